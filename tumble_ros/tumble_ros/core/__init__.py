@@ -1,0 +1,36 @@
+"""tumble_ros.core: the numerical core, plain numpy/scipy, no ROS.
+
+Quick start::
+
+    from tumble_ros.core import Scenario, simulate
+    result = simulate(Scenario(), t_eval=[0.0, 1.0, 2.0])
+    result.omega   # (3, 3) angular velocity [rad/yr], body axes
+
+Modules: ``rotation`` (Euler angles, matrices, quaternions), ``torque`` (gravity
+gradient), ``dynamics`` (equations of motion, invariants), ``integrators`` (one
+interface, a name registry), ``scenario`` (validated inputs), ``propagator``
+(incremental integration split at impacts), ``simulate`` (batch runs).
+"""
+from .dynamics import ATTITUDE_MODELS, angular_momentum_orbital, jacobi_integral, kinetic_energy
+from .integrators import METHODS
+from .propagator import IntegrationError, Propagator, Sample
+from .scenario import Impact, IntegratorSettings, Scenario, ScenarioError, load_scenario
+from .simulate import SimulationResult, simulate
+
+__all__ = [
+    "ATTITUDE_MODELS",
+    "METHODS",
+    "Impact",
+    "IntegrationError",
+    "IntegratorSettings",
+    "Propagator",
+    "Sample",
+    "Scenario",
+    "ScenarioError",
+    "SimulationResult",
+    "angular_momentum_orbital",
+    "jacobi_integral",
+    "kinetic_energy",
+    "load_scenario",
+    "simulate",
+]

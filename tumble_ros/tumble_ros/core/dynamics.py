@@ -1,0 +1,221 @@
+"""Euler-Liouville equations of a rigid asteroid under the Sun's gravity-gradient torque.
+
+State vector ``y`` (all in body principal axes, time in years):
+
+* ``y[0:3]`` = angular velocity (wx, wy, wz) [rad/yr], body frame;
+* ``y[3:]``  = attitude, in one of two representations (see ``ATTITUDE_MODELS``):
+
+  - ``"quaternion"``: unit quaternion (q0, q1, q2, q3), scalar first, body -> orbital
+    frame, kinematics dq/dt = 1/2 q * (0, w). No singularity.
+  - ``"euler"``: the paper's Euler angles (phi, psi, theta) with the kinematic equations
+    of the paper (eq 15), singular at theta = 0, pi.
+
+Dynamics (Euler's equations, paper eq 14 with the third line corrected, ERRATA 1)::
+
+    Ix dwx/dt = (Iy - Iz) wy wz + Mx
+    Iy dwy/dt = (Iz - Ix) wz wx + My
+    Iz dwz/dt = (Ix - Iy) wx wy + Mz
+
+with M the gravity-gradient torque (paper eq 12, ``torque.gravity_gradient_torque``) plus
+any impact torque active on the current integration segment. Right-hand sides are built
+for one segment at a time with the impact torque held constant (see ``propagator``), and
+are written on plain floats: they are the integration's hot path.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .rotation import (
+    euler_to_matrix,
+    euler_to_quaternion,
+    matrix_to_euler,
+    quaternion_to_matrix,
+)
+
+__all__ = [
+    "AttitudeModel",
+    "ATTITUDE_MODELS",
+    "Rhs",
+    "kinetic_energy",
+    "angular_momentum_orbital",
+    "jacobi_integral",
+]
+
+Rhs = Callable[[float, np.ndarray], np.ndarray]
+_ZERO = (0.0, 0.0, 0.0)
+
+
+def _make_quaternion_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO) -> Rhs:
+    ix, iy, iz = (float(v) for v in inertia)
+    k = 3.0 * orbit_rate * orbit_rate
+    ax, ay, az = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
+    gx, gy, gz = k * (iz - iy) / ix, k * (ix - iz) / iy, k * (iy - ix) / iz
+    bx, by, bz = torque_body[0] / ix, torque_body[1] / iy, torque_body[2] / iz
+    mox, moy, moz = (float(v) for v in torque_orbital)
+    orbital_pulse = mox != 0.0 or moy != 0.0 or moz != 0.0
+    sin, cos, array = math.sin, math.cos, np.array
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        wx, wy, wz, q0, q1, q2, q3 = y.tolist()  # Python floats: faster than numpy scalars
+        s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+        # First two rows of C(q) (body -> orbital): the Sun lies in the X'Y' plane.
+        c00 = 1.0 - s * (q2 * q2 + q3 * q3)
+        c01 = s * (q1 * q2 - q0 * q3)
+        c02 = s * (q1 * q3 + q0 * q2)
+        c10 = s * (q1 * q2 + q0 * q3)
+        c11 = 1.0 - s * (q1 * q1 + q3 * q3)
+        c12 = s * (q2 * q3 - q0 * q1)
+        sn, cs = sin(orbit_rate * t), cos(orbit_rate * t)
+        ux, uy, uz = c00 * sn + c10 * cs, c01 * sn + c11 * cs, c02 * sn + c12 * cs
+        dwx = ax * wy * wz + gx * uy * uz + bx
+        dwy = ay * wz * wx + gy * ux * uz + by
+        dwz = az * wx * wy + gz * ux * uy + bz
+        if orbital_pulse:
+            c20 = s * (q1 * q3 - q0 * q2)
+            c21 = s * (q2 * q3 + q0 * q1)
+            c22 = 1.0 - s * (q1 * q1 + q2 * q2)
+            dwx += (c00 * mox + c10 * moy + c20 * moz) / ix
+            dwy += (c01 * mox + c11 * moy + c21 * moz) / iy
+            dwz += (c02 * mox + c12 * moy + c22 * moz) / iz
+        return array(
+            (
+                dwx,
+                dwy,
+                dwz,
+                0.5 * (-q1 * wx - q2 * wy - q3 * wz),
+                0.5 * (q0 * wx + q2 * wz - q3 * wy),
+                0.5 * (q0 * wy - q1 * wz + q3 * wx),
+                0.5 * (q0 * wz + q1 * wy - q2 * wx),
+            )
+        )
+
+    return rhs
+
+
+def _make_euler_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO) -> Rhs:
+    ix, iy, iz = (float(v) for v in inertia)
+    k = 3.0 * orbit_rate * orbit_rate
+    ax, ay, az = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
+    gx, gy, gz = k * (iz - iy) / ix, k * (ix - iz) / iy, k * (iy - ix) / iz
+    bx, by, bz = torque_body[0] / ix, torque_body[1] / iy, torque_body[2] / iz
+    mo = np.asarray(torque_orbital, dtype=float)
+    orbital_pulse = bool(np.any(mo != 0.0))
+    sin, cos, array = math.sin, math.cos, np.array
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        wx, wy, wz, phi, psi, theta = y.tolist()
+        cf, sf = cos(phi), sin(phi)
+        cp, sp = cos(psi), sin(psi)
+        ct, st = cos(theta), sin(theta)
+        sn, cs = sin(orbit_rate * t), cos(orbit_rate * t)
+        # u = R(phi, psi, theta) @ (sin ws t, cos ws t, 0), the paper's matrix R.
+        ux = (cf * cp - sf * sp * ct) * sn + (sf * cp + cf * sp * ct) * cs
+        uy = (-cf * sp - sf * cp * ct) * sn + (-sf * sp + cf * cp * ct) * cs
+        uz = sf * st * sn - cf * st * cs
+        dwx = ax * wy * wz + gx * uy * uz + bx
+        dwy = ay * wz * wx + gy * ux * uz + by
+        dwz = az * wx * wy + gz * ux * uy + bz
+        if orbital_pulse:
+            m = euler_to_matrix(phi, psi, theta) @ mo
+            dwx += m[0] / ix
+            dwy += m[1] / iy
+            dwz += m[2] / iz
+        # Paper eq 15 (correct as printed).
+        w_perp = wx * sp + wy * cp
+        return array((dwx, dwy, dwz, w_perp / st, wz - w_perp * ct / st, wx * cp - wy * sp))
+
+    return rhs
+
+
+@dataclass(frozen=True)
+class AttitudeModel:
+    """One way of carrying the attitude in the state vector.
+
+    Attributes
+    ----------
+    name : registry key.
+    size : number of attitude components in the state vector.
+    from_euler : paper's Euler angles (phi, psi, theta) -> attitude components.
+    to_matrix : attitude components -> C (body -> orbital) 3x3 matrix.
+    make_rhs : (inertia, orbit_rate, torque_body, torque_orbital) -> f(t, y).
+    singular : attitude components -> True where this representation breaks down.
+    """
+
+    name: str
+    size: int
+    from_euler: Callable[[float, float, float], np.ndarray]
+    to_matrix: Callable[[np.ndarray], np.ndarray]
+    make_rhs: Callable[..., Rhs]
+    singular: Callable[[np.ndarray], bool]
+
+    def to_euler(self, attitude: np.ndarray) -> tuple[float, float, float]:
+        """Paper's Euler angles (phi, psi, theta), phi and psi wrapped to (-pi, pi]."""
+        return matrix_to_euler(self.to_matrix(attitude).T)
+
+
+ATTITUDE_MODELS: dict[str, AttitudeModel] = {
+    "quaternion": AttitudeModel(
+        name="quaternion",
+        size=4,
+        from_euler=euler_to_quaternion,
+        to_matrix=quaternion_to_matrix,
+        make_rhs=_make_quaternion_rhs,
+        singular=lambda a: False,
+    ),
+    "euler": AttitudeModel(
+        name="euler",
+        size=3,
+        from_euler=lambda phi, psi, theta: np.array([phi, psi, theta], dtype=float),
+        to_matrix=lambda a: euler_to_matrix(a[0], a[1], a[2]).T,
+        make_rhs=_make_euler_rhs,
+        # eq 15 divides by sin(theta); below this the attitude is numerically meaningless.
+        singular=lambda a: abs(math.sin(a[2])) < 1e-9,
+    ),
+}
+
+
+def kinetic_energy(omega, inertia) -> np.ndarray:
+    """Rotational kinetic energy 1/2 w.I.w for (3,) or (n, 3) body rates."""
+    w = np.asarray(omega, dtype=float)
+    return 0.5 * np.sum(w * w * np.asarray(inertia, dtype=float), axis=-1)
+
+
+def angular_momentum_orbital(omega, c_body_to_orbital, inertia) -> np.ndarray:
+    """Angular momentum L = C (I w) in orbital-frame components.
+
+    Shapes: omega (3,) with a (3, 3) matrix, or (n, 3) with (n, 3, 3).
+    """
+    h = np.asarray(omega, dtype=float) * np.asarray(inertia, dtype=float)
+    return np.einsum("...ij,...j->...i", c_body_to_orbital, h)
+
+
+def jacobi_integral(t, omega, c_body_to_orbital, inertia, orbit_rate: float) -> np.ndarray:
+    """Jacobi integral of the circular-orbit problem (conserved without impacts).
+
+    In the frame turning with the Sun line (angular velocity Omega = -ws Z') the tidal
+    potential is time independent, so H = T + V - Omega.L is conserved::
+
+        J = 1/2 w.I.w + 3/2 ws^2 u.I.u + ws (I w).z'
+
+    with u the Sun direction and z' the orbit normal, both in body axes
+    (derivation in docs/physics.md). Inputs may be single samples or arrays of n samples:
+    t (n,), omega (n, 3), c_body_to_orbital (n, 3, 3).
+    """
+    t = np.asarray(t, dtype=float)
+    c = np.asarray(c_body_to_orbital, dtype=float)
+    i = np.asarray(inertia, dtype=float)
+    w = np.asarray(omega, dtype=float)
+    u_orbital = np.stack([np.sin(orbit_rate * t), np.cos(orbit_rate * t), np.zeros_like(t)], -1)
+    # body components of an orbital vector v are C^T v
+    u = np.einsum("...ji,...j->...i", c, u_orbital)
+    z = c[..., 2, :]
+    h = i * w
+    return (
+        0.5 * np.sum(w * h, axis=-1)
+        + 1.5 * orbit_rate**2 * np.sum(u * u * i, axis=-1)
+        + orbit_rate * np.sum(h * z, axis=-1)
+    )

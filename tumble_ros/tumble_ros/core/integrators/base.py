@@ -1,0 +1,115 @@
+"""The contract every integrator of tumble_ros fulfils.
+
+Modelled on ``scipy.integrate._ivp.base.OdeSolver``. A *stepper* advances the solution
+of y' = fun(t, y) from t0 towards t_bound, one step per call to :meth:`Stepper.step`,
+and never steps past ``t_bound``: the propagator gives each stepper one integration
+segment on which the right-hand side is smooth (impact pulses start and end on segment
+edges), so no method can step over a pulse.
+
+Implementing a new method
+-------------------------
+1. Subclass :class:`Stepper`, set the class attributes ``name`` (the registry key),
+   ``adaptive`` (step size chosen from ``rtol``/``atol``) and, if relevant,
+   ``symplectic``.
+2. Implement ``_step_impl() -> (ok, message)``: advance ``self.t``/``self.y`` by one
+   step, keep the previous time in ``self.t_old``, and land exactly on ``t_bound`` at
+   the end. Return ``(False, reason)`` on numerical failure.
+3. Implement ``_state_at_impl(t)`` for any t in [t_old, t] (dense output).
+4. Add the class to ``METHODS`` in ``integrators/__init__.py``.
+The base class counts steps, records status and message, and turns a non-finite state
+into a failure.
+"""
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from typing import Callable, ClassVar
+
+import numpy as np
+
+__all__ = ["Stepper", "RUNNING", "FINISHED", "FAILED"]
+
+RUNNING, FINISHED, FAILED = "running", "finished", "failed"
+
+#: A step shorter than this many units in the last place of t counts as a collapse.
+_MIN_STEP_ULPS = 16
+
+
+class Stepper(ABC):
+    """Base class of the step-by-step integrators.
+
+    Parameters
+    ----------
+    fun : callable ``fun(t, y) -> ndarray``
+        Right-hand side; t in years.
+    t0, y0 : initial time [yr] and state.
+    t_bound : float
+        End of the segment [yr]; the stepper lands on it exactly and stops.
+    settings : IntegratorSettings
+        ``rtol``, ``atol``, ``max_step`` (adaptive methods), ``step`` (fixed-step methods).
+
+    Attributes
+    ----------
+    t, y : current time and state (y is owned by the stepper: copy before keeping).
+    t_old : time at the start of the last step (None before the first step).
+    status : ``"running"``, ``"finished"`` (reached t_bound) or ``"failed"``.
+    message : why it failed, empty otherwise.
+    n_steps : number of accepted steps.
+    """
+
+    name: ClassVar[str]
+    adaptive: ClassVar[bool]
+    symplectic: ClassVar[bool] = False
+
+    def __init__(self, fun: Callable, t0: float, y0: np.ndarray, t_bound: float, settings) -> None:
+        self.fun = fun
+        self.t = float(t0)
+        self.y = np.array(y0, dtype=float)
+        self.t_old: float | None = None
+        self.t_bound = float(t_bound)
+        self.settings = settings
+        self.status = FINISHED if self.t >= self.t_bound else RUNNING
+        self.message = ""
+        self.n_steps = 0
+
+    @property
+    def nfev(self) -> int:
+        """Number of right-hand-side evaluations so far."""
+        return 0
+
+    def step(self) -> str:
+        """Take one step; returns the new status."""
+        if self.status != RUNNING:
+            raise RuntimeError(f"step() on a stepper whose status is {self.status!r}")
+        t_good, y_good = self.t, self.y
+        ok, message = self._step_impl()
+        if ok and not all(math.isfinite(v) for v in self.y):
+            ok, message = False, f"non-finite state after t = {t_good:.10g} yr"
+        elif ok and self.t < self.t_bound and self.t - t_good <= _MIN_STEP_ULPS * math.ulp(t_good or 1.0):
+            ok, message = False, (f"step size collapsed to {self.t - t_good:.3g} yr at t = {t_good:.10g} yr: "
+                                  "the solution is singular or diverging there")
+        if not ok:
+            # Keep the last good state: a failed step never hands out NaN or inf.
+            self.t, self.y = t_good, y_good
+            self.status, self.message = FAILED, message
+            return self.status
+        self.n_steps += 1
+        if self.t >= self.t_bound:
+            self.status = FINISHED
+        return self.status
+
+    def state_at(self, t: float) -> np.ndarray:
+        """State at ``t`` within the last step [t_old, t] (dense output); a new array."""
+        if t == self.t:
+            return self.y.copy()
+        if self.t_old is None or not (self.t_old <= t <= self.t):
+            raise ValueError(f"t = {t!r} is outside the last step [{self.t_old!r}, {self.t!r}]")
+        return self._state_at_impl(t)
+
+    @abstractmethod
+    def _step_impl(self) -> tuple[bool, str]:
+        """Advance one step; return (ok, message)."""
+
+    @abstractmethod
+    def _state_at_impl(self, t: float) -> np.ndarray:
+        """Dense output inside the last step."""

@@ -1,0 +1,134 @@
+"""Attitude representations: the paper's Euler angles, rotation matrices and unit quaternions.
+
+Frames
+------
+* orbital (inertial) frame X'Y'Z': Z' normal to the orbit plane, the Sun at
+  R0(t) = R0 [sin ws t, cos ws t, 0] as seen from the asteroid's centre of mass;
+* body frame XYZ: the principal axes of inertia.
+
+Conventions (exactly as printed in the paper, Section 1)
+--------------------------------------------------------
+* Euler angles (phi, psi, theta), z-x-z, with the nodal line 'w':
+  ``R(phi, psi, theta) = Rz(psi) @ Rx(theta) @ Rz(phi)`` maps orbital-frame components
+  to body-frame components: ``v_body = R @ v_orbital``.
+* Quaternions are unit, scalar first ``q = (q0, q1, q2, q3)``, and rotate body-frame
+  components into the orbital frame: ``v_orbital = C(q) @ v_body`` with ``C(q) = R.T``.
+
+All angles are in radians. Nothing here depends on ROS.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = [
+    "euler_to_matrix",
+    "matrix_to_euler",
+    "quaternion_to_matrix",
+    "matrix_to_quaternion",
+    "euler_to_quaternion",
+    "quaternion_to_euler",
+    "quaternion_multiply",
+    "unwrap_towards",
+]
+
+
+def euler_to_matrix(phi: float, psi: float, theta: float) -> np.ndarray:
+    """The paper's matrix R(phi, psi, theta) (orbital -> body components), 3x3."""
+    cf, sf = math.cos(phi), math.sin(phi)
+    cp, sp = math.cos(psi), math.sin(psi)
+    ct, st = math.cos(theta), math.sin(theta)
+    return np.array(
+        [
+            [cf * cp - sf * sp * ct, sf * cp + cf * sp * ct, sp * st],
+            [-cf * sp - sf * cp * ct, -sf * sp + cf * cp * ct, cp * st],
+            [sf * st, -cf * st, ct],
+        ]
+    )
+
+
+def matrix_to_euler(r: np.ndarray) -> tuple[float, float, float]:
+    """Euler angles (phi, psi, theta) of an orbital -> body matrix, theta in [0, pi].
+
+    phi and psi are returned in (-pi, pi]. At theta = 0 or pi only phi + psi (or
+    phi - psi) is defined; psi is then set to 0.
+    """
+    st = math.hypot(r[0, 2], r[1, 2])
+    theta = math.atan2(st, r[2, 2])
+    if st < 1e-300:
+        # Gimbal lock: R = Rz(phi + psi) (theta = 0) or similar; put everything in phi.
+        return math.atan2(r[0, 1], r[0, 0]), 0.0, theta
+    psi = math.atan2(r[0, 2], r[1, 2])
+    phi = math.atan2(r[2, 0], -r[2, 1])
+    return phi, psi, theta
+
+
+def quaternion_to_matrix(q) -> np.ndarray:
+    """Rotation matrix C(q) (body -> orbital components) of a quaternion, scalar first.
+
+    The quaternion need not be normalised: C is built from q / |q|.
+    """
+    q0, q1, q2, q3 = q
+    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    return np.array(
+        [
+            [1.0 - s * (q2 * q2 + q3 * q3), s * (q1 * q2 - q0 * q3), s * (q1 * q3 + q0 * q2)],
+            [s * (q1 * q2 + q0 * q3), 1.0 - s * (q1 * q1 + q3 * q3), s * (q2 * q3 - q0 * q1)],
+            [s * (q1 * q3 - q0 * q2), s * (q2 * q3 + q0 * q1), 1.0 - s * (q1 * q1 + q2 * q2)],
+        ]
+    )
+
+
+def matrix_to_quaternion(c: np.ndarray) -> np.ndarray:
+    """Unit quaternion (scalar first, q0 >= 0) of a body -> orbital rotation matrix.
+
+    Shepperd's method: picks the numerically largest component first.
+    """
+    tr = c[0, 0] + c[1, 1] + c[2, 2]
+    cand = (tr, c[0, 0], c[1, 1], c[2, 2])
+    k = int(np.argmax(cand))
+    if k == 0:
+        s = 2.0 * math.sqrt(1.0 + tr)
+        q = (0.25 * s, (c[2, 1] - c[1, 2]) / s, (c[0, 2] - c[2, 0]) / s, (c[1, 0] - c[0, 1]) / s)
+    elif k == 1:
+        s = 2.0 * math.sqrt(1.0 + 2.0 * c[0, 0] - tr)
+        q = ((c[2, 1] - c[1, 2]) / s, 0.25 * s, (c[0, 1] + c[1, 0]) / s, (c[0, 2] + c[2, 0]) / s)
+    elif k == 2:
+        s = 2.0 * math.sqrt(1.0 + 2.0 * c[1, 1] - tr)
+        q = ((c[0, 2] - c[2, 0]) / s, (c[0, 1] + c[1, 0]) / s, 0.25 * s, (c[1, 2] + c[2, 1]) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + 2.0 * c[2, 2] - tr)
+        q = ((c[1, 0] - c[0, 1]) / s, (c[0, 2] + c[2, 0]) / s, (c[1, 2] + c[2, 1]) / s, 0.25 * s)
+    q = np.array(q)
+    q /= np.linalg.norm(q)
+    return -q if q[0] < 0.0 else q
+
+
+def euler_to_quaternion(phi: float, psi: float, theta: float) -> np.ndarray:
+    """Unit quaternion (body -> orbital, scalar first) of the paper's Euler angles."""
+    return matrix_to_quaternion(euler_to_matrix(phi, psi, theta).T)
+
+
+def quaternion_to_euler(q) -> tuple[float, float, float]:
+    """The paper's Euler angles (phi, psi, theta) of a body -> orbital quaternion."""
+    return matrix_to_euler(quaternion_to_matrix(q).T)
+
+
+def quaternion_multiply(p, q) -> np.ndarray:
+    """Hamilton product p * q of two scalar-first quaternions."""
+    p0, p1, p2, p3 = p
+    q0, q1, q2, q3 = q
+    return np.array(
+        [
+            p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3,
+            p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2,
+            p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1,
+            p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0,
+        ]
+    )
+
+
+def unwrap_towards(angle: float, reference: float) -> float:
+    """The angle ``angle + 2 pi k`` closest to ``reference`` (continuous angle tracking)."""
+    return angle + 2.0 * math.pi * round((reference - angle) / (2.0 * math.pi))

@@ -1,0 +1,390 @@
+"""Scenarios: everything that defines one simulation, validated once at the boundary.
+
+A :class:`Scenario` is a frozen dataclass. Building one validates every field and raises
+:class:`ScenarioError` (a ``ValueError``) whose message starts with the field's name,
+e.g. ``"integrator.rtol: must be in [1e-14, 0.1), got 0.5"``. Code inside the core
+trusts a Scenario.
+
+The same scenario is described to ROS as flat parameters (``inertia``,
+``integrator.method``, ``impacts.start``...): :meth:`Scenario.to_parameters` and
+:meth:`Scenario.from_parameters` convert, and :func:`load_scenario` reads the ROS 2
+``--params-file`` YAML files in ``config/``. One set of rules serves the Python API, the
+YAML files and the nodes' parameters.
+
+Units: time [yr], angles [rad], rates [rad/yr], inertia normalised, torque in
+inertia-units * rad/yr^2.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from .dynamics import ATTITUDE_MODELS
+from .integrators import METHODS
+
+__all__ = [
+    "ScenarioError",
+    "Impact",
+    "IntegratorSettings",
+    "Scenario",
+    "IMPACT_FRAMES",
+    "load_scenario",
+]
+
+IMPACT_FRAMES = ("body", "orbital")
+MIN_RTOL, MAX_RTOL = 1e-14, 0.1
+
+
+class ScenarioError(ValueError):
+    """An invalid scenario field; the message starts with the field's name."""
+
+
+def _fail(name: str, why: str, value: Any) -> None:
+    raise ScenarioError(f"{name}: {why}, got {value!r}")
+
+
+def _finite(name: str, value: Any) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        _fail(name, "must be a number", value)
+    if isinstance(value, bool) or not math.isfinite(v):
+        _fail(name, "must be a finite number", value)
+    return v
+
+
+def _vector(name: str, value: Any, n: int = 3) -> tuple[float, ...]:
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != n:
+        _fail(name, f"must be a list of {n} numbers", value)
+    return tuple(_finite(f"{name}[{k}]", v) for k, v in enumerate(value))
+
+
+def _positive(name: str, value: Any) -> float:
+    v = _finite(name, value)
+    if v <= 0.0:
+        _fail(name, "must be > 0", value)
+    return v
+
+
+def _one_of(name: str, value: Any, allowed) -> str:
+    if value not in allowed:
+        _fail(name, f"must be one of {sorted(allowed)}", value)
+    return value
+
+
+def _set(obj, name: str, value: Any) -> None:
+    object.__setattr__(obj, name, value)
+
+
+@dataclass(frozen=True)
+class Impact:
+    """A short torque pulse (paper Fig. 10): constant torque on [start, start + duration).
+
+    Attributes
+    ----------
+    start : float
+        Start time t1 [yr].
+    duration : float
+        Pulse length t2 - t1 [yr] (the paper: ~3e-7 yr).
+    torque : (float, float, float)
+        Torque components [inertia-units * rad/yr^2] in ``frame``.
+    frame : str
+        ``"body"``: fixed in the body's principal axes; ``"orbital"``: fixed in the orbital
+        (inertial) frame X'Y'Z' and rotated into body axes as the body turns.
+    """
+
+    start: float
+    duration: float
+    torque: tuple[float, float, float]
+    frame: str = "body"
+
+    def __post_init__(self) -> None:
+        self.validate("impact")
+
+    def validate(self, name: str) -> None:
+        """Check and normalise the fields; ``name`` prefixes error messages."""
+        start = _finite(f"{name}.start", self.start)
+        if start < 0.0:
+            _fail(f"{name}.start", "must be >= 0 (the scenario starts at t = 0)", self.start)
+        _set(self, "start", start)
+        _set(self, "duration", _positive(f"{name}.duration", self.duration))
+        _set(self, "torque", _vector(f"{name}.torque", self.torque))
+        _one_of(f"{name}.frame", self.frame, IMPACT_FRAMES)
+
+    @property
+    def end(self) -> float:
+        """End time t2 [yr] (exclusive)."""
+        return self.start + self.duration
+
+
+@dataclass(frozen=True)
+class IntegratorSettings:
+    """Which integrator, and how accurate.
+
+    Attributes
+    ----------
+    method : str
+        A key of ``integrators.METHODS``: rk4, rk45, dop853, radau, bdf, lsoda, adams.
+    rtol, atol : float
+        Relative and absolute tolerances of adaptive methods.
+    step : float
+        Step [yr] of fixed-step methods (shortened so that segment edges are hit).
+    max_step : float
+        Largest step [yr] an adaptive method may take; 0 = no limit.
+    """
+
+    method: str = "dop853"
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    step: float = 1e-4
+    max_step: float = 0.0
+
+    def __post_init__(self) -> None:
+        self.validate("integrator")
+
+    def validate(self, name: str) -> None:
+        """Check and normalise the fields; ``name`` prefixes error messages."""
+        _one_of(f"{name}.method", self.method, METHODS)
+        rtol = _finite(f"{name}.rtol", self.rtol)
+        if not MIN_RTOL <= rtol < MAX_RTOL:
+            _fail(f"{name}.rtol", f"must be in [{MIN_RTOL:g}, {MAX_RTOL:g})", self.rtol)
+        _set(self, "rtol", rtol)
+        _set(self, "atol", _positive(f"{name}.atol", self.atol))
+        _set(self, "step", _positive(f"{name}.step", self.step))
+        max_step = _finite(f"{name}.max_step", self.max_step)
+        if max_step < 0.0:
+            _fail(f"{name}.max_step", "must be >= 0 (0 = no limit)", self.max_step)
+        _set(self, "max_step", max_step)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One simulation: body, orbit, initial state, integrator, impacts and output grid.
+
+    The default is the paper's Fig. 4 case (a = 0.5, theta0 = 0.1), a physically
+    realisable body for which the paper's approximate solution works well.
+
+    Attributes
+    ----------
+    inertia : (Ix, Iy, Iz)
+        Principal moments of inertia, normalised; only their ratios matter.
+    allow_unphysical_inertia : bool
+        Accept moments that violate the triangle inequality (each moment <= the sum of
+        the other two, true of every real mass distribution). The paper's Figs 3 and 6-10
+        use a = (Iz - Ix)/Ix = 2 or 3 with Ix = Iy, which no real body has; their config
+        files set this flag to reproduce them.
+    orbit_rate : float
+        Orbital angular rate ws [rad/yr] of the circular orbit (GM/R0^3 = ws^2); 0
+        switches the gravity-gradient torque off (a free body).
+    omega0 : (wx0, wy0, wz0)
+        Initial angular velocity [rad/yr], body axes.
+    euler0 : (phi0, psi0, theta0)
+        Initial attitude as the paper's Euler angles [rad] (z-x-z, orbital -> body).
+        The paper gives no psi0; its figures use psi0 = 0.
+    attitude : str
+        How the attitude is integrated: ``"quaternion"`` (default, no singularity) or
+        ``"euler"`` (the paper's eq 15, singular at theta = 0, pi).
+    duration : float
+        Simulated time span tk [yr], starting at t = 0.
+    output_interval : float
+        Spacing of output samples [yr] (the paper: tk / n with n = 1000).
+    integrator : IntegratorSettings
+    impacts : tuple of Impact
+    """
+
+    inertia: tuple[float, float, float] = (1.0, 1.0, 1.5)
+    allow_unphysical_inertia: bool = False
+    orbit_rate: float = 1.0
+    omega0: tuple[float, float, float] = (0.0, 1.0, 30.0)
+    euler0: tuple[float, float, float] = (0.5, 0.0, 0.1)
+    attitude: str = "quaternion"
+    duration: float = 2.0
+    output_interval: float = 0.002
+    integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
+    impacts: tuple[Impact, ...] = ()
+
+    def __post_init__(self) -> None:
+        inertia = _vector("inertia", self.inertia)
+        for k, v in enumerate(inertia):
+            if v <= 0.0:
+                _fail(f"inertia[{k}]", "must be > 0", v)
+        if not isinstance(self.allow_unphysical_inertia, bool):
+            _fail("allow_unphysical_inertia", "must be true or false", self.allow_unphysical_inertia)
+        if not self.allow_unphysical_inertia:
+            for k in range(3):
+                others = sum(inertia) - inertia[k]
+                if inertia[k] > others * (1.0 + 1e-12):
+                    _fail(
+                        "inertia",
+                        f"is not physically realisable: inertia[{k}] = {inertia[k]:g} exceeds the sum "
+                        f"of the other two ({others:g}); set allow_unphysical_inertia: true to "
+                        "simulate such a body anyway (as the paper's figures with a > 1 do)",
+                        list(inertia),
+                    )
+        _set(self, "inertia", inertia)
+        orbit_rate = _finite("orbit_rate", self.orbit_rate)
+        if orbit_rate < 0.0:
+            _fail("orbit_rate", "must be >= 0", self.orbit_rate)
+        _set(self, "orbit_rate", orbit_rate)
+        _set(self, "omega0", _vector("omega0", self.omega0))
+        euler0 = _vector("euler0", self.euler0)
+        _one_of("attitude", self.attitude, ATTITUDE_MODELS)
+        if self.attitude == "euler" and not 0.0 < euler0[2] < math.pi:
+            _fail("euler0[2]", "theta0 must lie strictly inside (0, pi) with attitude 'euler' "
+                  "(eq 15 divides by sin theta); use attitude 'quaternion'", euler0[2])
+        if ATTITUDE_MODELS[self.attitude].singular(euler0):
+            _fail("euler0[2]", "theta0 is too close to 0 or pi for attitude 'euler'; "
+                  "use attitude 'quaternion'", euler0[2])
+        _set(self, "euler0", euler0)
+        _set(self, "duration", _positive("duration", self.duration))
+        _set(self, "output_interval", _positive("output_interval", self.output_interval))
+        if self.output_interval > self.duration:
+            _fail("output_interval", f"must be <= duration ({self.duration:g} yr)", self.output_interval)
+        if not isinstance(self.integrator, IntegratorSettings):
+            _fail("integrator", "must be an IntegratorSettings", self.integrator)
+        impacts = tuple(self.impacts)
+        for k, impact in enumerate(impacts):
+            if not isinstance(impact, Impact):
+                _fail(f"impacts[{k}]", "must be an Impact", impact)
+            impact.validate(f"impacts[{k}]")
+            if impact.end > self.duration:
+                _fail(f"impacts[{k}].start", f"the pulse must end by the end of the run ({self.duration:g} yr); "
+                      f"it ends at {impact.end!r}", impact.start)
+        _set(self, "impacts", impacts)
+
+    # -- derived quantities ---------------------------------------------------------
+    @property
+    def output_times(self):
+        """The default output grid: 0, dt, 2 dt, ... up to and including ``duration``."""
+        import numpy as np
+
+        n = int(math.floor(self.duration / self.output_interval * (1.0 + 1e-12)))
+        return np.minimum(np.arange(n + 1) * self.output_interval, self.duration)
+
+    def replace(self, **changes) -> "Scenario":
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    # -- flat parameters (ROS 2 parameters, YAML) ----------------------------------
+    def to_parameters(self) -> dict[str, Any]:
+        """Flat parameter dictionary as ROS 2 parameters (``integrator.rtol``, ...)."""
+        params: dict[str, Any] = {
+            "inertia": list(self.inertia),
+            "allow_unphysical_inertia": self.allow_unphysical_inertia,
+            "orbit_rate": self.orbit_rate,
+            "omega0": list(self.omega0),
+            "euler0": list(self.euler0),
+            "attitude": self.attitude,
+            "duration": self.duration,
+            "output_interval": self.output_interval,
+        }
+        for f in dataclasses.fields(IntegratorSettings):
+            params[f"integrator.{f.name}"] = getattr(self.integrator, f.name)
+        params["impacts.start"] = [i.start for i in self.impacts]
+        params["impacts.duration"] = [i.duration for i in self.impacts]
+        params["impacts.torque"] = [c for i in self.impacts for c in i.torque]
+        params["impacts.frame"] = [i.frame for i in self.impacts]
+        return params
+
+    @classmethod
+    def from_parameters(cls, params: Mapping[str, Any]) -> "Scenario":
+        """Build from a flat parameter mapping; missing keys take their defaults.
+
+        Raises ScenarioError for unknown keys and invalid values.
+        """
+        known = set(PARAMETER_NAMES)
+        unknown = sorted(set(params) - known)
+        if unknown:
+            raise ScenarioError(f"{unknown[0]}: unknown scenario parameter (known: {', '.join(sorted(known))})")
+        plain = {k: params[k] for k in _SCENARIO_PLAIN if k in params}
+        integ = {
+            k.split(".", 1)[1]: params[k] for k in params if k.startswith("integrator.")
+        }
+        plain["integrator"] = IntegratorSettings(**integ)
+        plain["impacts"] = _impacts_from_parameters(params)
+        return cls(**plain)
+
+
+_SCENARIO_PLAIN = (
+    "inertia", "allow_unphysical_inertia", "orbit_rate", "omega0", "euler0", "attitude",
+    "duration", "output_interval",
+)
+_IMPACT_KEYS = ("impacts.start", "impacts.duration", "impacts.torque", "impacts.frame")
+PARAMETER_NAMES: tuple[str, ...] = (
+    _SCENARIO_PLAIN
+    + tuple(f"integrator.{f.name}" for f in dataclasses.fields(IntegratorSettings))
+    + _IMPACT_KEYS
+)
+
+
+def _impacts_from_parameters(params: Mapping[str, Any]) -> tuple[Impact, ...]:
+    start = list(params.get("impacts.start", []) or [])
+    duration = list(params.get("impacts.duration", []) or [])
+    torque = list(params.get("impacts.torque", []) or [])
+    frame = list(params.get("impacts.frame", []) or [])
+    n = len(start)
+    if len(duration) != n:
+        _fail("impacts.duration", f"must have one entry per impacts.start ({n})", duration)
+    if len(torque) != 3 * n:
+        _fail("impacts.torque", f"must have 3 entries per impact ({3 * n})", torque)
+    if not frame:
+        frame = ["body"] * n
+    if len(frame) != n:
+        _fail("impacts.frame", f"must be empty (all 'body') or have one entry per impact ({n})", frame)
+    impacts = []
+    for k in range(n):
+        try:
+            impacts.append(Impact(start[k], duration[k], tuple(torque[3 * k: 3 * k + 3]), frame[k]))
+        except ScenarioError as err:
+            raise ScenarioError(str(err).replace("impact.", f"impacts[{k}].", 1)) from None
+    return tuple(impacts)
+
+
+def _flatten(mapping: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    flat: dict[str, Any] = {}
+    for key, value in mapping.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            flat.update(_flatten(value, f"{name}."))
+        else:
+            flat[name] = value
+    return flat
+
+
+def load_scenario(path: str | Path, node: str = "sim", ignore: frozenset[str] = frozenset()) -> Scenario:
+    """Read a scenario from a ROS 2 parameters YAML file (``--params-file`` format).
+
+    The file is ``{node_name: {ros__parameters: {...}}}``; the section of ``node`` is
+    used, else the wildcard ``/**``, else the only section. Nested keys are joined with
+    dots as ROS does (``integrator: {rtol: 1e-10}`` is ``integrator.rtol``). Keys in
+    ``ignore`` (a node's own, non-scenario parameters) are skipped.
+
+    Raises ScenarioError for an unreadable file, a missing section or invalid values.
+    """
+    import yaml
+
+    path = Path(path)
+    try:
+        document = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as err:
+        raise ScenarioError(f"{path}: cannot read scenario file: {err}") from None
+    if not isinstance(document, Mapping) or not document:
+        raise ScenarioError(f"{path}: expected a ROS 2 parameters file ({{node: {{ros__parameters: ...}}}})")
+    for key in (node, f"/{node}", "/**"):
+        if key in document:
+            section = document[key]
+            break
+    else:
+        if len(document) != 1:
+            raise ScenarioError(f"{path}: no section for node {node!r} or '/**'")
+        section = next(iter(document.values()))
+    if not isinstance(section, Mapping) or not isinstance(section.get("ros__parameters"), Mapping):
+        raise ScenarioError(f"{path}: the node section has no 'ros__parameters' mapping")
+    params = {k: v for k, v in _flatten(section["ros__parameters"]).items() if k not in ignore}
+    try:
+        return Scenario.from_parameters(params)
+    except ScenarioError as err:
+        raise ScenarioError(f"{path}: {err}") from None
