@@ -1,0 +1,81 @@
+# tumble_ros workspace: `make run` runs the main job, `make test` runs the tests.
+# `make setup` (a prerequisite of both) is idempotent and cheap when nothing changed:
+#   1. .venv from python3 -m venv, then pip install -r requirements.txt   (only when it changed)
+#   2. colcon build --symlink-install of tumble_ros_interfaces and tumble_ros
+#      (only when a package file that matters for the build changed)
+# The environment logic (venv + install/setup.bash) lives in scripts/env.sh.
+
+SHELL := /bin/bash
+.SHELLFLAGS := -eo pipefail -c
+.DEFAULT_GOAL := help
+.DELETE_ON_ERROR:
+
+PYTHON ?= python3
+VENV := .venv
+ENV := scripts/env.sh
+COLCON_PACKAGES := tumble_ros_interfaces tumble_ros
+COLCON_ARGS ?=
+PYTEST_ARGS ?=
+CONFIG ?=
+
+STAMPS := .stamps
+# Inside the venv: deleting .venv also forgets that requirements were installed.
+VENV_STAMP := $(VENV)/.requirements.stamp
+BUILD_STAMP := $(STAMPS)/colcon-build
+
+# What colcon's output depends on. Python modules are not listed: with --symlink-install they are
+# live. Directories are listed so that adding, renaming or deleting a file in them rebuilds.
+BUILD_INPUTS := \
+	tumble_ros_interfaces/package.xml tumble_ros_interfaces/CMakeLists.txt \
+	tumble_ros_interfaces/srv tumble_ros_interfaces/msg \
+	$(wildcard tumble_ros_interfaces/srv/*.srv tumble_ros_interfaces/msg/*.msg) \
+	tumble_ros/package.xml tumble_ros/setup.py tumble_ros/setup.cfg \
+	tumble_ros/resource tumble_ros/resource/tumble_ros \
+	tumble_ros/config $(wildcard tumble_ros/config/*)
+
+# Rebuild anyway if build/ or install/ was deleted behind make's back.
+BUILD_PRESENT := $(and $(wildcard install/setup.bash),$(wildcard build/tumble_ros))
+
+.PHONY: help setup test run lock clean distclean FORCE
+
+help:
+	@echo 'make run    [CONFIG=...]       run the main job (python -m tumble_ros $$CONFIG)'
+	@echo 'make test   [PYTEST_ARGS=...]  run the tests'
+	@echo 'make setup                     venv + pinned requirements + colcon build (idempotent)'
+	@echo 'make lock                      re-pin requirements.txt from requirements.in'
+	@echo 'make clean                     remove build/ install/ log/ and stamps (keeps .venv)'
+	@echo 'make distclean                 clean, and remove .venv'
+
+setup: $(BUILD_STAMP)
+
+$(VENV_STAMP): requirements.txt
+	@test -x $(VENV)/bin/python || { echo '== creating $(VENV)'; $(PYTHON) -m venv $(VENV); }
+	@# colcon must not crawl the venv (its share/ holds many package.xml files).
+	@touch $(VENV)/COLCON_IGNORE
+	@echo '== pip install -r requirements.txt'
+	$(VENV)/bin/python -m pip install --quiet -r requirements.txt
+	touch $@
+
+$(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
+	@echo '== colcon build'
+	$(ENV) --build colcon build --symlink-install --base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
+	@mkdir -p $(STAMPS)
+	touch $@
+
+# Test paths come from pytest.ini (testpaths) unless PYTEST_ARGS names some.
+test: setup
+	$(ENV) pytest -q -ra $(PYTEST_ARGS)
+
+run: setup
+	$(ENV) python -m tumble_ros $(CONFIG)
+
+lock:
+	scripts/lock.sh
+
+clean:
+	rm -rf build install log $(STAMPS)
+
+distclean: clean
+	rm -rf $(VENV)
+
+FORCE:

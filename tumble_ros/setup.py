@@ -1,0 +1,33 @@
+"""ament_python build of tumble_ros (colcon build, or pip for the pip-only path)."""
+from glob import glob
+import os
+
+from setuptools import find_packages, setup
+
+package_name = 'tumble_ros'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        # Register the package in the ament index, so `ros2 run` / ament_index find it.
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        # Scenario files, found at run time under share/tumble_ros/config.
+        (os.path.join('share', package_name, 'config'), glob(os.path.join('config', '*.yaml'))),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='tumble_ros maintainers',
+    maintainer_email='tumble_ros@example.com',
+    description='Tumbling-asteroid rotation under solar gravity-gradient torque (ROS 2 Jazzy).',
+    license='Apache-2.0',
+    entry_points={
+        # One line per executable, installed to lib/tumble_ros/<name> (setup.cfg) for `ros2 run`:
+        #   'name = tumble_ros.nodes.module:main',
+        'console_scripts': [
+            'sim = tumble_ros.nodes.sim:main',
+        ],
+    },
+)

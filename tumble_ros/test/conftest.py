@@ -1,0 +1,40 @@
+"""Shared pytest setup for the tumble_ros tests.
+
+DDS isolation, done at import time: pytest imports this file before any test module, so before
+anything imports rclpy (the RMW reads these variables when a context is initialised).
+
+- ROS_DOMAIN_ID: DDS participants only discover each other within one domain. Tests that start
+  nodes, publishers or services must not talk to another test process running at the same time
+  (a second `make test`, CI, a developer's running simulator), so every test process gets its own
+  domain, derived from its pid, in 1..101 (0 is the default domain everybody else uses; with the
+  default DDS port mapping, 101 is the highest id whose ports stay below Linux's ephemeral range).
+  A caller who sets ROS_DOMAIN_ID (even to 0) keeps it.
+- ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST: discovery never leaves this machine, so tests send no
+  multicast traffic to the network and see no other host's nodes.
+"""
+import os
+
+import pytest
+
+DOMAIN_ID_FROM_CALLER = bool(os.environ.get('ROS_DOMAIN_ID', '').strip())
+if not DOMAIN_ID_FROM_CALLER:
+    os.environ['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 101)
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+
+
+@pytest.fixture
+def domain_id_from_caller():
+    """True if ROS_DOMAIN_ID came from the caller's environment rather than from this file."""
+    return DOMAIN_ID_FROM_CALLER
+
+
+@pytest.fixture
+def ros():
+    """A RosHarness (ros_harness.py), shut down after the test whatever happens."""
+    from ros_harness import RosHarness
+
+    harness = RosHarness()
+    try:
+        yield harness
+    finally:
+        harness.close()
