@@ -10,7 +10,7 @@ pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")  # overflow is
 def test_step_size_collapse_is_reported():
     # An absurd spin with a tolerance it cannot meet in float64: scipy's step control gives up.
     sc = Scenario(inertia=(1.0, 1.6, 2.2), omega0=(1e150, 1e150, 1e150), duration=1.0,
-                  integrator=IntegratorSettings(method="rk45", rtol=1e-14, atol=1e-300))
+                  integrator=IntegratorSettings(method="rk45", rtol=1e-13, atol=1e-300))
     r = simulate(sc, t_eval=[0.0, 0.5, 1.0])
     assert not r.success and r.message
     assert np.all(np.isfinite(r.omega))

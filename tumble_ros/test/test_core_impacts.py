@@ -80,3 +80,18 @@ def test_impact_in_the_past_is_refused():
     prop.advance_to(0.2)
     with pytest.raises(ValueError, match="impact.start"):
         prop.schedule(Impact(0.1, DT, (1.0, 0.0, 0.0)))
+
+
+def test_completed_impacts_report_their_measured_delta_omega():
+    impacts = [Impact(0.1, DT, (0.0, 0.0, 1.5e6)), Impact(0.25, DT, (0.0, 0.0, -3.0e6), "orbital")]
+    sc = scenario("rk4", impacts).replace(omega0=(0.0, 0.0, 30.0), euler0=(0.5, 0.0, 0.0))
+    prop = Propagator(sc)
+    prop.advance_to(0.2)
+    first = prop.pop_completed_impacts()
+    assert [i for i, _, _ in first] == [impacts[0]]
+    _, y1, y2 = first[0]
+    assert y2[2] - y1[2] == pytest.approx(1.5e6 * DT / INERTIA[2], rel=1e-9)
+    assert prop.pop_completed_impacts() == []  # reported once
+    prop.advance_to(0.25 + DT)  # exactly the end of the second pulse
+    (impact, y1, y2), = prop.pop_completed_impacts()
+    assert impact == impacts[1] and y2[2] - y1[2] == pytest.approx(-3.0e6 * DT / INERTIA[2], rel=1e-9)

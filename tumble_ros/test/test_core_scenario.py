@@ -137,3 +137,30 @@ def test_simulate_rejects_bad_t_eval():
     for bad in ([], [0.2, 0.1], [0.0, 3.0], [math.nan]):
         with pytest.raises(ScenarioError, match="t_eval"):
             simulate(Scenario(), t_eval=bad)
+
+
+def test_every_parameter_is_documented():
+    from tumble_ros.core.scenario import PARAMETER_DOCS, PARAMETER_NAMES
+
+    assert set(PARAMETER_DOCS) == set(PARAMETER_NAMES) == set(Scenario().to_parameters())
+
+
+@pytest.mark.parametrize("impact,now,field", [
+    (Impact(0.5, 2e-3, (1.0, 0.0, 0.0)), 0.0, "duration"),
+    (Impact(0.5, 1e-6, (1e10, 0.0, 0.0)), 0.0, "torque"),
+    (Impact(0.5, 1e-6, (1.0, 0.0, 0.0)), 0.6, "start"),
+    (Impact(1.9999999, 1e-6, (1.0, 0.0, 0.0)), 0.0, "start"),
+])
+def test_impact_limits_refuse_with_the_field_named(impact, now, field):
+    from tumble_ros.core import ImpactLimits
+
+    with pytest.raises(ScenarioError, match=f"^{field}:"):
+        ImpactLimits(max_duration=1e-3, max_impulse=100.0).check(impact, now=now, end=2.0)
+    ImpactLimits().check(Impact(0.7, 1e-6, (1.0, 0.0, 0.0)), now=0.6, end=2.0)  # a good one passes
+
+
+def test_dump_parse_round_trip():
+    from tumble_ros.core import dump_scenario, parse_scenario
+
+    sc = Scenario(impacts=(Impact(0.5, 3e-7, (1.0, 2.0, 3.0), "orbital"),), attitude="euler")
+    assert parse_scenario(dump_scenario(sc)) == sc

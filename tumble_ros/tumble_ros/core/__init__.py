@@ -14,13 +14,26 @@ interface, a name registry), ``scenario`` (validated inputs), ``propagator``
 from .dynamics import ATTITUDE_MODELS, angular_momentum_orbital, jacobi_integral, kinetic_energy
 from .integrators import METHODS
 from .propagator import IntegrationError, Propagator, Sample
-from .scenario import Impact, IntegratorSettings, Scenario, ScenarioError, load_scenario
+from .scenario import (
+    PARAMETER_DOCS,
+    Impact,
+    ImpactLimits,
+    IntegratorSettings,
+    Scenario,
+    ScenarioError,
+    dump_scenario,
+    load_scenario,
+    parse_scenario,
+)
+from .timebase import TimeBase
 from .simulate import SimulationResult, simulate
 
 __all__ = [
     "ATTITUDE_MODELS",
     "METHODS",
+    "PARAMETER_DOCS",
     "Impact",
+    "ImpactLimits",
     "IntegrationError",
     "IntegratorSettings",
     "Propagator",
@@ -28,9 +41,12 @@ __all__ = [
     "Scenario",
     "ScenarioError",
     "SimulationResult",
+    "TimeBase",
     "angular_momentum_orbital",
     "jacobi_integral",
     "kinetic_energy",
+    "dump_scenario",
     "load_scenario",
+    "parse_scenario",
     "simulate",
 ]

@@ -56,8 +56,7 @@ class Sample:
         The paper's (phi, psi, theta) [rad]; phi and psi continuous (not wrapped).
     matrix : (3, 3) array
         C = body -> orbital rotation matrix.
-    jacobi : float
-        Jacobi integral (``dynamics.jacobi_integral``).
+    inertia, orbit_rate : the scenario's, for :attr:`jacobi`.
     """
 
     t: float
@@ -65,7 +64,13 @@ class Sample:
     quaternion: np.ndarray
     euler: np.ndarray
     matrix: np.ndarray
-    jacobi: float
+    inertia: tuple[float, float, float]
+    orbit_rate: float
+
+    @property
+    def jacobi(self) -> float:
+        """Jacobi integral (``dynamics.jacobi_integral``), computed on demand."""
+        return float(jacobi_integral(self.t, self.omega, self.matrix, self.inertia, self.orbit_rate))
 
 
 class Propagator:
@@ -96,6 +101,8 @@ class Propagator:
         self.n_steps = 0
         self._euler_track = np.array(scenario.euler0, dtype=float)
         self._quat_prev = None
+        self._edge_state: dict[float, np.ndarray] = {}  # state at impact edges reached so far
+        self._reported: set[int] = set()
         self._stepper = None
         for impact in scenario.impacts:
             self.schedule(impact)
@@ -157,12 +164,37 @@ class Propagator:
         self.t = t
         return self.y
 
+    def pop_completed_impacts(self) -> list[tuple[Impact, np.ndarray, np.ndarray]]:
+        """Impacts that ended by the current time and were not returned before.
+
+        Each entry is (impact, state at its start, state at its end); the measured change
+        of w [rad/yr, body axes] is ``end[:3] - start[:3]``.
+        """
+        done = []
+        for impact in self._impacts:
+            key = id(impact)
+            if key in self._reported or impact.end > self.t:
+                continue
+            y_end = self._edge_state.get(impact.end)
+            if y_end is None and self.t == impact.end:
+                y_end = self.y.copy()  # the segment after the pulse has not started yet
+            if y_end is not None and impact.start in self._edge_state:
+                self._reported.add(key)
+                done.append((impact, self._edge_state[impact.start], y_end))
+        return done
+
+    def quaternion_of(self, y: np.ndarray) -> np.ndarray:
+        """Unit quaternion (scalar first, body -> orbital) of a state vector."""
+        if self._model.name == "quaternion":
+            return y[3:] / np.linalg.norm(y[3:])
+        return matrix_to_quaternion(self._model.to_matrix(y[3:]))
+
     def sample(self, t: float) -> Sample:
         """Advance to ``t`` and describe the state there."""
         y = self.advance_to(t)
         attitude = y[3:]
         c = self._model.to_matrix(attitude)
-        q = matrix_to_quaternion(c) if self._model.name != "quaternion" else attitude / np.linalg.norm(attitude)
+        q = self.quaternion_of(y)
         if self._quat_prev is not None and np.dot(q, self._quat_prev) < 0.0:
             q = -q  # keep the quaternion continuous in time (q and -q are the same attitude)
         self._quat_prev = q
@@ -172,11 +204,14 @@ class Propagator:
             quaternion=q,
             euler=self._continuous_euler(attitude),
             matrix=c,
-            jacobi=float(jacobi_integral(t, y[:3], c, self.scenario.inertia, self.scenario.orbit_rate)),
+            inertia=self.scenario.inertia,
+            orbit_rate=self.scenario.orbit_rate,
         )
 
     # -- internals ------------------------------------------------------------------
     def _start_segment(self, t0: float, y0: np.ndarray) -> None:
+        if any(t0 in (i.start, i.end) for i in self._impacts):
+            self._edge_state[t0] = np.array(y0)
         k = bisect.bisect_right(self._edges, t0)
         t_bound = self._edges[k] if k < len(self._edges) else self.t_end
         rhs = self._rhs_for(t0, t_bound)

@@ -31,11 +31,15 @@ __all__ = [
     "IntegratorSettings",
     "Scenario",
     "IMPACT_FRAMES",
+    "ImpactLimits",
+    "PARAMETER_DOCS",
     "load_scenario",
+    "parse_scenario",
+    "dump_scenario",
 ]
 
 IMPACT_FRAMES = ("body", "orbital")
-MIN_RTOL, MAX_RTOL = 1e-14, 0.1
+MIN_RTOL, MAX_RTOL = 100 * 2.220446049250313e-16, 0.1  # scipy raises smaller rtol to 100 eps
 
 
 class ScenarioError(ValueError):
@@ -118,6 +122,43 @@ class Impact:
     def end(self) -> float:
         """End time t2 [yr] (exclusive)."""
         return self.start + self.duration
+
+
+@dataclass(frozen=True)
+class ImpactLimits:
+    """Caps on impacts requested while a simulation runs (the simulator's service).
+
+    Attributes
+    ----------
+    max_duration : float
+        Longest accepted pulse [yr].
+    max_impulse : float
+        Largest accepted |M| * duration [inertia-units * rad/yr].
+    """
+
+    max_duration: float = 1e-3
+    max_impulse: float = 1e3
+
+    def __post_init__(self) -> None:
+        _set(self, "max_duration", _positive("max_impact_duration", self.max_duration))
+        _set(self, "max_impulse", _positive("max_impact_impulse", self.max_impulse))
+
+    def check(self, impact: Impact, now: float, end: float) -> None:
+        """Raise ScenarioError (naming the field) unless ``impact`` may be scheduled.
+
+        ``now`` is the current simulated time and ``end`` the end of the run [yr].
+        """
+        if impact.duration > self.max_duration:
+            _fail("duration", f"must be <= max_impact_duration = {self.max_duration:g} yr", impact.duration)
+        impulse = math.hypot(*impact.torque) * impact.duration
+        if impulse > self.max_impulse:
+            _fail("torque", f"|M| * duration = {impulse:.6g} exceeds max_impact_impulse = {self.max_impulse:g}",
+                  list(impact.torque))
+        if impact.start < now:
+            _fail("start", f"is in the past (the simulation is at t = {now!r} yr)", impact.start)
+        if impact.end > end:
+            _fail("start", f"the pulse would end at {impact.end!r} yr, after the end of the run ({end!r} yr)",
+                  impact.start)
 
 
 @dataclass(frozen=True)
@@ -320,6 +361,28 @@ PARAMETER_NAMES: tuple[str, ...] = (
 )
 
 
+#: Unit and meaning of every scenario parameter (the nodes' descriptors, the README tables).
+PARAMETER_DOCS: dict[str, tuple[str, str]] = {
+    "inertia": ("normalised", "principal moments of inertia (Ix, Iy, Iz); only ratios matter"),
+    "allow_unphysical_inertia": ("", "accept moments that break the triangle inequality (paper Figs 3, 6-10)"),
+    "orbit_rate": ("rad/yr", "orbital rate ws of the circular orbit, GM/R0^3 = ws^2; 0 = no torque"),
+    "omega0": ("rad/yr", "initial angular velocity (wx, wy, wz), body axes"),
+    "euler0": ("rad", "initial attitude as the paper's Euler angles (phi, psi, theta)"),
+    "attitude": ("", "attitude state: quaternion (no singularity) or euler (paper eq 15)"),
+    "duration": ("yr", "simulated time span tk, from t = 0"),
+    "output_interval": ("yr", "spacing of published samples"),
+    "integrator.method": ("", "integrator: " + ", ".join(METHODS)),
+    "integrator.rtol": ("", "relative tolerance (adaptive methods)"),
+    "integrator.atol": ("", "absolute tolerance (adaptive methods)"),
+    "integrator.step": ("yr", "step of fixed-step methods (rk4)"),
+    "integrator.max_step": ("yr", "largest step of adaptive methods; 0 = no limit"),
+    "impacts.start": ("yr", "start time of each scheduled impact"),
+    "impacts.duration": ("yr", "length of each impact pulse"),
+    "impacts.torque": ("I rad/yr^2", "torque of each impact, 3 numbers per impact, flattened"),
+    "impacts.frame": ("", "frame of each impact's torque: body or orbital (empty = all body)"),
+}
+
+
 def _impacts_from_parameters(params: Mapping[str, Any]) -> tuple[Impact, ...]:
     start = list(params.get("impacts.start", []) or [])
     duration = list(params.get("impacts.duration", []) or [])
@@ -364,27 +427,43 @@ def load_scenario(path: str | Path, node: str = "sim", ignore: frozenset[str] = 
 
     Raises ScenarioError for an unreadable file, a missing section or invalid values.
     """
-    import yaml
-
     path = Path(path)
     try:
-        document = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as err:
+        text = path.read_text()
+    except OSError as err:
         raise ScenarioError(f"{path}: cannot read scenario file: {err}") from None
+    try:
+        return parse_scenario(text, node, ignore)
+    except ScenarioError as err:
+        raise ScenarioError(f"{path}: {err}") from None
+
+
+def parse_scenario(text: str, node: str = "sim", ignore: frozenset[str] = frozenset()) -> Scenario:
+    """:func:`load_scenario` on the text of a parameters file."""
+    import yaml
+
+    try:
+        document = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        raise ScenarioError(f"cannot read scenario file: {err}") from None
     if not isinstance(document, Mapping) or not document:
-        raise ScenarioError(f"{path}: expected a ROS 2 parameters file ({{node: {{ros__parameters: ...}}}})")
+        raise ScenarioError("expected a ROS 2 parameters file ({node: {ros__parameters: ...}})")
     for key in (node, f"/{node}", "/**"):
         if key in document:
             section = document[key]
             break
     else:
         if len(document) != 1:
-            raise ScenarioError(f"{path}: no section for node {node!r} or '/**'")
+            raise ScenarioError(f"no section for node {node!r} or '/**'")
         section = next(iter(document.values()))
     if not isinstance(section, Mapping) or not isinstance(section.get("ros__parameters"), Mapping):
-        raise ScenarioError(f"{path}: the node section has no 'ros__parameters' mapping")
+        raise ScenarioError("the node section has no 'ros__parameters' mapping")
     params = {k: v for k, v in _flatten(section["ros__parameters"]).items() if k not in ignore}
-    try:
-        return Scenario.from_parameters(params)
-    except ScenarioError as err:
-        raise ScenarioError(f"{path}: {err}") from None
+    return Scenario.from_parameters(params)
+
+
+def dump_scenario(scenario: Scenario, node: str = "sim") -> str:
+    """The scenario as the text of a ROS 2 parameters file (inverse of :func:`parse_scenario`)."""
+    import yaml
+
+    return yaml.safe_dump({node: {"ros__parameters": scenario.to_parameters()}}, sort_keys=False)

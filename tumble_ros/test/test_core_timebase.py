@@ -1,0 +1,43 @@
+"""Simulated years <-> ROS stamps: exact recovery, int32 limits."""
+import numpy as np
+import pytest
+
+from tumble_ros.core.timebase import MAX_STAMP_NS, TimeBase
+
+
+@pytest.mark.parametrize("spy", [1.0, 0.001, 3600.0, 31557600.0 / 1e4])
+def test_time_recovered_exactly_from_sec_nanosec(spy):
+    tb = TimeBase(spy)
+    interval_ns, n = tb.sample_grid(0.002, 10.0)
+    for k in (0, 1, 7, n // 3, n - 1):
+        ns = k * interval_ns
+        sec, nanosec = divmod(ns, 1_000_000_000)
+        assert tb.to_years(tb.stamp_ns(sec, nanosec)) == tb.to_years(ns)
+        assert tb.to_ns(tb.to_years(ns)) == ns
+
+
+def test_ten_thousand_years_fit_in_int32_seconds():
+    tb = TimeBase(1.0)
+    interval_ns, n = tb.sample_grid(0.01, 10_000.0)
+    last = (n - 1) * interval_ns
+    assert tb.to_years(last) == pytest.approx(10_000.0)
+    assert last // 1_000_000_000 < 2**31
+    assert last < 2**53  # integer ns still exact in float64
+
+
+def test_span_past_int32_is_refused_with_a_reason():
+    with pytest.raises(ValueError, match="int32"):
+        TimeBase(3.15576e7).check_span(10_000.0)  # real seconds per year: 3e11 s
+    TimeBase(1.0).check_span(MAX_STAMP_NS / 1e9)
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf"), True])
+def test_bad_scale_refused(bad):
+    with pytest.raises(ValueError, match="seconds_per_year"):
+        TimeBase(bad)
+
+
+def test_grid_is_rounded_to_whole_nanoseconds():
+    interval_ns, n = TimeBase(1.0).sample_grid(1e-10, 1e-8)
+    assert interval_ns == 1 and n == 11
+    assert np.isclose(TimeBase(2.0).sample_grid(0.5, 2.0)[0], 1e9)

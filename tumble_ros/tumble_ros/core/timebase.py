@@ -1,0 +1,77 @@
+"""The one mapping between simulated years and ROS time stamps.
+
+Every message the simulator publishes is stamped with ROS time ``ns`` (integer nanoseconds,
+``builtin_interfaces/Time`` = ``sec`` * 10^9 + ``nanosec``). The simulated time in years is
+
+    t [yr] = ns / (10^9 * seconds_per_year)        (one float64 division)
+
+and the simulator integrates to exactly that float, so a reader applying the same formula to
+a stamp recovers, bit for bit, the time the sample was computed at. ``seconds_per_year`` is a
+parameter of the simulator (default 1: one ROS second per simulated year, so a 10,000-year
+run ends at 10,000 s, far from the int32 limit of ``Time.sec`` at 2^31 s ~ 68 years of ROS
+time; the integer nanoseconds also stay below 2^53, where float64 stops being exact).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+__all__ = ["TimeBase", "MAX_STAMP_NS"]
+
+#: Largest stamp: Time.sec is an int32.
+MAX_STAMP_NS = (2**31 - 1) * 10**9
+
+
+@dataclass(frozen=True)
+class TimeBase:
+    """Conversion between simulated years and integer ROS nanoseconds.
+
+    Attributes
+    ----------
+    seconds_per_year : float
+        ROS seconds per simulated year (> 0).
+    """
+
+    seconds_per_year: float = 1.0
+
+    def __post_init__(self) -> None:
+        s = self.seconds_per_year
+        if isinstance(s, bool) or not isinstance(s, (int, float)) or not math.isfinite(s) or s <= 0:
+            raise ValueError(f"seconds_per_year: must be a finite number > 0, got {s!r}")
+
+    @property
+    def ns_per_year(self) -> float:
+        """ROS nanoseconds per simulated year."""
+        return 1e9 * self.seconds_per_year
+
+    def to_years(self, ns: int) -> float:
+        """Simulated time [yr] of a stamp in integer nanoseconds."""
+        return ns / self.ns_per_year
+
+    def to_ns(self, t: float) -> int:
+        """Nearest integer-nanosecond stamp of a simulated time [yr]."""
+        return int(round(t * self.ns_per_year))
+
+    @staticmethod
+    def stamp_ns(sec: int, nanosec: int) -> int:
+        """Integer nanoseconds of a ``builtin_interfaces/Time`` (sec, nanosec)."""
+        return int(sec) * 1_000_000_000 + int(nanosec)
+
+    def check_span(self, duration: float) -> None:
+        """Raise ValueError if a run of ``duration`` years overflows Time.sec (int32)."""
+        if self.to_ns(duration) > MAX_STAMP_NS:
+            limit = MAX_STAMP_NS / self.ns_per_year
+            raise ValueError(
+                f"duration: {duration:g} yr at seconds_per_year = {self.seconds_per_year:g} ends past the "
+                f"int32 limit of builtin_interfaces/Time ({limit:.4g} yr); lower seconds_per_year"
+            )
+
+    def sample_grid(self, interval: float, duration: float) -> tuple[int, int]:
+        """Output grid in stamps: (interval_ns, n_samples) with samples at k * interval_ns.
+
+        The interval is rounded to whole nanoseconds (at least 1); the grid covers
+        [0, duration].
+        """
+        self.check_span(duration)
+        interval_ns = max(1, self.to_ns(interval))
+        return interval_ns, self.to_ns(duration) // interval_ns + 1
