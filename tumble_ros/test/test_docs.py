@@ -1,0 +1,37 @@
+"""The README documents every parameter, topic and service that the code declares."""
+import re
+from pathlib import Path
+
+from tumble_ros.core import Scenario
+from tumble_ros.nodes.sim import NODE_PARAMETERS
+
+README = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+
+
+def table_rows(text):
+    return {m.group(1) for m in re.finditer(r"^\| `([^`]+)`", text, re.M)}
+
+
+def test_every_parameter_has_a_readme_row():
+    rows = table_rows(README)
+    missing = [n for n in list(Scenario().to_parameters()) + list(NODE_PARAMETERS) if n not in rows]
+    assert not missing
+
+
+def test_every_topic_and_service_has_a_readme_row(ros):
+    from tumble_ros.nodes.sim import SimNode
+
+    ros.start(SimNode, start_paused=True)
+    ros.spin_until(lambda: len(ros.probe.get_topic_names_and_types()) >= 7, 5.0)
+    rows = table_rows(README) | {"pause", "resume", "step"}
+    topics = {n.lstrip("/") if n != "/clock" else n for n, _ in ros.probe.get_topic_names_and_types()}
+    ignored = {"rosout", "parameter_events", "apply_impact/_service_event"}
+    assert not sorted(topics - rows - ignored)
+    services = {n.lstrip("/") for n, _ in ros.probe.get_service_names_and_types() if not n.startswith(("/sim/", "/probe/"))}
+    assert not sorted(services - rows)
+
+
+def test_readme_starts_with_the_two_commands():
+    first_block = README.split("```")[1]
+    assert first_block.split() == ["bash", "make", "run", "#", "runs", "the", "main", "job",
+                                   "make", "test", "#", "runs", "the", "tests"]

@@ -1,0 +1,337 @@
+"""The simulator node: ``ros2 run tumble_ros sim``.
+
+Integrates a :class:`~tumble_ros.core.Scenario` with :class:`~tumble_ros.core.Propagator`
+and publishes every ``output_interval`` of simulated time:
+
+* ``angular_velocity`` (geometry_msgs/Vector3Stamped): w [rad/yr], body axes, frame ``body``;
+* ``attitude`` (geometry_msgs/QuaternionStamped): body -> orbital frame, frame ``orbital``;
+* ``euler_angles`` (geometry_msgs/Vector3Stamped): the paper's (phi, psi, theta) [rad] in x, y, z;
+* ``/clock`` (rosgraph_msgs/Clock);
+* ``impact_events`` (tumble_ros_interfaces/ImpactEvent) when a pulse has ended;
+* ``status`` (tumble_ros_interfaces/SimStatus, latched) on every state change;
+* ``scenario`` (tumble_ros_interfaces/ScenarioDescription, latched) at the start and after each
+  impact: the scenario and the initial state of the current segment.
+
+Every stamp is ROS time; the simulated time is t [yr] = stamp_ns / (1e9 * seconds_per_year)
+(``core.timebase``). Services: ``apply_impact`` (tumble_ros_interfaces/ApplyImpact), ``pause``,
+``resume``, ``step`` (std_srvs/Trigger). Impacts are queued by the service and applied at the
+next step boundary, never inside the callback. The node holds no physics.
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+
+import rclpy
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Quaternion, QuaternionStamped, Vector3, Vector3Stamped
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+from rclpy.service_introspection import ServiceIntrospectionState
+from rosgraph_msgs.msg import Clock
+from std_srvs.srv import Trigger
+
+from tumble_ros.core import (
+    Impact,
+    ImpactLimits,
+    IntegrationError,
+    Propagator,
+    Scenario,
+    ScenarioError,
+    TimeBase,
+    dump_scenario,
+)
+from tumble_ros.nodes.parameters import declare_scenario_parameters, node_parameter, read_parameters
+from tumble_ros.nodes.qos import LATCHED_QOS, STATE_QOS
+from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
+from tumble_ros_interfaces.srv import ApplyImpact
+
+__all__ = ["SimNode", "main"]
+
+#: Wall-clock period of the simulation timer [s].
+TICK_PERIOD = 0.005
+#: Samples published per tick when running as fast as possible (real_time_factor = 0).
+BATCH = 100
+FRAMES = {ApplyImpact.Request.FRAME_BODY: "body", ApplyImpact.Request.FRAME_ORBITAL: "orbital"}
+FRAME_CODES = {name: code for code, name in FRAMES.items()}
+
+#: The simulator's own parameters (not part of the scenario): name -> (default, unit, description,
+#: (min, max) or None, read_only).
+NODE_PARAMETERS = {
+    "seconds_per_year": (1.0, "s/yr", "ROS seconds per simulated year in every stamp and /clock",
+                         (1e-6, 1e6), True),
+    "real_time_factor": (0.1, "yr/s", "simulated years per wall-clock second; 0 = as fast as the "
+                         "subscribers take it", (0.0, 1e6), False),
+    "start_paused": (False, "", "start paused (resume or step with the services)", None, True),
+    "max_impact_duration": (1e-3, "yr", "longest impact pulse the service accepts", (1e-15, 1e6), False),
+    "max_impact_impulse": (1e3, "I rad/yr", "largest |M| * duration the service accepts", (1e-12, 1e15), False),
+}
+
+
+def stamp(ns: int) -> Time:
+    """builtin_interfaces/Time of integer nanoseconds."""
+    sec, nanosec = divmod(ns, 1_000_000_000)
+    return Time(sec=sec, nanosec=nanosec)
+
+
+class SimNode(Node):
+    """Simulator node; see the module docstring for its interface."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("sim", **kwargs)
+        # Registered before declaring, so start-up values are validated too (rclpy docs).
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        declare_scenario_parameters(self)
+        for name, spec in NODE_PARAMETERS.items():
+            node_parameter(self, name, *spec)
+        params = read_parameters(self, NODE_PARAMETERS)
+        self.scenario = Scenario.from_parameters(params["scenario"])  # ScenarioError: refused at start
+        self.timebase = TimeBase(params["seconds_per_year"])
+        self.timebase.check_span(self.scenario.duration)
+        self._interval_ns, self._n_samples = self.timebase.sample_grid(
+            self.scenario.output_interval, self.scenario.duration)
+        self._limits = ImpactLimits(params["max_impact_duration"], params["max_impact_impulse"])
+        self._rtf = params["real_time_factor"]
+        self._propagator = Propagator(self.scenario)
+        self._next_k = 0  # index of the next sample to publish
+        self._pending: deque[tuple[int, Impact]] = deque()
+        self._impact_ids: dict[int, int] = {}  # id(Impact) -> service id
+        self._next_id = 1
+        self._revision = 0
+        self._state = SimStatus.PAUSED if params["start_paused"] else SimStatus.RUNNING
+        self._pace_origin: tuple[float, int] | None = None  # (wall time, sample index) when pacing began
+
+        self._pub_omega = self.create_publisher(Vector3Stamped, "angular_velocity", STATE_QOS)
+        self._pub_attitude = self.create_publisher(QuaternionStamped, "attitude", STATE_QOS)
+        self._pub_euler = self.create_publisher(Vector3Stamped, "euler_angles", STATE_QOS)
+        self._pub_clock = self.create_publisher(Clock, "/clock", STATE_QOS)
+        self._pub_events = self.create_publisher(ImpactEvent, "impact_events", STATE_QOS)
+        self._pub_status = self.create_publisher(SimStatus, "status", LATCHED_QOS)
+        self._pub_scenario = self.create_publisher(ScenarioDescription, "scenario", LATCHED_QOS)
+        self._srv_impact = self.create_service(ApplyImpact, "apply_impact", self._on_apply_impact)
+        self._srv_impact.configure_introspection(
+            self.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
+        self.create_service(Trigger, "pause", self._on_pause)
+        self.create_service(Trigger, "resume", self._on_resume)
+        self.create_service(Trigger, "step", self._on_step)
+        self._publish_scenario(0.0, self._propagator.y)
+        self._publish_status("started")
+        self._timer = self.create_timer(TICK_PERIOD, self._on_tick)
+        self.get_logger().info(
+            f"simulating {self.scenario.duration:g} yr with {self.scenario.integrator.method}, "
+            f"{self._n_samples} samples every {self.scenario.output_interval:g} yr, "
+            f"real_time_factor {self._rtf:g}")
+
+    # -- parameters ---------------------------------------------------------------------
+    def _on_set_parameters(self, parameters) -> SetParametersResult:
+        """Refuse invalid values of the run-time parameters with a reason."""
+        for p in parameters:
+            try:
+                if p.name == "max_impact_duration":
+                    ImpactLimits(p.value, 1.0)
+                elif p.name == "max_impact_impulse":
+                    ImpactLimits(1.0, p.value)
+                elif p.name == "real_time_factor" and not math.isfinite(p.value):
+                    raise ScenarioError(f"real_time_factor: must be finite, got {p.value!r}")
+                elif p.name == "seconds_per_year":
+                    TimeBase(p.value)
+            except (ScenarioError, ValueError) as err:
+                return SetParametersResult(successful=False, reason=str(err))
+        if hasattr(self, "_propagator"):  # after start-up: apply the accepted run-time changes
+            self._apply_runtime_parameters(parameters)
+        return SetParametersResult(successful=True)
+
+    def _apply_runtime_parameters(self, parameters) -> None:
+        for p in parameters:
+            if p.name == "max_impact_duration":
+                self._limits = ImpactLimits(p.value, self._limits.max_impulse)
+            elif p.name == "max_impact_impulse":
+                self._limits = ImpactLimits(self._limits.max_duration, p.value)
+            elif p.name == "real_time_factor":
+                self._rtf = p.value
+                self._pace_origin = None
+
+    # -- simulation ---------------------------------------------------------------------
+    @property
+    def t(self) -> float:
+        """Simulated time [yr] of the last published sample (0 before the first)."""
+        return self.timebase.to_years(max(0, self._next_k - 1) * self._interval_ns)
+
+    def _on_tick(self) -> None:
+        if self._state != SimStatus.RUNNING:
+            return
+        self._publish_up_to(self._target_index())
+
+    def _target_index(self) -> int:
+        if self._rtf == 0.0:
+            return self._next_k + BATCH - 1
+        now = time.monotonic()
+        if self._pace_origin is None:
+            self._pace_origin = (now, self._next_k)
+        wall0, k0 = self._pace_origin
+        t_target = self.timebase.to_years(k0 * self._interval_ns) + self._rtf * (now - wall0)
+        return int(self.timebase.to_ns(t_target) // self._interval_ns)
+
+    def _publish_up_to(self, k_last: int) -> None:
+        k_last = min(k_last, self._n_samples - 1)
+        while self._next_k <= k_last:
+            self._schedule_pending()
+            ns = self._next_k * self._interval_ns
+            try:
+                sample = self._propagator.sample(self.timebase.to_years(ns))
+            except IntegrationError as err:
+                self._diverged(err)
+                return
+            self._publish_sample(ns, sample)
+            self._publish_impact_events()
+            self._next_k += 1
+        if self._rtf == 0.0:
+            for pub in (self._pub_omega, self._pub_attitude, self._pub_euler):
+                pub.wait_for_all_acked(rclpy.duration.Duration(seconds=1.0))
+        if self._next_k >= self._n_samples:
+            self._set_state(SimStatus.FINISHED, f"finished at t = {self.t:g} yr")
+
+    def _schedule_pending(self) -> None:
+        while self._pending:
+            impact_id, impact = self._pending.popleft()
+            self._propagator.schedule(impact)
+            self._impact_ids[id(impact)] = impact_id
+
+    def _publish_sample(self, ns: int, s) -> None:
+        header_stamp = stamp(ns)
+        omega = Vector3Stamped()
+        omega.header.stamp, omega.header.frame_id = header_stamp, "body"
+        omega.vector = Vector3(x=float(s.omega[0]), y=float(s.omega[1]), z=float(s.omega[2]))
+        attitude = QuaternionStamped()
+        attitude.header.stamp, attitude.header.frame_id = header_stamp, "orbital"
+        q = s.quaternion
+        attitude.quaternion = Quaternion(w=float(q[0]), x=float(q[1]), y=float(q[2]), z=float(q[3]))
+        euler = Vector3Stamped()
+        euler.header.stamp, euler.header.frame_id = header_stamp, "euler_phi_psi_theta"
+        euler.vector = Vector3(x=float(s.euler[0]), y=float(s.euler[1]), z=float(s.euler[2]))
+        self._pub_clock.publish(Clock(clock=header_stamp))
+        self._pub_omega.publish(omega)
+        self._pub_attitude.publish(attitude)
+        self._pub_euler.publish(euler)
+
+    def _publish_impact_events(self) -> None:
+        for impact, y_start, y_end in self._propagator.pop_completed_impacts():
+            event = ImpactEvent()
+            event.header.stamp = stamp(self.timebase.to_ns(impact.end))
+            event.header.frame_id = "body"
+            event.id = self._impact_ids.get(id(impact), 0)
+            event.start, event.end = impact.start, impact.end
+            event.frame = FRAME_CODES[impact.frame]
+            event.torque = Vector3(x=impact.torque[0], y=impact.torque[1], z=impact.torque[2])
+            dw = y_end[:3] - y_start[:3]
+            event.delta_omega = Vector3(x=float(dw[0]), y=float(dw[1]), z=float(dw[2]))
+            self._pub_events.publish(event)
+            self.get_logger().info(f"impact {event.id} applied on [{impact.start:.9g}, {impact.end:.9g}] yr: "
+                                   f"delta w = {dw.round(9).tolist()} rad/yr")
+            self._publish_scenario(impact.end, y_end)
+
+    def _diverged(self, err: IntegrationError) -> None:
+        self.get_logger().error(f"integration stopped: {err}")
+        self._set_state(SimStatus.DIVERGED, str(err))
+
+    # -- latched topics -----------------------------------------------------------------
+    def _set_state(self, state: int, message: str) -> None:
+        if state != self._state:
+            self._state = state
+            self._publish_status(message)
+
+    def _publish_status(self, message: str) -> None:
+        msg = SimStatus(state=self._state, t=self.t, message=message)
+        msg.header.stamp = self.get_clock().now().to_msg()
+        self._pub_status.publish(msg)
+
+    def _publish_scenario(self, t0: float, y0) -> None:
+        """Describe the scenario and the state the current segment starts from (latched)."""
+        msg = ScenarioDescription()
+        msg.header.stamp = stamp(self.timebase.to_ns(t0))
+        msg.parameters_yaml = dump_scenario(self.scenario.replace(impacts=self._propagator.impacts))
+        msg.seconds_per_year = self.timebase.seconds_per_year
+        msg.revision, self._revision = self._revision, self._revision + 1
+        msg.segment_start = t0
+        msg.omega = Vector3(x=float(y0[0]), y=float(y0[1]), z=float(y0[2]))
+        q = self._propagator.quaternion_of(y0)
+        msg.attitude = Quaternion(w=float(q[0]), x=float(q[1]), y=float(q[2]), z=float(q[3]))
+        self._pub_scenario.publish(msg)
+
+    # -- services -----------------------------------------------------------------------
+    def _on_apply_impact(self, request, response):
+        response.accepted = False
+        frame = FRAMES.get(request.frame)
+        if frame is None:
+            response.message = (f"frame: unknown frame {request.frame} (FRAME_BODY=0, FRAME_ORBITAL=1)")
+            return response
+        if self._state in (SimStatus.FINISHED, SimStatus.DIVERGED):
+            response.message = "the simulation has ended: no impact can be applied"
+            return response
+        start = self.t if request.start_now else request.start
+        torque = (request.torque.x, request.torque.y, request.torque.z)
+        try:
+            impact = Impact(start, request.duration, torque, frame)
+            self._limits.check(impact, now=self.t, end=self.scenario.duration)
+        except ScenarioError as err:
+            response.message = str(err)
+            return response
+        impact_id, self._next_id = self._next_id, self._next_id + 1
+        self._pending.append((impact_id, impact))
+        response.accepted, response.id = True, impact_id
+        response.scheduled_start, response.scheduled_end = impact.start, impact.end
+        response.message = f"impact {impact_id} scheduled on [{impact.start:.9g}, {impact.end:.9g}] yr"
+        self.get_logger().info(response.message)
+        return response
+
+    def _on_pause(self, request, response):
+        if self._state != SimStatus.RUNNING:
+            response.success, response.message = False, f"not running (state {self._state})"
+            return response
+        self._set_state(SimStatus.PAUSED, f"paused at t = {self.t:g} yr")
+        response.success, response.message = True, f"paused at t = {self.t!r} yr"
+        return response
+
+    def _on_resume(self, request, response):
+        if self._state != SimStatus.PAUSED:
+            response.success, response.message = False, f"not paused (state {self._state})"
+            return response
+        self._pace_origin = None
+        self._set_state(SimStatus.RUNNING, f"resumed at t = {self.t:g} yr")
+        response.success, response.message = True, f"resumed at t = {self.t!r} yr"
+        return response
+
+    def _on_step(self, request, response):
+        if self._state != SimStatus.PAUSED:
+            response.success, response.message = False, f"step needs the simulation paused (state {self._state})"
+            return response
+        self._publish_up_to(self._next_k)
+        response.success = self._state != SimStatus.DIVERGED
+        response.message = f"stepped to t = {self.t!r} yr"
+        return response
+
+
+def main(args=None) -> int:
+    """Entry point of ``ros2 run tumble_ros sim``."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = SimNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (ScenarioError, ValueError) as err:
+        print(f"sim: invalid parameters: {err}", flush=True)
+        return 1
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
