@@ -46,6 +46,8 @@ def test_topics_have_their_documented_types(ros):
     assert services["/apply_impact"] == ["tumble_ros_interfaces/srv/ApplyImpact"]
     for name in ("/pause", "/resume", "/step"):
         assert services[name] == ["std_srvs/srv/Trigger"]
+    # service introspection: calls can be recorded
+    assert ros.spin_until(lambda: "/apply_impact/_service_event" in listed(), 5.0)
 
 
 def test_published_state_equals_simulate_at_the_stamped_times(ros):
@@ -203,3 +205,14 @@ def test_divergence_stops_publishing_and_reports(ros):
     ros.spin_for(0.2)
     assert len(omega) < 11
     assert np.all(np.isfinite(omega_array(omega)))
+
+
+def test_ten_thousand_year_run_keeps_exact_times(ros):
+    """A cheap free spinner over 10,000 yr: stamps stay valid int32 and t is recovered exactly."""
+    omega = ros.collect(Vector3Stamped, "angular_velocity")
+    ros.start(SimNode, orbit_rate=0.0, omega0=[0.0, 0.001, 0.01], duration=10_000.0, output_interval=100.0,
+              real_time_factor=0.0, integrator__rtol=1e-8)
+    assert ros.spin_until(lambda: len(omega) == 101, 30.0), len(omega)
+    t = times(omega)
+    assert t[-1] == 10_000.0 and omega[-1].header.stamp.sec == 10_000
+    np.testing.assert_array_equal(t, np.arange(101) * 100.0)
