@@ -216,3 +216,36 @@ def test_ten_thousand_year_run_keeps_exact_times(ros):
     t = times(omega)
     assert t[-1] == 10_000.0 and omega[-1].header.stamp.sec == 10_000
     np.testing.assert_array_equal(t, np.arange(101) * 100.0)
+
+
+def test_as_fast_as_the_consumers_take_it_loses_nothing(ros):
+    """rtf = 0 with a slow consumer reporting progress: every sample arrives, in order."""
+    import time
+
+    from tumble_ros.nodes.progress import ProgressReporter
+    from tumble_ros.nodes.qos import STATE_QOS
+
+    reporter = ProgressReporter(ros.probe)
+    got = []
+
+    def slow(msg):
+        got.append(msg)
+        time.sleep(2e-4)
+        reporter.mark(TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec))
+
+    ros.probe.create_subscription(Vector3Stamped, "angular_velocity", slow, STATE_QOS)
+    ros.start(SimNode, duration=0.5, output_interval=1e-4, real_time_factor=0.0, min_consumers=1)
+    assert ros.spin_until(lambda: len(got) == 5001, 60.0), len(got)
+    ns = [TimeBase.stamp_ns(m.header.stamp.sec, m.header.stamp.nanosec) for m in got]
+    assert ns == [k * 100_000 for k in range(5001)]
+
+
+def test_min_consumers_holds_publication_until_they_report(ros):
+    omega = ros.collect(Vector3Stamped, "angular_velocity")
+    ros.start(SimNode, real_time_factor=0.0, min_consumers=1, **{k: v for k, v in SHORT.items() if k != "real_time_factor"})
+    ros.spin_for(0.5)
+    assert omega == []
+    from tumble_ros.nodes.progress import ProgressReporter
+
+    ProgressReporter(ros.probe)  # announces itself, never marks progress: the window still opens
+    assert ros.spin_until(lambda: len(omega) == 101, 10.0), len(omega)

@@ -56,3 +56,25 @@ def test_sim_process_refuses_invalid_parameters_with_a_reason(process):
     assert sim.returncode == 1
     assert "inertia" in out and "not physically realisable" in out
     assert "Traceback" not in out
+
+
+def test_sim_process_paces_on_a_consumer_in_another_process(ros, process):
+    from tumble_ros.core import TimeBase
+    from tumble_ros.nodes.progress import ProgressReporter
+    from tumble_ros.nodes.qos import STATE_QOS
+
+    reporter = ProgressReporter(ros.probe)
+    got = []
+
+    def on_omega(msg):
+        got.append(TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec))
+        reporter.mark(got[-1])
+
+    ros.probe.create_subscription(Vector3Stamped, "angular_velocity", on_omega, STATE_QOS)
+    sim = process("--ros-args", "-p", "duration:=0.5", "-p", "output_interval:=0.0001",
+                  "-p", "real_time_factor:=0.0", "-p", "min_consumers:=1")
+    assert ros.spin_until(lambda: len(got) == 5001, 60.0), (len(got), sim.poll())
+    assert got == [k * 100_000 for k in range(5001)]
+    sim.send_signal(signal.SIGINT)
+    sim.communicate(timeout=20)
+    assert sim.returncode == 0

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -48,7 +48,10 @@ def node_parameter(node: Node, name: str, default: Any, unit: str, description: 
                    value_range: tuple[float, float] | None, read_only: bool) -> None:
     """Declare one of a node's own parameters, with its range enforced by rclpy."""
     descriptor = ParameterDescriptor(description=describe(description, unit), read_only=read_only)
-    if value_range is not None:
+    if isinstance(default, int) and not isinstance(default, bool):
+        low, high = value_range if value_range is not None else (0, 2**31 - 1)
+        descriptor.integer_range = [IntegerRange(from_value=int(low), to_value=int(high), step=1)]
+    elif value_range is not None:
         descriptor.floating_point_range = [
             FloatingPointRange(from_value=float(value_range[0]), to_value=float(value_range[1]), step=0.0)]
     node.declare_parameter(name, default, descriptor)

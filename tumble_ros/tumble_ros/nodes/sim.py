@@ -45,6 +45,7 @@ from tumble_ros.core import (
     dump_scenario,
 )
 from tumble_ros.nodes.parameters import declare_scenario_parameters, node_parameter, read_parameters
+from tumble_ros.nodes.progress import ConsumerTracker
 from tumble_ros.nodes.qos import LATCHED_QOS, STATE_QOS
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
@@ -55,6 +56,8 @@ __all__ = ["SimNode", "main"]
 TICK_PERIOD = 0.005
 #: Samples published per tick when running as fast as possible (real_time_factor = 0).
 BATCH = 100
+#: Largest lead [samples] over the slowest registered consumer (well below STATE_QOS depth).
+WINDOW = 2 * BATCH
 FRAMES = {ApplyImpact.Request.FRAME_BODY: "body", ApplyImpact.Request.FRAME_ORBITAL: "orbital"}
 FRAME_CODES = {name: code for code, name in FRAMES.items()}
 
@@ -66,6 +69,7 @@ NODE_PARAMETERS = {
     "real_time_factor": (0.1, "yr/s", "simulated years per wall-clock second; 0 = as fast as the "
                          "subscribers take it", (0.0, 1e6), False),
     "start_paused": (False, "", "start paused (resume or step with the services)", None, True),
+    "min_consumers": (0, "", "wait until this many consumers report progress before publishing", None, True),
     "max_impact_duration": (1e-3, "yr", "longest impact pulse the service accepts", (1e-15, 1e6), False),
     "max_impact_impulse": (1e3, "I rad/yr", "largest |M| * duration the service accepts", (1e-12, 1e15), False),
 }
@@ -104,6 +108,8 @@ class SimNode(Node):
         self._state = SimStatus.PAUSED if params["start_paused"] else SimStatus.RUNNING
         self._pace_origin: tuple[float, int] | None = None  # (wall time, sample index) when pacing began
 
+        self._min_consumers = params["min_consumers"]
+        self._consumers = ConsumerTracker(self)
         self._pub_omega = self.create_publisher(Vector3Stamped, "angular_velocity", STATE_QOS)
         self._pub_attitude = self.create_publisher(QuaternionStamped, "attitude", STATE_QOS)
         self._pub_euler = self.create_publisher(Vector3Stamped, "euler_angles", STATE_QOS)
@@ -166,6 +172,18 @@ class SimNode(Node):
         self._publish_up_to(self._target_index())
 
     def _target_index(self) -> int:
+        """Last sample index to publish now: pacing, then flow control on the consumers."""
+        return min(self._paced_index(), self._consumer_limit())
+
+    def _consumer_limit(self) -> int:
+        if self._consumers.count < self._min_consumers:
+            return self._next_k - 1  # not all expected consumers are here yet
+        slowest = self._consumers.slowest_ns(max(0, self._next_k - 1) * self._interval_ns)
+        if slowest is None:
+            return self._n_samples
+        return (slowest // self._interval_ns if slowest >= 0 else -1) + WINDOW
+
+    def _paced_index(self) -> int:
         if self._rtf == 0.0:
             return self._next_k + BATCH - 1
         now = time.monotonic()
@@ -188,9 +206,6 @@ class SimNode(Node):
             self._publish_sample(ns, sample)
             self._publish_impact_events()
             self._next_k += 1
-        if self._rtf == 0.0:
-            for pub in (self._pub_omega, self._pub_attitude, self._pub_euler):
-                pub.wait_for_all_acked(rclpy.duration.Duration(seconds=1.0))
         if self._next_k >= self._n_samples:
             self._set_state(SimStatus.FINISHED, f"finished at t = {self.t:g} yr")
 

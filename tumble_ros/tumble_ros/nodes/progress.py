@@ -1,0 +1,112 @@
+"""Flow control between the simulator and the consumers that must not lose samples.
+
+DDS alone does not give "as fast as the subscribers take it": a reliable writer with a
+bounded history overwrites samples a slow reader has not taken yet, and rclpy executors
+take one message per subscription per wait cycle. So the consumers that need every
+sample (comparator, recorder) report how far they got on ``consumer_progress``
+(:class:`ProgressReporter`), and the simulator never runs more than a window of samples
+ahead of the slowest of them (:class:`ConsumerTracker`). The window is well below the
+depth of the state topics' queues, so nothing is ever overwritten.
+"""
+from __future__ import annotations
+
+import time
+
+from builtin_interfaces.msg import Time
+from rclpy.node import Node
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from tumble_ros_interfaces.msg import ConsumerProgress
+
+__all__ = ["ProgressReporter", "ConsumerTracker", "PROGRESS_TOPIC"]
+
+PROGRESS_TOPIC = "consumer_progress"
+PROGRESS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE)
+#: Reporting period of a consumer [s] (when it made progress).
+REPORT_PERIOD = 0.005
+#: A consumer re-sends its progress at least this often [s], so a simulator that starts later
+#: learns about it, and a silent consumer can be told from a slow one.
+HEARTBEAT_PERIOD = 0.5
+_NOTHING_YET = -1
+
+
+class ProgressReporter:
+    """Publishes a consumer's progress (the stamp of the last sample it fully processed)."""
+
+    def __init__(self, node: Node) -> None:
+        self._node = node
+        self._pub = node.create_publisher(ConsumerProgress, PROGRESS_TOPIC, PROGRESS_QOS)
+        self._last_ns = _NOTHING_YET
+        self._sent_ns: int | None = None
+        self._sent_at = 0.0
+        self._timer = node.create_timer(REPORT_PERIOD, self._report)
+
+    def mark(self, stamp_ns: int) -> None:
+        """Record that every sample up to ``stamp_ns`` (ROS time, ns) has been processed."""
+        if stamp_ns > self._last_ns:
+            self._last_ns = stamp_ns
+
+    def _report(self) -> None:
+        if self._last_ns == self._sent_ns and time.monotonic() - self._sent_at < HEARTBEAT_PERIOD:
+            return
+        self._publish(True)
+
+    def _publish(self, active: bool) -> None:
+        msg = ConsumerProgress(consumer=self._node.get_fully_qualified_name(), active=active)
+        if self._last_ns == _NOTHING_YET:
+            msg.last_stamp = Time(sec=-1, nanosec=0)
+        else:
+            msg.last_stamp = Time(sec=self._last_ns // 1_000_000_000, nanosec=self._last_ns % 1_000_000_000)
+        self._pub.publish(msg)
+        self._sent_ns, self._sent_at = self._last_ns, time.monotonic()
+
+    def close(self) -> None:
+        """Tell the simulator this consumer is leaving."""
+        self._timer.cancel()
+        self._publish(False)
+
+
+class ConsumerTracker:
+    """The simulator's view of its consumers' progress.
+
+    Parameters
+    ----------
+    node : the simulator node.
+    timeout : seconds without a report after which a consumer that is behind is dropped
+        (it died without saying so), with a warning.
+    """
+
+    def __init__(self, node: Node, timeout: float = 5.0) -> None:
+        self._node = node
+        self._timeout = timeout
+        self._progress: dict[str, tuple[int, float]] = {}  # consumer -> (last ns, wall time of report)
+        node.create_subscription(ConsumerProgress, PROGRESS_TOPIC, self._on_progress, PROGRESS_QOS)
+
+    def _on_progress(self, msg: ConsumerProgress) -> None:
+        if not msg.active:
+            self._progress.pop(msg.consumer, None)
+            return
+        ns = _NOTHING_YET if msg.last_stamp.sec < 0 else msg.last_stamp.sec * 1_000_000_000 + msg.last_stamp.nanosec
+        if msg.consumer not in self._progress:
+            self._node.get_logger().info(f"consumer {msg.consumer} registered: pacing on its progress")
+        self._progress[msg.consumer] = (ns, time.monotonic())
+
+    @property
+    def count(self) -> int:
+        """Number of active consumers."""
+        return len(self._progress)
+
+    def slowest_ns(self, published_ns: int) -> int | None:
+        """Stamp the slowest consumer has processed (-1: nothing yet); None without consumers.
+
+        ``published_ns`` is the stamp of the last published sample: a consumer that is
+        behind it and silent for longer than the timeout is dropped.
+        """
+        now = time.monotonic()
+        for name, (ns, seen) in list(self._progress.items()):
+            if ns < published_ns and now - seen > self._timeout:
+                self._node.get_logger().warning(f"consumer {name} silent for {now - seen:.1f} s: no longer waiting for it")
+                del self._progress[name]
+        if not self._progress:
+            return None
+        return min(ns for ns, _ in self._progress.values())
