@@ -9,8 +9,12 @@ Quick start::
 Modules: ``rotation`` (Euler angles, matrices, quaternions), ``torque`` (gravity
 gradient), ``dynamics`` (equations of motion, invariants), ``integrators`` (one
 interface, a name registry), ``scenario`` (validated inputs), ``propagator``
-(incremental integration split at impacts), ``simulate`` (batch runs).
+(incremental integration split at impacts), ``simulate`` (batch runs), ``analytic``
+(the paper's approximate solution, better linearisations, exact torque-free motion),
+``timebase`` (simulated years <-> ROS stamps).
 """
+from .analytic import MODELS as ANALYTIC_MODELS
+from .analytic import AnalyticModel, AnchorState, ModelNotApplicable, applicability, make_model
 from .dynamics import ATTITUDE_MODELS, angular_momentum_orbital, jacobi_integral, kinetic_energy
 from .integrators import METHODS
 from .propagator import IntegrationError, Propagator, Sample
@@ -29,6 +33,12 @@ from .timebase import TimeBase
 from .simulate import SimulationResult, simulate
 
 __all__ = [
+    "ANALYTIC_MODELS",
+    "AnalyticModel",
+    "AnchorState",
+    "ModelNotApplicable",
+    "applicability",
+    "make_model",
     "ATTITUDE_MODELS",
     "METHODS",
     "PARAMETER_DOCS",
