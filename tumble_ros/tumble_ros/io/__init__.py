@@ -5,3 +5,23 @@ concatenated, ``cdr`` messages) and reads it back. Message definitions are looke
 ament index and, because sourcing install/setup.bash can drop the venv from AMENT_PREFIX_PATH,
 also under ``sys.prefix``.
 """
+
+from .mcap_reader import (McapError, McapSummary, RecordedMessage, TopicSummary, read_messages,
+                          summarize)
+from .mcap_writer import McapWriter, offered_qos_yaml
+from .msgdefs import MessageDefinitionError, message_definition, normalize_type_name, type_hash
+
+__all__ = [
+    'McapError',
+    'McapSummary',
+    'McapWriter',
+    'MessageDefinitionError',
+    'RecordedMessage',
+    'TopicSummary',
+    'message_definition',
+    'normalize_type_name',
+    'offered_qos_yaml',
+    'read_messages',
+    'summarize',
+    'type_hash',
+]

@@ -1,0 +1,353 @@
+"""Write rosbag2-compatible MCAP files from raw CDR messages (no rclpy import).
+
+The files look like those of rosbag2's MCAP storage plugin (Jazzy), so Foxglove, ``ros2 bag
+info``, the ``rosbags`` library and mcap's own readers open them:
+
+- header profile ``ros2``;
+- one schema per message type, named ``pkg/msg/Type``, encoding ``ros2msg``, data = the
+  concatenated definition of :func:`tumble_ros.io.msgdefs.message_definition`;
+- one channel per topic, message encoding ``cdr``, metadata ``offered_qos_profiles`` (the YAML
+  text rosbag2 writes, given by the caller, may be empty; :func:`offered_qos_yaml` makes it) and
+  ``topic_type_hash`` (the RIHS01 hash rosidl generated for the type, empty if unknown);
+- messages are the raw CDR bytes as given (never re-serialised), log time = receive time;
+- chunked and compressed (``zstd`` by default, ``lz4`` or ``none``), with message indexes, chunk
+  indexes, statistics and summary offsets written by :meth:`McapWriter.close`.
+
+Durability contract
+-------------------
+Messages are collected in a chunk in memory. The chunk in progress is finalised (compressed,
+written with its message indexes) AND the file object is flushed to the operating system as soon
+as
+
+- it holds ``chunk_bytes`` or more bytes of message data (checked on every
+  :meth:`~McapWriter.write`), or
+- its first message is ``chunk_seconds`` or more old (wall-clock, monotonic; checked on every
+  :meth:`~McapWriter.write` and by :meth:`~McapWriter.poll`, which a node's timer should call,
+  e.g. every ``chunk_seconds / 2``; without writes or polls the age is not looked at).
+
+:meth:`~McapWriter.flush` does the same on demand. So a process killed with SIGKILL (or one that
+crashes) loses at most the chunk in progress: fewer than ``chunk_bytes`` bytes of message data,
+and no message older than ``chunk_seconds`` plus the polling period. Everything flushed before
+stays readable by a non-seeking (streaming) reader such as :func:`tumble_ros.io.mcap_reader.
+read_messages`, which stops cleanly at the unfinished chunk; only a closed file has the summary
+section (statistics, indexes) that seeking readers use. Data is handed to the OS, not fsync'ed:
+a power failure can lose what the OS had not yet written to disk.
+
+The writer is thread-safe (one lock): a recorder may write from subscription callbacks and poll
+from a timer in a multi-threaded executor.
+"""
+from __future__ import annotations
+
+import math
+import operator
+import os
+import threading
+import time
+from collections.abc import Mapping
+from pathlib import Path
+
+import yaml
+from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
+
+from .msgdefs import message_definition, normalize_type_name, type_hash
+
+__all__ = ['COMPRESSIONS', 'McapWriter', 'offered_qos_yaml']
+
+#: Accepted values of ``compression``.
+COMPRESSIONS = {'zstd': CompressionType.ZSTD, 'lz4': CompressionType.LZ4,
+                'none': CompressionType.NONE}
+
+_LIBRARY = f'tumble_ros.io.mcap_writer; {LIBRARY_IDENTIFIER}'
+# The mcap Writer finalises a chunk by itself when it grows beyond its chunk_size: set it out of
+# reach so that only this module's policy decides.
+_NEVER = 2 ** 62
+_UINT64_MAX = 2 ** 64 - 1
+
+
+def _check_time(name: str, value) -> int:
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        value = operator.index(value)       # int, numpy integers
+    except TypeError:
+        raise ValueError(f'{name} must be an int number of nanoseconds, got {value!r}') from None
+    if not 0 <= value <= _UINT64_MAX:
+        raise ValueError(f'{name} must be in [0, 2**64), got {value}')
+    return value
+
+
+# Keys of one QoS profile in rosbag2's offered_qos_profiles YAML (metadata version 9, Jazzy), in
+# the order rosbag2 writes them; third-party readers (rosbags) need every one of them.
+QOS_KEYS = ('history', 'depth', 'reliability', 'durability', 'deadline', 'lifespan', 'liveliness',
+            'liveliness_lease_duration', 'avoid_ros_namespace_conventions')
+_INFINITE = (9223372036, 854775807)   # rmw's "infinite" duration as rosbag2 writes it
+_QOS_DEFAULTS = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
+                 'durability': 'volatile', 'deadline': _INFINITE, 'lifespan': _INFINITE,
+                 'liveliness': 'automatic', 'liveliness_lease_duration': _INFINITE,
+                 'avoid_ros_namespace_conventions': False}
+
+
+def offered_qos_yaml(*profiles: Mapping) -> str:
+    """The ``offered_qos_profiles`` text of rosbag2 (Jazzy) for the given publisher profiles.
+
+    Each profile is a mapping with any of QOS_KEYS: policies as rosbag2 spells them
+    (``history`` 'keep_last'/'keep_all', ``reliability`` 'reliable'/'best_effort',
+    ``durability`` 'volatile'/'transient_local', ``liveliness`` 'automatic'/'manual_by_topic',
+    ...), durations as ``(sec, nsec)``; what is left out gets rclpy's defaults (depth 10,
+    reliable, volatile, infinite durations). No profile gives ''.
+    """
+    lines = []
+    for profile in profiles:
+        unknown = set(profile) - set(QOS_KEYS)
+        if unknown:
+            raise ValueError(f'offered_qos_yaml: unknown QoS keys {sorted(unknown)}')
+        values = {**_QOS_DEFAULTS, **profile}
+        first = True
+        for key in QOS_KEYS:
+            value = values[key]
+            lead = '- ' if first else '  '
+            first = False
+            if key in ('deadline', 'lifespan', 'liveliness_lease_duration'):
+                sec, nsec = value
+                lines += [f'{lead}{key}:', f'    sec: {int(sec)}', f'    nsec: {int(nsec)}']
+            elif key == 'avoid_ros_namespace_conventions':
+                lines.append(f'{lead}{key}: {"true" if value else "false"}')
+            elif key == 'depth':
+                lines.append(f'{lead}{key}: {int(value)}')
+            else:
+                lines.append(f'{lead}{key}: {str(value).lower()}')
+    return '\n'.join(lines)
+
+
+def _check_qos(text: str) -> None:
+    """offered_qos_profiles must be '' or a YAML list of complete profiles (as rosbag2 writes)."""
+    if text == '':
+        return
+    try:
+        profiles = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        raise ValueError(f'offered_qos_profiles is not YAML: {" ".join(str(err).split())}') \
+            from None
+    if not isinstance(profiles, list) or not all(isinstance(p, dict) for p in profiles):
+        raise ValueError('offered_qos_profiles must be a YAML list of QoS profiles '
+                         '(see offered_qos_yaml)')
+    for profile in profiles:
+        missing = [key for key in QOS_KEYS if key not in profile]
+        if missing:
+            raise ValueError(f'offered_qos_profiles: a profile lacks {missing} '
+                             f'(rosbag2 writes all of {list(QOS_KEYS)}; see offered_qos_yaml)')
+
+
+class McapWriter:
+    """A rosbag2-compatible MCAP file being written (see the module docstring).
+
+    ``path``: the file to create; it must not exist yet (a recording is never overwritten).
+    ``chunk_bytes`` (> 0): finalise and flush the chunk in progress once it holds that many bytes
+    of message data. ``chunk_seconds`` (> 0, may be ``math.inf``): ... once its first message is
+    that old. ``compression``: ``'zstd'`` (default), ``'lz4'`` or ``'none'``.
+    """
+
+    def __init__(self, path, *, chunk_bytes: int = 1_000_000, chunk_seconds: float = 1.0,
+                 compression: str = 'zstd'):
+        if isinstance(chunk_bytes, bool) or not isinstance(chunk_bytes, int) or chunk_bytes <= 0:
+            raise ValueError(f'chunk_bytes must be a positive int, got {chunk_bytes!r}')
+        if (isinstance(chunk_seconds, bool) or not isinstance(chunk_seconds, (int, float))
+                or math.isnan(chunk_seconds) or chunk_seconds <= 0):
+            raise ValueError(
+                f'chunk_seconds must be a positive number (math.inf: no age limit), '
+                f'got {chunk_seconds!r}')
+        if compression not in COMPRESSIONS:
+            raise ValueError(
+                f'compression must be one of {sorted(COMPRESSIONS)}, got {compression!r}')
+        try:
+            self._path = Path(os.fspath(path))
+        except TypeError:
+            raise ValueError(f'path must be a str or os.PathLike, got {path!r}') from None
+        self._chunk_bytes = chunk_bytes
+        self._chunk_seconds = float(chunk_seconds)
+        self._compression = compression
+        self._lock = threading.Lock()
+        self._closed = False
+        self._schemas: dict[str, int] = {}            # normalised type name -> schema id
+        self._channels: dict[str, tuple[int, str]] = {}  # topic -> (channel id, type name)
+        self._topics: dict[int, str] = {}             # channel id -> topic
+        self._counts: dict[str, int] = {}
+        self._pending_bytes = 0
+        self._pending_messages = 0
+        self._pending_since: float | None = None
+        self._chunks_written = 0
+        self._messages_flushed = 0
+        # 'xb': refuse to overwrite an existing recording.
+        self._stream = open(self._path, 'xb')
+        try:
+            self._writer = Writer(self._stream, chunk_size=_NEVER,
+                                  compression=COMPRESSIONS[compression])
+            self._writer.start(profile='ros2', library=_LIBRARY)
+            self._stream.flush()
+        except BaseException:
+            self._stream.close()
+            raise
+
+    # -- properties ---------------------------------------------------------------------------
+
+    @property
+    def path(self) -> Path:
+        """The file being written."""
+        return self._path
+
+    @property
+    def counts(self) -> dict[str, int]:
+        """Messages written so far, per topic (a copy; topics without messages included)."""
+        with self._lock:
+            return dict(self._counts)
+
+    @property
+    def chunks_written(self) -> int:
+        """Chunks finalised and handed to the OS so far."""
+        return self._chunks_written
+
+    @property
+    def messages_flushed(self) -> int:
+        """Messages handed to the OS so far (they survive a SIGKILL of this process)."""
+        return self._messages_flushed
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    # -- writing ------------------------------------------------------------------------------
+
+    def add_channel(self, topic: str, type_name: str, offered_qos_profiles: str = '') -> int:
+        """Register ``topic`` with messages of ``type_name`` ('pkg/msg/Type' or 'pkg/Type');
+        return its channel id.
+
+        The schema of a type is registered once, with the definition from
+        :func:`~tumble_ros.io.msgdefs.message_definition` (MessageDefinitionError if the type
+        cannot be found). Adding a topic again with the same type returns the same id.
+        """
+        if not isinstance(topic, str) or not topic:
+            raise ValueError(f'topic must be a non-empty str, got {topic!r}')
+        if not isinstance(offered_qos_profiles, str):
+            raise ValueError(
+                f'offered_qos_profiles must be a str (YAML), got {offered_qos_profiles!r}')
+        _check_qos(offered_qos_profiles)
+        schema_name = normalize_type_name(type_name)
+        with self._lock:
+            self._check_open()
+            if topic in self._channels:
+                channel_id, existing = self._channels[topic]
+                if existing != schema_name:
+                    raise ValueError(
+                        f'topic {topic!r} already has type {existing!r}, not {schema_name!r}')
+                return channel_id
+            schema_id = self._schemas.get(schema_name)
+            if schema_id is None:
+                data = message_definition(schema_name).encode('utf-8')
+                schema_id = self._writer.register_schema(schema_name, 'ros2msg', data)
+                self._schemas[schema_name] = schema_id
+            metadata = {'offered_qos_profiles': offered_qos_profiles,
+                        'topic_type_hash': type_hash(schema_name)}
+            channel_id = self._writer.register_channel(topic, 'cdr', schema_id, metadata)
+            self._channels[topic] = (channel_id, schema_name)
+            self._topics[channel_id] = topic
+            self._counts[topic] = 0
+            return channel_id
+
+    def write(self, channel_id: int, data: bytes, log_time_ns: int,
+              publish_time_ns: int | None = None) -> None:
+        """Append one message (raw CDR bytes, stored as given) to the chunk in progress.
+
+        ``log_time_ns``: receive time [ns] (rosbag2's recv_timestamp); ``publish_time_ns``:
+        send time [ns], defaults to ``log_time_ns``. Finalises and flushes the chunk when the
+        durability policy says so.
+        """
+        if not isinstance(data, (bytes, bytearray, memoryview)):
+            raise ValueError(f'data must be bytes (serialized CDR), got {type(data).__name__}')
+        log_time_ns = _check_time('log_time_ns', log_time_ns)
+        if publish_time_ns is None:
+            publish_time_ns = log_time_ns
+        publish_time_ns = _check_time('publish_time_ns', publish_time_ns)
+        data = bytes(data)
+        with self._lock:
+            self._check_open()
+            topic = self._topics.get(channel_id) if isinstance(channel_id, int) else None
+            if topic is None:
+                raise ValueError(f'channel_id {channel_id!r} was not returned by add_channel')
+            self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, data=data,
+                                     publish_time=publish_time_ns)
+            self._counts[topic] += 1
+            if self._pending_messages == 0:
+                self._pending_since = time.monotonic()
+            self._pending_messages += 1
+            self._pending_bytes += len(data)
+            if self._pending_bytes >= self._chunk_bytes or self._too_old():
+                self._flush_locked()
+
+    def poll(self) -> bool:
+        """Finalise and flush the chunk in progress if its first message is too old.
+
+        Call it from a timer. Returns True if a chunk was written.
+        """
+        with self._lock:
+            if self._closed or not self._too_old():
+                return False
+            self._flush_locked()
+            return True
+
+    def flush(self) -> None:
+        """Finalise the chunk in progress (if it has messages) and flush the file to the OS."""
+        with self._lock:
+            self._check_open()
+            self._flush_locked()
+
+    def close(self) -> None:
+        """Write the last chunk, the summary (statistics, indexes) and the footer; close the file.
+
+        Calling it again does nothing.
+        """
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            try:
+                if self._pending_messages:
+                    self._chunks_written += 1
+                self._writer.finish()
+                self._messages_flushed += self._pending_messages
+                self._pending_messages = 0
+                self._pending_bytes = 0
+                self._pending_since = None
+            finally:
+                self._stream.close()
+
+    def __enter__(self) -> McapWriter:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        state = 'closed' if self._closed else 'open'
+        return (f'McapWriter({str(self._path)!r}, {state}, compression={self._compression!r}, '
+                f'chunk_bytes={self._chunk_bytes}, chunk_seconds={self._chunk_seconds})')
+
+    # -- internals ----------------------------------------------------------------------------
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise ValueError(f'McapWriter for {str(self._path)!r} is closed')
+
+    def _too_old(self) -> bool:
+        return (self._pending_messages > 0 and self._pending_since is not None
+                and time.monotonic() - self._pending_since >= self._chunk_seconds)
+
+    def _flush_locked(self) -> None:
+        if self._pending_messages:
+            self._chunks_written += 1
+        # mcap's Writer.flush(): finalise the chunk in progress (if it holds messages), write
+        # what is buffered and flush the stream.
+        self._writer.flush()
+        self._messages_flushed += self._pending_messages
+        self._pending_messages = 0
+        self._pending_bytes = 0
+        self._pending_since = None
