@@ -28,6 +28,7 @@ setup(
         #   'name = tumble_ros.nodes.module:main',
         'console_scripts': [
             'sim = tumble_ros.nodes.sim:main',
+            'comparator = tumble_ros.nodes.comparator:main',
         ],
     },
 )

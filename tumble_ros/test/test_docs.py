@@ -3,6 +3,7 @@ import re
 from pathlib import Path
 
 from tumble_ros.core import Scenario
+from tumble_ros.nodes.comparator import PARAMETERS as COMPARATOR_PARAMETERS
 from tumble_ros.nodes.sim import NODE_PARAMETERS
 
 README = (Path(__file__).resolve().parents[2] / "README.md").read_text()
@@ -14,20 +15,23 @@ def table_rows(text):
 
 def test_every_parameter_has_a_readme_row():
     rows = table_rows(README)
-    missing = [n for n in list(Scenario().to_parameters()) + list(NODE_PARAMETERS) if n not in rows]
+    names = list(Scenario().to_parameters()) + list(NODE_PARAMETERS) + list(COMPARATOR_PARAMETERS)
+    missing = [n for n in names if n not in rows]
     assert not missing
 
 
 def test_every_topic_and_service_has_a_readme_row(ros):
+    from tumble_ros.nodes.comparator import ComparatorNode
     from tumble_ros.nodes.sim import SimNode
 
     ros.start(SimNode, start_paused=True)
-    ros.spin_until(lambda: len(ros.probe.get_topic_names_and_types()) >= 7, 5.0)
+    ros.start(ComparatorNode)
+    ros.spin_until(lambda: len(ros.probe.get_topic_names_and_types()) >= 12, 5.0)
     rows = table_rows(README) | {"pause", "resume", "step"}
     topics = {n.lstrip("/") if n != "/clock" else n for n, _ in ros.probe.get_topic_names_and_types()}
     ignored = {"rosout", "parameter_events", "apply_impact/_service_event"}
     assert not sorted(topics - rows - ignored)
-    services = {n.lstrip("/") for n, _ in ros.probe.get_service_names_and_types() if not n.startswith(("/sim/", "/probe/"))}
+    services = {n.lstrip("/") for n, _ in ros.probe.get_service_names_and_types() if not n.startswith(("/sim/", "/probe/", "/comparator/"))}
     assert not sorted(services - rows)
 
 

@@ -15,7 +15,10 @@ import numpy as np
 from tumble_ros.core import Scenario, ScenarioError, load_scenario, simulate
 
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
-EXECUTABLES = {"sim": "tumble_ros.nodes.sim:main"}
+EXECUTABLES = {
+    "sim": "tumble_ros.nodes.sim:main",
+    "comparator": "tumble_ros.nodes.comparator:main",
+}
 
 
 def run_executable(name: str, args: list[str]) -> int:

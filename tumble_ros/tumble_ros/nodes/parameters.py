@@ -15,7 +15,7 @@ from rclpy.parameter import Parameter
 
 from tumble_ros.core import PARAMETER_DOCS, Scenario
 
-__all__ = ["declare_scenario_parameters", "node_parameter", "read_parameters", "describe"]
+__all__ = ["declare_scenario_parameters", "node_parameter", "read_parameters", "read_scenario_parameters", "describe"]
 
 #: Array parameters whose default is empty need an explicit type.
 _EMPTY_ARRAY_TYPES = {"impacts.frame": Parameter.Type.STRING_ARRAY}
@@ -65,8 +65,11 @@ def _value(node: Node, name: str) -> Any:
     return list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else value
 
 
-def read_parameters(node: Node, own: dict[str, Any]) -> dict[str, Any]:
-    """Current values: ``{"scenario": {scenario params}, <own name>: value, ...}``."""
-    values: dict[str, Any] = {"scenario": {name: _value(node, name) for name in PARAMETER_DOCS}}
-    values.update({name: _value(node, name) for name in own})
-    return values
+def read_parameters(node: Node, names) -> dict[str, Any]:
+    """Current values of the named parameters."""
+    return {name: _value(node, name) for name in names}
+
+
+def read_scenario_parameters(node: Node) -> dict[str, Any]:
+    """Current values of the scenario parameters (see :func:`declare_scenario_parameters`)."""
+    return read_parameters(node, PARAMETER_DOCS)

@@ -27,6 +27,7 @@ import rclpy
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Quaternion, QuaternionStamped, Vector3, Vector3Stamped
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
@@ -44,7 +45,12 @@ from tumble_ros.core import (
     TimeBase,
     dump_scenario,
 )
-from tumble_ros.nodes.parameters import declare_scenario_parameters, node_parameter, read_parameters
+from tumble_ros.nodes.parameters import (
+    declare_scenario_parameters,
+    node_parameter,
+    read_parameters,
+    read_scenario_parameters,
+)
 from tumble_ros.nodes.progress import ConsumerTracker
 from tumble_ros.nodes.qos import LATCHED_QOS, STATE_QOS
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
@@ -92,7 +98,7 @@ class SimNode(Node):
         for name, spec in NODE_PARAMETERS.items():
             node_parameter(self, name, *spec)
         params = read_parameters(self, NODE_PARAMETERS)
-        self.scenario = Scenario.from_parameters(params["scenario"])  # ScenarioError: refused at start
+        self.scenario = Scenario.from_parameters(read_scenario_parameters(self))  # ScenarioError: refused
         self.timebase = TimeBase(params["seconds_per_year"])
         self.timebase.check_span(self.scenario.duration)
         self._interval_ns, self._n_samples = self.timebase.sample_grid(
@@ -338,7 +344,7 @@ def main(args=None) -> int:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (ScenarioError, ValueError) as err:
+    except (ScenarioError, ValueError, ParameterException) as err:
         print(f"sim: invalid parameters: {err}", flush=True)
         return 1
     finally:

@@ -1,0 +1,106 @@
+"""The comparator node: one error sample per (k-th) w sample, anchoring, refusals, late join."""
+import numpy as np
+import pytest
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import Vector3Stamped
+from rcl_interfaces.srv import SetParameters
+from rclpy.parameter import Parameter
+from std_srvs.srv import Trigger
+
+from tumble_ros.core import Scenario, TimeBase, make_model
+from tumble_ros.nodes.comparator import ComparatorNode
+from tumble_ros.nodes.sim import SimNode
+from tumble_ros_interfaces.msg import ErrorNorm
+
+RUN = dict(duration=0.2, output_interval=0.002, real_time_factor=0.0, min_consumers=1)
+
+
+def stamp_ns(msg):
+    return TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec)
+
+
+def vec(msgs):
+    return np.array([[m.vector.x, m.vector.y, m.vector.z] for m in msgs])
+
+
+def test_an_error_sample_for_every_omega_sample(ros):
+    omega = ros.collect(Vector3Stamped, "angular_velocity")
+    model = ros.collect(Vector3Stamped, "comparison/model_angular_velocity")
+    error = ros.collect(Vector3Stamped, "comparison/error")
+    norm = ros.collect(ErrorNorm, "comparison/error_norm")
+    ros.start(ComparatorNode)
+    ros.start(SimNode, **RUN)
+    assert ros.spin_until(lambda: len(norm) == 101 and len(error) == 101 and len(model) == 101, 20.0), len(norm)
+    assert [stamp_ns(m) for m in norm] == [stamp_ns(m) for m in omega]
+    np.testing.assert_allclose(vec(error), vec(omega) - vec(model), rtol=0, atol=1e-12)
+    np.testing.assert_allclose([m.norm for m in norm], np.linalg.norm(vec(error), axis=1), rtol=1e-12)
+    assert norm[0].norm < 1e-12  # anchored on the initial state
+    assert norm[-1].norm > 1e-4 and norm[0].model == "paper"
+    # the published model is the core's model at the stamped times
+    t = np.array([stamp_ns(m) * 1e-9 for m in omega])
+    np.testing.assert_allclose(vec(model), make_model("paper", Scenario()).omega(t), rtol=0, atol=1e-12)
+
+
+def test_decimation_compares_every_kth_sample(ros):
+    norm = ros.collect(ErrorNorm, "comparison/error_norm")
+    omega = ros.collect(Vector3Stamped, "angular_velocity")
+    ros.start(ComparatorNode, decimation=3)
+    ros.start(SimNode, **RUN)
+    assert ros.spin_until(lambda: len(omega) == 101, 20.0)
+    ros.spin_until(lambda: len(norm) == 34, 5.0)
+    assert [stamp_ns(m) for m in norm] == [stamp_ns(m) for m in omega[::3]]
+
+
+def test_a_model_that_does_not_apply_says_so_and_publishes_nothing(ros):
+    status = ros.collect(DiagnosticStatus, "comparison/status", latched=True)
+    norm = ros.collect(ErrorNorm, "comparison/error_norm")
+    omega = ros.collect(Vector3Stamped, "angular_velocity")
+    ros.start(ComparatorNode)
+    ros.start(SimNode, inertia=[1.0, 1.2, 1.5], **RUN)
+    assert ros.spin_until(lambda: len(omega) == 101, 20.0)
+    ros.spin_for(0.2)
+    assert norm == []
+    assert status[-1].level == DiagnosticStatus.WARN and "inertia" in status[-1].message
+    assert "symmetric" in status[-1].message
+
+
+def test_late_join_recovers_from_the_latched_scenario(ros):
+    sim = ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002, real_time_factor=0.0)
+    for _ in range(5):
+        assert ros.call(Trigger, "step", Trigger.Request()).success
+    status = ros.collect(DiagnosticStatus, "comparison/status", latched=True)
+    model = ros.collect(Vector3Stamped, "comparison/model_angular_velocity")
+    ros.start(ComparatorNode, model="fast_spin")
+    assert ros.spin_until(lambda: status and status[-1].level == DiagnosticStatus.OK, 10.0)
+    assert ros.call(Trigger, "resume", Trigger.Request()).success
+    assert ros.spin_until(lambda: sim._next_k == 101, 20.0)
+    assert ros.spin_until(lambda: len(model) == 96, 10.0), len(model)
+    t = np.array([stamp_ns(m) * 1e-9 for m in model])
+    expected = make_model("fast_spin", Scenario(duration=0.2, output_interval=0.002)).omega(t)
+    np.testing.assert_allclose(vec(model), expected, rtol=0, atol=1e-12)
+
+
+def test_an_impact_re_anchors_the_model(ros):
+    norm = ros.collect(ErrorNorm, "comparison/error_norm")
+    status = ros.collect(DiagnosticStatus, "comparison/status", latched=True)
+    ros.start(ComparatorNode)
+    # an axial kick of 0.2 rad/yr at t = 0.1: without re-anchoring the model would be off by 0.2
+    ros.start(SimNode, impacts__start=[0.1], impacts__duration=[3e-7], impacts__torque=[0.0, 0.0, 1e6], **RUN)
+    assert ros.spin_until(lambda: len(norm) == 101, 20.0), len(norm)
+    t = np.array([stamp_ns(m) * 1e-9 for m in norm])
+    err = np.array([m.norm for m in norm])
+    after = t > 0.1 + 3e-7
+    assert err[after].max() < 0.05  # the same size as before the kick, not 0.2
+    assert err[~after].max() > 0
+    assert any("segment 1" in s.message and "0.1000003" in s.message for s in status)
+
+
+def test_invalid_model_is_refused_at_start_up_and_at_run_time(ros):
+    with pytest.raises(Exception, match="unknown model"):
+        ros.start(ComparatorNode, model="nonsense")
+    ros.start(ComparatorNode)
+    req = SetParameters.Request(parameters=[Parameter("model", value="nonsense").to_parameter_msg()])
+    result = ros.call(SetParameters, "/comparator/set_parameters", req).results[0]
+    assert not result.successful and "unknown model" in result.reason
+    req = SetParameters.Request(parameters=[Parameter("decimation", value=0).to_parameter_msg()])
+    assert not ros.call(SetParameters, "/comparator/set_parameters", req).results[0].successful

@@ -1,0 +1,184 @@
+"""The comparator node: ``ros2 run tumble_ros comparator``.
+
+Subscribes to the simulator's ``angular_velocity`` and latched ``scenario``, evaluates an
+analytic model (:mod:`tumble_ros.core.analytic`) at each sample's simulated time and
+publishes, with the sample's own stamp:
+
+* ``comparison/model_angular_velocity`` (geometry_msgs/Vector3Stamped): the model's w [rad/yr];
+* ``comparison/error`` (geometry_msgs/Vector3Stamped): w_numeric - w_model [rad/yr];
+* ``comparison/error_norm`` (tumble_ros_interfaces/ErrorNorm): |error| and |error| / |w_numeric|;
+* ``comparison/status`` (diagnostic_msgs/DiagnosticStatus, latched): whether the model applies.
+
+The model is anchored on the state the simulator's current integration segment starts from
+(``scenario`` topic): at start-up, and again after every impact (the simulator re-publishes the
+description with the post-impact state), so the error measures the model, not the impact. A
+sample that arrives before the simulator's description of its segment is compared with the
+previous anchor. A late start or a restart of either node recovers from the latched topic.
+Samples that arrive before any description are held (up to ``MAX_PENDING``) and compared once
+it arrives. The comparator reports its progress on ``consumer_progress`` so the simulator never
+outruns it.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+import rclpy
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Vector3, Vector3Stamped
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+
+from tumble_ros.core import ANALYTIC_MODELS, ScenarioError, TimeBase, make_model, parse_scenario
+from tumble_ros.nodes.parameters import node_parameter, read_parameters
+from tumble_ros.nodes.progress import ProgressReporter
+from tumble_ros.nodes.qos import LATCHED_QOS, STATE_QOS
+from tumble_ros_interfaces.msg import ErrorNorm, ScenarioDescription
+
+__all__ = ["ComparatorNode", "main"]
+
+#: Samples held while waiting for the first scenario description.
+MAX_PENDING = 10_000
+
+PARAMETERS = {
+    "model": ("paper", "", "analytic model: " + ", ".join(ANALYTIC_MODELS), None, False),
+    "decimation": (1, "", "compare every k-th sample", (1, 1_000_000), False),
+}
+
+
+class ComparatorNode(Node):
+    """Comparator node; see the module docstring."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("comparator", **kwargs)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        for name, spec in PARAMETERS.items():
+            node_parameter(self, name, *spec)
+        params = read_parameters(self, PARAMETERS)
+        self._model_name: str = params["model"]
+        self._decimation: int = params["decimation"]
+        self._description: ScenarioDescription | None = None
+        self._timebase = TimeBase()
+        self._model = None
+        self._received = 0
+        self._pending: deque[Vector3Stamped] = deque(maxlen=MAX_PENDING)
+        self._pub_model = self.create_publisher(Vector3Stamped, "comparison/model_angular_velocity", STATE_QOS)
+        self._pub_error = self.create_publisher(Vector3Stamped, "comparison/error", STATE_QOS)
+        self._pub_norm = self.create_publisher(ErrorNorm, "comparison/error_norm", STATE_QOS)
+        self._pub_status = self.create_publisher(DiagnosticStatus, "comparison/status", LATCHED_QOS)
+        self._progress = ProgressReporter(self)
+        self.create_subscription(ScenarioDescription, "scenario", self._on_scenario, LATCHED_QOS)
+        self.create_subscription(Vector3Stamped, "angular_velocity", self._on_omega, STATE_QOS)
+        self._report(DiagnosticStatus.WARN, "waiting for the simulator's scenario description")
+
+    # -- parameters ---------------------------------------------------------------------
+    def _on_set_parameters(self, parameters) -> SetParametersResult:
+        for p in parameters:
+            if p.name == "model" and p.value not in ANALYTIC_MODELS:
+                return SetParametersResult(
+                    successful=False, reason=f"model: unknown model {p.value!r}; known: {', '.join(ANALYTIC_MODELS)}")
+        if hasattr(self, "_pub_status"):  # after start-up
+            for p in parameters:
+                if p.name == "model":
+                    self._model_name = p.value
+                    self._anchor()
+                elif p.name == "decimation":
+                    self._decimation = p.value
+        return SetParametersResult(successful=True)
+
+    # -- model anchoring ----------------------------------------------------------------
+    def _on_scenario(self, msg: ScenarioDescription) -> None:
+        self._description = msg
+        self._timebase = TimeBase(msg.seconds_per_year)
+        self._anchor()
+        while self._pending:
+            self._compare(self._pending.popleft())
+
+    def _anchor(self) -> None:
+        """(Re)build the model from the latest description; report whether it applies."""
+        msg = self._description
+        if msg is None:
+            return
+        try:
+            scenario = parse_scenario(msg.parameters_yaml)
+            q = msg.attitude
+            self._model = make_model(
+                self._model_name, scenario, t0=msg.segment_start,
+                omega=(msg.omega.x, msg.omega.y, msg.omega.z), quaternion=(q.w, q.x, q.y, q.z))
+        except (ScenarioError, ValueError) as err:
+            self._model = None
+            self.get_logger().warning(f"no comparison: {err}")
+            self._report(DiagnosticStatus.WARN, str(err))
+            return
+        text = (f"model {self._model_name!r} ({self._model.label}) anchored at t = "
+                f"{msg.segment_start:.9g} yr (segment {msg.revision})")
+        self.get_logger().info(text)
+        self._report(DiagnosticStatus.OK, text)
+
+    def _report(self, level: bytes, message: str) -> None:
+        status = DiagnosticStatus(level=level, name=self.get_fully_qualified_name(), message=message)
+        status.values = [KeyValue(key="model", value=self._model_name)]
+        self._pub_status.publish(status)
+
+    # -- comparison ---------------------------------------------------------------------
+    def _on_omega(self, msg: Vector3Stamped) -> None:
+        if self._description is None:
+            self._pending.append(msg)
+            return
+        self._compare(msg)
+
+    def _compare(self, msg: Vector3Stamped) -> None:
+        stamp_ns = TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec)
+        k, self._received = self._received, self._received + 1
+        if self._model is not None and k % self._decimation == 0:
+            t = self._timebase.to_years(stamp_ns)
+            numeric = np.array([msg.vector.x, msg.vector.y, msg.vector.z])
+            model = self._model.omega(np.array([t]))[0]
+            if np.all(np.isfinite(model)):
+                self._publish(msg.header, numeric, model)
+        self._progress.mark(stamp_ns)
+
+    def _publish(self, header, numeric: np.ndarray, model: np.ndarray) -> None:
+        error = numeric - model
+        self._pub_model.publish(Vector3Stamped(header=header, vector=_vector(model)))
+        self._pub_error.publish(Vector3Stamped(header=header, vector=_vector(error)))
+        norm = float(np.linalg.norm(error))
+        magnitude = float(np.linalg.norm(numeric))
+        self._pub_norm.publish(ErrorNorm(header=header, model=self._model_name, norm=norm,
+                                         relative=norm / magnitude if magnitude > 0 else math.inf))
+
+    def close(self) -> None:
+        """Tell the simulator this consumer leaves."""
+        self._progress.close()
+
+
+def _vector(v) -> Vector3:
+    return Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+
+def main(args=None) -> int:
+    """Entry point of ``ros2 run tumble_ros comparator``."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = ComparatorNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ParameterException as err:
+        print(f"comparator: invalid parameters: {err}", flush=True)
+        return 1
+    finally:
+        if node is not None:
+            if rclpy.ok():
+                node.close()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
