@@ -29,6 +29,8 @@ setup(
         'console_scripts': [
             'sim = tumble_ros.nodes.sim:main',
             'comparator = tumble_ros.nodes.comparator:main',
+            'recorder = tumble_ros.nodes.recorder:main',
+            'bringup = tumble_ros.nodes.bringup:main',
         ],
     },
 )

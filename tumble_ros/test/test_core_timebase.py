@@ -41,3 +41,10 @@ def test_grid_is_rounded_to_whole_nanoseconds():
     interval_ns, n = TimeBase(1.0).sample_grid(1e-10, 1e-8)
     assert interval_ns == 1 and n == 11
     assert np.isclose(TimeBase(2.0).sample_grid(0.5, 2.0)[0], 1e9)
+
+
+@pytest.mark.parametrize("duration", [0.3, 0.29999999999999999, 0.1 + 0.2, 2.0 / 3.0, 1e-9 * 7])
+def test_grid_never_passes_the_end(duration):
+    tb = TimeBase(1.0)
+    interval_ns, n = tb.sample_grid(1e-9, duration)
+    assert tb.to_years((n - 1) * interval_ns) <= duration < tb.to_years(n * interval_ns)

@@ -4,6 +4,7 @@ from pathlib import Path
 
 from tumble_ros.core import Scenario
 from tumble_ros.nodes.comparator import PARAMETERS as COMPARATOR_PARAMETERS
+from tumble_ros.nodes.recorder import PARAMETERS as RECORDER_PARAMETERS
 from tumble_ros.nodes.sim import NODE_PARAMETERS
 
 README = (Path(__file__).resolve().parents[2] / "README.md").read_text()
@@ -15,7 +16,7 @@ def table_rows(text):
 
 def test_every_parameter_has_a_readme_row():
     rows = table_rows(README)
-    names = list(Scenario().to_parameters()) + list(NODE_PARAMETERS) + list(COMPARATOR_PARAMETERS)
+    names = list(Scenario().to_parameters()) + list(NODE_PARAMETERS) + list(COMPARATOR_PARAMETERS) + list(RECORDER_PARAMETERS)
     missing = [n for n in names if n not in rows]
     assert not missing
 

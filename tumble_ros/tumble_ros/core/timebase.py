@@ -69,9 +69,12 @@ class TimeBase:
     def sample_grid(self, interval: float, duration: float) -> tuple[int, int]:
         """Output grid in stamps: (interval_ns, n_samples) with samples at k * interval_ns.
 
-        The interval is rounded to whole nanoseconds (at least 1); the grid covers
-        [0, duration].
+        The interval is rounded to whole nanoseconds (at least 1); every sample time
+        ``to_years(k * interval_ns)`` lies in [0, duration].
         """
         self.check_span(duration)
         interval_ns = max(1, self.to_ns(interval))
-        return interval_ns, self.to_ns(duration) // interval_ns + 1
+        n = self.to_ns(duration) // interval_ns + 1
+        while n > 1 and self.to_years((n - 1) * interval_ns) > duration:
+            n -= 1  # the stamp rounded up past the end: the last sample must lie within the run
+        return interval_ns, n

@@ -168,6 +168,21 @@ class SimNode(Node):
 
     # -- simulation ---------------------------------------------------------------------
     @property
+    def state(self) -> int:
+        """SimStatus state: RUNNING, PAUSED, FINISHED or DIVERGED."""
+        return self._state
+
+    @property
+    def status_message(self) -> str:
+        """The message of the last status published."""
+        return self._status_message
+
+    @property
+    def published_samples(self) -> int:
+        """Samples published so far."""
+        return self._next_k
+
+    @property
     def t(self) -> float:
         """Simulated time [yr] of the last published sample (0 before the first)."""
         return self.timebase.to_years(max(0, self._next_k - 1) * self._interval_ns)
@@ -265,6 +280,7 @@ class SimNode(Node):
             self._publish_status(message)
 
     def _publish_status(self, message: str) -> None:
+        self._status_message = message
         msg = SimStatus(state=self._state, t=self.t, message=message)
         msg.header.stamp = self.get_clock().now().to_msg()
         self._pub_status.publish(msg)

@@ -1,0 +1,157 @@
+"""``bringup``: simulator + comparator + recorder in one process, for one scenario's duration.
+
+    bringup [SCENARIO.yaml] [--output FILE.mcap] [--model NAME] [--quiet] [--ros-args ...]
+
+Runs the three nodes in one executor, the simulator as fast as the comparator and the recorder
+take it (``real_time_factor = 0``, ``min_consumers = 2``: nothing is lost), shows progress on
+stderr, and ends with a finalised MCAP file and a printed summary. The scenario file is a ROS 2
+params file (``config/*.yaml``); its ``sim`` section configures the simulator, and ``comparator``
+or ``recorder`` sections, if present, those nodes. Without a file, the default scenario runs.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import rclpy
+from rclpy.context import Context
+from rclpy.exceptions import ParameterException
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+
+from tumble_ros.core import ScenarioError
+from tumble_ros.nodes.comparator import ComparatorNode
+from tumble_ros.nodes.recorder import RecorderNode
+from tumble_ros.nodes.sim import SimNode
+from tumble_ros_interfaces.msg import SimStatus
+
+__all__ = ["run_bringup", "BringupResult", "main"]
+
+#: Wall-clock seconds between progress lines.
+PROGRESS_PERIOD = 1.0
+#: Wall-clock seconds to wait for the consumers to drain after the simulator finished.
+DRAIN_TIMEOUT = 30.0
+
+
+@dataclass
+class BringupResult:
+    """What a bringup run produced."""
+
+    output: Path
+    state: int  # SimStatus.FINISHED or DIVERGED
+    message: str
+    samples: int  # published by the simulator
+    counts: dict[str, int] = field(default_factory=dict)  # recorded per topic
+    wall_seconds: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.state == SimStatus.FINISHED
+
+
+def _progress_line(sim: SimNode, started: float) -> str:
+    done = sim.t / sim.scenario.duration if sim.scenario.duration else 1.0
+    rate = sim.published_samples / max(time.monotonic() - started, 1e-9)
+    return (f"\rbringup: t = {sim.t:.6g} / {sim.scenario.duration:g} yr ({100 * done:5.1f} %), "
+            f"{sim.published_samples} samples, {rate:,.0f} samples/s")
+
+
+def run_bringup(params_file: str | None = None, output: str | None = None, model: str | None = None,
+                ros_args: list[str] | None = None, progress=sys.stderr) -> BringupResult:
+    """Run sim + comparator + recorder until the scenario ends; return what was recorded.
+
+    Raises ScenarioError / ParameterException for invalid parameters (nothing is started then).
+    """
+    args = ["bringup", "--ros-args", *(ros_args or [])]
+    if params_file:
+        args += ["--params-file", str(params_file)]
+    context = Context()
+    rclpy.init(args=args, context=context, signal_handler_options=None)
+    executor = SingleThreadedExecutor(context=context)
+    nodes = []
+    try:
+        sim = SimNode(context=context, parameter_overrides=[
+            Parameter("real_time_factor", value=0.0), Parameter("min_consumers", value=2)])
+        nodes.append(sim)
+        comparator_overrides = [Parameter("model", value=model)] if model else []
+        nodes.append(ComparatorNode(context=context, parameter_overrides=comparator_overrides))
+        recorder_overrides = [Parameter("output", value=str(output))] if output else []
+        recorder = RecorderNode(context=context, parameter_overrides=recorder_overrides)
+        nodes.append(recorder)
+        for node in nodes:
+            executor.add_node(node)
+        started = last_line = time.monotonic()
+        while sim.state not in (SimStatus.FINISHED, SimStatus.DIVERGED):
+            executor.spin_once(timeout_sec=0.05)
+            if progress and time.monotonic() - last_line > PROGRESS_PERIOD:
+                progress.write(_progress_line(sim, started))
+                progress.flush()
+                last_line = time.monotonic()
+        # Let the consumers take what is in flight (they report progress; the recorder's count is exact).
+        deadline = time.monotonic() + DRAIN_TIMEOUT
+        while recorder.counts.get(sim.resolve_topic_name("angular_velocity"), 0) < sim.published_samples \
+                and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.01)
+        for _ in range(20):  # latched status and last comparator outputs
+            executor.spin_once(timeout_sec=0.01)
+        if progress:
+            progress.write(_progress_line(sim, started) + "\n")
+        nodes[1].close()
+        recorder.close()
+        return BringupResult(output=recorder.path, state=sim.state, message=sim.status_message,
+                             samples=sim.published_samples, counts=dict(recorder.counts),
+                             wall_seconds=time.monotonic() - started)
+    finally:
+        for node in reversed(nodes):
+            if isinstance(node, RecorderNode):
+                node.close()
+            executor.remove_node(node)
+            node.destroy_node()
+        executor.shutdown()
+        rclpy.try_shutdown(context=context)
+
+
+def format_result(result: BringupResult) -> str:
+    """The printed summary of a run."""
+    size = result.output.stat().st_size if result.output.exists() else 0
+    lines = [f"bringup: {'finished' if result.ok else 'DIVERGED'}: {result.message}",
+             f"  {result.samples} samples in {result.wall_seconds:.1f} s wall; "
+             f"recorded {result.output} ({size / 1e6:.2f} MB)"]
+    lines += [f"  {topic:40s} {count:8d}" for topic, count in sorted(result.counts.items())]
+    return "\n".join(lines)
+
+
+def main(args: list[str] | None = None) -> int:
+    """Entry point of ``ros2 run tumble_ros bringup``; ``args`` as sys.argv (program name first)."""
+    argv = list(sys.argv if args is None else args)[1:]
+    ros_args = []
+    if "--ros-args" in argv:
+        k = argv.index("--ros-args")
+        argv, ros_args = argv[:k], argv[k + 1:]
+    parser = argparse.ArgumentParser(prog="bringup", description=__doc__.split("\n\n")[0])
+    parser.add_argument("scenario", nargs="?", help="ROS 2 params file (config/*.yaml); default scenario if omitted")
+    parser.add_argument("--output", help="MCAP file to write (default recordings/tumble_<time>.mcap)")
+    parser.add_argument("--model", help="the comparator's analytic model")
+    parser.add_argument("--quiet", action="store_true", help="no progress display")
+    options = parser.parse_args(argv)
+    if options.scenario and not Path(options.scenario).is_file():
+        print(f"ERROR: no scenario file {options.scenario}", file=sys.stderr)
+        return 1
+    try:
+        result = run_bringup(options.scenario, options.output, options.model, ros_args,
+                             progress=None if options.quiet else sys.stderr)
+    except (ScenarioError, ValueError, ParameterException, FileExistsError) as err:
+        print(f"ERROR: {err}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("\nbringup: interrupted; the recording was finalised", file=sys.stderr)
+        return 130
+    print(format_result(result))
+    return 0 if result.ok else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

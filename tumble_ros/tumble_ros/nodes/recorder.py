@@ -1,0 +1,230 @@
+"""The recorder node: ``ros2 run tumble_ros recorder``.
+
+Records topics to one rosbag2-compatible MCAP file (:class:`tumble_ros.io.McapWriter`: profile
+``ros2``, ``ros2msg`` schemas with their dependencies, ``cdr`` messages, chunked and compressed)
+from raw subscriptions: the bytes written are the bytes received, never re-serialised.
+
+What it records: the tumble topics (:data:`DEFAULT_TOPICS`) by default, or the ``topics`` list,
+plus every topic whose name matches the ``topic_pattern`` regular expression; topics that appear
+later are picked up by a discovery timer. Each subscription copies its publishers' durability
+and reliability (a latched topic is received even when published before the recorder started),
+and its publishers' QoS go into the channel's ``offered_qos_profiles``.
+
+Durability: SIGINT/SIGTERM finalise the file (summary, statistics, indexes). A SIGKILL loses at
+most the chunk in progress: fewer than ``chunk_bytes`` bytes of message data, and nothing older
+than ``chunk_seconds`` (plus the polling period, ``chunk_seconds / 4``); what was flushed is read
+back by a non-seeking reader. The recorder reports its progress on ``consumer_progress`` so the
+simulator never outruns it: at the default settings nothing is dropped.
+"""
+from __future__ import annotations
+
+import re
+import struct
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+import rclpy
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from tumble_ros.io import McapWriter, offered_qos_yaml
+from tumble_ros.io.mcap_writer import COMPRESSIONS
+from tumble_ros.nodes.parameters import node_parameter, read_parameters
+from tumble_ros.nodes.progress import ProgressReporter
+from tumble_ros.nodes.qos import STATE_QOS
+
+__all__ = ["RecorderNode", "DEFAULT_TOPICS", "main"]
+
+#: Recorded when neither ``topics`` nor ``topic_pattern`` is given (relative names resolve
+#: in the recorder's namespace).
+DEFAULT_TOPICS = (
+    "angular_velocity", "attitude", "euler_angles", "/clock", "impact_events", "status", "scenario",
+    "comparison/model_angular_velocity", "comparison/error", "comparison/error_norm", "comparison/status",
+)
+#: Types whose CDR starts with a header stamp: one message per simulator sample. The recorder's
+#: progress is the oldest of their latest stamps.
+PER_SAMPLE_TYPES = {
+    "geometry_msgs/msg/Vector3Stamped", "geometry_msgs/msg/QuaternionStamped", "rosgraph_msgs/msg/Clock",
+    "tumble_ros_interfaces/msg/ErrorNorm",
+}
+#: A per-sample topic silent for this long [s] no longer holds the recorder's progress back.
+STALE_TOPIC = 2.0
+
+PARAMETERS = {
+    "output": ("", "", "MCAP file to write; empty = recordings/tumble_<UTC time>.mcap", None, True),
+    "topics": ([""], "", "topics to record (empty: the tumble topics)", None, True),
+    "topic_pattern": ("", "", "also record every topic whose full name matches this regex", None, True),
+    "chunk_bytes": (1_000_000, "B", "a chunk is written once it holds this much message data", (1, 2**30), True),
+    "chunk_seconds": (1.0, "s", "... or once its first message is this old", (0.01, 3600.0), True),
+    "compression": ("zstd", "", "chunk compression: " + ", ".join(COMPRESSIONS), None, True),
+    "discovery_period": (0.5, "s", "how often to look for new matching topics", (0.01, 60.0), True),
+}
+
+
+def _header_stamp_ns(data: bytes) -> int:
+    """Stamp of a CDR message that starts with builtin_interfaces/Time (after the 4-byte header)."""
+    little = data[1] == 1  # encapsulation CDR_LE = 0x0001
+    sec, nanosec = struct.unpack_from("<iI" if little else ">iI", data, 4)
+    return sec * 1_000_000_000 + nanosec
+
+
+def _policy_name(policy) -> str:
+    return policy.name.lower()
+
+
+class RecorderNode(Node):
+    """Recorder node; see the module docstring."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("recorder", **kwargs)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        for name, spec in PARAMETERS.items():
+            node_parameter(self, name, *spec)
+        p = read_parameters(self, PARAMETERS)
+        topics = [t for t in p["topics"] if t]
+        self._explicit = {self.resolve_topic_name(t) for t in (topics or ([] if p["topic_pattern"] else DEFAULT_TOPICS))}
+        self._pattern = re.compile(p["topic_pattern"]) if p["topic_pattern"] else None
+        path = Path(p["output"] or f"recordings/tumble_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self._writer = McapWriter(path, chunk_bytes=p["chunk_bytes"], chunk_seconds=p["chunk_seconds"],
+                                  compression=p["compression"])
+        self._channels: dict[str, int] = {}
+        self._last_stamp: dict[str, tuple[int, float]] = {}  # per-sample topic -> (stamp ns, wall time)
+        self._progress = ProgressReporter(self)
+        self._discover()
+        self.create_timer(p["discovery_period"], self._discover)
+        self.create_timer(p["chunk_seconds"] / 4, self._writer.poll)
+        self.get_logger().info(f"recording to {path}")
+
+    @property
+    def path(self) -> Path:
+        """The file being written."""
+        return self._writer.path
+
+    @property
+    def counts(self) -> dict[str, int]:
+        """Messages written per topic."""
+        return self._writer.counts
+
+    def _on_set_parameters(self, parameters) -> SetParametersResult:
+        for p in parameters:
+            if p.name == "compression" and p.value not in COMPRESSIONS:
+                return SetParametersResult(successful=False,
+                                           reason=f"compression: must be one of {', '.join(COMPRESSIONS)}")
+            if p.name == "topic_pattern":
+                try:
+                    re.compile(p.value)
+                except re.error as err:
+                    return SetParametersResult(successful=False, reason=f"topic_pattern: not a regex: {err}")
+        return SetParametersResult(successful=True)
+
+    # -- discovery ----------------------------------------------------------------------
+    def _wanted(self, topic: str) -> bool:
+        return topic in self._explicit or (self._pattern is not None and self._pattern.search(topic) is not None)
+
+    def _discover(self) -> None:
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self._channels or not self._wanted(topic):
+                continue
+            if len(types) != 1:
+                self.get_logger().warning(f"not recording {topic}: it has several types {types}")
+                self._channels[topic] = -1
+                continue
+            self._subscribe(topic, types[0])
+
+    def _subscribe(self, topic: str, type_name: str) -> None:
+        publishers = self.get_publishers_info_by_topic(topic)
+        if not publishers:
+            return  # only subscribers so far: the type is known but nobody offers QoS yet
+        try:
+            msg_class = _import_type(type_name)
+            channel = self._writer.add_channel(topic, type_name, offered_qos_yaml(*[_qos_dict(p.qos_profile)
+                                                                                    for p in publishers]))
+        except (LookupError, ImportError, ValueError) as err:
+            self.get_logger().error(f"cannot record {topic} ({type_name}): {err}")
+            self._channels[topic] = -1
+            return
+        self._channels[topic] = channel
+        latched = all(p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in publishers)
+        reliable = all(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE for p in publishers)
+        qos = QoSProfile(
+            history=HistoryPolicy.KEEP_LAST, depth=STATE_QOS.depth,
+            reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+        per_sample = type_name in PER_SAMPLE_TYPES
+
+        def on_message(data: bytes, info) -> None:
+            received = time.time_ns()
+            sent = info.get("source_timestamp") or received
+            self._writer.write(channel, data, received, sent)
+            if per_sample:
+                self._last_stamp[topic] = (_header_stamp_ns(data), time.monotonic())
+                self._report_progress()
+
+        self.create_subscription(msg_class, topic, on_message, qos, raw=True)
+        self.get_logger().info(f"recording {topic} ({type_name})")
+
+    def _report_progress(self) -> None:
+        now = time.monotonic()
+        live = [ns for ns, seen in self._last_stamp.values() if now - seen < STALE_TOPIC]
+        if live:
+            self._progress.mark(min(live))
+
+    def close(self) -> None:
+        """Finalise the file (idempotent) and tell the simulator this consumer leaves."""
+        if not self._writer.closed:
+            self._writer.close()
+            self.get_logger().info(f"wrote {self.path}: {sum(self.counts.values())} messages on "
+                                   f"{len(self.counts)} topics")
+        if rclpy.ok(context=self.context):
+            self._progress.close()
+
+
+def _import_type(type_name: str):
+    """The Python class of 'pkg/msg/Type' (also 'pkg/srv/Name_Event')."""
+    import importlib
+
+    package, kind, name = type_name.split("/")
+    return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+
+def _qos_dict(qos: QoSProfile) -> dict:
+    def duration(d) -> tuple[int, int]:
+        ns = d.nanoseconds
+        return divmod(ns, 1_000_000_000)
+
+    return {
+        "history": _policy_name(qos.history), "depth": qos.depth,
+        "reliability": _policy_name(qos.reliability), "durability": _policy_name(qos.durability),
+        "deadline": duration(qos.deadline), "lifespan": duration(qos.lifespan),
+        "liveliness": _policy_name(qos.liveliness), "liveliness_lease_duration": duration(qos.liveliness_lease_duration),
+        "avoid_ros_namespace_conventions": qos.avoid_ros_namespace_conventions,
+    }
+
+
+def main(args=None) -> int:
+    """Entry point of ``ros2 run tumble_ros recorder``."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = RecorderNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (ParameterException, ValueError, OSError) as err:
+        print(f"recorder: {err}", flush=True)
+        return 1
+    finally:
+        if node is not None:
+            node.close()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
