@@ -24,16 +24,14 @@ import math
 from collections import deque
 
 import numpy as np
-import rclpy
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Vector3, Vector3Stamped
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 from tumble_ros.core import ANALYTIC_MODELS, ScenarioError, TimeBase, make_model, parse_scenario
-from tumble_ros.nodes.parameters import node_parameter, read_parameters
+from tumble_ros.nodes.parameters import declare_node_parameters
+from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.progress import ProgressReporter
 from tumble_ros.nodes.qos import LATCHED_QOS, STATE_QOS
 from tumble_ros_interfaces.msg import ErrorNorm, ScenarioDescription
@@ -55,9 +53,7 @@ class ComparatorNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("comparator", **kwargs)
         self.add_on_set_parameters_callback(self._on_set_parameters)
-        for name, spec in PARAMETERS.items():
-            node_parameter(self, name, *spec)
-        params = read_parameters(self, PARAMETERS)
+        params = declare_node_parameters(self, PARAMETERS)
         self._model_name: str = params["model"]
         self._decimation: int = params["decimation"]
         self._description: ScenarioDescription | None = None
@@ -161,23 +157,7 @@ def _vector(v) -> Vector3:
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run tumble_ros comparator``."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = ComparatorNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ParameterException as err:
-        print(f"comparator: invalid parameters: {err}", flush=True)
-        return 1
-    finally:
-        if node is not None:
-            if rclpy.ok():
-                node.close()
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(ComparatorNode, args, "comparator")
 
 
 if __name__ == "__main__":

@@ -15,7 +15,7 @@ from rclpy.parameter import Parameter
 
 from tumble_ros.core import PARAMETER_DOCS, Scenario
 
-__all__ = ["declare_scenario_parameters", "node_parameter", "read_parameters", "read_scenario_parameters", "describe"]
+__all__ = ["declare_node_parameters", "declare_scenario_parameters", "node_parameter", "read_parameters", "read_scenario_parameters", "describe"]
 
 #: Array parameters whose default is empty need an explicit type.
 _EMPTY_ARRAY_TYPES = {"impacts.frame": Parameter.Type.STRING_ARRAY}
@@ -55,6 +55,14 @@ def node_parameter(node: Node, name: str, default: Any, unit: str, description: 
         descriptor.floating_point_range = [
             FloatingPointRange(from_value=float(value_range[0]), to_value=float(value_range[1]), step=0.0)]
     node.declare_parameter(name, default, descriptor)
+
+
+def declare_node_parameters(node: Node, table: dict[str, tuple]) -> dict[str, Any]:
+    """Declare a node's own parameters from ``{name: (default, unit, description, range, read_only)}``
+    and return their values (overrides and params files applied, ranges enforced)."""
+    for name, spec in table.items():
+        node_parameter(node, name, *spec)
+    return read_parameters(node, table)
 
 
 def _value(node: Node, name: str) -> Any:

@@ -61,9 +61,10 @@ class ProgressReporter:
         self._sent_ns, self._sent_at = self._last_ns, time.monotonic()
 
     def close(self) -> None:
-        """Tell the simulator this consumer is leaving."""
+        """Tell the simulator this consumer is leaving (if ROS is still up)."""
         self._timer.cancel()
-        self._publish(False)
+        if self._node.context.ok():
+            self._publish(False)
 
 
 class ConsumerTracker:

@@ -1,14 +1,16 @@
 """QoS profiles shared by the tumble_ros nodes (one place, so publishers and subscribers match)."""
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-#: Sampled state (w, attitude, Euler angles, /clock, events): reliable, deep queue, so a
-#: subscriber that keeps up loses nothing; the simulator also waits for acknowledgements
-#: between batches when it runs as fast as possible.
+#: Sampled state (w, attitude, Euler angles, /clock, events, comparisons): reliable with a deep
+#: queue, and transient-local, so a subscriber whose subscription is matched a moment after the
+#: publisher started (a recorder discovering topics, a late comparator) still receives the last
+#: 1000 samples. The simulator never runs more than a window of 200 samples ahead of the slowest
+#: consumer (nodes.progress), so the queue is never overrun for them.
 STATE_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
     depth=1000,
     reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.VOLATILE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
 
 #: Latched descriptions (scenario, status): the last message reaches late joiners.

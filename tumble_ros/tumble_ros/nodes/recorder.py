@@ -24,16 +24,14 @@ import time
 from datetime import datetime, timezone
 from pathlib import Path
 
-import rclpy
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.mcap_writer import COMPRESSIONS
-from tumble_ros.nodes.parameters import node_parameter, read_parameters
+from tumble_ros.nodes.parameters import declare_node_parameters
+from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.progress import ProgressReporter
 from tumble_ros.nodes.qos import STATE_QOS
 
@@ -82,9 +80,7 @@ class RecorderNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("recorder", **kwargs)
         self.add_on_set_parameters_callback(self._on_set_parameters)
-        for name, spec in PARAMETERS.items():
-            node_parameter(self, name, *spec)
-        p = read_parameters(self, PARAMETERS)
+        p = declare_node_parameters(self, PARAMETERS)
         topics = [t for t in p["topics"] if t]
         self._explicit = {self.resolve_topic_name(t) for t in (topics or ([] if p["topic_pattern"] else DEFAULT_TOPICS))}
         self._pattern = re.compile(p["topic_pattern"]) if p["topic_pattern"] else None
@@ -180,8 +176,7 @@ class RecorderNode(Node):
             self._writer.close()
             self.get_logger().info(f"wrote {self.path}: {sum(self.counts.values())} messages on "
                                    f"{len(self.counts)} topics")
-        if rclpy.ok(context=self.context):
-            self._progress.close()
+        self._progress.close()
 
 
 def _import_type(type_name: str):
@@ -208,22 +203,7 @@ def _qos_dict(qos: QoSProfile) -> dict:
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run tumble_ros recorder``."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = RecorderNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ParameterException, ValueError, OSError) as err:
-        print(f"recorder: {err}", flush=True)
-        return 1
-    finally:
-        if node is not None:
-            node.close()
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(RecorderNode, args, "recorder")
 
 
 if __name__ == "__main__":

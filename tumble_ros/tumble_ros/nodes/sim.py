@@ -23,12 +23,9 @@ import math
 import time
 from collections import deque
 
-import rclpy
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Quaternion, QuaternionStamped, Vector3, Vector3Stamped
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.service_introspection import ServiceIntrospectionState
@@ -46,11 +43,11 @@ from tumble_ros.core import (
     dump_scenario,
 )
 from tumble_ros.nodes.parameters import (
+    declare_node_parameters,
     declare_scenario_parameters,
-    node_parameter,
-    read_parameters,
     read_scenario_parameters,
 )
+from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.progress import ConsumerTracker
 from tumble_ros.nodes.qos import LATCHED_QOS, STATE_QOS
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
@@ -95,9 +92,7 @@ class SimNode(Node):
         # Registered before declaring, so start-up values are validated too (rclpy docs).
         self.add_on_set_parameters_callback(self._on_set_parameters)
         declare_scenario_parameters(self)
-        for name, spec in NODE_PARAMETERS.items():
-            node_parameter(self, name, *spec)
-        params = read_parameters(self, NODE_PARAMETERS)
+        params = declare_node_parameters(self, NODE_PARAMETERS)
         self.scenario = Scenario.from_parameters(read_scenario_parameters(self))  # ScenarioError: refused
         self.timebase = TimeBase(params["seconds_per_year"])
         self.timebase.check_span(self.scenario.duration)
@@ -353,21 +348,7 @@ class SimNode(Node):
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run tumble_ros sim``."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = SimNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ScenarioError, ValueError, ParameterException) as err:
-        print(f"sim: invalid parameters: {err}", flush=True)
-        return 1
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(SimNode, args, "sim")
 
 
 if __name__ == "__main__":
