@@ -36,11 +36,12 @@ BUILD_INPUTS := \
 # Rebuild anyway if build/ or install/ was deleted behind make's back.
 BUILD_PRESENT := $(and $(wildcard install/setup.bash),$(wildcard build/tumble_ros))
 
-.PHONY: help setup test run lock clean distclean FORCE
+.PHONY: help setup test run figures lock clean distclean FORCE
 
 help:
 	@echo 'make run    [CONFIG=...]       run the main job (python -m tumble_ros $$CONFIG)'
 	@echo 'make test   [PYTEST_ARGS=...]  run the tests'
+	@echo 'make figures [FIGS="fig3 fig9"] reproduce the paper figures into docs/figures/'
 	@echo 'make setup                     venv + pinned requirements + colcon build (idempotent)'
 	@echo 'make lock                      re-pin requirements.txt from requirements.in'
 	@echo 'make clean                     remove build/ install/ log/ and stamps (keeps .venv)'
@@ -68,6 +69,9 @@ test: setup
 
 run: setup
 	$(ENV) python -m tumble_ros $(CONFIG)
+
+figures: setup
+	$(ENV) python scripts/make_figures.py $(FIGS)
 
 lock:
 	scripts/lock.sh

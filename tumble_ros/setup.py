@@ -31,6 +31,7 @@ setup(
             'comparator = tumble_ros.nodes.comparator:main',
             'recorder = tumble_ros.nodes.recorder:main',
             'bringup = tumble_ros.nodes.bringup:main',
+            'analyze = tumble_ros.analysis.cli:main',
         ],
     },
 )

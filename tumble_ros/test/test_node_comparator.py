@@ -105,3 +105,15 @@ def test_invalid_model_is_refused_at_start_up_and_at_run_time(ros):
     assert not result.successful and "unknown model" in result.reason
     req = SetParameters.Request(parameters=[Parameter("decimation", value=0).to_parameter_msg()])
     assert not ros.call(SetParameters, "/comparator/set_parameters", req).results[0].successful
+
+
+def test_samples_before_an_impact_keep_the_pre_impact_model(ros):
+    """With the simulator far ahead, pre-impact samples are still compared with their own anchor."""
+    model = ros.collect(Vector3Stamped, "comparison/model_angular_velocity")
+    ros.start(ComparatorNode)
+    ros.start(SimNode, impacts__start=[0.1], impacts__duration=[3e-7], impacts__torque=[0.0, 0.0, 1e6], **RUN)
+    assert ros.spin_until(lambda: len(model) == 101, 20.0), len(model)
+    t = np.array([stamp_ns(m) * 1e-9 for m in model])
+    before = t <= 0.1
+    expected = make_model("paper", Scenario(duration=0.2, output_interval=0.002)).omega(t[before])
+    np.testing.assert_allclose(vec(model)[before], expected, rtol=0, atol=1e-12)

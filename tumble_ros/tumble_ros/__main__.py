@@ -19,6 +19,7 @@ EXECUTABLES = {
     "comparator": "tumble_ros.nodes.comparator:main",
     "recorder": "tumble_ros.nodes.recorder:main",
     "bringup": "tumble_ros.nodes.bringup:main",
+    "analyze": "tumble_ros.analysis.cli:main",
 }
 
 

@@ -2,4 +2,26 @@
 
 Reads the files written by ``tumble_ros.io`` and computes errors, periods and plots without a
 ROS runtime: no rclpy, no running nodes, no sourced workspace needed.
+
+    from tumble_ros.analysis import load_recording, analyze, format_summary, write_figures
+    rec = load_recording("run.mcap")          # arrays: rec.t, rec.omega, rec.quaternion, ...
+    summary = analyze(rec)                    # AnalysisSummary
+    print(format_summary(summary))            # or summary_to_dict(summary) for JSON
+    write_figures(rec, "figures/", summary)   # PNG paths
+
+Modules: ``recording`` (MCAP -> arrays), ``summary`` (the numbers and their text/JSON),
+``figures`` (matplotlib, Agg; imported lazily here so that the summary needs no matplotlib),
+``cli`` (the ``analyze`` command, ``python -m tumble_ros.analysis``). See docs/analysis.md.
 """
+from .recording import AnalysisError, Recording, load_recording
+from .summary import AnalysisSummary, analyze, format_summary, summary_to_dict
+
+__all__ = ['AnalysisError', 'AnalysisSummary', 'Recording', 'analyze', 'format_summary',
+           'load_recording', 'summary_to_dict', 'write_figures']
+
+
+def write_figures(rec, out_dir, summary=None):
+    """:func:`tumble_ros.analysis.figures.write_figures` (imports matplotlib on first use)."""
+    from .figures import write_figures as _write
+
+    return _write(rec, out_dir, summary)

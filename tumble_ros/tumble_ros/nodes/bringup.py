@@ -90,12 +90,21 @@ def run_bringup(params_file: str | None = None, output: str | None = None, model
                 progress.write(_progress_line(sim, started))
                 progress.flush()
                 last_line = time.monotonic()
-        # Let the consumers take what is in flight (they report progress; the recorder's count is exact).
+        # Let the consumers take what is in flight, until every sample and every comparison
+        # has been recorded (latched status/scenario: the last one is always delivered).
+        comparator = nodes[1]
+
+        def drained() -> bool:
+            counts = recorder.counts
+            per_sample = ("angular_velocity", "attitude", "euler_angles", "/clock")
+            comparisons = ("comparison/model_angular_velocity", "comparison/error", "comparison/error_norm")
+            return (comparator.consumed == sim.published_samples
+                    and all(counts.get(sim.resolve_topic_name(t), 0) == sim.published_samples for t in per_sample)
+                    and all(counts.get(comparator.resolve_topic_name(t), 0) == comparator.compared
+                            for t in comparisons))
+
         deadline = time.monotonic() + DRAIN_TIMEOUT
-        while recorder.counts.get(sim.resolve_topic_name("angular_velocity"), 0) < sim.published_samples \
-                and time.monotonic() < deadline:
-            executor.spin_once(timeout_sec=0.01)
-        for _ in range(20):  # latched status and last comparator outputs
+        while not drained() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.01)
         if progress:
             progress.write(_progress_line(sim, started) + "\n")

@@ -11,9 +11,10 @@ publishes, with the sample's own stamp:
 
 The model is anchored on the state the simulator's current integration segment starts from
 (``scenario`` topic): at start-up, and again after every impact (the simulator re-publishes the
-description with the post-impact state), so the error measures the model, not the impact. A
-sample that arrives before the simulator's description of its segment is compared with the
-previous anchor. A late start or a restart of either node recovers from the latched topic.
+description with the post-impact state), so the error measures the model, not the impact. Each
+sample is compared with the model of the segment its time falls in: the simulator publishes a
+segment's description before the segment's first sample, and samples of the previous segment that
+are still queued keep the previous model. A late start or a restart of either node recovers from the latched topic.
 Samples that arrive before any description are held (up to ``MAX_PENDING``) and compared once
 it arrives. The comparator reports its progress on ``consumer_progress`` so the simulator never
 outruns it.
@@ -58,8 +59,10 @@ class ComparatorNode(Node):
         self._decimation: int = params["decimation"]
         self._description: ScenarioDescription | None = None
         self._timebase = TimeBase()
-        self._model = None
+        self._model = None  # anchored on the latest segment
+        self._previous: list = []  # earlier segments' models, newest last: (segment_start, model)
         self._received = 0
+        self.compared = 0  # comparisons published (each on the three comparison topics)
         self._pending: deque[Vector3Stamped] = deque(maxlen=MAX_PENDING)
         self._pub_model = self.create_publisher(Vector3Stamped, "comparison/model_angular_velocity", STATE_QOS)
         self._pub_error = self.create_publisher(Vector3Stamped, "comparison/error", STATE_QOS)
@@ -87,6 +90,12 @@ class ComparatorNode(Node):
 
     # -- model anchoring ----------------------------------------------------------------
     def _on_scenario(self, msg: ScenarioDescription) -> None:
+        old = self._description
+        if old is not None and msg.revision > old.revision and msg.segment_start > old.segment_start:
+            # Samples of the previous segment may still be queued: keep its model for them.
+            self._previous = [*self._previous[-7:], (old.segment_start, self._model)]
+        elif old is None or msg.revision <= old.revision:
+            self._previous = []  # a new run (the simulator restarted)
         self._description = msg
         self._timebase = TimeBase(msg.seconds_per_year)
         self._anchor()
@@ -129,15 +138,31 @@ class ComparatorNode(Node):
     def _compare(self, msg: Vector3Stamped) -> None:
         stamp_ns = TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec)
         k, self._received = self._received, self._received + 1
-        if self._model is not None and k % self._decimation == 0:
-            t = self._timebase.to_years(stamp_ns)
+        t = self._timebase.to_years(stamp_ns)
+        model_at = self._model_for(t)
+        if model_at is not None and k % self._decimation == 0:
             numeric = np.array([msg.vector.x, msg.vector.y, msg.vector.z])
-            model = self._model.omega(np.array([t]))[0]
+            model = model_at.omega(np.array([t]))[0]
             if np.all(np.isfinite(model)):
                 self._publish(msg.header, numeric, model)
         self._progress.mark(stamp_ns)
 
+    def _model_for(self, t: float):
+        """The model of the segment containing ``t`` (samples can trail the description)."""
+        if self._description is None or t >= self._description.segment_start:
+            return self._model
+        for start, model in reversed(self._previous):
+            if t >= start:
+                return model
+        return None
+
+    @property
+    def consumed(self) -> int:
+        """Samples taken from angular_velocity and processed (compared or not)."""
+        return self._received
+
     def _publish(self, header, numeric: np.ndarray, model: np.ndarray) -> None:
+        self.compared += 1
         error = numeric - model
         self._pub_model.publish(Vector3Stamped(header=header, vector=_vector(model)))
         self._pub_error.publish(Vector3Stamped(header=header, vector=_vector(error)))

@@ -219,8 +219,8 @@ class SimNode(Node):
             except IntegrationError as err:
                 self._diverged(err)
                 return
+            self._publish_impact_events()  # before the sample: its new segment description first
             self._publish_sample(ns, sample)
-            self._publish_impact_events()
             self._next_k += 1
         if self._next_k >= self._n_samples:
             self._set_state(SimStatus.FINISHED, f"finished at t = {self.t:g} yr")

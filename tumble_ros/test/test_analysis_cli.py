@@ -1,0 +1,251 @@
+"""The analyze command (tumble_ros.analysis.cli), the figures, and the no-ROS-runtime promise."""
+from __future__ import annotations
+
+import ast
+import json
+import math
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_analysis_support import write_recording
+
+from tumble_ros.analysis import load_recording, write_figures
+from tumble_ros.analysis.cli import command
+from tumble_ros.analysis.figures import plot_error, plot_impacts
+from tumble_ros.core import Scenario
+from tumble_ros.io import McapWriter
+
+DATA = Path(__file__).resolve().parent / 'data'
+GOLDEN = DATA / 'golden.mcap'
+ANALYSIS = Path(__file__).resolve().parents[1] / 'tumble_ros' / 'analysis'
+PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
+
+
+def _one_error_line(capsys) -> str:
+    out, err = capsys.readouterr()
+    assert out == ''
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith('ERROR: ') and 'Traceback' not in err
+    return lines[0]
+
+
+# -- user errors --------------------------------------------------------------------------------
+
+def _no_angular_velocity(path: Path) -> Path:
+    from rclpy.serialization import serialize_message
+    from tumble_ros_interfaces.msg import SimStatus
+    with McapWriter(path) as writer:
+        ch = writer.add_channel('/status', 'tumble_ros_interfaces/msg/SimStatus')
+        writer.write(ch, serialize_message(SimStatus(state=SimStatus.FINISHED)), 1, 1)
+    return path
+
+
+def _empty_angular_velocity(path: Path) -> Path:
+    with McapWriter(path) as writer:
+        writer.add_channel('/angular_velocity', 'geometry_msgs/msg/Vector3Stamped')
+    return path
+
+
+def _wrong_type(path: Path) -> Path:
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import Float64
+    with McapWriter(path) as writer:
+        ch = writer.add_channel('/angular_velocity', 'std_msgs/msg/Float64')
+        writer.write(ch, serialize_message(Float64(data=1.0)), 1, 1)
+    return path
+
+
+def _bytes(path: Path, data: bytes) -> Path:
+    path.write_bytes(data)
+    return path
+
+
+BAD_FILES = {
+    'missing': (lambda d: d / 'nope.mcap', 'no such file'),
+    'empty': (lambda d: _bytes(d / 'empty.mcap', b''), 'empty file'),
+    'truncated': (lambda d: _bytes(d / 'cut.mcap', GOLDEN.read_bytes()[:300]), 'truncated'),
+    'magic only': (lambda d: _bytes(d / 'm.mcap', GOLDEN.read_bytes()[:5]), 'truncated'),
+    'not mcap': (lambda d: _bytes(d / 'x.mcap', b'hello, not a recording\n'), 'not an MCAP file'),
+    'directory': (lambda d: d, 'is a directory'),
+    'no /angular_velocity': (lambda d: _no_angular_velocity(d / 'status.mcap'),
+                             'no /angular_velocity topic'),
+    'no /angular_velocity messages': (lambda d: _empty_angular_velocity(d / 'e.mcap'),
+                                      '/angular_velocity has no messages'),
+    'wrong type': (lambda d: _wrong_type(d / 'w.mcap'), 'std_msgs/msg/Float64'),
+}
+
+
+@pytest.mark.parametrize('kind', list(BAD_FILES))
+def test_bad_file_gives_one_error_line_and_status_1(tmp_path, capsys, kind):
+    make, phrase = BAD_FILES[kind]
+    path = make(tmp_path)
+    assert command([str(path)]) == 1
+    assert phrase in _one_error_line(capsys)
+    assert command([str(path), '--json', '--figures', str(tmp_path / 'figs')]) == 1
+    _one_error_line(capsys)
+    assert not (tmp_path / 'figs').exists()
+
+
+@pytest.mark.parametrize('argv, phrase', [
+    ([], 'required: FILE.mcap'),
+    ([str(GOLDEN), '--bogus'], 'unrecognized arguments: --bogus'),
+    ([str(GOLDEN), '--peaks', 'x'], 'invalid int value'),
+    ([str(GOLDEN), '--peaks', '0'], '--peaks must be >= 1'),
+])
+def test_bad_options_give_one_error_line(capsys, argv, phrase):
+    assert command(argv) == 1
+    assert phrase in _one_error_line(capsys)
+
+
+def test_help_exits_0(capsys):
+    assert command(['--help']) == 0
+    assert '--figures DIR' in capsys.readouterr().out
+
+
+def test_unwritable_figure_directory(tmp_path, capsys):
+    blocker = tmp_path / 'file'
+    blocker.write_text('x')
+    assert command([str(GOLDEN), '--figures', str(blocker)]) == 1
+    assert 'cannot write figures to' in _one_error_line(capsys)
+
+
+def test_file_truncated_after_complete_chunks_is_analysed_with_a_warning(tmp_path, capsys):
+    t = np.arange(400) * 0.005
+    omega = np.stack([np.cos(15 * t), np.sin(15 * t), np.full_like(t, 30.0)], -1)
+    full = write_recording(tmp_path / 'full.mcap', t, omega, scenario=Scenario(), chunk_bytes=4096)
+    cut = tmp_path / 'cut.mcap'
+    cut.write_bytes(full.read_bytes()[: full.stat().st_size * 2 // 3])
+    assert command([str(cut)]) == 0
+    out, err = capsys.readouterr()
+    assert 'file: TRUNCATED' in out and 'WARNING: the file is truncated' in out
+    n = load_recording(cut).n
+    assert 50 < n < 400 and f'{n} samples of /angular_velocity' in out
+
+
+# -- success ------------------------------------------------------------------------------------
+
+def test_text_summary_of_golden(capsys):
+    assert command([str(GOLDEN)]) == 0
+    out, err = capsys.readouterr()
+    assert err == ''
+    assert 'simulated time: 200 samples of /angular_velocity, t = 0 .. 0.398 yr' in out
+    assert 'delta_omega (0, 0.3, 0) rad/yr' in out
+    assert 'figures' not in out.splitlines()[-1]
+
+
+def test_json_summary_of_golden(capsys, tmp_path):
+    assert command([str(GOLDEN), '--json', '--peaks', '2']) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data['sampling']['n'] == 200 and data['sampling']['duration'] == pytest.approx(0.398)
+    assert data['topics']['/impact_events']['count'] == 1
+    assert abs(data['spectrum']['peaks'][0]['omega'] - 2 * math.pi * 15) <= data['spectrum']['resolution']
+    assert data['figures'] == [] and data['warnings'] == []
+
+
+def _png_size(path: Path) -> tuple[int, int]:
+    data = path.read_bytes()
+    assert data[:8] == PNG_MAGIC and data[12:16] == b'IHDR'
+    return struct.unpack('>II', data[16:24])
+
+
+def test_figures_option_writes_pngs(tmp_path, capsys):
+    out_dir = tmp_path / 'figs' / 'golden'
+    assert command([str(GOLDEN), '--figures', str(out_dir)]) == 0
+    out = capsys.readouterr().out
+    names = sorted(p.name for p in out_dir.iterdir())
+    assert names == ['impact_0_id1.png', 'omega.png', 'spectrum_wx.png', 'wy_vs_wx.png']
+    for name in names:
+        assert str(out_dir / name) in out
+        width, height = _png_size(out_dir / name)
+        assert width >= 500 and height >= 300
+        assert (out_dir / name).stat().st_size > 20_000
+
+
+def test_every_figure_with_a_comparator_and_impacts(tmp_path):
+    t = np.arange(301) * 0.002
+    omega = np.stack([np.cos(15 * t), np.sin(15 * t), np.full_like(t, 30.0)], -1)
+    omega[t >= 0.3, 1] += 0.3
+    model = omega.copy()
+    model[:, 0] += 0.01 * t
+    impacts = [{'id': 4, 'start': 0.3 - 3e-7, 'end': 0.3, 'torque': (0, 1e6, 0), 'delta_omega': (0, 0.3, 0)},
+               {'id': 5, 'start': 0.5, 'end': 0.5 + 3e-7, 'torque': (0, 0, 1e3), 'delta_omega': (0, 0, 3e-4),
+                'frame': 'orbital'}]
+    rec = load_recording(write_recording(tmp_path / 'all.mcap', t, omega, model=model, impacts=impacts,
+                                         scenario=Scenario(duration=0.6)))
+    paths = write_figures(rec, tmp_path / 'out')
+    assert sorted(p.name for p in paths) == ['error.png', 'impact_0_id4.png', 'impact_1_id5.png',
+                                             'omega.png', 'spectrum_wx.png', 'wy_vs_wx.png']
+    for path in paths:
+        assert path.parent == tmp_path / 'out'
+        assert _png_size(path)[0] >= 500 and path.stat().st_size > 20_000
+
+
+def test_figures_that_need_missing_topics_write_nothing(tmp_path):
+    t = np.arange(20) * 0.01
+    rec = load_recording(write_recording(tmp_path / 'bare.mcap', t, np.ones((20, 3))))
+    assert plot_error(rec, tmp_path / 'o') == [] and plot_impacts(rec, tmp_path / 'o') == []
+    assert not (tmp_path / 'o').exists()
+
+
+# -- entry points and no ROS runtime --------------------------------------------------------------
+
+def _run(*args, timeout=120):
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True, timeout=timeout)
+
+
+def test_python_dash_m_and_no_rclpy_is_imported(tmp_path):
+    """One subprocess: the module entry point runs, and importing and running the whole
+    analysis (figures and JSON included) loads no rclpy or rosidl module."""
+    code = (
+        "import sys, runpy\n"
+        "sys.argv = ['analyze', sys.argv[1], '--json', '--figures', sys.argv[2]]\n"
+        "try:\n"
+        "    runpy.run_module('tumble_ros.analysis', run_name='__main__')\n"
+        "except SystemExit as e:\n"
+        "    assert e.code == 0, e.code\n"
+        "import tumble_ros.analysis.figures, tumble_ros.analysis.cli, tumble_ros.analysis.summary\n"
+        "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rosidl_runtime_py')\n"
+        "             or m.startswith('rosidl') or m.endswith('_msgs') or '_msgs.' in m)\n"
+        "print('LOADED', bad, file=sys.stderr)\n"
+        "sys.exit(3 if bad else 0)\n")
+    done = _run('-c', code, str(GOLDEN), str(tmp_path / 'f'))
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)['sampling']['n'] == 200
+    assert 'LOADED []' in done.stderr
+    assert len(list((tmp_path / 'f').glob('*.png'))) == 4
+
+
+def test_python_dash_m_on_a_bad_file(tmp_path):
+    done = _run('-m', 'tumble_ros.analysis', str(tmp_path / 'missing.mcap'))
+    assert done.returncode == 1
+    assert done.stdout == ''
+    assert done.stderr.splitlines() == [f'ERROR: {tmp_path / "missing.mcap"}: no such file']
+
+
+def test_analysis_sources_import_no_ros():
+    offenders = []
+    for path in ANALYSIS.rglob('*.py'):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module]
+            top = [n.split('.')[0] for n in names]
+            offenders += [f'{path.name}: {n}' for n in top
+                          if n in {'rclpy', 'rosidl_runtime_py'} or n.endswith('_msgs')]
+    assert not offenders
+    assert {p.name for p in ANALYSIS.glob('*.py')} >= {'recording.py', 'summary.py', 'figures.py', 'cli.py',
+                                                      '__main__.py', '__init__.py'}
+
+
+def test_main_is_the_console_script_entry(monkeypatch, capsys):
+    from tumble_ros.analysis import cli
+    monkeypatch.setattr(sys, 'argv', ['analyze', str(GOLDEN), '--quiet'])
+    assert cli.main() == 0
+    assert 'dominant frequencies of wx' in capsys.readouterr().out

@@ -1,0 +1,109 @@
+"""The ``analyze`` command: summarise a tumble_ros MCAP recording, optionally write figures.
+
+    python -m tumble_ros.analysis RUN.mcap                     # text summary on stdout
+    python -m tumble_ros.analysis RUN.mcap --json              # the same as JSON
+    python -m tumble_ros.analysis RUN.mcap --figures figs/     # and PNG figures into figs/
+
+Exit status: 0 on success (warnings included), 1 on a user error (a missing, empty,
+truncated-before-any-chunk or non-MCAP file, a recording without /angular_velocity, a
+figure directory that cannot be written, bad options), reported as one ``ERROR: ...`` line
+on stderr, never a traceback. Progress for big files (>= 100,000 messages) goes to stderr
+(``--quiet`` turns it off).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from tumble_ros.io import McapError
+
+from .recording import AnalysisError, load_recording, stderr_progress
+from .summary import analyze, format_summary, summary_to_dict
+
+__all__ = ['command', 'main']
+
+PROG = 'analyze'
+
+
+class _UsageError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # noqa: D102 - argparse hook: one ERROR line instead of usage+exit 2
+        raise _UsageError(f'{message} (see {self.prog} --help)')
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog=PROG,
+        description='Summarise a tumble_ros MCAP recording: topics and counts, simulated '
+                    'duration, comparator error, Jacobi-integral drift per segment, impacts, '
+                    'dominant frequencies of wx against the theory, and an aliasing check '
+                    '(docs/analysis.md).')
+    parser.add_argument('file', metavar='FILE.mcap', help='the recording')
+    parser.add_argument('--figures', metavar='DIR', default=None,
+                        help='also write the figures (PNG) into DIR, created if needed '
+                             '(default: no figures)')
+    parser.add_argument('--json', action='store_true',
+                        help='print the summary as JSON instead of text')
+    parser.add_argument('--peaks', type=int, default=5, metavar='N',
+                        help='number of spectral peaks to report (default: %(default)s)')
+    parser.add_argument('--quiet', action='store_true',
+                        help='no progress messages on stderr')
+    return parser
+
+
+def _error(text: str) -> int:
+    print(f'ERROR: {" ".join(str(text).split())}', file=sys.stderr)
+    return 1
+
+
+def command(argv=None) -> int:
+    """Run the command on ``argv`` (without the program name); returns the exit status."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    try:
+        args = _parser().parse_args(argv)
+    except _UsageError as err:
+        return _error(str(err))
+    except SystemExit as exit_:          # --help
+        return int(exit_.code or 0)
+    if args.peaks < 1:
+        return _error(f'--peaks must be >= 1, got {args.peaks}')
+    try:
+        progress = None if args.quiet else stderr_progress()
+        rec = load_recording(args.file, progress=progress)
+        summary = analyze(rec, n_peaks=args.peaks)
+    except (McapError, AnalysisError) as err:
+        return _error(err)
+    except KeyboardInterrupt:
+        return _error('interrupted')
+    figures = []
+    if args.figures is not None:
+        try:
+            from .figures import write_figures   # matplotlib only when figures are asked for
+            figures = write_figures(rec, args.figures, summary)
+        except OSError as err:
+            return _error(f'cannot write figures to {args.figures}: '
+                          f'{err.strerror or err}' + (f': {err.filename}' if err.filename else ''))
+    if args.json:
+        data = summary_to_dict(summary)
+        data['figures'] = [str(p) for p in figures]
+        print(json.dumps(data, indent=1, allow_nan=False))
+    else:
+        print(format_summary(summary))
+        if args.figures is not None:
+            print(f'figures: {len(figures)} written to {args.figures}')
+            for path in figures:
+                print(f'  {path}')
+    return 0
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console-script entry point (``analyze = tumble_ros.analysis.cli:main``); ``args`` as sys.argv."""
+    return command(list(sys.argv if args is None else args)[1:])
+
+
+if __name__ == '__main__':
+    sys.exit(main())

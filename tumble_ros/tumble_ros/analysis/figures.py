@@ -1,0 +1,228 @@
+"""The paper's figures from a recording, as PNG files (matplotlib, Agg canvas: no display).
+
+    from tumble_ros.analysis import load_recording, write_figures
+    paths = write_figures(load_recording("run.mcap"), "figures/")
+
+Every function takes a :class:`~tumble_ros.analysis.recording.Recording` and an output
+directory (created if needed), writes its PNG file(s) there (overwriting files of the same
+name) and returns the list of paths written, empty when the recording lacks what the figure
+needs:
+
+- :func:`plot_angular_velocity` ``omega.png``: wx, wy, wz against t (paper Figs 3-9), the
+  analytic model's w overlaid as a bold line when the comparator recorded it (as the paper
+  draws its analytic solution), impact pulses marked;
+- :func:`plot_wy_vs_wx` ``wy_vs_wx.png``: wy against wx (Fig 9, bottom);
+- :func:`plot_error` ``error.png``: the comparator's error components and |error| against t;
+- :func:`plot_impacts` ``impact_<k>_id<id>.png``: w around each impact with the pulse
+  interval marked (Fig 10);
+- :func:`plot_spectrum` ``spectrum_wx.png``: the amplitude spectrum of wx with the theory's
+  lines and the Nyquist rate.
+
+The figures are drawn on :class:`matplotlib.figure.Figure` with the Agg canvas directly, never
+through pyplot, so no GUI backend is touched and nothing global is changed.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from .recording import Recording
+from .summary import AnalysisSummary, analyze, impact_intervals, spectrum, theory_lines
+
+__all__ = ['plot_angular_velocity', 'plot_error', 'plot_impacts', 'plot_spectrum',
+           'plot_wy_vs_wx', 'write_figures']
+
+DPI = 110
+_LABELS = ('$\\omega_x$', '$\\omega_y$', '$\\omega_z$')
+
+
+def _new(rows: int = 1, height: float = 3.0, width: float = 9.0):
+    fig = Figure(figsize=(width, height * rows), dpi=DPI, layout='constrained')
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
+    return fig, axes
+
+
+def _save(fig: Figure, out_dir, name: str) -> Path:
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / name
+    fig.savefig(path, format='png')
+    return path
+
+
+def _title(rec: Recording) -> str:
+    text = rec.path.name
+    sc = rec.scenario
+    if sc is not None:
+        ix, _, iz = sc.inertia
+        text += (f'   I = {tuple(sc.inertia)}, a = {(iz - ix) / ix:.3g}, '
+                 f'$\\theta_0$ = {sc.euler0[2]:.3g}, $\\omega_0$ = {tuple(sc.omega0)}, '
+                 f'$\\omega_s$ = {sc.orbit_rate:.3g}')
+    return text
+
+
+def _mark_impacts(ax, rec: Recording) -> None:
+    for k, (start, end) in enumerate(impact_intervals(rec)):
+        ax.axvline(start, color='tab:red', lw=0.8, ls='--',
+                   label='impact' if k == 0 else None)
+        ax.axvspan(start, end, color='tab:red', alpha=0.25)
+
+
+def plot_angular_velocity(rec: Recording, out_dir) -> list[Path]:
+    """``omega.png``: the three components against t, the model's overlaid if recorded."""
+    fig, axes = _new(3, 2.4)
+    has_model = len(rec.model_t) > 0
+    for i, ax in enumerate(axes):
+        ax.plot(rec.t, rec.omega[:, i], lw=0.6, color='tab:blue', label='numeric')
+        if has_model:
+            ax.plot(rec.model_t, rec.model_omega[:, i], lw=2.0, color='black', alpha=0.6,
+                    label='analytic model' + (f' ({", ".join(rec.error_models)})'
+                                              if rec.error_models else ''))
+        _mark_impacts(ax, rec)
+        ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
+        ax.grid(True, lw=0.3)
+    axes[-1].set_xlabel('t [yr]')
+    if has_model or rec.impacts:
+        axes[0].legend(loc='upper right', fontsize='small')
+    axes[0].set_title(_title(rec), fontsize='small')
+    return [_save(fig, out_dir, 'omega.png')]
+
+
+def plot_wy_vs_wx(rec: Recording, out_dir) -> list[Path]:
+    """``wy_vs_wx.png``: the transverse angular velocity's path (paper Fig 9, bottom)."""
+    fig, (ax,) = _new(1, 6.0, 6.5)
+    ax.plot(rec.omega[:, 0], rec.omega[:, 1], lw=0.4, color='tab:blue')
+    ax.plot(rec.omega[:1, 0], rec.omega[:1, 1], 'o', color='tab:green', label='start')
+    ax.plot(rec.omega[-1:, 0], rec.omega[-1:, 1], 's', color='tab:red', label='end')
+    ax.set_aspect('equal', adjustable='datalim')
+    ax.set_xlabel(f'{_LABELS[0]} [rad/yr]')
+    ax.set_ylabel(f'{_LABELS[1]} [rad/yr]')
+    ax.grid(True, lw=0.3)
+    ax.legend(loc='upper right', fontsize='small')
+    ax.set_title(f'{rec.path.name}: $\\omega_y$ vs $\\omega_x$, t = {rec.t[0]:.4g} .. '
+                 f'{rec.t[-1]:.4g} yr', fontsize='small')
+    return [_save(fig, out_dir, 'wy_vs_wx.png')]
+
+
+def plot_error(rec: Recording, out_dir) -> list[Path]:
+    """``error.png``: error components and |error| against t; nothing without a comparator."""
+    t_vec, vec = rec.error_t, rec.error
+    if not len(t_vec) and len(rec.model_t):
+        _, ia, ib = np.intersect1d(rec.model_t, rec.t, return_indices=True)
+        t_vec, vec = rec.t[ib], rec.omega[ib] - rec.model_omega[ia]
+    if len(rec.norm_t):
+        t_norm, norm = rec.norm_t, rec.error_norm
+    elif len(t_vec):
+        t_norm, norm = t_vec, np.linalg.norm(vec, axis=1)
+    else:
+        return []
+    fig, (ax1, ax2) = _new(2, 2.8)
+    if len(t_vec):
+        for i in range(3):
+            ax1.plot(t_vec, vec[:, i], lw=0.7, label=_LABELS[i].replace('omega', 'Delta\\omega'))
+        ax1.legend(loc='upper left', fontsize='small')
+    ax1.set_ylabel('$\\omega - \\omega_{model}$ [rad/yr]')
+    ax2.plot(t_norm, norm, lw=0.8, color='black')
+    ax2.set_ylabel('|error| [rad/yr]')
+    ax2.set_xlabel('t [yr]')
+    for ax in (ax1, ax2):
+        _mark_impacts(ax, rec)
+        ax.grid(True, lw=0.3)
+    models = ', '.join(rec.error_models) or (rec.comparator_status.values.get('model', '')
+                                             if rec.comparator_status else '')
+    ax1.set_title(f'{rec.path.name}: numeric - analytic model {models}', fontsize='small')
+    return [_save(fig, out_dir, 'error.png')]
+
+
+def plot_impacts(rec: Recording, out_dir, *, samples: int = 25) -> list[Path]:
+    """``impact_<k>_id<id>.png`` per impact event: w over +-``samples`` sampling intervals
+    (at least +-10 pulse lengths) around the pulse, the pulse interval shaded and its edges
+    drawn (paper Fig 10)."""
+    paths = []
+    if rec.n < 2:
+        return paths
+    dt = float(np.median(np.diff(rec.t)))
+    for k, event in enumerate(rec.impacts):
+        half = max(samples * dt, 10 * event.duration)
+        lo, hi = event.start - half, event.end + half
+        sel = (rec.t >= lo) & (rec.t <= hi)
+        fig, axes = _new(3, 2.2)
+        for i, ax in enumerate(axes):
+            ax.plot(rec.t[sel], rec.omega[sel, i], '.-', lw=0.8, ms=3, color='tab:blue',
+                    label='numeric samples')
+            if len(rec.model_t):
+                msel = (rec.model_t >= lo) & (rec.model_t <= hi)
+                ax.plot(rec.model_t[msel], rec.model_omega[msel, i], lw=2.0, color='black',
+                        alpha=0.5, label='analytic model')
+            ax.axvspan(event.start, event.end, color='tab:red', alpha=0.3,
+                       label=f'pulse [{event.start:.9g}, {event.end:.9g}] yr')
+            ax.axvline(event.start, color='tab:red', lw=0.8, ls='--')
+            ax.axvline(event.end, color='tab:red', lw=0.8, ls=':')
+            ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
+            ax.grid(True, lw=0.3)
+            ax.set_xlim(lo, hi)
+        axes[0].legend(loc='upper left', fontsize='x-small')
+        axes[-1].set_xlabel('t [yr]')
+        d = event.delta_omega
+        axes[0].set_title(
+            f'{rec.path.name}: impact {event.id}, {event.frame} torque '
+            f'({event.torque[0]:.3g}, {event.torque[1]:.3g}, {event.torque[2]:.3g}) for '
+            f'{event.duration:.3g} yr; $\\Delta\\omega$ = ({d[0]:.4g}, {d[1]:.4g}, {d[2]:.4g}) '
+            f'rad/yr', fontsize='small')
+        paths.append(_save(fig, out_dir, f'impact_{k}_id{event.id}.png'))
+    return paths
+
+
+def plot_spectrum(rec: Recording, out_dir, summary: AnalysisSummary | None = None
+                  ) -> list[Path]:
+    """``spectrum_wx.png``: amplitude spectrum of wx (as in the summary), the theory's lines
+    dashed, the Nyquist rate pi/dt marked; nothing for fewer than 8 samples."""
+    if summary is not None:
+        spec, lines = summary.spectrum, list(summary.theory)
+    else:
+        lines, _ = theory_lines(rec.scenario, rec.omega)
+        spec = spectrum(rec.t, rec.omega[:, 0], lines)
+    if spec is None:
+        return []
+    fig, (ax,) = _new(1, 3.5)
+    positive = spec.amplitude > 0
+    ax.semilogy(spec.omega_axis[positive], spec.amplitude[positive], lw=0.8, color='tab:blue',
+                label=f'|FFT| of {spec.component} ({spec.window} window)')
+    for k, line in enumerate(lines):
+        if line.omega <= spec.nyquist:
+            ax.axvline(line.omega, color=f'C{(k % 8) + 1}', lw=0.8, ls='--',
+                       label=f'{line.name} = {line.omega:.4g}')
+    for peak in spec.peaks:
+        ax.plot(peak.omega, peak.amplitude, 'v', color='black', ms=5)
+    # Zoom on the interesting part: the lines and peaks, unless they fill the band anyway.
+    interesting = [line.omega for line in lines if line.omega <= spec.nyquist]
+    interesting += [peak.omega for peak in spec.peaks]
+    right = spec.nyquist
+    if interesting and 1.3 * max(interesting) < spec.nyquist:
+        right = max(1.3 * max(interesting), 20 * spec.resolution, 1.0)
+    ax.set_xlim(0, min(right, spec.nyquist))
+    ax.set_xlabel(f'$\\omega$ [rad/yr]  (Nyquist $\\pi/dt$ = {spec.nyquist:.4g} rad/yr)')
+    ax.set_ylabel('amplitude [rad/yr]')
+    ax.grid(True, lw=0.3)
+    ax.legend(loc='upper right', fontsize='x-small')
+    ax.set_title(f'{rec.path.name}: spectrum of {spec.component}, resolution '
+                 f'{spec.resolution:.3g} rad/yr', fontsize='small')
+    return [_save(fig, out_dir, f'spectrum_{spec.component}.png')]
+
+
+def write_figures(rec: Recording, out_dir, summary: AnalysisSummary | None = None
+                  ) -> list[Path]:
+    """Every figure the recording supports; returns the paths written."""
+    if summary is None:
+        summary = analyze(rec)
+    paths: list[Path] = []
+    paths += plot_angular_velocity(rec, out_dir)
+    paths += plot_wy_vs_wx(rec, out_dir)
+    paths += plot_error(rec, out_dir)
+    paths += plot_impacts(rec, out_dir)
+    paths += plot_spectrum(rec, out_dir, summary)
+    return paths

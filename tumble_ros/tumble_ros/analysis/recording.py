@@ -1,0 +1,348 @@
+"""Load a tumble_ros MCAP recording into numpy arrays, in one pass, without a ROS runtime.
+
+    from tumble_ros.analysis import load_recording
+    rec = load_recording("run.mcap")
+    rec.t, rec.omega                # (n,), (n, 3): simulated years, rad/yr (body axes)
+    rec.quaternion_t, rec.quaternion  # (m,), (m, 4): scalar first (w, x, y, z), body -> orbital
+    rec.impacts, rec.scenario, rec.topics
+
+Every stamped series keeps its own time axis (the simulator may publish the attitude less
+often than the angular velocity, the comparator may decimate). Times are simulated years,
+t = stamp_ns / (1e9 * seconds_per_year) (:class:`tumble_ros.core.TimeBase`), with
+``seconds_per_year`` from the recorded ``/scenario`` (1.0 if there is none). Samples are
+sorted by stamp (stable), so a file written out of order still gives monotonic series.
+
+Any topic may be absent: its arrays are then empty (shape (0, k)) and the optional objects
+None. Only ``/angular_velocity`` is required (:class:`AnalysisError` otherwise). File-level
+failures (missing, empty, not MCAP, truncated before the first complete chunk, undecodable
+message) are :class:`tumble_ros.io.McapError`. A file truncated after some complete chunks
+loads what it holds; ``finalised`` is then False and ``problem`` says why reading stopped.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from tumble_ros.core import Scenario, ScenarioError, TimeBase, parse_scenario
+from tumble_ros.io import read_messages, summarize
+
+__all__ = [
+    'ANGULAR_VELOCITY', 'ATTITUDE', 'EULER_ANGLES', 'IMPACT_EVENTS', 'SCENARIO', 'STATUS',
+    'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM', 'COMPARISON_STATUS', 'EXPECTED_TYPES',
+    'AnalysisError', 'ImpactRecord', 'SegmentStart', 'StatusRecord', 'ComparatorStatus',
+    'Recording', 'load_recording', 'stderr_progress',
+]
+
+ANGULAR_VELOCITY = '/angular_velocity'
+ATTITUDE = '/attitude'
+EULER_ANGLES = '/euler_angles'
+IMPACT_EVENTS = '/impact_events'
+SCENARIO = '/scenario'
+STATUS = '/status'
+MODEL_ANGULAR_VELOCITY = '/comparison/model_angular_velocity'
+ERROR = '/comparison/error'
+ERROR_NORM = '/comparison/error_norm'
+COMPARISON_STATUS = '/comparison/status'
+
+#: The topics the analysis decodes, with the type each must have. Other topics (``/clock``,
+#: ``/consumer_progress``, service events) are only counted.
+EXPECTED_TYPES = {
+    ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
+    ATTITUDE: 'geometry_msgs/msg/QuaternionStamped',
+    EULER_ANGLES: 'geometry_msgs/msg/Vector3Stamped',
+    IMPACT_EVENTS: 'tumble_ros_interfaces/msg/ImpactEvent',
+    SCENARIO: 'tumble_ros_interfaces/msg/ScenarioDescription',
+    STATUS: 'tumble_ros_interfaces/msg/SimStatus',
+    MODEL_ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
+    ERROR: 'geometry_msgs/msg/Vector3Stamped',
+    ERROR_NORM: 'tumble_ros_interfaces/msg/ErrorNorm',
+    COMPARISON_STATUS: 'diagnostic_msgs/msg/DiagnosticStatus',
+}
+
+#: SimStatus states (tumble_ros_interfaces/msg/SimStatus.msg).
+SIM_STATES = {0: 'RUNNING', 1: 'PAUSED', 2: 'FINISHED', 3: 'DIVERGED'}
+#: DiagnosticStatus levels.
+DIAGNOSTIC_LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
+#: ImpactEvent frames.
+IMPACT_FRAMES = {0: 'body', 1: 'orbital'}
+
+
+class AnalysisError(Exception):
+    """The file is a readable MCAP file but not something the analysis can work on
+    (one-line message)."""
+
+
+@dataclass(frozen=True)
+class ImpactRecord:
+    """One ``/impact_events`` message (times in years, rates in rad/yr)."""
+
+    id: int
+    start: float
+    end: float
+    frame: str                      # 'body' or 'orbital' (or 'frame <n>' if unknown)
+    torque: tuple[float, float, float]
+    delta_omega: tuple[float, float, float]
+    t: float                        # the message's stamp as simulated time (= end)
+
+    @property
+    def duration(self) -> float:
+        return self.end - self.start
+
+
+@dataclass(frozen=True)
+class SegmentStart:
+    """One ``/scenario`` message: the state an integration segment starts from."""
+
+    revision: int
+    segment_start: float
+    omega: tuple[float, float, float]
+    quaternion: tuple[float, float, float, float]   # (w, x, y, z)
+
+
+@dataclass(frozen=True)
+class StatusRecord:
+    """One ``/status`` message."""
+
+    t: float
+    state: str
+    message: str
+
+
+@dataclass(frozen=True)
+class ComparatorStatus:
+    """The last ``/comparison/status`` message."""
+
+    level: str
+    message: str
+    values: dict[str, str]
+
+
+def _empty(k: int) -> np.ndarray:
+    return np.empty((0, k))
+
+
+@dataclass
+class Recording:
+    """A recording's content as arrays (see the module docstring)."""
+
+    path: Path
+    finalised: bool
+    problem: str | None
+    #: topic -> (type name, message count) of every topic in the file.
+    topics: dict[str, tuple[str, int]]
+    seconds_per_year: float
+    seconds_per_year_source: str            # '/scenario' or 'default'
+    t: np.ndarray                           # (n,) [yr] of /angular_velocity
+    omega: np.ndarray                       # (n, 3) [rad/yr]
+    stamp_ns: np.ndarray                    # (n,) int64, the stamps of t
+    euler_t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    euler: np.ndarray = field(default_factory=lambda: _empty(3))          # (phi, psi, theta)
+    quaternion_t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    quaternion: np.ndarray = field(default_factory=lambda: _empty(4))     # (w, x, y, z)
+    model_t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    model_omega: np.ndarray = field(default_factory=lambda: _empty(3))
+    error_t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    error: np.ndarray = field(default_factory=lambda: _empty(3))          # w_numeric - w_model
+    norm_t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    error_norm: np.ndarray = field(default_factory=lambda: np.empty(0))   # |error| [rad/yr]
+    error_relative: np.ndarray = field(default_factory=lambda: np.empty(0))
+    error_models: tuple[str, ...] = ()      # model names of /comparison/error_norm, in order seen
+    comparator_status: ComparatorStatus | None = None
+    impacts: list[ImpactRecord] = field(default_factory=list)
+    segments: list[SegmentStart] = field(default_factory=list)
+    scenario: Scenario | None = None        # from the last parsable /scenario
+    scenario_error: str | None = None       # why /scenario could not be parsed
+    status: list[StatusRecord] = field(default_factory=list)
+    #: Topics present but skipped because their type is not the expected one.
+    skipped: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return len(self.t)
+
+    @property
+    def has_comparator(self) -> bool:
+        return bool(len(self.error_norm) or len(self.error_t) or len(self.model_t))
+
+
+#: progress(messages_done, messages_total)
+Progress = Callable[[int, int], None]
+
+
+def stderr_progress(min_total: int = 100_000, stream=None) -> Progress:
+    """A progress callback printing ``reading FILE: 40% (400000 of 1000000 messages)`` to
+    stderr every 10 %, for files of at least ``min_total`` messages (silent otherwise)."""
+    state = {'next': 0.1}
+
+    def report(done: int, total: int) -> None:
+        out = stream or sys.stderr
+        if total < min_total or total <= 0:
+            return
+        fraction = done / total
+        if fraction >= state['next']:
+            print(f'reading: {min(fraction, 1.0):4.0%} ({done} of {total} messages)', file=out,
+                  flush=True)
+            state['next'] = math.floor(fraction * 10 + 1) / 10
+    return report
+
+
+def _vec(v) -> tuple[float, float, float]:
+    return (float(v.x), float(v.y), float(v.z))
+
+
+def _ns(header) -> int:
+    return TimeBase.stamp_ns(header.stamp.sec, header.stamp.nanosec)
+
+
+def _level(value) -> str:
+    if isinstance(value, (bytes, bytearray)):
+        value = value[0] if value else 0
+    try:
+        return DIAGNOSTIC_LEVELS.get(int(value), str(value))
+    except (TypeError, ValueError):
+        return str(value)
+
+
+def _sorted(ns: list[int], rows: list, k: int) -> tuple[np.ndarray, np.ndarray]:
+    stamps = np.asarray(ns, dtype=np.int64)
+    values = np.asarray(rows, dtype=float).reshape(-1, k) if rows else _empty(k)
+    order = np.argsort(stamps, kind='stable')
+    return stamps[order], values[order]
+
+
+def load_recording(path, *, progress: Progress | None = None) -> Recording:
+    """Read ``path`` once and return its :class:`Recording`.
+
+    Raises :class:`McapError` for an unreadable file and :class:`AnalysisError` when it has no
+    ``/angular_velocity`` messages (or that topic has another type). ``progress`` is called as
+    ``progress(done, total)`` while reading (``total`` from the file's statistics).
+    """
+    info = summarize(path)
+    topics = {name: (t.type_name, t.message_count) for name, t in info.topics.items()}
+    skipped: dict[str, str] = {}
+    wanted: set[str] = set()
+    for topic, expected in EXPECTED_TYPES.items():
+        if topic not in topics:
+            continue
+        actual = topics[topic][0]
+        if actual != expected:
+            skipped[topic] = f'type {actual}, expected {expected}'
+        else:
+            wanted.add(topic)
+    if ANGULAR_VELOCITY in skipped:
+        raise AnalysisError(f'{info.path}: {ANGULAR_VELOCITY} has {skipped[ANGULAR_VELOCITY]}')
+    if ANGULAR_VELOCITY not in topics:
+        present = ', '.join(sorted(topics)) or 'none'
+        raise AnalysisError(f'{info.path}: no {ANGULAR_VELOCITY} topic: not a tumble_ros '
+                            f'simulator recording (topics: {present})')
+
+    # Raw columns, stamps as integer ns (seconds_per_year may only be known later in the file).
+    raw: dict[str, tuple[list[int], list]] = {topic: ([], []) for topic in wanted}
+    impacts_raw: list[tuple[int, object]] = []
+    scenarios: list[tuple[int, object]] = []
+    statuses: list[tuple[int, object]] = []
+    norm_models: list[str] = []
+    comparator_status = None
+    done = 0
+    # Non-decoded topics are skipped by the reader without decoding; count them for progress.
+    decoded_total = sum(topics[t][1] for t in wanted) or 1
+    for record in read_messages(info.path, topics=sorted(wanted)):
+        done += 1
+        if progress is not None and (done % 5000 == 0):
+            progress(done, decoded_total)
+        topic, msg = record.topic, record.message
+        if topic in (ANGULAR_VELOCITY, EULER_ANGLES, MODEL_ANGULAR_VELOCITY, ERROR):
+            ns, rows = raw[topic]
+            ns.append(_ns(msg.header))
+            rows.append(_vec(msg.vector))
+        elif topic == ATTITUDE:
+            ns, rows = raw[topic]
+            q = msg.quaternion
+            ns.append(_ns(msg.header))
+            rows.append((float(q.w), float(q.x), float(q.y), float(q.z)))
+        elif topic == ERROR_NORM:
+            ns, rows = raw[topic]
+            ns.append(_ns(msg.header))
+            rows.append((float(msg.norm), float(msg.relative)))
+            if str(msg.model) not in norm_models:
+                norm_models.append(str(msg.model))
+        elif topic == IMPACT_EVENTS:
+            impacts_raw.append((_ns(msg.header), msg))
+        elif topic == SCENARIO:
+            scenarios.append((_ns(msg.header), msg))
+        elif topic == STATUS:
+            statuses.append((_ns(msg.header), msg))
+        elif topic == COMPARISON_STATUS:
+            comparator_status = ComparatorStatus(
+                level=_level(msg.level), message=str(msg.message),
+                values={str(kv.key): str(kv.value) for kv in msg.values})
+    if progress is not None:
+        progress(decoded_total, decoded_total)
+
+    # The time base: the first /scenario's seconds_per_year.
+    spy, spy_source = 1.0, 'default'
+    for _, msg in scenarios:
+        value = float(msg.seconds_per_year)
+        if math.isfinite(value) and value > 0:
+            spy, spy_source = value, SCENARIO
+            break
+    timebase = TimeBase(spy)
+
+    def years(ns: np.ndarray) -> np.ndarray:
+        return ns.astype(np.float64) / timebase.ns_per_year
+
+    stamps, omega = _sorted(*raw.get(ANGULAR_VELOCITY, ([], [])), 3)
+    if len(stamps) == 0:
+        raise AnalysisError(f'{info.path}: {ANGULAR_VELOCITY} has no messages'
+                            + ('' if info.finalised else f' (file truncated: {info.problem})'))
+    rec = Recording(path=info.path, finalised=info.finalised, problem=info.problem,
+                    topics=topics, seconds_per_year=spy, seconds_per_year_source=spy_source,
+                    t=years(stamps), omega=omega, stamp_ns=stamps, skipped=skipped)
+    if EULER_ANGLES in raw:
+        ns, rec.euler = _sorted(*raw[EULER_ANGLES], 3)
+        rec.euler_t = years(ns)
+    if ATTITUDE in raw:
+        ns, rec.quaternion = _sorted(*raw[ATTITUDE], 4)
+        rec.quaternion_t = years(ns)
+    if MODEL_ANGULAR_VELOCITY in raw:
+        ns, rec.model_omega = _sorted(*raw[MODEL_ANGULAR_VELOCITY], 3)
+        rec.model_t = years(ns)
+    if ERROR in raw:
+        ns, rec.error = _sorted(*raw[ERROR], 3)
+        rec.error_t = years(ns)
+    if ERROR_NORM in raw:
+        ns, values = _sorted(*raw[ERROR_NORM], 2)
+        rec.norm_t = years(ns)
+        rec.error_norm, rec.error_relative = values[:, 0].copy(), values[:, 1].copy()
+        rec.error_models = tuple(norm_models)
+    rec.comparator_status = comparator_status
+
+    for ns, msg in sorted(impacts_raw, key=lambda item: item[0]):
+        frame = int(msg.frame)
+        rec.impacts.append(ImpactRecord(
+            id=int(msg.id), start=float(msg.start), end=float(msg.end),
+            frame=IMPACT_FRAMES.get(frame, f'frame {frame}'), torque=_vec(msg.torque),
+            delta_omega=_vec(msg.delta_omega), t=timebase.to_years(ns)))
+    for _, msg in scenarios:
+        q = msg.attitude
+        rec.segments.append(SegmentStart(
+            revision=int(msg.revision), segment_start=float(msg.segment_start),
+            omega=_vec(msg.omega), quaternion=(float(q.w), float(q.x), float(q.y), float(q.z))))
+    # The last description holds every impact scheduled so far; all describe the same body.
+    for _, msg in reversed(scenarios):
+        try:
+            rec.scenario = parse_scenario(msg.parameters_yaml)
+            rec.scenario_error = None
+            break
+        except (ScenarioError, ValueError, TypeError) as err:   # a description we cannot use
+            rec.scenario_error = ' '.join(str(err).split()) or type(err).__name__
+    for ns, msg in statuses:
+        state = int(msg.state)
+        rec.status.append(StatusRecord(t=float(msg.t), state=SIM_STATES.get(state, str(state)),
+                                       message=str(msg.message)))
+    return rec
