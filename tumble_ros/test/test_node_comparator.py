@@ -117,3 +117,22 @@ def test_samples_before_an_impact_keep_the_pre_impact_model(ros):
     before = t <= 0.1
     expected = make_model("paper", Scenario(duration=0.2, output_interval=0.002)).omega(t[before])
     np.testing.assert_allclose(vec(model)[before], expected, rtol=0, atol=1e-12)
+
+
+def test_a_comparator_started_after_an_impact_compares_every_segment(ros):
+    """Late join after an impact: the description history gives both anchors."""
+    sim = ros.start(SimNode, start_paused=True, impacts__start=[0.1], impacts__duration=[3e-7],
+                    impacts__torque=[0.0, 0.0, 1e6], **{k: v for k, v in RUN.items() if k != "min_consumers"})
+    for _ in range(60):  # to t = 0.118 yr, past the impact
+        assert ros.call(Trigger, "step", Trigger.Request()).success
+    model = ros.collect(Vector3Stamped, "comparison/model_angular_velocity")
+    norm = ros.collect(ErrorNorm, "comparison/error_norm")
+    ros.start(ComparatorNode)
+    ros.spin_for(0.5)
+    assert ros.call(Trigger, "resume", Trigger.Request()).success
+    assert ros.spin_until(lambda: sim.published_samples == 101 and len(model) == 101, 20.0), len(model)
+    t = np.array([stamp_ns(m) * 1e-9 for m in model])
+    before = t <= 0.1
+    expected = make_model("paper", Scenario(duration=0.2, output_interval=0.002)).omega(t[before])
+    np.testing.assert_allclose(vec(model)[before], expected, rtol=0, atol=1e-12)
+    assert max(m.norm for m in norm) < 0.05  # after the kick: the post-impact anchor

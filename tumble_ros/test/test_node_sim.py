@@ -241,11 +241,16 @@ def test_as_fast_as_the_consumers_take_it_loses_nothing(ros):
 
 
 def test_min_consumers_holds_publication_until_they_report(ros):
+    from tumble_ros.nodes.progress import ProgressReporter
+    from tumble_ros.nodes.sim import WINDOW
+
     omega = ros.collect(Vector3Stamped, "angular_velocity")
     ros.start(SimNode, real_time_factor=0.0, min_consumers=1, **{k: v for k, v in SHORT.items() if k != "real_time_factor"})
     ros.spin_for(0.5)
-    assert omega == []
-    from tumble_ros.nodes.progress import ProgressReporter
-
-    ProgressReporter(ros.probe)  # announces itself, never marks progress: the window still opens
-    assert ros.spin_until(lambda: len(omega) == 101, 10.0), len(omega)
+    assert omega == []  # nobody has reported yet
+    reporter = ProgressReporter(ros.probe)  # reports, but has processed nothing
+    assert ros.spin_until(lambda: len(omega) == WINDOW, 10.0), len(omega)
+    ros.spin_for(0.3)
+    assert len(omega) == WINDOW  # never more than the window ahead of the slowest consumer
+    reporter.mark(TimeBase.stamp_ns(omega[-1].header.stamp.sec, omega[-1].header.stamp.nanosec))
+    assert ros.spin_until(lambda: len(omega) == 2 * WINDOW, 10.0), len(omega)

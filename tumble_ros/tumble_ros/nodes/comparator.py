@@ -34,7 +34,7 @@ from tumble_ros.core import ANALYTIC_MODELS, ScenarioError, TimeBase, make_model
 from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.progress import ProgressReporter
-from tumble_ros.nodes.qos import LATCHED_QOS, STATE_QOS
+from tumble_ros.nodes.qos import DESCRIPTION_QOS, LATCHED_QOS, STATE_QOS
 from tumble_ros_interfaces.msg import ErrorNorm, ScenarioDescription
 
 __all__ = ["ComparatorNode", "main"]
@@ -69,7 +69,7 @@ class ComparatorNode(Node):
         self._pub_norm = self.create_publisher(ErrorNorm, "comparison/error_norm", STATE_QOS)
         self._pub_status = self.create_publisher(DiagnosticStatus, "comparison/status", LATCHED_QOS)
         self._progress = ProgressReporter(self)
-        self.create_subscription(ScenarioDescription, "scenario", self._on_scenario, LATCHED_QOS)
+        self.create_subscription(ScenarioDescription, "scenario", self._on_scenario, DESCRIPTION_QOS)
         self.create_subscription(Vector3Stamped, "angular_velocity", self._on_omega, STATE_QOS)
         self._report(DiagnosticStatus.WARN, "waiting for the simulator's scenario description")
 
@@ -93,7 +93,7 @@ class ComparatorNode(Node):
         old = self._description
         if old is not None and msg.revision > old.revision and msg.segment_start > old.segment_start:
             # Samples of the previous segment may still be queued: keep its model for them.
-            self._previous = [*self._previous[-7:], (old.segment_start, self._model)]
+            self._previous = [*self._previous[-(DESCRIPTION_QOS.depth - 1):], (old.segment_start, self._model)]
         elif old is None or msg.revision <= old.revision:
             self._previous = []  # a new run (the simulator restarted)
         self._description = msg

@@ -49,7 +49,7 @@ from tumble_ros.nodes.parameters import (
 )
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.progress import ConsumerTracker
-from tumble_ros.nodes.qos import LATCHED_QOS, STATE_QOS
+from tumble_ros.nodes.qos import DESCRIPTION_QOS, LATCHED_QOS, STATE_QOS
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 
@@ -58,7 +58,7 @@ __all__ = ["SimNode", "main"]
 #: Wall-clock period of the simulation timer [s].
 TICK_PERIOD = 0.005
 #: Samples published per tick when running as fast as possible (real_time_factor = 0).
-BATCH = 100
+BATCH = 10
 #: Largest lead [samples] over the slowest registered consumer (well below STATE_QOS depth).
 WINDOW = 2 * BATCH
 FRAMES = {ApplyImpact.Request.FRAME_BODY: "body", ApplyImpact.Request.FRAME_ORBITAL: "orbital"}
@@ -117,7 +117,7 @@ class SimNode(Node):
         self._pub_clock = self.create_publisher(Clock, "/clock", STATE_QOS)
         self._pub_events = self.create_publisher(ImpactEvent, "impact_events", STATE_QOS)
         self._pub_status = self.create_publisher(SimStatus, "status", LATCHED_QOS)
-        self._pub_scenario = self.create_publisher(ScenarioDescription, "scenario", LATCHED_QOS)
+        self._pub_scenario = self.create_publisher(ScenarioDescription, "scenario", DESCRIPTION_QOS)
         self._srv_impact = self.create_service(ApplyImpact, "apply_impact", self._on_apply_impact)
         self._srv_impact.configure_introspection(
             self.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
