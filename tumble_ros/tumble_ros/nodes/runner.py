@@ -6,6 +6,7 @@ from typing import Callable
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
 from tumble_ros.core import ScenarioError
@@ -26,6 +27,12 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str) -
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except _rclpy.RCLError:
+        # A SIGINT/SIGTERM that shuts the context down while the executor builds its wait set
+        # surfaces as "context is not valid" instead of ExternalShutdownException (seen under
+        # load): a shutdown all the same. Any other RCLError is a real failure.
+        if rclpy.ok():
+            raise
     except (ParameterException, ScenarioError, ValueError, OSError) as err:
         print(f"{name}: invalid parameters: {err}", flush=True)
         return 1
