@@ -8,15 +8,17 @@ Quick start::
 
 Modules: ``rotation`` (Euler angles, matrices, quaternions), ``torque`` (gravity
 gradient), ``dynamics`` (equations of motion, invariants), ``integrators`` (one
-interface, a name registry), ``scenario`` (validated inputs), ``propagator``
-(incremental integration split at impacts), ``simulate`` (batch runs), ``analytic``
-(the paper's approximate solution, better linearisations, exact torque-free motion),
-``timebase`` (simulated years <-> ROS stamps).
+interface, name registries, the Lie-Poisson splitting methods), ``kernels`` (the
+compiled loops of the fast path, numba), ``scenario`` (validated inputs), ``propagator``
+(incremental integration split at impacts), ``simulate`` (batch runs), ``ensemble`` (N
+bodies at once), ``analytic`` (the paper's approximate solution, better linearisations,
+exact torque-free motion), ``timebase`` (simulated years <-> ROS stamps).
+Performance and long runs: docs/performance.md.
 """
 from .analytic import MODELS as ANALYTIC_MODELS
 from .analytic import AnalyticModel, AnchorState, ModelNotApplicable, applicability, make_model
 from .dynamics import ATTITUDE_MODELS, angular_momentum_orbital, jacobi_integral, kinetic_energy
-from .integrators import METHODS
+from .integrators import INTEGRATORS, METHODS, SPLITTING_METHODS, SegmentProblem
 from .propagator import IntegrationError, Propagator, Sample
 from .scenario import (
     PARAMETER_DOCS,
@@ -31,6 +33,7 @@ from .scenario import (
 )
 from .timebase import TimeBase
 from .simulate import SimulationResult, simulate
+from .ensemble import EnsembleResult, ensemble_scenarios, random_impacts, simulate_ensemble
 
 __all__ = [
     "ANALYTIC_MODELS",
@@ -41,6 +44,13 @@ __all__ = [
     "make_model",
     "ATTITUDE_MODELS",
     "METHODS",
+    "SPLITTING_METHODS",
+    "INTEGRATORS",
+    "SegmentProblem",
+    "EnsembleResult",
+    "ensemble_scenarios",
+    "random_impacts",
+    "simulate_ensemble",
     "PARAMETER_DOCS",
     "Impact",
     "ImpactLimits",

@@ -11,6 +11,13 @@ pulse of 3e-7 yr entirely (the paper's Fig. 10 "ode" failure).
 A non-finite state, a collapsing step size or a singular attitude stop the propagation:
 :class:`IntegrationError` is raised and ``status``/``message`` say why; no NaN is ever
 returned.
+
+Fast path: for methods with a compiled loop (rk4, dop853, splitting*; quaternion attitude)
+and numba available, each segment is run by a
+:class:`~.integrators.compiled.CompiledStepper`, which takes all the steps up to a requested
+time (and samples a whole output grid, :meth:`Propagator.sample_many`) without returning to
+Python per step. Same steps, same results as the reference path (``fast=False``) to
+rounding (tests/test_core_fast.py).
 """
 from __future__ import annotations
 
@@ -21,11 +28,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dynamics import ATTITUDE_MODELS, jacobi_integral
-from .integrators import FAILED, METHODS, RUNNING
+from .integrators import FAILED, INTEGRATORS, RUNNING, SegmentProblem
+from .integrators.compiled import CompiledStepper, why_no_fast_path
 from .rotation import matrix_to_quaternion, unwrap_towards
 from .scenario import Impact, Scenario, ScenarioError
 
-__all__ = ["Propagator", "IntegrationError", "Sample"]
+__all__ = ["Propagator", "IntegrationError", "Sample", "segment_torques", "quaternions_to_matrices"]
 
 #: Largest attitude change [rad] between two points used to unwrap Euler angles.
 _UNWRAP_STEP = 1.0
@@ -38,6 +46,45 @@ class IntegrationError(RuntimeError):
     def __init__(self, message: str, t: float) -> None:
         super().__init__(message)
         self.t = t
+
+
+def segment_torques(impacts, t0: float, t1: float) -> tuple[tuple, tuple]:
+    """(body, orbital) pulse torques active on the segment [t0, t1] (whose edges are pulse edges)."""
+    mid = 0.5 * (t0 + t1)
+    body, orbital = np.zeros(3), np.zeros(3)
+    for impact in impacts:
+        if impact.start <= mid < impact.end:
+            (body if impact.frame == "body" else orbital)[:] += impact.torque
+    return tuple(body), tuple(orbital)
+
+
+def quaternions_to_matrices(q: np.ndarray) -> np.ndarray:
+    """``rotation.quaternion_to_matrix`` for an (..., 4) array (same arithmetic): (..., 3, 3)."""
+    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    c = np.empty(q.shape[:-1] + (3, 3))
+    c[..., 0, 0] = 1.0 - s * (q2 * q2 + q3 * q3)
+    c[..., 0, 1] = s * (q1 * q2 - q0 * q3)
+    c[..., 0, 2] = s * (q1 * q3 + q0 * q2)
+    c[..., 1, 0] = s * (q1 * q2 + q0 * q3)
+    c[..., 1, 1] = 1.0 - s * (q1 * q1 + q3 * q3)
+    c[..., 1, 2] = s * (q2 * q3 - q0 * q1)
+    c[..., 2, 0] = s * (q1 * q3 - q0 * q2)
+    c[..., 2, 1] = s * (q2 * q3 + q0 * q1)
+    c[..., 2, 2] = 1.0 - s * (q1 * q1 + q2 * q2)
+    return c
+
+
+def continuous_quaternions(q: np.ndarray, previous=None) -> np.ndarray:
+    """Normalise (n, 4) quaternions and flip signs so that consecutive ones have q.q' >= 0
+    (as :meth:`Propagator.sample` does one at a time; ``previous`` is the last one handed out)."""
+    q = q / np.sqrt(np.sum(q * q, axis=-1, keepdims=True))
+    if len(q) == 0:
+        return q
+    dots = np.einsum("ij,ij->i", q[1:], q[:-1])
+    first = -1.0 if previous is not None and np.dot(q[0], previous) < 0.0 else 1.0
+    signs = np.cumprod(np.concatenate([[first], np.where(dots < 0.0, -1.0, 1.0)]))
+    return q * signs[:, None]
 
 
 @dataclass(frozen=True)
@@ -83,14 +130,28 @@ class Propagator:
     split_impacts : bool
         Cut the integration at impact edges (default). ``False`` puts the pulse into the
         right-hand side as a time switch instead; it exists only to demonstrate the
-        failure this design prevents (docs/physics.md).
+        failure this design prevents (docs/physics.md). Not available with the splitting
+        methods (they need a constant torque per segment).
+    fast : bool or None
+        Use the method's compiled loop (:mod:`~.integrators.compiled`): ``None`` (default)
+        when available, ``True`` to require it (ValueError saying why if it is not),
+        ``False`` for the reference step-by-step path. Both give the same trajectory.
     """
 
-    def __init__(self, scenario: Scenario, *, split_impacts: bool = True) -> None:
+    def __init__(self, scenario: Scenario, *, split_impacts: bool = True, fast: bool | None = None) -> None:
         self.scenario = scenario
         self._model = ATTITUDE_MODELS[scenario.attitude]
-        self._method = METHODS[scenario.integrator.method]
+        self._method = INTEGRATORS[scenario.integrator.method]
         self._split = split_impacts
+        if self._method.needs_problem and not split_impacts:
+            raise ValueError(f"split_impacts=False is not available with method {self._method.name!r}: "
+                             "it needs a constant torque on each segment")
+        why = why_no_fast_path(self._method, scenario.attitude)
+        if not split_impacts:
+            why = "split_impacts=False (a time-switched right-hand side) runs on the reference path"
+        if fast and why:
+            raise ValueError(f"fast path not available: {why}")
+        self.fast = not why if fast is None else bool(fast)
         self._impacts: list[Impact] = []
         self._edges: list[float] = [scenario.duration]
         self.t = 0.0
@@ -159,10 +220,63 @@ class Propagator:
                 self._start_segment(stepper.t, stepper.y.copy())
                 stepper = self._stepper
                 continue
-            self._step(stepper)
+            if self.fast:
+                self._advance_compiled(stepper, t)
+            else:
+                self._step(stepper)
         self.y = stepper.state_at(t)
         self.t = t
         return self.y
+
+    def sample_many(self, times) -> tuple[int, dict[str, np.ndarray], str]:
+        """:meth:`sample` at every time of the sorted sequence ``times``, as arrays.
+
+        Returns ``(n_done, arrays, message)``: ``arrays`` has ``omega`` (n, 3), ``euler``
+        (n, 3), ``quaternion`` (n, 4) and ``matrix`` (n, 3, 3), of which the first ``n_done``
+        rows are valid; ``message`` says why the rest are missing (integration failure),
+        empty when n_done == n. On the fast path the whole grid is sampled inside the
+        compiled loop (one call per segment).
+        """
+        times = np.ascontiguousarray(times, dtype=float)
+        n = times.size
+        if n and self.status != FAILED and not self.t <= times[0]:
+            raise ValueError(f"t = {times[0]!r} must lie in [{self.t!r}, {self.t_end!r}] yr")
+        if n and times[-1] > self.t_end:
+            raise ValueError(f"t = {times[-1]!r} must lie in [{self.t!r}, {self.t_end!r}] yr")
+        omega, euler = np.empty((n, 3)), np.empty((n, 3))
+        quat, matrices = np.empty((n, 4)), np.empty((n, 3, 3))
+        arrays = {"omega": omega, "euler": euler, "quaternion": quat, "matrix": matrices}
+        if not self.fast:
+            for k, t in enumerate(times):
+                try:
+                    s = self.sample(float(t))
+                except IntegrationError as err:
+                    return k, arrays, str(err)
+                omega[k], euler[k], quat[k], matrices[k] = s.omega, s.euler, s.quaternion, s.matrix
+            return n, arrays, ""
+        if self.status == FAILED:
+            return 0, arrays, self.message
+        y_out = np.empty((n, 7))
+        k, message = 0, ""
+        while k < n:
+            stepper = self._stepper
+            if stepper.status != RUNNING and times[k] > stepper.t:
+                self._start_segment(stepper.t, stepper.y.copy())
+                continue
+            k, steps = stepper.advance(times[-1], self._euler_track, times, y_out, euler, k)
+            self.n_steps += steps
+            if stepper.status == FAILED:
+                self.status, self.message = FAILED, stepper.message
+                message = stepper.message
+                break
+        if k:
+            y = y_out[:k]
+            omega[:k] = y[:, :3]
+            quat[:k] = continuous_quaternions(y[:, 3:], self._quat_prev)
+            matrices[:k] = quaternions_to_matrices(y[:, 3:])
+            self._quat_prev = quat[k - 1].copy()
+            self.t, self.y = float(times[k - 1]), y_out[k - 1].copy()
+        return k, arrays, message
 
     def pop_completed_impacts(self) -> list[tuple[Impact, np.ndarray, np.ndarray]]:
         """Impacts that ended by the current time and were not returned before.
@@ -214,21 +328,27 @@ class Propagator:
             self._edge_state[t0] = np.array(y0)
         k = bisect.bisect_right(self._edges, t0)
         t_bound = self._edges[k] if k < len(self._edges) else self.t_end
-        rhs = self._rhs_for(t0, t_bound)
         if self._stepper is not None:
             self._nfev_done += self._stepper.nfev
-        self._stepper = self._method(rhs, t0, y0, t_bound, self.scenario.integrator)
+        problem = self._problem_for(t0, t_bound)
+        settings = self.scenario.integrator
+        if self.fast:
+            self._stepper = CompiledStepper(self._method, None, t0, y0, t_bound, settings, problem=problem)
+        else:
+            rhs = self._rhs_for(t0, t_bound)
+            self._stepper = self._method(rhs, t0, y0, t_bound, settings, problem=problem)
+
+    def _problem_for(self, t0: float, t1: float) -> SegmentProblem:
+        sc = self.scenario
+        body, orbital = segment_torques(self._impacts, t0, t1) if self._split else ((0.0,) * 3, (0.0,) * 3)
+        return SegmentProblem(sc.inertia, sc.orbit_rate, body, orbital, sc.attitude)
 
     def _rhs_for(self, t0: float, t1: float):
         sc, make = self.scenario, self._model.make_rhs
         if not self._split:
             return self._switching_rhs()
-        mid = 0.5 * (t0 + t1)
-        body, orbital = np.zeros(3), np.zeros(3)
-        for impact in self._impacts:
-            if impact.start <= mid < impact.end:
-                (body if impact.frame == "body" else orbital)[:] += impact.torque
-        return make(sc.inertia, sc.orbit_rate, tuple(body), tuple(orbital))
+        body, orbital = segment_torques(self._impacts, t0, t1)
+        return make(sc.inertia, sc.orbit_rate, body, orbital)
 
     def _switching_rhs(self):
         """Pulses as a time switch inside one smooth-looking RHS (demonstration only)."""
@@ -245,6 +365,13 @@ class Propagator:
             return free(t, y)
 
         return rhs
+
+    def _advance_compiled(self, stepper, t: float) -> None:
+        _, steps = stepper.advance(t, self._euler_track)
+        self.n_steps += steps
+        if stepper.status == FAILED:
+            self.status, self.message = FAILED, stepper.message
+            raise IntegrationError(stepper.message, stepper.t)
 
     def _step(self, stepper) -> None:
         t_before = stepper.t

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from .dynamics import ATTITUDE_MODELS
-from .integrators import METHODS
+from .integrators import INTEGRATORS
 
 __all__ = [
     "ScenarioError",
@@ -168,11 +168,14 @@ class IntegratorSettings:
     Attributes
     ----------
     method : str
-        A key of ``integrators.METHODS``: rk4, rk45, dop853, radau, bdf, lsoda, adams.
+        A key of ``integrators.INTEGRATORS``: rk4, rk45, dop853, radau, bdf, lsoda, adams
+        (``METHODS``) or splitting, splitting4, splitting6 (``SPLITTING_METHODS``, attitude
+        'quaternion' only: checked by :class:`Scenario`).
     rtol, atol : float
         Relative and absolute tolerances of adaptive methods.
     step : float
-        Step [yr] of fixed-step methods (shortened so that segment edges are hit).
+        Step [yr] of fixed-step methods (rk4, splitting*; shortened so that segment edges
+        are hit).
     max_step : float
         Largest step [yr] an adaptive method may take; 0 = no limit.
     """
@@ -188,7 +191,7 @@ class IntegratorSettings:
 
     def validate(self, name: str) -> None:
         """Check and normalise the fields; ``name`` prefixes error messages."""
-        _one_of(f"{name}.method", self.method, METHODS)
+        _one_of(f"{name}.method", self.method, INTEGRATORS)
         rtol = _finite(f"{name}.rtol", self.rtol)
         if not MIN_RTOL <= rtol < MAX_RTOL:
             _fail(f"{name}.rtol", f"must be in [{MIN_RTOL:g}, {MAX_RTOL:g})", self.rtol)
@@ -273,6 +276,11 @@ class Scenario:
         _set(self, "omega0", _vector("omega0", self.omega0))
         euler0 = _vector("euler0", self.euler0)
         _one_of("attitude", self.attitude, ATTITUDE_MODELS)
+        method = INTEGRATORS[self.integrator.method] if isinstance(self.integrator, IntegratorSettings) else None
+        if method is not None and self.attitude not in method.attitudes:
+            # Capability check: the method says what it can integrate, and why not the rest.
+            _fail("integrator.method", f"{method.name!r} cannot integrate attitude {self.attitude!r}: "
+                  f"{method.requirement or 'unsupported'}", self.integrator.method)
         if self.attitude == "euler" and not 0.0 < euler0[2] < math.pi:
             _fail("euler0[2]", "theta0 must lie strictly inside (0, pi) with attitude 'euler' "
                   "(eq 15 divides by sin theta); use attitude 'quaternion'", euler0[2])
@@ -371,10 +379,10 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     "attitude": ("", "attitude state: quaternion (no singularity) or euler (paper eq 15)"),
     "duration": ("yr", "simulated time span tk, from t = 0"),
     "output_interval": ("yr", "spacing of published samples"),
-    "integrator.method": ("", "integrator: " + ", ".join(METHODS)),
+    "integrator.method": ("", "integrator: " + ", ".join(INTEGRATORS)),
     "integrator.rtol": ("", "relative tolerance (adaptive methods)"),
     "integrator.atol": ("", "absolute tolerance (adaptive methods)"),
-    "integrator.step": ("yr", "step of fixed-step methods (rk4)"),
+    "integrator.step": ("yr", "step of fixed-step methods (rk4, splitting*)"),
     "integrator.max_step": ("yr", "largest step of adaptive methods; 0 = no limit"),
     "impacts.start": ("yr", "start time of each scheduled impact"),
     "impacts.duration": ("yr", "length of each impact pulse"),

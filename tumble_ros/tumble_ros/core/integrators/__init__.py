@@ -1,17 +1,32 @@
 """Integrators behind one interface (:class:`~.base.Stepper`) and a name registry.
 
-``METHODS`` maps the names accepted in a scenario (``integrator.method``) to classes.
-Capability flags on each class: ``adaptive`` (step size from rtol/atol) and
-``symplectic``.
+Two registries, one namespace of names (``integrator.method`` of a scenario):
+
+* ``METHODS``: general-purpose methods, any y' = f(t, y): rk4, rk45, dop853, radau, bdf,
+  lsoda, adams;
+* ``SPLITTING_METHODS``: structure-preserving Lie-Poisson splitting methods, which need the
+  rigid-body structure of the segment (:class:`~.base.SegmentProblem`) and the quaternion
+  attitude: splitting (order 2), splitting4, splitting6;
+* ``INTEGRATORS`` = both: every name a scenario accepts.
+
+Capability flags on each class: ``adaptive``, ``symplectic``, ``order``, ``attitudes``
+(+ ``requirement``, the reason others are refused), ``needs_problem`` and ``kernel`` (a
+compiled loop in ``core/kernels.py``; :mod:`.compiled`).
 """
 from __future__ import annotations
 
 from .adaptive import BDF, DOP853, LSODA, RK45, Adams, Radau
-from .base import FAILED, FINISHED, RUNNING, Stepper
+from .base import FAILED, FINISHED, RUNNING, SegmentProblem, Stepper
 from .fixed_step import RK4
+from .splitting import Splitting, Splitting4, Splitting6
 
 METHODS: dict[str, type[Stepper]] = {
     cls.name: cls for cls in (RK4, RK45, DOP853, Radau, BDF, LSODA, Adams)
 }
+SPLITTING_METHODS: dict[str, type[Stepper]] = {
+    cls.name: cls for cls in (Splitting, Splitting4, Splitting6)
+}
+INTEGRATORS: dict[str, type[Stepper]] = {**METHODS, **SPLITTING_METHODS}
 
-__all__ = ["METHODS", "Stepper", "RUNNING", "FINISHED", "FAILED"]
+__all__ = ["METHODS", "SPLITTING_METHODS", "INTEGRATORS", "Stepper", "SegmentProblem",
+           "RUNNING", "FINISHED", "FAILED"]

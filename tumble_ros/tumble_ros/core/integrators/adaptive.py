@@ -26,8 +26,8 @@ class _ScipyStepper(Stepper):
     adaptive = True
     solver_class: type
 
-    def __init__(self, fun, t0, y0, t_bound, settings):
-        super().__init__(fun, t0, y0, t_bound, settings)
+    def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
+        super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         self._solver = None
         if self.status == "running":
             self._solver = self.solver_class(
@@ -57,10 +57,13 @@ class _ScipyStepper(Stepper):
 
 class RK45(_ScipyStepper):
     name, solver_class = "rk45", integrate.RK45
+    order = 5
 
 
 class DOP853(_ScipyStepper):
     name, solver_class = "dop853", integrate.DOP853
+    order = 8
+    kernel = "dop853"  # core/kernels.py transcribes scipy's DOP853 step by step
 
 
 class Radau(_ScipyStepper):
@@ -87,8 +90,8 @@ class Adams(Stepper):
     name = "adams"
     adaptive = True
 
-    def __init__(self, fun, t0, y0, t_bound, settings):
-        super().__init__(fun, t0, y0, t_bound, settings)
+    def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
+        super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         self._nfev = 0
 
         def counted(t, y):

@@ -9,13 +9,18 @@ edges), so no method can step over a pulse.
 Implementing a new method
 -------------------------
 1. Subclass :class:`Stepper`, set the class attributes ``name`` (the registry key),
-   ``adaptive`` (step size chosen from ``rtol``/``atol``) and, if relevant,
-   ``symplectic``.
+   ``adaptive`` (step size chosen from ``rtol``/``atol``) and, if relevant, the other
+   capability flags: ``symplectic``, ``order``, ``attitudes`` (the attitude
+   representations it can integrate; Scenario validation refuses the others and says why,
+   from ``requirement``), ``needs_problem`` (it uses the segment's :class:`SegmentProblem`
+   rather than only ``fun``, like the splitting methods) and ``kernel`` (the name of its
+   compiled loop in ``core/kernels.py``, if any).
 2. Implement ``_step_impl() -> (ok, message)``: advance ``self.t``/``self.y`` by one
    step, keep the previous time in ``self.t_old``, and land exactly on ``t_bound`` at
    the end. Return ``(False, reason)`` on numerical failure.
 3. Implement ``_state_at_impl(t)`` for any t in [t_old, t] (dense output).
-4. Add the class to ``METHODS`` in ``integrators/__init__.py``.
+4. Add the class to ``METHODS`` (general-purpose methods: any y' = f(t, y)) or
+   ``SPLITTING_METHODS`` (structure-exploiting methods) in ``integrators/__init__.py``.
 The base class counts steps, records status and message, and turns a non-finite state
 into a failure.
 """
@@ -23,16 +28,40 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import Callable, ClassVar
 
 import numpy as np
 
-__all__ = ["Stepper", "RUNNING", "FINISHED", "FAILED"]
+__all__ = ["Stepper", "SegmentProblem", "RUNNING", "FINISHED", "FAILED"]
 
 RUNNING, FINISHED, FAILED = "running", "finished", "failed"
 
 #: A step shorter than this many units in the last place of t counts as a collapse.
 _MIN_STEP_ULPS = 16
+
+
+@dataclass(frozen=True)
+class SegmentProblem:
+    """The structure of the equations on one integration segment (built by the Propagator).
+
+    ``fun`` is this problem's right-hand side; methods that exploit the structure (the
+    splitting methods, the compiled kernels) use these fields instead.
+
+    Attributes
+    ----------
+    inertia : (Ix, Iy, Iz) principal moments.
+    orbit_rate : ws [rad/yr].
+    torque_body, torque_orbital : constant pulse torques on this segment, body-fixed and
+        orbital-frame-fixed (zero outside pulses).
+    attitude : the attitude representation of the state vector ("quaternion" or "euler").
+    """
+
+    inertia: tuple[float, float, float]
+    orbit_rate: float
+    torque_body: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    torque_orbital: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    attitude: str = "quaternion"
 
 
 class Stepper(ABC):
@@ -47,6 +76,9 @@ class Stepper(ABC):
         End of the segment [yr]; the stepper lands on it exactly and stops.
     settings : IntegratorSettings
         ``rtol``, ``atol``, ``max_step`` (adaptive methods), ``step`` (fixed-step methods).
+    problem : SegmentProblem, optional
+        The segment's structure; required by methods with ``needs_problem``, ignored by the
+        others.
 
     Attributes
     ----------
@@ -60,9 +92,21 @@ class Stepper(ABC):
     name: ClassVar[str]
     adaptive: ClassVar[bool]
     symplectic: ClassVar[bool] = False
+    #: Order of convergence (informative).
+    order: ClassVar[int | None] = None
+    #: Attitude representations this method can integrate (``dynamics.ATTITUDE_MODELS`` keys).
+    attitudes: ClassVar[frozenset[str]] = frozenset({"quaternion", "euler"})
+    #: Why other attitudes are refused (used in Scenario validation messages).
+    requirement: ClassVar[str] = ""
+    #: Uses the SegmentProblem instead of only ``fun``.
+    needs_problem: ClassVar[bool] = False
+    #: Name of the compiled loop in ``core/kernels.py`` (quaternion attitude), or None.
+    kernel: ClassVar[str | None] = None
 
-    def __init__(self, fun: Callable, t0: float, y0: np.ndarray, t_bound: float, settings) -> None:
+    def __init__(self, fun: Callable, t0: float, y0: np.ndarray, t_bound: float, settings,
+                 problem: SegmentProblem | None = None) -> None:
         self.fun = fun
+        self.problem = problem
         self.t = float(t0)
         self.y = np.array(y0, dtype=float)
         self.t_old: float | None = None

@@ -1,0 +1,130 @@
+"""The fast path: a method's compiled loop (``core/kernels.py``) behind the Stepper interface.
+
+:class:`CompiledStepper` integrates one segment like the method's own stepper class (same
+steps, same dense output, same failure checks), but can also take many steps per call
+(:meth:`CompiledStepper.advance`) with the Propagator's per-step work (continuous Euler
+angles, output sampling) done inside the compiled loop. The Propagator uses it when
+:func:`fast_path_available` says so; ``fast=False`` keeps the reference path.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import kernels as K
+from .base import FAILED, FINISHED, RUNNING, SegmentProblem, Stepper
+
+__all__ = ["CompiledStepper", "fast_path_available", "why_no_fast_path", "failure_message"]
+
+_EMPTY_T = np.empty(0)
+_EMPTY_Y = np.empty((0, K.N))
+_EMPTY_E = np.empty((0, 3))
+_STATUS = {K.RUNNING: RUNNING, K.FINISHED: FINISHED, K.FAILED: FAILED}
+
+
+def failure_message(st: np.ndarray, method_name: str) -> str:
+    """The reference path's message for the failure recorded in a kernel state ``st``."""
+    t_good = float(st[K.S_FAILT])
+    code = st[K.S_FAIL]
+    if code == K.FAIL_NONFINITE:
+        return f"non-finite state after t = {t_good:.10g} yr"
+    if code == K.FAIL_COLLAPSE:
+        return (f"step size collapsed to {float(st[K.S_FAILDT]):.3g} yr at t = {t_good:.10g} yr: "
+                "the solution is singular or diverging there")
+    return (f"{method_name} failed at t = {t_good:.10g} yr: "
+            "Required step size is less than spacing between numbers.")
+
+
+def why_no_fast_path(method: type[Stepper], attitude: str) -> str:
+    """Empty if ``method`` has a compiled loop usable for ``attitude``, else the reason."""
+    if method.kernel is None:
+        return f"method {method.name!r} has no compiled loop"
+    if attitude != "quaternion":
+        return f"the compiled loops integrate attitude 'quaternion' only, not {attitude!r}"
+    if not K.COMPILED:
+        return ("numba is not installed or is disabled (NUMBA_DISABLE_JIT / TUMBLE_ROS_NO_JIT); "
+                "the reference path gives the same results, slower")
+    return ""
+
+
+def fast_path_available(method: type[Stepper], attitude: str) -> bool:
+    """True if the Propagator can run ``method`` through its compiled loop."""
+    return not why_no_fast_path(method, attitude)
+
+
+class CompiledStepper(Stepper):
+    """One segment of ``method`` run by its compiled kernel (quaternion attitude).
+
+    Parameters are those of :class:`Stepper` plus ``method`` (the registry class whose
+    ``kernel`` to run); ``problem`` is required, ``fun`` is not used.
+    """
+
+    adaptive = False  # replaced per instance by the method's flags
+
+    def __init__(self, method: type[Stepper], fun, t0, y0, t_bound, settings,
+                 problem: SegmentProblem | None = None) -> None:
+        super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
+        if problem is None:
+            raise ValueError("CompiledStepper needs the SegmentProblem")
+        self.method = method
+        self.name = method.name
+        self.adaptive = method.adaptive
+        self.symplectic = method.symplectic
+        self.order = method.order
+        gammas = method.composition() if hasattr(method, "composition") else ()
+        self._cfg = K.config_array(method.kernel, settings, gammas)
+        self._p = K.problem_array(problem.inertia, problem.orbit_rate, problem.torque_body,
+                                  problem.torque_orbital)
+        self._st = K.new_state()
+        self._st[K.O_Y:K.O_Y + K.N] = self.y
+        K.seg_init(self._p, self._cfg, self._st, self.t, self.t_bound)
+        self._sync()
+
+    @property
+    def nfev(self) -> int:
+        return int(self._st[K.S_NFEV])
+
+    def _sync(self) -> None:
+        st = self._st
+        self.t = float(st[K.S_T])
+        self.y = st[K.O_Y:K.O_Y + K.N].copy()
+        self.n_steps = int(st[K.S_NSTEPS])
+        self.t_old = float(st[K.S_TOLD]) if self.n_steps else None
+        self.status = _STATUS[st[K.S_STATUS]]
+        if self.status == FAILED and not self.message:
+            self.message = self._failure_message()
+
+    def _failure_message(self) -> str:
+        return failure_message(self._st, self.name)
+
+    def step(self) -> str:
+        """Take one step; returns the new status."""
+        if self.status != RUNNING:
+            raise RuntimeError(f"step() on a stepper whose status is {self.status!r}")
+        K.step(self._p, self._cfg, self._st)
+        self._sync()
+        return self.status
+
+    def advance(self, t_target: float, track: np.ndarray, t_out=None, y_out=None, e_out=None,
+                k: int = 0) -> tuple[int, int]:
+        """Step until t >= t_target, the segment's end or a failure, in compiled code.
+
+        ``track`` (3,) holds the continuous Euler angles and is updated in place after every
+        step (``Propagator._track_euler``). Outputs: every ``t_out[j]`` (j >= k) passed on the
+        way (up to the current t) is written to ``y_out[j]`` (state) and ``e_out[j]``
+        (unwrapped Euler angles). Returns (next output index, steps taken).
+        """
+        if t_out is None:
+            t_out, y_out, e_out = _EMPTY_T, _EMPTY_Y, _EMPTY_E
+        if self.status != RUNNING:
+            k, steps = K.emit(self._p, self._cfg, self._st, track, t_out, y_out, e_out, k), 0
+        else:
+            k, steps = K.advance(self._p, self._cfg, self._st, track, float(t_target), t_out, y_out, e_out, k)
+        self._sync()
+        return int(k), int(steps)
+
+    def _step_impl(self):  # pragma: no cover - step() is overridden
+        raise NotImplementedError
+
+    def _state_at_impl(self, t):
+        K.dense(self._p, self._cfg, self._st, float(t))
+        return self._st[K.O_SCR:K.O_SCR + K.N].copy()
