@@ -33,9 +33,10 @@ def stamp_ns(msg):
     return TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec)
 
 
-def test_bringup_round_trip_counts_and_values(tmp_path):
+@pytest.mark.parametrize("executor", ["events", "single"])
+def test_bringup_round_trip_counts_and_values(tmp_path, executor):
     params = write_params(tmp_path)
-    result = run_bringup(params, output=tmp_path / "run.mcap", progress=None)
+    result = run_bringup(params, output=tmp_path / "run.mcap", progress=None, executor_name=executor)
     assert result.ok and result.samples == 301
     for topic in PER_SAMPLE:
         assert result.counts[topic] == 301, topic  # nothing lost
@@ -58,6 +59,19 @@ def test_bringup_round_trip_counts_and_values(tmp_path):
             reader.deserialize(raw, connection.msgtype)
             counts[connection.topic] = counts.get(connection.topic, 0) + 1
     assert counts == {t: n for t, n in result.counts.items() if n}
+
+    # publish time: the publisher's source timestamp ('single'), the receive time ('events'
+    # cannot pass MessageInfo); never after the receive time
+    records = list(read_messages(result.output, topics=["/angular_velocity"]))
+    gaps = np.array([m.log_time_ns - m.publish_time_ns for m in records])
+    assert np.all(gaps >= 0)
+    assert np.all(gaps == 0) if executor == "events" else np.any(gaps > 0)
+
+
+def test_bringup_refuses_an_unknown_executor(tmp_path):
+    with pytest.raises(ValueError, match="executor: must be one of events, single"):
+        run_bringup(write_params(tmp_path), output=tmp_path / "x.mcap", progress=None, executor_name="multi")
+    assert not (tmp_path / "x.mcap").exists()
 
 
 def test_latched_and_late_topics_are_recorded(ros, tmp_path):

@@ -23,7 +23,7 @@ __all__ = ["ProgressReporter", "ConsumerTracker", "PROGRESS_TOPIC"]
 PROGRESS_TOPIC = "consumer_progress"
 PROGRESS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE)
 #: Reporting period of a consumer [s] (when it made progress).
-REPORT_PERIOD = 0.005
+REPORT_PERIOD = 0.002
 #: A consumer re-sends its progress at least this often [s], so a simulator that starts later
 #: learns about it, and a silent consumer can be told from a slow one.
 HEARTBEAT_PERIOD = 0.5

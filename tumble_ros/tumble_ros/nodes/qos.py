@@ -4,7 +4,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 #: Sampled state (w, attitude, Euler angles, /clock, events, comparisons): reliable with a deep
 #: queue, and transient-local, so a subscriber whose subscription is matched a moment after the
 #: publisher started (a recorder discovering topics, a late comparator) still receives the last
-#: 1000 samples. The simulator never runs more than a window of 20 samples ahead of the slowest
+#: 1000 samples. The simulator never runs more than a window of 40 samples ahead of the slowest
 #: consumer (nodes.progress), so the queue is never overrun for them.
 STATE_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,

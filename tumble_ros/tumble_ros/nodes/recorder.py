@@ -77,8 +77,12 @@ def _policy_name(policy) -> str:
 class RecorderNode(Node):
     """Recorder node; see the module docstring."""
 
-    def __init__(self, **kwargs) -> None:
+    def __init__(self, *, message_info: bool = True, **kwargs) -> None:
+        """``message_info=False``: subscription callbacks take the message only (executors that
+        cannot pass rclpy's MessageInfo, e.g. Jazzy's EventsExecutor); the publish time of
+        each record is then its receive time instead of the publisher's source timestamp."""
         super().__init__("recorder", **kwargs)
+        self._message_info = message_info
         self.add_on_set_parameters_callback(self._on_set_parameters)
         p = declare_node_parameters(self, PARAMETERS)
         topics = [t for t in p["topics"] if t]
@@ -155,13 +159,14 @@ class RecorderNode(Node):
 
         def on_message(data: bytes, info) -> None:
             received = time.time_ns()
-            sent = info.get("source_timestamp") or received
+            sent = (info.get("source_timestamp") or received) if info else received
             self._writer.write(channel, data, received, sent)
             if per_sample:
                 self._last_stamp[topic] = (_header_stamp_ns(data), time.monotonic())
                 self._report_progress()
 
-        self.create_subscription(msg_class, topic, on_message, qos, raw=True)
+        callback = on_message if self._message_info else (lambda data: on_message(data, None))
+        self.create_subscription(msg_class, topic, callback, qos, raw=True)
         self.get_logger().info(f"recording {topic} ({type_name})")
 
     def _report_progress(self) -> None:

@@ -56,11 +56,11 @@ from tumble_ros_interfaces.srv import ApplyImpact
 __all__ = ["SimNode", "main"]
 
 #: Wall-clock period of the simulation timer [s].
-TICK_PERIOD = 0.005
+TICK_PERIOD = 0.002
 #: Samples published per tick when running as fast as possible (real_time_factor = 0).
 BATCH = 10
 #: Largest lead [samples] over the slowest registered consumer (well below STATE_QOS depth).
-WINDOW = 2 * BATCH
+WINDOW = 4 * BATCH
 FRAMES = {ApplyImpact.Request.FRAME_BODY: "body", ApplyImpact.Request.FRAME_ORBITAL: "orbital"}
 FRAME_CODES = {name: code for code, name in FRAMES.items()}
 
