@@ -42,6 +42,7 @@ help:
 	@echo 'make run    [CONFIG=...]       run the main job (python -m tumble_ros $$CONFIG)'
 	@echo 'make test   [PYTEST_ARGS=...]  run the tests'
 	@echo 'make figures [FIGS="fig3 fig9"] reproduce the paper figures into docs/figures/'
+	@echo 'make bench  [BENCH_ARGS=...]   benchmarks: Fig 9 over 2000 yr vs scipy, ensembles (docs/performance.md)'
 	@echo 'make setup                     venv + pinned requirements + colcon build (idempotent)'
 	@echo 'make lock                      re-pin requirements.txt from requirements.in'
 	@echo 'make clean                     remove build/ install/ log/ and stamps (keeps .venv)'
@@ -72,6 +73,12 @@ run: setup
 
 figures: setup
 	$(ENV) python scripts/make_figures.py $(FIGS)
+
+# Benchmarks (a few minutes; --quick: seconds): every section in benchmarks/, see docs/performance.md.
+.PHONY: bench
+BENCH_ARGS ?=
+bench: setup
+	$(ENV) python benchmarks/run.py $(BENCH_ARGS)
 
 lock:
 	scripts/lock.sh
