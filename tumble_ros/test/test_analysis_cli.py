@@ -1,7 +1,6 @@
 """The analyze command (tumble_ros.analysis.cli), the figures, and the no-ROS-runtime promise."""
 from __future__ import annotations
 
-import ast
 import json
 import math
 import struct
@@ -21,7 +20,6 @@ from tumble_ros.io import McapWriter
 
 DATA = Path(__file__).resolve().parent / 'data'
 GOLDEN = DATA / 'golden.mcap'
-ANALYSIS = Path(__file__).resolve().parents[1] / 'tumble_ros' / 'analysis'
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
 
 
@@ -225,23 +223,6 @@ def test_python_dash_m_on_a_bad_file(tmp_path):
     assert done.returncode == 1
     assert done.stdout == ''
     assert done.stderr.splitlines() == [f'ERROR: {tmp_path / "missing.mcap"}: no such file']
-
-
-def test_analysis_sources_import_no_ros():
-    offenders = []
-    for path in ANALYSIS.rglob('*.py'):
-        for node in ast.walk(ast.parse(path.read_text())):
-            names = []
-            if isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            elif isinstance(node, ast.ImportFrom) and node.module:
-                names = [node.module]
-            top = [n.split('.')[0] for n in names]
-            offenders += [f'{path.name}: {n}' for n in top
-                          if n in {'rclpy', 'rosidl_runtime_py'} or n.endswith('_msgs')]
-    assert not offenders
-    assert {p.name for p in ANALYSIS.glob('*.py')} >= {'recording.py', 'summary.py', 'figures.py', 'cli.py',
-                                                      '__main__.py', '__init__.py'}
 
 
 def test_main_is_the_console_script_entry(monkeypatch, capsys):

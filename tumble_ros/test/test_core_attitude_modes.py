@@ -4,7 +4,7 @@ import math
 import numpy as np
 
 from tumble_ros.core import IntegratorSettings, Scenario, angular_momentum_orbital, simulate
-from tumble_ros.core.rotation import euler_to_matrix, quaternion_to_matrix
+from tumble_ros.core.rotation import quaternion_to_matrix
 
 TIGHT = IntegratorSettings(method="dop853", rtol=1e-13, atol=1e-14)
 

@@ -7,9 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from geometry_msgs.msg import Vector3Stamped
 from std_msgs.msg import String
-from std_srvs.srv import Trigger
 
 from tumble_ros.core import TimeBase, load_scenario, simulate
 from tumble_ros.io import read_messages, summarize
