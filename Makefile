@@ -61,6 +61,8 @@ $(VENV_STAMP): requirements.txt
 $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 	@echo '== colcon build'
 	$(ENV) --build colcon build --symlink-install --base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
+	@# numba compiles the integration loops on first use (~15 s, cached): do it once here.
+	$(ENV) python -c "from tumble_ros.core.integrators.compiled import warm_up; print(f'== compiled loops ready ({warm_up():.1f} s)')"
 	@mkdir -p $(STAMPS)
 	touch $@
 

@@ -119,6 +119,15 @@ def test_fast_path_capability_and_fallback():
     assert Propagator(sc, split_impacts=False).fast is False
 
 
+@needs_numba
+def test_warm_up_compiles_the_single_body_and_ensemble_loops():
+    from tumble_ros.core.integrators.compiled import warm_up
+
+    assert warm_up() > 0.0
+    for loop in (kernels.advance, kernels.ensemble_advance, kernels.ensemble_init):
+        assert loop.signatures, loop  # compiled (or loaded from the cache) for the real argument types
+
+
 _SUBPROCESS = r"""
 import json, sys
 import numpy as np
