@@ -9,6 +9,7 @@ from std_srvs.srv import Trigger
 
 from tumble_ros.core import Scenario, TimeBase, make_model
 from tumble_ros.nodes.comparator import ComparatorNode
+from tumble_ros.nodes.qos import STATE_QOS
 from tumble_ros.nodes.sim import SimNode
 from tumble_ros_interfaces.msg import ErrorNorm
 
@@ -39,6 +40,25 @@ def test_an_error_sample_for_every_omega_sample(ros):
     # the published model is the core's model at the stamped times
     t = np.array([stamp_ns(m) * 1e-9 for m in omega])
     np.testing.assert_allclose(vec(model), make_model("paper", Scenario()).omega(t), rtol=0, atol=1e-12)
+
+
+def test_a_sample_off_the_simulators_grid_is_compared_at_its_own_time(ros):
+    """The comparator evaluates the model ahead on the simulator's sample grid; any other stamp
+    (another publisher, a changed grid) still gets the model at exactly its time."""
+    model = ros.collect(Vector3Stamped, "comparison/model_angular_velocity")
+    ros.start(ComparatorNode)
+    ros.start(SimNode, start_paused=True, **RUN)
+    pub = ros.probe.create_publisher(Vector3Stamped, "angular_velocity", STATE_QOS)
+    assert ros.spin_until(lambda: pub.get_subscription_count() > 0, 5.0)
+    ros.spin_for(0.3)  # the latched scenario description reaches the comparator
+    off_grid = [12_345_678, 2_000_000, 54_321_987]  # ns: 0.0123 s, on the grid (0.002 yr), 0.0543 s
+    for ns in off_grid:
+        msg = Vector3Stamped()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, 1_000_000_000)
+        pub.publish(msg)
+    assert ros.spin_until(lambda: len(model) == 3, 5.0), len(model)
+    expected = make_model("paper", Scenario()).omega(np.array(off_grid) * 1e-9)
+    np.testing.assert_allclose(vec(model), expected, rtol=0, atol=1e-12)
 
 
 def test_decimation_compares_every_kth_sample(ros):

@@ -213,17 +213,35 @@ class SimNode(Node):
         k_last = min(k_last, self._n_samples - 1)
         while self._next_k <= k_last:
             self._schedule_pending()
-            ns = self._next_k * self._interval_ns
-            try:
-                sample = self._propagator.sample(self.timebase.to_years(ns))
-            except IntegrationError as err:
-                self._diverged(err)
+            stamps, times = self._batch(k_last)
+            done, arrays, message = self._propagator.sample_many(times)
+            if done:
+                # An impact can only end at the batch's first sample (batches stop before the
+                # next segment edge): its events and new description go out before the sample.
+                self._publish_impact_events()
+            for j in range(done):
+                self._publish_sample(stamps[j], arrays["omega"][j], arrays["quaternion"][j], arrays["euler"][j])
+            self._next_k += done
+            if done < len(times):
+                self._diverged(IntegrationError(message, self._propagator.t))
                 return
-            self._publish_impact_events()  # before the sample: its new segment description first
-            self._publish_sample(ns, sample)
-            self._next_k += 1
         if self._next_k >= self._n_samples:
             self._set_state(SimStatus.FINISHED, f"finished at t = {self.t:g} yr")
+
+    def _batch(self, k_last: int) -> tuple[list[int], list[float]]:
+        """Stamps [ns] and times [yr] of the next samples up to ``k_last``: the first one, and
+        those after it that lie before the next segment edge (at least one sample)."""
+        to_years, step = self.timebase.to_years, self._interval_ns
+        first = self._next_k * step
+        edge = self._propagator.next_edge(to_years(first))
+        stamps, times = [first], [to_years(first)]
+        for k in range(self._next_k + 1, k_last + 1):
+            t = to_years(k * step)
+            if t >= edge:
+                break
+            stamps.append(k * step)
+            times.append(t)
+        return stamps, times
 
     def _schedule_pending(self) -> None:
         while self._pending:
@@ -231,22 +249,26 @@ class SimNode(Node):
             self._propagator.schedule(impact)
             self._impact_ids[id(impact)] = impact_id
 
-    def _publish_sample(self, ns: int, s) -> None:
+    def _publish_sample(self, ns: int, omega, quaternion, euler) -> None:
+        """Publish one sample: ω [rad/yr] (body axes), the attitude quaternion (scalar first,
+        body -> orbital), the continuous Euler angles (φ, ψ, θ) [rad] and /clock."""
         header_stamp = stamp(ns)
-        omega = Vector3Stamped()
-        omega.header.stamp, omega.header.frame_id = header_stamp, "body"
-        omega.vector = Vector3(x=float(s.omega[0]), y=float(s.omega[1]), z=float(s.omega[2]))
+        wx, wy, wz = omega.tolist()
+        q0, q1, q2, q3 = quaternion.tolist()
+        phi, psi, theta = euler.tolist()
+        msg = Vector3Stamped()
+        msg.header.stamp, msg.header.frame_id = header_stamp, "body"
+        msg.vector = Vector3(x=wx, y=wy, z=wz)
         attitude = QuaternionStamped()
         attitude.header.stamp, attitude.header.frame_id = header_stamp, "orbital"
-        q = s.quaternion
-        attitude.quaternion = Quaternion(w=float(q[0]), x=float(q[1]), y=float(q[2]), z=float(q[3]))
-        euler = Vector3Stamped()
-        euler.header.stamp, euler.header.frame_id = header_stamp, "euler_phi_psi_theta"
-        euler.vector = Vector3(x=float(s.euler[0]), y=float(s.euler[1]), z=float(s.euler[2]))
+        attitude.quaternion = Quaternion(w=q0, x=q1, y=q2, z=q3)
+        angles = Vector3Stamped()
+        angles.header.stamp, angles.header.frame_id = header_stamp, "euler_phi_psi_theta"
+        angles.vector = Vector3(x=phi, y=psi, z=theta)
         self._pub_clock.publish(Clock(clock=header_stamp))
-        self._pub_omega.publish(omega)
+        self._pub_omega.publish(msg)
         self._pub_attitude.publish(attitude)
-        self._pub_euler.publish(euler)
+        self._pub_euler.publish(angles)
 
     def _publish_impact_events(self) -> None:
         for impact, y_start, y_end in self._propagator.pop_completed_impacts():
