@@ -32,7 +32,7 @@ from tumble_ros_interfaces.msg import SimStatus
 __all__ = ["run_bringup", "BringupResult", "main"]
 
 #: The executors bringup can run the nodes in. ``events`` (rclpy's C++ EventsExecutor,
-#: experimental in Jazzy) dispatches a message about 2x faster than ``single`` (the Python
+#: experimental in Jazzy) runs bringup about 4x faster than ``single`` (the Python
 #: SingleThreadedExecutor, which rebuilds its wait set over every entity of the three nodes);
 #: it cannot hand MessageInfo to callbacks, so the recorder stamps publish times on receipt.
 def _events_executor(context: Context):
