@@ -31,10 +31,6 @@ from tumble_ros_interfaces.msg import SimStatus
 
 __all__ = ["run_bringup", "BringupResult", "main"]
 
-#: The executors bringup can run the nodes in. ``events`` (rclpy's C++ EventsExecutor,
-#: experimental in Jazzy) runs bringup about 4x faster than ``single`` (the Python
-#: SingleThreadedExecutor, which rebuilds its wait set over every entity of the three nodes);
-#: it cannot hand MessageInfo to callbacks, so the recorder stamps publish times on receipt.
 def _events_executor(context: Context):
     # rclpy's EventsExecutor() calls faulthandler.enable(), which needs sys.stderr to be a real
     # file; pytest's capture (and some IDE consoles) replace it by one without a descriptor.
@@ -46,6 +42,10 @@ def _events_executor(context: Context):
         sys.stderr = saved
 
 
+#: The executors bringup can run the nodes in. ``events`` (rclpy's C++ EventsExecutor,
+#: experimental in Jazzy) runs bringup about 4x faster than ``single`` (the Python
+#: SingleThreadedExecutor, which rebuilds its wait set over every entity of the three nodes);
+#: it cannot hand MessageInfo to callbacks, so the recorder stamps publish times on receipt.
 EXECUTORS = {"events": _events_executor, "single": SingleThreadedExecutor}
 
 #: Wall-clock seconds between progress lines.
