@@ -31,6 +31,7 @@ from tumble_ros_interfaces.msg import SimStatus
 
 __all__ = ["run_bringup", "BringupResult", "main"]
 
+
 def _events_executor(context: Context):
     # rclpy's EventsExecutor() calls faulthandler.enable(), which needs sys.stderr to be a real
     # file; pytest's capture (and some IDE consoles) replace it by one without a descriptor.
