@@ -96,13 +96,3 @@ def test_completed_impacts_report_their_measured_delta_omega():
     (impact, y1, y2), = prop.pop_completed_impacts()
     assert impact == impacts[1] and y2[2] - y1[2] == pytest.approx(-3.0e6 * DT / INERTIA[2], rel=1e-9)
 
-
-def test_next_edge_is_the_next_pulse_edge_or_the_end():
-    sc = scenario("rk4", [Impact(0.1, DT, (0.0, 0.0, 1.5e6))])
-    prop = Propagator(sc)
-    assert prop.next_edge(0.0) == 0.1
-    assert prop.next_edge(0.1) == 0.1 + DT  # strictly after t
-    assert prop.next_edge(0.1 + DT) == sc.duration
-    prop.advance_to(0.2)
-    prop.schedule(Impact(0.3, DT, (1.0, 0.0, 0.0)))  # scheduled while running: new edges
-    assert prop.next_edge(0.2) == 0.3

@@ -297,15 +297,6 @@ class Propagator:
                 done.append((impact, self._edge_state[impact.start], y_end))
         return done
 
-    def next_edge(self, t: float) -> float:
-        """The first segment edge (impact start or end, or the end of the run) after ``t`` [yr].
-
-        Samples strictly before it can be taken in one :meth:`sample_many` call without
-        passing the end of an impact (see :meth:`pop_completed_impacts`).
-        """
-        k = bisect.bisect_right(self._edges, t)
-        return self._edges[k] if k < len(self._edges) else self.t_end
-
     def quaternion_of(self, y: np.ndarray) -> np.ndarray:
         """Unit quaternion (scalar first, body -> orbital) of a state vector."""
         if self._model.name == "quaternion":

@@ -35,7 +35,6 @@ from std_srvs.srv import Trigger
 from tumble_ros.core import (
     Impact,
     ImpactLimits,
-    IntegrationError,
     Propagator,
     Scenario,
     ScenarioError,
@@ -211,37 +210,22 @@ class SimNode(Node):
 
     def _publish_up_to(self, k_last: int) -> None:
         k_last = min(k_last, self._n_samples - 1)
-        while self._next_k <= k_last:
+        if self._next_k <= k_last:
             self._schedule_pending()
-            stamps, times = self._batch(k_last)
-            done, arrays, message = self._propagator.sample_many(times)
-            if done:
-                # An impact can only end at the batch's first sample (batches stop before the
-                # next segment edge): its events and new description go out before the sample.
-                self._publish_impact_events()
+            stamps = [k * self._interval_ns for k in range(self._next_k, k_last + 1)]
+            done, arrays, message = self._propagator.sample_many([self.timebase.to_years(ns) for ns in stamps])
+            # Impacts that ended within the batch: their events and new descriptions go out
+            # before its samples (the comparator keeps the previous segment's model for the
+            # samples that trail a description).
+            self._publish_impact_events()
             for j in range(done):
                 self._publish_sample(stamps[j], arrays["omega"][j], arrays["quaternion"][j], arrays["euler"][j])
             self._next_k += done
-            if done < len(times):
-                self._diverged(IntegrationError(message, self._propagator.t))
+            if done < len(stamps):
+                self._diverged(message)
                 return
         if self._next_k >= self._n_samples:
             self._set_state(SimStatus.FINISHED, f"finished at t = {self.t:g} yr")
-
-    def _batch(self, k_last: int) -> tuple[list[int], list[float]]:
-        """Stamps [ns] and times [yr] of the next samples up to ``k_last``: the first one, and
-        those after it that lie before the next segment edge (at least one sample)."""
-        to_years, step = self.timebase.to_years, self._interval_ns
-        first = self._next_k * step
-        edge = self._propagator.next_edge(to_years(first))
-        stamps, times = [first], [to_years(first)]
-        for k in range(self._next_k + 1, k_last + 1):
-            t = to_years(k * step)
-            if t >= edge:
-                break
-            stamps.append(k * step)
-            times.append(t)
-        return stamps, times
 
     def _schedule_pending(self) -> None:
         while self._pending:
@@ -286,9 +270,9 @@ class SimNode(Node):
                                    f"delta w = {dw.round(9).tolist()} rad/yr")
             self._publish_scenario(impact.end, y_end)
 
-    def _diverged(self, err: IntegrationError) -> None:
-        self.get_logger().error(f"integration stopped: {err}")
-        self._set_state(SimStatus.DIVERGED, str(err))
+    def _diverged(self, reason: str) -> None:
+        self.get_logger().error(f"integration stopped: {reason}")
+        self._set_state(SimStatus.DIVERGED, reason)
 
     # -- latched topics -----------------------------------------------------------------
     def _set_state(self, state: int, message: str) -> None:
