@@ -52,31 +52,22 @@ def rosbag2_full_text(root: str, find, std_header=False) -> str:
 
     seen = set()
 
-    def append(package, namespace, name):
-        text = find(package, namespace, name)
+    def with_dependencies(text, package):
         result = text
         for dep in deps(text, package):
             if dep not in seen:
                 seen.add(dep)
                 dep_package, dep_name = dep.split('/')
                 result += '\n' + '=' * 80 + '\nMSG: ' + dep + '\n'
-                result += append(dep_package, 'msg', dep_name)
+                result += with_dependencies(find(dep_package, 'msg', dep_name), dep_package)
         return result
 
     package, namespace, name = root.split('/')
     if namespace == 'srv':   # Jazzy: service event -> the .srv file under an SRV: delimiter
         service = name[:-len('_Event')]
         seen.add(f'{package}/srv/{service}')
-        text = find(package, 'srv', service)
-        result = '=' * 80 + f'\nSRV: {package}/srv/{service}\n' + text
-        for dep in deps(text, package):
-            if dep not in seen:
-                seen.add(dep)
-                dep_package, dep_name = dep.split('/')
-                result += '\n' + '=' * 80 + '\nMSG: ' + dep + '\n'
-                result += append(dep_package, 'msg', dep_name)
-        return result
-    return append(package, namespace, name)
+        return '=' * 80 + f'\nSRV: {package}/srv/{service}\n' + with_dependencies(find(package, 'srv', service), package)
+    return with_dependencies(find(package, namespace, name), package)
 
 
 def find_installed(package, namespace, name):
