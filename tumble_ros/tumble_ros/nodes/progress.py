@@ -11,6 +11,7 @@ depth of the state topics' queues, so nothing is ever overwritten.
 from __future__ import annotations
 
 import time
+from typing import Callable
 
 from builtin_interfaces.msg import Time
 from rclpy.node import Node
@@ -31,10 +32,15 @@ _NOTHING_YET = -1
 
 
 class ProgressReporter:
-    """Publishes a consumer's progress (the stamp of the last sample it fully processed)."""
+    """Publishes a consumer's progress (the stamp of the last sample it fully processed).
 
-    def __init__(self, node: Node) -> None:
+    The consumer calls :meth:`mark` as it goes, or passes ``source``: a function returning its
+    progress stamp [ns] (or None), asked once per report instead of once per message.
+    """
+
+    def __init__(self, node: Node, source: Callable[[], int | None] | None = None) -> None:
         self._node = node
+        self._source = source
         self._pub = node.create_publisher(ConsumerProgress, PROGRESS_TOPIC, PROGRESS_QOS)
         self._last_ns = _NOTHING_YET
         self._sent_ns: int | None = None
@@ -47,6 +53,10 @@ class ProgressReporter:
             self._last_ns = stamp_ns
 
     def _report(self) -> None:
+        if self._source is not None:
+            stamp_ns = self._source()
+            if stamp_ns is not None:
+                self.mark(stamp_ns)
         if self._last_ns == self._sent_ns and time.monotonic() - self._sent_at < HEARTBEAT_PERIOD:
             return
         self._publish(True)

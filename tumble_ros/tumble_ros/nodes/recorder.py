@@ -94,7 +94,7 @@ class RecorderNode(Node):
                                   compression=p["compression"])
         self._channels: dict[str, int] = {}
         self._last_stamp: dict[str, tuple[int, float]] = {}  # per-sample topic -> (stamp ns, wall time)
-        self._progress = ProgressReporter(self)
+        self._progress = ProgressReporter(self, source=self._slowest_live_stamp)
         self._discover()
         self.create_timer(p["discovery_period"], self._discover)
         self.create_timer(p["chunk_seconds"] / 4, self._writer.poll)
@@ -163,17 +163,16 @@ class RecorderNode(Node):
             self._writer.write(channel, data, received, sent)
             if per_sample:
                 self._last_stamp[topic] = (_header_stamp_ns(data), time.monotonic())
-                self._report_progress()
 
         callback = on_message if self._message_info else (lambda data: on_message(data, None))
         self.create_subscription(msg_class, topic, callback, qos, raw=True)
         self.get_logger().info(f"recording {topic} ({type_name})")
 
-    def _report_progress(self) -> None:
+    def _slowest_live_stamp(self) -> int | None:
+        """Progress [ns]: the last stamp recorded on every per-sample topic still being published."""
         now = time.monotonic()
         live = [ns for ns, seen in self._last_stamp.values() if now - seen < STALE_TOPIC]
-        if live:
-            self._progress.mark(min(live))
+        return min(live) if live else None
 
     def close(self) -> None:
         """Finalise the file (idempotent) and tell the simulator this consumer leaves."""
