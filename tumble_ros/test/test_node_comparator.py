@@ -9,9 +9,9 @@ from std_srvs.srv import Trigger
 
 from tumble_ros.core import Scenario, TimeBase, make_model
 from tumble_ros.nodes.comparator import ComparatorNode
-from tumble_ros.nodes.qos import STATE_QOS
+from tumble_ros.nodes.qos import DESCRIPTION_QOS, STATE_QOS
 from tumble_ros.nodes.sim import SimNode
-from tumble_ros_interfaces.msg import ErrorNorm
+from tumble_ros_interfaces.msg import ErrorNorm, ScenarioDescription
 
 RUN = dict(duration=0.2, output_interval=0.002, real_time_factor=0.0, min_consumers=1)
 
@@ -156,3 +156,33 @@ def test_a_comparator_started_after_an_impact_compares_every_segment(ros):
     expected = make_model("paper", Scenario(duration=0.2, output_interval=0.002)).omega(t[before])
     np.testing.assert_allclose(vec(model)[before], expected, rtol=0, atol=1e-12)
     assert max(m.norm for m in norm) < 0.05  # after the kick: the post-impact anchor
+
+
+def test_held_samples_wait_for_the_whole_description_history(ros):
+    """A late join in which DDS replays the sample history before the description history: the
+    held samples are compared only after the post-impact description is in, not with the first
+    (pre-impact) anchor. Replayed by the probe in that order to a comparator in /replay."""
+    descriptions, omega = [], ros.collect(Vector3Stamped, "angular_velocity")
+    ros.probe.create_subscription(ScenarioDescription, "scenario", descriptions.append, DESCRIPTION_QOS)
+    ros.start(SimNode, start_paused=True, impacts__start=[0.1], impacts__duration=[3e-7],
+              impacts__torque=[0.0, 0.0, 1e6], **{k: v for k, v in RUN.items() if k != "min_consumers"})
+    for _ in range(60):  # to t = 0.118 yr, past the impact at 0.1
+        assert ros.call(Trigger, "step", Trigger.Request()).success
+    assert ros.spin_until(lambda: len(omega) == 60 and len(descriptions) == 2, 5.0)
+
+    comparator = ros.add(ComparatorNode(context=ros.context, namespace="/replay"))
+    norm = ros.collect(ErrorNorm, "/replay/comparison/error_norm")
+    pub_omega = ros.probe.create_publisher(Vector3Stamped, "/replay/angular_velocity", STATE_QOS)
+    pub_description = ros.probe.create_publisher(ScenarioDescription, "/replay/scenario", DESCRIPTION_QOS)
+    assert ros.spin_until(lambda: pub_omega.get_subscription_count() and pub_description.get_subscription_count(), 5.0)
+    for msg in omega:
+        pub_omega.publish(msg)
+    ros.spin_for(0.5)
+    assert norm == []  # held: no description yet
+    pub_description.publish(descriptions[0])
+    assert ros.spin_until(lambda: comparator._description is not None, 5.0)  # the first anchor is in
+    pub_description.publish(descriptions[1])
+    assert ros.spin_until(lambda: len(norm) == 60, 5.0), len(norm)
+    t = np.array([stamp_ns(m) * 1e-9 for m in norm])
+    assert t.max() > 0.1 + 3e-7
+    assert max(m.norm for m in norm) < 0.05  # each sample against its own segment's anchor

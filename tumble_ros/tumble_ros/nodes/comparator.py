@@ -15,8 +15,10 @@ description with the post-impact state), so the error measures the model, not th
 sample is compared with the model of the segment its time falls in: the simulator publishes a
 segment's description before the segment's first sample, and samples of the previous segment that
 are still queued keep the previous model. A late start or a restart of either node recovers from the latched topic.
-Samples that arrive before any description are held (up to ``MAX_PENDING``) and compared once
-it arrives. The comparator reports its progress on ``consumer_progress`` so the simulator never
+Samples that arrive before any description are held (up to ``MAX_PENDING``) and compared
+``SETTLE`` seconds after the first description arrives: on a late join, DDS replays the latched
+description history and the sample history on separate topics in no particular order, and the
+later descriptions (post-impact anchors) must be in before the held samples are compared. The comparator reports its progress on ``consumer_progress`` so the simulator never
 outruns it.
 """
 from __future__ import annotations
@@ -41,6 +43,9 @@ __all__ = ["ComparatorNode", "main"]
 
 #: Samples held while waiting for the first scenario description.
 MAX_PENDING = 10_000
+#: Wall-clock seconds between the first description and comparing the held samples (the rest
+#: of the latched description history arrives meanwhile).
+SETTLE = 0.2
 #: Grid samples whose model value is computed in one vectorised call: the model's fixed numpy
 #: cost (~50 us a call) is then shared by this many samples.
 LOOKAHEAD = 64
@@ -69,6 +74,7 @@ class ComparatorNode(Node):
         self._received = 0
         self.compared = 0  # comparisons published (each on the three comparison topics)
         self._pending: deque[Vector3Stamped] = deque(maxlen=MAX_PENDING)
+        self._settle_timer = None
         self._pub_model = self.create_publisher(Vector3Stamped, "comparison/model_angular_velocity", STATE_QOS)
         self._pub_error = self.create_publisher(Vector3Stamped, "comparison/error", STATE_QOS)
         self._pub_norm = self.create_publisher(ErrorNorm, "comparison/error_norm", STATE_QOS)
@@ -101,9 +107,17 @@ class ComparatorNode(Node):
             self._previous = [*self._previous[-(DESCRIPTION_QOS.depth - 1):], (old.segment_start, self._model)]
         elif old is None or msg.revision <= old.revision:
             self._previous = []  # a new run (the simulator restarted)
+        first = self._description is None
         self._description = msg
         self._timebase = TimeBase(msg.seconds_per_year)
         self._anchor()
+        if first and self._pending:
+            self._settle_timer = self.create_timer(SETTLE, self._compare_pending)
+
+    def _compare_pending(self) -> None:
+        """Compare the samples held before the description history came in (once)."""
+        self.destroy_timer(self._settle_timer)
+        self._settle_timer = None
         while self._pending:
             self._compare(self._pending.popleft())
 
@@ -136,7 +150,7 @@ class ComparatorNode(Node):
 
     # -- comparison ---------------------------------------------------------------------
     def _on_omega(self, msg: Vector3Stamped) -> None:
-        if self._description is None:
+        if self._description is None or self._pending:  # held samples first, in order
             self._pending.append(msg)
             return
         self._compare(msg)
