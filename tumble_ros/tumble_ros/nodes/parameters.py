@@ -6,19 +6,19 @@ They are read-only: a scenario is fixed for the life of a run.
 """
 from __future__ import annotations
 
-from typing import Any
+import difflib
+from pathlib import Path
+from typing import Any, Iterable
 
+import yaml
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 
 from tumble_ros.core import PARAMETER_DOCS, Scenario
 
-__all__ = ["declare_node_parameters", "declare_scenario_parameters", "node_parameter", "read_parameters", "read_scenario_parameters", "describe"]
-
-#: Array parameters whose default is empty need an explicit type.
-_EMPTY_ARRAY_TYPES = {"impacts.frame": Parameter.Type.STRING_ARRAY}
+__all__ = ["declare_node_parameters", "declare_scenario_parameters", "node_parameter", "read_parameters",
+           "read_scenario_parameters", "describe", "params_file_problem", "refuse_unknown_parameters"]
 
 
 def describe(description: str, unit: str) -> str:
@@ -27,7 +27,13 @@ def describe(description: str, unit: str) -> str:
 
 
 def declare_scenario_parameters(node: Node) -> None:
-    """Declare every Scenario field as a read-only parameter, defaults from ``Scenario()``."""
+    """Declare every Scenario field as a read-only parameter, defaults from ``Scenario()``.
+
+    Every parameter gets a value, empty arrays included (``impacts.*: []``): a parameter declared
+    without a value makes GetParameters answer nothing for the whole request, so ``ros2 param
+    dump`` printed ``ros__parameters: {}``. Dynamic typing lets ``[]`` (which rclpy types as a
+    byte array) be overridden by numbers or names; Scenario converts and checks every value.
+    """
     for name, default in Scenario().to_parameters().items():
         unit, description = PARAMETER_DOCS[name]
         descriptor = ParameterDescriptor(
@@ -37,11 +43,7 @@ def declare_scenario_parameters(node: Node) -> None:
             # Integers in YAML (duration: 2) are accepted; Scenario converts and checks.
             dynamic_typing=True,
         )
-        if isinstance(default, list) and not default:
-            descriptor.dynamic_typing = False  # rclpy: a declared type excludes dynamic typing
-            node.declare_parameter(name, _EMPTY_ARRAY_TYPES.get(name, Parameter.Type.DOUBLE_ARRAY), descriptor)
-        else:
-            node.declare_parameter(name, default, descriptor)
+        node.declare_parameter(name, default, descriptor)
 
 
 def node_parameter(node: Node, name: str, default: Any, unit: str, description: str,
@@ -81,3 +83,77 @@ def read_parameters(node: Node, names) -> dict[str, Any]:
 def read_scenario_parameters(node: Node) -> dict[str, Any]:
     """Current values of the scenario parameters (see :func:`declare_scenario_parameters`)."""
     return read_parameters(node, PARAMETER_DOCS)
+
+
+def refuse_unknown_parameters(nodes: Iterable[Node]) -> None:
+    """Raise ValueError naming every override that no node of ``nodes`` declares.
+
+    rclpy silently drops an override (``-p``, a params-file entry) for a parameter the node does
+    not declare, so a misspelt key (``durration``) would run with the default. ``nodes`` are the
+    nodes that share the command line (one for ``ros2 run``, three for ``bringup``, whose ``-p``
+    reaches all of them): a name is unknown if none of them declares it. QoS overrides
+    (``qos_overrides.*``) are rclpy's own and are let through.
+    """
+    nodes = list(nodes)
+    known = {name for node in nodes for name in node._parameters}
+    problems = []
+    for node in nodes:
+        # Node._parameter_overrides: every override rclpy found for this node (no public getter).
+        for name in sorted(getattr(node, "_parameter_overrides", {})):
+            if name in known or name.startswith("qos_overrides."):
+                continue
+            near = difflib.get_close_matches(name, sorted(known), n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            problems.append(f"{node.get_fully_qualified_name()}: unknown parameter {name!r}{hint}")
+    if problems:
+        raise ValueError("; ".join(dict.fromkeys(problems)))
+
+
+def _params_files(args: list[str] | None) -> list[str]:
+    """The files named by ``--params-file`` after ``--ros-args`` in a node's arguments."""
+    args = list(args or [])
+    files, in_ros_args = [], False
+    for k, arg in enumerate(args):
+        if arg == "--ros-args":
+            in_ros_args = True
+        elif arg == "--":
+            in_ros_args = False
+        elif in_ros_args and arg == "--params-file" and k + 1 < len(args):
+            files.append(args[k + 1])
+    return files
+
+
+def _node_sections(tree: Any, path: tuple[str, ...] = ()) -> list[str]:
+    """The node keys of a params file (``sim``, ``/ns/sim``, ``/**``): where ros__parameters sit."""
+    if not isinstance(tree, dict):
+        return []
+    if "ros__parameters" in tree:
+        return ["/".join(path)]
+    return [key for k, v in tree.items() for key in _node_sections(v, (*path, str(k)))]
+
+
+def params_file_problem(args: list[str] | None, node_name: str | None = None) -> str | None:
+    """What is wrong with the ``--params-file`` files of ``args`` (None: nothing).
+
+    rcl stops with a traceback on a missing, binary or malformed file; this says which file and
+    why, in one line. With ``node_name``, a file must also have a section that applies to that
+    node (its name, a namespaced name ending in it, or a wildcard): an empty file or one written
+    for another node would otherwise run silently with the defaults.
+    """
+    for name in _params_files(args):
+        path = Path(name)
+        if not path.is_file():
+            return f"params file {name}: {'not a regular file' if path.exists() else 'no such file'}"
+        try:
+            tree = yaml.safe_load(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError) as err:
+            return f"params file {name}: cannot read it as text ({err.__class__.__name__}: {err})"
+        except yaml.YAMLError as err:
+            return f"params file {name}: not valid YAML: {' '.join(str(err).split())}"
+        sections = _node_sections(tree)
+        if not sections:
+            return (f"params file {name}: no parameters (a ROS 2 params file maps node names to "
+                    "'ros__parameters:' sections)")
+        if node_name and not any(s.rsplit("/", 1)[-1] in (node_name, "*", "**") for s in sections):
+            return f"params file {name}: no section for node {node_name!r} (sections: {', '.join(sections)})"
+    return None

@@ -14,12 +14,14 @@ import time
 from typing import Callable
 
 from builtin_interfaces.msg import Time
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros_interfaces.msg import ConsumerProgress
 
-__all__ = ["ProgressReporter", "ConsumerTracker", "PROGRESS_TOPIC"]
+__all__ = ["ProgressReporter", "ConsumerTracker", "PROGRESS_TOPIC", "CONSUMER_TIMEOUT"]
 
 PROGRESS_TOPIC = "consumer_progress"
 PROGRESS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE)
@@ -28,6 +30,11 @@ REPORT_PERIOD = 0.002
 #: A consumer re-sends its progress at least this often [s], so a simulator that starts later
 #: learns about it, and a silent consumer can be told from a slow one.
 HEARTBEAT_PERIOD = 0.5
+#: A consumer silent for this long [s] while behind is taken for dead and no longer waited for
+#: (six missed heartbeats): the longest a killed consumer can hold the simulator.
+CONSUMER_TIMEOUT = 3.0
+#: How long a leaving consumer waits for its goodbye to be acknowledged [s].
+GOODBYE_TIMEOUT = 0.5
 _NOTHING_YET = -1
 
 
@@ -45,7 +52,7 @@ class ProgressReporter:
         self._last_ns = _NOTHING_YET
         self._sent_ns: int | None = None
         self._sent_at = 0.0
-        self._timer = node.create_timer(REPORT_PERIOD, self._report)
+        self._timer = steady_timer(node, REPORT_PERIOD, self._report)
 
     def mark(self, stamp_ns: int) -> None:
         """Record that every sample up to ``stamp_ns`` (ROS time, ns) has been processed."""
@@ -71,10 +78,17 @@ class ProgressReporter:
         self._sent_ns, self._sent_at = self._last_ns, time.monotonic()
 
     def close(self) -> None:
-        """Tell the simulator this consumer is leaving (if ROS is still up)."""
+        """Tell the simulator this consumer is leaving, and wait (briefly) until it heard it.
+
+        Called before the node is destroyed, with the context still valid (nodes.runner), so a
+        stopped consumer never makes the simulator wait for it. Calling it again does nothing.
+        """
+        if self._timer.is_canceled():
+            return
         self._timer.cancel()
         if self._node.context.ok():
             self._publish(False)
+            self._pub.wait_for_all_acked(Duration(seconds=GOODBYE_TIMEOUT))
 
 
 class ConsumerTracker:
@@ -85,11 +99,15 @@ class ConsumerTracker:
     node : the simulator node.
     timeout : seconds without a report after which a consumer that is behind is dropped
         (it died without saying so), with a warning.
+    on_drop : called with a one-line message when a consumer is dropped (the simulator puts it
+        on its ``status``).
     """
 
-    def __init__(self, node: Node, timeout: float = 5.0) -> None:
+    def __init__(self, node: Node, timeout: float = CONSUMER_TIMEOUT,
+                 on_drop: Callable[[str], None] | None = None) -> None:
         self._node = node
         self._timeout = timeout
+        self._on_drop = on_drop
         self._progress: dict[str, tuple[int, float]] = {}  # consumer -> (last ns, wall time of report)
         node.create_subscription(ConsumerProgress, PROGRESS_TOPIC, self._on_progress, PROGRESS_QOS)
 
@@ -116,8 +134,11 @@ class ConsumerTracker:
         now = time.monotonic()
         for name, (ns, seen) in list(self._progress.items()):
             if ns < published_ns and now - seen > self._timeout:
-                self._node.get_logger().warning(f"consumer {name} silent for {now - seen:.1f} s: no longer waiting for it")
+                message = f"consumer {name} silent for {now - seen:.1f} s: no longer waiting for it"
+                self._node.get_logger().warning(message)
                 del self._progress[name]
+                if self._on_drop is not None:
+                    self._on_drop(message)
         if not self._progress:
             return None
         return min(ns for ns, _ in self._progress.values())

@@ -1,46 +1,62 @@
 """The one ``main()`` of every node executable (the demo_nodes_py pattern, written once)."""
 from __future__ import annotations
 
+import sys
 from typing import Callable
 
 import rclpy
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 
 from tumble_ros.core import ScenarioError
+from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
+from tumble_ros.nodes.shutdown import StopSignals, spin_until_stopped
 
-__all__ = ["run_node"]
+__all__ = ["run_node", "close_node"]
 
 
-def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str) -> int:
-    """Init rclpy, build the node, spin until SIGINT/SIGTERM or shutdown, clean up.
+def close_node(node: Node) -> None:
+    """Run the node's ``close()`` if it has one (finalise a file, say goodbye), then destroy it."""
+    close = getattr(node, "close", None)
+    if close is not None:
+        close()
+    node.destroy_node()
 
-    Returns 0 on a normal stop, 1 when the node refused its parameters (the reason is printed,
-    no traceback). A node's ``close()`` (finalise a file, say goodbye) runs before it is destroyed.
+
+def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
+             params_section: str | None = None) -> int:
+    """Init rclpy, build the node, spin until SIGINT/SIGTERM, close, clean up.
+
+    Returns 0 on a stop by SIGINT or SIGTERM (both finalise alike: the node's ``close()`` runs
+    while its context is still valid; a second signal during the clean-up is absorbed), 1 when
+    the node refused its parameters or a params file (one line saying why, no traceback).
+    ``params_section``: a node name that every ``--params-file`` must have a section for.
     """
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = make_node()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except _rclpy.RCLError:
-        # A SIGINT/SIGTERM that shuts the context down while the executor builds its wait set
-        # surfaces as "context is not valid" instead of ExternalShutdownException (seen under
-        # load): a shutdown all the same. Any other RCLError is a real failure.
-        if rclpy.ok():
-            raise
-    except (ParameterException, ScenarioError, ValueError, OSError) as err:
-        print(f"{name}: invalid parameters: {err}", flush=True)
+    problem = params_file_problem(args, params_section)
+    if problem:
+        print(f"{name}: {problem}", file=sys.stderr, flush=True)
         return 1
-    finally:
-        if node is not None:
-            close = getattr(node, "close", None)
-            if close is not None:
-                close()
-            node.destroy_node()
-        rclpy.try_shutdown()
+    with StopSignals(name) as stop:
+        # Our handlers, not rclpy's: rclpy's would shut the context down before close().
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        executor = SingleThreadedExecutor()
+        node = None
+        try:
+            node = make_node()
+            refuse_unknown_parameters([node])
+            executor.add_node(node)
+            spin_until_stopped(executor, lambda: stop.requested)
+        except (ParameterException, ScenarioError, ValueError) as err:
+            print(f"{name}: invalid parameters: {err}", file=sys.stderr, flush=True)
+            return 1
+        except OSError as err:  # e.g. the recorder cannot create its file
+            print(f"{name}: cannot start: {err}", file=sys.stderr, flush=True)
+            return 1
+        finally:
+            if node is not None:
+                close_node(node)
+            executor.shutdown()
+            rclpy.try_shutdown()
     return 0

@@ -1,0 +1,78 @@
+"""Stopping cleanly: SIGINT and SIGTERM alike, served once, between callbacks.
+
+rclpy's own signal handler shuts the context down the moment SIGINT arrives, so a node can no
+longer publish its goodbye (``consumer_progress``) or log; SIGTERM (how containers, CI and
+systemd stop a process) is not handled at all; and a second SIGINT (``ros2 launch`` forwards
+Ctrl-C to a process group that already received it) raises KeyboardInterrupt in the middle of the
+clean-up. :class:`StopSignals` replaces all three behaviours: the first SIGINT or SIGTERM only
+records a stop request, which the spin loop (:func:`spin_until_stopped`) sees between callbacks
+(within ``POLL`` seconds); the node then closes with its context still valid; later signals are
+absorbed with one line on stderr. No exception is ever raised inside a callback, so a file being
+written is never left half-written by a signal.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import threading
+from typing import Callable
+
+from rclpy.executors import Executor, ExternalShutdownException
+
+__all__ = ["StopSignals", "spin_until_stopped", "POLL", "STOP_SIGNALS"]
+
+#: The signals that request a stop.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: Longest wait of the spin loop [s] before it looks at the stop request again.
+POLL = 0.1
+
+
+class StopSignals:
+    """Context manager: while active, SIGINT/SIGTERM request a stop instead of interrupting.
+
+    ``signum`` is the first signal received (None: none yet). Outside the main thread (where
+    Python cannot install handlers) it does nothing and ``signum`` stays None. The previous
+    handlers are restored on exit.
+    """
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.signum: int | None = None
+        self._saved: dict[int, object] = {}
+
+    def __enter__(self) -> StopSignals:
+        if threading.current_thread() is threading.main_thread():
+            for signum in STOP_SIGNALS:
+                self._saved[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for signum, handler in self._saved.items():
+            signal.signal(signum, handler)
+        self._saved.clear()
+
+    def _handle(self, signum: int, _frame) -> None:
+        if self.signum is None:
+            self.signum = signum
+            return
+        # os.write, not print: a handler may run while the main thread is inside a print.
+        os.write(2, f"{self.name}: {signal.Signals(signum).name} again: already stopping\n".encode())
+
+    @property
+    def requested(self) -> bool:
+        """True once SIGINT or SIGTERM arrived."""
+        return self.signum is not None
+
+    @property
+    def exit_code(self) -> int:
+        """128 + the signal number (130 for SIGINT, 143 for SIGTERM), as a shell reports it."""
+        return 128 + (self.signum or 0)
+
+
+def spin_until_stopped(executor: Executor, stop: Callable[[], bool]) -> None:
+    """Run callbacks until ``stop()`` is true or the context is shut down from outside."""
+    try:
+        while not stop() and executor.context.ok():
+            executor.spin_once(timeout_sec=POLL)
+    except ExternalShutdownException:
+        pass
