@@ -37,10 +37,10 @@ class RosHarness:
         params = [Parameter(name.replace("__", "."), value=value) for name, value in overrides.items()]
         return self.add(node_class(context=self.context, parameter_overrides=params))
 
-    def collect(self, msg_type, topic: str, latched: bool = False) -> list:
+    def collect(self, msg_type, topic: str, latched: bool = False, qos=None) -> list:
         """Subscribe the probe to ``topic``; returns the list that fills with messages."""
         box: list = []
-        self.probe.create_subscription(msg_type, topic, box.append, LATCHED_QOS if latched else STATE_QOS)
+        self.probe.create_subscription(msg_type, topic, box.append, qos or (LATCHED_QOS if latched else STATE_QOS))
         return box
 
     def spin_until(self, predicate: Callable[[], bool], timeout: float = 10.0) -> bool:

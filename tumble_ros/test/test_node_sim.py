@@ -6,6 +6,7 @@ import pytest
 from geometry_msgs.msg import QuaternionStamped, Vector3, Vector3Stamped
 from rcl_interfaces.srv import SetParameters
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 
@@ -15,6 +16,8 @@ from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatu
 from tumble_ros_interfaces.srv import ApplyImpact
 
 SHORT = dict(duration=0.2, output_interval=0.002, real_time_factor=0.0)
+#: /clock is best effort (rclpy's clock QoS); a deep reader queue keeps every sample in-process.
+CLOCK_READER_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
 def omega_array(msgs):
@@ -53,7 +56,7 @@ def test_topics_have_their_documented_types(ros):
 def test_published_state_equals_simulate_at_the_stamped_times(ros):
     omega = ros.collect(Vector3Stamped, "angular_velocity")
     attitude = ros.collect(QuaternionStamped, "attitude")
-    clock = ros.collect(Clock, "/clock")
+    clock = ros.collect(Clock, "/clock", qos=CLOCK_READER_QOS)
     status = ros.collect(SimStatus, "status", latched=True)
     ros.start(SimNode, seconds_per_year=3.0, **SHORT)
     assert ros.spin_until(lambda: status and status[-1].state == SimStatus.FINISHED, 20.0)

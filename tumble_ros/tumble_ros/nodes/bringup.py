@@ -1,18 +1,33 @@
 """``bringup``: simulator + comparator + recorder in one process, for one scenario's duration.
 
-    bringup [SCENARIO.yaml] [--output FILE.mcap] [--model NAME] [--quiet] [--ros-args ...]
+    bringup [SCENARIO.yaml] [--output FILE.mcap] [--model NAME] [--quiet] [--visible] [--ros-args ...]
 
 Runs the three nodes in one executor, the simulator as fast as the comparator and the recorder
 take it (``real_time_factor = 0``, ``min_consumers = 2``: nothing is lost), shows progress on
 stderr, and ends with a finalised MCAP file and a printed summary. The scenario file is a ROS 2
 params file (``config/*.yaml``); its ``sim`` section configures the simulator, and ``comparator``
-or ``recorder`` sections, if present, those nodes. Without a file, the default scenario runs.
+or ``recorder`` sections, if present, those nodes; ``--ros-args -p name:=value`` overrides the
+file. Without a file, the default scenario runs.
+
+Isolation: the run is invisible to other ROS processes and sees none of them
+(``ROS_AUTOMATIC_DISCOVERY_RANGE=OFF`` for its own context, whatever the environment says), so
+two runs at once, or a foreign ``/clock``, never mix into its recording. ``--visible`` keeps the
+environment's discovery settings instead (to watch the run with ``ros2 topic echo``); then give
+each visible run its own ``ROS_DOMAIN_ID``. A second publisher on the tumble topics is reported
+all the same (status, comparison/status, the summary).
+
+Exit codes: 0 finished; 1 diverged, refused input or a recording that failed (one ``ERROR:``
+line); 130 / 143 stopped by SIGINT / SIGTERM (the file is finalised and the summary printed
+alike).
 """
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,7 +40,10 @@ from rclpy.parameter import Parameter
 
 from tumble_ros.core import ScenarioError
 from tumble_ros.nodes.comparator import ComparatorNode
+from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.recorder import RecorderNode
+from tumble_ros.nodes.runner import close_node
+from tumble_ros.nodes.shutdown import StopSignals
 from tumble_ros.nodes.sim import SimNode
 from tumble_ros_interfaces.msg import SimStatus
 
@@ -60,15 +78,25 @@ class BringupResult:
     """What a bringup run produced."""
 
     output: Path
-    state: int  # SimStatus.FINISHED or DIVERGED
+    state: int  # SimStatus.FINISHED or DIVERGED (RUNNING/PAUSED if stopped early)
     message: str
     samples: int  # published by the simulator
     counts: dict[str, int] = field(default_factory=dict)  # recorded per topic
     wall_seconds: float = 0.0
+    signal: int | None = None  # the SIGINT/SIGTERM that stopped the run early
+    error: str | None = None  # why the recording stopped early
+    warnings: list[str] = field(default_factory=list)  # second sources seen
 
     @property
     def ok(self) -> bool:
-        return self.state == SimStatus.FINISHED
+        return self.state == SimStatus.FINISHED and self.error is None and self.signal is None
+
+    @property
+    def exit_code(self) -> int:
+        """0 finished, 128 + signal when stopped by one, 1 otherwise."""
+        if self.signal is not None:
+            return 128 + self.signal
+        return 0 if self.ok else 1
 
 
 def _progress_line(sim: SimNode, started: float) -> str:
@@ -78,19 +106,46 @@ def _progress_line(sim: SimNode, started: float) -> str:
             f"{sim.published_samples} samples, {rate:,.0f} samples/s")
 
 
+@contextmanager
+def _isolated(visible: bool):
+    """Discovery off for the contexts created inside (the nodes still talk within the process)."""
+    key = "ROS_AUTOMATIC_DISCOVERY_RANGE"
+    saved = os.environ.get(key)
+    if not visible:
+        os.environ[key] = "OFF"
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop(key, None)
+        else:
+            os.environ[key] = saved
+
+
 def run_bringup(params_file: str | None = None, output: str | None = None, model: str | None = None,
                 ros_args: list[str] | None = None, progress=sys.stderr,
-                executor_name: str = "events") -> BringupResult:
+                executor_name: str = "events", visible: bool = False) -> BringupResult:
     """Run sim + comparator + recorder until the scenario ends; return what was recorded.
 
-    ``executor_name`` is a key of :data:`EXECUTORS`. Raises ScenarioError / ParameterException
-    for invalid parameters, ValueError for an unknown executor (nothing is started then).
+    ``executor_name`` is a key of :data:`EXECUTORS`; ``visible``: see the module docstring
+    (isolation). SIGINT and SIGTERM stop the run early with the file finalised
+    (``BringupResult.signal``). Raises ScenarioError / ParameterException / ValueError for
+    invalid parameters or params files, an unknown executor; OSError when the recording cannot
+    be created (nothing is left running then).
     """
     if executor_name not in EXECUTORS:
         raise ValueError(f"executor: must be one of {', '.join(EXECUTORS)}, got {executor_name!r}")
-    args = ["bringup", "--ros-args", *(ros_args or [])]
-    if params_file:
-        args += ["--params-file", str(params_file)]
+    # The file first: what --ros-args says after it (-p duration:=...) overrides it.
+    args = ["bringup", "--ros-args", *(["--params-file", str(params_file)] if params_file else []),
+            *(ros_args or [])]
+    problem = params_file_problem(args, "sim")
+    if problem:
+        raise ValueError(problem)
+    with StopSignals("bringup") as stop, _isolated(visible):
+        return _run(args, output, model, progress, executor_name, stop)
+
+
+def _run(args, output, model, progress, executor_name, stop: StopSignals) -> BringupResult:
     context = Context()
     rclpy.init(args=args, context=context, signal_handler_options=None)
     executor = EXECUTORS[executor_name](context=context)
@@ -105,10 +160,15 @@ def run_bringup(params_file: str | None = None, output: str | None = None, model
         recorder = RecorderNode(context=context, parameter_overrides=recorder_overrides,
                                 message_info=executor_name != "events")
         nodes.append(recorder)
+        refuse_unknown_parameters(nodes)
         for node in nodes:
             executor.add_node(node)
         started = last_line = time.monotonic()
-        while sim.state not in (SimStatus.FINISHED, SimStatus.DIVERGED):
+
+        def stopped() -> bool:
+            return stop.requested or recorder.error is not None
+
+        while sim.state not in (SimStatus.FINISHED, SimStatus.DIVERGED) and not stopped():
             executor.spin_once(timeout_sec=0.05)
             if progress and time.monotonic() - last_line > PROGRESS_PERIOD:
                 progress.write(_progress_line(sim, started))
@@ -128,21 +188,20 @@ def run_bringup(params_file: str | None = None, output: str | None = None, model
                             for t in comparisons))
 
         deadline = time.monotonic() + DRAIN_TIMEOUT
-        while not drained() and time.monotonic() < deadline:
+        while not drained() and not stopped() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.01)
         if progress:
             progress.write(_progress_line(sim, started) + "\n")
-        nodes[1].close()
+        comparator.close()
         recorder.close()
         return BringupResult(output=recorder.path, state=sim.state, message=sim.status_message,
                              samples=sim.published_samples, counts=dict(recorder.counts),
-                             wall_seconds=time.monotonic() - started)
+                             wall_seconds=time.monotonic() - started, signal=stop.signum,
+                             error=recorder.error, warnings=list(recorder.warnings))
     finally:
         for node in reversed(nodes):
-            if isinstance(node, RecorderNode):
-                node.close()
             executor.remove_node(node)
-            node.destroy_node()
+            close_node(node)
         executor.shutdown()
         rclpy.try_shutdown(context=context)
 
@@ -150,7 +209,14 @@ def run_bringup(params_file: str | None = None, output: str | None = None, model
 def format_result(result: BringupResult) -> str:
     """The printed summary of a run."""
     size = result.output.stat().st_size if result.output.exists() else 0
-    lines = [f"bringup: {'finished' if result.ok else 'DIVERGED'}: {result.message}",
+    if result.signal is not None:
+        head = (f"stopped by {signal.Signals(result.signal).name} after {result.samples} samples; "
+                "the recording was finalised")
+    elif result.error:
+        head = f"ERROR: {result.error}"
+    else:
+        head = f"{'finished' if result.state == SimStatus.FINISHED else 'DIVERGED'}: {result.message}"
+    lines = [f"bringup: {head}", *(f"bringup: WARNING: {w}" for w in result.warnings),
              f"  {result.samples} samples in {result.wall_seconds:.1f} s wall; "
              f"recorded {result.output} ({size / 1e6:.2f} MB)"]
     lines += [f"  {topic:40s} {count:8d}" for topic, count in sorted(result.counts.items())]
@@ -171,21 +237,24 @@ def main(args: list[str] | None = None) -> int:
     parser.add_argument("--executor", choices=sorted(EXECUTORS), default="events",
                         help="rclpy executor running the three nodes (default: events, the faster)")
     parser.add_argument("--quiet", action="store_true", help="no progress display")
+    parser.add_argument("--visible", action="store_true",
+                        help="let other ROS processes see the run (default: isolated, see above)")
     options = parser.parse_args(argv)
     if options.scenario and not Path(options.scenario).is_file():
         print(f"ERROR: no scenario file {options.scenario}", file=sys.stderr)
         return 1
     try:
         result = run_bringup(options.scenario, options.output, options.model, ros_args,
-                             progress=None if options.quiet else sys.stderr, executor_name=options.executor)
-    except (ScenarioError, ValueError, ParameterException, FileExistsError) as err:
-        print(f"ERROR: {err}", file=sys.stderr)
+                             progress=None if options.quiet else sys.stderr, executor_name=options.executor,
+                             visible=options.visible)
+    except (ScenarioError, ValueError, ParameterException) as err:
+        print(f"ERROR: {' '.join(str(err).split())}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print("\nbringup: interrupted; the recording was finalised", file=sys.stderr)
-        return 130
+    except OSError as err:  # the recording cannot be created (read-only directory, exists, ...)
+        print(f"ERROR: cannot record: {err}", file=sys.stderr)
+        return 1
     print(format_result(result))
-    return 0 if result.ok else 1
+    return result.exit_code
 
 
 if __name__ == "__main__":

@@ -7,7 +7,8 @@ publishes, with the sample's own stamp:
 * ``comparison/model_angular_velocity`` (geometry_msgs/Vector3Stamped): the model's w [rad/yr];
 * ``comparison/error`` (geometry_msgs/Vector3Stamped): w_numeric - w_model [rad/yr];
 * ``comparison/error_norm`` (tumble_ros_interfaces/ErrorNorm): |error| and |error| / |w_numeric|;
-* ``comparison/status`` (diagnostic_msgs/DiagnosticStatus, latched): whether the model applies.
+* ``comparison/status`` (diagnostic_msgs/DiagnosticStatus, latched): whether the model applies,
+  and ERROR when ``angular_velocity`` or ``scenario`` has more than one publisher (two runs mix).
 
 The model is anchored on the state the simulator's current integration segment starts from
 (``scenario`` topic): at start-up, and again after every impact (the simulator re-publishes the
@@ -33,10 +34,12 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 
 from tumble_ros.core import ANALYTIC_MODELS, ScenarioError, TimeBase, make_model, parse_scenario
+from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.parameters import declare_node_parameters
-from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.progress import ProgressReporter
 from tumble_ros.nodes.qos import DESCRIPTION_QOS, LATCHED_QOS, STATE_QOS
+from tumble_ros.nodes.runner import run_node
+from tumble_ros.nodes.sources import SourceMonitor
 from tumble_ros_interfaces.msg import ErrorNorm, ScenarioDescription
 
 __all__ = ["ComparatorNode", "main"]
@@ -82,7 +85,9 @@ class ComparatorNode(Node):
         self._progress = ProgressReporter(self)
         self.create_subscription(ScenarioDescription, "scenario", self._on_scenario, DESCRIPTION_QOS)
         self.create_subscription(Vector3Stamped, "angular_velocity", self._on_omega, STATE_QOS)
-        self._report(DiagnosticStatus.WARN, "waiting for the simulator's scenario description")
+        self._status = (DiagnosticStatus.WARN, "waiting for the simulator's scenario description")
+        self._report(*self._status)
+        self._sources = SourceMonitor(self, lambda: ("angular_velocity", "scenario"), self._on_sources)
 
     # -- parameters ---------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
@@ -112,7 +117,7 @@ class ComparatorNode(Node):
         self._timebase = TimeBase(msg.seconds_per_year)
         self._anchor()
         if first and self._pending:
-            self._settle_timer = self.create_timer(SETTLE, self._compare_pending)
+            self._settle_timer = steady_timer(self, SETTLE, self._compare_pending)
 
     def _compare_pending(self) -> None:
         """Compare the samples held before the description history came in (once)."""
@@ -143,7 +148,20 @@ class ComparatorNode(Node):
         self.get_logger().info(text)
         self._report(DiagnosticStatus.OK, text)
 
-    def _report(self, level: bytes, message: str) -> None:
+    def _on_sources(self, problem: str | None) -> None:
+        """A second simulator appeared on our inputs (ERROR), or it left (back to the model's status)."""
+        if problem:
+            self._report(DiagnosticStatus.ERROR, problem, keep=False)
+        else:
+            self._report(*self._status)
+
+    def _report(self, level: bytes, message: str, keep: bool = True) -> None:
+        """Publish ``comparison/status``; ``keep``: it is the model's status (restored after a
+        second-source error clears)."""
+        if keep:
+            self._status = (level, message)
+            if getattr(self, "_sources", None) is not None and self._sources.current:
+                return  # the second-source error stays on until it clears
         status = DiagnosticStatus(level=level, name=self.get_fully_qualified_name(), message=message)
         status.values = [KeyValue(key="model", value=self._model_name)]
         self._pub_status.publish(status)

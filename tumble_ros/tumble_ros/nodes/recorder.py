@@ -10,11 +10,20 @@ later are picked up by a discovery timer. Each subscription copies its publisher
 and reliability (a latched topic is received even when published before the recorder started),
 and its publishers' QoS go into the channel's ``offered_qos_profiles``.
 
-Durability: SIGINT/SIGTERM finalise the file (summary, statistics, indexes). A SIGKILL loses at
+Durability: SIGINT/SIGTERM finalise the file (summary, statistics, indexes). A write that fails
+(disk full, file size limit, I/O error) stops the recording with an error in the log and in
+:attr:`RecorderNode.error`: what was flushed before stays readable, the node leaves the
+simulator's consumers so nothing waits for it, and keeps running otherwise. A SIGKILL loses at
 most the chunk in progress: fewer than ``chunk_bytes`` bytes of message data, and nothing older
 than ``chunk_seconds`` (plus the polling period, ``chunk_seconds / 4``); what was flushed is read
 back by a non-seeking reader. The recorder reports its progress on ``consumer_progress`` so the
-simulator never outruns it: at the default settings nothing is dropped.
+simulator never outruns it: at the default settings nothing is dropped (``/clock`` is best effort,
+as time sources expect, and recorded as received).
+
+With ``use_sim_time:=true`` the log time of each record is the node's ROS time (``/clock``), as
+``ros2 bag record --use-sim-time`` does; otherwise it is the wall-clock receive time. A second
+publisher on a recorded tumble topic (another run on the same topics) is reported in the log and
+in :attr:`RecorderNode.warnings`.
 """
 from __future__ import annotations
 
@@ -25,15 +34,18 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.exceptions import InvalidTopicNameException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.mcap_writer import COMPRESSIONS
+from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.parameters import declare_node_parameters
-from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.progress import ProgressReporter
 from tumble_ros.nodes.qos import STATE_QOS
+from tumble_ros.nodes.runner import run_node
+from tumble_ros.nodes.sources import SourceMonitor
 
 __all__ = ["RecorderNode", "DEFAULT_TOPICS", "main"]
 
@@ -44,10 +56,9 @@ DEFAULT_TOPICS = (
     "comparison/model_angular_velocity", "comparison/error", "comparison/error_norm", "comparison/status",
 )
 #: Types whose CDR starts with a header stamp: one message per simulator sample. The recorder's
-#: progress is the oldest of their latest stamps.
+#: progress is the oldest of their latest stamps. Not /clock: it is best effort (CLOCK_QOS).
 PER_SAMPLE_TYPES = {
-    "geometry_msgs/msg/Vector3Stamped", "geometry_msgs/msg/QuaternionStamped", "rosgraph_msgs/msg/Clock",
-    "tumble_ros_interfaces/msg/ErrorNorm",
+    "geometry_msgs/msg/Vector3Stamped", "geometry_msgs/msg/QuaternionStamped", "tumble_ros_interfaces/msg/ErrorNorm",
 }
 #: A per-sample topic silent for this long [s] no longer holds the recorder's progress back.
 STALE_TOPIC = 2.0
@@ -86,18 +97,24 @@ class RecorderNode(Node):
         self.add_on_set_parameters_callback(self._on_set_parameters)
         p = declare_node_parameters(self, PARAMETERS)
         topics = [t for t in p["topics"] if t]
-        self._explicit = {self.resolve_topic_name(t) for t in (topics or ([] if p["topic_pattern"] else DEFAULT_TOPICS))}
+        self._explicit = {self._resolve("topics", t) for t in (topics or ([] if p["topic_pattern"] else DEFAULT_TOPICS))}
         self._pattern = re.compile(p["topic_pattern"]) if p["topic_pattern"] else None
         path = Path(p["output"] or f"recordings/tumble_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap")
         path.parent.mkdir(parents=True, exist_ok=True)
         self._writer = McapWriter(path, chunk_bytes=p["chunk_bytes"], chunk_seconds=p["chunk_seconds"],
                                   compression=p["compression"])
         self._channels: dict[str, int] = {}
+        self.error: str | None = None  # why recording stopped early (None: it did not)
+        self.warnings: list[str] = []  # second sources seen on the recorded tumble topics
+        self._sim_time = bool(self.get_parameter("use_sim_time").value)
         self._last_stamp: dict[str, tuple[int, float]] = {}  # per-sample topic -> (stamp ns, wall time)
         self._progress = ProgressReporter(self, source=self._slowest_live_stamp)
         self._discover()
-        self.create_timer(p["discovery_period"], self._discover)
-        self.create_timer(p["chunk_seconds"] / 4, self._writer.poll)
+        steady_timer(self, p["discovery_period"], self._discover)
+        steady_timer(self, p["chunk_seconds"] / 4, self._poll)
+        tumble = {self.resolve_topic_name(t) for t in DEFAULT_TOPICS}
+        self._sources = SourceMonitor(
+            self, lambda: [t for t, c in self._channels.items() if c >= 0 and t in tumble], self._on_sources)
         self.get_logger().info(f"recording to {path}")
 
     @property
@@ -109,6 +126,16 @@ class RecorderNode(Node):
     def counts(self) -> dict[str, int]:
         """Messages written per topic."""
         return self._writer.counts
+
+    def _resolve(self, parameter: str, topic: str) -> str:
+        try:
+            return self.resolve_topic_name(topic)
+        except InvalidTopicNameException as err:
+            raise ValueError(f"{parameter}: invalid topic name {topic!r}: {' '.join(str(err).split())}") from None
+
+    def _on_sources(self, problem: str | None) -> None:
+        if problem:
+            self.warnings.append(problem)
 
     def _on_set_parameters(self, parameters) -> SetParametersResult:
         for p in parameters:
@@ -158,9 +185,15 @@ class RecorderNode(Node):
         per_sample = type_name in PER_SAMPLE_TYPES
 
         def on_message(data: bytes, info) -> None:
-            received = time.time_ns()
+            if self.error is not None:
+                return
+            received = self.get_clock().now().nanoseconds if self._sim_time else time.time_ns()
             sent = (info.get("source_timestamp") or received) if info else received
-            self._writer.write(channel, data, received, sent)
+            try:
+                self._writer.write(channel, data, received, sent)
+            except OSError as err:
+                self._stop_recording(err)
+                return
             if per_sample:
                 self._last_stamp[topic] = (_header_stamp_ns(data), time.monotonic())
 
@@ -174,12 +207,35 @@ class RecorderNode(Node):
         live = [ns for ns, seen in self._last_stamp.values() if now - seen < STALE_TOPIC]
         return min(live) if live else None
 
+    def _poll(self) -> None:
+        if self.error is None:
+            try:
+                self._writer.poll()
+            except OSError as err:
+                self._stop_recording(err)
+
+    def _stop_recording(self, err: OSError) -> None:
+        """A write failed: keep what was flushed, stop recording, stop holding the simulator."""
+        flushed = self._writer.messages_flushed
+        self.error = (f"recording stopped: cannot write {self.path}: {err.strerror or err}; "
+                      f"the file keeps the {flushed} messages flushed before the failure")
+        self.get_logger().error(self.error)
+        try:
+            self._writer.close()  # finalise if the disk allows; the flushed chunks stay readable anyway
+        except OSError:
+            pass
+        self._progress.close()
+
     def close(self) -> None:
         """Finalise the file (idempotent) and tell the simulator this consumer leaves."""
         if not self._writer.closed:
-            self._writer.close()
-            self.get_logger().info(f"wrote {self.path}: {sum(self.counts.values())} messages on "
-                                   f"{len(self.counts)} topics")
+            try:
+                self._writer.close()
+            except OSError as err:
+                self._stop_recording(err)
+            else:
+                self.get_logger().info(f"wrote {self.path}: {sum(self.counts.values())} messages on "
+                                       f"{len(self.counts)} topics")
         self._progress.close()
 
 

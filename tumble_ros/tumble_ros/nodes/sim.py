@@ -6,14 +6,16 @@ and publishes every ``output_interval`` of simulated time:
 * ``angular_velocity`` (geometry_msgs/Vector3Stamped): w [rad/yr], body axes, frame ``body``;
 * ``attitude`` (geometry_msgs/QuaternionStamped): body -> orbital frame, frame ``orbital``;
 * ``euler_angles`` (geometry_msgs/Vector3Stamped): the paper's (phi, psi, theta) [rad] in x, y, z;
-* ``/clock`` (rosgraph_msgs/Clock);
+* ``/clock`` (rosgraph_msgs/Clock, rclpy's clock QoS), unless ``publish_clock`` is false;
 * ``impact_events`` (tumble_ros_interfaces/ImpactEvent) when a pulse has ended;
-* ``status`` (tumble_ros_interfaces/SimStatus, latched) on every state change;
+* ``status`` (tumble_ros_interfaces/SimStatus, latched) on every state change, on ``step``, when
+  a consumer is dropped or a second source appears, and once a second while running;
 * ``scenario`` (tumble_ros_interfaces/ScenarioDescription, latched) at the start and after each
-  impact: the scenario and the initial state of the current segment.
+  impact (one per segment): the scenario as started and the initial state of the segment.
 
-Every stamp is ROS time; the simulated time is t [yr] = stamp_ns / (1e9 * seconds_per_year)
-(``core.timebase``). Services: ``apply_impact`` (tumble_ros_interfaces/ApplyImpact), ``pause``,
+Every stamp is ROS time carrying simulated time, ``status`` included (the time of the last
+published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year) (``core.timebase``). The node
+is the clock source: it paces on the steady clock whatever ``use_sim_time`` says. Services: ``apply_impact`` (tumble_ros_interfaces/ApplyImpact), ``pause``,
 ``resume``, ``step`` (std_srvs/Trigger). Impacts are queued by the service and applied at the
 next step boundary, never inside the callback. The node holds no physics.
 """
@@ -46,9 +48,11 @@ from tumble_ros.nodes.parameters import (
     declare_scenario_parameters,
     read_scenario_parameters,
 )
-from tumble_ros.nodes.runner import run_node
+from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.progress import ConsumerTracker
-from tumble_ros.nodes.qos import DESCRIPTION_QOS, LATCHED_QOS, STATE_QOS
+from tumble_ros.nodes.qos import CLOCK_QOS, DESCRIPTION_QOS, LATCHED_QOS, SERVICE_QOS, STATE_QOS
+from tumble_ros.nodes.runner import run_node
+from tumble_ros.nodes.sources import SourceMonitor
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 
@@ -60,6 +64,13 @@ TICK_PERIOD = 0.002
 BATCH = 10
 #: Largest lead [samples] over the slowest registered consumer (well below STATE_QOS depth).
 WINDOW = 4 * BATCH
+#: Impacts accepted but not yet ended, at most: a request beyond is refused with the reason.
+#: Bounds the node's memory and the burst of impact_events (below STATE_QOS depth) under a flood.
+MAX_PENDING_IMPACTS = 500
+#: Wall-clock seconds between two status messages while running (a heartbeat with a fresh t).
+STATUS_PERIOD = 1.0
+#: The state topics, relative to the node's namespace (one publisher each: this node).
+STATE_TOPICS = ("angular_velocity", "attitude", "euler_angles", "impact_events", "status", "scenario")
 FRAMES = {ApplyImpact.Request.FRAME_BODY: "body", ApplyImpact.Request.FRAME_ORBITAL: "orbital"}
 FRAME_CODES = {name: code for code, name in FRAMES.items()}
 
@@ -72,6 +83,7 @@ NODE_PARAMETERS = {
                          "subscribers take it", (0.0, 1e6), False),
     "start_paused": (False, "", "start paused (resume or step with the services)", None, True),
     "min_consumers": (0, "", "wait until this many consumers report progress before publishing", None, True),
+    "publish_clock": (True, "", "publish /clock (one simulator per ROS domain should)", None, True),
     "max_impact_duration": (1e-3, "yr", "longest impact pulse the service accepts", (1e-15, 1e6), False),
     "max_impact_impulse": (1e3, "I rad/yr", "largest |M| * duration the service accepts", (1e-12, 1e15), False),
 }
@@ -100,6 +112,7 @@ class SimNode(Node):
         self._limits = ImpactLimits(params["max_impact_duration"], params["max_impact_impulse"])
         self._rtf = params["real_time_factor"]
         self._propagator = Propagator(self.scenario)
+        self._scenario_yaml = dump_scenario(self.scenario)
         self._next_k = 0  # index of the next sample to publish
         self._pending: deque[tuple[int, Impact]] = deque()
         self._impact_ids: dict[int, int] = {}  # id(Impact) -> service id
@@ -109,23 +122,30 @@ class SimNode(Node):
         self._pace_origin: tuple[float, int] | None = None  # (wall time, sample index) when pacing began
 
         self._min_consumers = params["min_consumers"]
-        self._consumers = ConsumerTracker(self)
+        self._consumers_gate_open = self._min_consumers == 0  # opens once, when they are all here
+        self._consumers = ConsumerTracker(self, on_drop=self._publish_status)
         self._pub_omega = self.create_publisher(Vector3Stamped, "angular_velocity", STATE_QOS)
         self._pub_attitude = self.create_publisher(QuaternionStamped, "attitude", STATE_QOS)
         self._pub_euler = self.create_publisher(Vector3Stamped, "euler_angles", STATE_QOS)
-        self._pub_clock = self.create_publisher(Clock, "/clock", STATE_QOS)
+        self._pub_clock = self.create_publisher(Clock, "/clock", CLOCK_QOS) if params["publish_clock"] else None
         self._pub_events = self.create_publisher(ImpactEvent, "impact_events", STATE_QOS)
         self._pub_status = self.create_publisher(SimStatus, "status", LATCHED_QOS)
         self._pub_scenario = self.create_publisher(ScenarioDescription, "scenario", DESCRIPTION_QOS)
-        self._srv_impact = self.create_service(ApplyImpact, "apply_impact", self._on_apply_impact)
+        self._srv_impact = self.create_service(ApplyImpact, "apply_impact", self._on_apply_impact,
+                                               qos_profile=SERVICE_QOS)
         self._srv_impact.configure_introspection(
             self.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
         self.create_service(Trigger, "pause", self._on_pause)
         self.create_service(Trigger, "resume", self._on_resume)
         self.create_service(Trigger, "step", self._on_step)
+        self._sources = SourceMonitor(
+            self, lambda: (*STATE_TOPICS, *(("/clock",) if self._pub_clock else ())),
+            lambda problem: self._publish_status(problem or "single source again on the simulator's topics"))
         self._publish_scenario(0.0, self._propagator.y)
         self._publish_status("started")
-        self._timer = self.create_timer(TICK_PERIOD, self._on_tick)
+        # Steady clock: the simulator is the clock source, use_sim_time or not.
+        self._timer = steady_timer(self, TICK_PERIOD, self._on_tick)
+        steady_timer(self, STATUS_PERIOD, self._on_status_period)
         self.get_logger().info(
             f"simulating {self.scenario.duration:g} yr with {self.scenario.integrator.method}, "
             f"{self._n_samples} samples every {self.scenario.output_interval:g} yr, "
@@ -191,8 +211,10 @@ class SimNode(Node):
         return min(self._paced_index(), self._consumer_limit())
 
     def _consumer_limit(self) -> int:
-        if self._consumers.count < self._min_consumers:
-            return self._next_k - 1  # not all expected consumers are here yet
+        if not self._consumers_gate_open:
+            if self._consumers.count < self._min_consumers:
+                return self._next_k - 1  # not all expected consumers are here yet
+            self._consumers_gate_open = True  # for good: a consumer that leaves later is not waited for
         slowest = self._consumers.slowest_ns(max(0, self._next_k - 1) * self._interval_ns)
         if slowest is None:
             return self._n_samples
@@ -213,7 +235,7 @@ class SimNode(Node):
         if self._next_k <= k_last:
             self._schedule_pending()
             stamps = [k * self._interval_ns for k in range(self._next_k, k_last + 1)]
-            done, arrays, message = self._propagator.sample_many([self.timebase.to_years(ns) for ns in stamps])
+            done, arrays, failure = self._propagator.sample_many([self.timebase.to_years(ns) for ns in stamps])
             # Impacts that ended within the batch: their events and new descriptions go out
             # before its samples (the comparator keeps the previous segment's model for the
             # samples that trail a description).
@@ -221,9 +243,10 @@ class SimNode(Node):
             for j in range(done):
                 self._publish_sample(stamps[j], arrays["omega"][j], arrays["quaternion"][j], arrays["euler"][j])
             self._next_k += done
-            if done < len(stamps):
-                self._diverged(message)
+            if failure:
+                self._diverged(failure)
                 return
+            # done < len(stamps) without a failure: the call used its work budget; next tick goes on.
         if self._next_k >= self._n_samples:
             self._set_state(SimStatus.FINISHED, f"finished at t = {self.t:g} yr")
 
@@ -249,12 +272,15 @@ class SimNode(Node):
         angles = Vector3Stamped()
         angles.header.stamp, angles.header.frame_id = header_stamp, "euler_phi_psi_theta"
         angles.vector = Vector3(x=phi, y=psi, z=theta)
-        self._pub_clock.publish(Clock(clock=header_stamp))
+        if self._pub_clock is not None:
+            self._pub_clock.publish(Clock(clock=header_stamp))
         self._pub_omega.publish(msg)
         self._pub_attitude.publish(attitude)
         self._pub_euler.publish(angles)
 
     def _publish_impact_events(self) -> None:
+        """One event per impact that ended; one description per segment that starts at an end."""
+        segment_starts = {}
         for impact, y_start, y_end in self._propagator.pop_completed_impacts():
             event = ImpactEvent()
             event.header.stamp = stamp(self.timebase.to_ns(impact.end))
@@ -268,7 +294,10 @@ class SimNode(Node):
             self._pub_events.publish(event)
             self.get_logger().info(f"impact {event.id} applied on [{impact.start:.9g}, {impact.end:.9g}] yr: "
                                    f"delta w = {dw.round(9).tolist()} rad/yr")
-            self._publish_scenario(impact.end, y_end)
+            self._impact_ids.pop(id(impact), None)
+            segment_starts[impact.end] = y_end
+        for t0 in sorted(segment_starts):
+            self._publish_scenario(t0, segment_starts[t0])
 
     def _diverged(self, reason: str) -> None:
         self.get_logger().error(f"integration stopped: {reason}")
@@ -281,16 +310,23 @@ class SimNode(Node):
             self._publish_status(message)
 
     def _publish_status(self, message: str) -> None:
+        """Publish the state, t and ``message``, stamped with simulated time like every sample."""
         self._status_message = message
         msg = SimStatus(state=self._state, t=self.t, message=message)
-        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.stamp = stamp(max(0, self._next_k - 1) * self._interval_ns)
         self._pub_status.publish(msg)
+
+    def _on_status_period(self) -> None:
+        if self._state == SimStatus.RUNNING:
+            self._publish_status(self._status_message)
 
     def _publish_scenario(self, t0: float, y0) -> None:
         """Describe the scenario and the state the current segment starts from (latched)."""
         msg = ScenarioDescription()
         msg.header.stamp = stamp(self.timebase.to_ns(t0))
-        msg.parameters_yaml = dump_scenario(self.scenario.replace(impacts=self._propagator.impacts))
+        # The scenario as started (constant size: the impacts applied through the service are on
+        # impact_events, not repeated in every later description).
+        msg.parameters_yaml = self._scenario_yaml
         msg.seconds_per_year = self.timebase.seconds_per_year
         msg.revision, self._revision = self._revision, self._revision + 1
         msg.segment_start = t0
@@ -308,6 +344,10 @@ class SimNode(Node):
             return response
         if self._state in (SimStatus.FINISHED, SimStatus.DIVERGED):
             response.message = "the simulation has ended: no impact can be applied"
+            return response
+        if len(self._pending) + len(self._impact_ids) >= MAX_PENDING_IMPACTS:
+            response.message = (f"too many impacts in progress ({MAX_PENDING_IMPACTS} accepted and not yet ended): "
+                                "retry after some have ended")
             return response
         start = self.t if request.start_now else request.start
         torque = (request.torque.x, request.torque.y, request.torque.z)
@@ -347,6 +387,8 @@ class SimNode(Node):
             response.success, response.message = False, f"step needs the simulation paused (state {self._state})"
             return response
         self._publish_up_to(self._next_k)
+        if self._state == SimStatus.PAUSED:
+            self._publish_status(f"stepped to t = {self.t:g} yr")
         response.success = self._state != SimStatus.DIVERGED
         response.message = f"stepped to t = {self.t!r} yr"
         return response
@@ -354,7 +396,7 @@ class SimNode(Node):
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run tumble_ros sim``."""
-    return run_node(SimNode, args, "sim")
+    return run_node(SimNode, args, "sim", params_section="sim")
 
 
 if __name__ == "__main__":
