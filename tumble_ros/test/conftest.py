@@ -38,3 +38,22 @@ def ros():
         yield harness
     finally:
         harness.close()
+
+
+@pytest.fixture
+def spawn(tmp_path):
+    """spawn(name, *args, **popen_kwargs) -> processes.Process; every process group is killed after the test."""
+    from processes import Process
+
+    started = []
+
+    def start(name, *args, **kwargs):
+        process = Process(name, args, tmp_path / f"{name}_{len(started)}.log", **kwargs)
+        started.append(process)
+        return process
+
+    try:
+        yield start
+    finally:
+        for process in started:
+            process.kill_group()

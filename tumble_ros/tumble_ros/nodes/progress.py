@@ -113,7 +113,8 @@ class ConsumerTracker:
 
     def _on_progress(self, msg: ConsumerProgress) -> None:
         if not msg.active:
-            self._progress.pop(msg.consumer, None)
+            if self._progress.pop(msg.consumer, None) is not None:
+                self._node.get_logger().info(f"consumer {msg.consumer} left")
             return
         ns = _NOTHING_YET if msg.last_stamp.sec < 0 else msg.last_stamp.sec * 1_000_000_000 + msg.last_stamp.nanosec
         if msg.consumer not in self._progress:

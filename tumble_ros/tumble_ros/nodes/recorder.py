@@ -35,6 +35,7 @@ from pathlib import Path
 
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidTopicNameException
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -130,7 +131,7 @@ class RecorderNode(Node):
     def _resolve(self, parameter: str, topic: str) -> str:
         try:
             return self.resolve_topic_name(topic)
-        except InvalidTopicNameException as err:
+        except (InvalidTopicNameException, _rclpy.RCLError) as err:
             raise ValueError(f"{parameter}: invalid topic name {topic!r}: {' '.join(str(err).split())}") from None
 
     def _on_sources(self, problem: str | None) -> None:

@@ -34,7 +34,7 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
     the node refused its parameters or a params file (one line saying why, no traceback).
     ``params_section``: a node name that every ``--params-file`` must have a section for.
     """
-    problem = params_file_problem(args, params_section)
+    problem = params_file_problem(sys.argv if args is None else args, params_section)
     if problem:
         print(f"{name}: {problem}", file=sys.stderr, flush=True)
         return 1

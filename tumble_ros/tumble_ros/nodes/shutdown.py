@@ -7,8 +7,8 @@ Ctrl-C to a process group that already received it) raises KeyboardInterrupt in 
 clean-up. :class:`StopSignals` replaces all three behaviours: the first SIGINT or SIGTERM only
 records a stop request, which the spin loop (:func:`spin_until_stopped`) sees between callbacks
 (within ``POLL`` seconds); the node then closes with its context still valid; later signals are
-absorbed with one line on stderr. No exception is ever raised inside a callback, so a file being
-written is never left half-written by a signal.
+absorbed with one line on stderr, and ignored for good once the clean-up is over. No exception
+is ever raised inside a callback, so a file being written is never left half-written by a signal.
 """
 from __future__ import annotations
 
@@ -47,8 +47,11 @@ class StopSignals:
         return self
 
     def __exit__(self, *exc) -> None:
+        """Restore the previous handlers, unless a stop was requested: then the caller is being
+        stopped, and later SIGINT/SIGTERM are ignored for good (``ros2 launch`` sends two; a late
+        one must not kill the interpreter while it exits)."""
         for signum, handler in self._saved.items():
-            signal.signal(signum, handler)
+            signal.signal(signum, signal.SIG_IGN if self.requested else handler)
         self._saved.clear()
 
     def _handle(self, signum: int, _frame) -> None:
