@@ -31,7 +31,8 @@ BUILD_INPUTS := \
 	$(wildcard tumble_ros_interfaces/srv/*.srv tumble_ros_interfaces/msg/*.msg) \
 	tumble_ros/package.xml tumble_ros/setup.py tumble_ros/setup.cfg \
 	tumble_ros/resource tumble_ros/resource/tumble_ros \
-	tumble_ros/config $(wildcard tumble_ros/config/*)
+	tumble_ros/config $(wildcard tumble_ros/config/*) \
+	tumble_ros/launch $(wildcard tumble_ros/launch/*)
 
 # Rebuild anyway if build/ or install/ was deleted behind make's back.
 BUILD_PRESENT := $(and $(wildcard install/setup.bash),$(wildcard build/tumble_ros))
