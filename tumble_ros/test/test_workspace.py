@@ -148,10 +148,11 @@ def test_tumble_ros_package_xml():
     assert package.name == 'tumble_ros'
     assert package.package_format == 3
     assert package.get_build_type() == 'ament_python'
-    assert {d.name for d in package.exec_depends} == {
+    # The complete lists are checked against the imports by test_package_xml.py.
+    assert {
         'rclpy', 'geometry_msgs', 'rosgraph_msgs', 'std_msgs', 'tumble_ros_interfaces',
-        'python3-numpy', 'python3-scipy', 'python3-yaml'}
-    assert {d.name for d in package.test_depends} == {'python3-pytest'}
+        'python3-numpy', 'python3-scipy', 'python3-yaml'} <= {d.name for d in package.exec_depends}
+    assert 'python3-pytest' in {d.name for d in package.test_depends}
     assert package.version == __import__('tumble_ros').__version__
 
 
