@@ -43,6 +43,8 @@ _tumble_ros_env() {
     # shellcheck disable=SC1091
     source "$root/install/setup.bash" || return 1
     ((nounset)) && set -u
+    # Discovery stays on this machine unless the caller chose otherwise (README "Isolation").
+    export ROS_AUTOMATIC_DISCOVERY_RANGE="${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}"
     case ":${AMENT_PREFIX_PATH:-}:" in
         *":$VIRTUAL_ENV:"*) ;;
         *) export AMENT_PREFIX_PATH="${AMENT_PREFIX_PATH:+$AMENT_PREFIX_PATH:}$VIRTUAL_ENV" ;;

@@ -13,7 +13,7 @@ from tumble_ros.core import TimeBase
 from tumble_ros.io import read_messages, summarize
 from tumble_ros.nodes.bringup import main as bringup_main, run_bringup
 from tumble_ros.nodes.comparator import ComparatorNode
-from tumble_ros.nodes.parameters import params_file_problem
+from tumble_ros.nodes.parameters import params_file_problem, section_applies
 from tumble_ros.nodes.qos import SERVICE_QOS
 from tumble_ros.nodes.recorder import RecorderNode
 from tumble_ros.nodes.sim import MAX_PENDING_IMPACTS, SimNode
@@ -162,22 +162,26 @@ def test_every_parameter_has_a_value_and_a_dump_reproduces_the_run(ros, spawn, t
     (None, "no such file"),
     ("", "no parameters"),
     ("sim: [1, 2\n", "not valid YAML"),
-    ("simulator:\n  ros__parameters:\n    duration: 1.0\n", "no section for node 'sim' (sections: simulator)"),
+    ("simulator:\n  ros__parameters:\n    duration: 1.0\n", "no section applies to node /sim (sections: simulator;"),
 ])
 def test_a_params_file_problem_is_one_line(tmp_path, content, expected):
     path = tmp_path / "p.yaml"
     if content is not None:
         path.write_text(content)
-    problem = params_file_problem(["sim", "--ros-args", "--params-file", str(path)], "sim")
-    assert problem == f"params file {path}: {expected}" or (problem.startswith(f"params file {path}: {expected}"))
+    problem = params_file_problem(["sim", "--ros-args", "--params-file", str(path)], "/sim")
+    assert problem.startswith(f"params file {path}: {expected}")
     assert "\n" not in problem
 
 
-def test_params_files_that_configure_the_node_pass(tmp_path):
-    for key in ("sim", "/sim", "/ast1/sim", "/**"):
-        path = tmp_path / "ok.yaml"
-        path.write_text(f"{key}:\n  ros__parameters:\n    duration: 1.0\n")
-        assert params_file_problem(["x", "--ros-args", "--params-file", str(path)], "sim") is None
+@pytest.mark.parametrize("key, fqn, applies", [
+    ("sim", "/sim", True), ("/sim", "/sim", True), ("/**", "/ast1/sim", True), ("/**/sim", "/ast1/sim", True),
+    ("/**/sim", "/sim", True), ("/ast1/*", "/ast1/sim", True), ("/ast1/sim", "/ast1/sim", True),
+    ("sim", "/ast1/sim", False), ("/ast2/sim", "/ast1/sim", False), ("/**/comparator", "/sim", False),
+])
+def test_params_file_sections_apply_by_rcl_rules(key, fqn, applies):
+    """A `sim:` section does not reach a namespaced simulator (rcl: it means /sim): that ran the
+    defaults silently under ros2 launch with a namespace."""
+    assert section_applies(key, fqn) is applies
 
 
 def test_bringup_ros_args_override_the_scenario_file(tmp_path):

@@ -428,8 +428,8 @@ def _flatten(mapping: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
 def load_scenario(path: str | Path, node: str = "sim", ignore: frozenset[str] = frozenset()) -> Scenario:
     """Read a scenario from a ROS 2 parameters YAML file (``--params-file`` format).
 
-    The file is ``{node_name: {ros__parameters: {...}}}``; the section of ``node`` is
-    used, else the wildcard ``/**``, else the only section. Nested keys are joined with
+    The file is ``{node_name: {ros__parameters: {...}}}``; the section ``/**/<node>``, ``node``
+    or ``/<node>`` is used, else the wildcard ``/**``, else the only section. Nested keys are joined with
     dots as ROS does (``integrator: {rtol: 1e-10}`` is ``integrator.rtol``). Keys in
     ``ignore`` (a node's own, non-scenario parameters) are skipped.
 
@@ -456,7 +456,7 @@ def parse_scenario(text: str, node: str = "sim", ignore: frozenset[str] = frozen
         raise ScenarioError(f"cannot read scenario file: {err}") from None
     if not isinstance(document, Mapping) or not document:
         raise ScenarioError("expected a ROS 2 parameters file ({node: {ros__parameters: ...}})")
-    for key in (node, f"/{node}", "/**"):
+    for key in (f"/**/{node}", node, f"/{node}", "/**"):
         if key in document:
             section = document[key]
             break
@@ -471,7 +471,11 @@ def parse_scenario(text: str, node: str = "sim", ignore: frozenset[str] = frozen
 
 
 def dump_scenario(scenario: Scenario, node: str = "sim") -> str:
-    """The scenario as the text of a ROS 2 parameters file (inverse of :func:`parse_scenario`)."""
+    """The scenario as the text of a ROS 2 parameters file (inverse of :func:`parse_scenario`).
+
+    Keyed ``/**/<node>``: the section applies to the node in any namespace (a plain ``sim:`` key
+    means ``/sim`` only, and a namespaced simulator would silently run the defaults).
+    """
     import yaml
 
-    return yaml.safe_dump({node: {"ros__parameters": scenario.to_parameters()}}, sort_keys=False)
+    return yaml.safe_dump({f"/**/{node}": {"ros__parameters": scenario.to_parameters()}}, sort_keys=False)

@@ -138,7 +138,7 @@ def run_bringup(params_file: str | None = None, output: str | None = None, model
     # The file first: what --ros-args says after it (-p duration:=...) overrides it.
     args = ["bringup", "--ros-args", *(["--params-file", str(params_file)] if params_file else []),
             *(ros_args or [])]
-    problem = params_file_problem(args, "sim")
+    problem = params_file_problem(args)
     if problem:
         raise ValueError(problem)
     with StopSignals("bringup") as stop, _isolated(visible):
@@ -160,6 +160,9 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals) -> Bri
         recorder = RecorderNode(context=context, parameter_overrides=recorder_overrides,
                                 message_info=executor_name != "events")
         nodes.append(recorder)
+        problem = params_file_problem(args, sim.get_fully_qualified_name())
+        if problem:
+            raise ValueError(problem)
         refuse_unknown_parameters(nodes)
         for node in nodes:
             executor.add_node(node)

@@ -7,6 +7,7 @@ They are read-only: a scenario is fixed for the life of a run.
 from __future__ import annotations
 
 import difflib
+import re
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -18,7 +19,8 @@ from rclpy.node import Node
 from tumble_ros.core import PARAMETER_DOCS, Scenario
 
 __all__ = ["declare_node_parameters", "declare_scenario_parameters", "node_parameter", "read_parameters",
-           "read_scenario_parameters", "describe", "params_file_problem", "refuse_unknown_parameters"]
+           "read_scenario_parameters", "describe", "params_file_problem", "refuse_unknown_parameters",
+           "section_applies"]
 
 
 def describe(description: str, unit: str) -> str:
@@ -132,13 +134,23 @@ def _node_sections(tree: Any, path: tuple[str, ...] = ()) -> list[str]:
     return [key for k, v in tree.items() for key in _node_sections(v, (*path, str(k)))]
 
 
-def params_file_problem(args: list[str] | None, node_name: str | None = None) -> str | None:
+def section_applies(key: str, node_fqn: str) -> bool:
+    """Whether a params-file node key (``sim``, ``/ast1/sim``, ``/**``, ``/**/sim``) applies to the
+    node ``node_fqn`` (``/ast1/sim``), by rcl's rules: a key without a leading slash is in the
+    root namespace (``sim`` is ``/sim`` only), ``*`` matches one name, ``/**`` any namespaces."""
+    key = key if key.startswith("/") else "/" + key
+    pattern = "".join("(/[^/]+)*" if part == "**" else "/[^/]+" if part == "*" else "/" + re.escape(part)
+                      for part in key.split("/")[1:])
+    return re.fullmatch(pattern, node_fqn) is not None
+
+
+def params_file_problem(args: list[str] | None, node_fqn: str | None = None) -> str | None:
     """What is wrong with the ``--params-file`` files of ``args`` (None: nothing).
 
     rcl stops with a traceback on a missing, binary or malformed file; this says which file and
-    why, in one line. With ``node_name``, a file must also have a section that applies to that
-    node (its name, a namespaced name ending in it, or a wildcard): an empty file or one written
-    for another node would otherwise run silently with the defaults.
+    why, in one line. With ``node_fqn`` (``/sim``, ``/ast1/sim``), a file must also have a section
+    that applies to that node: an empty file, one written for another node, or a ``sim:`` section
+    given to a namespaced simulator would otherwise run silently with the defaults.
     """
     for name in _params_files(args):
         path = Path(name)
@@ -154,6 +166,7 @@ def params_file_problem(args: list[str] | None, node_name: str | None = None) ->
         if not sections:
             return (f"params file {name}: no parameters (a ROS 2 params file maps node names to "
                     "'ros__parameters:' sections)")
-        if node_name and not any(s.rsplit("/", 1)[-1] in (node_name, "*", "**") for s in sections):
-            return f"params file {name}: no section for node {node_name!r} (sections: {', '.join(sections)})"
+        if node_fqn and not any(section_applies(s, node_fqn) for s in sections):
+            return (f"params file {name}: no section applies to node {node_fqn} (sections: {', '.join(sections)}; "
+                    f"'/**/{node_fqn.rsplit('/', 1)[-1]}:' applies in any namespace)")
     return None

@@ -26,15 +26,17 @@ def close_node(node: Node) -> None:
 
 
 def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
-             params_section: str | None = None) -> int:
+             needs_params_section: bool = False) -> int:
     """Init rclpy, build the node, spin until SIGINT/SIGTERM, close, clean up.
 
     Returns 0 on a stop by SIGINT or SIGTERM (both finalise alike: the node's ``close()`` runs
     while its context is still valid; a second signal during the clean-up is absorbed), 1 when
     the node refused its parameters or a params file (one line saying why, no traceback).
-    ``params_section``: a node name that every ``--params-file`` must have a section for.
+    ``needs_params_section``: every ``--params-file`` must have a section for this node (the
+    simulator's scenario files).
     """
-    problem = params_file_problem(sys.argv if args is None else args, params_section)
+    args = sys.argv if args is None else args
+    problem = params_file_problem(args)
     if problem:
         print(f"{name}: {problem}", file=sys.stderr, flush=True)
         return 1
@@ -45,6 +47,9 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
         node = None
         try:
             node = make_node()
+            problem = params_file_problem(args, node.get_fully_qualified_name()) if needs_params_section else None
+            if problem:
+                raise ValueError(problem)
             refuse_unknown_parameters([node])
             executor.add_node(node)
             spin_until_stopped(executor, lambda: stop.requested)

@@ -396,7 +396,7 @@ class SimNode(Node):
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run tumble_ros sim``."""
-    return run_node(SimNode, args, "sim", params_section="sim")
+    return run_node(SimNode, args, "sim", needs_params_section=True)
 
 
 if __name__ == "__main__":
