@@ -8,9 +8,16 @@
   by a clean close) or is truncated.
 
 Every failure is an :class:`McapError` with a one-line message naming the file: a missing,
-unreadable or empty file, a file that is not MCAP (bad magic), a truncated file without a single
-complete chunk, a message that cannot be decoded (topic and type named). Library errors are
-translated at this boundary.
+unreadable or empty file, a path that is not a regular file (a directory, a FIFO, a device: a FIFO
+would block the reader forever, so it is refused before any read), a file that is not MCAP (bad
+magic), a truncated file without a single complete chunk, a message that cannot be decoded (topic
+and type named). Library errors are translated at this boundary.
+
+The work and the memory are bounded by the file's size: a record that declares more bytes than
+remain in the file ends the reading at once (it is a truncation, nothing is allocated for it),
+and a chunk may expand to at most :data:`MAX_CHUNK_RATIO` times its compressed size and
+:data:`MAX_CHUNK_BYTES` in all; a chunk that declares more is damaged (it is not decompressed).
+Decompression never produces more than the declared size.
 
 Service introspection events (``pkg/srv/Name_Event``) recorded by rosbag2 (Jazzy) or by
 :class:`~tumble_ros.io.mcap_writer.McapWriter` carry a schema holding the ``.srv`` file
@@ -22,7 +29,9 @@ from __future__ import annotations
 
 import io
 import os
+import stat
 import struct
+import zlib
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,17 +41,31 @@ from mcap.data_stream import ReadDataStream
 from mcap.opcode import Opcode
 from mcap.records import (Channel, Chunk, ChunkIndex, Footer, Header, Message, Schema,
                           Statistics)
-from mcap.stream_reader import breakup_chunk
 from mcap_ros2.decoder import DecoderFactory
 
-__all__ = ['McapError', 'McapSummary', 'RecordedMessage', 'TopicSummary', 'read_messages',
-           'summarize']
+try:                                # both come with mcap; a missing one only refuses its chunks
+    import lz4.frame as lz4_frame
+except ImportError:  # pragma: no cover
+    lz4_frame = None
+try:
+    import zstandard
+except ImportError:  # pragma: no cover
+    zstandard = None
+
+__all__ = ['MAX_CHUNK_BYTES', 'MAX_CHUNK_RATIO', 'McapError', 'McapSummary', 'RecordedMessage',
+           'TopicSummary', 'read_messages', 'summarize']
 
 MAGIC = b'\x89MCAP0\r\n'
 _SEPARATOR = '=' * 80
 _FOOTER_LENGTH = 8 + 8 + 4
-# A record longer than this is taken for corruption (the mcap library's default limit).
-_RECORD_LIMIT = 4 * 2 ** 30
+_RECORD_HEADER = 9            # opcode (1) + length (8)
+#: A chunk that declares an uncompressed size above this many times its compressed size is
+#: damaged (or hostile: a zstd frame of zeros expands ~30,000 times). Recorded CDR compresses
+#: 3-5 times with zstd; lz4 cannot exceed ~255 times.
+MAX_CHUNK_RATIO = 1000
+#: ... or above this many bytes in all: the recorder's largest ``chunk_bytes`` (1 GiB) with room
+#: for the message that crosses it.
+MAX_CHUNK_BYTES = 2 * 2 ** 30
 
 
 class McapError(Exception):
@@ -111,19 +134,53 @@ class _Truncated(Exception):
     """The record stream ends (or breaks) before the footer."""
 
 
-def _open(path) -> tuple[Path, io.BufferedReader]:
+_FILE_KINDS = ((stat.S_ISDIR, 'is a directory'), (stat.S_ISFIFO, 'is a FIFO (named pipe)'),
+               (stat.S_ISCHR, 'is a character device'), (stat.S_ISBLK, 'is a block device'),
+               (stat.S_ISSOCK, 'is a socket'))
+
+
+def _not_regular(path: Path, mode: int) -> McapError:
+    kind = next((text for test, text in _FILE_KINDS if test(mode)), 'is not a regular file')
+    return McapError(f'{path}: {kind}, not an MCAP file (only regular files are read)')
+
+
+def _open_regular(path: Path) -> io.BufferedReader:
+    """Open ``path`` for reading without ever blocking on it.
+
+    O_NONBLOCK makes the open of a FIFO return at once, and the opened file (not the name,
+    which may change) must be a regular file.
+    """
     try:
-        path = Path(os.fspath(path))
-    except TypeError:
-        raise McapError(f'not a file path: {path!r}') from None
-    try:
-        stream = open(path, 'rb')
+        fd = os.open(path, os.O_RDONLY | getattr(os, 'O_NONBLOCK', 0))
     except FileNotFoundError:
         raise McapError(f'{path}: no such file') from None
     except IsADirectoryError:
         raise McapError(f'{path}: is a directory, not an MCAP file') from None
     except OSError as err:
+        try:
+            mode = os.stat(path).st_mode      # a socket fails to open: say what it is
+        except OSError:
+            mode = stat.S_IFREG
+        if not stat.S_ISREG(mode):
+            raise _not_regular(path, mode) from None
         raise McapError(f'{path}: cannot open: {_one_line(err.strerror or err)}') from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            raise _not_regular(path, mode)
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, 'rb')
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+def _open(path) -> tuple[Path, io.BufferedReader]:
+    try:
+        path = Path(os.fspath(path))
+    except TypeError:
+        raise McapError(f'not a file path: {path!r}') from None
+    stream = _open_regular(path)
     try:
         magic = stream.read(len(MAGIC))
     except OSError as err:
@@ -140,19 +197,27 @@ def _open(path) -> tuple[Path, io.BufferedReader]:
     return path, stream
 
 
+def _remaining(stream) -> int:
+    """Return the bytes from the stream's position to the end of the file (as it is now)."""
+    return os.fstat(stream.fileno()).st_size - stream.tell()
+
+
 def _records(stream) -> Iterator[tuple[int, bytes]]:
     """(opcode, body) of each record after the magic, up to and including the footer.
 
-    Raises _Truncated where the stream ends or breaks before the footer and its closing magic.
+    Raises _Truncated where the stream ends or breaks before the footer and its closing magic,
+    and at once, before reading it, for a record longer than what remains of the file.
     """
     while True:
-        head = stream.read(9)
-        if len(head) < 9:
+        head = stream.read(_RECORD_HEADER)
+        if len(head) < _RECORD_HEADER:
             raise _Truncated('file ends before the footer' if not head
                              else 'file ends inside a record header')
         opcode, length = struct.unpack('<BQ', head)
-        if length > _RECORD_LIMIT:
-            raise _Truncated(f'record of {length} bytes (opcode {opcode:#x}): corrupt')
+        remaining = _remaining(stream)
+        if length > remaining:
+            raise _Truncated(f'file ends inside a record (opcode {opcode:#x}, '
+                             f'{remaining} of {length} bytes)')
         body = stream.read(length)
         if len(body) < length:
             raise _Truncated(f'file ends inside a record (opcode {opcode:#x}, '
@@ -166,6 +231,108 @@ def _records(stream) -> Iterator[tuple[int, bytes]]:
 
 def _parse(cls, body: bytes, *args):
     return cls.read(ReadDataStream(io.BytesIO(body)), *args)
+
+
+class _Damaged(Exception):
+    """A record that is complete in the file but cannot be used (one-line message)."""
+
+
+def _check_chunk_size(chunk: Chunk) -> None:
+    size, packed = chunk.uncompressed_size, len(chunk.data)
+    compression = chunk.compression or 'none'
+    if size > MAX_CHUNK_BYTES:
+        raise _Damaged(f'a chunk declares {size} bytes uncompressed, more than the limit of '
+                       f'{MAX_CHUNK_BYTES}: refused')
+    if size > MAX_CHUNK_RATIO * max(packed, 1):
+        raise _Damaged(f'a chunk declares {size} bytes uncompressed from {packed} bytes of '
+                       f'{compression} data, more than {MAX_CHUNK_RATIO} times: refused')
+
+
+def _read_exactly(reader, size: int) -> bytes:
+    """Return the ``size`` bytes ``reader`` produces; _Damaged if it produces fewer or more."""
+    buffer = bytearray(size + 1)           # one more: a stream that goes on is an error too
+    view = memoryview(buffer)
+    got = 0
+    while got < len(buffer):
+        n = reader.readinto(view[got:])
+        if not n:
+            break
+        got += n
+    view.release()
+    if got != size:
+        raise _Damaged(f'a chunk decompresses to {"more than " if got > size else ""}'
+                       f'{min(got, size)} bytes, it declares {size}')
+    del buffer[size:]
+    return bytes(buffer)
+
+
+class _Lz4Reader:
+    """readinto() over an lz4 frame, never producing more than asked for."""
+
+    def __init__(self, data: bytes):
+        self.decompressor = lz4_frame.LZ4FrameDecompressor()
+        self.data = data
+
+    def readinto(self, view) -> int:
+        if self.decompressor.eof:
+            return 0
+        out = self.decompressor.decompress(self.data, max_length=len(view))
+        self.data = b''
+        view[:len(out)] = out
+        return len(out)
+
+
+def _decompressing_reader(chunk: Chunk):
+    """Return a reader (readinto) of the chunk's decompressed records; None if uncompressed."""
+    compression = chunk.compression or 'none'
+    if compression == 'none':
+        return None
+    module = {'zstd': zstandard, 'lz4': lz4_frame}.get(compression, False)
+    if module is False:
+        raise _Damaged(f'a chunk has unknown compression {compression!r}')
+    if module is None:
+        raise _Damaged(f'a chunk is {compression}-compressed and its Python module is missing')
+    if compression == 'lz4':
+        return _Lz4Reader(chunk.data)
+    return zstandard.ZstdDecompressor().stream_reader(io.BytesIO(chunk.data),
+                                                      read_across_frames=True)
+
+
+def _chunk_data(chunk: Chunk) -> bytes:
+    """Return the chunk's records, decompressed to at most its declared size, CRC checked."""
+    _check_chunk_size(chunk)
+    reader = _decompressing_reader(chunk)
+    data = chunk.data if reader is None else _read_exactly(reader, chunk.uncompressed_size)
+    if chunk.uncompressed_crc != 0 and zlib.crc32(data) != chunk.uncompressed_crc:
+        raise _Damaged('a chunk fails its CRC check')
+    return data
+
+
+def _chunk_records(chunk: Chunk) -> list[Schema | Channel | Message]:
+    """Return the schemas, channels and messages of a chunk.
+
+    As the mcap library's breakup_chunk, with every record's length checked against what
+    remains of the chunk.
+    """
+    data = _chunk_data(chunk)
+    stream = ReadDataStream(io.BytesIO(data))
+    records: list[Schema | Channel | Message] = []
+    while stream.count < len(data):
+        if len(data) - stream.count < _RECORD_HEADER:
+            raise _Damaged('a chunk ends inside a record header')
+        opcode, length = stream.read1(), stream.read8()
+        if length > len(data) - stream.count:
+            raise _Damaged(f'a record in a chunk (opcode {opcode:#x}) declares {length} bytes, '
+                           f'{len(data) - stream.count} remain in the chunk')
+        if opcode == Opcode.SCHEMA:
+            records.append(Schema.read(stream))
+        elif opcode == Opcode.CHANNEL:
+            records.append(Channel.read(stream))
+        elif opcode == Opcode.MESSAGE:
+            records.append(Message.read(stream, length))
+        else:
+            stream.read(length)
+    return records
 
 
 class _Scan:
@@ -199,7 +366,7 @@ class _Scan:
                     yield _parse(Message, body, len(body))
                 elif opcode == Opcode.CHUNK:
                     chunk = _parse(Chunk, body)
-                    records = breakup_chunk(chunk, validate_crc=True)
+                    records = _chunk_records(chunk)
                     self.chunk_count += 1
                     self.compressions.add(chunk.compression or 'none')
                     for record in records:
@@ -216,6 +383,8 @@ class _Scan:
             self.finalised = True
         except _Truncated as err:
             self.problem = str(err)
+        except _Damaged as err:
+            self.problem = f'damaged record: {err}'
         except OSError as err:
             self.problem = f'read error: {_one_line(err.strerror or err)}'
         except Exception as err:  # noqa: BLE001
