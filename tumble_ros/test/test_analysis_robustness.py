@@ -1,7 +1,7 @@
 """The analyze command on hostile or unusual input.
 
-Bounded work and no blocking, whatever the file declares. Every refusal is one ``ERROR:`` line
-and status 1 (docs/analysis.md, "Command").
+Bounded work, no blocking, no writing through links or over existing files. Every refusal is one
+``ERROR:`` line and status 1 (docs/analysis.md, "Command").
 """
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ import tracemalloc
 
 import lz4.frame
 import pytest
+from tumble_ros.analysis import load_recording, write_figures
 from tumble_ros.analysis.cli import command
 from tumble_ros.io import McapError, read_messages, summarize
 import zstandard
@@ -181,3 +182,92 @@ def test_device_is_refused(capsys):
     assert command(['/dev/null']) == 1
     assert _one_error_line(capsys) == \
         'ERROR: /dev/null: is a character device, not an MCAP file (only regular files are read)'
+
+
+# -- figures: no overwriting, no links ------------------------------------------------------------
+
+FIGURES = ['impact_0_id1.png', 'omega.png', 'spectrum_wx.png', 'wy_vs_wx.png']
+
+
+def test_existing_figure_is_not_overwritten_and_nothing_is_written(tmp_path, capsys):
+    out_dir = tmp_path / 'figs'
+    out_dir.mkdir()
+    (out_dir / 'omega.png').write_bytes(b'my own work')
+    assert command([str(GOLDEN), '--figures', str(out_dir)]) == 1
+    line = _one_error_line(capsys)
+    assert line == (f'ERROR: {out_dir / "omega.png"}: exists, not overwritten (--overwrite '
+                    f'replaces existing figures)')
+    assert (out_dir / 'omega.png').read_bytes() == b'my own work'
+    assert sorted(p.name for p in out_dir.iterdir()) == ['omega.png']     # all or nothing
+
+
+def test_second_run_refuses_and_overwrite_replaces(tmp_path, capsys):
+    out_dir = tmp_path / 'figs'
+    assert command([str(GOLDEN), '--figures', str(out_dir)]) == 0
+    capsys.readouterr()
+    before = {name: (out_dir / name).stat().st_ino for name in FIGURES}
+    assert command([str(GOLDEN), '--figures', str(out_dir)]) == 1
+    line = _one_error_line(capsys)
+    assert all(str(out_dir / name) in line for name in FIGURES)
+    assert 'exist, not overwritten' in line
+    assert command([str(GOLDEN), '--figures', str(out_dir), '--overwrite']) == 0
+    out = capsys.readouterr().out
+    assert f'figures: 4 written to {out_dir}' in out
+    assert sorted(p.name for p in out_dir.iterdir()) == FIGURES        # no temporary left
+    assert all((out_dir / name).stat().st_ino != before[name] for name in FIGURES)
+    assert all((out_dir / name).read_bytes()[:4] == b'\x89PNG' for name in FIGURES)
+
+
+@pytest.mark.parametrize('overwrite', [[], ['--overwrite']])
+@pytest.mark.parametrize('target', ['existing', 'dangling'])
+def test_link_at_a_figure_path_is_refused(tmp_path, capsys, overwrite, target):
+    victim = tmp_path / 'victim.txt'
+    if target == 'existing':
+        victim.write_bytes(b'precious')
+    out_dir = tmp_path / 'figs'
+    out_dir.mkdir()
+    (out_dir / 'wy_vs_wx.png').symlink_to(victim)
+    assert command([str(GOLDEN), '--figures', str(out_dir), *overwrite]) == 1
+    assert _one_error_line(capsys) == (f'ERROR: {out_dir / "wy_vs_wx.png"}: is a symbolic link: '
+                                       f'figures are not written through links')
+    assert (victim.read_bytes() == b'precious') if target == 'existing' else not victim.exists()
+    assert sorted(p.name for p in out_dir.iterdir()) == ['wy_vs_wx.png']
+    assert (out_dir / 'wy_vs_wx.png').is_symlink()
+
+
+@pytest.mark.parametrize('overwrite', [[], ['--overwrite']])
+def test_link_as_the_figure_directory_is_refused(tmp_path, capsys, overwrite):
+    real = tmp_path / 'elsewhere'
+    real.mkdir()
+    link = tmp_path / 'figs'
+    link.symlink_to(real)
+    for given in (str(link), str(link) + '/'):
+        assert command([str(GOLDEN), '--figures', given, *overwrite]) == 1
+        assert _one_error_line(capsys) == (f'ERROR: {link}: is a symbolic link: figures are not '
+                                           f'written through links')
+    assert list(real.iterdir()) == []
+
+
+def test_non_regular_file_at_a_figure_path_is_refused_even_with_overwrite(tmp_path, capsys):
+    out_dir = tmp_path / 'figs'
+    (out_dir / 'omega.png').mkdir(parents=True)
+    assert command([str(GOLDEN), '--figures', str(out_dir), '--overwrite']) == 1
+    assert _one_error_line(capsys) == \
+        f'ERROR: {out_dir / "omega.png"}: exists and is not a regular file'
+
+
+def test_overwrite_needs_figures(capsys):
+    assert command([str(GOLDEN), '--overwrite']) == 1
+    assert _one_error_line(capsys) == 'ERROR: --overwrite needs --figures DIR'
+
+
+def test_python_api_refuses_existing_figures_unless_told(tmp_path):
+    from tumble_ros.analysis.figures import FigureExistsError, FigurePathError
+    rec = load_recording(GOLDEN)
+    first = write_figures(rec, tmp_path)
+    with pytest.raises(FigureExistsError):
+        write_figures(rec, tmp_path)
+    assert write_figures(rec, tmp_path, overwrite=True) == first
+    (tmp_path / 'link').symlink_to(tmp_path)
+    with pytest.raises(FigurePathError):
+        write_figures(rec, tmp_path / 'link', overwrite=True)

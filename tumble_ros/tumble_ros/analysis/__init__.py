@@ -7,7 +7,7 @@ ROS runtime: no rclpy, no running nodes, no sourced workspace needed.
     rec = load_recording("run.mcap")          # arrays: rec.t, rec.omega, rec.quaternion, ...
     summary = analyze(rec)                    # AnalysisSummary
     print(format_summary(summary))            # or summary_to_dict(summary) for JSON
-    write_figures(rec, "figures/", summary)   # PNG paths
+    write_figures(rec, "figures/", summary)   # PNG paths (never over an existing file)
 
 Modules: ``recording`` (MCAP -> arrays), ``summary`` (the numbers and their text/JSON),
 ``figures`` (matplotlib, Agg; imported lazily here so that the summary needs no matplotlib),
@@ -20,8 +20,8 @@ __all__ = ['AnalysisError', 'AnalysisSummary', 'Recording', 'analyze', 'format_s
            'load_recording', 'summary_to_dict', 'write_figures']
 
 
-def write_figures(rec, out_dir, summary=None):
+def write_figures(rec, out_dir, summary=None, *, overwrite: bool = False):
     """:func:`tumble_ros.analysis.figures.write_figures` (imports matplotlib on first use)."""
     from .figures import write_figures as _write
 
-    return _write(rec, out_dir, summary)
+    return _write(rec, out_dir, summary, overwrite=overwrite)

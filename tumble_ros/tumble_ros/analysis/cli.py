@@ -5,10 +5,11 @@
     python -m tumble_ros.analysis RUN.mcap --figures figs/     # and PNG figures into figs/
 
 Exit status: 0 on success (warnings included), 1 on a user error (a missing, empty,
-truncated-before-any-chunk or non-MCAP file, a recording without /angular_velocity, a
-figure directory that cannot be written, bad options), reported as one ``ERROR: ...`` line
-on stderr, never a traceback. Progress for big files (>= 100,000 messages) goes to stderr
-(``--quiet`` turns it off).
+truncated-before-any-chunk or non-MCAP file, a path that is not a regular file, a damaged
+chunk, a recording without /angular_velocity, a figure that exists (without --overwrite) or a
+symbolic link in the way, a figure directory that cannot be written, bad options), reported as
+one ``ERROR: ...`` line on stderr, never a traceback. Progress for big files (>= 100,000
+messages) goes to stderr (``--quiet`` turns it off).
 """
 from __future__ import annotations
 
@@ -45,7 +46,11 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('file', metavar='FILE.mcap', help='the recording')
     parser.add_argument('--figures', metavar='DIR', default=None,
                         help='also write the figures (PNG) into DIR, created if needed '
-                             '(default: no figures)')
+                             '(default: no figures); existing files are not overwritten and '
+                             'symbolic links are refused')
+    parser.add_argument('--overwrite', action='store_true',
+                        help='with --figures: replace figure files that exist (links are '
+                             'still refused)')
     parser.add_argument('--json', action='store_true',
                         help='print the summary as JSON instead of text')
     parser.add_argument('--peaks', type=int, default=5, metavar='N',
@@ -60,6 +65,27 @@ def _error(text: str) -> int:
     return 1
 
 
+def _figures(rec, summary, args) -> list:
+    """Write the figures; any failure is an AnalysisError with a one-line message."""
+    from .figures import FigureExistsError, write_figures   # matplotlib only when asked for
+    try:
+        return write_figures(rec, args.figures, summary, overwrite=args.overwrite)
+    except FigureExistsError as err:
+        raise AnalysisError(f'{err} (--overwrite replaces existing figures)') from None
+    except OSError as err:
+        raise AnalysisError(f'cannot write figures to {args.figures}: {err.strerror or err}'
+                            + (f': {err.filename}' if err.filename else '')) from None
+
+
+def _check_options(args) -> str | None:
+    """Why the options are wrong, or None."""
+    if args.peaks < 1:
+        return f'--peaks must be >= 1, got {args.peaks}'
+    if args.overwrite and args.figures is None:
+        return '--overwrite needs --figures DIR'
+    return None
+
+
 def command(argv=None) -> int:
     """Run the command on ``argv`` (without the program name); returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -69,24 +95,18 @@ def command(argv=None) -> int:
         return _error(str(err))
     except SystemExit as exit_:          # --help
         return int(exit_.code or 0)
-    if args.peaks < 1:
-        return _error(f'--peaks must be >= 1, got {args.peaks}')
+    problem = _check_options(args)
+    if problem:
+        return _error(problem)
     try:
         progress = None if args.quiet else stderr_progress()
         rec = load_recording(args.file, progress=progress)
         summary = analyze(rec, n_peaks=args.peaks)
+        figures = [] if args.figures is None else _figures(rec, summary, args)
     except (McapError, AnalysisError) as err:
         return _error(err)
     except KeyboardInterrupt:
         return _error('interrupted')
-    figures = []
-    if args.figures is not None:
-        try:
-            from .figures import write_figures   # matplotlib only when figures are asked for
-            figures = write_figures(rec, args.figures, summary)
-        except OSError as err:
-            return _error(f'cannot write figures to {args.figures}: '
-                          f'{err.strerror or err}' + (f': {err.filename}' if err.filename else ''))
     if args.json:
         data = summary_to_dict(summary)
         data['figures'] = [str(p) for p in figures]

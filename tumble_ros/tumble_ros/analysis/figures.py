@@ -4,9 +4,8 @@
     paths = write_figures(load_recording("run.mcap"), "figures/")
 
 Every function takes a :class:`~tumble_ros.analysis.recording.Recording` and an output
-directory (created if needed), writes its PNG file(s) there (overwriting files of the same
-name) and returns the list of paths written, empty when the recording lacks what the figure
-needs:
+directory (created if needed), writes its PNG file(s) there and returns the list of paths
+written, empty when the recording lacks what the figure needs:
 
 - :func:`plot_angular_velocity` ``omega.png``: wx, wy, wz against t (paper Figs 3-9), the
   analytic model's w overlaid as a bold line when the comparator recorded it (as the paper
@@ -20,20 +19,32 @@ needs:
 
 The figures are drawn on :class:`matplotlib.figure.Figure` with the Agg canvas directly, never
 through pyplot, so no GUI backend is touched and nothing global is changed.
+
+Files are never written through a symbolic link and, unless ``overwrite=True``, never replace an
+existing file: every figure is drawn first, then all their names are checked, and only if none is
+taken (:class:`FigureExistsError` names them) or a symbolic link (:class:`FigurePathError`) are
+they written. The output directory itself must not be a symbolic link. Files are created with
+O_CREAT | O_EXCL | O_NOFOLLOW relative to the directory's descriptor; with ``overwrite=True`` a
+figure is written to a new temporary file and renamed over the old one (a rename replaces a
+link, never what it points to).
 """
 from __future__ import annotations
 
+import errno
+import io
+import os
 from pathlib import Path
+import stat
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .recording import Recording
+from .recording import AnalysisError, Recording
 from .summary import AnalysisSummary, analyze, impact_intervals, spectrum, theory_lines
 
-__all__ = ['plot_angular_velocity', 'plot_error', 'plot_impacts', 'plot_spectrum',
-           'plot_wy_vs_wx', 'write_figures']
+__all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
+           'plot_impacts', 'plot_spectrum', 'plot_wy_vs_wx', 'write_figures']
 
 DPI = 110
 _LABELS = ('$\\omega_x$', '$\\omega_y$', '$\\omega_z$')
@@ -46,12 +57,104 @@ def _new(rows: int = 1, height: float = 3.0, width: float = 9.0):
     return fig, axes
 
 
-def _save(fig: Figure, out_dir, name: str) -> Path:
-    out_dir = Path(out_dir)
+#: A drawn figure: (file name, PNG bytes).
+Drawing = tuple[str, bytes]
+
+
+class FigurePathError(AnalysisError):
+    """A figure path that is refused: a symbolic link, or not a regular file."""
+
+
+class FigureExistsError(FigurePathError):
+    """Figure files that already exist and are not overwritten (``overwrite=False``)."""
+
+
+def _png(fig: Figure, name: str) -> Drawing:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format='png')
+    return name, buffer.getvalue()
+
+
+def _link_refused(path: Path) -> FigurePathError:
+    return FigurePathError(f'{path}: is a symbolic link: figures are not written through links')
+
+
+def _open_dir(out_dir: Path) -> int:
+    """Open ``out_dir`` (created if needed) as a descriptor; refuse a symbolic link."""
+    if out_dir.is_symlink():
+        raise _link_refused(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / name
-    fig.savefig(path, format='png')
-    return path
+    try:
+        return os.open(out_dir, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+    except OSError as err:
+        if err.errno == errno.ELOOP:            # replaced by a link since the check
+            raise _link_refused(out_dir) from None
+        raise
+
+
+def _check_names(out_dir: Path, dir_fd: int, names: list[str], overwrite: bool) -> None:
+    """Refuse links and non-regular files at the figure paths.
+
+    Without ``overwrite``, refuse any existing file too.
+    """
+    taken = []
+    for name in names:
+        try:
+            mode = os.stat(name, dir_fd=dir_fd, follow_symlinks=False).st_mode
+        except FileNotFoundError:
+            continue
+        if stat.S_ISLNK(mode):
+            raise _link_refused(out_dir / name)
+        if not stat.S_ISREG(mode):
+            raise FigurePathError(f'{out_dir / name}: exists and is not a regular file')
+        taken.append(name)
+    if taken and not overwrite:
+        raise FigureExistsError(f'{", ".join(str(out_dir / n) for n in taken)}: '
+                                f'{"exists" if len(taken) == 1 else "exist"}, not overwritten')
+
+
+_CREATE = os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | getattr(os, 'O_CLOEXEC', 0)
+
+
+def _create(dir_fd: int, name: str, data: bytes) -> None:
+    """Write a new file ``name`` (never an existing one, never through a link)."""
+    fd = os.open(name, _CREATE, 0o666, dir_fd=dir_fd)
+    try:
+        with os.fdopen(fd, 'wb') as stream:
+            stream.write(data)
+    except BaseException:
+        os.unlink(name, dir_fd=dir_fd)
+        raise
+
+
+def _write_one(out_dir: Path, dir_fd: int, name: str, data: bytes, overwrite: bool) -> Path:
+    if overwrite:
+        temporary = f'.{name}.{os.getpid()}-{os.urandom(4).hex()}.tmp'
+        _create(dir_fd, temporary, data)
+        try:
+            os.replace(temporary, name, src_dir_fd=dir_fd, dst_dir_fd=dir_fd)
+        except BaseException:
+            os.unlink(temporary, dir_fd=dir_fd)
+            raise
+        return out_dir / name
+    try:
+        _create(dir_fd, name, data)
+    except FileExistsError:        # created since the check
+        raise FigureExistsError(f'{out_dir / name}: exists, not overwritten') from None
+    return out_dir / name
+
+
+def _write(drawings: list[Drawing], out_dir, overwrite: bool) -> list[Path]:
+    """Write the drawn figures into ``out_dir`` if none of their paths is refused."""
+    if not drawings:
+        return []
+    out_dir = Path(out_dir)
+    dir_fd = _open_dir(out_dir)
+    try:
+        _check_names(out_dir, dir_fd, [name for name, _ in drawings], overwrite)
+        return [_write_one(out_dir, dir_fd, name, data, overwrite) for name, data in drawings]
+    finally:
+        os.close(dir_fd)
 
 
 def _title(rec: Recording) -> str:
@@ -72,8 +175,12 @@ def _mark_impacts(ax, rec: Recording) -> None:
         ax.axvspan(start, end, color='tab:red', alpha=0.25)
 
 
-def plot_angular_velocity(rec: Recording, out_dir) -> list[Path]:
+def plot_angular_velocity(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
     """``omega.png``: the three components against t, the model's overlaid if recorded."""
+    return _write(_draw_angular_velocity(rec), out_dir, overwrite)
+
+
+def _draw_angular_velocity(rec: Recording) -> list[Drawing]:
     fig, axes = _new(3, 2.4)
     has_model = len(rec.model_t) > 0
     for i, ax in enumerate(axes):
@@ -89,11 +196,15 @@ def plot_angular_velocity(rec: Recording, out_dir) -> list[Path]:
     if has_model or rec.impacts:
         axes[0].legend(loc='upper right', fontsize='small')
     axes[0].set_title(_title(rec), fontsize='small')
-    return [_save(fig, out_dir, 'omega.png')]
+    return [_png(fig, 'omega.png')]
 
 
-def plot_wy_vs_wx(rec: Recording, out_dir) -> list[Path]:
+def plot_wy_vs_wx(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
     """``wy_vs_wx.png``: the transverse angular velocity's path (paper Fig 9, bottom)."""
+    return _write(_draw_wy_vs_wx(rec), out_dir, overwrite)
+
+
+def _draw_wy_vs_wx(rec: Recording) -> list[Drawing]:
     fig, (ax,) = _new(1, 6.0, 6.5)
     ax.plot(rec.omega[:, 0], rec.omega[:, 1], lw=0.4, color='tab:blue')
     ax.plot(rec.omega[:1, 0], rec.omega[:1, 1], 'o', color='tab:green', label='start')
@@ -105,11 +216,15 @@ def plot_wy_vs_wx(rec: Recording, out_dir) -> list[Path]:
     ax.legend(loc='upper right', fontsize='small')
     ax.set_title(f'{rec.path.name}: $\\omega_y$ vs $\\omega_x$, t = {rec.t[0]:.4g} .. '
                  f'{rec.t[-1]:.4g} yr', fontsize='small')
-    return [_save(fig, out_dir, 'wy_vs_wx.png')]
+    return [_png(fig, 'wy_vs_wx.png')]
 
 
-def plot_error(rec: Recording, out_dir) -> list[Path]:
+def plot_error(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
     """``error.png``: error components and |error| against t; nothing without a comparator."""
+    return _write(_draw_error(rec), out_dir, overwrite)
+
+
+def _draw_error(rec: Recording) -> list[Drawing]:
     t_vec, vec = rec.error_t, rec.error
     if not len(t_vec) and len(rec.model_t):
         _, ia, ib = np.intersect1d(rec.model_t, rec.t, return_indices=True)
@@ -135,16 +250,21 @@ def plot_error(rec: Recording, out_dir) -> list[Path]:
     models = ', '.join(rec.error_models) or (rec.comparator_status.values.get('model', '')
                                              if rec.comparator_status else '')
     ax1.set_title(f'{rec.path.name}: numeric - analytic model {models}', fontsize='small')
-    return [_save(fig, out_dir, 'error.png')]
+    return [_png(fig, 'error.png')]
 
 
-def plot_impacts(rec: Recording, out_dir, *, samples: int = 25) -> list[Path]:
+def plot_impacts(rec: Recording, out_dir, *, samples: int = 25,
+                 overwrite: bool = False) -> list[Path]:
     """``impact_<k>_id<id>.png`` per impact event: w over +-``samples`` sampling intervals
     (at least +-10 pulse lengths) around the pulse, the pulse interval shaded and its edges
     drawn (paper Fig 10)."""
-    paths = []
+    return _write(_draw_impacts(rec, samples), out_dir, overwrite)
+
+
+def _draw_impacts(rec: Recording, samples: int = 25) -> list[Drawing]:
+    drawings: list[Drawing] = []
     if rec.n < 2:
-        return paths
+        return drawings
     dt = float(np.median(np.diff(rec.t)))
     for k, event in enumerate(rec.impacts):
         half = max(samples * dt, 10 * event.duration)
@@ -173,14 +293,18 @@ def plot_impacts(rec: Recording, out_dir, *, samples: int = 25) -> list[Path]:
             f'({event.torque[0]:.3g}, {event.torque[1]:.3g}, {event.torque[2]:.3g}) for '
             f'{event.duration:.3g} yr; $\\Delta\\omega$ = ({d[0]:.4g}, {d[1]:.4g}, {d[2]:.4g}) '
             f'rad/yr', fontsize='small')
-        paths.append(_save(fig, out_dir, f'impact_{k}_id{event.id}.png'))
-    return paths
+        drawings.append(_png(fig, f'impact_{k}_id{event.id}.png'))
+    return drawings
 
 
-def plot_spectrum(rec: Recording, out_dir, summary: AnalysisSummary | None = None
-                  ) -> list[Path]:
+def plot_spectrum(rec: Recording, out_dir, summary: AnalysisSummary | None = None, *,
+                  overwrite: bool = False) -> list[Path]:
     """``spectrum_wx.png``: amplitude spectrum of wx (as in the summary), the theory's lines
     dashed, the Nyquist rate pi/dt marked; nothing for fewer than 8 samples."""
+    return _write(_draw_spectrum(rec, summary), out_dir, overwrite)
+
+
+def _draw_spectrum(rec: Recording, summary: AnalysisSummary | None) -> list[Drawing]:
     if summary is not None:
         spec, lines = summary.spectrum, list(summary.theory)
     else:
@@ -211,18 +335,18 @@ def plot_spectrum(rec: Recording, out_dir, summary: AnalysisSummary | None = Non
     ax.legend(loc='upper right', fontsize='x-small')
     ax.set_title(f'{rec.path.name}: spectrum of {spec.component}, resolution '
                  f'{spec.resolution:.3g} rad/yr', fontsize='small')
-    return [_save(fig, out_dir, f'spectrum_{spec.component}.png')]
+    return [_png(fig, f'spectrum_{spec.component}.png')]
 
 
-def write_figures(rec: Recording, out_dir, summary: AnalysisSummary | None = None
-                  ) -> list[Path]:
-    """Every figure the recording supports; returns the paths written."""
+def write_figures(rec: Recording, out_dir, summary: AnalysisSummary | None = None, *,
+                  overwrite: bool = False) -> list[Path]:
+    """Write every figure the recording supports; return the paths written.
+
+    All are drawn before any is written: an existing file (without ``overwrite``) or a link
+    refuses them all.
+    """
     if summary is None:
         summary = analyze(rec)
-    paths: list[Path] = []
-    paths += plot_angular_velocity(rec, out_dir)
-    paths += plot_wy_vs_wx(rec, out_dir)
-    paths += plot_error(rec, out_dir)
-    paths += plot_impacts(rec, out_dir)
-    paths += plot_spectrum(rec, out_dir, summary)
-    return paths
+    drawings = (_draw_angular_velocity(rec) + _draw_wy_vs_wx(rec) + _draw_error(rec)
+                + _draw_impacts(rec) + _draw_spectrum(rec, summary))
+    return _write(drawings, out_dir, overwrite)
