@@ -20,11 +20,11 @@ The simulator runs with ``min_consumers = 2`` (it waits for the comparator and t
 never outruns them) and the ``real_time_factor`` of the scenario file, else its default. When one
 of the three nodes ends (refused its parameters, crashed), the launch stops the others.
 
-The params file's node sections apply whatever the namespace: a section keyed ``sim`` (as in the
-shipped files), ``/sim``, ``/**/sim`` or ``<namespace>/sim`` configures the simulator, and likewise
-``comparator`` and ``recorder``; ``/**`` applies to all three. (rcl itself would apply a ``sim:``
-section only to the node ``/sim``, not to ``/ast1/sim``: the launch file hands each node its own
-sections under the ``/**`` key, in a file of its own.)
+The params file's node sections apply whatever the namespace: a section keyed ``/**/sim`` (as in
+the shipped files), ``sim``, ``/sim`` or ``<namespace>/sim`` configures the simulator, and likewise
+``comparator`` and ``recorder``; ``/**`` applies to all three. (rcl itself applies ``sim:`` and
+``/sim:`` only to the node ``/sim``, not to ``/ast1/sim``.) Each node gets one params file of its
+own, written at launch time and removed when the launch ends: its sections, then the values above.
 """
 import os
 import re
@@ -32,7 +32,9 @@ import tempfile
 
 from ament_index_python.packages import get_package_share_directory
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, GroupAction, OpaqueFunction, Shutdown
+from launch.actions import DeclareLaunchArgument, GroupAction, OpaqueFunction
+from launch.actions import RegisterEventHandler, Shutdown
+from launch.event_handlers import OnShutdown
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node, PushROSNamespace
 import yaml
@@ -141,18 +143,29 @@ def launch_setup(context):
     if arg('output'):
         overrides['recorder']['output'] = arg('output')
 
-    nodes = []
+    nodes, files = [], []
     for node in NODES:
-        parameters = [params_file(node, sections[node])] if sections[node] else []
+        # One file per node: its sections of the scenario file, then the launch's values.
+        files.append(params_file(node, {**sections[node], **overrides[node]}))
         nodes.append(Node(
             package=PACKAGE, executable=node, name=node, output='screen',
-            parameters=parameters + [overrides[node]],
+            parameters=[files[-1]],
             # The simulator publishes the absolute /clock: keep it in the namespace.
             remappings=[('/clock', 'clock')],
             on_exit=_stop_all,
         ))
     actions = [PushROSNamespace(pushed)] if pushed else []
-    return [GroupAction(actions + nodes, scoped=True)]
+    # The nodes read their params files at start-up: remove them when the launch ends.
+    cleanup = RegisterEventHandler(OnShutdown(on_shutdown=lambda event, context: _remove(files)))
+    return [GroupAction(actions + nodes, scoped=True), cleanup]
+
+
+def _remove(paths):
+    for path in paths:
+        try:
+            os.unlink(path)
+        except OSError:
+            pass
 
 
 def generate_launch_description():
