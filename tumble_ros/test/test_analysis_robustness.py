@@ -1,10 +1,12 @@
 """The analyze command on hostile or unusual input.
 
-Bounded work, no blocking, no writing through links or over existing files. Every refusal is one
-``ERROR:`` line and status 1 (docs/analysis.md, "Command").
+Bounded work, no blocking, no writing through links or over existing files, and recordings of
+simulators in ROS namespaces. Every refusal is one ``ERROR:`` line and status 1
+(docs/analysis.md, "Command").
 """
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 import struct
@@ -13,10 +15,14 @@ import sys
 import tracemalloc
 
 import lz4.frame
+from mcap.reader import make_reader
+import numpy as np
 import pytest
-from tumble_ros.analysis import load_recording, write_figures
+from test_analysis_support import write_recording
+from tumble_ros.analysis import analyze, load_recording, write_figures
 from tumble_ros.analysis.cli import command
-from tumble_ros.io import McapError, read_messages, summarize
+from tumble_ros.core import Scenario
+from tumble_ros.io import McapError, McapWriter, read_messages, summarize
 import zstandard
 
 DATA = Path(__file__).resolve().parent / 'data'
@@ -271,3 +277,146 @@ def test_python_api_refuses_existing_figures_unless_told(tmp_path):
     (tmp_path / 'link').symlink_to(tmp_path)
     with pytest.raises(FigurePathError):
         write_figures(rec, tmp_path / 'link', overwrite=True)
+
+
+# -- namespaces -----------------------------------------------------------------------------------
+
+def _copy_into(writer: McapWriter, source: Path, namespace: str, channels: dict) -> None:
+    """Copy every message of ``source`` into ``writer``, its topic moved into ``namespace``.
+
+    ``/clock`` stays global, as the simulator publishes it.
+    """
+    with open(source, 'rb') as stream:
+        for schema, channel, message in make_reader(stream).iter_messages():
+            topic = channel.topic if channel.topic == '/clock' else namespace + channel.topic
+            if topic not in channels:
+                channels[topic] = writer.add_channel(topic, schema.name)
+            writer.write(channels[topic], message.data, message.log_time, message.publish_time)
+
+
+def _namespaced(path: Path, sources: list[tuple[Path, str]]) -> Path:
+    """Write one file holding the recordings ``sources``, each moved into its namespace."""
+    with McapWriter(path, chunk_bytes=4096) as writer:
+        channels: dict[str, int] = {}
+        for source, namespace in sources:
+            _copy_into(writer, source, namespace, channels)
+    return path
+
+
+def _simulator_run(path: Path, frequency: float) -> Path:
+    """Write a recording as the simulator and the comparator publish it.
+
+    wx at ``frequency`` rad/yr, a comparator with a known error, one impact, the scenario.
+    """
+    t = np.arange(400) * 0.002
+    omega = np.stack([np.cos(frequency * t), np.sin(frequency * t), np.full_like(t, 30.0)], -1)
+    model = omega.copy()
+    model[:, 0] += 0.01 * frequency * t
+    impacts = [{'id': 1, 'start': 0.4, 'end': 0.4 + 3e-7, 'torque': (0, 1e6, 0),
+                'delta_omega': (0, 0.3, 0)}]
+    quaternion = np.stack([np.cos(t), np.zeros_like(t), np.zeros_like(t), np.sin(t)], -1)
+    return write_recording(path, t, omega, model=model, impacts=impacts, quaternion=quaternion,
+                           scenario=Scenario(duration=0.8))
+
+
+@pytest.fixture(scope='module')
+def runs(tmp_path_factory):
+    """Record two simulator runs without a namespace, wx at 100 and at 300 rad/yr."""
+    d = tmp_path_factory.mktemp('runs')
+    return _simulator_run(d / 'one.mcap', 100.0), _simulator_run(d / 'two.mcap', 300.0)
+
+
+def _dominant(out: str) -> float:
+    line = next(x for x in out.splitlines() if x.strip().startswith('1. '))
+    return float(line.split()[1])
+
+
+def test_recording_in_a_namespace_is_found_and_analysed_like_without(tmp_path, capsys, runs):
+    plain = runs[0]
+    path = _namespaced(tmp_path / 'ast1.mcap', [(plain, '/ast1')])
+    assert command([str(path)]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[1] == 'namespace: /ast1'
+    assert '400 samples of /ast1/angular_velocity' in out
+    assert 'from /ast1/comparison/error_norm' in out and 'attitude from /ast1/attitude' in out
+    assert 'seconds_per_year = 1 (from /ast1/scenario)' in out
+    assert 'WARNING' not in out and 'note:' not in out
+    ns, root = analyze(load_recording(path)), analyze(load_recording(plain))
+    assert ns.namespace == '/ast1' and root.namespace == '/'
+    assert ns.sampling == root.sampling and ns.impacts == root.impacts
+    assert ns.comparator.max_abs == root.comparator.max_abs
+    assert ns.invariant.segments == root.invariant.segments
+    assert ns.spectrum.peaks == root.spectrum.peaks
+    assert abs(_dominant(out) - 100.0) < ns.spectrum.resolution
+    # Without a namespace, as before: no namespace line, the root names.
+    assert command([str(plain)]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[1].startswith('file: finalised')
+    assert '400 samples of /angular_velocity' in out and '(from /scenario)' in out
+
+
+def test_two_namespaces_in_one_file_need_namespace(tmp_path, capsys, runs):
+    path = _namespaced(tmp_path / 'both.mcap', [(runs[0], '/ast1'), (runs[1], '/ast2')])
+    assert command([str(path)]) == 1
+    assert _one_error_line(capsys) == (f'ERROR: {path}: the tumble topics are in 2 namespaces: '
+                                       f'/ast1, /ast2; choose one with --namespace')
+    for namespace, frequency in (('/ast1', 100.0), ('ast2', 300.0), ('/ast2/', 300.0)):
+        assert command([str(path), '--namespace', namespace]) == 0
+        out = capsys.readouterr().out
+        name = '/' + namespace.strip('/')
+        assert f'namespace: {name}\n' in out and f'samples of {name}/angular_velocity' in out
+        assert abs(_dominant(out) - frequency) < 2 * math.pi / 0.8
+        assert 'WARNING' not in out
+
+
+def test_figures_of_one_namespace(tmp_path, capsys, runs):
+    path = _namespaced(tmp_path / 'both.mcap', [(runs[0], '/ast1'), (runs[1], '/ast2')])
+    for namespace in ('/ast1', '/ast2'):
+        out_dir = tmp_path / namespace.strip('/')
+        assert command([str(path), '--namespace', namespace, '--figures', str(out_dir)]) == 0
+        names = sorted(p.name for p in out_dir.iterdir())
+        assert names == ['error.png', 'impact_0_id1.png', 'omega.png', 'spectrum_wx.png',
+                         'wy_vs_wx.png']
+    capsys.readouterr()
+
+
+def test_root_namespace_beside_a_namespace(tmp_path, capsys, runs):
+    path = _namespaced(tmp_path / 'mixed.mcap', [(runs[0], ''), (runs[1], '/ast2')])
+    assert command([str(path)]) == 1
+    assert 'the tumble topics are in 2 namespaces: /, /ast2;' in _one_error_line(capsys)
+    assert command([str(path), '--namespace', '/', '--json']) == 0
+    assert '"namespace": "/"' in capsys.readouterr().out
+
+
+def test_namespace_without_the_topics(tmp_path, capsys, runs):
+    path = _namespaced(tmp_path / 'both.mcap', [(runs[0], '/ast1'), (runs[1], '/ast2')])
+    assert command([str(path), '--namespace', '/ast3']) == 1
+    assert _one_error_line(capsys) == (f'ERROR: {path}: no /ast3/angular_velocity topic in '
+                                       f'namespace /ast3 (namespaces with the tumble topics: '
+                                       f'/ast1, /ast2)')
+    assert command([str(GOLDEN), '--namespace', '/ast1']) == 1
+    assert 'no /ast1/angular_velocity topic in namespace /ast1 (namespaces with the tumble ' \
+           'topics: /)' in _one_error_line(capsys)
+
+
+@pytest.mark.parametrize('bad', ['a b', '/1ast', '/ast-1'])
+def test_invalid_namespace_option(capsys, bad):
+    assert command([str(GOLDEN), '--namespace', bad]) == 1
+    assert _one_error_line(capsys) == (f'ERROR: --namespace: not a ROS namespace: {bad!r} (each '
+                                       f'name in it is letters, digits and _, not starting with '
+                                       f'a digit)')
+
+
+def test_unrelated_angular_velocity_of_another_type_does_not_make_it_ambiguous(tmp_path, capsys):
+    """Only a namespace whose angular_velocity is a Vector3Stamped holds the tumble topics."""
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import Float64
+    t = np.arange(50) * 0.01
+    plain = write_recording(
+        tmp_path / 'extra.mcap', t, np.ones((50, 3)),
+        extra_topics=[('/wheel/angular_velocity', 'std_msgs/msg/Float64', 0,
+                       serialize_message(Float64(data=1.0)))])
+    path = _namespaced(tmp_path / 'ns.mcap', [(plain, '/ast1')])
+    assert '/ast1/wheel/angular_velocity' in summarize(path).topics
+    assert command([str(path)]) == 0
+    assert 'samples of /ast1/angular_velocity' in capsys.readouterr().out

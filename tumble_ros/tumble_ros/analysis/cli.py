@@ -3,13 +3,15 @@
     python -m tumble_ros.analysis RUN.mcap                     # text summary on stdout
     python -m tumble_ros.analysis RUN.mcap --json              # the same as JSON
     python -m tumble_ros.analysis RUN.mcap --figures figs/     # and PNG figures into figs/
+    python -m tumble_ros.analysis RUN.mcap --namespace /ast1   # the simulator of /ast1
 
 Exit status: 0 on success (warnings included), 1 on a user error (a missing, empty,
 truncated-before-any-chunk or non-MCAP file, a path that is not a regular file, a damaged
-chunk, a recording without /angular_velocity, a figure that exists (without --overwrite) or a
-symbolic link in the way, a figure directory that cannot be written, bad options), reported as
-one ``ERROR: ...`` line on stderr, never a traceback. Progress for big files (>= 100,000
-messages) goes to stderr (``--quiet`` turns it off).
+chunk, a recording without /angular_velocity, the tumble topics in several namespaces and no
+--namespace, a figure that exists (without --overwrite) or a symbolic link in the way, a
+figure directory that cannot be written, bad options), reported as one ``ERROR: ...`` line on
+stderr, never a traceback. Progress for big files (>= 100,000 messages) goes to stderr
+(``--quiet`` turns it off).
 """
 from __future__ import annotations
 
@@ -19,7 +21,7 @@ import sys
 
 from tumble_ros.io import McapError
 
-from .recording import AnalysisError, load_recording, stderr_progress
+from .recording import AnalysisError, load_recording, normalize_namespace, stderr_progress
 from .summary import analyze, format_summary, summary_to_dict
 
 __all__ = ['command', 'main']
@@ -51,6 +53,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--overwrite', action='store_true',
                         help='with --figures: replace figure files that exist (links are '
                              'still refused)')
+    parser.add_argument('--namespace', metavar='NS', default=None,
+                        help='the ROS namespace of the simulator to analyse, e.g. /ast1 '
+                             '("/" for none); default: the only one in the file')
     parser.add_argument('--json', action='store_true',
                         help='print the summary as JSON instead of text')
     parser.add_argument('--peaks', type=int, default=5, metavar='N',
@@ -83,6 +88,11 @@ def _check_options(args) -> str | None:
         return f'--peaks must be >= 1, got {args.peaks}'
     if args.overwrite and args.figures is None:
         return '--overwrite needs --figures DIR'
+    if args.namespace is not None:
+        try:
+            args.namespace = normalize_namespace(args.namespace)
+        except AnalysisError as err:
+            return f'--namespace: {err}'
     return None
 
 
@@ -100,7 +110,7 @@ def command(argv=None) -> int:
         return _error(problem)
     try:
         progress = None if args.quiet else stderr_progress()
-        rec = load_recording(args.file, progress=progress)
+        rec = load_recording(args.file, namespace=args.namespace, progress=progress)
         summary = analyze(rec, n_peaks=args.peaks)
         figures = [] if args.figures is None else _figures(rec, summary, args)
     except (McapError, AnalysisError) as err:

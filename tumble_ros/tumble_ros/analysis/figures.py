@@ -40,7 +40,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .recording import AnalysisError, Recording
+from .recording import AnalysisError, Recording, ROOT_NAMESPACE
 from .summary import AnalysisSummary, analyze, impact_intervals, spectrum, theory_lines
 
 __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
@@ -157,8 +157,15 @@ def _write(drawings: list[Drawing], out_dir, overwrite: bool) -> list[Path]:
         os.close(dir_fd)
 
 
+def _label(rec: Recording) -> str:
+    """Name the file, and the namespace analysed unless it is the root."""
+    if rec.namespace == ROOT_NAMESPACE:
+        return rec.path.name
+    return f'{rec.path.name} {rec.namespace}'
+
+
 def _title(rec: Recording) -> str:
-    text = rec.path.name
+    text = _label(rec)
     sc = rec.scenario
     if sc is not None:
         ix, _, iz = sc.inertia
@@ -214,7 +221,7 @@ def _draw_wy_vs_wx(rec: Recording) -> list[Drawing]:
     ax.set_ylabel(f'{_LABELS[1]} [rad/yr]')
     ax.grid(True, lw=0.3)
     ax.legend(loc='upper right', fontsize='small')
-    ax.set_title(f'{rec.path.name}: $\\omega_y$ vs $\\omega_x$, t = {rec.t[0]:.4g} .. '
+    ax.set_title(f'{_label(rec)}: $\\omega_y$ vs $\\omega_x$, t = {rec.t[0]:.4g} .. '
                  f'{rec.t[-1]:.4g} yr', fontsize='small')
     return [_png(fig, 'wy_vs_wx.png')]
 
@@ -249,7 +256,7 @@ def _draw_error(rec: Recording) -> list[Drawing]:
         ax.grid(True, lw=0.3)
     models = ', '.join(rec.error_models) or (rec.comparator_status.values.get('model', '')
                                              if rec.comparator_status else '')
-    ax1.set_title(f'{rec.path.name}: numeric - analytic model {models}', fontsize='small')
+    ax1.set_title(f'{_label(rec)}: numeric - analytic model {models}', fontsize='small')
     return [_png(fig, 'error.png')]
 
 
@@ -289,7 +296,7 @@ def _draw_impacts(rec: Recording, samples: int = 25) -> list[Drawing]:
         axes[-1].set_xlabel('t [yr]')
         d = event.delta_omega
         axes[0].set_title(
-            f'{rec.path.name}: impact {event.id}, {event.frame} torque '
+            f'{_label(rec)}: impact {event.id}, {event.frame} torque '
             f'({event.torque[0]:.3g}, {event.torque[1]:.3g}, {event.torque[2]:.3g}) for '
             f'{event.duration:.3g} yr; $\\Delta\\omega$ = ({d[0]:.4g}, {d[1]:.4g}, {d[2]:.4g}) '
             f'rad/yr', fontsize='small')
@@ -333,7 +340,7 @@ def _draw_spectrum(rec: Recording, summary: AnalysisSummary | None) -> list[Draw
     ax.set_ylabel('amplitude [rad/yr]')
     ax.grid(True, lw=0.3)
     ax.legend(loc='upper right', fontsize='x-small')
-    ax.set_title(f'{rec.path.name}: spectrum of {spec.component}, resolution '
+    ax.set_title(f'{_label(rec)}: spectrum of {spec.component}, resolution '
                  f'{spec.resolution:.3g} rad/yr', fontsize='small')
     return [_png(fig, f'spectrum_{spec.component}.png')]
 

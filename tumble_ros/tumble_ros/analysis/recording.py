@@ -17,12 +17,19 @@ None. Only ``/angular_velocity`` is required (:class:`AnalysisError` otherwise).
 failures (missing, empty, not MCAP, truncated before the first complete chunk, undecodable
 message) are :class:`tumble_ros.io.McapError`. A file truncated after some complete chunks
 loads what it holds; ``finalised`` is then False and ``problem`` says why reading stopped.
+
+Namespaces: the topic constants below are the names in the root namespace ``/``; a simulator
+started in a namespace (``--ros-args -r __ns:=/ast1``) publishes ``/ast1/angular_velocity``, ...
+:func:`topic_name` is the one place that puts a namespace in front of a name. ``load_recording``
+reads one namespace: the one given, or the only one whose ``angular_velocity`` topic is in the
+file (:func:`find_namespaces`); with several it refuses and lists them.
 """
 from __future__ import annotations
 
 import math
+import re
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,8 +41,9 @@ from tumble_ros.io import read_messages, summarize
 __all__ = [
     'ANGULAR_VELOCITY', 'ATTITUDE', 'EULER_ANGLES', 'IMPACT_EVENTS', 'SCENARIO', 'STATUS',
     'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM', 'COMPARISON_STATUS', 'EXPECTED_TYPES',
-    'AnalysisError', 'ImpactRecord', 'SegmentStart', 'StatusRecord', 'ComparatorStatus',
-    'Recording', 'load_recording', 'stderr_progress',
+    'ROOT_NAMESPACE', 'AnalysisError', 'ImpactRecord', 'SegmentStart', 'StatusRecord',
+    'ComparatorStatus', 'Recording', 'find_namespaces', 'load_recording', 'normalize_namespace',
+    'stderr_progress', 'topic_name',
 ]
 
 ANGULAR_VELOCITY = '/angular_velocity'
@@ -75,6 +83,65 @@ IMPACT_FRAMES = {0: 'body', 1: 'orbital'}
 class AnalysisError(Exception):
     """The file is a readable MCAP file but not something the analysis can work on
     (one-line message)."""
+
+
+# -- namespaces -------------------------------------------------------------------------------
+
+ROOT_NAMESPACE = '/'
+_NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
+
+
+def normalize_namespace(namespace: str) -> str:
+    """Return ``'/ast1'`` for ``'ast1'``, ``'/ast1/'`` or ``'/ast1'``; ``'/'`` for ``''``.
+
+    AnalysisError for a name that is not a ROS namespace.
+    """
+    tokens = [token for token in str(namespace).strip().split('/') if token]
+    bad = [token for token in tokens if not _NAME_TOKEN.fullmatch(token)]
+    if bad:
+        raise AnalysisError(f'not a ROS namespace: {namespace!r} (each name in it is letters, '
+                            f'digits and _, not starting with a digit)')
+    return '/' + '/'.join(tokens)
+
+
+def topic_name(namespace: str, topic: str) -> str:
+    """Return the full name of a tumble topic (``ANGULAR_VELOCITY``, ...) in ``namespace``."""
+    return namespace.rstrip('/') + topic
+
+
+def find_namespaces(topics: dict[str, str] | Iterable[str]) -> list[str]:
+    """Return the namespaces that hold an ``angular_velocity`` topic, sorted.
+
+    ``topics``: topic names, or a mapping topic -> type name; with types, only the namespaces
+    whose ``angular_velocity`` has the expected type count, unless none has.
+    """
+    types = topics if isinstance(topics, dict) else dict.fromkeys(topics)
+    found = {name[:-len(ANGULAR_VELOCITY)] or ROOT_NAMESPACE: type_name
+             for name, type_name in types.items() if name.endswith(ANGULAR_VELOCITY)}
+    typed = [ns for ns, type_name in found.items()
+             if type_name == EXPECTED_TYPES[ANGULAR_VELOCITY]]
+    return sorted(typed or found)
+
+
+def _choose_namespace(path: Path, types: dict[str, str], namespace: str | None) -> str:
+    """Return the namespace to analyse: ``namespace`` (normalised), or the only one."""
+    found = find_namespaces(types)
+    if namespace is not None:
+        namespace = normalize_namespace(namespace)
+        if topic_name(namespace, ANGULAR_VELOCITY) in types:
+            return namespace
+        where = (f'namespaces with the tumble topics: {", ".join(found)}' if found
+                 else f'topics: {", ".join(sorted(types)) or "none"}')
+        raise AnalysisError(f'{path}: no {topic_name(namespace, ANGULAR_VELOCITY)} topic in '
+                            f'namespace {namespace} ({where})')
+    if len(found) > 1:
+        raise AnalysisError(f'{path}: the tumble topics are in {len(found)} namespaces: '
+                            f'{", ".join(found)}; choose one with --namespace')
+    if not found:
+        present = ', '.join(sorted(types)) or 'none'
+        raise AnalysisError(f'{path}: no {ANGULAR_VELOCITY} topic: not a tumble_ros '
+                            f'simulator recording (topics: {present})')
+    return found[0]
 
 
 @dataclass(frozen=True)
@@ -136,7 +203,7 @@ class Recording:
     #: topic -> (type name, message count) of every topic in the file.
     topics: dict[str, tuple[str, int]]
     seconds_per_year: float
-    seconds_per_year_source: str            # '/scenario' or 'default'
+    seconds_per_year_source: str            # the scenario topic ('/scenario') or 'default'
     t: np.ndarray                           # (n,) [yr] of /angular_velocity
     omega: np.ndarray                       # (n, 3) [rad/yr]
     stamp_ns: np.ndarray                    # (n,) int64, the stamps of t
@@ -160,10 +227,16 @@ class Recording:
     status: list[StatusRecord] = field(default_factory=list)
     #: Topics present but skipped because their type is not the expected one.
     skipped: dict[str, str] = field(default_factory=dict)
+    #: The namespace whose topics were read ('/' for the root namespace).
+    namespace: str = ROOT_NAMESPACE
 
     @property
     def n(self) -> int:
         return len(self.t)
+
+    def topic(self, name: str) -> str:
+        """Return the full name of ``name`` (``ANGULAR_VELOCITY``, ...) in this namespace."""
+        return topic_name(self.namespace, name)
 
     @property
     def has_comparator(self) -> bool:
@@ -215,34 +288,44 @@ def _sorted(ns: list[int], rows: list, k: int) -> tuple[np.ndarray, np.ndarray]:
     return stamps[order], values[order]
 
 
-def load_recording(path, *, progress: Progress | None = None) -> Recording:
+def _select_topics(info, namespace: str | None
+                   ) -> tuple[str, dict[str, str], dict[str, str]]:
+    """Return (namespace, {full name: root name} of the topics to decode, {skipped: why})."""
+    types = {name: t.type_name for name, t in info.topics.items()}
+    namespace = _choose_namespace(info.path, types, namespace)
+    wanted: dict[str, str] = {}
+    skipped: dict[str, str] = {}
+    for topic, expected in EXPECTED_TYPES.items():
+        full = topic_name(namespace, topic)
+        if full not in types:
+            continue
+        if types[full] != expected:
+            skipped[full] = f'type {types[full]}, expected {expected}'
+        else:
+            wanted[full] = topic
+    velocity = topic_name(namespace, ANGULAR_VELOCITY)
+    if velocity in skipped:
+        raise AnalysisError(f'{info.path}: {velocity} has {skipped[velocity]}')
+    return namespace, wanted, skipped
+
+
+def load_recording(path, *, namespace: str | None = None,
+                   progress: Progress | None = None) -> Recording:
     """Read ``path`` once and return its :class:`Recording`.
 
+    ``namespace``: the ROS namespace of the topics to read (``'/ast1'``, ``'/'`` for the root);
+    None: the only namespace in the file that has an ``angular_velocity`` topic.
     Raises :class:`McapError` for an unreadable file and :class:`AnalysisError` when it has no
-    ``/angular_velocity`` messages (or that topic has another type). ``progress`` is called as
+    ``angular_velocity`` messages in that namespace (or that topic has another type), or when
+    ``namespace`` is None and several namespaces have them. ``progress`` is called as
     ``progress(done, total)`` while reading (``total`` from the file's statistics).
     """
     info = summarize(path)
     topics = {name: (t.type_name, t.message_count) for name, t in info.topics.items()}
-    skipped: dict[str, str] = {}
-    wanted: set[str] = set()
-    for topic, expected in EXPECTED_TYPES.items():
-        if topic not in topics:
-            continue
-        actual = topics[topic][0]
-        if actual != expected:
-            skipped[topic] = f'type {actual}, expected {expected}'
-        else:
-            wanted.add(topic)
-    if ANGULAR_VELOCITY in skipped:
-        raise AnalysisError(f'{info.path}: {ANGULAR_VELOCITY} has {skipped[ANGULAR_VELOCITY]}')
-    if ANGULAR_VELOCITY not in topics:
-        present = ', '.join(sorted(topics)) or 'none'
-        raise AnalysisError(f'{info.path}: no {ANGULAR_VELOCITY} topic: not a tumble_ros '
-                            f'simulator recording (topics: {present})')
+    namespace, wanted, skipped = _select_topics(info, namespace)
 
     # Raw columns, stamps as integer ns (seconds_per_year may only be known later in the file).
-    raw: dict[str, tuple[list[int], list]] = {topic: ([], []) for topic in wanted}
+    raw: dict[str, tuple[list[int], list]] = {topic: ([], []) for topic in wanted.values()}
     impacts_raw: list[tuple[int, object]] = []
     scenarios: list[tuple[int, object]] = []
     statuses: list[tuple[int, object]] = []
@@ -255,7 +338,7 @@ def load_recording(path, *, progress: Progress | None = None) -> Recording:
         done += 1
         if progress is not None and (done % 5000 == 0):
             progress(done, decoded_total)
-        topic, msg = record.topic, record.message
+        topic, msg = wanted[record.topic], record.message
         if topic in (ANGULAR_VELOCITY, EULER_ANGLES, MODEL_ANGULAR_VELOCITY, ERROR):
             ns, rows = raw[topic]
             ns.append(_ns(msg.header))
@@ -289,7 +372,7 @@ def load_recording(path, *, progress: Progress | None = None) -> Recording:
     for _, msg in scenarios:
         value = float(msg.seconds_per_year)
         if math.isfinite(value) and value > 0:
-            spy, spy_source = value, SCENARIO
+            spy, spy_source = value, topic_name(namespace, SCENARIO)
             break
     timebase = TimeBase(spy)
 
@@ -298,11 +381,13 @@ def load_recording(path, *, progress: Progress | None = None) -> Recording:
 
     stamps, omega = _sorted(*raw.get(ANGULAR_VELOCITY, ([], [])), 3)
     if len(stamps) == 0:
-        raise AnalysisError(f'{info.path}: {ANGULAR_VELOCITY} has no messages'
+        raise AnalysisError(f'{info.path}: {topic_name(namespace, ANGULAR_VELOCITY)} has no '
+                            f'messages'
                             + ('' if info.finalised else f' (file truncated: {info.problem})'))
     rec = Recording(path=info.path, finalised=info.finalised, problem=info.problem,
                     topics=topics, seconds_per_year=spy, seconds_per_year_source=spy_source,
-                    t=years(stamps), omega=omega, stamp_ns=stamps, skipped=skipped)
+                    t=years(stamps), omega=omega, stamp_ns=stamps, skipped=skipped,
+                    namespace=namespace)
     if EULER_ANGLES in raw:
         ns, rec.euler = _sorted(*raw[EULER_ANGLES], 3)
         rec.euler_t = years(ns)

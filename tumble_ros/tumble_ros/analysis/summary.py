@@ -22,7 +22,8 @@ from tumble_ros.core.analytic import COS_THETA_TOL, SYMMETRY_TOL
 from tumble_ros.core.rotation import euler_to_matrix, quaternion_to_matrix
 
 from .recording import (ANGULAR_VELOCITY, ATTITUDE, ERROR, ERROR_NORM, EULER_ANGLES,
-                        MODEL_ANGULAR_VELOCITY, ImpactRecord, Recording)
+                        MODEL_ANGULAR_VELOCITY, ROOT_NAMESPACE, SCENARIO, ImpactRecord,
+                        Recording, topic_name)
 
 __all__ = [
     'AliasingCheck', 'AnalysisSummary', 'ErrorStats', 'ImpactSummary', 'InvariantDrift',
@@ -118,11 +119,11 @@ def comparator_errors(rec: Recording) -> tuple[ErrorStats | None, str | None]:
     vectors = None
     if len(rec.error_norm):
         t, norm, rel = rec.norm_t, rec.error_norm, rec.error_relative
-        source = ERROR_NORM
+        source = rec.topic(ERROR_NORM)
         if len(rec.error_t):
             vectors = rec.error
     elif len(rec.error_t):
-        t, vectors, source = rec.error_t, rec.error, ERROR
+        t, vectors, source = rec.error_t, rec.error, rec.topic(ERROR)
         norm = np.linalg.norm(vectors, axis=1)
         rel = np.full(len(t), np.nan)
         ia, ib = _match(t, rec.t)
@@ -130,16 +131,16 @@ def comparator_errors(rec: Recording) -> tuple[ErrorStats | None, str | None]:
     elif len(rec.model_t):
         ia, ib = _match(rec.model_t, rec.t)
         if len(ia) == 0:
-            return None, (f'{MODEL_ANGULAR_VELOCITY} has no sample at a stamp of '
-                          f'{ANGULAR_VELOCITY}')
+            return None, (f'{rec.topic(MODEL_ANGULAR_VELOCITY)} has no sample at a stamp of '
+                          f'{rec.topic(ANGULAR_VELOCITY)}')
         t = rec.t[ib]
         vectors = rec.omega[ib] - rec.model_omega[ia]
-        source = f'{ANGULAR_VELOCITY} - {MODEL_ANGULAR_VELOCITY}'
+        source = f'{rec.topic(ANGULAR_VELOCITY)} - {rec.topic(MODEL_ANGULAR_VELOCITY)}'
         norm = np.linalg.norm(vectors, axis=1)
         with np.errstate(divide='ignore', invalid='ignore'):
             rel = norm / np.linalg.norm(rec.omega[ib], axis=1)
     else:
-        reason = 'no comparator topics (/comparison/*) in the recording'
+        reason = f'no comparator topics ({rec.topic("/comparison/*")}) in the recording'
         if rec.comparator_status is not None:
             reason = (f'the comparator published no errors; its last status: '
                       f'{rec.comparator_status.level}: {rec.comparator_status.message}')
@@ -214,12 +215,12 @@ def _attitude_matrices(rec: Recording) -> tuple[np.ndarray, np.ndarray, str] | N
         if len(ia):
             q = rec.quaternion[ib].T                 # (4, k): quaternion_to_matrix broadcasts
             c = np.moveaxis(quaternion_to_matrix(q), -1, 0)
-            return ia, c, ATTITUDE
+            return ia, c, rec.topic(ATTITUDE)
     if len(rec.euler_t):
         ia, ib = _match(rec.t, rec.euler_t)
         if len(ia):
             c = np.stack([euler_to_matrix(*e).T for e in rec.euler[ib]])
-            return ia, c, EULER_ANGLES
+            return ia, c, rec.topic(EULER_ANGLES)
     return None
 
 
@@ -228,14 +229,14 @@ def jacobi_drift(rec: Recording) -> tuple[InvariantDrift | None, str | None]:
     jacobi_integral) at every sample that has both w and the attitude, split into segments at
     the impacts (samples inside a pulse are left out); per segment max |J - J(first)|."""
     if rec.scenario is None:
-        why = 'no /scenario in the recording (inertia and orbit rate unknown)'
+        why = f'no {rec.topic(SCENARIO)} in the recording (inertia and orbit rate unknown)'
         if rec.scenario_error:
-            why = f'/scenario could not be parsed: {rec.scenario_error}'
+            why = f'{rec.topic(SCENARIO)} could not be parsed: {rec.scenario_error}'
         return None, why
     found = _attitude_matrices(rec)
     if found is None:
-        return None, (f'no attitude at the stamps of {ANGULAR_VELOCITY} '
-                      f'(neither {ATTITUDE} nor {EULER_ANGLES})')
+        return None, (f'no attitude at the stamps of {rec.topic(ANGULAR_VELOCITY)} '
+                      f'(neither {rec.topic(ATTITUDE)} nor {rec.topic(EULER_ANGLES)})')
     idx, c, source = found
     t, w = rec.t[idx], rec.omega[idx]
     j = jacobi_integral(t, w, c, rec.scenario.inertia, rec.scenario.orbit_rate)
@@ -524,6 +525,7 @@ class AnalysisSummary:
     aliasing: AliasingCheck
     warnings: tuple[str, ...]
     notes: tuple[str, ...]
+    namespace: str = ROOT_NAMESPACE          # the ROS namespace whose topics were analysed
 
 
 def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
@@ -537,14 +539,14 @@ def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
         notes.append(f'{topic} skipped: {why}')
     samp = sampling(rec.t)
     if samp.duplicates:
-        warnings.append(f'{samp.duplicates} repeated stamps on {ANGULAR_VELOCITY} (two runs in '
-                        f'one file?)')
+        warnings.append(f'{samp.duplicates} repeated stamps on {rec.topic(ANGULAR_VELOCITY)} '
+                        f'(two runs in one file?)')
     if samp.gaps:
-        notes.append(f'{samp.gaps} gaps longer than 1.5 dt in {ANGULAR_VELOCITY}')
+        notes.append(f'{samp.gaps} gaps longer than 1.5 dt in {rec.topic(ANGULAR_VELOCITY)}')
     if rec.seconds_per_year_source == 'default':
-        notes.append('no /scenario: seconds_per_year = 1 assumed')
+        notes.append(f'no {rec.topic(SCENARIO)}: seconds_per_year = 1 assumed')
     if rec.scenario_error:
-        warnings.append(f'/scenario could not be parsed: {rec.scenario_error}')
+        warnings.append(f'{rec.topic(SCENARIO)} could not be parsed: {rec.scenario_error}')
 
     final_status = None
     if rec.status:
@@ -577,7 +579,7 @@ def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
         comparator=comparator, comparator_note=comparator_note,
         invariant=invariant, invariant_note=invariant_note, impacts=tuple(impact_summaries(rec)),
         theory_basis=basis, theory=tuple(lines), spectrum=spec, aliasing=aliasing,
-        warnings=tuple(warnings), notes=tuple(notes))
+        warnings=tuple(warnings), notes=tuple(notes), namespace=rec.namespace)
 
 
 # -- rendering --------------------------------------------------------------------------------
@@ -595,6 +597,8 @@ def _v(v, digits: int = 6) -> str:
 def format_summary(s: AnalysisSummary) -> str:
     """The summary as text (one WARNING: line per warning, at the end)."""
     out = [f'recording: {s.path}']
+    if s.namespace != ROOT_NAMESPACE:
+        out.append(f'namespace: {s.namespace}')
     state = 'finalised' if s.finalised else f'TRUNCATED ({s.problem})'
     total = sum(count for _, count in s.topics.values())
     out.append(f'file: {state}, {len(s.topics)} topics, {total} messages')
@@ -606,10 +610,12 @@ def format_summary(s: AnalysisSummary) -> str:
     dt = (f'dt = {_g(p.dt)} yr' + (' (uniform)' if p.uniform else
                                    f' (median; {_g(p.dt_min)} .. {_g(p.dt_max)})')
           if p.dt is not None else 'one sample')
-    out.append(f'simulated time: {p.n} samples of {ANGULAR_VELOCITY}, t = {_g(p.t_first)} .. '
+    out.append(f'simulated time: {p.n} samples of {topic_name(s.namespace, ANGULAR_VELOCITY)}, '
+               f't = {_g(p.t_first)} .. '
                f'{_g(p.t_last)} yr, duration {_g(p.duration)} yr, {dt}')
+    source = s.seconds_per_year_source
     out.append(f'time base: seconds_per_year = {_g(s.seconds_per_year)} '
-               f'({"from /scenario" if s.seconds_per_year_source != "default" else "default"})')
+               f'({"default" if source == "default" else f"from {source}"})')
     if s.scenario is not None:
         sc = s.scenario
         out.append(f"scenario: inertia {_v(sc['inertia'])}, orbit_rate {_g(sc['orbit_rate'])} "
@@ -619,7 +625,7 @@ def format_summary(s: AnalysisSummary) -> str:
                    f"{len(sc['impacts.start'])} scheduled impact(s)")
     else:
         out.append('scenario: none' + (f' ({s.scenario_error})' if s.scenario_error else
-                                       ' (no /scenario topic)'))
+                                       f' (no {topic_name(s.namespace, SCENARIO)} topic)'))
     if s.final_status:
         out.append(f'simulator status: {s.final_status}')
 
