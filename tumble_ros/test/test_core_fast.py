@@ -89,18 +89,19 @@ def test_incremental_api_is_the_same_on_both_paths(method):
 
 @needs_numba
 def test_failures_are_reported_the_same_way():
-    sc = Scenario(inertia=(1.0, 1.6, 2.2), omega0=(1e100, 2e100, 1e100), duration=1.0,
+    # (|omega0| is bounded: a torque pulse of 1e300, which only needs to be finite, makes the
+    # state overflow within the first step)
+    sc = Scenario(inertia=(1.0, 1.6, 2.2), impacts=(Impact(0.0, 0.5, (1e300, 1e300, 1e300)),), duration=1.0,
                   integrator=IntegratorSettings(method="rk4", step=0.1))
-    fast, ref = simulate(sc, t_eval=[0.0, 0.5, 1.0], fast=True), simulate(sc, t_eval=[0.0, 0.5, 1.0], fast=False)
+    with np.errstate(all="ignore"):
+        fast, ref = simulate(sc, t_eval=[0.0, 0.5, 1.0], fast=True), simulate(sc, t_eval=[0.0, 0.5, 1.0], fast=False)
     assert not fast.success and fast.message == ref.message and "non-finite" in fast.message
     np.testing.assert_array_equal(fast.omega, ref.omega)
     with np.errstate(all="ignore"):
-        sc = sc.replace(integrator=IntegratorSettings(method="dop853", rtol=1e-13, atol=1e-300),
-                        omega0=(1e150, 1e150, 1e150))
+        sc = sc.replace(integrator=IntegratorSettings(method="dop853", rtol=1e-13, atol=1e-300))
         fast, ref = simulate(sc, t_eval=[0.0, 1.0], fast=True), simulate(sc, t_eval=[0.0, 1.0], fast=False)
     assert not fast.success and fast.message == ref.message, (fast.message, ref.message)
-    prop = Propagator(sc.replace(integrator=IntegratorSettings(method="splitting", step=0.1),
-                                 omega0=(1e200, 1e200, 1e200)), fast=True)
+    prop = Propagator(sc.replace(integrator=IntegratorSettings(method="splitting", step=0.1)), fast=True)
     with pytest.raises(IntegrationError, match="non-finite"):
         prop.advance_to(1.0)
     assert prop.status == "failed"

@@ -38,13 +38,18 @@ def test_bad_scale_refused(bad):
 
 
 def test_grid_is_rounded_to_whole_nanoseconds():
-    interval_ns, n = TimeBase(1.0).sample_grid(1e-10, 1e-8)
+    interval_ns, n = TimeBase(1.0).sample_grid(1.4e-9, 1e-8)
     assert interval_ns == 1 and n == 11
     assert np.isclose(TimeBase(2.0).sample_grid(0.5, 2.0)[0], 1e9)
+    with pytest.raises(ValueError, match="^output_interval:.*1 ns"):  # below a nanosecond: refused
+        TimeBase(1.0).sample_grid(1e-10, 1e-8)
 
 
-@pytest.mark.parametrize("duration", [0.3, 0.29999999999999999, 0.1 + 0.2, 2.0 / 3.0, 1e-9 * 7])
+# (seconds_per_year = 0.01: 1e-7 yr is 1 ns, and a grid over 0.3 yr has 3e6 samples, within
+# MAX_SAMPLES)
+@pytest.mark.parametrize("duration", [0.3, 0.29999999999999999, 0.1 + 0.2, 2.0 / 3.0, 1e-7 * 7])
 def test_grid_never_passes_the_end(duration):
-    tb = TimeBase(1.0)
-    interval_ns, n = tb.sample_grid(1e-9, duration)
+    tb = TimeBase(0.01)
+    interval_ns, n = tb.sample_grid(1e-7, duration)
+    assert interval_ns == 1
     assert tb.to_years((n - 1) * interval_ns) <= duration < tb.to_years(n * interval_ns)

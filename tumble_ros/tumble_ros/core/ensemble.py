@@ -44,7 +44,7 @@ from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import INTEGRATORS
 from .integrators.compiled import failure_message, why_no_fast_path
 from .propagator import quaternions_to_matrices, segment_torques
-from .scenario import Impact, IntegratorSettings, Scenario, ScenarioError, load_scenario
+from .scenario import MAX_OMEGA, MAX_ROTATION, Impact, IntegratorSettings, Scenario, ScenarioError, load_scenario
 from .simulate import _check_times, simulate
 
 __all__ = ["EnsembleResult", "simulate_ensemble", "ensemble_scenarios", "random_impacts",
@@ -110,6 +110,14 @@ def _bodies(scenario, impacts, omega0, euler0, n_bodies):
         omega0 = np.asarray(omega0, dtype=float)
         if omega0.shape != (n, 3) or not np.all(np.isfinite(omega0)):
             raise ScenarioError(f"omega0: must be a finite (N, 3) array, got shape {omega0.shape}")
+        # the bounds of Scenario (every body of the reference path is one), checked here for the
+        # compiled path too
+        fastest = float(np.max(np.linalg.norm(omega0, axis=1)))
+        if fastest > MAX_OMEGA:
+            raise ScenarioError(f"omega0: |omega0| = {fastest:.3g} rad/yr exceeds {MAX_OMEGA:g} rad/yr")
+        if fastest * scenario.duration > MAX_ROTATION:
+            raise ScenarioError(f"duration: a body turns by |omega0| * duration = {fastest * scenario.duration:.3g} "
+                                f"rad, above {MAX_ROTATION:.0e} rad")
     if euler0 is not None:
         euler0 = np.asarray(euler0, dtype=float)
         if euler0.shape != (n, 3) or not np.all(np.isfinite(euler0)):

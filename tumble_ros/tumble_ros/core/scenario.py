@@ -33,6 +33,7 @@ __all__ = [
     "IMPACT_FRAMES",
     "ImpactLimits",
     "PARAMETER_DOCS",
+    "time_resolution",
     "load_scenario",
     "parse_scenario",
     "dump_scenario",
@@ -40,6 +41,42 @@ __all__ = [
 
 IMPACT_FRAMES = ("body", "orbital")
 MIN_RTOL, MAX_RTOL = 100 * 2.220446049250313e-16, 0.1  # scipy raises smaller rtol to 100 eps
+
+# -- Validated ranges (docs/physics.md, "Validated ranges"). Every bound keeps a run physically
+# meaningful and its work finite; none is near a value the paper or a real asteroid needs.
+
+#: Orbital rate ws [rad/yr]: 0 (no torque) or within [MIN, MAX]. Real heliocentric circular
+#: orbits: 2 pi / P, from ~2e-7 rad/yr (Oort cloud, 1e5 AU, P ~ 3e7 yr) to ~2e4 rad/yr (an orbit
+#: grazing the Sun's surface, P ~ 2.8 h); the bounds leave two orders of magnitude on each side.
+#: ws = 1e300 made 3 ws^2 infinite and the right-hand side NaN.
+MIN_ORBIT_RATE, MAX_ORBIT_RATE = 1e-9, 1e6
+#: Largest |omega0| [rad/yr]. The fastest known asteroids spin in a few seconds (~1e8 rad/yr);
+#: 1e10 rad/yr (a period of 0.02 s) leaves 100x. Every method needs at least a step per
+#: radian or so of rotation, so the work per simulated year grows with |omega|.
+MAX_OMEGA = 1e10
+#: Largest absolute tolerance: the state holds the unit quaternion (components <= 1), so an
+#: atol of 0.1 already accepts errors of a tenth of the attitude itself (as MAX_RTOL does for
+#: every component). atol = 1e300 accepted any step: the state ran away.
+MAX_ATOL = 0.1
+#: Longest run [yr]: the model (rigid body, fixed circular orbit, no YORP, no orbital
+#: evolution) means nothing over a fraction of the solar system's age (4.6e9 yr); at
+#: t = 1e9 yr float64 still resolves 1.2e-7 yr, below the paper's 3e-7-yr pulses.
+MAX_DURATION = 1e9
+#: Most integration steps of a fixed-step run (duration / step) and smallest duration /
+#: max_step of an adaptive one: 1e10 steps take ~40 min (rk4) to ~4 h (splitting6) compiled and
+#: weeks on the reference path; more is a typo, not a simulation.
+MAX_STEPS = 10**10
+#: Most output samples (duration / output_interval + 1): simulate() keeps ~230 bytes per
+#: sample (2.3 GB at the bound) and the ROS node publishes ~2,000 samples/s (1.4 h).
+MAX_SAMPLES = 10**7
+#: Largest max(|omega0|, orbit_rate) * duration [rad]: φ and ψ are followed at least every
+#: radian of rotation (Propagator._track_euler) and the torque turns with the orbit, so a run
+#: costs at least this many units of work; 1e10 matches MAX_STEPS.
+MAX_ROTATION = 1e10
+#: An interval (a step, an impact pulse) must span at least this many units in the last place
+#: of the time it ends at: shorter ones are what the integrators' step-collapse test refuses
+#: (integrators.base._MIN_STEP_ULPS), and t + dt rounds to t for dt < 1/2 ulp.
+RESOLUTION_ULPS = 16
 
 
 class ScenarioError(ValueError):
@@ -83,6 +120,26 @@ def _set(obj, name: str, value: Any) -> None:
     object.__setattr__(obj, name, value)
 
 
+def time_resolution(t: float) -> float:
+    """Shortest interval [yr] that float64 times resolve at time ``t`` (RESOLUTION_ULPS ulp of
+    max(|t|, 1): the integrators' collapse test counts a step from t = 0 against ulp(1))."""
+    return RESOLUTION_ULPS * math.ulp(max(abs(t), 1.0))
+
+
+def _check_step(name: str, step: float, duration: float) -> None:
+    """A fixed step (or an adaptive method's max_step) that float64 resolves at the end of the
+    run and that covers ``duration`` in at most MAX_STEPS steps."""
+    # 4x the resolution: the steps actually taken are span / ceil(span / step) >= step / 2,
+    # and t_k = t0 + k h is itself rounded.
+    shortest = 4.0 * time_resolution(duration)
+    if step < shortest:
+        _fail(name, f"must be >= {shortest:.3g} yr: shorter steps are below the float64 time resolution "
+              f"at t = duration ({duration:g} yr)", step)
+    if duration / step > MAX_STEPS:
+        _fail(name, f"duration / step = {duration / step:.3g} steps exceeds {MAX_STEPS:.0e}: "
+              f"use a step >= {duration / MAX_STEPS:.3g} yr", step)
+
+
 @dataclass(frozen=True)
 class Impact:
     """A short torque pulse (paper Fig. 10): constant torque on [start, start + duration).
@@ -114,7 +171,13 @@ class Impact:
         if start < 0.0:
             _fail(f"{name}.start", "must be >= 0 (the scenario starts at t = 0)", self.start)
         _set(self, "start", start)
-        _set(self, "duration", _positive(f"{name}.duration", self.duration))
+        duration = _positive(f"{name}.duration", self.duration)
+        # A pulse shorter than the time resolution at its end has start + duration == start
+        # (or nearly): it would be applied as no pulse at all (delta w = 0) or with a wrong length.
+        if duration < time_resolution(start + duration):
+            _fail(f"{name}.duration", f"must be >= {time_resolution(start + duration):.3g} yr, the float64 time "
+                  f"resolution at t = {start + duration:g} yr (a shorter pulse is not resolved)", self.duration)
+        _set(self, "duration", duration)
         _set(self, "torque", _vector(f"{name}.torque", self.torque))
         _one_of(f"{name}.frame", self.frame, IMPACT_FRAMES)
 
@@ -196,7 +259,11 @@ class IntegratorSettings:
         if not MIN_RTOL <= rtol < MAX_RTOL:
             _fail(f"{name}.rtol", f"must be in [{MIN_RTOL:g}, {MAX_RTOL:g})", self.rtol)
         _set(self, "rtol", rtol)
-        _set(self, "atol", _positive(f"{name}.atol", self.atol))
+        atol = _positive(f"{name}.atol", self.atol)
+        if atol > MAX_ATOL:
+            _fail(f"{name}.atol", f"must be in (0, {MAX_ATOL:g}] (the attitude quaternion's components are <= 1)",
+                  self.atol)
+        _set(self, "atol", atol)
         _set(self, "step", _positive(f"{name}.step", self.step))
         max_step = _finite(f"{name}.max_step", self.max_step)
         if max_step < 0.0:
@@ -270,10 +337,15 @@ class Scenario:
                     )
         _set(self, "inertia", inertia)
         orbit_rate = _finite("orbit_rate", self.orbit_rate)
-        if orbit_rate < 0.0:
-            _fail("orbit_rate", "must be >= 0", self.orbit_rate)
+        if orbit_rate != 0.0 and not MIN_ORBIT_RATE <= orbit_rate <= MAX_ORBIT_RATE:
+            _fail("orbit_rate", f"must be 0 (no torque) or in [{MIN_ORBIT_RATE:g}, {MAX_ORBIT_RATE:g}] rad/yr "
+                  "(real heliocentric orbits: ~2e-7 to ~2e4 rad/yr)", self.orbit_rate)
         _set(self, "orbit_rate", orbit_rate)
-        _set(self, "omega0", _vector("omega0", self.omega0))
+        omega0 = _vector("omega0", self.omega0)
+        if math.hypot(*omega0) > MAX_OMEGA:
+            _fail("omega0", f"|omega0| = {math.hypot(*omega0):.3g} rad/yr exceeds {MAX_OMEGA:g} rad/yr "
+                  "(a spin period of 0.02 s; the fastest known asteroids take a few seconds)", list(omega0))
+        _set(self, "omega0", omega0)
         euler0 = _vector("euler0", self.euler0)
         _one_of("attitude", self.attitude, ATTITUDE_MODELS)
         method = INTEGRATORS[self.integrator.method] if isinstance(self.integrator, IntegratorSettings) else None
@@ -288,12 +360,31 @@ class Scenario:
             _fail("euler0[2]", "theta0 is too close to 0 or pi for attitude 'euler'; "
                   "use attitude 'quaternion'", euler0[2])
         _set(self, "euler0", euler0)
-        _set(self, "duration", _positive("duration", self.duration))
+        duration = _positive("duration", self.duration)
+        if duration > MAX_DURATION:
+            _fail("duration", f"must be <= {MAX_DURATION:g} yr (the model ignores orbital evolution and "
+                  "YORP, which act over such times)", self.duration)
+        _set(self, "duration", duration)
+        rotation = max(math.hypot(*self.omega0), self.orbit_rate) * duration
+        if rotation > MAX_ROTATION:
+            _fail("duration", f"the body or its orbit turns by max(|omega0|, orbit_rate) * duration = "
+                  f"{rotation:.3g} rad, above {MAX_ROTATION:.0e} rad: every method needs about a step per "
+                  "radian", self.duration)
         _set(self, "output_interval", _positive("output_interval", self.output_interval))
         if self.output_interval > self.duration:
             _fail("output_interval", f"must be <= duration ({self.duration:g} yr)", self.output_interval)
+        samples = self.duration / self.output_interval + 1.0
+        if samples > MAX_SAMPLES:
+            _fail("output_interval", f"duration / output_interval + 1 = {samples:.3g} samples exceeds "
+                  f"{MAX_SAMPLES:.0e}: use an output_interval >= {self.duration / (MAX_SAMPLES - 1):.3g} yr",
+                  self.output_interval)
         if not isinstance(self.integrator, IntegratorSettings):
             _fail("integrator", "must be an IntegratorSettings", self.integrator)
+        if method.adaptive:
+            if self.integrator.max_step > 0.0:
+                _check_step("integrator.max_step", self.integrator.max_step, duration)
+        else:
+            _check_step("integrator.step", self.integrator.step, duration)
         impacts = tuple(self.impacts)
         for k, impact in enumerate(impacts):
             if not isinstance(impact, Impact):
@@ -373,19 +464,19 @@ PARAMETER_NAMES: tuple[str, ...] = (
 PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     "inertia": ("normalised", "principal moments of inertia (Ix, Iy, Iz); only ratios matter"),
     "allow_unphysical_inertia": ("", "accept moments that break the triangle inequality (paper Figs 3, 6-10)"),
-    "orbit_rate": ("rad/yr", "orbital rate ws of the circular orbit, GM/R0^3 = ws^2; 0 = no torque"),
-    "omega0": ("rad/yr", "initial angular velocity (wx, wy, wz), body axes"),
+    "orbit_rate": ("rad/yr", "orbital rate ws of the circular orbit, GM/R0^3 = ws^2; 0 = no torque, else 1e-9 to 1e6"),
+    "omega0": ("rad/yr", "initial angular velocity (wx, wy, wz), body axes; |omega0| <= 1e10"),
     "euler0": ("rad", "initial attitude as the paper's Euler angles (phi, psi, theta)"),
     "attitude": ("", "attitude state: quaternion (no singularity) or euler (paper eq 15)"),
-    "duration": ("yr", "simulated time span tk, from t = 0"),
-    "output_interval": ("yr", "spacing of published samples"),
+    "duration": ("yr", "simulated time span tk, from t = 0; <= 1e9, max(|omega0|, orbit_rate) * duration <= 1e10 rad"),
+    "output_interval": ("yr", "spacing of published samples; at most 1e7 samples, at least 1 ns of ROS time"),
     "integrator.method": ("", "integrator: " + ", ".join(INTEGRATORS)),
     "integrator.rtol": ("", "relative tolerance (adaptive methods)"),
-    "integrator.atol": ("", "absolute tolerance (adaptive methods)"),
-    "integrator.step": ("yr", "step of fixed-step methods (rk4, splitting*)"),
-    "integrator.max_step": ("yr", "largest step of adaptive methods; 0 = no limit"),
+    "integrator.atol": ("", "absolute tolerance (adaptive methods), in (0, 0.1]"),
+    "integrator.step": ("yr", "step of fixed-step methods (rk4, splitting*); at most 1e10 steps, above the float64 resolution"),
+    "integrator.max_step": ("yr", "largest step of adaptive methods; 0 = no limit, else as integrator.step"),
     "impacts.start": ("yr", "start time of each scheduled impact"),
-    "impacts.duration": ("yr", "length of each impact pulse"),
+    "impacts.duration": ("yr", "length of each impact pulse; >= 16 ulp of its end time"),
     "impacts.torque": ("I rad/yr^2", "torque of each impact, 3 numbers per impact, flattened"),
     "impacts.frame": ("", "frame of each impact's torque: body or orbital (empty = all body)"),
 }

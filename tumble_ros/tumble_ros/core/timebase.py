@@ -16,6 +16,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from .scenario import MAX_SAMPLES, ScenarioError
+
 __all__ = ["TimeBase", "MAX_STAMP_NS"]
 
 #: Largest stamp: Time.sec is an int32.
@@ -58,21 +60,44 @@ class TimeBase:
         return int(sec) * 1_000_000_000 + int(nanosec)
 
     def check_span(self, duration: float) -> None:
-        """Raise ValueError if a run of ``duration`` years overflows Time.sec (int32)."""
-        if self.to_ns(duration) > MAX_STAMP_NS:
+        """Raise ScenarioError (a ValueError) if a run of ``duration`` years overflows Time.sec (int32)."""
+        ns = duration * self.ns_per_year  # compared as a float first: 1e300 yr has no integer stamp
+        if not ns <= MAX_STAMP_NS or self.to_ns(duration) > MAX_STAMP_NS:
             limit = MAX_STAMP_NS / self.ns_per_year
-            raise ValueError(
+            raise ScenarioError(
                 f"duration: {duration:g} yr at seconds_per_year = {self.seconds_per_year:g} ends past the "
                 f"int32 limit of builtin_interfaces/Time ({limit:.4g} yr); lower seconds_per_year"
+            )
+
+    def check(self, interval: float, duration: float) -> None:
+        """Raise ScenarioError (naming the field) unless the output grid of ``interval`` years over
+        ``duration`` years fits ROS stamps: the run ends within the int32 limit
+        (:meth:`check_span`), the interval is at least 1 ns of ROS time (the stamps' resolution:
+        a shorter one would be rounded to a different interval, or to 0) and the grid has at
+        most ``scenario.MAX_SAMPLES`` samples."""
+        self.check_span(duration)
+        ns = interval * self.ns_per_year
+        if not ns >= 1.0 - 1e-9:  # (1e-9: an interval computed as 1 / ns_per_year may round below 1)
+            raise ScenarioError(
+                f"output_interval: {interval:g} yr is {ns:.3g} ns of ROS time at seconds_per_year = "
+                f"{self.seconds_per_year:g}, below the 1 ns resolution of the stamps; raise output_interval "
+                f"to >= {1.0 / self.ns_per_year:.3g} yr or seconds_per_year"
+            )
+        samples = self.to_ns(duration) // max(1, self.to_ns(interval)) + 1
+        if samples > MAX_SAMPLES:
+            raise ScenarioError(
+                f"output_interval: {samples:.3g} samples of {interval:g} yr over {duration:g} yr exceed "
+                f"{MAX_SAMPLES:.0e}"
             )
 
     def sample_grid(self, interval: float, duration: float) -> tuple[int, int]:
         """Output grid in stamps: (interval_ns, n_samples) with samples at k * interval_ns.
 
-        The interval is rounded to whole nanoseconds (at least 1); every sample time
-        ``to_years(k * interval_ns)`` lies in [0, duration].
+        The interval is rounded to whole nanoseconds; every sample time
+        ``to_years(k * interval_ns)`` lies in [0, duration]. Raises ScenarioError (see
+        :meth:`check`) for a grid that ROS stamps cannot carry.
         """
-        self.check_span(duration)
+        self.check(interval, duration)
         interval_ns = max(1, self.to_ns(interval))
         n = self.to_ns(duration) // interval_ns + 1
         while n > 1 and self.to_years((n - 1) * interval_ns) > duration:
