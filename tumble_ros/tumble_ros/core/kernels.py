@@ -94,6 +94,7 @@ S_BUDGET = 16             # Euler tracking: angle change bound accumulated since
 S_COLLAPSE = 17           # 16 ulp of the segment's largest t: no step longer than this collapses
 RUNNING, FINISHED, FAILED = 0.0, 1.0, 2.0
 FAIL_NONE, FAIL_NONFINITE, FAIL_COLLAPSE, FAIL_TOO_SMALL = 0.0, 1.0, 2.0, 3.0
+FAIL_STEP_NAN, FAIL_REJECTED = 4.0, 5.0   # dop853: step size not a number; too many rejections
 N = 7                     # state size: omega (3) + quaternion (4)
 O_Y = 20                  # current state
 O_YOLD = O_Y + N          # state at the start of the last step
@@ -124,6 +125,11 @@ _ERR_EXP = -1.0 / (7 + 1)                # DOP853: error_estimator_order = 7
 _MIN_STEP_ULPS = 16.0                    # integrators.base._MIN_STEP_ULPS
 _UNWRAP_STEP = 1.0                       # propagator._UNWRAP_STEP
 _UNWRAP_MIN_SIN = 0.1                    # propagator._UNWRAP_MIN_SIN
+_MAX_TRACK_PIECES = 100_000              # propagator._MAX_TRACK_PIECES
+#: dop853: rejected step sizes in a row before the step fails. Each rejection divides h by >= 5
+#: (_MIN_FACTOR), so a finite h reaches min_step (FAIL_TOO_SMALL) within ~480 rejections even
+#: from 1e9 yr; this only bounds the loop by construction.
+_MAX_REJECTIONS = 1000
 _TWO_PI = 2.0 * math.pi
 
 
@@ -410,7 +416,9 @@ def seg_init(p, cfg, st, t0, t_bound):
     if method == M_RK4 or method == M_SPLIT:
         n = 1.0
         if span > 0:
-            n = max(1.0, math.ceil(span / cfg[C_STEP] * (1.0 - 1e-12)))
+            # np.ceil stays a float (math.ceil is an int64 in numba: a span / step above 9e18
+            # wrapped around to one step over the whole segment)
+            n = max(1.0, np.ceil(span / cfg[C_STEP] * (1.0 - 1e-12)))
         st[S_H] = span / n
         st[S_NTOTAL] = n
         if method == M_SPLIT:
@@ -506,9 +514,16 @@ def _dop853_step(p, cfg, st):
         h_abs = min_step
     rejected = False
     ns = _D_NSTAGES
+    n_rejected = 0
     while True:
+        if h_abs != h_abs:
+            # NaN (a non-finite right-hand side at the segment start): every comparison below
+            # is False, so without this the loop neither accepts nor fails, for ever
+            return FAIL_STEP_NAN
         if h_abs < min_step:
             return FAIL_TOO_SMALL
+        if n_rejected >= _MAX_REJECTIONS:
+            return FAIL_REJECTED
         t_new = t + h_abs
         if t_new - t_bound > 0:
             t_new = t_bound
@@ -568,6 +583,7 @@ def _dop853_step(p, cfg, st):
             factor = _MIN_FACTOR
         h_abs *= factor
         rejected = True
+        n_rejected += 1
     st[S_HPREV] = h
     for i in range(N):
         st[O_Y + i] = st[O_YNEW + i]
@@ -611,10 +627,13 @@ def step(p, cfg, st):
     else:
         code = _split_step(p, cfg, st)
     if code == FAIL_NONE:
+        # |y|^2 finite (integrators.base.Stepper.step): also refuses a finite state whose square
+        # overflows, from which no rotation matrix, energy or attitude can be computed any more
+        acc = 0.0
         for i in range(N):
-            if not math.isfinite(st[O_Y + i]):
-                code = FAIL_NONFINITE
-                break
+            acc += st[O_Y + i] * st[O_Y + i]
+        if not math.isfinite(acc):
+            code = FAIL_NONFINITE
     if code == FAIL_NONE and st[S_T] < st[S_TBOUND] and st[S_T] - t_good <= st[S_COLLAPSE]:
         # the exact test of integrators.base (only reached for steps near the bound)
         base = t_good if t_good != 0.0 else 1.0
@@ -734,6 +753,17 @@ def unwrapped_euler(st, o, track):
     return _unwrap(phi, track[0]), _unwrap(psi, track[1]), theta
 
 
+@jit
+def set_track(st, o, track):
+    """track <- the unwrapped Euler angles of st[o:o+7], unless they are not finite (a dense
+    output inside a step whose state ran away: ``Propagator._unwrapped`` returns None)."""
+    phi, psi, theta = unwrapped_euler(st, o, track)
+    if math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta):
+        track[0] = phi
+        track[1] = psi
+        track[2] = theta
+
+
 @jit_inline
 def track_increment(st):
     """Bound on how far phi, psi turned during the last step [rad] (``Propagator._track_euler``:
@@ -756,27 +786,29 @@ def track_increment(st):
 @jit
 def track_update(p, cfg, st, track, increment):
     """Update the track through the last step (the reference's subdivision), after catching up
-    from wherever it was left at the start of the step (see :func:`track_euler`)."""
+    from wherever it was left at the start of the step (see :func:`track_euler`). Returns the
+    number of dense-output evaluations it took (work, at most _MAX_TRACK_PIECES - 1)."""
     if st[S_BUDGET] > 0.0:
-        phi, psi, theta = unwrapped_euler(st, O_YOLD, track)
-        track[0] = phi
-        track[1] = psi
-        track[2] = theta
+        set_track(st, O_YOLD, track)
     st[S_BUDGET] = 0.0
     t = st[S_T]
     t_old = st[S_TOLD]
     h = t - t_old
-    n = max(1, int(math.ceil(increment / _UNWRAP_STEP)))
+    pieces = increment / _UNWRAP_STEP
+    if not pieces <= _MAX_TRACK_PIECES:
+        # a step far too long for the spin (or a state running away): follow it in at most
+        # this many pieces (bounded work per step; propagator._track_euler does the same)
+        n = _MAX_TRACK_PIECES
+    else:
+        n = max(1, int(math.ceil(pieces)))
     for j in range(1, n + 1):
         if j == n:
             o = O_Y
         else:
             dense(p, cfg, st, t_old + h * j / n)
             o = O_SCR
-        phi, psi, theta = unwrapped_euler(st, o, track)
-        track[0] = phi
-        track[1] = psi
-        track[2] = theta
+        set_track(st, o, track)
+    return n - 1
 
 
 @jit_inline
@@ -789,22 +821,20 @@ def track_euler(p, cfg, st, track):
     the start of the step, then through the step as the reference does), or by
     :func:`refresh_track`: the track is then never more than 1 rad of bound away from the
     state, so every unwrapped angle gets the same 2 pi multiple as on the reference path,
-    while most steps skip the three atan2 of the conversion."""
+    while most steps skip the three atan2 of the conversion. Returns the dense-output
+    evaluations taken (work)."""
     increment = track_increment(st)
     if st[S_BUDGET] + increment < _UNWRAP_STEP:
         st[S_BUDGET] += increment
-    else:
-        track_update(p, cfg, st, track, increment)
+        return 0
+    return track_update(p, cfg, st, track, increment)
 
 
 @jit
 def refresh_track(st, track):
     """Bring a lazily updated track to the current state (see :func:`track_euler`)."""
     if st[S_BUDGET] > 0.0:
-        phi, psi, theta = unwrapped_euler(st, O_Y, track)
-        track[0] = phi
-        track[1] = psi
-        track[2] = theta
+        set_track(st, O_Y, track)
         st[S_BUDGET] = 0.0
 
 
@@ -830,22 +860,28 @@ def emit(p, cfg, st, track, t_out, y_out, e_out, k):
 
 
 @jit
-def advance(p, cfg, st, track, t_target, t_out, y_out, e_out, k):
-    """Step the segment until t >= t_target (or it finishes or fails), tracking the Euler
-    angles and writing the outputs passed on the way. Returns (k, steps)."""
+def advance(p, cfg, st, track, t_target, t_out, y_out, e_out, k, budget):
+    """Step the segment until t >= t_target (or it finishes or fails, or ``budget`` units of
+    work are spent), tracking the Euler angles and writing the outputs passed on the way.
+
+    Work: one unit per step plus one per dense evaluation of the Euler-angle tracking
+    (:func:`track_update`), so one call does a bounded amount of work however long the
+    interval; the caller calls again to go on (same steps, same results). Returns
+    (k, steps, work)."""
     n_out = t_out.shape[0]
     k = emit(p, cfg, st, track, t_out, y_out, e_out, k)
     steps = 0
-    while st[S_STATUS] == RUNNING and st[S_T] < t_target:
+    work = 0
+    while st[S_STATUS] == RUNNING and st[S_T] < t_target and work < budget:
         ok = step(p, cfg, st)
         if not ok:
             break
         steps += 1
-        track_euler(p, cfg, st, track)
+        work += 1 + track_euler(p, cfg, st, track)
         if k < n_out and t_out[k] <= st[S_T]:  # (no call, no array reference counting, otherwise)
             k = emit(p, cfg, st, track, t_out, y_out, e_out, k)
     refresh_track(st, track)
-    return k, steps
+    return k, steps, work
 
 
 # =======================================================================================
@@ -866,7 +902,7 @@ def body_advance(cfg, probs, seg_t, first, last, cur, st, track, t_stop, t_out, 
             cur += 1
             seg_init(probs[cur], cfg, st, st[S_T], seg_t[cur, 1])
             continue
-        k, n = advance(probs[cur], cfg, st, track, t_stop, t_out, y_out, e_out, k)
+        k, n, _ = advance(probs[cur], cfg, st, track, t_stop, t_out, y_out, e_out, k, np.inf)
         steps += n
     return cur, k, steps
 

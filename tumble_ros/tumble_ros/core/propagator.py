@@ -29,15 +29,35 @@ import numpy as np
 
 from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import FAILED, INTEGRATORS, RUNNING, SegmentProblem
+from .integrators.base import _finite_norm
 from .integrators.compiled import CompiledStepper, why_no_fast_path
 from .rotation import matrix_to_quaternion, unwrap_towards
 from .scenario import Impact, Scenario, ScenarioError
 
-__all__ = ["Propagator", "IntegrationError", "Sample", "segment_torques", "quaternions_to_matrices"]
+__all__ = ["Propagator", "IntegrationError", "Sample", "segment_torques", "quaternions_to_matrices",
+           "FAST_WORK_BUDGET", "REFERENCE_WORK_BUDGET"]
 
 #: Largest attitude change [rad] between two points used to unwrap Euler angles.
 _UNWRAP_STEP = 1.0
 _UNWRAP_MIN_SIN = 0.1
+#: Most pieces a single step is cut into to follow phi and psi (kernels._MAX_TRACK_PIECES). A
+#: step over which they may turn by more than this many radians is far too long for the spin
+#: (every method's result is meaningless there, except the splitting methods' exact free flow
+#: of a symmetric body); beyond it their 2 pi multiples are not followed, the attitude stays
+#: as integrated, and the work per step stays bounded.
+_MAX_TRACK_PIECES = 100_000
+
+#: Work per call of :meth:`Propagator.sample_many` (and per compiled call of
+#: :meth:`Propagator.advance_to`): steps plus the dense evaluations of the Euler-angle
+#: tracking, and at most as many samples. Compiled steps take ~0.3-3 us: 50,000 units stay
+#: below ~0.15 s, so a node calling in a timer serves its signals in time. Reference-path
+#: steps take 20-200 us in Python (scipy's implicit methods more).
+FAST_WORK_BUDGET = 50_000
+REFERENCE_WORK_BUDGET = 1_000
+
+
+def _interpolated_nonfinite_message(t: float) -> str:
+    return f"non-finite state at t = {t:.10g} yr (interpolated inside a step that ran away)"
 
 
 class IntegrationError(RuntimeError):
@@ -161,6 +181,7 @@ class Propagator:
         self._nfev_done = 0
         self.n_steps = 0
         self._euler_track = np.array(scenario.euler0, dtype=float)
+        self._track_at_t = self._euler_track.copy()  # continuous Euler angles at self.t
         self._quat_prev = None
         self._edge_state: dict[float, np.ndarray] = {}  # state at impact edges reached so far
         self._reported: set[int] = set()
@@ -201,41 +222,55 @@ class Propagator:
                     self._edges.insert(k, edge)
         if affects_segment or not self._split:
             # Restart from the last state handed out: the running segment's right-hand
-            # side or end no longer holds.
+            # side or end no longer holds. The Euler-angle track goes back with it (the
+            # stepper may have run many steps past self.t in a call cut by its work budget).
+            self._euler_track = self._track_at_t.copy()
             self._start_segment(self.t, self.y)
 
     def advance_to(self, t: float) -> np.ndarray:
         """Integrate to time ``t`` [yr] (not before the current time) and return the state.
 
         Raises IntegrationError when the integration fails; ``status`` is then
-        ``"failed"`` and stays so.
+        ``"failed"`` and stays so. The work is done in bounded compiled calls
+        (:data:`FAST_WORK_BUDGET`), so a KeyboardInterrupt is served in between.
         """
         if self.status == FAILED:
             raise IntegrationError(self.message, self.t)
         if not self.t <= t <= self.t_end:
             raise ValueError(f"t = {t!r} must lie in [{self.t!r}, {self.t_end!r}] yr")
-        stepper = self._stepper
-        while t > stepper.t:
-            if stepper.status != RUNNING:
-                self._start_segment(stepper.t, stepper.y.copy())
-                stepper = self._stepper
-                continue
-            if self.fast:
-                self._advance_compiled(stepper, t)
-            else:
-                self._step(stepper)
-        self.y = stepper.state_at(t)
-        self.t = t
+        while not self._advance_until(t, self._default_budget())[1]:
+            pass
+        y = self._stepper.state_at(t)
+        euler = self._continuous_euler(y[3:])
+        if euler is None or not _finite_norm(y):
+            # dense output inside a step whose end points are finite but whose state ran away
+            self.status, self.message = FAILED, _interpolated_nonfinite_message(t)
+            raise IntegrationError(self.message, self.t)
+        self.y, self.t, self._track_at_t = y, t, euler
         return self.y
 
-    def sample_many(self, times) -> tuple[int, dict[str, np.ndarray], str]:
-        """:meth:`sample` at every time of the sorted sequence ``times``, as arrays.
+    def sample_many(self, times, *, budget: float | None = None) -> tuple[int, dict[str, np.ndarray], str]:
+        """:meth:`sample` at every time of the sorted sequence ``times``, as arrays, with
+        bounded work per call.
 
         Returns ``(n_done, arrays, message)``: ``arrays`` has ``omega`` (n, 3), ``euler``
         (n, 3), ``quaternion`` (n, 4) and ``matrix`` (n, 3, 3), of which the first ``n_done``
-        rows are valid; ``message`` says why the rest are missing (integration failure),
-        empty when n_done == n. On the fast path the whole grid is sampled inside the
-        compiled loop (one call per segment).
+        rows are valid. Three outcomes:
+
+        * ``n_done == n``, ``message == ""``: done.
+        * ``n_done < n``, ``message == ""``: *partial progress, not a failure*: the call spent
+          its work budget. Call again with the times not yet sampled (``times[n_done:]``, or
+          any sorted times from ``times[n_done]`` on); the results are the same as with one
+          uninterrupted call, bit for bit.
+        * ``n_done < n``, ``message != ""``: the integration failed; ``message`` says why,
+          ``status`` is ``"failed"`` and every later call returns ``(0, arrays, message)``.
+
+        ``budget``: the work of this call in units of one integration step or one dense
+        evaluation of the Euler-angle tracking (and at most as many samples); ``None`` is
+        :data:`FAST_WORK_BUDGET` on the fast path, :data:`REFERENCE_WORK_BUDGET` on the
+        reference path; ``math.inf`` runs to the end (or the failure) in such bounded chunks,
+        never partial (what :func:`~.simulate.simulate` does). On the fast path the grid is
+        sampled inside the compiled loop.
         """
         times = np.ascontiguousarray(times, dtype=float)
         n = times.size
@@ -243,40 +278,80 @@ class Propagator:
             raise ValueError(f"t = {times[0]!r} must lie in [{self.t!r}, {self.t_end!r}] yr")
         if n and times[-1] > self.t_end:
             raise ValueError(f"t = {times[-1]!r} must lie in [{self.t!r}, {self.t_end!r}] yr")
-        omega, euler = np.empty((n, 3)), np.empty((n, 3))
-        quat, matrices = np.empty((n, 4)), np.empty((n, 3, 3))
-        arrays = {"omega": omega, "euler": euler, "quaternion": quat, "matrix": matrices}
-        if not self.fast:
-            for k, t in enumerate(times):
-                try:
-                    s = self.sample(float(t))
-                except IntegrationError as err:
-                    return k, arrays, str(err)
-                omega[k], euler[k], quat[k], matrices[k] = s.omega, s.euler, s.quaternion, s.matrix
-            return n, arrays, ""
-        if self.status == FAILED:
-            return 0, arrays, self.message
-        y_out = np.empty((n, 7))
+        arrays = {"omega": np.empty((n, 3)), "euler": np.empty((n, 3)), "quaternion": np.empty((n, 4)),
+                  "matrix": np.empty((n, 3, 3))}
+        y_out = np.empty((n, 7)) if self.fast else None
+        chunk = self._default_budget() if budget is None or budget == math.inf else budget
+        if not chunk >= 1:
+            raise ValueError(f"budget: must be >= 1 (or None, or math.inf), got {budget!r}")
         k, message = 0, ""
-        while k < n:
+        while True:
+            k, message = self._sample_into(times, arrays, y_out, k, chunk)
+            if message or k == n or budget != math.inf:
+                return k, arrays, message
+
+    def _default_budget(self) -> int:
+        return FAST_WORK_BUDGET if self.fast else REFERENCE_WORK_BUDGET
+
+    def _sample_into(self, times, arrays, y_out, k0: int, budget: float) -> tuple[int, str]:
+        """Sample times[k0:] into rows k0... of ``arrays`` with at most ~``budget`` units of work
+        (and samples); returns (next row, failure message or "")."""
+        n = times.size
+        k_stop = min(n, k0 + int(min(budget, n)))  # at most `budget` samples per call as well
+        omega, euler, quat, matrices = arrays["omega"], arrays["euler"], arrays["quaternion"], arrays["matrix"]
+        work = 0
+        if not self.fast:
+            for k in range(k0, k_stop):
+                t = float(times[k])
+                try:
+                    used, reached = self._advance_until(t, budget - work)
+                    work += used
+                    if not reached:
+                        return k, ""
+                    s = self.sample(t)
+                except IntegrationError as err:
+                    return k, str(err) or "integration failed"
+                omega[k], euler[k], quat[k], matrices[k] = s.omega, s.euler, s.quaternion, s.matrix
+            return k_stop, ""
+        if self.status == FAILED:
+            return k0, self.message
+        t_view = times[:k_stop]
+        k, message = k0, ""
+        while k < k_stop:
             stepper = self._stepper
-            if stepper.status != RUNNING and times[k] > stepper.t:
+            if stepper.status != RUNNING and t_view[k] > stepper.t:
                 self._start_segment(stepper.t, stepper.y.copy())
+                work += 1
                 continue
-            k, steps = stepper.advance(times[-1], self._euler_track, times, y_out, euler, k)
+            if work >= budget:
+                break
+            k, steps = stepper.advance(t_view[-1], self._euler_track, t_view, y_out, euler, k, budget - work)
+            work += stepper.work
             self.n_steps += steps
             if stepper.status == FAILED:
-                self.status, self.message = FAILED, stepper.message
-                message = stepper.message
+                self.status, self.message = FAILED, stepper.message or "integration failed"
+                message = self.message
                 break
-        if k:
-            y = y_out[:k]
-            omega[:k] = y[:, :3]
-            quat[:k] = continuous_quaternions(y[:, 3:], self._quat_prev)
-            matrices[:k] = quaternions_to_matrices(y[:, 3:])
+        if k > k0:
+            # the rule of advance_to: no sample with a non-finite state or Euler angles
+            y = y_out[k0:k]
+            norm2 = y[:, 0] * y[:, 0]
+            for i in range(1, y.shape[1]):
+                norm2 += y[:, i] * y[:, i]  # (summed in the order of base._finite_norm)
+            bad = np.flatnonzero(~(np.isfinite(norm2) & np.isfinite(euler[k0:k]).all(axis=1)))
+            if bad.size:
+                k = k0 + int(bad[0])
+                self.status, self.message = FAILED, _interpolated_nonfinite_message(float(times[k]))
+                message = self.message
+        if k > k0:
+            y = y_out[k0:k]
+            omega[k0:k] = y[:, :3]
+            quat[k0:k] = continuous_quaternions(y[:, 3:], self._quat_prev)
+            matrices[k0:k] = quaternions_to_matrices(y[:, 3:])
             self._quat_prev = quat[k - 1].copy()
             self.t, self.y = float(times[k - 1]), y_out[k - 1].copy()
-        return k, arrays, message
+            self._track_at_t = euler[k - 1].copy()
+        return k, message
 
     def pop_completed_impacts(self) -> list[tuple[Impact, np.ndarray, np.ndarray]]:
         """Impacts that ended by the current time and were not returned before.
@@ -316,7 +391,7 @@ class Propagator:
             t=t,
             omega=y[:3].copy(),
             quaternion=q,
-            euler=self._continuous_euler(attitude),
+            euler=self._track_at_t.copy(),  # (advance_to: self._continuous_euler(attitude))
             matrix=c,
             inertia=self.scenario.inertia,
             orbit_rate=self.scenario.orbit_rate,
@@ -366,14 +441,36 @@ class Propagator:
 
         return rhs
 
-    def _advance_compiled(self, stepper, t: float) -> None:
-        _, steps = stepper.advance(t, self._euler_track)
+    def _advance_until(self, t: float, budget: float) -> tuple[int, bool]:
+        """Step towards ``t`` with at most ~``budget`` units of work (steps and tracking
+        evaluations); returns (work done, whether the stepper reached t). Raises IntegrationError."""
+        if self.status == FAILED:
+            raise IntegrationError(self.message, self.t)
+        stepper = self._stepper
+        work = 0
+        while t > stepper.t:
+            if stepper.status != RUNNING:
+                self._start_segment(stepper.t, stepper.y.copy())
+                stepper = self._stepper
+                continue
+            if work >= budget:
+                return work, False
+            if self.fast:
+                work += self._advance_compiled(stepper, t, budget - work)
+            else:
+                work += self._step(stepper)
+        return work, True
+
+    def _advance_compiled(self, stepper, t: float, budget: float) -> int:
+        _, steps = stepper.advance(t, self._euler_track, budget=budget)
         self.n_steps += steps
         if stepper.status == FAILED:
-            self.status, self.message = FAILED, stepper.message
-            raise IntegrationError(stepper.message, stepper.t)
+            self.status, self.message = FAILED, stepper.message or "integration failed"
+            raise IntegrationError(self.message, stepper.t)
+        return stepper.work
 
-    def _step(self, stepper) -> None:
+    def _step(self, stepper) -> int:
+        """One reference-path step; returns its work (1 + the tracking's dense evaluations)."""
         t_before = stepper.t
         stepper.step()
         self.n_steps += 1
@@ -385,10 +482,12 @@ class Propagator:
             self.status, self.message = FAILED, message
             raise IntegrationError(message, t_before)
         if self._model.name == "quaternion":
-            self._track_euler(stepper)
+            return 1 + self._track_euler(stepper)
+        return 1
 
-    def _track_euler(self, stepper) -> None:
-        """Follow phi, psi continuously through the step just taken (quaternion mode)."""
+    def _track_euler(self, stepper) -> int:
+        """Follow phi, psi continuously through the step just taken (quaternion mode); returns
+        the dense evaluations it took."""
         y = stepper.y
         w = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2)
         cos_theta = self._model.to_matrix(y[3:])[2, 2]
@@ -396,18 +495,28 @@ class Propagator:
         # Below theta ~ 0.1 only phi + psi is well defined, so the bound stops growing.
         rate = w / max(_UNWRAP_MIN_SIN, math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta)))
         h = stepper.t - stepper.t_old
-        n = max(1, math.ceil(rate * h / _UNWRAP_STEP))
+        pieces = rate * h / _UNWRAP_STEP
+        # (not <=: also an infinite rate, |w| overflowing in a state running away)
+        n = _MAX_TRACK_PIECES if not pieces <= _MAX_TRACK_PIECES else max(1, math.ceil(pieces))
         for j in range(1, n + 1):
             tj = stepper.t if j == n else stepper.t_old + h * j / n
             att = y[3:] if j == n else stepper.state_at(tj)[3:]
-            self._euler_track = self._unwrapped(att)
+            euler = self._unwrapped(att)
+            if euler is not None:
+                self._euler_track = euler
+        return n - 1
 
-    def _unwrapped(self, attitude) -> np.ndarray:
+    def _unwrapped(self, attitude) -> np.ndarray | None:
+        """phi, psi unwrapped towards the track, theta; None if they are not finite (a state
+        that ran away: kernels.set_track skips it the same way)."""
         phi, psi, theta = self._model.to_euler(attitude)
+        if not (math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta)):
+            return None
         ref = self._euler_track
         return np.array([unwrap_towards(phi, ref[0]), unwrap_towards(psi, ref[1]), theta])
 
-    def _continuous_euler(self, attitude) -> np.ndarray:
+    def _continuous_euler(self, attitude) -> np.ndarray | None:
         if self._model.name != "quaternion":
-            return np.array(attitude, dtype=float)
+            euler = np.array(attitude, dtype=float)
+            return euler if np.all(np.isfinite(euler)) else None
         return self._unwrapped(attitude)

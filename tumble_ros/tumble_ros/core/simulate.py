@@ -1,6 +1,7 @@
 """The researcher's entry point: ``simulate(scenario, t_eval)`` without ROS."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,7 +71,7 @@ def simulate(scenario: Scenario, t_eval=None, *, split_impacts: bool = True,
     times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
     prop = Propagator(scenario, split_impacts=split_impacts, fast=fast)
     n = times.size
-    done, arrays, message = prop.sample_many(times)
+    done, arrays, message = prop.sample_many(times, budget=math.inf)  # to the end, in bounded calls
     t_out = times[:done]
     omega, matrices = arrays["omega"][:done], arrays["matrix"][:done]
     jacobi = jacobi_integral(t_out, omega, matrices, scenario.inertia, scenario.orbit_rate)

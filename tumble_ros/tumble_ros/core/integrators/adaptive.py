@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import integrate
 
-from .base import Stepper
+from .base import Stepper, step_nan_message
 
 __all__ = ["RK45", "DOP853", "Radau", "BDF", "LSODA", "Adams"]
 
@@ -42,6 +42,11 @@ class _ScipyStepper(Stepper):
 
     def _step_impl(self):
         solver = self._solver
+        h_abs = getattr(solver, "h_abs", None)
+        if h_abs is not None and h_abs != h_abs:
+            # NaN step size (a non-finite right-hand side where the initial step was chosen):
+            # scipy's step loop would neither accept nor fail, for ever (kernels._dop853_step)
+            return False, step_nan_message(self.name, solver.t)
         message = solver.step()
         if solver.status == "failed":
             return False, f"{self.name} failed at t = {solver.t:.10g} yr: {message}"

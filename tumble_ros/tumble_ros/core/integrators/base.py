@@ -41,6 +41,21 @@ RUNNING, FINISHED, FAILED = "running", "finished", "failed"
 _MIN_STEP_ULPS = 16
 
 
+def _finite_norm(y) -> bool:
+    """|y|^2 is finite: no component is NaN or infinite, nor so large that its square overflows
+    (such a state has no usable rotation matrix or energy; kernels.step sums the same way)."""
+    acc = 0.0
+    for v in y.tolist():
+        acc += v * v
+    return math.isfinite(acc)
+
+
+def step_nan_message(method_name: str, t: float) -> str:
+    """Why an adaptive step whose size is not a number failed (the same on both paths)."""
+    return (f"{method_name} failed at t = {t:.10g} yr: the step size is not a number "
+            "(the right-hand side is not finite there)")
+
+
 @dataclass(frozen=True)
 class SegmentProblem:
     """The structure of the equations on one integration segment (built by the Propagator).
@@ -127,7 +142,7 @@ class Stepper(ABC):
             raise RuntimeError(f"step() on a stepper whose status is {self.status!r}")
         t_good, y_good = self.t, self.y
         ok, message = self._step_impl()
-        if ok and not all(math.isfinite(v) for v in self.y):
+        if ok and not _finite_norm(self.y):
             ok, message = False, f"non-finite state after t = {t_good:.10g} yr"
         elif ok and self.t < self.t_bound and self.t - t_good <= _MIN_STEP_ULPS * math.ulp(t_good or 1.0):
             ok, message = False, (f"step size collapsed to {self.t - t_good:.3g} yr at t = {t_good:.10g} yr: "

@@ -8,10 +8,12 @@ angles, output sampling) done inside the compiled loop. The Propagator uses it w
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .. import kernels as K
-from .base import FAILED, FINISHED, RUNNING, SegmentProblem, Stepper
+from .base import FAILED, FINISHED, RUNNING, SegmentProblem, Stepper, step_nan_message
 
 __all__ = ["CompiledStepper", "fast_path_available", "why_no_fast_path", "failure_message", "warm_up"]
 
@@ -30,6 +32,11 @@ def failure_message(st: np.ndarray, method_name: str) -> str:
     if code == K.FAIL_COLLAPSE:
         return (f"step size collapsed to {float(st[K.S_FAILDT]):.3g} yr at t = {t_good:.10g} yr: "
                 "the solution is singular or diverging there")
+    if code == K.FAIL_STEP_NAN:
+        return step_nan_message(method_name, t_good)
+    if code == K.FAIL_REJECTED:
+        return (f"{method_name} failed at t = {t_good:.10g} yr: {K._MAX_REJECTIONS} step sizes rejected "
+                "in a row")
     return (f"{method_name} failed at t = {t_good:.10g} yr: "
             "Required step size is less than spacing between numbers.")
 
@@ -95,6 +102,7 @@ class CompiledStepper(Stepper):
         self._cfg = K.config_array(method.kernel, settings, gammas)
         self._p = K.problem_array(problem.inertia, problem.orbit_rate, problem.torque_body,
                                   problem.torque_orbital)
+        self.work = 0  # units of work of the last advance()
         self._st = K.new_state()
         self._st[K.O_Y:K.O_Y + K.N] = self.y
         K.seg_init(self._p, self._cfg, self._st, self.t, self.t_bound)
@@ -126,20 +134,25 @@ class CompiledStepper(Stepper):
         return self.status
 
     def advance(self, t_target: float, track: np.ndarray, t_out=None, y_out=None, e_out=None,
-                k: int = 0) -> tuple[int, int]:
-        """Step until t >= t_target, the segment's end or a failure, in compiled code.
+                k: int = 0, budget: float = math.inf) -> tuple[int, int]:
+        """Step until t >= t_target, the segment's end, a failure or ``budget`` units of work,
+        in compiled code.
 
         ``track`` (3,) holds the continuous Euler angles and is updated in place after every
         step (``Propagator._track_euler``). Outputs: every ``t_out[j]`` (j >= k) passed on the
         way (up to the current t) is written to ``y_out[j]`` (state) and ``e_out[j]``
-        (unwrapped Euler angles). Returns (next output index, steps taken).
+        (unwrapped Euler angles). Work (:func:`~tumble_ros.core.kernels.advance`): a unit per
+        step and per dense evaluation of the tracking; ``self.work`` is what this call spent.
+        Returns (next output index, steps taken).
         """
         if t_out is None:
             t_out, y_out, e_out = _EMPTY_T, _EMPTY_Y, _EMPTY_E
         if self.status != RUNNING:
-            k, steps = K.emit(self._p, self._cfg, self._st, track, t_out, y_out, e_out, k), 0
+            k, steps, work = K.emit(self._p, self._cfg, self._st, track, t_out, y_out, e_out, k), 0, 0
         else:
-            k, steps = K.advance(self._p, self._cfg, self._st, track, float(t_target), t_out, y_out, e_out, k)
+            k, steps, work = K.advance(self._p, self._cfg, self._st, track, float(t_target), t_out, y_out, e_out,
+                                       k, float(budget))
+        self.work = int(work)
         self._sync()
         return int(k), int(steps)
 

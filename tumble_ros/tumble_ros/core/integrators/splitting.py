@@ -226,7 +226,13 @@ class Splitting(Stepper):
     def _step_impl(self):
         t = self.t
         self._y_old, self._pi_old, self._tau_old = self.y, self._pi, self._tau
-        self.y, self._pi, self._tau = self._flow(t, self.y, self._pi, self._tau, self._h)
+        try:
+            self.y, self._pi, self._tau = self._flow(t, self.y, self._pi, self._tau, self._h)
+        except (ValueError, OverflowError):
+            # math.cos/sin of an infinite angle (|pi| overflowed): the compiled loop gets NaN
+            # there and reports the same
+            self.y, self._pi, self._tau = self._y_old, self._pi_old, self._tau_old
+            return False, f"non-finite state after t = {t:.10g} yr"
         self._nfev += len(self._gammas)
         self.t_old = t
         # t_k = t0 + k h: no rounding accumulated in t over millions of steps
