@@ -69,7 +69,7 @@ $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 
 # Test paths come from pytest.ini (testpaths) unless PYTEST_ARGS names some.
 test: setup
-	$(ENV) pytest -q -ra $(PYTEST_ARGS)
+	$(ENV) pytest -q -ra --durations=15 $(PYTEST_ARGS)
 
 run: setup
 	$(ENV) python -m tumble_ros $(CONFIG)
