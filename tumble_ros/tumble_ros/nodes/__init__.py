@@ -1,4 +1,5 @@
-"""Thin rclpy nodes (simulator, comparator, recorder): ROS parameters in, messages out.
+"""
+Thin rclpy nodes (simulator, comparator, recorder): ROS parameters in, messages out.
 
 Nodes only wire publishers, subscriptions, services and timers, translate ROS messages and
 parameters to and from ``tumble_ros.core`` objects, and hold no physics: every equation lives in

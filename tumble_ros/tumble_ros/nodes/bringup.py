@@ -1,6 +1,8 @@
-"""``bringup``: simulator + comparator + recorder in one process, for one scenario's duration.
+"""
+``bringup``: simulator + comparator + recorder in one process, for one scenario's duration.
 
-    bringup [SCENARIO.yaml] [--output FILE.mcap] [--model NAME] [--quiet] [--visible] [--ros-args ...]
+    bringup [SCENARIO.yaml] [--output FILE.mcap] [--model NAME] [--quiet] [--visible]
+            [--ros-args ...]
 
 Runs the three nodes in one executor, the simulator as fast as the comparator and the recorder
 take it (``real_time_factor = 0``, ``min_consumers = 2``: nothing is lost), shows progress on
@@ -23,13 +25,13 @@ alike).
 from __future__ import annotations
 
 import argparse
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 import os
+from pathlib import Path
 import signal
 import sys
 import time
-from contextlib import contextmanager
-from dataclasses import dataclass, field
-from pathlib import Path
 
 import rclpy
 from rclpy.context import Context
@@ -47,7 +49,7 @@ from tumble_ros.nodes.shutdown import StopSignals
 from tumble_ros.nodes.sim import SimNode
 from tumble_ros_interfaces.msg import SimStatus
 
-__all__ = ["run_bringup", "BringupResult", "main"]
+__all__ = ['run_bringup', 'BringupResult', 'main']
 
 
 def _events_executor(context: Context):
@@ -65,7 +67,7 @@ def _events_executor(context: Context):
 #: experimental in Jazzy) runs bringup about 4x faster than ``single`` (the Python
 #: SingleThreadedExecutor, which rebuilds its wait set over every entity of the three nodes);
 #: it cannot hand MessageInfo to callbacks, so the recorder stamps publish times on receipt.
-EXECUTORS = {"events": _events_executor, "single": SingleThreadedExecutor}
+EXECUTORS = {'events': _events_executor, 'single': SingleThreadedExecutor}
 
 #: Wall-clock seconds between progress lines.
 PROGRESS_PERIOD = 1.0
@@ -102,17 +104,17 @@ class BringupResult:
 def _progress_line(sim: SimNode, started: float) -> str:
     done = sim.t / sim.scenario.duration if sim.scenario.duration else 1.0
     rate = sim.published_samples / max(time.monotonic() - started, 1e-9)
-    return (f"\rbringup: t = {sim.t:.6g} / {sim.scenario.duration:g} yr ({100 * done:5.1f} %), "
-            f"{sim.published_samples} samples, {rate:,.0f} samples/s")
+    return (f'\rbringup: t = {sim.t:.6g} / {sim.scenario.duration:g} yr ({100 * done:5.1f} %), '
+            f'{sim.published_samples} samples, {rate:,.0f} samples/s')
 
 
 @contextmanager
 def _isolated(visible: bool):
     """Discovery off for the contexts created inside (the nodes still talk within the process)."""
-    key = "ROS_AUTOMATIC_DISCOVERY_RANGE"
+    key = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
     saved = os.environ.get(key)
     if not visible:
-        os.environ[key] = "OFF"
+        os.environ[key] = 'OFF'
     try:
         yield
     finally:
@@ -122,10 +124,12 @@ def _isolated(visible: bool):
             os.environ[key] = saved
 
 
-def run_bringup(params_file: str | None = None, output: str | None = None, model: str | None = None,
-                ros_args: list[str] | None = None, progress=sys.stderr,
-                executor_name: str = "events", visible: bool = False) -> BringupResult:
-    """Run sim + comparator + recorder until the scenario ends; return what was recorded.
+def run_bringup(params_file: str | None = None, output: str | None = None,
+                model: str | None = None, ros_args: list[str] | None = None,
+                progress=sys.stderr, executor_name: str = 'events',
+                visible: bool = False) -> BringupResult:
+    """
+    Run sim + comparator + recorder until the scenario ends; return what was recorded.
 
     ``executor_name`` is a key of :data:`EXECUTORS`; ``visible``: see the module docstring
     (isolation). SIGINT and SIGTERM stop the run early with the file finalised
@@ -136,12 +140,12 @@ def run_bringup(params_file: str | None = None, output: str | None = None, model
     if executor_name not in EXECUTORS:
         raise ValueError(f"executor: must be one of {', '.join(EXECUTORS)}, got {executor_name!r}")
     # The file first: what --ros-args says after it (-p duration:=...) overrides it.
-    args = ["bringup", "--ros-args", *(["--params-file", str(params_file)] if params_file else []),
+    args = ['bringup', '--ros-args', *(['--params-file', str(params_file)] if params_file else []),
             *(ros_args or [])]
     problem = params_file_problem(args)
     if problem:
         raise ValueError(problem)
-    with StopSignals("bringup") as stop, _isolated(visible):
+    with StopSignals('bringup') as stop, _isolated(visible):
         return _run(args, output, model, progress, executor_name, stop)
 
 
@@ -152,13 +156,13 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals) -> Bri
     nodes = []
     try:
         sim = SimNode(context=context, parameter_overrides=[
-            Parameter("real_time_factor", value=0.0), Parameter("min_consumers", value=2)])
+            Parameter('real_time_factor', value=0.0), Parameter('min_consumers', value=2)])
         nodes.append(sim)
-        comparator_overrides = [Parameter("model", value=model)] if model else []
+        comparator_overrides = [Parameter('model', value=model)] if model else []
         nodes.append(ComparatorNode(context=context, parameter_overrides=comparator_overrides))
-        recorder_overrides = [Parameter("output", value=str(output))] if output else []
+        recorder_overrides = [Parameter('output', value=str(output))] if output else []
         recorder = RecorderNode(context=context, parameter_overrides=recorder_overrides,
-                                message_info=executor_name != "events")
+                                message_info=executor_name != 'events')
         nodes.append(recorder)
         problem = params_file_problem(args, sim.get_fully_qualified_name())
         if problem:
@@ -183,10 +187,12 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals) -> Bri
 
         def drained() -> bool:
             counts = recorder.counts
-            per_sample = ("angular_velocity", "attitude", "euler_angles", "/clock")
-            comparisons = ("comparison/model_angular_velocity", "comparison/error", "comparison/error_norm")
+            per_sample = ('angular_velocity', 'attitude', 'euler_angles', '/clock')
+            comparisons = ('comparison/model_angular_velocity', 'comparison/error',
+                           'comparison/error_norm')
             return (comparator.consumed == sim.published_samples
-                    and all(counts.get(sim.resolve_topic_name(t), 0) == sim.published_samples for t in per_sample)
+                    and all(counts.get(sim.resolve_topic_name(t), 0) == sim.published_samples
+                            for t in per_sample)
                     and all(counts.get(comparator.resolve_topic_name(t), 0) == comparator.compared
                             for t in comparisons))
 
@@ -194,7 +200,7 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals) -> Bri
         while not drained() and not stopped() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.01)
         if progress:
-            progress.write(_progress_line(sim, started) + "\n")
+            progress.write(_progress_line(sim, started) + '\n')
         comparator.close()
         recorder.close()
         return BringupResult(output=recorder.path, state=sim.state, message=sim.status_message,
@@ -210,55 +216,60 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals) -> Bri
 
 
 def format_result(result: BringupResult) -> str:
-    """The printed summary of a run."""
+    """Return the printed summary of a run."""
     size = result.output.stat().st_size if result.output.exists() else 0
     if result.signal is not None:
-        head = (f"stopped by {signal.Signals(result.signal).name} after {result.samples} samples; "
-                "the recording was finalised")
+        head = (f'stopped by {signal.Signals(result.signal).name} after {result.samples} samples; '
+                'the recording was finalised')
     elif result.error:
-        head = f"ERROR: {result.error}"
+        head = f'ERROR: {result.error}'
     else:
-        head = f"{'finished' if result.state == SimStatus.FINISHED else 'DIVERGED'}: {result.message}"
-    lines = [f"bringup: {head}", *(f"bringup: WARNING: {w}" for w in result.warnings),
-             f"  {result.samples} samples in {result.wall_seconds:.1f} s wall; "
-             f"recorded {result.output} ({size / 1e6:.2f} MB)"]
-    lines += [f"  {topic:40s} {count:8d}" for topic, count in sorted(result.counts.items())]
-    return "\n".join(lines)
+        state = 'finished' if result.state == SimStatus.FINISHED else 'DIVERGED'
+        head = f'{state}: {result.message}'
+    lines = [f'bringup: {head}', *(f'bringup: WARNING: {w}' for w in result.warnings),
+             f'  {result.samples} samples in {result.wall_seconds:.1f} s wall; '
+             f'recorded {result.output} ({size / 1e6:.2f} MB)']
+    lines += [f'  {topic:40s} {count:8d}' for topic, count in sorted(result.counts.items())]
+    return '\n'.join(lines)
 
 
 def main(args: list[str] | None = None) -> int:
-    """Entry point of ``ros2 run tumble_ros bringup``; ``args`` as sys.argv (program name first)."""
+    """Entry point of ``ros2 run tumble_ros bringup``; ``args``: sys.argv, program name first."""
     argv = list(sys.argv if args is None else args)[1:]
     ros_args = []
-    if "--ros-args" in argv:
-        k = argv.index("--ros-args")
+    if '--ros-args' in argv:
+        k = argv.index('--ros-args')
         argv, ros_args = argv[:k], argv[k + 1:]
-    parser = argparse.ArgumentParser(prog="bringup", description=__doc__.split("\n\n")[0])
-    parser.add_argument("scenario", nargs="?", help="ROS 2 params file (config/*.yaml); default scenario if omitted")
-    parser.add_argument("--output", help="MCAP file to write (default recordings/tumble_<time>.mcap)")
-    parser.add_argument("--model", help="the comparator's analytic model")
-    parser.add_argument("--executor", choices=sorted(EXECUTORS), default="events",
-                        help="rclpy executor running the three nodes (default: events, the faster)")
-    parser.add_argument("--quiet", action="store_true", help="no progress display")
-    parser.add_argument("--visible", action="store_true",
-                        help="let other ROS processes see the run (default: isolated, see above)")
+    parser = argparse.ArgumentParser(prog='bringup', description=__doc__.split('\n\n')[0])
+    parser.add_argument('scenario', nargs='?',
+                        help='ROS 2 params file (config/*.yaml); default scenario if omitted')
+    parser.add_argument('--output',
+                        help='MCAP file to write (default recordings/tumble_<time>.mcap)')
+    parser.add_argument('--model', help="the comparator's analytic model")
+    parser.add_argument('--executor', choices=sorted(EXECUTORS), default='events',
+                        help='rclpy executor running the three nodes '
+                             '(default: events, the faster)')
+    parser.add_argument('--quiet', action='store_true', help='no progress display')
+    parser.add_argument('--visible', action='store_true',
+                        help='let other ROS processes see the run (default: isolated, see above)')
     options = parser.parse_args(argv)
     if options.scenario and not Path(options.scenario).is_file():
-        print(f"ERROR: no scenario file {options.scenario}", file=sys.stderr)
+        print(f'ERROR: no scenario file {options.scenario}', file=sys.stderr)
         return 1
     try:
         result = run_bringup(options.scenario, options.output, options.model, ros_args,
-                             progress=None if options.quiet else sys.stderr, executor_name=options.executor,
+                             progress=None if options.quiet else sys.stderr,
+                             executor_name=options.executor,
                              visible=options.visible)
     except (ScenarioError, ValueError, ParameterException) as err:
         print(f"ERROR: {' '.join(str(err).split())}", file=sys.stderr)
         return 1
     except OSError as err:  # the recording cannot be created (read-only directory, exists, ...)
-        print(f"ERROR: cannot record: {err}", file=sys.stderr)
+        print(f'ERROR: cannot record: {err}', file=sys.stderr)
         return 1
     print(format_result(result))
     return result.exit_code
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     raise SystemExit(main())

@@ -1,4 +1,5 @@
-"""Timers on the steady clock, for the nodes' own machinery.
+"""
+Timers on the steady clock, for the nodes' own machinery.
 
 A node's default timer runs on ROS time, which with ``use_sim_time:=true`` only advances when
 ``/clock`` does. The simulator *is* the clock source, and the consumers' progress reports, the
@@ -14,9 +15,9 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.timer import Timer
 
-__all__ = ["steady_timer"]
+__all__ = ['steady_timer']
 
 
 def steady_timer(node: Node, period: float, callback: Callable[[], None]) -> Timer:
-    """A timer of ``node`` calling ``callback`` every ``period`` seconds of steady (wall) time."""
+    """Create a timer of ``node`` calling ``callback`` every ``period`` s of steady (wall) time."""
     return node.create_timer(period, callback, clock=Clock(clock_type=ClockType.STEADY_TIME))

@@ -1,4 +1,5 @@
-"""The comparator node: ``ros2 run tumble_ros comparator``.
+"""
+The comparator node: ``ros2 run tumble_ros comparator``.
 
 Subscribes to the simulator's ``angular_velocity`` and latched ``scenario``, evaluates an
 analytic model (:mod:`tumble_ros.core.analytic`) at each sample's simulated time and
@@ -15,25 +16,26 @@ The model is anchored on the state the simulator's current integration segment s
 description with the post-impact state), so the error measures the model, not the impact. Each
 sample is compared with the model of the segment its time falls in: the simulator publishes a
 segment's description before the segment's first sample, and samples of the previous segment that
-are still queued keep the previous model. A late start or a restart of either node recovers from the latched topic.
-Samples that arrive before any description are held (up to ``MAX_PENDING``) and compared
-``SETTLE`` seconds after the first description arrives: on a late join, DDS replays the latched
-description history and the sample history on separate topics in no particular order, and the
-later descriptions (post-impact anchors) must be in before the held samples are compared. The comparator reports its progress on ``consumer_progress`` so the simulator never
+are still queued keep the previous model. A late start or a restart of either node recovers from
+the latched topic. Samples that arrive before any description are held (up to ``MAX_PENDING``)
+and compared ``SETTLE`` seconds after the first description arrives: on a late join, DDS replays
+the latched description history and the sample history on separate topics in no particular
+order, and the later descriptions (post-impact anchors) must be in before the held samples are
+compared. The comparator reports its progress on ``consumer_progress`` so the simulator never
 outruns it.
 """
 from __future__ import annotations
 
-import math
 from collections import deque
+import math
 
-import numpy as np
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Vector3, Vector3Stamped
+import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 
-from tumble_ros.core import ANALYTIC_MODELS, ScenarioError, TimeBase, make_model, parse_scenario
+from tumble_ros.core import ANALYTIC_MODELS, make_model, parse_scenario, ScenarioError, TimeBase
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.progress import ProgressReporter
@@ -42,7 +44,7 @@ from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
 from tumble_ros_interfaces.msg import ErrorNorm, ScenarioDescription
 
-__all__ = ["ComparatorNode", "main"]
+__all__ = ['ComparatorNode', 'main']
 
 #: Samples held while waiting for the first scenario description.
 MAX_PENDING = 10_000
@@ -54,8 +56,8 @@ SETTLE = 0.2
 LOOKAHEAD = 64
 
 PARAMETERS = {
-    "model": ("paper", "", "analytic model: " + ", ".join(ANALYTIC_MODELS), None, False),
-    "decimation": (1, "", "compare every k-th sample", (1, 1_000_000), False),
+    'model': ('paper', '', 'analytic model: ' + ', '.join(ANALYTIC_MODELS), None, False),
+    'decimation': (1, '', 'compare every k-th sample', (1, 1_000_000), False),
 }
 
 
@@ -63,11 +65,11 @@ class ComparatorNode(Node):
     """Comparator node; see the module docstring."""
 
     def __init__(self, **kwargs) -> None:
-        super().__init__("comparator", **kwargs)
+        super().__init__('comparator', **kwargs)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         params = declare_node_parameters(self, PARAMETERS)
-        self._model_name: str = params["model"]
-        self._decimation: int = params["decimation"]
+        self._model_name: str = params['model']
+        self._decimation: int = params['decimation']
         self._description: ScenarioDescription | None = None
         self._timebase = TimeBase()
         self._model = None  # anchored on the latest segment
@@ -78,38 +80,45 @@ class ComparatorNode(Node):
         self.compared = 0  # comparisons published (each on the three comparison topics)
         self._pending: deque[Vector3Stamped] = deque(maxlen=MAX_PENDING)
         self._settle_timer = None
-        self._pub_model = self.create_publisher(Vector3Stamped, "comparison/model_angular_velocity", STATE_QOS)
-        self._pub_error = self.create_publisher(Vector3Stamped, "comparison/error", STATE_QOS)
-        self._pub_norm = self.create_publisher(ErrorNorm, "comparison/error_norm", STATE_QOS)
-        self._pub_status = self.create_publisher(DiagnosticStatus, "comparison/status", LATCHED_QOS)
+        self._pub_model = self.create_publisher(Vector3Stamped,
+                                                'comparison/model_angular_velocity', STATE_QOS)
+        self._pub_error = self.create_publisher(Vector3Stamped, 'comparison/error', STATE_QOS)
+        self._pub_norm = self.create_publisher(ErrorNorm, 'comparison/error_norm', STATE_QOS)
+        self._pub_status = self.create_publisher(DiagnosticStatus, 'comparison/status',
+                                                 LATCHED_QOS)
         self._progress = ProgressReporter(self)
-        self.create_subscription(ScenarioDescription, "scenario", self._on_scenario, DESCRIPTION_QOS)
-        self.create_subscription(Vector3Stamped, "angular_velocity", self._on_omega, STATE_QOS)
+        self.create_subscription(ScenarioDescription, 'scenario', self._on_scenario,
+                                 DESCRIPTION_QOS)
+        self.create_subscription(Vector3Stamped, 'angular_velocity', self._on_omega, STATE_QOS)
         self._status = (DiagnosticStatus.WARN, "waiting for the simulator's scenario description")
         self._report(*self._status)
-        self._sources = SourceMonitor(self, lambda: ("angular_velocity", "scenario"), self._on_sources)
+        self._sources = SourceMonitor(self, lambda: ('angular_velocity', 'scenario'),
+                                      self._on_sources)
 
     # -- parameters ---------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
         for p in parameters:
-            if p.name == "model" and p.value not in ANALYTIC_MODELS:
+            if p.name == 'model' and p.value not in ANALYTIC_MODELS:
+                known = ', '.join(ANALYTIC_MODELS)
                 return SetParametersResult(
-                    successful=False, reason=f"model: unknown model {p.value!r}; known: {', '.join(ANALYTIC_MODELS)}")
-        if hasattr(self, "_pub_status"):  # after start-up
+                    successful=False, reason=f'model: unknown model {p.value!r}; known: {known}')
+        if hasattr(self, '_pub_status'):  # after start-up
             for p in parameters:
-                if p.name == "model":
+                if p.name == 'model':
                     self._model_name = p.value
                     self._anchor()
-                elif p.name == "decimation":
+                elif p.name == 'decimation':
                     self._decimation = p.value
         return SetParametersResult(successful=True)
 
     # -- model anchoring ----------------------------------------------------------------
     def _on_scenario(self, msg: ScenarioDescription) -> None:
         old = self._description
-        if old is not None and msg.revision > old.revision and msg.segment_start > old.segment_start:
+        if (old is not None and msg.revision > old.revision
+                and msg.segment_start > old.segment_start):
             # Samples of the previous segment may still be queued: keep its model for them.
-            self._previous = [*self._previous[-(DESCRIPTION_QOS.depth - 1):], (old.segment_start, self._model)]
+            self._previous = [*self._previous[-(DESCRIPTION_QOS.depth - 1):],
+                              (old.segment_start, self._model)]
         elif old is None or msg.revision <= old.revision:
             self._previous = []  # a new run (the simulator restarted)
         first = self._description is None
@@ -133,37 +142,42 @@ class ComparatorNode(Node):
             return
         try:
             scenario = parse_scenario(msg.parameters_yaml)
-            self._interval_ns = self._timebase.sample_grid(scenario.output_interval, scenario.duration)[0]
+            self._interval_ns = self._timebase.sample_grid(scenario.output_interval,
+                                                           scenario.duration)[0]
             q = msg.attitude
             self._model = make_model(
                 self._model_name, scenario, t0=msg.segment_start,
                 omega=(msg.omega.x, msg.omega.y, msg.omega.z), quaternion=(q.w, q.x, q.y, q.z))
         except (ScenarioError, ValueError) as err:
             self._model = None
-            self.get_logger().warning(f"no comparison: {err}")
+            self.get_logger().warning(f'no comparison: {err}')
             self._report(DiagnosticStatus.WARN, str(err))
             return
-        text = (f"model {self._model_name!r} ({self._model.label}) anchored at t = "
-                f"{msg.segment_start:.9g} yr (segment {msg.revision})")
+        text = (f'model {self._model_name!r} ({self._model.label}) anchored at t = '
+                f'{msg.segment_start:.9g} yr (segment {msg.revision})')
         self.get_logger().info(text)
         self._report(DiagnosticStatus.OK, text)
 
     def _on_sources(self, problem: str | None) -> None:
-        """A second simulator appeared on our inputs (ERROR), or it left (back to the model's status)."""
+        """Report a second simulator on our inputs (ERROR), or restore the model's status."""
         if problem:
             self._report(DiagnosticStatus.ERROR, problem, keep=False)
         else:
             self._report(*self._status)
 
     def _report(self, level: bytes, message: str, keep: bool = True) -> None:
-        """Publish ``comparison/status``; ``keep``: it is the model's status (restored after a
-        second-source error clears)."""
+        """
+        Publish ``comparison/status``.
+
+        ``keep``: it is the model's status (restored after a second-source error clears).
+        """
         if keep:
             self._status = (level, message)
-            if getattr(self, "_sources", None) is not None and self._sources.current:
+            if getattr(self, '_sources', None) is not None and self._sources.current:
                 return  # the second-source error stays on until it clears
-        status = DiagnosticStatus(level=level, name=self.get_fully_qualified_name(), message=message)
-        status.values = [KeyValue(key="model", value=self._model_name)]
+        status = DiagnosticStatus(level=level, name=self.get_fully_qualified_name(),
+                                  message=message)
+        status.values = [KeyValue(key='model', value=self._model_name)]
         self._pub_status.publish(status)
 
     # -- comparison ---------------------------------------------------------------------
@@ -185,7 +199,7 @@ class ComparatorNode(Node):
         self._progress.mark(stamp_ns)
 
     def _model_omega(self, model, stamp_ns: int, t: float) -> list[float]:
-        """``model`` at ``t`` [yr]; on the simulator's grid, computed LOOKAHEAD samples at a time."""
+        """Evaluate ``model`` at ``t`` [yr] (on the simulator's grid: LOOKAHEAD at once)."""
         step = self._interval_ns
         if not step or stamp_ns % step:
             return model.omega(np.array([t]))[0].tolist()
@@ -198,7 +212,7 @@ class ComparatorNode(Node):
         return values[k - k0]
 
     def _model_for(self, t: float):
-        """The model of the segment containing ``t`` (samples can trail the description)."""
+        """Return the model of the segment containing ``t`` (samples can trail the description)."""
         if self._description is None or t >= self._description.segment_start:
             return self._model
         for start, model in reversed(self._previous):
@@ -208,7 +222,7 @@ class ComparatorNode(Node):
 
     @property
     def consumed(self) -> int:
-        """Samples taken from angular_velocity and processed (compared or not)."""
+        """Count the samples taken from angular_velocity and processed (compared or not)."""
         return self._received
 
     def _publish(self, header, numeric, model) -> None:
@@ -233,8 +247,8 @@ def _vector(v) -> Vector3:
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run tumble_ros comparator``."""
-    return run_node(ComparatorNode, args, "comparator")
+    return run_node(ComparatorNode, args, 'comparator')
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     raise SystemExit(main())

@@ -1,4 +1,5 @@
-"""Declaring and reading ROS 2 parameters with descriptors (description, unit, range).
+"""
+Declaring and reading ROS 2 parameters with descriptors (description, unit, range).
 
 The scenario's parameters come from :data:`tumble_ros.core.scenario.PARAMETER_DOCS` and are
 validated by :class:`tumble_ros.core.Scenario` itself: the node adds no rules of its own.
@@ -7,29 +8,29 @@ They are read-only: a scenario is fixed for the life of a run.
 from __future__ import annotations
 
 import difflib
-import re
 from pathlib import Path
+import re
 from typing import Any, Iterable
 
-import yaml
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
-
 from tumble_ros.core import PARAMETER_DOCS, Scenario
+import yaml
 
-__all__ = ["declare_node_parameters", "declare_scenario_parameters", "node_parameter", "read_parameters",
-           "read_scenario_parameters", "describe", "params_file_problem", "refuse_unknown_parameters",
-           "section_applies"]
+__all__ = ['declare_node_parameters', 'declare_scenario_parameters', 'node_parameter',
+           'read_parameters', 'read_scenario_parameters', 'describe', 'params_file_problem',
+           'refuse_unknown_parameters', 'section_applies']
 
 
 def describe(description: str, unit: str) -> str:
     """Parameter description with its unit in brackets."""
-    return f"{description} [{unit}]" if unit else description
+    return f'{description} [{unit}]' if unit else description
 
 
 def declare_scenario_parameters(node: Node) -> None:
-    """Declare every Scenario field as a read-only parameter, defaults from ``Scenario()``.
+    """
+    Declare every Scenario field as a read-only parameter, defaults from ``Scenario()``.
 
     Every parameter gets a value, empty arrays included (``impacts.*: []``): a parameter declared
     without a value makes GetParameters answer nothing for the whole request, so ``ros2 param
@@ -40,7 +41,7 @@ def declare_scenario_parameters(node: Node) -> None:
         unit, description = PARAMETER_DOCS[name]
         descriptor = ParameterDescriptor(
             description=describe(description, unit),
-            additional_constraints="validated by tumble_ros.core.Scenario (docs/physics.md)",
+            additional_constraints='validated by tumble_ros.core.Scenario (docs/physics.md)',
             read_only=True,
             # Integers in YAML (duration: 2) are accepted; Scenario converts and checks.
             dynamic_typing=True,
@@ -57,13 +58,18 @@ def node_parameter(node: Node, name: str, default: Any, unit: str, description: 
         descriptor.integer_range = [IntegerRange(from_value=int(low), to_value=int(high), step=1)]
     elif value_range is not None:
         descriptor.floating_point_range = [
-            FloatingPointRange(from_value=float(value_range[0]), to_value=float(value_range[1]), step=0.0)]
+            FloatingPointRange(from_value=float(value_range[0]), to_value=float(value_range[1]),
+                               step=0.0)]
     node.declare_parameter(name, default, descriptor)
 
 
 def declare_node_parameters(node: Node, table: dict[str, tuple]) -> dict[str, Any]:
-    """Declare a node's own parameters from ``{name: (default, unit, description, range, read_only)}``
-    and return their values (overrides and params files applied, ranges enforced)."""
+    """
+    Declare a node's own parameters and return their values.
+
+    ``table`` is ``{name: (default, unit, description, range, read_only)}``; the values returned
+    have the overrides and params files applied and their ranges enforced.
+    """
     for name, spec in table.items():
         node_parameter(node, name, *spec)
     return read_parameters(node, table)
@@ -74,21 +80,22 @@ def _value(node: Node, name: str) -> Any:
         value = node.get_parameter(name).value
     except ParameterUninitializedException:
         return []
-    return list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else value
+    return list(value) if isinstance(value, (list, tuple)) or hasattr(value, 'tolist') else value
 
 
 def read_parameters(node: Node, names) -> dict[str, Any]:
-    """Current values of the named parameters."""
+    """Return the current values of the named parameters."""
     return {name: _value(node, name) for name in names}
 
 
 def read_scenario_parameters(node: Node) -> dict[str, Any]:
-    """Current values of the scenario parameters (see :func:`declare_scenario_parameters`)."""
+    """Return the scenario parameters' values (see :func:`declare_scenario_parameters`)."""
     return read_parameters(node, PARAMETER_DOCS)
 
 
 def refuse_unknown_parameters(nodes: Iterable[Node]) -> None:
-    """Raise ValueError naming every override that no node of ``nodes`` declares.
+    """
+    Raise ValueError naming every override that no node of ``nodes`` declares.
 
     rclpy silently drops an override (``-p``, a params-file entry) for a parameter the node does
     not declare, so a misspelt key (``durration``) would run with the default. ``nodes`` are the
@@ -101,51 +108,56 @@ def refuse_unknown_parameters(nodes: Iterable[Node]) -> None:
     problems = []
     for node in nodes:
         # Node._parameter_overrides: every override rclpy found for this node (no public getter).
-        for name in sorted(getattr(node, "_parameter_overrides", {})):
-            if name in known or name.startswith("qos_overrides."):
+        for name in sorted(getattr(node, '_parameter_overrides', {})):
+            if name in known or name.startswith('qos_overrides.'):
                 continue
             near = difflib.get_close_matches(name, sorted(known), n=1)
-            hint = f" (did you mean {near[0]!r}?)" if near else ""
-            problems.append(f"{node.get_fully_qualified_name()}: unknown parameter {name!r}{hint}")
+            hint = f' (did you mean {near[0]!r}?)' if near else ''
+            problems.append(f'{node.get_fully_qualified_name()}: unknown parameter {name!r}{hint}')
     if problems:
-        raise ValueError("; ".join(dict.fromkeys(problems)))
+        raise ValueError('; '.join(dict.fromkeys(problems)))
 
 
 def _params_files(args: list[str] | None) -> list[str]:
-    """The files named by ``--params-file`` after ``--ros-args`` in a node's arguments."""
+    """Return the files named by ``--params-file`` after ``--ros-args`` in a node's arguments."""
     args = list(args or [])
     files, in_ros_args = [], False
     for k, arg in enumerate(args):
-        if arg == "--ros-args":
+        if arg == '--ros-args':
             in_ros_args = True
-        elif arg == "--":
+        elif arg == '--':
             in_ros_args = False
-        elif in_ros_args and arg == "--params-file" and k + 1 < len(args):
+        elif in_ros_args and arg == '--params-file' and k + 1 < len(args):
             files.append(args[k + 1])
     return files
 
 
 def _node_sections(tree: Any, path: tuple[str, ...] = ()) -> list[str]:
-    """The node keys of a params file (``sim``, ``/ns/sim``, ``/**``): where ros__parameters sit."""
+    """List a params file's node keys (``sim``, ``/ns/sim``, ``/**``): where ros__parameters is."""
     if not isinstance(tree, dict):
         return []
-    if "ros__parameters" in tree:
-        return ["/".join(path)]
+    if 'ros__parameters' in tree:
+        return ['/'.join(path)]
     return [key for k, v in tree.items() for key in _node_sections(v, (*path, str(k)))]
 
 
 def section_applies(key: str, node_fqn: str) -> bool:
-    """Whether a params-file node key (``sim``, ``/ast1/sim``, ``/**``, ``/**/sim``) applies to the
-    node ``node_fqn`` (``/ast1/sim``), by rcl's rules: a key without a leading slash is in the
-    root namespace (``sim`` is ``/sim`` only), ``*`` matches one name, ``/**`` any namespaces."""
-    key = key if key.startswith("/") else "/" + key
-    pattern = "".join("(/[^/]+)*" if part == "**" else "/[^/]+" if part == "*" else "/" + re.escape(part)
-                      for part in key.split("/")[1:])
+    """
+    Tell whether a params-file node key applies to the node ``node_fqn``, by rcl's rules.
+
+    Keys look like ``sim``, ``/ast1/sim``, ``/**`` or ``/**/sim``, nodes like ``/ast1/sim``. A key
+    without a leading slash is in the root namespace (``sim`` is ``/sim`` only), ``*`` matches
+    one name, ``/**`` any namespaces.
+    """
+    key = key if key.startswith('/') else '/' + key
+    pattern = ''.join('(/[^/]+)*' if part == '**' else '/[^/]+' if part == '*'
+                      else '/' + re.escape(part) for part in key.split('/')[1:])
     return re.fullmatch(pattern, node_fqn) is not None
 
 
 def params_file_problem(args: list[str] | None, node_fqn: str | None = None) -> str | None:
-    """What is wrong with the ``--params-file`` files of ``args`` (None: nothing).
+    """
+    Say what is wrong with the ``--params-file`` files of ``args`` (None: nothing).
 
     rcl stops with a traceback on a missing, binary or malformed file; this says which file and
     why, in one line. With ``node_fqn`` (``/sim``, ``/ast1/sim``), a file must also have a section
@@ -155,18 +167,20 @@ def params_file_problem(args: list[str] | None, node_fqn: str | None = None) -> 
     for name in _params_files(args):
         path = Path(name)
         if not path.is_file():
-            return f"params file {name}: {'not a regular file' if path.exists() else 'no such file'}"
+            what = 'not a regular file' if path.exists() else 'no such file'
+            return f'params file {name}: {what}'
         try:
-            tree = yaml.safe_load(path.read_text(encoding="utf-8"))
+            tree = yaml.safe_load(path.read_text(encoding='utf-8'))
         except (OSError, UnicodeDecodeError) as err:
-            return f"params file {name}: cannot read it as text ({err.__class__.__name__}: {err})"
+            return f'params file {name}: cannot read it as text ({err.__class__.__name__}: {err})'
         except yaml.YAMLError as err:
             return f"params file {name}: not valid YAML: {' '.join(str(err).split())}"
         sections = _node_sections(tree)
         if not sections:
-            return (f"params file {name}: no parameters (a ROS 2 params file maps node names to "
+            return (f'params file {name}: no parameters (a ROS 2 params file maps node names to '
                     "'ros__parameters:' sections)")
         if node_fqn and not any(section_applies(s, node_fqn) for s in sections):
-            return (f"params file {name}: no section applies to node {node_fqn} (sections: {', '.join(sections)}; "
+            return (f'params file {name}: no section applies to node {node_fqn} '
+                    f"(sections: {', '.join(sections)}; "
                     f"'/**/{node_fqn.rsplit('/', 1)[-1]}:' applies in any namespace)")
     return None

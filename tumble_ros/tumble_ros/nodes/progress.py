@@ -1,4 +1,5 @@
-"""Flow control between the simulator and the consumers that must not lose samples.
+"""
+Flow control between the simulator and the consumers that must not lose samples.
 
 DDS alone does not give "as fast as the subscribers take it": a reliable writer with a
 bounded history overwrites samples a slow reader has not taken yet, and rclpy executors
@@ -21,10 +22,11 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros_interfaces.msg import ConsumerProgress
 
-__all__ = ["ProgressReporter", "ConsumerTracker", "PROGRESS_TOPIC", "CONSUMER_TIMEOUT"]
+__all__ = ['ProgressReporter', 'ConsumerTracker', 'PROGRESS_TOPIC', 'CONSUMER_TIMEOUT']
 
-PROGRESS_TOPIC = "consumer_progress"
-PROGRESS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE)
+PROGRESS_TOPIC = 'consumer_progress'
+PROGRESS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                          reliability=ReliabilityPolicy.RELIABLE)
 #: Reporting period of a consumer [s] (when it made progress).
 REPORT_PERIOD = 0.002
 #: A consumer re-sends its progress at least this often [s], so a simulator that starts later
@@ -39,7 +41,8 @@ _NOTHING_YET = -1
 
 
 class ProgressReporter:
-    """Publishes a consumer's progress (the stamp of the last sample it fully processed).
+    """
+    Publishes a consumer's progress (the stamp of the last sample it fully processed).
 
     The consumer calls :meth:`mark` as it goes, or passes ``source``: a function returning its
     progress stamp [ns] (or None), asked once per report instead of once per message.
@@ -73,12 +76,14 @@ class ProgressReporter:
         if self._last_ns == _NOTHING_YET:
             msg.last_stamp = Time(sec=-1, nanosec=0)
         else:
-            msg.last_stamp = Time(sec=self._last_ns // 1_000_000_000, nanosec=self._last_ns % 1_000_000_000)
+            msg.last_stamp = Time(sec=self._last_ns // 1_000_000_000,
+                                  nanosec=self._last_ns % 1_000_000_000)
         self._pub.publish(msg)
         self._sent_ns, self._sent_at = self._last_ns, time.monotonic()
 
     def close(self) -> None:
-        """Tell the simulator this consumer is leaving, and wait (briefly) until it heard it.
+        """
+        Tell the simulator this consumer is leaving, and wait (briefly) until it heard it.
 
         Called before the node is destroyed, with the context still valid (nodes.runner), so a
         stopped consumer never makes the simulator wait for it. Calling it again does nothing.
@@ -92,7 +97,8 @@ class ProgressReporter:
 
 
 class ConsumerTracker:
-    """The simulator's view of its consumers' progress.
+    """
+    The simulator's view of its consumers' progress.
 
     Parameters
     ----------
@@ -101,6 +107,7 @@ class ConsumerTracker:
         (it died without saying so), with a warning.
     on_drop : called with a one-line message when a consumer is dropped (the simulator puts it
         on its ``status``).
+
     """
 
     def __init__(self, node: Node, timeout: float = CONSUMER_TIMEOUT,
@@ -108,26 +115,30 @@ class ConsumerTracker:
         self._node = node
         self._timeout = timeout
         self._on_drop = on_drop
-        self._progress: dict[str, tuple[int, float]] = {}  # consumer -> (last ns, wall time of report)
+        # consumer -> (last ns, wall time of report)
+        self._progress: dict[str, tuple[int, float]] = {}
         node.create_subscription(ConsumerProgress, PROGRESS_TOPIC, self._on_progress, PROGRESS_QOS)
 
     def _on_progress(self, msg: ConsumerProgress) -> None:
         if not msg.active:
             if self._progress.pop(msg.consumer, None) is not None:
-                self._node.get_logger().info(f"consumer {msg.consumer} left")
+                self._node.get_logger().info(f'consumer {msg.consumer} left')
             return
-        ns = _NOTHING_YET if msg.last_stamp.sec < 0 else msg.last_stamp.sec * 1_000_000_000 + msg.last_stamp.nanosec
+        ns = (_NOTHING_YET if msg.last_stamp.sec < 0
+              else msg.last_stamp.sec * 1_000_000_000 + msg.last_stamp.nanosec)
         if msg.consumer not in self._progress:
-            self._node.get_logger().info(f"consumer {msg.consumer} registered: pacing on its progress")
+            self._node.get_logger().info(
+                f'consumer {msg.consumer} registered: pacing on its progress')
         self._progress[msg.consumer] = (ns, time.monotonic())
 
     @property
     def count(self) -> int:
-        """Number of active consumers."""
+        """Return the number of active consumers."""
         return len(self._progress)
 
     def slowest_ns(self, published_ns: int) -> int | None:
-        """Stamp the slowest consumer has processed (-1: nothing yet); None without consumers.
+        """
+        Stamp the slowest consumer has processed (-1: nothing yet); None without consumers.
 
         ``published_ns`` is the stamp of the last published sample: a consumer that is
         behind it and silent for longer than the timeout is dropped.
@@ -135,7 +146,8 @@ class ConsumerTracker:
         now = time.monotonic()
         for name, (ns, seen) in list(self._progress.items()):
             if ns < published_ns and now - seen > self._timeout:
-                message = f"consumer {name} silent for {now - seen:.1f} s: no longer waiting for it"
+                message = (f'consumer {name} silent for {now - seen:.1f} s: '
+                           'no longer waiting for it')
                 self._node.get_logger().warning(message)
                 del self._progress[name]
                 if self._on_drop is not None:

@@ -1,7 +1,7 @@
 """QoS profiles shared by the tumble_ros nodes (one place, so publishers and subscribers match)."""
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ["STATE_QOS", "CLOCK_QOS", "LATCHED_QOS", "DESCRIPTION_QOS", "SERVICE_QOS"]
+__all__ = ['STATE_QOS', 'CLOCK_QOS', 'LATCHED_QOS', 'DESCRIPTION_QOS', 'SERVICE_QOS']
 
 #: Sampled state (w, attitude, Euler angles, /clock, events, comparisons): reliable with a deep
 #: queue, and transient-local, so a subscriber whose subscription is matched a moment after the

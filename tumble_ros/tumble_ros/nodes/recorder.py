@@ -1,4 +1,5 @@
-"""The recorder node: ``ros2 run tumble_ros recorder``.
+"""
+The recorder node: ``ros2 run tumble_ros recorder``.
 
 Records topics to one rosbag2-compatible MCAP file (:class:`tumble_ros.io.McapWriter`: profile
 ``ros2``, ``ros2msg`` schemas with their dependencies, ``cdr`` messages, chunked and compressed)
@@ -27,11 +28,11 @@ in :attr:`RecorderNode.warnings`.
 """
 from __future__ import annotations
 
+from datetime import datetime, timezone
+from pathlib import Path
 import re
 import struct
 import time
-from datetime import datetime, timezone
-from pathlib import Path
 
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidTopicNameException
@@ -48,37 +49,44 @@ from tumble_ros.nodes.qos import STATE_QOS
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
 
-__all__ = ["RecorderNode", "DEFAULT_TOPICS", "main"]
+__all__ = ['RecorderNode', 'DEFAULT_TOPICS', 'main']
 
 #: Recorded when neither ``topics`` nor ``topic_pattern`` is given (relative names resolve
 #: in the recorder's namespace).
 DEFAULT_TOPICS = (
-    "angular_velocity", "attitude", "euler_angles", "/clock", "impact_events", "status", "scenario",
-    "comparison/model_angular_velocity", "comparison/error", "comparison/error_norm", "comparison/status",
+    'angular_velocity', 'attitude', 'euler_angles', '/clock', 'impact_events', 'status',
+    'scenario',
+    'comparison/model_angular_velocity', 'comparison/error', 'comparison/error_norm',
+    'comparison/status',
 )
 #: Types whose CDR starts with a header stamp: one message per simulator sample. The recorder's
 #: progress is the oldest of their latest stamps. Not /clock: it is best effort (CLOCK_QOS).
 PER_SAMPLE_TYPES = {
-    "geometry_msgs/msg/Vector3Stamped", "geometry_msgs/msg/QuaternionStamped", "tumble_ros_interfaces/msg/ErrorNorm",
+    'geometry_msgs/msg/Vector3Stamped', 'geometry_msgs/msg/QuaternionStamped',
+    'tumble_ros_interfaces/msg/ErrorNorm',
 }
 #: A per-sample topic silent for this long [s] no longer holds the recorder's progress back.
 STALE_TOPIC = 2.0
 
 PARAMETERS = {
-    "output": ("", "", "MCAP file to write; empty = recordings/tumble_<UTC time>.mcap", None, True),
-    "topics": ([""], "", "topics to record (empty: the tumble topics)", None, True),
-    "topic_pattern": ("", "", "also record every topic whose full name matches this regex", None, True),
-    "chunk_bytes": (1_000_000, "B", "a chunk is written once it holds this much message data", (1, 2**30), True),
-    "chunk_seconds": (1.0, "s", "... or once its first message is this old", (0.01, 3600.0), True),
-    "compression": ("zstd", "", "chunk compression: " + ", ".join(COMPRESSIONS), None, True),
-    "discovery_period": (0.5, "s", "how often to look for new matching topics", (0.01, 60.0), True),
+    'output': ('', '', 'MCAP file to write; empty = recordings/tumble_<UTC time>.mcap', None,
+               True),
+    'topics': ([''], '', 'topics to record (empty: the tumble topics)', None, True),
+    'topic_pattern': ('', '', 'also record every topic whose full name matches this regex', None,
+                      True),
+    'chunk_bytes': (1_000_000, 'B', 'a chunk is written once it holds this much message data',
+                    (1, 2**30), True),
+    'chunk_seconds': (1.0, 's', '... or once its first message is this old', (0.01, 3600.0), True),
+    'compression': ('zstd', '', 'chunk compression: ' + ', '.join(COMPRESSIONS), None, True),
+    'discovery_period': (0.5, 's', 'how often to look for new matching topics', (0.01, 60.0),
+                         True),
 }
 
 
 def _header_stamp_ns(data: bytes) -> int:
-    """Stamp of a CDR message that starts with builtin_interfaces/Time (after the 4-byte header)."""
+    """Read the stamp of a CDR message that starts with builtin_interfaces/Time (after 4 bytes)."""
     little = data[1] == 1  # encapsulation CDR_LE = 0x0001
-    sec, nanosec = struct.unpack_from("<iI" if little else ">iI", data, 4)
+    sec, nanosec = struct.unpack_from('<iI' if little else '>iI', data, 4)
     return sec * 1_000_000_000 + nanosec
 
 
@@ -90,49 +98,59 @@ class RecorderNode(Node):
     """Recorder node; see the module docstring."""
 
     def __init__(self, *, message_info: bool = True, **kwargs) -> None:
-        """``message_info=False``: subscription callbacks take the message only (executors that
+        """
+        Create the recorder node (its parameters: :data:`PARAMETERS`).
+
+        ``message_info=False``: subscription callbacks take the message only (executors that
         cannot pass rclpy's MessageInfo, e.g. Jazzy's EventsExecutor); the publish time of
-        each record is then its receive time instead of the publisher's source timestamp."""
-        super().__init__("recorder", **kwargs)
+        each record is then its receive time instead of the publisher's source timestamp.
+        """
+        super().__init__('recorder', **kwargs)
         self._message_info = message_info
         self.add_on_set_parameters_callback(self._on_set_parameters)
         p = declare_node_parameters(self, PARAMETERS)
-        topics = [t for t in p["topics"] if t]
-        self._explicit = {self._resolve("topics", t) for t in (topics or ([] if p["topic_pattern"] else DEFAULT_TOPICS))}
-        self._pattern = re.compile(p["topic_pattern"]) if p["topic_pattern"] else None
-        path = Path(p["output"] or f"recordings/tumble_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap")
+        topics = [t for t in p['topics'] if t]
+        self._explicit = {self._resolve('topics', t)
+                          for t in (topics or ([] if p['topic_pattern'] else DEFAULT_TOPICS))}
+        self._pattern = re.compile(p['topic_pattern']) if p['topic_pattern'] else None
+        path = Path(p['output']
+                    or f'recordings/tumble_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap')
         path.parent.mkdir(parents=True, exist_ok=True)
-        self._writer = McapWriter(path, chunk_bytes=p["chunk_bytes"], chunk_seconds=p["chunk_seconds"],
-                                  compression=p["compression"])
+        self._writer = McapWriter(path, chunk_bytes=p['chunk_bytes'],
+                                  chunk_seconds=p['chunk_seconds'],
+                                  compression=p['compression'])
         self._channels: dict[str, int] = {}
         self.error: str | None = None  # why recording stopped early (None: it did not)
         self.warnings: list[str] = []  # second sources seen on the recorded tumble topics
-        self._sim_time = bool(self.get_parameter("use_sim_time").value)
-        self._last_stamp: dict[str, tuple[int, float]] = {}  # per-sample topic -> (stamp ns, wall time)
+        self._sim_time = bool(self.get_parameter('use_sim_time').value)
+        # per-sample topic -> (stamp ns, wall time)
+        self._last_stamp: dict[str, tuple[int, float]] = {}
         self._progress = ProgressReporter(self, source=self._slowest_live_stamp)
         self._discover()
-        steady_timer(self, p["discovery_period"], self._discover)
-        steady_timer(self, p["chunk_seconds"] / 4, self._poll)
+        steady_timer(self, p['discovery_period'], self._discover)
+        steady_timer(self, p['chunk_seconds'] / 4, self._poll)
         tumble = {self.resolve_topic_name(t) for t in DEFAULT_TOPICS}
         self._sources = SourceMonitor(
-            self, lambda: [t for t, c in self._channels.items() if c >= 0 and t in tumble], self._on_sources)
-        self.get_logger().info(f"recording to {path}")
+            self, lambda: [t for t, c in self._channels.items() if c >= 0 and t in tumble],
+            self._on_sources)
+        self.get_logger().info(f'recording to {path}')
 
     @property
     def path(self) -> Path:
-        """The file being written."""
+        """Return the file being written."""
         return self._writer.path
 
     @property
     def counts(self) -> dict[str, int]:
-        """Messages written per topic."""
+        """Return the count of messages written per topic."""
         return self._writer.counts
 
     def _resolve(self, parameter: str, topic: str) -> str:
         try:
             return self.resolve_topic_name(topic)
         except (InvalidTopicNameException, _rclpy.RCLError) as err:
-            raise ValueError(f"{parameter}: invalid topic name {topic!r}: {' '.join(str(err).split())}") from None
+            reason = ' '.join(str(err).split())
+            raise ValueError(f'{parameter}: invalid topic name {topic!r}: {reason}') from None
 
     def _on_sources(self, problem: str | None) -> None:
         if problem:
@@ -140,26 +158,29 @@ class RecorderNode(Node):
 
     def _on_set_parameters(self, parameters) -> SetParametersResult:
         for p in parameters:
-            if p.name == "compression" and p.value not in COMPRESSIONS:
-                return SetParametersResult(successful=False,
-                                           reason=f"compression: must be one of {', '.join(COMPRESSIONS)}")
-            if p.name == "topic_pattern":
+            if p.name == 'compression' and p.value not in COMPRESSIONS:
+                return SetParametersResult(
+                    successful=False,
+                    reason=f"compression: must be one of {', '.join(COMPRESSIONS)}")
+            if p.name == 'topic_pattern':
                 try:
                     re.compile(p.value)
                 except re.error as err:
-                    return SetParametersResult(successful=False, reason=f"topic_pattern: not a regex: {err}")
+                    return SetParametersResult(successful=False,
+                                               reason=f'topic_pattern: not a regex: {err}')
         return SetParametersResult(successful=True)
 
     # -- discovery ----------------------------------------------------------------------
     def _wanted(self, topic: str) -> bool:
-        return topic in self._explicit or (self._pattern is not None and self._pattern.search(topic) is not None)
+        return topic in self._explicit or (self._pattern is not None
+                                           and self._pattern.search(topic) is not None)
 
     def _discover(self) -> None:
         for topic, types in self.get_topic_names_and_types():
             if topic in self._channels or not self._wanted(topic):
                 continue
             if len(types) != 1:
-                self.get_logger().warning(f"not recording {topic}: it has several types {types}")
+                self.get_logger().warning(f'not recording {topic}: it has several types {types}')
                 self._channels[topic] = -1
                 continue
             self._subscribe(topic, types[0])
@@ -170,14 +191,15 @@ class RecorderNode(Node):
             return  # only subscribers so far: the type is known but nobody offers QoS yet
         try:
             msg_class = _import_type(type_name)
-            channel = self._writer.add_channel(topic, type_name, offered_qos_yaml(*[_qos_dict(p.qos_profile)
-                                                                                    for p in publishers]))
+            offered = offered_qos_yaml(*[_qos_dict(p.qos_profile) for p in publishers])
+            channel = self._writer.add_channel(topic, type_name, offered)
         except (LookupError, ImportError, ValueError) as err:
-            self.get_logger().error(f"cannot record {topic} ({type_name}): {err}")
+            self.get_logger().error(f'cannot record {topic} ({type_name}): {err}')
             self._channels[topic] = -1
             return
         self._channels[topic] = channel
-        latched = all(p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in publishers)
+        latched = all(p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
+                      for p in publishers)
         reliable = all(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE for p in publishers)
         qos = QoSProfile(
             history=HistoryPolicy.KEEP_LAST, depth=STATE_QOS.depth,
@@ -189,7 +211,7 @@ class RecorderNode(Node):
             if self.error is not None:
                 return
             received = self.get_clock().now().nanoseconds if self._sim_time else time.time_ns()
-            sent = (info.get("source_timestamp") or received) if info else received
+            sent = (info.get('source_timestamp') or received) if info else received
             try:
                 self._writer.write(channel, data, received, sent)
             except OSError as err:
@@ -200,10 +222,10 @@ class RecorderNode(Node):
 
         callback = on_message if self._message_info else (lambda data: on_message(data, None))
         self.create_subscription(msg_class, topic, callback, qos, raw=True)
-        self.get_logger().info(f"recording {topic} ({type_name})")
+        self.get_logger().info(f'recording {topic} ({type_name})')
 
     def _slowest_live_stamp(self) -> int | None:
-        """Progress [ns]: the last stamp recorded on every per-sample topic still being published."""
+        """Return the progress [ns]: the latest stamp every live per-sample topic has reached."""
         now = time.monotonic()
         live = [ns for ns, seen in self._last_stamp.values() if now - seen < STALE_TOPIC]
         return min(live) if live else None
@@ -216,13 +238,14 @@ class RecorderNode(Node):
                 self._stop_recording(err)
 
     def _stop_recording(self, err: OSError) -> None:
-        """A write failed: keep what was flushed, stop recording, stop holding the simulator."""
+        """Stop recording on a failed write: keep what was flushed, stop holding the simulator."""
         flushed = self._writer.messages_flushed
-        self.error = (f"recording stopped: cannot write {self.path}: {err.strerror or err}; "
-                      f"the file keeps the {flushed} messages flushed before the failure")
+        self.error = (f'recording stopped: cannot write {self.path}: {err.strerror or err}; '
+                      f'the file keeps the {flushed} messages flushed before the failure')
         self.get_logger().error(self.error)
         try:
-            self._writer.close()  # finalise if the disk allows; the flushed chunks stay readable anyway
+            # finalise if the disk allows; the flushed chunks stay readable anyway
+            self._writer.close()
         except OSError:
             pass
         self._progress.close()
@@ -235,17 +258,17 @@ class RecorderNode(Node):
             except OSError as err:
                 self._stop_recording(err)
             else:
-                self.get_logger().info(f"wrote {self.path}: {sum(self.counts.values())} messages on "
-                                       f"{len(self.counts)} topics")
+                self.get_logger().info(f'wrote {self.path}: {sum(self.counts.values())} '
+                                       f'messages on {len(self.counts)} topics')
         self._progress.close()
 
 
 def _import_type(type_name: str):
-    """The Python class of 'pkg/msg/Type' (also 'pkg/srv/Name_Event')."""
+    """Import the Python class of 'pkg/msg/Type' (also 'pkg/srv/Name_Event')."""
     import importlib
 
-    package, kind, name = type_name.split("/")
-    return getattr(importlib.import_module(f"{package}.{kind}"), name)
+    package, kind, name = type_name.split('/')
+    return getattr(importlib.import_module(f'{package}.{kind}'), name)
 
 
 def _qos_dict(qos: QoSProfile) -> dict:
@@ -254,18 +277,19 @@ def _qos_dict(qos: QoSProfile) -> dict:
         return divmod(ns, 1_000_000_000)
 
     return {
-        "history": _policy_name(qos.history), "depth": qos.depth,
-        "reliability": _policy_name(qos.reliability), "durability": _policy_name(qos.durability),
-        "deadline": duration(qos.deadline), "lifespan": duration(qos.lifespan),
-        "liveliness": _policy_name(qos.liveliness), "liveliness_lease_duration": duration(qos.liveliness_lease_duration),
-        "avoid_ros_namespace_conventions": qos.avoid_ros_namespace_conventions,
+        'history': _policy_name(qos.history), 'depth': qos.depth,
+        'reliability': _policy_name(qos.reliability), 'durability': _policy_name(qos.durability),
+        'deadline': duration(qos.deadline), 'lifespan': duration(qos.lifespan),
+        'liveliness': _policy_name(qos.liveliness),
+        'liveliness_lease_duration': duration(qos.liveliness_lease_duration),
+        'avoid_ros_namespace_conventions': qos.avoid_ros_namespace_conventions,
     }
 
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run tumble_ros recorder``."""
-    return run_node(RecorderNode, args, "recorder")
+    return run_node(RecorderNode, args, 'recorder')
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     raise SystemExit(main())

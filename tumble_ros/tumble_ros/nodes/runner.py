@@ -12,14 +12,14 @@ from rclpy.signals import SignalHandlerOptions
 
 from tumble_ros.core import ScenarioError
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
-from tumble_ros.nodes.shutdown import StopSignals, spin_until_stopped
+from tumble_ros.nodes.shutdown import spin_until_stopped, StopSignals
 
-__all__ = ["run_node", "close_node"]
+__all__ = ['run_node', 'close_node']
 
 
 def close_node(node: Node) -> None:
     """Run the node's ``close()`` if it has one (finalise a file, say goodbye), then destroy it."""
-    close = getattr(node, "close", None)
+    close = getattr(node, 'close', None)
     if close is not None:
         close()
     node.destroy_node()
@@ -27,7 +27,8 @@ def close_node(node: Node) -> None:
 
 def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
              needs_params_section: bool = False) -> int:
-    """Init rclpy, build the node, spin until SIGINT/SIGTERM, close, clean up.
+    """
+    Init rclpy, build the node, spin until SIGINT/SIGTERM, close, clean up.
 
     Returns 0 on a stop by SIGINT or SIGTERM (both finalise alike: the node's ``close()`` runs
     while its context is still valid; a second signal during the clean-up is absorbed), 1 when
@@ -38,7 +39,7 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
     args = sys.argv if args is None else args
     problem = params_file_problem(args)
     if problem:
-        print(f"{name}: {problem}", file=sys.stderr, flush=True)
+        print(f'{name}: {problem}', file=sys.stderr, flush=True)
         return 1
     with StopSignals(name) as stop:
         # Our handlers, not rclpy's: rclpy's would shut the context down before close().
@@ -47,17 +48,18 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
         node = None
         try:
             node = make_node()
-            problem = params_file_problem(args, node.get_fully_qualified_name()) if needs_params_section else None
+            problem = (params_file_problem(args, node.get_fully_qualified_name())
+                       if needs_params_section else None)
             if problem:
                 raise ValueError(problem)
             refuse_unknown_parameters([node])
             executor.add_node(node)
             spin_until_stopped(executor, lambda: stop.requested)
         except (ParameterException, ScenarioError, ValueError) as err:
-            print(f"{name}: invalid parameters: {err}", file=sys.stderr, flush=True)
+            print(f'{name}: invalid parameters: {err}', file=sys.stderr, flush=True)
             return 1
         except OSError as err:  # e.g. the recorder cannot create its file
-            print(f"{name}: cannot start: {err}", file=sys.stderr, flush=True)
+            print(f'{name}: cannot start: {err}', file=sys.stderr, flush=True)
             return 1
         finally:
             if node is not None:

@@ -1,4 +1,5 @@
-"""Stopping cleanly: SIGINT and SIGTERM alike, served once, between callbacks.
+"""
+Stopping cleanly: SIGINT and SIGTERM alike, served once, between callbacks.
 
 rclpy's own signal handler shuts the context down the moment SIGINT arrives, so a node can no
 longer publish its goodbye (``consumer_progress``) or log; SIGTERM (how containers, CI and
@@ -19,7 +20,7 @@ from typing import Callable
 
 from rclpy.executors import Executor, ExternalShutdownException
 
-__all__ = ["StopSignals", "spin_until_stopped", "POLL", "STOP_SIGNALS"]
+__all__ = ['StopSignals', 'spin_until_stopped', 'POLL', 'STOP_SIGNALS']
 
 #: The signals that request a stop.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -28,7 +29,8 @@ POLL = 0.1
 
 
 class StopSignals:
-    """Context manager: while active, SIGINT/SIGTERM request a stop instead of interrupting.
+    """
+    Context manager: while active, SIGINT/SIGTERM request a stop instead of interrupting.
 
     ``signum`` is the first signal received (None: none yet). Outside the main thread (where
     Python cannot install handlers) it does nothing and ``signum`` stays None. The previous
@@ -47,9 +49,12 @@ class StopSignals:
         return self
 
     def __exit__(self, *exc) -> None:
-        """Restore the previous handlers, unless a stop was requested: then the caller is being
-        stopped, and later SIGINT/SIGTERM are ignored for good (``ros2 launch`` sends two; a late
-        one must not kill the interpreter while it exits)."""
+        """
+        Restore the previous handlers, unless a stop was requested.
+
+        Then the caller is being stopped, and later SIGINT/SIGTERM are ignored for good
+        (``ros2 launch`` sends two; a late one must not kill the interpreter while it exits).
+        """
         for signum, handler in self._saved.items():
             signal.signal(signum, signal.SIG_IGN if self.requested else handler)
         self._saved.clear()
@@ -59,11 +64,12 @@ class StopSignals:
             self.signum = signum
             return
         # os.write, not print: a handler may run while the main thread is inside a print.
-        os.write(2, f"{self.name}: {signal.Signals(signum).name} again: already stopping\n".encode())
+        name = signal.Signals(signum).name
+        os.write(2, f'{self.name}: {name} again: already stopping\n'.encode())
 
     @property
     def requested(self) -> bool:
-        """True once SIGINT or SIGTERM arrived."""
+        """Return True once SIGINT or SIGTERM arrived."""
         return self.signum is not None
 
     @property

@@ -1,4 +1,5 @@
-"""Noticing a second source on topics that must have exactly one.
+"""
+Noticing a second source on topics that must have exactly one.
 
 Every tumble topic has one publisher: the simulator's (state, ``/clock``, ``scenario``, ...) or
 the comparator's (``comparison/*``). A second publisher means two runs mix: another simulator
@@ -16,14 +17,15 @@ from rclpy.node import Node
 
 from tumble_ros.nodes.clocks import steady_timer
 
-__all__ = ["SourceMonitor", "SOURCE_CHECK_PERIOD"]
+__all__ = ['SourceMonitor', 'SOURCE_CHECK_PERIOD']
 
 #: Seconds between two looks at the graph.
 SOURCE_CHECK_PERIOD = 1.0
 
 
 class SourceMonitor:
-    """Reports topics of ``node`` that have more than one publisher.
+    """
+    Reports topics of ``node`` that have more than one publisher.
 
     Parameters
     ----------
@@ -31,10 +33,12 @@ class SourceMonitor:
     topics : callable returning the topic names to watch (relative names resolve in the node's
         namespace); called at each check, so a recorder can watch what it discovered.
     report : called with a message when the problem appears or changes, ``None`` when it clears.
+
     """
 
     def __init__(self, node: Node, topics: Callable[[], Iterable[str]],
-                 report: Callable[[str | None], None], period: float = SOURCE_CHECK_PERIOD) -> None:
+                 report: Callable[[str | None], None],
+                 period: float = SOURCE_CHECK_PERIOD) -> None:
         self._node = node
         self._topics = topics
         self._report = report
@@ -42,19 +46,21 @@ class SourceMonitor:
         self._timer = steady_timer(node, period, self.check)
 
     def problem(self) -> str | None:
-        """The current problem (None: every watched topic has at most one publisher)."""
+        """Return the current problem, or None if every watched topic has at most one publisher."""
         crowded = []
         for topic in self._topics():
             name = self._node.resolve_topic_name(topic)
             publishers = self._node.get_publishers_info_by_topic(name)
             if len(publishers) > 1:
-                nodes = ", ".join(sorted(f"{p.node_namespace.rstrip('/')}/{p.node_name}" for p in publishers))
-                crowded.append(f"{name} ({nodes})")
+                nodes = ', '.join(sorted(f"{p.node_namespace.rstrip('/')}/{p.node_name}"
+                                         for p in publishers))
+                crowded.append(f'{name} ({nodes})')
         if not crowded:
             return None
-        return (f"second source: {len(crowded)} topic(s) with several publishers: {'; '.join(crowded)}. "
-                "Another run shares these topics (same ROS domain and namespace): their messages mix. "
-                "Give each run its own ROS_DOMAIN_ID or namespace.")
+        return (f'second source: {len(crowded)} topic(s) with several publishers: '
+                f"{'; '.join(crowded)}. "
+                'Another run shares these topics (same ROS domain and namespace): '
+                'their messages mix. Give each run its own ROS_DOMAIN_ID or namespace.')
 
     def check(self) -> None:
         """Look at the graph now; report a change."""
@@ -64,10 +70,10 @@ class SourceMonitor:
             if problem:
                 self._node.get_logger().error(problem)
             else:
-                self._node.get_logger().info("single source again on every watched topic")
+                self._node.get_logger().info('single source again on every watched topic')
             self._report(problem)
 
     @property
     def current(self) -> str | None:
-        """The last problem reported (None: none)."""
+        """Return the last problem reported (None: none)."""
         return self._last
