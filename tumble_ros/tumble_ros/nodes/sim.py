@@ -1,4 +1,5 @@
-"""The simulator node: ``ros2 run tumble_ros sim``.
+"""
+The simulator node: ``ros2 run tumble_ros sim``.
 
 Integrates a :class:`~tumble_ros.core.Scenario` with :class:`~tumble_ros.core.Propagator`
 and publishes every ``output_interval`` of simulated time:
@@ -15,15 +16,16 @@ and publishes every ``output_interval`` of simulated time:
 
 Every stamp is ROS time carrying simulated time, ``status`` included (the time of the last
 published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year) (``core.timebase``). The node
-is the clock source: it paces on the steady clock whatever ``use_sim_time`` says. Services: ``apply_impact`` (tumble_ros_interfaces/ApplyImpact), ``pause``,
+is the clock source: it paces on the steady clock whatever ``use_sim_time`` says. Services:
+``apply_impact`` (tumble_ros_interfaces/ApplyImpact), ``pause``,
 ``resume``, ``step`` (std_srvs/Trigger). Impacts are queued by the service and applied at the
 next step boundary, never inside the callback. The node holds no physics.
 """
 from __future__ import annotations
 
+from collections import deque
 import math
 import time
-from collections import deque
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Quaternion, QuaternionStamped, Vector3, Vector3Stamped
@@ -35,20 +37,20 @@ from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 
 from tumble_ros.core import (
+    dump_scenario,
     Impact,
     ImpactLimits,
     Propagator,
     Scenario,
     ScenarioError,
     TimeBase,
-    dump_scenario,
 )
+from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.parameters import (
     declare_node_parameters,
     declare_scenario_parameters,
     read_scenario_parameters,
 )
-from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.progress import ConsumerTracker
 from tumble_ros.nodes.qos import CLOCK_QOS, DESCRIPTION_QOS, LATCHED_QOS, SERVICE_QOS, STATE_QOS
 from tumble_ros.nodes.runner import run_node
@@ -56,7 +58,7 @@ from tumble_ros.nodes.sources import SourceMonitor
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 
-__all__ = ["SimNode", "main"]
+__all__ = ['SimNode', 'main']
 
 #: Wall-clock period of the simulation timer [s].
 TICK_PERIOD = 0.002
@@ -70,22 +72,27 @@ MAX_PENDING_IMPACTS = 500
 #: Wall-clock seconds between two status messages while running (a heartbeat with a fresh t).
 STATUS_PERIOD = 1.0
 #: The state topics, relative to the node's namespace (one publisher each: this node).
-STATE_TOPICS = ("angular_velocity", "attitude", "euler_angles", "impact_events", "status", "scenario")
-FRAMES = {ApplyImpact.Request.FRAME_BODY: "body", ApplyImpact.Request.FRAME_ORBITAL: "orbital"}
+STATE_TOPICS = ('angular_velocity', 'attitude', 'euler_angles', 'impact_events', 'status',
+                'scenario')
+FRAMES = {ApplyImpact.Request.FRAME_BODY: 'body', ApplyImpact.Request.FRAME_ORBITAL: 'orbital'}
 FRAME_CODES = {name: code for code, name in FRAMES.items()}
 
 #: The simulator's own parameters (not part of the scenario): name -> (default, unit, description,
 #: (min, max) or None, read_only).
 NODE_PARAMETERS = {
-    "seconds_per_year": (1.0, "s/yr", "ROS seconds per simulated year in every stamp and /clock",
+    'seconds_per_year': (1.0, 's/yr', 'ROS seconds per simulated year in every stamp and /clock',
                          (1e-6, 1e6), True),
-    "real_time_factor": (0.1, "yr/s", "simulated years per wall-clock second; 0 = as fast as the "
-                         "subscribers take it", (0.0, 1e6), False),
-    "start_paused": (False, "", "start paused (resume or step with the services)", None, True),
-    "min_consumers": (0, "", "wait until this many consumers report progress before publishing", None, True),
-    "publish_clock": (True, "", "publish /clock (one simulator per ROS domain should)", None, True),
-    "max_impact_duration": (1e-3, "yr", "longest impact pulse the service accepts", (1e-15, 1e6), False),
-    "max_impact_impulse": (1e3, "I rad/yr", "largest |M| * duration the service accepts", (1e-12, 1e15), False),
+    'real_time_factor': (0.1, 'yr/s', 'simulated years per wall-clock second; 0 = as fast as the '
+                         'subscribers take it', (0.0, 1e6), False),
+    'start_paused': (False, '', 'start paused (resume or step with the services)', None, True),
+    'min_consumers': (0, '', 'wait until this many consumers report progress before publishing',
+                      None, True),
+    'publish_clock': (True, '', 'publish /clock (one simulator per ROS domain should)', None,
+                      True),
+    'max_impact_duration': (1e-3, 'yr', 'longest impact pulse the service accepts', (1e-15, 1e6),
+                            False),
+    'max_impact_impulse': (1e3, 'I rad/yr', 'largest |M| * duration the service accepts',
+                           (1e-12, 1e15), False),
 }
 
 
@@ -99,18 +106,19 @@ class SimNode(Node):
     """Simulator node; see the module docstring for its interface."""
 
     def __init__(self, **kwargs) -> None:
-        super().__init__("sim", **kwargs)
+        super().__init__('sim', **kwargs)
         # Registered before declaring, so start-up values are validated too (rclpy docs).
         self.add_on_set_parameters_callback(self._on_set_parameters)
         declare_scenario_parameters(self)
         params = declare_node_parameters(self, NODE_PARAMETERS)
-        self.scenario = Scenario.from_parameters(read_scenario_parameters(self))  # ScenarioError: refused
-        self.timebase = TimeBase(params["seconds_per_year"])
+        # ScenarioError: refused
+        self.scenario = Scenario.from_parameters(read_scenario_parameters(self))
+        self.timebase = TimeBase(params['seconds_per_year'])
         self.timebase.check_span(self.scenario.duration)
         self._interval_ns, self._n_samples = self.timebase.sample_grid(
             self.scenario.output_interval, self.scenario.duration)
-        self._limits = ImpactLimits(params["max_impact_duration"], params["max_impact_impulse"])
-        self._rtf = params["real_time_factor"]
+        self._limits = ImpactLimits(params['max_impact_duration'], params['max_impact_impulse'])
+        self._rtf = params['real_time_factor']
         self._propagator = Propagator(self.scenario)
         self._scenario_yaml = dump_scenario(self.scenario)
         self._next_k = 0  # index of the next sample to publish
@@ -118,87 +126,91 @@ class SimNode(Node):
         self._impact_ids: dict[int, int] = {}  # id(Impact) -> service id
         self._next_id = 1
         self._revision = 0
-        self._state = SimStatus.PAUSED if params["start_paused"] else SimStatus.RUNNING
-        self._pace_origin: tuple[float, int] | None = None  # (wall time, sample index) when pacing began
+        self._state = SimStatus.PAUSED if params['start_paused'] else SimStatus.RUNNING
+        # (wall time, sample index) when pacing began
+        self._pace_origin: tuple[float, int] | None = None
 
-        self._min_consumers = params["min_consumers"]
+        self._min_consumers = params['min_consumers']
         self._consumers_gate_open = self._min_consumers == 0  # opens once, when they are all here
         self._consumers = ConsumerTracker(self, on_drop=self._publish_status)
-        self._pub_omega = self.create_publisher(Vector3Stamped, "angular_velocity", STATE_QOS)
-        self._pub_attitude = self.create_publisher(QuaternionStamped, "attitude", STATE_QOS)
-        self._pub_euler = self.create_publisher(Vector3Stamped, "euler_angles", STATE_QOS)
-        self._pub_clock = self.create_publisher(Clock, "/clock", CLOCK_QOS) if params["publish_clock"] else None
-        self._pub_events = self.create_publisher(ImpactEvent, "impact_events", STATE_QOS)
-        self._pub_status = self.create_publisher(SimStatus, "status", LATCHED_QOS)
-        self._pub_scenario = self.create_publisher(ScenarioDescription, "scenario", DESCRIPTION_QOS)
-        self._srv_impact = self.create_service(ApplyImpact, "apply_impact", self._on_apply_impact,
+        self._pub_omega = self.create_publisher(Vector3Stamped, 'angular_velocity', STATE_QOS)
+        self._pub_attitude = self.create_publisher(QuaternionStamped, 'attitude', STATE_QOS)
+        self._pub_euler = self.create_publisher(Vector3Stamped, 'euler_angles', STATE_QOS)
+        self._pub_clock = (self.create_publisher(Clock, '/clock', CLOCK_QOS)
+                           if params['publish_clock'] else None)
+        self._pub_events = self.create_publisher(ImpactEvent, 'impact_events', STATE_QOS)
+        self._pub_status = self.create_publisher(SimStatus, 'status', LATCHED_QOS)
+        self._pub_scenario = self.create_publisher(ScenarioDescription, 'scenario',
+                                                   DESCRIPTION_QOS)
+        self._srv_impact = self.create_service(ApplyImpact, 'apply_impact', self._on_apply_impact,
                                                qos_profile=SERVICE_QOS)
         self._srv_impact.configure_introspection(
             self.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
-        self.create_service(Trigger, "pause", self._on_pause)
-        self.create_service(Trigger, "resume", self._on_resume)
-        self.create_service(Trigger, "step", self._on_step)
+        self.create_service(Trigger, 'pause', self._on_pause)
+        self.create_service(Trigger, 'resume', self._on_resume)
+        self.create_service(Trigger, 'step', self._on_step)
         self._sources = SourceMonitor(
-            self, lambda: (*STATE_TOPICS, *(("/clock",) if self._pub_clock else ())),
-            lambda problem: self._publish_status(problem or "single source again on the simulator's topics"))
+            self, lambda: (*STATE_TOPICS, *(('/clock',) if self._pub_clock else ())),
+            lambda problem: self._publish_status(
+                problem or "single source again on the simulator's topics"))
         self._publish_scenario(0.0, self._propagator.y)
-        self._publish_status("started")
+        self._publish_status('started')
         # Steady clock: the simulator is the clock source, use_sim_time or not.
         self._timer = steady_timer(self, TICK_PERIOD, self._on_tick)
         steady_timer(self, STATUS_PERIOD, self._on_status_period)
         self.get_logger().info(
-            f"simulating {self.scenario.duration:g} yr with {self.scenario.integrator.method}, "
-            f"{self._n_samples} samples every {self.scenario.output_interval:g} yr, "
-            f"real_time_factor {self._rtf:g}")
+            f'simulating {self.scenario.duration:g} yr with {self.scenario.integrator.method}, '
+            f'{self._n_samples} samples every {self.scenario.output_interval:g} yr, '
+            f'real_time_factor {self._rtf:g}')
 
     # -- parameters ---------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
         """Refuse invalid values of the run-time parameters with a reason."""
         for p in parameters:
             try:
-                if p.name == "max_impact_duration":
+                if p.name == 'max_impact_duration':
                     ImpactLimits(p.value, 1.0)
-                elif p.name == "max_impact_impulse":
+                elif p.name == 'max_impact_impulse':
                     ImpactLimits(1.0, p.value)
-                elif p.name == "real_time_factor" and not math.isfinite(p.value):
-                    raise ScenarioError(f"real_time_factor: must be finite, got {p.value!r}")
-                elif p.name == "seconds_per_year":
+                elif p.name == 'real_time_factor' and not math.isfinite(p.value):
+                    raise ScenarioError(f'real_time_factor: must be finite, got {p.value!r}')
+                elif p.name == 'seconds_per_year':
                     TimeBase(p.value)
             except (ScenarioError, ValueError) as err:
                 return SetParametersResult(successful=False, reason=str(err))
-        if hasattr(self, "_propagator"):  # after start-up: apply the accepted run-time changes
+        if hasattr(self, '_propagator'):  # after start-up: apply the accepted run-time changes
             self._apply_runtime_parameters(parameters)
         return SetParametersResult(successful=True)
 
     def _apply_runtime_parameters(self, parameters) -> None:
         for p in parameters:
-            if p.name == "max_impact_duration":
+            if p.name == 'max_impact_duration':
                 self._limits = ImpactLimits(p.value, self._limits.max_impulse)
-            elif p.name == "max_impact_impulse":
+            elif p.name == 'max_impact_impulse':
                 self._limits = ImpactLimits(self._limits.max_duration, p.value)
-            elif p.name == "real_time_factor":
+            elif p.name == 'real_time_factor':
                 self._rtf = p.value
                 self._pace_origin = None
 
     # -- simulation ---------------------------------------------------------------------
     @property
     def state(self) -> int:
-        """SimStatus state: RUNNING, PAUSED, FINISHED or DIVERGED."""
+        """Return the SimStatus state: RUNNING, PAUSED, FINISHED or DIVERGED."""
         return self._state
 
     @property
     def status_message(self) -> str:
-        """The message of the last status published."""
+        """Return the message of the last status published."""
         return self._status_message
 
     @property
     def published_samples(self) -> int:
-        """Samples published so far."""
+        """Count the samples published so far."""
         return self._next_k
 
     @property
     def t(self) -> float:
-        """Simulated time [yr] of the last published sample (0 before the first)."""
+        """Return the simulated time [yr] of the last published sample (0 before the first)."""
         return self.timebase.to_years(max(0, self._next_k - 1) * self._interval_ns)
 
     def _on_tick(self) -> None:
@@ -214,7 +226,8 @@ class SimNode(Node):
         if not self._consumers_gate_open:
             if self._consumers.count < self._min_consumers:
                 return self._next_k - 1  # not all expected consumers are here yet
-            self._consumers_gate_open = True  # for good: a consumer that leaves later is not waited for
+            # for good: a consumer that leaves later is not waited for
+            self._consumers_gate_open = True
         slowest = self._consumers.slowest_ns(max(0, self._next_k - 1) * self._interval_ns)
         if slowest is None:
             return self._n_samples
@@ -235,20 +248,23 @@ class SimNode(Node):
         if self._next_k <= k_last:
             self._schedule_pending()
             stamps = [k * self._interval_ns for k in range(self._next_k, k_last + 1)]
-            done, arrays, failure = self._propagator.sample_many([self.timebase.to_years(ns) for ns in stamps])
+            done, arrays, failure = self._propagator.sample_many(
+                [self.timebase.to_years(ns) for ns in stamps])
             # Impacts that ended within the batch: their events and new descriptions go out
             # before its samples (the comparator keeps the previous segment's model for the
             # samples that trail a description).
             self._publish_impact_events()
             for j in range(done):
-                self._publish_sample(stamps[j], arrays["omega"][j], arrays["quaternion"][j], arrays["euler"][j])
+                self._publish_sample(stamps[j], arrays['omega'][j], arrays['quaternion'][j],
+                                     arrays['euler'][j])
             self._next_k += done
             if failure:
                 self._diverged(failure)
                 return
-            # done < len(stamps) without a failure: the call used its work budget; next tick goes on.
+            # done < len(stamps) without a failure: the call used its work budget; the next tick
+            # goes on.
         if self._next_k >= self._n_samples:
-            self._set_state(SimStatus.FINISHED, f"finished at t = {self.t:g} yr")
+            self._set_state(SimStatus.FINISHED, f'finished at t = {self.t:g} yr')
 
     def _schedule_pending(self) -> None:
         while self._pending:
@@ -257,20 +273,24 @@ class SimNode(Node):
             self._impact_ids[id(impact)] = impact_id
 
     def _publish_sample(self, ns: int, omega, quaternion, euler) -> None:
-        """Publish one sample: ω [rad/yr] (body axes), the attitude quaternion (scalar first,
-        body -> orbital), the continuous Euler angles (φ, ψ, θ) [rad] and /clock."""
+        """
+        Publish one sample and /clock.
+
+        The sample: ω [rad/yr] (body axes), the attitude quaternion (scalar first,
+        body -> orbital), the continuous Euler angles (φ, ψ, θ) [rad].
+        """
         header_stamp = stamp(ns)
         wx, wy, wz = omega.tolist()
         q0, q1, q2, q3 = quaternion.tolist()
         phi, psi, theta = euler.tolist()
         msg = Vector3Stamped()
-        msg.header.stamp, msg.header.frame_id = header_stamp, "body"
+        msg.header.stamp, msg.header.frame_id = header_stamp, 'body'
         msg.vector = Vector3(x=wx, y=wy, z=wz)
         attitude = QuaternionStamped()
-        attitude.header.stamp, attitude.header.frame_id = header_stamp, "orbital"
+        attitude.header.stamp, attitude.header.frame_id = header_stamp, 'orbital'
         attitude.quaternion = Quaternion(w=q0, x=q1, y=q2, z=q3)
         angles = Vector3Stamped()
-        angles.header.stamp, angles.header.frame_id = header_stamp, "euler_phi_psi_theta"
+        angles.header.stamp, angles.header.frame_id = header_stamp, 'euler_phi_psi_theta'
         angles.vector = Vector3(x=phi, y=psi, z=theta)
         if self._pub_clock is not None:
             self._pub_clock.publish(Clock(clock=header_stamp))
@@ -284,7 +304,7 @@ class SimNode(Node):
         for impact, y_start, y_end in self._propagator.pop_completed_impacts():
             event = ImpactEvent()
             event.header.stamp = stamp(self.timebase.to_ns(impact.end))
-            event.header.frame_id = "body"
+            event.header.frame_id = 'body'
             event.id = self._impact_ids.get(id(impact), 0)
             event.start, event.end = impact.start, impact.end
             event.frame = FRAME_CODES[impact.frame]
@@ -292,15 +312,16 @@ class SimNode(Node):
             dw = y_end[:3] - y_start[:3]
             event.delta_omega = Vector3(x=float(dw[0]), y=float(dw[1]), z=float(dw[2]))
             self._pub_events.publish(event)
-            self.get_logger().info(f"impact {event.id} applied on [{impact.start:.9g}, {impact.end:.9g}] yr: "
-                                   f"delta w = {dw.round(9).tolist()} rad/yr")
+            self.get_logger().info(f'impact {event.id} applied on '
+                                   f'[{impact.start:.9g}, {impact.end:.9g}] yr: '
+                                   f'delta w = {dw.round(9).tolist()} rad/yr')
             self._impact_ids.pop(id(impact), None)
             segment_starts[impact.end] = y_end
         for t0 in sorted(segment_starts):
             self._publish_scenario(t0, segment_starts[t0])
 
     def _diverged(self, reason: str) -> None:
-        self.get_logger().error(f"integration stopped: {reason}")
+        self.get_logger().error(f'integration stopped: {reason}')
         self._set_state(SimStatus.DIVERGED, reason)
 
     # -- latched topics -----------------------------------------------------------------
@@ -340,14 +361,15 @@ class SimNode(Node):
         response.accepted = False
         frame = FRAMES.get(request.frame)
         if frame is None:
-            response.message = (f"frame: unknown frame {request.frame} (FRAME_BODY=0, FRAME_ORBITAL=1)")
+            response.message = (f'frame: unknown frame {request.frame} '
+                                '(FRAME_BODY=0, FRAME_ORBITAL=1)')
             return response
         if self._state in (SimStatus.FINISHED, SimStatus.DIVERGED):
-            response.message = "the simulation has ended: no impact can be applied"
+            response.message = 'the simulation has ended: no impact can be applied'
             return response
         if len(self._pending) + len(self._impact_ids) >= MAX_PENDING_IMPACTS:
-            response.message = (f"too many impacts in progress ({MAX_PENDING_IMPACTS} accepted and not yet ended): "
-                                "retry after some have ended")
+            response.message = (f'too many impacts in progress ({MAX_PENDING_IMPACTS} accepted '
+                                'and not yet ended): retry after some have ended')
             return response
         start = self.t if request.start_now else request.start
         torque = (request.torque.x, request.torque.y, request.torque.z)
@@ -361,43 +383,45 @@ class SimNode(Node):
         self._pending.append((impact_id, impact))
         response.accepted, response.id = True, impact_id
         response.scheduled_start, response.scheduled_end = impact.start, impact.end
-        response.message = f"impact {impact_id} scheduled on [{impact.start:.9g}, {impact.end:.9g}] yr"
+        response.message = (
+            f'impact {impact_id} scheduled on [{impact.start:.9g}, {impact.end:.9g}] yr')
         self.get_logger().info(response.message)
         return response
 
     def _on_pause(self, request, response):
         if self._state != SimStatus.RUNNING:
-            response.success, response.message = False, f"not running (state {self._state})"
+            response.success, response.message = False, f'not running (state {self._state})'
             return response
-        self._set_state(SimStatus.PAUSED, f"paused at t = {self.t:g} yr")
-        response.success, response.message = True, f"paused at t = {self.t!r} yr"
+        self._set_state(SimStatus.PAUSED, f'paused at t = {self.t:g} yr')
+        response.success, response.message = True, f'paused at t = {self.t!r} yr'
         return response
 
     def _on_resume(self, request, response):
         if self._state != SimStatus.PAUSED:
-            response.success, response.message = False, f"not paused (state {self._state})"
+            response.success, response.message = False, f'not paused (state {self._state})'
             return response
         self._pace_origin = None
-        self._set_state(SimStatus.RUNNING, f"resumed at t = {self.t:g} yr")
-        response.success, response.message = True, f"resumed at t = {self.t!r} yr"
+        self._set_state(SimStatus.RUNNING, f'resumed at t = {self.t:g} yr')
+        response.success, response.message = True, f'resumed at t = {self.t!r} yr'
         return response
 
     def _on_step(self, request, response):
         if self._state != SimStatus.PAUSED:
-            response.success, response.message = False, f"step needs the simulation paused (state {self._state})"
+            response.success, response.message = (
+                False, f'step needs the simulation paused (state {self._state})')
             return response
         self._publish_up_to(self._next_k)
         if self._state == SimStatus.PAUSED:
-            self._publish_status(f"stepped to t = {self.t:g} yr")
+            self._publish_status(f'stepped to t = {self.t:g} yr')
         response.success = self._state != SimStatus.DIVERGED
-        response.message = f"stepped to t = {self.t!r} yr"
+        response.message = f'stepped to t = {self.t!r} yr'
         return response
 
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run tumble_ros sim``."""
-    return run_node(SimNode, args, "sim", needs_params_section=True)
+    return run_node(SimNode, args, 'sim', needs_params_section=True)
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     raise SystemExit(main())
