@@ -17,7 +17,8 @@ setup(
         # Scenario files, found at run time under share/tumble_ros/config.
         (os.path.join('share', package_name, 'config'), glob(os.path.join('config', '*.yaml'))),
         # Launch files, found by `ros2 launch tumble_ros <file>` under share/tumble_ros/launch.
-        (os.path.join('share', package_name, 'launch'), glob(os.path.join('launch', '*.launch.py'))),
+        (os.path.join('share', package_name, 'launch'),
+         glob(os.path.join('launch', '*.launch.py'))),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

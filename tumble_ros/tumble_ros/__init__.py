@@ -1,4 +1,5 @@
-"""tumble_ros: rotation of a tumbling asteroid under the Sun's gravity-gradient torque, on ROS 2 Jazzy.
+"""
+tumble_ros: rotation of a tumbling asteroid under the Sun's gravity-gradient torque (ROS 2 Jazzy).
 
 Sub-packages:
 
@@ -11,4 +12,4 @@ Sub-packages:
 Units throughout: time in years [yr], angular rates in rad/yr, inertia normalised.
 """
 
-__version__ = "0.1.0"
+__version__ = '0.1.0'

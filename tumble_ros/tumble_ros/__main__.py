@@ -1,42 +1,43 @@
-"""``python -m tumble_ros``: the project's own entry point (the pip-only path has no ``ros2``).
+"""
+``python -m tumble_ros``: the project's own entry point (the pip-only path has no ``ros2``).
 
     python -m tumble_ros [SCENARIO.yaml]          the main job (default: the default scenario)
-    python -m tumble_ros <executable> [args ...]  run an executable, as `ros2 run tumble_ros <executable>`
+    python -m tumble_ros <executable> [args ...]  run an executable, as `ros2 run tumble_ros` does
 
 The main job simulates the scenario, compares it with the paper's analytic solution and records
 everything to ``recordings/<scenario>_<UTC time>.mcap`` (``bringup``), then analyses the file.
 """
 from __future__ import annotations
 
-import importlib
-import sys
 from datetime import datetime, timezone
+import importlib
 from pathlib import Path
+import sys
 
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
 EXECUTABLES = {
-    "sim": "tumble_ros.nodes.sim:main",
-    "comparator": "tumble_ros.nodes.comparator:main",
-    "recorder": "tumble_ros.nodes.recorder:main",
-    "bringup": "tumble_ros.nodes.bringup:main",
-    "analyze": "tumble_ros.analysis.cli:main",
+    'sim': 'tumble_ros.nodes.sim:main',
+    'comparator': 'tumble_ros.nodes.comparator:main',
+    'recorder': 'tumble_ros.nodes.recorder:main',
+    'bringup': 'tumble_ros.nodes.bringup:main',
+    'analyze': 'tumble_ros.analysis.cli:main',
 }
 
 
 def run_executable(name: str, args: list[str]) -> int:
     """Run an executable's ``main`` with ``args`` (its sys.argv without the program name)."""
-    module, function = EXECUTABLES[name].split(":")
+    module, function = EXECUTABLES[name].split(':')
     return getattr(importlib.import_module(module), function)([name, *args]) or 0
 
 
 def main_job(argv: list[str]) -> int:
     """Bringup on a scenario file (or the default scenario), then the analysis of the recording."""
-    if len(argv) > 1 or (argv and argv[0].startswith("-")):
+    if len(argv) > 1 or (argv and argv[0].startswith('-')):
         print(__doc__.strip(), file=sys.stderr)
         return 2
-    stem = Path(argv[0]).stem if argv else "default"
-    output = Path("recordings") / f"{stem}_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap"
-    code = run_executable("bringup", [*argv, "--output", str(output)])
+    stem = Path(argv[0]).stem if argv else 'default'
+    output = Path('recordings') / f'{stem}_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap'
+    code = run_executable('bringup', [*argv, '--output', str(output)])
     if code != 0 or not output.exists():
         return code or 1
     return analyse(output)
@@ -45,11 +46,11 @@ def main_job(argv: list[str]) -> int:
 def analyse(recording: Path) -> int:
     """Summary and figures of a recording (figures beside it, in <name>_figures/)."""
     try:
-        cli = importlib.import_module("tumble_ros.analysis.cli")
+        cli = importlib.import_module('tumble_ros.analysis.cli')
     except ImportError:
-        print(f"recorded {recording} (no analysis available)")
+        print(f'recorded {recording} (no analysis available)')
         return 0
-    return cli.command([str(recording), "--figures", str(recording.with_suffix("")) + "_figures"])
+    return cli.command([str(recording), '--figures', str(recording.with_suffix('')) + '_figures'])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -59,5 +60,5 @@ def main(argv: list[str] | None = None) -> int:
     return main_job(argv)
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     raise SystemExit(main())

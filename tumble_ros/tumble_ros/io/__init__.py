@@ -1,15 +1,16 @@
-"""MCAP writing and reading, and lookup of ROS message definitions.
+"""
+MCAP writing and reading, and lookup of ROS message definitions.
 
 Writes rosbag2-compatible MCAP (profile ``ros2``, ``ros2msg`` schemas with their dependencies
 concatenated, ``cdr`` messages) and reads it back. Message definitions are looked up through the
 ament index and, because sourcing install/setup.bash can drop the venv from AMENT_PREFIX_PATH,
 also under ``sys.prefix``.
-"""
+"""  # noqa: A005 (tumble_ros.io is a subpackage: absolute imports never confuse it with io)
 
-from .mcap_reader import (McapError, McapSummary, RecordedMessage, TopicSummary, read_messages,
-                          summarize)
+from .mcap_reader import (McapError, McapSummary, read_messages, RecordedMessage, summarize,
+                          TopicSummary)
 from .mcap_writer import McapWriter, offered_qos_yaml
-from .msgdefs import MessageDefinitionError, message_definition, normalize_type_name, type_hash
+from .msgdefs import message_definition, MessageDefinitionError, normalize_type_name, type_hash
 
 __all__ = [
     'McapError',

@@ -1,4 +1,5 @@
-"""Write rosbag2-compatible MCAP files from raw CDR messages (no rclpy import).
+"""
+Write rosbag2-compatible MCAP files from raw CDR messages (no rclpy import).
 
 The files look like those of rosbag2's MCAP storage plugin (Jazzy), so Foxglove, ``ros2 bag
 info``, the ``rosbags`` library and mcap's own readers open them:
@@ -38,16 +39,16 @@ from a timer in a multi-threaded executor.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 import math
 import operator
 import os
+from pathlib import Path
 import threading
 import time
-from collections.abc import Mapping
-from pathlib import Path
 
+from mcap.writer import CompressionType, LIBRARY_IDENTIFIER, Writer
 import yaml
-from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
 
 from .msgdefs import message_definition, normalize_type_name, type_hash
 
@@ -88,7 +89,8 @@ _QOS_DEFAULTS = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
 
 
 def offered_qos_yaml(*profiles: Mapping) -> str:
-    """The ``offered_qos_profiles`` text of rosbag2 (Jazzy) for the given publisher profiles.
+    """
+    Return the ``offered_qos_profiles`` text of rosbag2 (Jazzy) for the given publisher profiles.
 
     Each profile is a mapping with any of QOS_KEYS: policies as rosbag2 spells them
     (``history`` 'keep_last'/'keep_all', ``reliability`` 'reliable'/'best_effort',
@@ -139,7 +141,8 @@ def _check_qos(text: str) -> None:
 
 
 class McapWriter:
-    """A rosbag2-compatible MCAP file being written (see the module docstring).
+    """
+    A rosbag2-compatible MCAP file being written (see the module docstring).
 
     ``path``: the file to create; it must not exist yet (a recording is never overwritten).
     ``chunk_bytes`` (> 0): finalise and flush the chunk in progress once it holds that many bytes
@@ -192,7 +195,7 @@ class McapWriter:
 
     @property
     def path(self) -> Path:
-        """The file being written."""
+        """Return the file being written."""
         return self._path
 
     @property
@@ -218,12 +221,13 @@ class McapWriter:
     # -- writing ------------------------------------------------------------------------------
 
     def add_channel(self, topic: str, type_name: str, offered_qos_profiles: str = '') -> int:
-        """Register ``topic`` with messages of ``type_name`` ('pkg/msg/Type' or 'pkg/Type');
-        return its channel id.
+        """
+        Register ``topic`` with messages of ``type_name``; return its channel id.
 
-        The schema of a type is registered once, with the definition from
-        :func:`~tumble_ros.io.msgdefs.message_definition` (MessageDefinitionError if the type
-        cannot be found). Adding a topic again with the same type returns the same id.
+        ``type_name`` is 'pkg/msg/Type' or 'pkg/Type'. The schema of a type is registered once,
+        with the definition from :func:`~tumble_ros.io.msgdefs.message_definition`
+        (MessageDefinitionError if the type cannot be found). Adding a topic again with the same
+        type returns the same id.
         """
         if not isinstance(topic, str) or not topic:
             raise ValueError(f'topic must be a non-empty str, got {topic!r}')
@@ -255,7 +259,8 @@ class McapWriter:
 
     def write(self, channel_id: int, data: bytes, log_time_ns: int,
               publish_time_ns: int | None = None) -> None:
-        """Append one message (raw CDR bytes, stored as given) to the chunk in progress.
+        """
+        Append one message (raw CDR bytes, stored as given) to the chunk in progress.
 
         ``log_time_ns``: receive time [ns] (rosbag2's recv_timestamp); ``publish_time_ns``:
         send time [ns], defaults to ``log_time_ns``. Finalises and flushes the chunk when the
@@ -284,7 +289,8 @@ class McapWriter:
                 self._flush_locked()
 
     def poll(self) -> bool:
-        """Finalise and flush the chunk in progress if its first message is too old.
+        """
+        Finalise and flush the chunk in progress if its first message is too old.
 
         Call it from a timer. Returns True if a chunk was written.
         """
@@ -301,7 +307,8 @@ class McapWriter:
             self._flush_locked()
 
     def close(self) -> None:
-        """Write the last chunk, the summary (statistics, indexes) and the footer; close the file.
+        """
+        Write the last chunk, the summary (statistics, indexes) and the footer; close the file.
 
         Calling it again does nothing.
         """

@@ -1,4 +1,5 @@
-"""ROS 2 message definitions as rosbag2 stores them in MCAP schemas (no ROS runtime needed).
+r"""
+ROS 2 message definitions as rosbag2 stores them in MCAP schemas (no ROS runtime needed).
 
 ``message_definition('geometry_msgs/msg/Vector3Stamped')`` returns the schema text that rosbag2's
 MCAP storage plugin (Jazzy) writes for that type, schema encoding ``ros2msg``: the type's own
@@ -9,7 +10,7 @@ message_definitions/local_message_definition_source.cpp, Jazzy branch):
 
 - ``result = text`` of the type; then for each dependency *of that type*, in sorted order
   (``std::set<std::string>`` of ``pkg/Type`` names), not seen before anywhere in this definition:
-  ``result += "\\n" + "=" * 80 + "\\n" + "MSG: pkg/Type\\n" + <the dependency, recursively>``.
+  ``result += "\n" + "=" * 80 + "\n" + "MSG: pkg/Type\n" + <the dependency, recursively>``.
   The files keep their own trailing newline, so a blank line usually precedes each separator.
 - a field type without a package is resolved to the package of the file it appears in;
   ``Header`` alone means ``std_msgs/Header`` (the ROS 1 convention, which rosbags follows;
@@ -18,7 +19,7 @@ message_definitions/local_message_definition_source.cpp, Jazzy branch):
   files in practice always write ``std_msgs/Header``, where all of them agree.
 - service event types ``pkg/srv/Name_Event`` (topics ``<service>/_service_event``, recorded when
   service introspection is on) are stored the way Jazzy's rosbag2 stores them since
-  ros2/rosbag2#2042: ``"=" * 80 + "\\nSRV: pkg/srv/Name\\n"`` + the ``.srv`` file verbatim,
+  ros2/rosbag2#2042: ``"=" * 80 + "\nSRV: pkg/srv/Name\n"`` + the ``.srv`` file verbatim,
   then the message dependencies of the ``.srv`` file as above (still encoding ``ros2msg``).
   That text does not describe the event message itself (ros2/rosbag2#2365): generic ros2msg
   decoders cannot decode it, and rosbags' AnyReader refuses to open a file holding such a
@@ -35,13 +36,13 @@ Nothing here imports rclpy.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 import functools
 import json
 import os
+from pathlib import Path
 import re
 import sys
-from dataclasses import dataclass, field
-from pathlib import Path
 
 __all__ = [
     'SEPARATOR',
@@ -85,7 +86,8 @@ class MessageDefinitionError(LookupError):
 
 @dataclass(frozen=True)
 class Field:
-    """A field of a .msg file.
+    """
+    A field of a .msg file.
 
     ``type`` is a primitive name ('float64', 'string', ...) or a resolved 'pkg/Type';
     ``array`` is None (scalar), '' (unbounded sequence ``[]``), 'N' (fixed ``[N]``) or '<=N'
@@ -93,7 +95,7 @@ class Field:
     text.
     """
 
-    type: str
+    type: str  # noqa: A003 (the .msg grammar's word, as in rosidl_adapter; a class attribute)
     name: str
     array: str | None = None
     string_bound: int | None = None
@@ -108,7 +110,7 @@ class Field:
 class Constant:
     """A constant of a .msg file: ``TYPE NAME=value`` (value kept as text)."""
 
-    type: str
+    type: str  # noqa: A003 (the .msg grammar's word, as in rosidl_adapter; a class attribute)
     name: str
     value: str
 
@@ -143,7 +145,7 @@ def _split_type_name(type_name: str) -> tuple[str, str, str]:
 
 
 def search_prefixes() -> tuple[Path, ...]:
-    """The install prefixes searched, in order: AMENT_PREFIX_PATH, then sys.prefix."""
+    """Return the install prefixes searched, in order: AMENT_PREFIX_PATH, then sys.prefix."""
     prefixes: list[Path] = []
     for entry in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep):
         if entry.strip():
@@ -219,7 +221,8 @@ def _resolve(base: str, package: str, has_own_type) -> str:
 
 
 def parse_msg(text: str, package: str, *, source: str = '<text>', has_own_type=None) -> MsgSpec:
-    """Parse .msg text of ``package``: fields, constants and the resolved dependencies.
+    """
+    Parse .msg text of ``package``: fields, constants and the resolved dependencies.
 
     Understands builtin types, bounded strings (``string<=N``), arrays (``[]``, ``[N]``,
     ``[<=N]``), constants (``TYPE NAME=value``), default values (``TYPE name value``), comments
@@ -277,7 +280,8 @@ def parse_msg(text: str, package: str, *, source: str = '<text>', has_own_type=N
 
 
 def message_definition(type_name: str) -> str:
-    """The ``ros2msg`` schema text rosbag2 (Jazzy) stores for ``type_name``.
+    """
+    Return the ``ros2msg`` schema text rosbag2 (Jazzy) stores for ``type_name``.
 
     ``type_name`` is 'pkg/msg/Type' or 'pkg/Type' (or 'pkg/srv/Name_Event' for a service event).
     Raises MessageDefinitionError (a LookupError) with a one-line message if the type or one of
@@ -288,7 +292,7 @@ def message_definition(type_name: str) -> str:
 
 
 def message_spec(type_name: str) -> MsgSpec:
-    """The parsed .msg file of one message type 'pkg/msg/Type' (its own fields only)."""
+    """Parse the .msg file of one message type 'pkg/msg/Type' (its own fields only)."""
     package, namespace, name = _split_type_name(type_name)
     if namespace != 'msg':
         raise MessageDefinitionError(f'{type_name!r} is not a message type (pkg/msg/Type)')
@@ -348,7 +352,8 @@ def _definition(prefixes: tuple[Path, ...], package: str, namespace: str, name: 
 
 
 def type_hash(type_name: str) -> str:
-    """The RIHS01 type hash rosidl generated for ``type_name`` ('' if it cannot be found).
+    """
+    Return the RIHS01 type hash rosidl generated for ``type_name`` ('' if it cannot be found).
 
     Read from ``share/<pkg>/<msg|srv>/<Name>.json`` (rosidl_generator_type_description);
     rosbag2 stores it as the channel metadata ``topic_type_hash``.
