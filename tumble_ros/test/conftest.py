@@ -1,4 +1,5 @@
-"""Shared pytest setup for the tumble_ros tests.
+"""
+Shared pytest setup for the tumble_ros tests.
 
 DDS isolation, done at import time: pytest imports this file before any test module, so before
 anything imports rclpy (the RMW reads these variables when a context is initialised).
@@ -24,13 +25,13 @@ os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
 @pytest.fixture
 def domain_id_from_caller():
-    """True if ROS_DOMAIN_ID came from the caller's environment rather than from this file."""
+    """Tell whether ROS_DOMAIN_ID came from the caller's environment rather than this file."""
     return DOMAIN_ID_FROM_CALLER
 
 
 @pytest.fixture
 def ros():
-    """A RosHarness (ros_harness.py), shut down after the test whatever happens."""
+    """Provide a RosHarness (ros_harness.py), shut down after the test whatever happens."""
     from ros_harness import RosHarness
 
     harness = RosHarness()
@@ -42,13 +43,17 @@ def ros():
 
 @pytest.fixture
 def spawn(tmp_path):
-    """spawn(name, *args, **popen_kwargs) -> processes.Process; every process group is killed after the test."""
+    """
+    Provide ``start(name, *args, **popen_kwargs) -> processes.Process``.
+
+    Every process group started is killed after the test.
+    """
     from processes import Process
 
     started = []
 
     def start(name, *args, **kwargs):
-        process = Process(name, args, tmp_path / f"{name}_{len(started)}.log", **kwargs)
+        process = Process(name, args, tmp_path / f'{name}_{len(started)}.log', **kwargs)
         started.append(process)
         return process
 

@@ -1,4 +1,5 @@
-"""Executables as their own processes, for the tests that need real signals and real concurrency.
+"""
+Executables as their own processes, for the tests that need real signals and real concurrency.
 
 Each process is started in its own session (process group), with its output in a file (a pipe
 that nobody reads can block a chatty node), and the ``spawn`` fixture (conftest.py) kills every
@@ -8,18 +9,18 @@ group it started when the test ends. The processes inherit the test process's DD
 from __future__ import annotations
 
 import os
+from pathlib import Path
 import signal
 import subprocess
 import time
-from pathlib import Path
 
 
 def executable(name: str) -> str:
     """Where `ros2 run tumble_ros <name>` finds it: <prefix>/lib/tumble_ros/<name>."""
     from ament_index_python.packages import get_package_prefix
 
-    path = Path(get_package_prefix("tumble_ros")) / "lib" / "tumble_ros" / name
-    assert path.is_file() and os.access(path, os.X_OK), f"{path} is not installed (make setup)"
+    path = Path(get_package_prefix('tumble_ros')) / 'lib' / 'tumble_ros' / name
+    assert path.is_file() and os.access(path, os.X_OK), f'{path} is not installed (make setup)'
     return str(path)
 
 
@@ -28,17 +29,18 @@ class Process:
 
     def __init__(self, name: str, args, log: Path, **kwargs) -> None:
         self.name, self.log = name, log
-        self._out = open(log, "w")
+        self._out = open(log, 'w')
         self.popen = subprocess.Popen([executable(name), *map(str, args)], stdout=self._out,
-                                      stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, text=True,
+                                      stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                      text=True,
                                       start_new_session=True, **kwargs)
 
     @property
     def output(self) -> str:
-        return self.log.read_text(errors="replace")
+        return self.log.read_text(errors='replace')
 
     def wait_for(self, text: str, timeout: float = 30.0) -> bool:
-        """Wait until ``text`` is in the output (False: timeout or the process ended without it)."""
+        """Wait until ``text`` is in the output (False: timeout, or the process ended first)."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if text in self.output:

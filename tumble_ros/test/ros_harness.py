@@ -1,4 +1,5 @@
-"""In-process ROS test harness: a private context, one executor, automatic cleanup.
+"""
+In-process ROS test harness: a private context, one executor, automatic cleanup.
 
 Follows the rclpy tests' pattern: a private ``Context``, nodes built with
 ``parameter_overrides``, a ``SingleThreadedExecutor`` bound to the context; no launch files.
@@ -25,7 +26,7 @@ class RosHarness:
         rclpy.init(context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.nodes: list = []
-        self.probe = self.add(rclpy.create_node("probe", context=self.context))
+        self.probe = self.add(rclpy.create_node('probe', context=self.context))
 
     def add(self, node):
         self.nodes.append(node)
@@ -34,13 +35,15 @@ class RosHarness:
 
     def start(self, node_class, **overrides):
         """Build ``node_class`` in this context with parameter overrides (name=value)."""
-        params = [Parameter(name.replace("__", "."), value=value) for name, value in overrides.items()]
+        params = [Parameter(name.replace('__', '.'), value=value)
+                  for name, value in overrides.items()]
         return self.add(node_class(context=self.context, parameter_overrides=params))
 
     def collect(self, msg_type, topic: str, latched: bool = False, qos=None) -> list:
         """Subscribe the probe to ``topic``; returns the list that fills with messages."""
         box: list = []
-        self.probe.create_subscription(msg_type, topic, box.append, qos or (LATCHED_QOS if latched else STATE_QOS))
+        self.probe.create_subscription(msg_type, topic, box.append,
+                                       qos or (LATCHED_QOS if latched else STATE_QOS))
         return box
 
     def spin_until(self, predicate: Callable[[], bool], timeout: float = 10.0) -> bool:
@@ -58,9 +61,9 @@ class RosHarness:
 
     def call(self, srv_type, name: str, request, timeout: float = 10.0) -> Any:
         client = self.probe.create_client(srv_type, name)
-        assert client.wait_for_service(timeout_sec=timeout), f"service {name} not available"
+        assert client.wait_for_service(timeout_sec=timeout), f'service {name} not available'
         future = client.call_async(request)
-        assert self.spin_until(future.done, timeout), f"no answer from {name}"
+        assert self.spin_until(future.done, timeout), f'no answer from {name}'
         self.probe.destroy_client(client)
         return future.result()
 

@@ -1,42 +1,43 @@
-"""Analytic models (core/analytic.py) against the numerical integration and the paper.
+"""
+Analytic models (core/analytic.py) against the numerical integration and the paper.
 
 Run ``python tumble_ros/test/test_core_analytic.py`` (from tumble_ros/ or under
 scripts/env.sh) to print the measurements quoted in docs/analytic.md.
 """
+from functools import lru_cache
 import math
 import os
+from pathlib import Path
 import subprocess
 import sys
-from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tumble_ros.core import IntegratorSettings, Scenario, ScenarioError, simulate
 from tumble_ros.core.analytic import (
-    MODELS,
     AnchorState,
-    ModelNotApplicable,
     applicability,
     make_model,
+    ModelNotApplicable,
+    MODELS,
 )
 
 PACKAGE_ROOT = Path(__file__).resolve().parents[1]
-TIGHT = IntegratorSettings(method="dop853", rtol=1e-13, atol=1e-13)
+TIGHT = IntegratorSettings(method='dop853', rtol=1e-13, atol=1e-13)
 # Reference for the torqued cases: its error (~1e-9) is far below the models' (>= 1e-3).
-REFERENCE = IntegratorSettings(method="dop853", rtol=1e-11, atol=1e-12)
+REFERENCE = IntegratorSettings(method='dop853', rtol=1e-11, atol=1e-12)
 
 # The paper's figures: ws = 1, wz0 = 30, phi0 = 0.5, psi0 = 0 (ERRATA: the paper gives none),
 # (wx0, wy0) = (0, 1), inertia (1, 1, 1 + a).
-FIGS = {"fig3": (2.0, 0.1), "fig4": (0.5, 0.1), "fig5": (0.5, 0.5), "fig6": (3.0, 0.5)}
+FIGS = {'fig3': (2.0, 0.1), 'fig4': (0.5, 0.1), 'fig5': (0.5, 0.5), 'fig6': (3.0, 0.5)}
 LONG = 20.0  # years
 DT = 0.004  # output spacing [yr], ~17 samples per oscillation of w_perp (period >= 0.07 yr)
-LINEAR = ("paper", "fast_spin", "fast_spin_precessing", "fast_spin_adiabatic")
-FREE = ("torque_free_symmetric", "torque_free_exact")
+LINEAR = ('paper', 'fast_spin', 'fast_spin_precessing', 'fast_spin_adiabatic')
+FREE = ('torque_free_symmetric', 'torque_free_exact')
 # Models whose omega(t) is the exact solution of one linear ODE in time, so that re-anchoring
 # on their own state reproduces them (fast_spin_adiabatic modulates only the anchored free term).
-SEMIGROUP = ("paper", "fast_spin", "fast_spin_precessing") + FREE
+SEMIGROUP = ('paper', 'fast_spin', 'fast_spin_precessing') + FREE
 
 
 def fig_scenario(a, theta0, duration=LONG, omega0=(0.0, 1.0, 30.0), euler0=None):
@@ -70,10 +71,10 @@ def free_scenario(inertia, omega0, duration=1.0, **kw):
 
 
 def scenario_for(name):
-    """A scenario each model applies to."""
+    """Return a scenario each model applies to."""
     if name in LINEAR:
-        return fig_scenario(*FIGS["fig4"], duration=2.0)
-    if name == "torque_free_symmetric":
+        return fig_scenario(*FIGS['fig4'], duration=2.0)
+    if name == 'torque_free_symmetric':
         return free_scenario((1.0, 1.0, 1.5), (0.3, 1.0, 30.0))
     return free_scenario((1.0, 1.6, 2.2), (10.0, 3.0, 0.5))
 
@@ -84,13 +85,13 @@ def test_registry_names_and_labels():
     for name, cls in MODELS.items():
         assert cls.name == name
         assert cls.label
-    assert "ERRATA 1-10" in MODELS["paper"].label
-    for name in ("fast_spin", "fast_spin_precessing", "fast_spin_adiabatic"):
-        assert MODELS[name].label.startswith("beyond the paper")
+    assert 'ERRATA 1-10' in MODELS['paper'].label
+    for name in ('fast_spin', 'fast_spin_precessing', 'fast_spin_adiabatic'):
+        assert MODELS[name].label.startswith('beyond the paper')
 
 
 # -- anchoring -------------------------------------------------------------------------
-@pytest.mark.parametrize("name", sorted(MODELS))
+@pytest.mark.parametrize('name', sorted(MODELS))
 def test_model_meets_the_initial_condition(name):
     sc = scenario_for(name)
     m = make_model(name, sc)
@@ -99,7 +100,7 @@ def test_model_meets_the_initial_condition(name):
     assert m.omega(np.array([0.0, 0.5])).shape == (2, 3)
 
 
-@pytest.mark.parametrize("name", sorted(MODELS))
+@pytest.mark.parametrize('name', sorted(MODELS))
 def test_model_anchored_later_on_a_simulated_state(name):
     sc = scenario_for(name)
     t0 = 0.73
@@ -110,36 +111,42 @@ def test_model_anchored_later_on_a_simulated_state(name):
     # The same attitude given as the paper's (unwrapped) Euler angles: the same model.
     from_e = make_model(name, sc, t0=t0, omega=w, euler=e)
     t = np.linspace(t0, t0 + 1.0, 101)
-    np.testing.assert_allclose(from_e.omega(t), from_q.omega(t), rtol=0, atol=1e-10 * np.linalg.norm(w))
+    np.testing.assert_allclose(from_e.omega(t), from_q.omega(t), rtol=0,
+                               atol=1e-10 * np.linalg.norm(w))
 
 
-@pytest.mark.parametrize("name", SEMIGROUP)
+@pytest.mark.parametrize('name', SEMIGROUP)
 def test_reanchoring_on_the_models_own_state_reproduces_it(name):
-    """Exact check of the anchored formulas: restarting at t0 from the model's own state
-    (and, for the linearised models, its own kinematics) continues the same solution."""
+    """
+    Check the anchored formulas exactly.
+
+    Restarting at t0 from the model's own state (and, for the linearised models, its own
+    kinematics) continues the same solution.
+    """
     sc = scenario_for(name)
     m0 = make_model(name, sc)
     t0 = 1.3
     att = m0.euler(t0) if name in LINEAR else sc.euler0
     m1 = make_model(name, sc, t0=t0, omega=m0.omega(t0), euler=att)
     t = np.linspace(t0, t0 + 5.0, 501)
-    np.testing.assert_allclose(m1.omega(t), m0.omega(t), rtol=0, atol=1e-11 * np.linalg.norm(sc.omega0))
+    np.testing.assert_allclose(m1.omega(t), m0.omega(t), rtol=0,
+                               atol=1e-11 * np.linalg.norm(sc.omega0))
 
 
 # -- torque-free exact models ----------------------------------------------------------
 FREE_CASES = [
     # (model, inertia, omega0, expected mode)
-    ("torque_free_symmetric", (1.0, 1.0, 1.5), (0.3, 1.0, 30.0), None),
-    ("torque_free_exact", (1.0, 1.0, 1.5), (0.3, 1.0, 30.0), "symmetric"),
-    ("torque_free_exact", (1.0, 1.6, 2.2), (3.0, 0.5, 10.0), "short-axis"),
-    ("torque_free_exact", (1.0, 1.6, 2.2), (10.0, 3.0, 0.5), "long-axis"),
+    ('torque_free_symmetric', (1.0, 1.0, 1.5), (0.3, 1.0, 30.0), None),
+    ('torque_free_exact', (1.0, 1.0, 1.5), (0.3, 1.0, 30.0), 'symmetric'),
+    ('torque_free_exact', (1.0, 1.6, 2.2), (3.0, 0.5, 10.0), 'short-axis'),
+    ('torque_free_exact', (1.0, 1.6, 2.2), (10.0, 3.0, 0.5), 'long-axis'),
     # other orderings of the moments (odd and even permutations), negative components
-    ("torque_free_exact", (2.2, 1.0, 1.6), (-10.0, 0.5, 3.0), "short-axis"),
-    ("torque_free_exact", (1.6, 2.2, 1.0), (-3.0, -0.5, 10.0), "long-axis"),
+    ('torque_free_exact', (2.2, 1.0, 1.6), (-10.0, 0.5, 3.0), 'short-axis'),
+    ('torque_free_exact', (1.6, 2.2, 1.0), (-3.0, -0.5, 10.0), 'long-axis'),
 ]
 
 
-@pytest.mark.parametrize("name,inertia,omega0,mode", FREE_CASES)
+@pytest.mark.parametrize('name,inertia,omega0,mode', FREE_CASES)
 def test_torque_free_models_match_tight_integration_over_100_periods(name, inertia, omega0, mode):
     m = make_model(name, free_scenario(inertia, omega0))
     if mode is not None:
@@ -161,7 +168,7 @@ def test_torque_free_exact_anchored_after_a_while_keeps_matching():
     t = np.linspace(0.0, 20.0, 2001)
     r = simulate(sc, t)
     k = 777
-    m = make_model("torque_free_exact", sc, t0=t[k], omega=r.omega[k], quaternion=r.quaternion[k])
+    m = make_model('torque_free_exact', sc, t0=t[k], omega=r.omega[k], quaternion=r.quaternion[k])
     rel = np.max(np.abs(m.omega(t[k:]) - r.omega[k:])) / np.linalg.norm(sc.omega0)
     assert rel <= 1e-9
 
@@ -170,8 +177,8 @@ def test_separatrix_is_refused_with_a_reason():
     i1, i2, i3 = 1.0, 1.6, 2.2
     w1, w2 = 3.0, 5.0
     w3 = math.sqrt(i1 * (i2 - i1) / (i3 * (i3 - i2))) * w1  # L^2 = 2 E I2 exactly (up to rounding)
-    with pytest.raises(ModelNotApplicable, match="separatrix"):
-        make_model("torque_free_exact", free_scenario((i1, i2, i3), (w1, w2, w3)))
+    with pytest.raises(ModelNotApplicable, match='separatrix'):
+        make_model('torque_free_exact', free_scenario((i1, i2, i3), (w1, w2, w3)))
 
 
 # -- the paper's model -----------------------------------------------------------------
@@ -200,22 +207,23 @@ def corrected_eq18(t, a, ws, omega0, euler0):
     return np.stack([wx, wy, np.full_like(t, w0)], -1)
 
 
-@pytest.mark.parametrize("a,theta0,omega0,euler0", [
+@pytest.mark.parametrize('a,theta0,omega0,euler0', [
     *[(a, th, (0.0, 1.0, 30.0), (0.5, 0.0, th)) for a, th in FIGS.values()],
     (0.7, 0.4, (0.6, -0.8, 25.0), (1.1, 0.9, 0.4)),  # wx0 != 0, psi0 != 0
 ])
 def test_paper_model_is_the_corrected_eq18(a, theta0, omega0, euler0):
     sc = fig_scenario(a, theta0, omega0=omega0, euler0=euler0)
     t = np.linspace(0.0, 2.0, 1001)
-    m = make_model("paper", sc)
+    m = make_model('paper', sc)
     expected = corrected_eq18(t, a, 1.0, omega0, euler0)
     np.testing.assert_allclose(m.omega(t), expected, rtol=0, atol=1e-12 * np.linalg.norm(omega0))
     assert m.w_a == pytest.approx(2 * (1.0 + (1 + a) * omega0[2] / math.cos(theta0)), rel=1e-15)
 
 
-@pytest.mark.parametrize("fig", sorted(FIGS))
+@pytest.mark.parametrize('fig', sorted(FIGS))
 def test_paper_model_error_grows_at_the_secular_rate(fig):
-    """The error of the paper's model grows linearly at |b C0 - i d w_perp0| ~ b sin(2 theta0)/4.
+    """
+    The error of the paper's model grows linearly at |b C0 - i d w_perp0| ~ b sin(2 theta0)/4.
 
     Prediction: the model's secular term b C0 t e^{i wE t}, |b C0| = b sin(2 theta0)/4, is
     absent from the true motion, whose free term turns faster than wE by the nutation shift
@@ -227,15 +235,16 @@ def test_paper_model_error_grows_at_the_secular_rate(fig):
     """
     sc, t, omega, _ = fig_run(fig)
     two = t <= 2.0
-    m = make_model("paper", sc)
+    m = make_model('paper', sc)
     e = error(m, t[two], omega[two])
     fitted = slope(t[two], e)
     w_perp = complex(*sc.omega0[:2])
-    adiabatic = make_model("fast_spin_adiabatic", sc)
+    adiabatic = make_model('fast_spin_adiabatic', sc)
     shift = adiabatic.lam - adiabatic.a * adiabatic.w0
     refined = abs(m.b * m.coeffs[0] - 1j * shift * w_perp)
     assert abs(m.b * m.coeffs[0]) == pytest.approx(m.secular_rate, rel=1e-12)
-    assert abs(fitted - m.secular_rate) <= adiabatic.precession_rate * abs(w_perp) + 0.05 * m.secular_rate
+    assert (abs(fitted - m.secular_rate)
+            <= adiabatic.precession_rate * abs(w_perp) + 0.05 * m.secular_rate)
     assert fitted == pytest.approx(refined, rel=0.05)
     # linear: the fit's intercept is a small part of the error reached after 2 years
     intercept = np.polyfit(t[two], e, 1)[1]
@@ -243,65 +252,77 @@ def test_paper_model_error_grows_at_the_secular_rate(fig):
 
 
 def test_paper_model_is_good_only_for_small_a_and_theta():
-    """Fig 4 (a = 0.5, theta0 = 0.1) is the case with the smallest secular rate, and the
-    only one the paper calls good: it has the smallest error of the four."""
+    """
+    Fig 4 (a = 0.5, theta0 = 0.1) is the paper model's best case.
+
+    It is the case with the smallest secular rate, and the only one the paper calls good: it has
+    the smallest error of the four.
+    """
     worst = {}
     for fig in FIGS:
         sc, t, omega, _ = fig_run(fig)
         two = t <= 2.0
-        worst[fig] = error(make_model("paper", sc), t[two], omega[two]).max()
-    assert min(worst, key=worst.get) == "fig4"
+        worst[fig] = error(make_model('paper', sc), t[two], omega[two]).max()
+    assert min(worst, key=worst.get) == 'fig4'
 
 
 def test_paper_model_on_its_own_kinematics_has_no_linear_error_growth():
-    """Started in the regular precession the paper assumes (L along the orbit normal:
+    """
+    On its own kinematics, the paper model's error grows quadratically, not linearly.
+
+    Started in the regular precession the paper assumes (L along the orbit normal:
     w_perp0 = (1 + a) w0 tan(theta0), ERRATA 11), the secular term is the first-order expansion
     of a slow phase drift of the free term, so the error grows quadratically (x100 from 2 to
-    20 years), not linearly (x10) as for the figures' data."""
-    a, theta0 = FIGS["fig4"]
+    20 years), not linearly (x10) as for the figures' data.
+    """
+    a, theta0 = FIGS['fig4']
     w_perp = (1 + a) * 30.0 * math.tan(theta0)
     sc = fig_scenario(a, theta0, omega0=(0.0, w_perp, 30.0))
     r = simulate(sc)
     assert r.success, r.message
     assert np.ptp(r.euler[:, 2]) < 1e-3  # theta stays constant: the assumed kinematics hold
-    e = error(make_model("paper", sc), r.t, r.omega)
+    e = error(make_model('paper', sc), r.t, r.omega)
     growth = e.max() / e[r.t <= 2.0].max()
     assert 50.0 <= growth <= 200.0
-    _, t, omega, _ = fig_run("fig4")
-    linear = error(make_model("paper", fig_scenario(a, theta0)), t, omega)
+    _, t, omega, _ = fig_run('fig4')
+    linear = error(make_model('paper', fig_scenario(a, theta0)), t, omega)
     assert 5.0 <= linear.max() / linear[t <= 2.0].max() <= 20.0
 
 
 # -- fast-spin models --------------------------------------------------------------------
-@pytest.mark.parametrize("fig", sorted(FIGS))
+@pytest.mark.parametrize('fig', sorted(FIGS))
 def test_precessing_fast_spin_models_are_an_order_of_magnitude_closer_than_the_paper(fig):
     sc, t, omega, _ = fig_run(fig)
     two = t <= 2.0
-    paper = error(make_model("paper", sc), t[two], omega[two]).max()
-    fast = error(make_model("fast_spin", sc), t[two], omega[two]).max()
+    paper = error(make_model('paper', sc), t[two], omega[two]).max()
+    fast = error(make_model('fast_spin', sc), t[two], omega[two]).max()
     assert fast < paper
-    for name in ("fast_spin_precessing", "fast_spin_adiabatic"):
+    for name in ('fast_spin_precessing', 'fast_spin_adiabatic'):
         assert error(make_model(name, sc), t[two], omega[two]).max() <= 0.1 * paper, name
 
 
-@pytest.mark.parametrize("fig", sorted(FIGS))
+@pytest.mark.parametrize('fig', sorted(FIGS))
 def test_fast_spin_error_grows_at_the_nutation_frequency_shift(fig):
-    """fast_spin's free term turns at a w0; the true one at a w0 + d, d = S (3 cos^2 theta0 - 1)/2:
+    """
+    The fast_spin error grows at the nutation frequency shift d times |w_perp0|.
+
+    fast_spin's free term turns at a w0; the true one at a w0 + d, d = S (3 cos^2 theta0 - 1)/2:
     over 20 years its error grows at |d| |w_perp0| (within 10 %: the other terms are bounded).
-    For theta0 = 0.5 this differs from ERRATA 11's Op |w_perp0| by 25 %."""
+    For theta0 = 0.5 this differs from ERRATA 11's Op |w_perp0| by 25 %.
+    """
     sc, t, omega, _ = fig_run(fig)
-    adiabatic = make_model("fast_spin_adiabatic", sc)
+    adiabatic = make_model('fast_spin_adiabatic', sc)
     shift = adiabatic.lam - adiabatic.a * adiabatic.w0
     rate = abs(shift) * abs(complex(*sc.omega0[:2]))
-    assert slope(t, error(make_model("fast_spin", sc), t, omega)) == pytest.approx(rate, rel=0.1)
+    assert slope(t, error(make_model('fast_spin', sc), t, omega)) == pytest.approx(rate, rel=0.1)
 
 
-@pytest.mark.parametrize("fig", sorted(FIGS))
+@pytest.mark.parametrize('fig', sorted(FIGS))
 def test_adiabatic_model_is_an_order_of_magnitude_closer_than_fast_spin_over_2_to_20_years(fig):
     sc, t, omega, _ = fig_run(fig)
-    fast = error(make_model("fast_spin", sc), t, omega)
-    adiabatic = error(make_model("fast_spin_adiabatic", sc), t, omega)
-    precessing = error(make_model("fast_spin_precessing", sc), t, omega)
+    fast = error(make_model('fast_spin', sc), t, omega)
+    adiabatic = error(make_model('fast_spin_adiabatic', sc), t, omega)
+    precessing = error(make_model('fast_spin_precessing', sc), t, omega)
     for horizon in (2.0, 20.0):
         upto = t <= horizon
         assert adiabatic[upto].max() <= 0.1 * fast[upto].max(), horizon
@@ -310,23 +331,27 @@ def test_adiabatic_model_is_an_order_of_magnitude_closer_than_fast_spin_over_2_t
 
 
 def test_errata_precession_overshoots_at_the_magic_angle():
-    """At cos^2 theta0 = 1/3 the mean nutation shift vanishes: adding Op to the free term
+    """
+    At the magic angle, ERRATA 11's precession makes fast_spin worse, the adiabatic model not.
+
+    At cos^2 theta0 = 1/3 the mean nutation shift vanishes: adding Op to the free term
     (fast_spin_precessing, ERRATA 11) makes fast_spin worse over 20 years; the adiabatic
-    model, whose shift has the theta dependence, still improves on it."""
+    model, whose shift has the theta dependence, still improves on it.
+    """
     theta0 = math.acos(1.0 / math.sqrt(3.0))
     sc = fig_scenario(0.5, theta0)
     r = simulate(sc)
     assert r.success, r.message
     e = {name: error(make_model(name, sc), r.t, r.omega).max()
-         for name in ("fast_spin", "fast_spin_precessing", "fast_spin_adiabatic")}
-    assert e["fast_spin_precessing"] > e["fast_spin"]
-    assert e["fast_spin_adiabatic"] < e["fast_spin"]
+         for name in ('fast_spin', 'fast_spin_precessing', 'fast_spin_adiabatic')}
+    assert e['fast_spin_precessing'] > e['fast_spin']
+    assert e['fast_spin_adiabatic'] < e['fast_spin']
 
 
 def test_precession_rate_and_its_sign_match_the_numerical_phi_drift():
     """The figure axis precesses about the orbit normal at -Op (phi decreases for w0 > 0)."""
-    sc, t, _, euler = fig_run("fig5")
-    m = make_model("fast_spin_precessing", sc)
+    sc, t, _, euler = fig_run('fig5')
+    m = make_model('fast_spin_precessing', sc)
     assert slope(t, euler[:, 0]) == pytest.approx(-m.precession_rate, rel=0.05)
     assert m.phi_dot == -m.precession_rate
 
@@ -335,45 +360,45 @@ def test_precession_rate_and_its_sign_match_the_numerical_phi_drift():
 ASYMMETRIC = Scenario(inertia=(1.0, 1.6, 2.2), orbit_rate=1.0, omega0=(0.0, 1.0, 30.0))
 
 
-@pytest.mark.parametrize("name", LINEAR)
+@pytest.mark.parametrize('name', LINEAR)
 def test_linearised_models_refuse_an_asymmetric_body(name):
-    with pytest.raises(ModelNotApplicable, match=r"^inertia: .*symmetric body, Ix == Iy") as err:
+    with pytest.raises(ModelNotApplicable, match=r'^inertia: .*symmetric body, Ix == Iy') as err:
         make_model(name, ASYMMETRIC)
     assert err.value.model == name
     assert name in str(err.value)
     assert MODELS[name].applies(ASYMMETRIC) == err.value.reason
 
 
-@pytest.mark.parametrize("name", FREE)
+@pytest.mark.parametrize('name', FREE)
 def test_torque_free_models_refuse_an_orbit(name):
-    sc = fig_scenario(*FIGS["fig4"], duration=2.0)
-    with pytest.raises(ModelNotApplicable, match=r"^orbit_rate: .*no torque"):
+    sc = fig_scenario(*FIGS['fig4'], duration=2.0)
+    with pytest.raises(ModelNotApplicable, match=r'^orbit_rate: .*no torque'):
         make_model(name, sc)
 
 
 def test_symmetric_top_refuses_an_asymmetric_body():
-    with pytest.raises(ModelNotApplicable, match="^inertia: .*torque_free_exact"):
-        make_model("torque_free_symmetric", free_scenario((1.0, 1.6, 2.2), (1.0, 1.0, 1.0)))
+    with pytest.raises(ModelNotApplicable, match='^inertia: .*torque_free_exact'):
+        make_model('torque_free_symmetric', free_scenario((1.0, 1.6, 2.2), (1.0, 1.0, 1.0)))
 
 
 def test_symmetry_tolerance_is_1e12_relative():
     near = Scenario(inertia=(1.0, 1.0 + 5e-13, 1.5), orbit_rate=1.0)
     far = Scenario(inertia=(1.0, 1.0 + 5e-12, 1.5), orbit_rate=1.0)
-    assert MODELS["paper"].applies(near) is None
-    assert "symmetric" in MODELS["paper"].applies(far)
+    assert MODELS['paper'].applies(near) is None
+    assert 'symmetric' in MODELS['paper'].applies(far)
 
 
 def test_paper_model_refuses_theta_pi_over_2():
     sc = Scenario(inertia=(1.0, 1.0, 1.5), euler0=(0.5, 0.0, math.pi / 2))
-    with pytest.raises(ModelNotApplicable, match=r"^euler0: .*cos\(theta\)"):
-        make_model("paper", sc)
-    assert make_model("fast_spin", sc).omega(1.0).shape == (3,)  # nothing divides by cos there
+    with pytest.raises(ModelNotApplicable, match=r'^euler0: .*cos\(theta\)'):
+        make_model('paper', sc)
+    assert make_model('fast_spin', sc).omega(1.0).shape == (3,)  # nothing divides by cos there
 
 
-@pytest.mark.parametrize("name", ("fast_spin_precessing", "fast_spin_adiabatic"))
+@pytest.mark.parametrize('name', ('fast_spin_precessing', 'fast_spin_adiabatic'))
 def test_precessing_models_refuse_no_spin(name):
     sc = Scenario(inertia=(1.0, 1.0, 1.5), omega0=(1.0, 0.0, 0.0))
-    with pytest.raises(ModelNotApplicable, match=r"^omega0: wz = 0"):
+    with pytest.raises(ModelNotApplicable, match=r'^omega0: wz = 0'):
         make_model(name, sc)
 
 
@@ -389,87 +414,96 @@ def test_applicability_lists_every_model_with_its_reason():
 def test_bad_names_and_anchors_are_scenario_errors():
     sc = Scenario()
     with pytest.raises(ScenarioError, match="^model: unknown analytic model 'nope'"):
-        make_model("nope", sc)
-    with pytest.raises(ScenarioError, match="^t0: "):
-        make_model("paper", sc, t0=1.0)  # a later anchor needs its own state
-    with pytest.raises(ScenarioError, match="^quaternion: "):
-        make_model("paper", sc, omega=(0, 1, 30), euler=(0, 0, 0.1), quaternion=(1, 0, 0, 0))
-    with pytest.raises(ScenarioError, match="^omega: "):
-        make_model("paper", sc, omega=(0, 1))
+        make_model('nope', sc)
+    with pytest.raises(ScenarioError, match='^t0: '):
+        make_model('paper', sc, t0=1.0)  # a later anchor needs its own state
+    with pytest.raises(ScenarioError, match='^quaternion: '):
+        make_model('paper', sc, omega=(0, 1, 30), euler=(0, 0, 0.1), quaternion=(1, 0, 0, 0))
+    with pytest.raises(ScenarioError, match='^omega: '):
+        make_model('paper', sc, omega=(0, 1))
     state = AnchorState.build(sc, 2.0, omega=(0.0, 1.0, 30.0), quaternion=(1.0, 0.0, 0.0, 0.0))
     assert state.euler[2] == 0.0
-    assert MODELS["paper"].applies(sc, state) is None
+    assert MODELS['paper'].applies(sc, state) is None
 
 
 def test_importing_the_analytic_module_loads_no_rclpy():
-    code = ("import sys, tumble_ros.core.analytic; "
+    code = ('import sys, tumble_ros.core.analytic; '
             "bad = [m for m in sys.modules if m.startswith(('rclpy', 'rosidl'))]; print(bad); "
-            "sys.exit(1 if bad else 0)")
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(PACKAGE_ROOT), os.environ.get("PYTHONPATH")])))
-    done = subprocess.run([sys.executable, "-c", code], cwd=PACKAGE_ROOT, env=env,
+            'sys.exit(1 if bad else 0)')
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        filter(None, [str(PACKAGE_ROOT), os.environ.get('PYTHONPATH')])))
+    done = subprocess.run([sys.executable, '-c', code], cwd=PACKAGE_ROOT, env=env,
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stdout + done.stderr
 
 
 # -- measurements for docs/analytic.md ---------------------------------------------------
 def report():
-    names = ("paper", "fast_spin", "fast_spin_precessing", "fast_spin_adiabatic")
-    print("max |w_model - w_numeric| [rad/yr] over 2 yr / 20 yr")
-    print("fig   " + "  ".join(f"{n:>22}" for n in names))
+    names = ('paper', 'fast_spin', 'fast_spin_precessing', 'fast_spin_adiabatic')
+    print('max |w_model - w_numeric| [rad/yr] over 2 yr / 20 yr')
+    print('fig   ' + '  '.join(f'{n:>22}' for n in names))
     for fig in FIGS:
         sc, t, omega, _ = fig_run(fig)
         cells = []
         for n in names:
             e = error(make_model(n, sc), t, omega)
-            cells.append(f"{e[t <= 2].max():10.3g} /{e.max():10.3g}")
-        print(f"{fig}  " + "  ".join(cells))
-    print("\ntheta over the 20-year runs (the fast-spin kinematics: nearly constant)")
+            cells.append(f'{e[t <= 2].max():10.3g} /{e.max():10.3g}')
+        print(f'{fig}  ' + '  '.join(cells))
+    print('\ntheta over the 20-year runs (the fast-spin kinematics: nearly constant)')
     for fig in FIGS:
         sc, t, omega, euler = fig_run(fig)
-        print(f"{fig}  theta0 = {sc.euler0[2]}: {euler[:, 2].min():.4f} .. {euler[:, 2].max():.4f}, "
-              f"phi drift {slope(t, euler[:, 0]):.5f} rad/yr, "
+        print(f'{fig}  theta0 = {sc.euler0[2]}: '
+              f'{euler[:, 2].min():.4f} .. {euler[:, 2].max():.4f}, '
+              f'phi drift {slope(t, euler[:, 0]):.5f} rad/yr, '
               f"-Op = {-make_model('fast_spin_precessing', sc).precession_rate:.5f}")
-    print("\nerror growth rates [rad/yr per yr]")
-    print("fig   b sin2th/4  paper slope(2yr)  |bC0 - i d w|   Op|w|   d|w|   fast_spin slope(20yr)")
+    print('\nerror growth rates [rad/yr per yr]')
+    print(
+        'fig   b sin2th/4  paper slope(2yr)  |bC0 - i d w|   Op|w|   d|w|   fast_spin slope(20yr)')
     for fig in FIGS:
         sc, t, omega, _ = fig_run(fig)
         two = t <= 2.0
-        p = make_model("paper", sc)
-        ad = make_model("fast_spin_adiabatic", sc)
+        p = make_model('paper', sc)
+        ad = make_model('fast_spin_adiabatic', sc)
         w = complex(*sc.omega0[:2])
         d = ad.lam - ad.a * ad.w0
-        print(f"{fig}  {p.secular_rate:10.4g}  {slope(t[two], error(p, t[two], omega[two])):16.4g}  "
-              f"{abs(p.b * p.coeffs[0] - 1j * d * w):13.4g}  {ad.precession_rate * abs(w):6.4g}  "
-              f"{abs(d) * abs(w):6.4g}  {slope(t, error(make_model('fast_spin', sc), t, omega)):10.4g}")
+        print(f'{fig}  {p.secular_rate:10.4g}  '
+              f'{slope(t[two], error(p, t[two], omega[two])):16.4g}  '
+              f'{abs(p.b * p.coeffs[0] - 1j * d * w):13.4g}  {ad.precession_rate * abs(w):6.4g}  '
+              f'{abs(d) * abs(w):6.4g}  '
+              f"{slope(t, error(make_model('fast_spin', sc), t, omega)):10.4g}")
     sc = fig_scenario(0.5, math.acos(1.0 / math.sqrt(3.0)))
     r = simulate(sc)
-    for fig in ("fig4", "fig5"):
+    for fig in ('fig4', 'fig5'):
         a, theta0 = FIGS[fig]
         sc = fig_scenario(a, theta0, omega0=(0.0, (1 + a) * 30.0 * math.tan(theta0), 30.0))
         r = simulate(sc)
-        print(f"\n{fig} body started in the paper's regular precession (w_perp0 = {sc.omega0[1]:.4g}), "
-              f"theta in {r.euler[:, 2].min():.4f} .. {r.euler[:, 2].max():.4f}, max error over 2 yr / 20 yr:")
+        print(f"\n{fig} body started in the paper's regular precession "
+              f'(w_perp0 = {sc.omega0[1]:.4g}), '
+              f'theta in {r.euler[:, 2].min():.4f} .. {r.euler[:, 2].max():.4f}, '
+              'max error over 2 yr / 20 yr:')
         for n in names:
             e = error(make_model(n, sc), r.t, r.omega)
-            print(f"  {n:22} {e[r.t <= 2].max():10.3g} /{e.max():10.3g}")
+            print(f'  {n:22} {e[r.t <= 2].max():10.3g} /{e.max():10.3g}')
     sc = fig_scenario(0.5, math.acos(1.0 / math.sqrt(3.0)))
     r = simulate(sc)
-    print("\nmagic angle cos^2 theta0 = 1/3, a = 0.5, max error over 2 yr / 20 yr:")
+    print('\nmagic angle cos^2 theta0 = 1/3, a = 0.5, max error over 2 yr / 20 yr:')
     for n in names[1:]:
         e = error(make_model(n, sc), r.t, r.omega)
-        print(f"  {n:22} {e[r.t <= 2].max():10.3g} /{e.max():10.3g}")
-    print("\ntorque-free models: max |w_model - w_dop853| / |w0| over 100 periods (rtol = atol = 1e-13)")
+        print(f'  {n:22} {e[r.t <= 2].max():10.3g} /{e.max():10.3g}')
+    print('\ntorque-free models: max |w_model - w_dop853| / |w0| over 100 periods '
+          '(rtol = atol = 1e-13)')
     for name, inertia, omega0, mode in FREE_CASES:
         m = make_model(name, free_scenario(inertia, omega0))
         period = m.period if mode else 2 * math.pi / abs(m.w_e)
         sc = free_scenario(inertia, omega0, duration=100 * period)
         r = simulate(sc)
         rel = np.max(np.abs(make_model(name, sc).omega(r.t) - r.omega)) / np.linalg.norm(omega0)
-        print(f"  {name:22} {str(inertia):16} {str(omega0):20} {mode or '':10} T = {period:.4g} yr  {rel:.2g}")
+        print(f"  {name:22} {str(inertia):16} {str(omega0):20} {mode or '':10} "
+              f'T = {period:.4g} yr  {rel:.2g}')
 
 
 def report_variants():
-    """The interpretations of ERRATA 11's precession that were tried (docs/analytic.md)."""
+    """Report the interpretations of ERRATA 11's precession that were tried (docs/analytic.md)."""
     from tumble_ros.core.analytic import FastSpinModel
 
     def variant(shift_sign, phi_sign):
@@ -482,39 +516,40 @@ def report_variants():
         return Variant
 
     variants = {"phi' = -Op only": variant(0, -1), "phi' = +Op only": variant(0, +1),
-                "lam = a w0 - Op": variant(-1, 0), "lam = a w0 + Op": variant(+1, 0),
+                'lam = a w0 - Op': variant(-1, 0), 'lam = a w0 + Op': variant(+1, 0),
                 "lam = a w0 + Op, phi' = -Op": variant(+1, -1)}
-    print("\nERRATA 11 interpretations, max error over 2 yr / 20 yr")
-    print(f"{'':28}" + "".join(f"{fig:>22}" for fig in FIGS))
+    print('\nERRATA 11 interpretations, max error over 2 yr / 20 yr')
+    print(f"{'':28}" + ''.join(f'{fig:>22}' for fig in FIGS))
     runs = {fig: fig_run(fig) for fig in FIGS}
-    for label, cls in [("fast_spin", MODELS["fast_spin"])] + list(variants.items()):
+    for label, cls in [('fast_spin', MODELS['fast_spin'])] + list(variants.items()):
         cells = []
         for fig, (sc, t, omega, _) in runs.items():
             e = error(cls(sc), t, omega)
-            cells.append(f"{e[t <= 2].max():10.3g} /{e.max():9.3g}")
-        print(f"{label:28}" + " ".join(cells))
+            cells.append(f'{e[t <= 2].max():10.3g} /{e.max():9.3g}')
+        print(f'{label:28}' + ' '.join(cells))
 
 
 def report_separatrix():
     """torque_free_exact near the separatrix: (1, 1.6, 2.2), w = (3, 5, w3), 5 periods."""
     i1, i2, i3 = 1.0, 1.6, 2.2
-    print("\ntorque_free_exact near the separatrix, max error / |w0| over 5 periods")
+    print('\ntorque_free_exact near the separatrix, max error / |w0| over 5 periods')
     for eps in (1e-4, 1e-6, 1e-8, 1e-10):
         # L^2 - 2 E I2 = eps * (I1 (I2 - I1) w1^2)
         w3 = math.sqrt((1 + eps) * i1 * (i2 - i1) / (i3 * (i3 - i2))) * 3.0
         sc = free_scenario((i1, i2, i3), (3.0, 5.0, w3))
         try:
-            m = make_model("torque_free_exact", sc)
+            m = make_model('torque_free_exact', sc)
         except ModelNotApplicable as err:
-            print(f"  eps = {eps:g}: refused: {err}")
+            print(f'  eps = {eps:g}: refused: {err}')
             continue
         sc = free_scenario((i1, i2, i3), (3.0, 5.0, w3), duration=5 * m.period)
         r = simulate(sc)
-        rel = np.max(np.abs(make_model("torque_free_exact", sc).omega(r.t) - r.omega)) / np.linalg.norm(sc.omega0)
-        print(f"  eps = {eps:g}: 1 - m = {1 - m.params[6]:.3g}, T = {m.period:.4g} yr, {rel:.2g}")
+        rel = (np.max(np.abs(make_model('torque_free_exact', sc).omega(r.t) - r.omega))
+               / np.linalg.norm(sc.omega0))
+        print(f'  eps = {eps:g}: 1 - m = {1 - m.params[6]:.3g}, T = {m.period:.4g} yr, {rel:.2g}')
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     report()
     report_variants()
     report_separatrix()

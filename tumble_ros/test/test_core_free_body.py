@@ -4,14 +4,15 @@ import itertools
 import numpy as np
 import pytest
 
-from tumble_ros.core import METHODS, IntegratorSettings, Scenario, angular_momentum_orbital, kinetic_energy, simulate
+from tumble_ros.core import (angular_momentum_orbital, IntegratorSettings, kinetic_energy, METHODS,
+                             Scenario, simulate)
 from tumble_ros.core.rotation import quaternion_to_matrix
 
-TIGHT = IntegratorSettings(method="dop853", rtol=1e-13, atol=1e-13)
+TIGHT = IntegratorSettings(method='dop853', rtol=1e-13, atol=1e-13)
 
 
 def symmetric_top_omega(t, inertia, omega0):
-    """Closed form for Ix = Iy: w_perp turns at lam = (Iz - Ix)/Ix wz, wz constant."""
+    """Return the closed form for Ix = Iy: w_perp turns at lam = (Iz - Ix)/Ix wz, wz constant."""
     ix, _, iz = inertia
     wx0, wy0, wz0 = omega0
     lam = (iz - ix) / ix * wz0
@@ -63,10 +64,10 @@ def test_asymmetric_body_conserves_energy_and_momentum():
     assert rel_drift(momentum) <= 1e-10
 
 
-CASES = list(itertools.product(sorted(METHODS), ["quaternion", "euler"]))
+CASES = list(itertools.product(sorted(METHODS), ['quaternion', 'euler']))
 
 
-@pytest.mark.parametrize("method,attitude", CASES)
+@pytest.mark.parametrize('method,attitude', CASES)
 def test_every_method_and_attitude_reproduces_the_symmetric_top(method, attitude):
     inertia = (1.0, 1.0, 1.5)
     omega0 = (0.0, 1.0, 30.0)

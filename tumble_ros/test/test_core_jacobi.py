@@ -1,13 +1,14 @@
 """The Jacobi integral of the circular-orbit problem (ERRATA.md 'Conventions')."""
 import numpy as np
 
-from tumble_ros.core import IntegratorSettings, Scenario, jacobi_integral, simulate
+from tumble_ros.core import IntegratorSettings, jacobi_integral, Scenario, simulate
 from tumble_ros.core.rotation import quaternion_to_matrix
 
 # Paper Figs 7/8: a = 3, theta = 0.9, phi = 0.5, wx0 = wy0 = 0.1, wz0 = 30, ws = 1.
 FIG7 = Scenario(inertia=(1.0, 1.0, 4.0), allow_unphysical_inertia=True, orbit_rate=1.0,
-                omega0=(0.1, 0.1, 30.0), euler0=(0.5, 0.0, 0.9), duration=20.0, output_interval=0.01,
-                integrator=IntegratorSettings(method="dop853", rtol=1e-13, atol=1e-12))
+                omega0=(0.1, 0.1, 30.0), euler0=(0.5, 0.0, 0.9), duration=20.0,
+                output_interval=0.01,
+                integrator=IntegratorSettings(method='dop853', rtol=1e-13, atol=1e-12))
 
 
 def relative_drift(j):
@@ -28,7 +29,8 @@ def test_wrong_sign_of_the_orbital_term_is_not_conserved():
     r = simulate(FIG7.replace(duration=2.0))
     c = np.array([quaternion_to_matrix(q) for q in r.quaternion])
     h = r.omega * np.array(FIG7.inertia)
-    flipped = jacobi_integral(r.t, r.omega, c, FIG7.inertia, FIG7.orbit_rate) - 2 * np.sum(h * c[:, 2, :], axis=1)
+    flipped = (jacobi_integral(r.t, r.omega, c, FIG7.inertia, FIG7.orbit_rate)
+               - 2 * np.sum(h * c[:, 2, :], axis=1))
     assert relative_drift(flipped) > 1e-4
     assert relative_drift(r.jacobi) < 1e-10
 

@@ -27,13 +27,15 @@ def rx(a):
     return np.array([[1.0, 0, 0], [0, c, s], [0, -s, c]])
 
 
-@pytest.mark.parametrize("angles", RNG.uniform([-3, -3, 0.01], [3, 3, 3.1], size=(20, 3)))
+@pytest.mark.parametrize('angles', RNG.uniform([-3, -3, 0.01], [3, 3, 3.1], size=(20, 3)))
 def test_matrix_is_product_of_elementary_rotations(angles):
     phi, psi, theta = angles
-    np.testing.assert_allclose(euler_to_matrix(phi, psi, theta), rz(psi) @ rx(theta) @ rz(phi), atol=1e-15)
+    np.testing.assert_allclose(euler_to_matrix(phi, psi, theta), rz(psi) @ rx(theta) @ rz(phi),
+                               atol=1e-15)
 
 
-@pytest.mark.parametrize("angles", RNG.uniform([-3, -3, 1e-6], [3, 3, math.pi - 1e-6], size=(20, 3)))
+@pytest.mark.parametrize('angles',
+                         RNG.uniform([-3, -3, 1e-6], [3, 3, math.pi - 1e-6], size=(20, 3)))
 def test_euler_matrix_quaternion_round_trips(angles):
     r = euler_to_matrix(*angles)
     np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-14)
@@ -68,7 +70,7 @@ def test_quaternion_kinematics_match_matrix_kinematics():
     """dq/dt = 1/2 q*(0, w) must give dC/dt = C [w x] for C = body -> orbital."""
     from tumble_ros.core.dynamics import ATTITUDE_MODELS
 
-    rhs = ATTITUDE_MODELS["quaternion"].make_rhs((1.0, 2.0, 2.5), 0.0)
+    rhs = ATTITUDE_MODELS['quaternion'].make_rhs((1.0, 2.0, 2.5), 0.0)
     q = RNG.normal(size=4)
     q /= np.linalg.norm(q)
     w = np.array([0.3, -1.2, 2.0])
@@ -83,7 +85,7 @@ def test_euler_kinematics_match_matrix_kinematics():
     """Paper eq 15 (as printed) must give dR/dt = -[w x] R for R = orbital -> body."""
     from tumble_ros.core.dynamics import ATTITUDE_MODELS
 
-    rhs = ATTITUDE_MODELS["euler"].make_rhs((1.0, 2.0, 2.5), 0.0)
+    rhs = ATTITUDE_MODELS['euler'].make_rhs((1.0, 2.0, 2.5), 0.0)
     e = np.array([0.7, -0.4, 1.1])
     w = np.array([0.3, -1.2, 2.0])
     de = rhs(0.0, np.concatenate([w, e]))[3:]

@@ -1,67 +1,68 @@
 """Scenario validation, parameter round trips and YAML loading."""
 import math
-import re
 from pathlib import Path
+import re
 
 import numpy as np
 import pytest
 
-from tumble_ros.core import Impact, IntegratorSettings, Scenario, ScenarioError, load_scenario, simulate
+from tumble_ros.core import (Impact, IntegratorSettings, load_scenario, Scenario, ScenarioError,
+                             simulate)
 
-CONFIG = Path(__file__).resolve().parents[1] / "config"
+CONFIG = Path(__file__).resolve().parents[1] / 'config'
 
 BAD_FIELDS = [
-    ({"inertia": (1.0, 1.0)}, "inertia"),
-    ({"inertia": (1.0, -1.0, 1.5)}, "inertia[1]"),
-    ({"inertia": (1.0, 1.0, math.nan)}, "inertia[2]"),
-    ({"inertia": (1.0, 1.0, 4.0)}, "inertia"),  # a = 3: not realisable
-    ({"allow_unphysical_inertia": "yes"}, "allow_unphysical_inertia"),
-    ({"orbit_rate": -1.0}, "orbit_rate"),
-    ({"orbit_rate": math.inf}, "orbit_rate"),
-    ({"omega0": (0.0, "x", 1.0)}, "omega0[1]"),
-    ({"euler0": (0.5, 0.0)}, "euler0"),
-    ({"euler0": (0.5, 0.0, 0.0), "attitude": "euler"}, "euler0[2]"),
-    ({"euler0": (0.5, 0.0, math.pi), "attitude": "euler"}, "euler0[2]"),
-    ({"attitude": "matrix"}, "attitude"),
-    ({"duration": 0.0}, "duration"),
-    ({"output_interval": -0.1}, "output_interval"),
-    ({"output_interval": 5.0}, "output_interval"),
-    ({"impacts": (Impact(1.9, 0.2, (1.0, 0.0, 0.0)),)}, "impacts[0].start"),
+    ({'inertia': (1.0, 1.0)}, 'inertia'),
+    ({'inertia': (1.0, -1.0, 1.5)}, 'inertia[1]'),
+    ({'inertia': (1.0, 1.0, math.nan)}, 'inertia[2]'),
+    ({'inertia': (1.0, 1.0, 4.0)}, 'inertia'),  # a = 3: not realisable
+    ({'allow_unphysical_inertia': 'yes'}, 'allow_unphysical_inertia'),
+    ({'orbit_rate': -1.0}, 'orbit_rate'),
+    ({'orbit_rate': math.inf}, 'orbit_rate'),
+    ({'omega0': (0.0, 'x', 1.0)}, 'omega0[1]'),
+    ({'euler0': (0.5, 0.0)}, 'euler0'),
+    ({'euler0': (0.5, 0.0, 0.0), 'attitude': 'euler'}, 'euler0[2]'),
+    ({'euler0': (0.5, 0.0, math.pi), 'attitude': 'euler'}, 'euler0[2]'),
+    ({'attitude': 'matrix'}, 'attitude'),
+    ({'duration': 0.0}, 'duration'),
+    ({'output_interval': -0.1}, 'output_interval'),
+    ({'output_interval': 5.0}, 'output_interval'),
+    ({'impacts': (Impact(1.9, 0.2, (1.0, 0.0, 0.0)),)}, 'impacts[0].start'),
 ]
 
 
-@pytest.mark.parametrize("changes,field", BAD_FIELDS)
+@pytest.mark.parametrize('changes,field', BAD_FIELDS)
 def test_invalid_field_is_rejected_naming_it(changes, field):
     with pytest.raises(ScenarioError) as err:
         Scenario(**changes)
-    assert str(err.value).startswith(field + ":"), str(err.value)
+    assert str(err.value).startswith(field + ':'), str(err.value)
 
 
 BAD_INTEGRATOR = [
-    ({"method": "euler"}, "integrator.method"),
-    ({"rtol": 0.5}, "integrator.rtol"),
-    ({"rtol": 1e-16}, "integrator.rtol"),
-    ({"atol": 0.0}, "integrator.atol"),
-    ({"step": -1e-3}, "integrator.step"),
-    ({"max_step": -1.0}, "integrator.max_step"),
+    ({'method': 'euler'}, 'integrator.method'),
+    ({'rtol': 0.5}, 'integrator.rtol'),
+    ({'rtol': 1e-16}, 'integrator.rtol'),
+    ({'atol': 0.0}, 'integrator.atol'),
+    ({'step': -1e-3}, 'integrator.step'),
+    ({'max_step': -1.0}, 'integrator.max_step'),
 ]
 
 
-@pytest.mark.parametrize("changes,field", BAD_INTEGRATOR)
+@pytest.mark.parametrize('changes,field', BAD_INTEGRATOR)
 def test_invalid_integrator_setting_is_rejected_naming_it(changes, field):
-    with pytest.raises(ScenarioError, match=f"^{re.escape(field)}:"):
+    with pytest.raises(ScenarioError, match=f'^{re.escape(field)}:'):
         IntegratorSettings(**changes)
 
 
-@pytest.mark.parametrize("changes,field", [
-    ({"start": -1.0}, "impact.start"),
-    ({"duration": 0.0}, "impact.duration"),
-    ({"torque": (1.0, math.nan, 0.0)}, "impact.torque[1]"),
-    ({"frame": "world"}, "impact.frame"),
+@pytest.mark.parametrize('changes,field', [
+    ({'start': -1.0}, 'impact.start'),
+    ({'duration': 0.0}, 'impact.duration'),
+    ({'torque': (1.0, math.nan, 0.0)}, 'impact.torque[1]'),
+    ({'frame': 'world'}, 'impact.frame'),
 ])
 def test_invalid_impact_is_rejected_naming_it(changes, field):
-    fields = {"start": 0.1, "duration": 3e-7, "torque": (1.0, 0.0, 0.0), "frame": "body"} | changes
-    with pytest.raises(ScenarioError, match=f"^{re.escape(field)}"):
+    fields = {'start': 0.1, 'duration': 3e-7, 'torque': (1.0, 0.0, 0.0), 'frame': 'body'} | changes
+    with pytest.raises(ScenarioError, match=f'^{re.escape(field)}'):
         Impact(**fields)
 
 
@@ -71,58 +72,62 @@ def test_unphysical_inertia_allowed_on_request():
 
 
 def test_parameters_round_trip():
-    sc = Scenario(inertia=(1.0, 1.2, 1.5), impacts=(Impact(0.5, 3e-7, (1.0, 2.0, 3.0), "orbital"),
+    sc = Scenario(inertia=(1.0, 1.2, 1.5), impacts=(Impact(0.5, 3e-7, (1.0, 2.0, 3.0), 'orbital'),
                                                     Impact(1.0, 1e-6, (0.0, 0.0, 5.0))),
-                  integrator=IntegratorSettings(method="rk4", step=1e-3))
+                  integrator=IntegratorSettings(method='rk4', step=1e-3))
     params = sc.to_parameters()
-    assert params["impacts.torque"] == [1.0, 2.0, 3.0, 0.0, 0.0, 5.0]
+    assert params['impacts.torque'] == [1.0, 2.0, 3.0, 0.0, 0.0, 5.0]
     assert Scenario.from_parameters(params) == sc
 
 
-@pytest.mark.parametrize("params,field", [
-    ({"inertai": [1, 1, 1]}, "inertai"),
-    ({"impacts.start": [0.1], "impacts.duration": [], "impacts.torque": [1, 0, 0]}, "impacts.duration"),
-    ({"impacts.start": [0.1], "impacts.duration": [1e-7], "impacts.torque": [1, 0]}, "impacts.torque"),
-    ({"impacts.start": [0.1], "impacts.duration": [-1e-7], "impacts.torque": [1, 0, 0]}, "impacts[0].duration"),
-    ({"integrator.rtol": 2.0}, "integrator.rtol"),
+@pytest.mark.parametrize('params,field', [
+    ({'inertai': [1, 1, 1]}, 'inertai'),
+    ({'impacts.start': [0.1], 'impacts.duration': [], 'impacts.torque': [1, 0, 0]},
+     'impacts.duration'),
+    ({'impacts.start': [0.1], 'impacts.duration': [1e-7], 'impacts.torque': [1, 0]},
+     'impacts.torque'),
+    ({'impacts.start': [0.1], 'impacts.duration': [-1e-7], 'impacts.torque': [1, 0, 0]},
+     'impacts[0].duration'),
+    ({'integrator.rtol': 2.0}, 'integrator.rtol'),
 ])
 def test_bad_parameters_name_the_parameter(params, field):
-    with pytest.raises(ScenarioError, match=f"^{re.escape(field)}"):
+    with pytest.raises(ScenarioError, match=f'^{re.escape(field)}'):
         Scenario.from_parameters(params)
 
 
 def test_load_scenario_from_ros_params_yaml(tmp_path):
-    path = tmp_path / "s.yaml"
+    path = tmp_path / 's.yaml'
     path.write_text(
-        "sim:\n  ros__parameters:\n    inertia: [1.0, 1.0, 1.5]\n    euler0: [0.5, 0.0, 0.5]\n"
-        "    integrator:\n      method: rk45\n      rtol: 1.0e-9\n"
-        "    impacts:\n      start: [0.5]\n      duration: [3.0e-7]\n      torque: [0.0, 0.0, 1.0e6]\n"
-        "    real_time_factor: 0.0\n"
+        'sim:\n  ros__parameters:\n    inertia: [1.0, 1.0, 1.5]\n    euler0: [0.5, 0.0, 0.5]\n'
+        '    integrator:\n      method: rk45\n      rtol: 1.0e-9\n'
+        '    impacts:\n      start: [0.5]\n      duration: [3.0e-7]\n'
+        '      torque: [0.0, 0.0, 1.0e6]\n'
+        '    real_time_factor: 0.0\n'
     )
-    sc = load_scenario(path, ignore=frozenset({"real_time_factor"}))
-    assert sc.integrator.method == "rk45" and sc.integrator.rtol == 1e-9
+    sc = load_scenario(path, ignore=frozenset({'real_time_factor'}))
+    assert sc.integrator.method == 'rk45' and sc.integrator.rtol == 1e-9
     assert sc.impacts == (Impact(0.5, 3e-7, (0.0, 0.0, 1e6)),)
-    with pytest.raises(ScenarioError, match="real_time_factor"):
+    with pytest.raises(ScenarioError, match='real_time_factor'):
         load_scenario(path)
 
 
-@pytest.mark.parametrize("text,why", [
-    ("", "expected a ROS 2 parameters file"),
-    ("sim: [1, 2]", "ros__parameters"),
-    ("a: {ros__parameters: {}}\nb: {ros__parameters: {}}", "no section"),
-    ("sim:\n  ros__parameters:\n    duration: -1\n", "duration"),
-    ("sim: {ros__parameters: {inertia: [1, 1}}", "cannot read"),
+@pytest.mark.parametrize('text,why', [
+    ('', 'expected a ROS 2 parameters file'),
+    ('sim: [1, 2]', 'ros__parameters'),
+    ('a: {ros__parameters: {}}\nb: {ros__parameters: {}}', 'no section'),
+    ('sim:\n  ros__parameters:\n    duration: -1\n', 'duration'),
+    ('sim: {ros__parameters: {inertia: [1, 1}}', 'cannot read'),
 ])
 def test_load_scenario_errors(tmp_path, text, why):
-    path = tmp_path / "bad.yaml"
+    path = tmp_path / 'bad.yaml'
     path.write_text(text)
     with pytest.raises(ScenarioError, match=why):
         load_scenario(path)
 
 
 def test_config_files_load_and_run_briefly():
-    files = sorted(CONFIG.glob("*.yaml"))
-    assert {f.name for f in files} >= {"default.yaml"} | {f"fig{k}.yaml" for k in range(3, 11)}
+    files = sorted(CONFIG.glob('*.yaml'))
+    assert {f.name for f in files} >= {'default.yaml'} | {f'fig{k}.yaml' for k in range(3, 11)}
     for f in files:
         sc = load_scenario(f)
         r = simulate(sc, t_eval=np.linspace(0, min(sc.duration, 0.01), 3))
@@ -130,12 +135,12 @@ def test_config_files_load_and_run_briefly():
 
 
 def test_default_yaml_is_the_default_scenario():
-    assert load_scenario(CONFIG / "default.yaml") == Scenario()
+    assert load_scenario(CONFIG / 'default.yaml') == Scenario()
 
 
 def test_simulate_rejects_bad_t_eval():
     for bad in ([], [0.2, 0.1], [0.0, 3.0], [math.nan]):
-        with pytest.raises(ScenarioError, match="t_eval"):
+        with pytest.raises(ScenarioError, match='t_eval'):
             simulate(Scenario(), t_eval=bad)
 
 
@@ -145,16 +150,16 @@ def test_every_parameter_is_documented():
     assert set(PARAMETER_DOCS) == set(PARAMETER_NAMES) == set(Scenario().to_parameters())
 
 
-@pytest.mark.parametrize("impact,now,field", [
-    (Impact(0.5, 2e-3, (1.0, 0.0, 0.0)), 0.0, "duration"),
-    (Impact(0.5, 1e-6, (1e10, 0.0, 0.0)), 0.0, "torque"),
-    (Impact(0.5, 1e-6, (1.0, 0.0, 0.0)), 0.6, "start"),
-    (Impact(1.9999999, 1e-6, (1.0, 0.0, 0.0)), 0.0, "start"),
+@pytest.mark.parametrize('impact,now,field', [
+    (Impact(0.5, 2e-3, (1.0, 0.0, 0.0)), 0.0, 'duration'),
+    (Impact(0.5, 1e-6, (1e10, 0.0, 0.0)), 0.0, 'torque'),
+    (Impact(0.5, 1e-6, (1.0, 0.0, 0.0)), 0.6, 'start'),
+    (Impact(1.9999999, 1e-6, (1.0, 0.0, 0.0)), 0.0, 'start'),
 ])
 def test_impact_limits_refuse_with_the_field_named(impact, now, field):
     from tumble_ros.core import ImpactLimits
 
-    with pytest.raises(ScenarioError, match=f"^{field}:"):
+    with pytest.raises(ScenarioError, match=f'^{field}:'):
         ImpactLimits(max_duration=1e-3, max_impulse=100.0).check(impact, now=now, end=2.0)
     ImpactLimits().check(Impact(0.7, 1e-6, (1.0, 0.0, 0.0)), now=0.6, end=2.0)  # a good one passes
 
@@ -162,5 +167,5 @@ def test_impact_limits_refuse_with_the_field_named(impact, now, field):
 def test_dump_parse_round_trip():
     from tumble_ros.core import dump_scenario, parse_scenario
 
-    sc = Scenario(impacts=(Impact(0.5, 3e-7, (1.0, 2.0, 3.0), "orbital"),), attitude="euler")
+    sc = Scenario(impacts=(Impact(0.5, 3e-7, (1.0, 2.0, 3.0), 'orbital'),), attitude='euler')
     assert parse_scenario(dump_scenario(sc)) == sc

@@ -19,7 +19,7 @@ def point_cloud(n=400):
     return m, r @ axes, moments
 
 
-@pytest.mark.parametrize("trial", range(5))
+@pytest.mark.parametrize('trial', range(5))
 def test_eq12_equals_sum_of_point_mass_torques(trial):
     m, r, inertia = point_cloud()
     ws = 1.7
@@ -46,9 +46,10 @@ def test_eq12_component_form():
     np.testing.assert_allclose(gravity_gradient_torque(u, inertia, 0.8), expected, rtol=1e-14)
 
 
-@pytest.mark.parametrize("mode", sorted(ATTITUDE_MODELS))
+@pytest.mark.parametrize('mode', sorted(ATTITUDE_MODELS))
 def test_rhs_is_eulers_equation_with_eq12(mode):
-    """The hot-path RHS equals I^-1 (M - w x I w), M from eq 12 with u = R R0(t)/R0.
+    """
+    The hot-path RHS equals I^-1 (M - w x I w), M from eq 12 with u = R R0(t)/R0.
 
     This is where the typo of eq 14 (third line) would show: Ix != Iy here.
     """
@@ -66,7 +67,7 @@ def test_rhs_is_eulers_equation_with_eq12(mode):
     np.testing.assert_allclose(rhs(t, y)[:3], expected, rtol=1e-12, atol=1e-12)
 
 
-@pytest.mark.parametrize("mode", sorted(ATTITUDE_MODELS))
+@pytest.mark.parametrize('mode', sorted(ATTITUDE_MODELS))
 def test_rhs_adds_pulse_torques_in_their_frames(mode):
     model = ATTITUDE_MODELS[mode]
     inertia = np.array([1.0, 1.4, 2.1])
@@ -78,5 +79,6 @@ def test_rhs_adds_pulse_torques_in_their_frames(mode):
     pulsed = model.make_rhs(inertia, 1.0, m_body, m_orb)(0.3, y)[:3]
     c = model.to_matrix(y[3:])
     np.testing.assert_allclose(pulsed - free, (m_body + c.T @ m_orb) / inertia, rtol=1e-12)
-    np.testing.assert_allclose(c, quaternion_to_matrix(ATTITUDE_MODELS["quaternion"].from_euler(*angles)),
+    np.testing.assert_allclose(c, quaternion_to_matrix(
+        ATTITUDE_MODELS['quaternion'].from_euler(*angles)),
                                atol=1e-14)

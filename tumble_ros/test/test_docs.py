@@ -1,22 +1,23 @@
 """The README documents every parameter, topic and service that the code declares."""
-import re
 from pathlib import Path
+import re
 
 from tumble_ros.core import Scenario
 from tumble_ros.nodes.comparator import PARAMETERS as COMPARATOR_PARAMETERS
 from tumble_ros.nodes.recorder import PARAMETERS as RECORDER_PARAMETERS
 from tumble_ros.nodes.sim import NODE_PARAMETERS
 
-README = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+README = (Path(__file__).resolve().parents[2] / 'README.md').read_text()
 
 
 def table_rows(text):
-    return {m.group(1) for m in re.finditer(r"^\| `([^`]+)`", text, re.M)}
+    return {m.group(1) for m in re.finditer(r'^\| `([^`]+)`', text, re.M)}
 
 
 def test_every_parameter_has_a_readme_row():
     rows = table_rows(README)
-    names = list(Scenario().to_parameters()) + list(NODE_PARAMETERS) + list(COMPARATOR_PARAMETERS) + list(RECORDER_PARAMETERS)
+    names = (list(Scenario().to_parameters()) + list(NODE_PARAMETERS) + list(COMPARATOR_PARAMETERS)
+             + list(RECORDER_PARAMETERS))
     missing = [n for n in names if n not in rows]
     assert not missing
 
@@ -28,15 +29,17 @@ def test_every_topic_and_service_has_a_readme_row(ros):
     ros.start(SimNode, start_paused=True)
     ros.start(ComparatorNode)
     ros.spin_until(lambda: len(ros.probe.get_topic_names_and_types()) >= 12, 5.0)
-    rows = table_rows(README) | {"pause", "resume", "step"}
-    topics = {n.lstrip("/") if n != "/clock" else n for n, _ in ros.probe.get_topic_names_and_types()}
-    ignored = {"rosout", "parameter_events", "apply_impact/_service_event"}
+    rows = table_rows(README) | {'pause', 'resume', 'step'}
+    topics = {n.lstrip('/') if n != '/clock' else n
+              for n, _ in ros.probe.get_topic_names_and_types()}
+    ignored = {'rosout', 'parameter_events', 'apply_impact/_service_event'}
     assert not sorted(topics - rows - ignored)
-    services = {n.lstrip("/") for n, _ in ros.probe.get_service_names_and_types() if not n.startswith(("/sim/", "/probe/", "/comparator/"))}
+    services = {n.lstrip('/') for n, _ in ros.probe.get_service_names_and_types()
+                if not n.startswith(('/sim/', '/probe/', '/comparator/'))}
     assert not sorted(services - rows)
 
 
 def test_readme_starts_with_the_two_commands():
-    first_block = README.split("```")[1]
-    assert first_block.split() == ["bash", "make", "run", "#", "runs", "the", "main", "job",
-                                   "make", "test", "#", "runs", "the", "tests"]
+    first_block = README.split('```')[1]
+    assert first_block.split() == ['bash', 'make', 'run', '#', 'runs', 'the', 'main', 'job',
+                                   'make', 'test', '#', 'runs', 'the', 'tests']

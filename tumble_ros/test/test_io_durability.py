@@ -1,6 +1,9 @@
-"""McapWriter's durability contract: a writer killed with SIGKILL loses at most the chunk in
-progress (< chunk_bytes of message data), what was flushed stays readable; plus the writer's
-argument checks and close semantics."""
+"""
+McapWriter's durability contract, argument checks and close semantics.
+
+A writer killed with SIGKILL loses at most the chunk in progress (< chunk_bytes of message
+data), what was flushed stays readable.
+"""
 import math
 import os
 import pickle
@@ -11,15 +14,15 @@ import textwrap
 import threading
 import time
 
+from geometry_msgs.msg import Vector3Stamped
 import numpy
 import pytest
-from geometry_msgs.msg import Vector3Stamped
 from rclpy.serialization import serialize_message
 
 from tumble_ros.io import (McapError, McapWriter, MessageDefinitionError, offered_qos_yaml,
-                          read_messages, summarize)
+                           read_messages, summarize)
 
-CHILD = textwrap.dedent('''
+CHILD = textwrap.dedent("""
     import math, pickle, sys, time
     from tumble_ros.io import McapWriter
     payloads = pickle.load(open(sys.argv[1], 'rb'))
@@ -49,11 +52,11 @@ CHILD = textwrap.dedent('''
             if writer.chunks_written > reported:
                 reported = writer.chunks_written
                 print(i, writer.messages_flushed, reported, flush=True)
-''')
+""")
 
 
 def vector_payloads(count):
-    """Serialized Vector3Stamped messages; message k carries k in vector.x."""
+    """Return serialized Vector3Stamped messages; message k carries k in vector.x."""
     out = []
     for k in range(count):
         message = Vector3Stamped()

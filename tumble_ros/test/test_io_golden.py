@@ -1,13 +1,16 @@
-"""The committed golden MCAP file: in sync with scripts/make_golden_mcap.py (byte-identical when
-regenerated) and read back by tumble_ros.io exactly as golden.json (written by the script from its
-own inputs) says."""
+"""
+The committed golden MCAP file, checked against scripts/make_golden_mcap.py and golden.json.
+
+It is in sync with scripts/make_golden_mcap.py (byte-identical when regenerated) and read back
+by tumble_ros.io exactly as golden.json (written by the script from its own inputs) says.
+"""
 import json
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
-import pytest
 from mcap.reader import make_reader
+import pytest
 
 from tumble_ros.io import offered_qos_yaml, read_messages, summarize
 

@@ -1,15 +1,15 @@
 """tumble_ros.io.msgdefs: message definitions in rosbag2's (Jazzy) ros2msg schema format."""
 import os
+from pathlib import Path
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 from tumble_ros.io import msgdefs
-from tumble_ros.io.msgdefs import (SEPARATOR, MessageDefinitionError, message_definition,
-                                   normalize_type_name, parse_msg, type_hash)
+from tumble_ros.io.msgdefs import (message_definition, MessageDefinitionError, normalize_type_name,
+                                   parse_msg, SEPARATOR, type_hash)
 
 REPO = Path(__file__).resolve().parents[2]
 INSTALL_PREFIX = REPO / 'install' / 'tumble_ros_interfaces'
@@ -66,7 +66,8 @@ def rosbag2_full_text(root: str, find, std_header=False) -> str:
     if namespace == 'srv':   # Jazzy: service event -> the .srv file under an SRV: delimiter
         service = name[:-len('_Event')]
         seen.add(f'{package}/srv/{service}')
-        return '=' * 80 + f'\nSRV: {package}/srv/{service}\n' + with_dependencies(find(package, 'srv', service), package)
+        return '=' * 80 + f'\nSRV: {package}/srv/{service}\n' + with_dependencies(
+            find(package, 'srv', service), package)
     return with_dependencies(find(package, namespace, name), package)
 
 

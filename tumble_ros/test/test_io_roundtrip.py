@@ -1,21 +1,24 @@
-"""McapWriter -> our reader, the rosbags library and mcap's own reader: every message decodes,
-per-topic counts and values equal what was written (messages serialised by rclpy)."""
+"""
+McapWriter -> our reader, the rosbags library and mcap's own reader.
+
+Every message decodes, per-topic counts and values equal what was written (messages serialised
+by rclpy).
+"""
+from collections import Counter
 import dataclasses
 import math
-from collections import Counter
 from pathlib import Path
 
-import pytest
 from geometry_msgs.msg import QuaternionStamped, Vector3Stamped
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
+import pytest
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from service_msgs.msg import ServiceEventInfo
+from tumble_ros.io import McapWriter, offered_qos_yaml, read_messages, summarize
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
-
-from tumble_ros.io import McapWriter, offered_qos_yaml, read_messages, summarize
 
 TYPES = {
     '/angular_velocity': 'geometry_msgs/msg/Vector3Stamped',
@@ -29,7 +32,7 @@ LATCHED_QOS = offered_qos_yaml({'depth': 1, 'durability': 'transient_local'})
 
 
 def plain(value):
-    """A comparable structure of a message from rclpy, mcap_ros2 or rosbags."""
+    """Return a comparable structure of a message from rclpy, mcap_ros2 or rosbags."""
     if hasattr(value, 'get_fields_and_field_types'):                      # rclpy
         return {name: plain(getattr(value, name)) for name in value.get_fields_and_field_types()}
     if dataclasses.is_dataclass(value) and not isinstance(value, type):   # rosbags

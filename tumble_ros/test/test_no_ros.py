@@ -1,50 +1,58 @@
-"""The numerical core, the MCAP IO and the offline analysis are usable without ROS: they import no
-rclpy, no message packages."""
+"""
+The numerical core, the MCAP IO and the offline analysis are usable without ROS.
+
+They import no rclpy, no message packages.
+"""
 import ast
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-PACKAGE = Path(__file__).resolve().parents[1] / "tumble_ros"
+PACKAGE = Path(__file__).resolve().parents[1] / 'tumble_ros'
 #: The ROS-free packages (a researcher uses them without a ROS install) and files each must have.
 ROS_FREE = {
-    "core": {"scenario.py", "propagator.py", "kernels.py", "ensemble.py", "integrators/splitting.py"},
-    "io": {"msgdefs.py", "mcap_reader.py", "mcap_writer.py"},
-    "analysis": {"recording.py", "summary.py", "figures.py", "cli.py", "__main__.py", "__init__.py"},
+    'core': {'scenario.py', 'propagator.py', 'kernels.py', 'ensemble.py',
+             'integrators/splitting.py'},
+    'io': {'msgdefs.py', 'mcap_reader.py', 'mcap_writer.py'},
+    'analysis': {'recording.py', 'summary.py', 'figures.py', 'cli.py', '__main__.py',
+                 '__init__.py'},
 }
 
 
 def _is_ros(module: str) -> bool:
-    top = module.split(".")[0]
-    return top in {"rclpy", "rosidl_runtime_py", "rosbag2_py"} or top.endswith(("_msgs", "_interfaces", "_srvs"))
+    top = module.split('.')[0]
+    return (top in {'rclpy', 'rosidl_runtime_py', 'rosbag2_py'}
+            or top.endswith(('_msgs', '_interfaces', '_srvs')))
 
 
-@pytest.mark.parametrize("package", sorted(ROS_FREE))
+@pytest.mark.parametrize('package', sorted(ROS_FREE))
 def test_sources_import_no_ros(package):
     folder = PACKAGE / package
     offenders = []
-    for path in folder.rglob("*.py"):
+    for path in folder.rglob('*.py'):
         for node in ast.walk(ast.parse(path.read_text())):
             names = []
             if isinstance(node, ast.Import):
                 names = [a.name for a in node.names]
             elif isinstance(node, ast.ImportFrom) and node.module:
                 names = [node.module]
-            offenders += [f"{path.relative_to(folder)}: {n}" for n in names if _is_ros(n)]
+            offenders += [f'{path.relative_to(folder)}: {n}' for n in names if _is_ros(n)]
     assert not offenders
-    assert {str(p.relative_to(folder)) for p in folder.rglob("*.py")} >= ROS_FREE[package]
+    assert {str(p.relative_to(folder)) for p in folder.rglob('*.py')} >= ROS_FREE[package]
 
 
 def test_the_ros_check_catches_ros_imports():
-    assert all(map(_is_ros, ["rclpy.node", "geometry_msgs.msg", "tumble_ros_interfaces.srv", "std_srvs"]))
-    assert not any(map(_is_ros, ["numpy", "mcap_ros2.decoder", "tumble_ros.core", "rosbags.highlevel"]))
+    assert all(map(_is_ros,
+                   ['rclpy.node', 'geometry_msgs.msg', 'tumble_ros_interfaces.srv', 'std_srvs']))
+    assert not any(map(_is_ros,
+                       ['numpy', 'mcap_ros2.decoder', 'tumble_ros.core', 'rosbags.highlevel']))
 
 
 def test_importing_core_loads_no_rclpy():
-    code = ("import sys, tumble_ros.core; from tumble_ros.core import Scenario, simulate; "
+    code = ('import sys, tumble_ros.core; from tumble_ros.core import Scenario, simulate; '
             "bad = [m for m in sys.modules if m.startswith(('rclpy', 'rosidl'))]; print(bad); "
-            "sys.exit(1 if bad else 0)")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+            'sys.exit(1 if bad else 0)')
+    done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stdout + done.stderr

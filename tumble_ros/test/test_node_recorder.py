@@ -1,28 +1,30 @@
 """Recording to MCAP: round trip, latched and late topics, SIGTERM and SIGKILL, bringup."""
 import os
+from pathlib import Path
 import signal
 import subprocess
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 from std_msgs.msg import String
 
-from tumble_ros.core import TimeBase, load_scenario, simulate
+from tumble_ros.core import load_scenario, simulate, TimeBase
 from tumble_ros.io import read_messages, summarize
 from tumble_ros.nodes.bringup import run_bringup
 from tumble_ros.nodes.recorder import RecorderNode
 from tumble_ros.nodes.sim import SimNode
 
-PER_SAMPLE = ["/angular_velocity", "/attitude", "/euler_angles", "/clock", "/comparison/model_angular_velocity",
-              "/comparison/error", "/comparison/error_norm"]
+PER_SAMPLE = ['/angular_velocity', '/attitude', '/euler_angles', '/clock',
+              '/comparison/model_angular_velocity',
+              '/comparison/error', '/comparison/error_norm']
 
 
-def write_params(tmp_path, extra=""):
-    path = tmp_path / "short.yaml"
-    path.write_text("sim:\n  ros__parameters:\n    duration: 0.3\n    output_interval: 0.001\n"
-                    "    impacts:\n      start: [0.1]\n      duration: [3.0e-7]\n      torque: [0.0, 1.0e6, 0.0]\n"
+def write_params(tmp_path, extra=''):
+    path = tmp_path / 'short.yaml'
+    path.write_text('sim:\n  ros__parameters:\n    duration: 0.3\n    output_interval: 0.001\n'
+                    '    impacts:\n      start: [0.1]\n      duration: [3.0e-7]\n'
+                    '      torque: [0.0, 1.0e6, 0.0]\n'
                     + extra)
     return path
 
@@ -31,22 +33,23 @@ def stamp_ns(msg):
     return TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec)
 
 
-@pytest.mark.parametrize("executor", ["events", "single"])
+@pytest.mark.parametrize('executor', ['events', 'single'])
 def test_bringup_round_trip_counts_and_values(tmp_path, executor):
     params = write_params(tmp_path)
-    result = run_bringup(params, output=tmp_path / "run.mcap", progress=None, executor_name=executor)
+    result = run_bringup(params, output=tmp_path / 'run.mcap', progress=None,
+                         executor_name=executor)
     assert result.ok and result.samples == 301
     for topic in PER_SAMPLE:
         assert result.counts[topic] == 301, topic  # nothing lost
     summary = summarize(result.output)
-    assert summary.finalised and not summary.truncated and summary.profile == "ros2"
+    assert summary.finalised and not summary.truncated and summary.profile == 'ros2'
     assert {t: s.message_count for t, s in summary.topics.items()} == result.counts
 
-    omega = [m.message for m in read_messages(result.output, topics=["/angular_velocity"])]
+    omega = [m.message for m in read_messages(result.output, topics=['/angular_velocity'])]
     t = np.array([TimeBase().to_years(stamp_ns(m)) for m in omega])
     ref = simulate(load_scenario(params), t_eval=t)
     np.testing.assert_array_equal([[m.vector.x, m.vector.y, m.vector.z] for m in omega], ref.omega)
-    (event,) = [m.message for m in read_messages(result.output, topics=["/impact_events"])]
+    (event,) = [m.message for m in read_messages(result.output, topics=['/impact_events'])]
     assert event.delta_omega.y == pytest.approx(0.3, rel=1e-4)
 
     from rosbags.highlevel import AnyReader
@@ -60,54 +63,60 @@ def test_bringup_round_trip_counts_and_values(tmp_path, executor):
 
     # publish time: the publisher's source timestamp ('single'), the receive time ('events'
     # cannot pass MessageInfo); never after the receive time
-    records = list(read_messages(result.output, topics=["/angular_velocity"]))
+    records = list(read_messages(result.output, topics=['/angular_velocity']))
     gaps = np.array([m.log_time_ns - m.publish_time_ns for m in records])
     assert np.all(gaps >= 0)
-    assert np.all(gaps == 0) if executor == "events" else np.any(gaps > 0)
+    assert np.all(gaps == 0) if executor == 'events' else np.any(gaps > 0)
 
 
 def test_bringup_refuses_an_unknown_executor(tmp_path):
-    with pytest.raises(ValueError, match="executor: must be one of events, single"):
-        run_bringup(write_params(tmp_path), output=tmp_path / "x.mcap", progress=None, executor_name="multi")
-    assert not (tmp_path / "x.mcap").exists()
+    with pytest.raises(ValueError, match='executor: must be one of events, single'):
+        run_bringup(write_params(tmp_path), output=tmp_path / 'x.mcap', progress=None,
+                    executor_name='multi')
+    assert not (tmp_path / 'x.mcap').exists()
 
 
 def test_latched_and_late_topics_are_recorded(ros, tmp_path):
-    sim = ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002, real_time_factor=0.0)
+    sim = ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002,
+                    real_time_factor=0.0)
     ros.spin_for(0.2)
-    recorder = ros.start(RecorderNode, output=str(tmp_path / "late.mcap"), topics=["scenario", "status"],
-                         topic_pattern="^/late", discovery_period=0.05)
-    late = ros.probe.create_publisher(String, "/late/news", 10)
-    assert ros.spin_until(lambda: recorder.counts.get("/late/news") is not None, 5.0)
-    late.publish(String(data="hello"))
-    assert ros.spin_until(lambda: recorder.counts.get("/late/news") == 1, 5.0)
-    assert ros.spin_until(lambda: recorder.counts.get("/scenario") == 1 and recorder.counts.get("/status") == 1, 5.0)
-    assert "/angular_velocity" not in recorder.counts  # not asked for
+    recorder = ros.start(RecorderNode, output=str(tmp_path / 'late.mcap'),
+                         topics=['scenario', 'status'],
+                         topic_pattern='^/late', discovery_period=0.05)
+    late = ros.probe.create_publisher(String, '/late/news', 10)
+    assert ros.spin_until(lambda: recorder.counts.get('/late/news') is not None, 5.0)
+    late.publish(String(data='hello'))
+    assert ros.spin_until(lambda: recorder.counts.get('/late/news') == 1, 5.0)
+    assert ros.spin_until(lambda: recorder.counts.get('/scenario') == 1
+                          and recorder.counts.get('/status') == 1, 5.0)
+    assert '/angular_velocity' not in recorder.counts  # not asked for
     recorder.close()
-    got = {m.topic: m.message for m in read_messages(tmp_path / "late.mcap")}
-    assert got["/late/news"].data == "hello" and got["/scenario"].revision == 0
+    got = {m.topic: m.message for m in read_messages(tmp_path / 'late.mcap')}
+    assert got['/late/news'].data == 'hello' and got['/scenario'].revision == 0
     assert sim.state == 1  # still paused: the latched messages came from before the recorder
 
 
 def recorder_process(path, *extra):
-    exe = Path(os.environ.get("AMENT_PREFIX_PATH", "").split(":")[0]) / "lib" / "tumble_ros" / "recorder"
+    exe = (Path(os.environ.get('AMENT_PREFIX_PATH', '').split(':')[0]) / 'lib' / 'tumble_ros'
+           / 'recorder')
     from ament_index_python.packages import get_package_prefix
 
-    exe = Path(get_package_prefix("tumble_ros")) / "lib" / "tumble_ros" / "recorder"
-    return subprocess.Popen([str(exe), "--ros-args", "-p", f"output:={path}", *extra],
+    exe = Path(get_package_prefix('tumble_ros')) / 'lib' / 'tumble_ros' / 'recorder'
+    return subprocess.Popen([str(exe), '--ros-args', '-p', f'output:={path}', *extra],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
 def run_sim_until_recorded(ros, path, n_samples):
     """Publish n samples from an in-process sim, paced on the recorder in the other process."""
-    sim = ros.start(SimNode, duration=(n_samples - 1) * 1e-3, output_interval=1e-3, real_time_factor=0.0,
+    sim = ros.start(SimNode, duration=(n_samples - 1) * 1e-3, output_interval=1e-3,
+                    real_time_factor=0.0,
                     min_consumers=1)
     assert ros.spin_until(lambda: sim.published_samples == n_samples, 60.0), sim.published_samples
     return sim
 
 
 def test_sigterm_finalises_the_file(ros, tmp_path):
-    path = tmp_path / "term.mcap"
+    path = tmp_path / 'term.mcap'
     proc = recorder_process(path)
     try:
         run_sim_until_recorded(ros, path, 500)
@@ -120,13 +129,14 @@ def test_sigterm_finalises_the_file(ros, tmp_path):
     assert proc.returncode == 0, out
     summary = summarize(path)
     assert summary.finalised
-    assert summary.topics["/angular_velocity"].message_count == 500
+    assert summary.topics['/angular_velocity'].message_count == 500
 
 
 def test_sigkill_loses_at_most_the_last_chunk(ros, tmp_path):
-    path = tmp_path / "kill.mcap"
+    path = tmp_path / 'kill.mcap'
     chunk_seconds = 0.2
-    proc = recorder_process(path, "-p", f"chunk_seconds:={chunk_seconds}", "-p", "chunk_bytes:=20000")
+    proc = recorder_process(path, '-p', f'chunk_seconds:={chunk_seconds}', '-p',
+                            'chunk_bytes:=20000')
     try:
         sim = run_sim_until_recorded(ros, path, 2000)
         published_at = time.monotonic()
@@ -139,7 +149,7 @@ def test_sigkill_loses_at_most_the_last_chunk(ros, tmp_path):
     assert time.monotonic() - published_at > chunk_seconds
     summary = summarize(path)
     assert not summary.finalised
-    stamps = [stamp_ns(m.message) for m in read_messages(path, topics=["/angular_velocity"])]
+    stamps = [stamp_ns(m.message) for m in read_messages(path, topics=['/angular_velocity'])]
     # Every sample was published more than chunk_seconds (+ the polling period) before the kill,
     # so the documented bound says none may be lost.
     assert stamps == [k * 1_000_000 for k in range(sim.published_samples)]

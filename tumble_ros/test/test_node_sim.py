@@ -1,21 +1,21 @@
 """The simulator node in-process: topics, values, impacts, parameters, pacing, failures."""
 import math
 
+from geometry_msgs.msg import QuaternionStamped, Vector3, Vector3Stamped
 import numpy as np
 import pytest
-from geometry_msgs.msg import QuaternionStamped, Vector3, Vector3Stamped
 from rcl_interfaces.srv import SetParameters
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 
-from tumble_ros.core import Impact, Scenario, ScenarioError, TimeBase, simulate
+from tumble_ros.core import Impact, Scenario, ScenarioError, simulate, TimeBase
 from tumble_ros.nodes.sim import SimNode
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 
-SHORT = dict(duration=0.2, output_interval=0.002, real_time_factor=0.0)
+SHORT = {'duration': 0.2, 'output_interval': 0.002, 'real_time_factor': 0.0}
 #: /clock is best effort (rclpy's clock QoS); a deep reader queue keeps every sample in-process.
 CLOCK_READER_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
 
@@ -26,38 +26,39 @@ def omega_array(msgs):
 
 def times(msgs, spy=1.0):
     tb = TimeBase(spy)
-    return np.array([tb.to_years(tb.stamp_ns(m.header.stamp.sec, m.header.stamp.nanosec)) for m in msgs])
+    return np.array([tb.to_years(tb.stamp_ns(m.header.stamp.sec, m.header.stamp.nanosec))
+                     for m in msgs])
 
 
 def test_topics_have_their_documented_types(ros):
     ros.start(SimNode, **SHORT)
     expected = {
-        "/angular_velocity": "geometry_msgs/msg/Vector3Stamped",
-        "/attitude": "geometry_msgs/msg/QuaternionStamped",
-        "/euler_angles": "geometry_msgs/msg/Vector3Stamped",
-        "/clock": "rosgraph_msgs/msg/Clock",
-        "/impact_events": "tumble_ros_interfaces/msg/ImpactEvent",
-        "/status": "tumble_ros_interfaces/msg/SimStatus",
-        "/scenario": "tumble_ros_interfaces/msg/ScenarioDescription",
+        '/angular_velocity': 'geometry_msgs/msg/Vector3Stamped',
+        '/attitude': 'geometry_msgs/msg/QuaternionStamped',
+        '/euler_angles': 'geometry_msgs/msg/Vector3Stamped',
+        '/clock': 'rosgraph_msgs/msg/Clock',
+        '/impact_events': 'tumble_ros_interfaces/msg/ImpactEvent',
+        '/status': 'tumble_ros_interfaces/msg/SimStatus',
+        '/scenario': 'tumble_ros_interfaces/msg/ScenarioDescription',
     }
 
     def listed():
-        return dict((n, t[0]) for n, t in ros.probe.get_topic_names_and_types())
+        return {n: t[0] for n, t in ros.probe.get_topic_names_and_types()}
 
     assert ros.spin_until(lambda: expected.items() <= listed().items(), 10.0), listed()
     services = dict(ros.probe.get_service_names_and_types())
-    assert services["/apply_impact"] == ["tumble_ros_interfaces/srv/ApplyImpact"]
-    for name in ("/pause", "/resume", "/step"):
-        assert services[name] == ["std_srvs/srv/Trigger"]
+    assert services['/apply_impact'] == ['tumble_ros_interfaces/srv/ApplyImpact']
+    for name in ('/pause', '/resume', '/step'):
+        assert services[name] == ['std_srvs/srv/Trigger']
     # service introspection: calls can be recorded
-    assert ros.spin_until(lambda: "/apply_impact/_service_event" in listed(), 5.0)
+    assert ros.spin_until(lambda: '/apply_impact/_service_event' in listed(), 5.0)
 
 
 def test_published_state_equals_simulate_at_the_stamped_times(ros):
-    omega = ros.collect(Vector3Stamped, "angular_velocity")
-    attitude = ros.collect(QuaternionStamped, "attitude")
-    clock = ros.collect(Clock, "/clock", qos=CLOCK_READER_QOS)
-    status = ros.collect(SimStatus, "status", latched=True)
+    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    attitude = ros.collect(QuaternionStamped, 'attitude')
+    clock = ros.collect(Clock, '/clock', qos=CLOCK_READER_QOS)
+    status = ros.collect(SimStatus, 'status', latched=True)
     ros.start(SimNode, seconds_per_year=3.0, **SHORT)
     assert ros.spin_until(lambda: status and status[-1].state == SimStatus.FINISHED, 20.0)
     ros.spin_until(lambda: len(omega) == 101 and len(attitude) == 101 and len(clock) == 101, 5.0)
@@ -66,7 +67,8 @@ def test_published_state_equals_simulate_at_the_stamped_times(ros):
     np.testing.assert_allclose(t, np.arange(101) * 0.002, rtol=0, atol=1e-15)
     ref = simulate(Scenario(duration=0.2, output_interval=0.002), t_eval=t)
     np.testing.assert_array_equal(omega_array(omega), ref.omega)  # same times, same numbers
-    q = np.array([[m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z] for m in attitude])
+    q = np.array([[m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z]
+                  for m in attitude])
     np.testing.assert_array_equal(q, ref.quaternion)
     assert [c.clock for c in clock] == [m.header.stamp for m in omega]
 
@@ -74,74 +76,78 @@ def test_published_state_equals_simulate_at_the_stamped_times(ros):
 def impact_request(**fields):
     req = ApplyImpact.Request()
     req.torque = Vector3(x=0.0, y=0.0, z=1.0e6)
-    req.frame, req.duration, req.start, req.start_now = ApplyImpact.Request.FRAME_BODY, 3e-7, 0.1, False
+    req.frame, req.duration, req.start, req.start_now = (ApplyImpact.Request.FRAME_BODY, 3e-7, 0.1,
+                                                         False)
     for k, v in fields.items():
         setattr(req, k, v)
     return req
 
 
 def test_accepted_impact_changes_omega_by_its_impulse(ros):
-    events = ros.collect(ImpactEvent, "impact_events")
-    omega = ros.collect(Vector3Stamped, "angular_velocity")
-    scenario_msgs = ros.collect(ScenarioDescription, "scenario", latched=True)
+    events = ros.collect(ImpactEvent, 'impact_events')
+    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    scenario_msgs = ros.collect(ScenarioDescription, 'scenario', latched=True)
     ros.start(SimNode, start_paused=True, **SHORT)
-    reply = ros.call(ApplyImpact, "apply_impact", impact_request())
+    reply = ros.call(ApplyImpact, 'apply_impact', impact_request())
     assert reply.accepted, reply.message
     assert (reply.scheduled_start, reply.scheduled_end, reply.id) == (0.1, 0.1 + 3e-7, 1)
-    ros.call(Trigger, "resume", Trigger.Request())
+    ros.call(Trigger, 'resume', Trigger.Request())
     assert ros.spin_until(lambda: events and len(omega) == 101, 20.0)
     (event,) = events
     dwz = 1.0e6 * 3e-7 / 1.5  # Mz dt / Iz (exact for Ix = Iy)
     assert event.id == 1 and event.delta_omega.z == pytest.approx(dwz, rel=1e-9)
     # The transverse part is the free motion during the pulse (w_perp turning at 15 rad/yr).
-    ref = simulate(Scenario(duration=0.2, impacts=(Impact(0.1, 3e-7, (0.0, 0.0, 1.0e6)),)), t_eval=[0.1, 0.1 + 3e-7])
+    ref = simulate(Scenario(duration=0.2, impacts=(Impact(0.1, 3e-7, (0.0, 0.0, 1.0e6)),)),
+                   t_eval=[0.1, 0.1 + 3e-7])
     dw = [event.delta_omega.x, event.delta_omega.y, event.delta_omega.z]
     np.testing.assert_allclose(dw, ref.omega[1] - ref.omega[0], rtol=0, atol=1e-12)
     w = omega_array(omega)
     assert w[-1, 2] - w[0, 2] == pytest.approx(dwz, rel=1e-9)
     # The latched description now starts a new segment at the end of the pulse.
-    assert ros.spin_until(lambda: scenario_msgs and scenario_msgs[-1].segment_start == 0.1 + 3e-7, 5.0)
+    assert ros.spin_until(lambda: scenario_msgs and scenario_msgs[-1].segment_start == 0.1 + 3e-7,
+                          5.0)
     assert scenario_msgs[-1].omega.z == pytest.approx(30.0 + dwz, rel=1e-12)
-    assert "impacts.start" in scenario_msgs[-1].parameters_yaml
+    assert 'impacts.start' in scenario_msgs[-1].parameters_yaml
 
 
 BAD_REQUESTS = [
-    (dict(torque=Vector3(x=math.nan, y=0.0, z=0.0)), "torque"),
-    (dict(torque=Vector3(x=0.0, y=math.inf, z=0.0)), "torque"),
-    (dict(duration=0.0), "duration"),
-    (dict(duration=-1e-7), "duration"),
-    (dict(duration=0.01), "max_impact_duration"),
-    (dict(torque=Vector3(x=1e12, y=0.0, z=0.0)), "max_impact_impulse"),
-    (dict(start=-0.5), "start"),
-    (dict(start=0.19999999), "after the end"),
-    (dict(frame=7), "frame"),
-    (dict(start=math.nan), "start"),
+    ({'torque': Vector3(x=math.nan, y=0.0, z=0.0)}, 'torque'),
+    ({'torque': Vector3(x=0.0, y=math.inf, z=0.0)}, 'torque'),
+    ({'duration': 0.0}, 'duration'),
+    ({'duration': -1e-7}, 'duration'),
+    ({'duration': 0.01}, 'max_impact_duration'),
+    ({'torque': Vector3(x=1e12, y=0.0, z=0.0)}, 'max_impact_impulse'),
+    ({'start': -0.5}, 'start'),
+    ({'start': 0.19999999}, 'after the end'),
+    ({'frame': 7}, 'frame'),
+    ({'start': math.nan}, 'start'),
 ]
 
 
 def test_bad_impact_requests_are_rejected_with_a_reason_and_the_node_goes_on(ros):
-    omega = ros.collect(Vector3Stamped, "angular_velocity")
-    ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002, real_time_factor=0.1)
+    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002,
+              real_time_factor=0.1)
     for fields, reason in BAD_REQUESTS:
-        reply = ros.call(ApplyImpact, "apply_impact", impact_request(**fields))
+        reply = ros.call(ApplyImpact, 'apply_impact', impact_request(**fields))
         assert not reply.accepted, fields
         assert reason in reply.message, (fields, reply.message)
         assert reply.id == 0
-    ros.call(Trigger, "resume", Trigger.Request())
+    ros.call(Trigger, 'resume', Trigger.Request())
     assert ros.spin_until(lambda: len(omega) >= 20, 10.0)  # still publishing after all that
-    reply = ros.call(ApplyImpact, "apply_impact", impact_request(start=0.01))
-    assert not reply.accepted and "past" in reply.message, reply.message
+    reply = ros.call(ApplyImpact, 'apply_impact', impact_request(start=0.01))
+    assert not reply.accepted and 'past' in reply.message, reply.message
     assert ros.spin_until(lambda: len(omega) == 101, 10.0)
 
 
 def test_invalid_parameters_are_refused_at_start_up(ros):
-    with pytest.raises(ScenarioError, match="^inertia"):
+    with pytest.raises(ScenarioError, match='^inertia'):
         ros.start(SimNode, inertia=[1.0, 1.0, 4.0])
-    with pytest.raises(ScenarioError, match=r"^integrator\.method"):
-        ros.start(SimNode, integrator__method="euler")
-    with pytest.raises(Exception, match="real_time_factor"):
+    with pytest.raises(ScenarioError, match=r'^integrator\.method'):
+        ros.start(SimNode, integrator__method='euler')
+    with pytest.raises(Exception, match='real_time_factor'):
         ros.start(SimNode, real_time_factor=-1.0)
-    with pytest.raises(ValueError, match="int32"):
+    with pytest.raises(ValueError, match='int32'):
         ros.start(SimNode, duration=10_000.0, seconds_per_year=1e6)
 
 
@@ -150,61 +156,65 @@ def test_invalid_parameters_are_refused_at_run_time(ros):
 
     def set_param(name, value):
         req = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
-        return ros.call(SetParameters, "/sim/set_parameters", req).results[0]
+        return ros.call(SetParameters, '/sim/set_parameters', req).results[0]
 
-    result = set_param("real_time_factor", -2.0)
+    result = set_param('real_time_factor', -2.0)
     assert not result.successful and result.reason
-    result = set_param("max_impact_duration", math.nan)
-    assert not result.successful and "max_impact_duration" in result.reason
-    result = set_param("inertia", [1.0, 1.0, 1.2])
-    assert not result.successful and "read-only" in result.reason
-    result = set_param("max_impact_duration", 0.5)
+    result = set_param('max_impact_duration', math.nan)
+    assert not result.successful and 'max_impact_duration' in result.reason
+    result = set_param('inertia', [1.0, 1.0, 1.2])
+    assert not result.successful and 'read-only' in result.reason
+    result = set_param('max_impact_duration', 0.5)
     assert result.successful
-    assert node.get_parameter("max_impact_duration").value == 0.5
-    reply = ros.call(ApplyImpact, "apply_impact", impact_request(duration=0.01, torque=Vector3(x=0.0, y=0.0, z=1e3)))
+    assert node.get_parameter('max_impact_duration').value == 0.5
+    reply = ros.call(ApplyImpact, 'apply_impact',
+                     impact_request(duration=0.01, torque=Vector3(x=0.0, y=0.0, z=1e3)))
     assert reply.accepted, reply.message  # the new cap is in force
 
 
 def test_pause_step_resume(ros):
-    omega = ros.collect(Vector3Stamped, "angular_velocity")
-    ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002, real_time_factor=0.1)
+    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002,
+              real_time_factor=0.1)
     ros.spin_for(0.3)
     assert omega == []  # paused from the start
-    reply = ros.call(Trigger, "step", Trigger.Request())
+    reply = ros.call(Trigger, 'step', Trigger.Request())
     assert reply.success, reply.message
     assert ros.spin_until(lambda: len(omega) == 1, 5.0)
     ros.spin_for(0.2)
     assert len(omega) == 1  # one sample, no more
-    assert ros.call(Trigger, "resume", Trigger.Request()).success
+    assert ros.call(Trigger, 'resume', Trigger.Request()).success
     assert ros.spin_until(lambda: len(omega) >= 5, 5.0)
-    assert ros.call(Trigger, "pause", Trigger.Request()).success
+    assert ros.call(Trigger, 'pause', Trigger.Request()).success
     ros.spin_for(0.1)
     n = len(omega)
     ros.spin_for(0.3)
     assert len(omega) == n < 101  # paused: nothing more
-    assert not ros.call(Trigger, "pause", Trigger.Request()).success  # already paused: says so
-    assert ros.call(Trigger, "step", Trigger.Request()).success
+    assert not ros.call(Trigger, 'pause', Trigger.Request()).success  # already paused: says so
+    assert ros.call(Trigger, 'step', Trigger.Request()).success
     assert ros.spin_until(lambda: len(omega) == n + 1, 5.0)
-    assert ros.call(Trigger, "resume", Trigger.Request()).success
+    assert ros.call(Trigger, 'resume', Trigger.Request()).success
     assert ros.spin_until(lambda: len(omega) == 101, 10.0)
-    assert not ros.call(Trigger, "step", Trigger.Request()).success  # finished: says so
+    assert not ros.call(Trigger, 'step', Trigger.Request()).success  # finished: says so
 
 
 def test_real_time_factor_paces_the_run(ros):
-    omega = ros.collect(Vector3Stamped, "angular_velocity")
-    ros.start(SimNode, duration=0.2, output_interval=0.002, real_time_factor=0.2)  # 1 s of wall time
+    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    # 1 s of wall time
+    ros.start(SimNode, duration=0.2, output_interval=0.002, real_time_factor=0.2)
     ros.spin_for(0.4)
     assert 0 < len(omega) < 101
     assert ros.spin_until(lambda: len(omega) == 101, 10.0)
 
 
 def test_divergence_stops_publishing_and_reports(ros):
-    omega = ros.collect(Vector3Stamped, "angular_velocity")
-    status = ros.collect(SimStatus, "status", latched=True)
-    ros.start(SimNode, inertia=[1.0, 1.6, 2.2], omega0=[1e100, 2e100, 1e100], integrator__method="rk4",
+    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    status = ros.collect(SimStatus, 'status', latched=True)
+    ros.start(SimNode, inertia=[1.0, 1.6, 2.2], omega0=[1e100, 2e100, 1e100],
+              integrator__method='rk4',
               integrator__step=0.1, duration=1.0, output_interval=0.1, real_time_factor=0.0)
     assert ros.spin_until(lambda: status and status[-1].state == SimStatus.DIVERGED, 10.0)
-    assert "non-finite" in status[-1].message
+    assert 'non-finite' in status[-1].message
     ros.spin_for(0.2)
     assert len(omega) < 11
     assert np.all(np.isfinite(omega_array(omega)))
@@ -212,8 +222,9 @@ def test_divergence_stops_publishing_and_reports(ros):
 
 def test_ten_thousand_year_run_keeps_exact_times(ros):
     """A cheap free spinner over 10,000 yr: stamps stay valid int32 and t is recovered exactly."""
-    omega = ros.collect(Vector3Stamped, "angular_velocity")
-    ros.start(SimNode, orbit_rate=0.0, omega0=[0.0, 0.001, 0.01], duration=10_000.0, output_interval=100.0,
+    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    ros.start(SimNode, orbit_rate=0.0, omega0=[0.0, 0.001, 0.01], duration=10_000.0,
+              output_interval=100.0,
               real_time_factor=0.0, integrator__rtol=1e-8)
     assert ros.spin_until(lambda: len(omega) == 101, 30.0), len(omega)
     t = times(omega)
@@ -222,7 +233,7 @@ def test_ten_thousand_year_run_keeps_exact_times(ros):
 
 
 def test_as_fast_as_the_consumers_take_it_loses_nothing(ros):
-    """rtf = 0 with a slow consumer reporting progress: every sample arrives, in order."""
+    """With rtf = 0 and a slow consumer reporting progress, every sample arrives, in order."""
     import time
 
     from tumble_ros.nodes.progress import ProgressReporter
@@ -236,7 +247,7 @@ def test_as_fast_as_the_consumers_take_it_loses_nothing(ros):
         time.sleep(2e-4)
         reporter.mark(TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec))
 
-    ros.probe.create_subscription(Vector3Stamped, "angular_velocity", slow, STATE_QOS)
+    ros.probe.create_subscription(Vector3Stamped, 'angular_velocity', slow, STATE_QOS)
     ros.start(SimNode, duration=0.5, output_interval=1e-4, real_time_factor=0.0, min_consumers=1)
     assert ros.spin_until(lambda: len(got) == 5001, 60.0), len(got)
     ns = [TimeBase.stamp_ns(m.header.stamp.sec, m.header.stamp.nanosec) for m in got]
@@ -247,8 +258,9 @@ def test_min_consumers_holds_publication_until_they_report(ros):
     from tumble_ros.nodes.progress import ProgressReporter
     from tumble_ros.nodes.sim import WINDOW
 
-    omega = ros.collect(Vector3Stamped, "angular_velocity")
-    ros.start(SimNode, real_time_factor=0.0, min_consumers=1, **{k: v for k, v in SHORT.items() if k != "real_time_factor"})
+    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    ros.start(SimNode, real_time_factor=0.0, min_consumers=1,
+              **{k: v for k, v in SHORT.items() if k != 'real_time_factor'})
     ros.spin_for(0.5)
     assert omega == []  # nobody has reported yet
     reporter = ProgressReporter(ros.probe)  # reports, but has processed nothing

@@ -1,152 +1,174 @@
-"""Real use, process by process: concurrent runs, signals, consumers that leave, disk errors.
+"""
+Real use, process by process: concurrent runs, signals, consumers that leave, disk errors.
 
 Every process runs in the test's DDS domain (conftest.py) and its process group is killed when
 the test ends (the ``spawn`` fixture).
 """
+from pathlib import Path
 import resource
 import signal
 import time
-from pathlib import Path
 
-import pytest
 from builtin_interfaces.msg import Time
+import pytest
 from rosgraph_msgs.msg import Clock
 
 from tumble_ros.core import TimeBase
 from tumble_ros.io import read_messages, summarize
 from tumble_ros_interfaces.msg import SimStatus
 
-CONFIG = Path(__file__).resolve().parents[1] / "config"
+CONFIG = Path(__file__).resolve().parents[1] / 'config'
 #: Generous bound for a process to do a short job on a loaded 2-core machine [s].
 SLOW = 120.0
 
 
-def stamps(path, topic="/angular_velocity"):
+def stamps(path, topic='/angular_velocity'):
     return [TimeBase.stamp_ns(m.message.header.stamp.sec, m.message.header.stamp.nanosec)
             for m in read_messages(path, topics=[topic])]
 
 
 def test_two_bringups_at_once_each_record_only_their_own_samples(ros, spawn, tmp_path):
-    """Same domain, same topics: each run is isolated (discovery off), and a foreign /clock
-    published meanwhile by a third party reaches neither file."""
-    runs = {name: spawn("bringup", CONFIG / f"{name}.yaml", "--output", tmp_path / f"{name}.mcap", "--quiet")
-            for name in ("fig5", "fig10")}
-    foreign = ros.probe.create_publisher(Clock, "/clock", 10)
+    """
+    Two bringups at once each record only their own samples.
+
+    Same domain, same topics: each run is isolated (discovery off), and a foreign /clock
+    published meanwhile by a third party reaches neither file.
+    """
+    runs = {name: spawn('bringup', CONFIG / f'{name}.yaml', '--output', tmp_path / f'{name}.mcap',
+                        '--quiet')
+            for name in ('fig5', 'fig10')}
+    foreign = ros.probe.create_publisher(Clock, '/clock', 10)
     deadline = time.monotonic() + SLOW
     while any(p.popen.poll() is None for p in runs.values()) and time.monotonic() < deadline:
         foreign.publish(Clock(clock=Time(sec=999_999)))
         ros.spin_for(0.01)
     for name, process in runs.items():
         assert process.wait(10) == 0, process.output
-        path = tmp_path / f"{name}.mcap"
-        assert stamps(path) == [k * 2_000_000 for k in range(1001)], name  # 1001 samples, each once
-        clock = [m.message.clock.sec for m in read_messages(path, topics=["/clock"])]
+        path = tmp_path / f'{name}.mcap'
+        # 1001 samples, each once
+        assert stamps(path) == [k * 2_000_000 for k in range(1001)], name
+        clock = [m.message.clock.sec for m in read_messages(path, topics=['/clock'])]
         assert clock and max(clock) <= 2, name  # its own /clock only, none of the foreign one
-    events = [m.message for m in read_messages(tmp_path / "fig10.mcap", topics=["/impact_events"])]
+    events = [m.message for m in read_messages(tmp_path / 'fig10.mcap', topics=['/impact_events'])]
     assert len(events) == 1
-    assert list(read_messages(tmp_path / "fig5.mcap", topics=["/impact_events"])) == []
+    assert list(read_messages(tmp_path / 'fig5.mcap', topics=['/impact_events'])) == []
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_stops_bringup_with_a_finalised_file_and_a_summary(spawn, tmp_path, signum):
-    output = tmp_path / "long.mcap"
-    run = spawn("bringup", "--output", output, "--ros-args", "-p", "duration:=400.0")
-    assert run.wait_for("samples/s", SLOW), run.output  # running, progress shown
+    output = tmp_path / 'long.mcap'
+    run = spawn('bringup', '--output', output, '--ros-args', '-p', 'duration:=400.0')
+    assert run.wait_for('samples/s', SLOW), run.output  # running, progress shown
     run.signal(signum)
     assert run.wait(30) == 128 + signum, run.output
-    assert f"stopped by {signal.Signals(signum).name}" in run.output
-    assert "Traceback" not in run.output
+    assert f'stopped by {signal.Signals(signum).name}' in run.output
+    assert 'Traceback' not in run.output
     summary = summarize(output)
     assert summary.finalised
-    n = summary.topics["/angular_velocity"].message_count
+    n = summary.topics['/angular_velocity'].message_count
     assert 0 < n < 200_001  # stopped early, what was received is in
-    assert f"/angular_velocity {n:>{40 - len('/angular_velocity') + 8}d}" in run.output  # the summary's count
+    # the summary's count
+    assert f"/angular_velocity {n:>{40 - len('/angular_velocity') + 8}d}" in run.output
 
 
 def test_a_second_signal_during_shutdown_is_absorbed(spawn, tmp_path):
-    """ros2 launch sends Ctrl-C twice (the process group's and its own): no traceback, exit 0,
-    the recording finalised."""
-    output = tmp_path / "rec.mcap"
-    sim = spawn("sim", "--ros-args", "-p", "duration:=100.0", "-p", "real_time_factor:=1.0")
-    recorder = spawn("recorder", "--ros-args", "-p", f"output:={output}")
-    comparator = spawn("comparator")
-    assert recorder.wait_for("recording /angular_velocity", SLOW), recorder.output
-    assert comparator.wait_for("anchored", SLOW), comparator.output
+    """
+    A second signal during shutdown is absorbed.
+
+    ros2 launch sends Ctrl-C twice (the process group's and its own): no traceback, exit 0,
+    the recording finalised.
+    """
+    output = tmp_path / 'rec.mcap'
+    sim = spawn('sim', '--ros-args', '-p', 'duration:=100.0', '-p', 'real_time_factor:=1.0')
+    recorder = spawn('recorder', '--ros-args', '-p', f'output:={output}')
+    comparator = spawn('comparator')
+    assert recorder.wait_for('recording /angular_velocity', SLOW), recorder.output
+    assert comparator.wait_for('anchored', SLOW), comparator.output
     for process in (sim, recorder, comparator):
         process.signal(signal.SIGINT)
         time.sleep(0.005)
         process.signal(signal.SIGINT)
     for process in (sim, recorder, comparator):
         assert process.wait(30) == 0, process.output
-        for noise in ("Traceback", "KeyboardInterrupt", "Failed to publish log message", "Future.__del__"):
+        for noise in ('Traceback', 'KeyboardInterrupt', 'Failed to publish log message',
+                      'Future.__del__'):
             assert noise not in process.output, (process.name, process.output)
     assert summarize(output).finalised
 
 
 def test_a_consumer_stopped_cleanly_says_goodbye(ros, spawn):
     """The simulator hears the goodbye (no 'silent for' timeout, no freeze)."""
-    sim = spawn("sim", "--ros-args", "-p", "duration:=50.0", "-p", "real_time_factor:=1.0", "-p", "min_consumers:=1")
-    comparator = spawn("comparator")
-    assert sim.wait_for("consumer /comparator registered", SLOW), sim.output
+    sim = spawn('sim', '--ros-args', '-p', 'duration:=50.0', '-p', 'real_time_factor:=1.0', '-p',
+                'min_consumers:=1')
+    comparator = spawn('comparator')
+    assert sim.wait_for('consumer /comparator registered', SLOW), sim.output
     comparator.signal(signal.SIGINT)
     assert comparator.wait(30) == 0, comparator.output
-    assert sim.wait_for("consumer /comparator left", 10.0), sim.output
-    assert "silent for" not in sim.output
+    assert sim.wait_for('consumer /comparator left', 10.0), sim.output
+    assert 'silent for' not in sim.output
 
 
 def test_a_killed_consumer_is_dropped_even_with_min_consumers(ros, spawn):
-    status = ros.collect(SimStatus, "status", latched=True)
-    sim = spawn("sim", "--ros-args", "-p", "duration:=8.0", "-p", "real_time_factor:=2.0", "-p", "min_consumers:=1")
-    comparator = spawn("comparator")
-    assert sim.wait_for("consumer /comparator registered", SLOW), sim.output
+    status = ros.collect(SimStatus, 'status', latched=True)
+    sim = spawn('sim', '--ros-args', '-p', 'duration:=8.0', '-p', 'real_time_factor:=2.0', '-p',
+                'min_consumers:=1')
+    comparator = spawn('comparator')
+    assert sim.wait_for('consumer /comparator registered', SLOW), sim.output
     comparator.kill_group()
-    assert ros.spin_until(lambda: status and status[-1].state == SimStatus.FINISHED, 60.0), sim.output
-    assert any("silent for" in s.message for s in status)  # said on status, not only in the log
+    assert ros.spin_until(lambda: status and status[-1].state == SimStatus.FINISHED,
+                          60.0), sim.output
+    assert any('silent for' in s.message for s in status)  # said on status, not only in the log
 
 
 def test_a_full_disk_stops_the_recording_and_keeps_what_was_flushed(spawn, tmp_path):
-    """A file size limit (EFBIG, like ENOSPC) during a bringup: one ERROR line, exit 1, and the
-    chunks flushed before the failure read back."""
-    output = tmp_path / "full.mcap"
+    """
+    A full disk stops the recording and keeps what was flushed.
+
+    A file size limit (EFBIG, like ENOSPC) during a bringup: one ERROR line, exit 1, and the
+    chunks flushed before the failure read back.
+    """
+    output = tmp_path / 'full.mcap'
     limit = 200_000
 
     def small_files():
         resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
 
-    scenario = tmp_path / "long.yaml"
-    scenario.write_text("sim:\n  ros__parameters:\n    duration: 100.0\n"
-                        "recorder:\n  ros__parameters:\n    chunk_bytes: 20000\n")
-    run = spawn("bringup", scenario, "--output", output, "--quiet", preexec_fn=small_files)
+    scenario = tmp_path / 'long.yaml'
+    scenario.write_text('sim:\n  ros__parameters:\n    duration: 100.0\n'
+                        'recorder:\n  ros__parameters:\n    chunk_bytes: 20000\n')
+    run = spawn('bringup', scenario, '--output', output, '--quiet', preexec_fn=small_files)
     assert run.wait(SLOW) == 1, run.output
-    assert "ERROR: recording stopped: cannot write" in run.output
-    assert "Traceback" not in run.output
+    assert 'ERROR: recording stopped: cannot write' in run.output
+    assert 'Traceback' not in run.output
     kept = stamps(output)
-    assert kept and kept == [k * 2_000_000 for k in range(len(kept))]  # a readable prefix, in order
+    # a readable prefix, in order
+    assert kept and kept == [k * 2_000_000 for k in range(len(kept))]
 
 
 def test_sim_with_use_sim_time_still_runs(ros, spawn):
     """The simulator is the clock source: use_sim_time must not freeze it."""
     from geometry_msgs.msg import Vector3Stamped
 
-    omega = ros.collect(Vector3Stamped, "angular_velocity")
-    spawn("sim", "--ros-args", "-p", "use_sim_time:=true", "-p", "duration:=0.2", "-p", "real_time_factor:=0.0")
+    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    spawn('sim', '--ros-args', '-p', 'use_sim_time:=true', '-p', 'duration:=0.2', '-p',
+          'real_time_factor:=0.0')
     assert ros.spin_until(lambda: len(omega) == 101, SLOW), len(omega)
 
 
-@pytest.mark.parametrize("args, expected", [
-    (["-p", "durration:=3.0"], "unknown parameter 'durration' (did you mean 'duration'?)"),
-    (["-p", "integrator.methd:=rk4"], "did you mean 'integrator.method'?"),
+@pytest.mark.parametrize('args, expected', [
+    (['-p', 'durration:=3.0'], "unknown parameter 'durration' (did you mean 'duration'?)"),
+    (['-p', 'integrator.methd:=rk4'], "did you mean 'integrator.method'?"),
 ])
 def test_sim_refuses_a_misspelt_parameter(spawn, args, expected):
-    sim = spawn("sim", "--ros-args", *args)
+    sim = spawn('sim', '--ros-args', *args)
     assert sim.wait(SLOW) == 1, sim.output
-    assert expected in sim.output and "Traceback" not in sim.output
+    assert expected in sim.output and 'Traceback' not in sim.output
 
 
 def test_sim_refuses_a_binary_params_file_in_one_line(spawn, tmp_path):
-    path = tmp_path / "binary.yaml"
+    path = tmp_path / 'binary.yaml'
     path.write_bytes(bytes(range(256)) * 4)
-    sim = spawn("sim", "--ros-args", "--params-file", path)
+    sim = spawn('sim', '--ros-args', '--params-file', path)
     assert sim.wait(SLOW) == 1, sim.output
     (line,) = sim.output.strip().splitlines()
-    assert line.startswith(f"sim: params file {path}: cannot read it as text (UnicodeDecodeError")
+    assert line.startswith(f'sim: params file {path}: cannot read it as text (UnicodeDecodeError')

@@ -1,4 +1,5 @@
-"""The workspace is set up as documented: interfaces built, package metadata, test isolation.
+"""
+The workspace is set up as documented: interfaces built, package metadata, test isolation.
 
 Run through `make test` (scripts/env.sh): the venv active and install/setup.bash sourced.
 """
@@ -7,12 +8,11 @@ from pathlib import Path
 
 from ament_index_python.packages import get_package_share_directory
 from catkin_pkg.package import parse_package
+from geometry_msgs.msg import Vector3
 import pytest
 import rclpy
 from rclpy.context import Context
 from rclpy.serialization import deserialize_message, serialize_message
-
-from geometry_msgs.msg import Vector3
 from tumble_ros_interfaces.msg import ImpactEvent, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 
@@ -106,7 +106,8 @@ def test_interface_definitions_are_installed():
 def test_tumble_ros_is_imported_from_the_source_tree():
     import tumble_ros  # noqa: PLC0415 - the import location is what is tested
     # colcon --symlink-install: edits of the source are live, no rebuild needed.
-    assert Path(tumble_ros.__file__).resolve() == REPO / 'tumble_ros' / 'tumble_ros' / '__init__.py'
+    assert (Path(tumble_ros.__file__).resolve()
+            == REPO / 'tumble_ros' / 'tumble_ros' / '__init__.py')
     assert tumble_ros.__version__ == '0.1.0'
 
 
