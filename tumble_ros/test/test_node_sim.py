@@ -210,8 +210,9 @@ def test_real_time_factor_paces_the_run(ros):
 def test_divergence_stops_publishing_and_reports(ros):
     omega = ros.collect(Vector3Stamped, 'angular_velocity')
     status = ros.collect(SimStatus, 'status', latched=True)
-    ros.start(SimNode, inertia=[1.0, 1.6, 2.2], omega0=[1e100, 2e100, 1e100],
-              integrator__method='rk4',
+    # A valid scenario whose state overflows: a 1e300 torque pulse (torques need only be finite).
+    ros.start(SimNode, inertia=[1.0, 1.6, 2.2], impacts__start=[0.0], impacts__duration=[0.5],
+              impacts__torque=[1e300, 1e300, 1e300], integrator__method='rk4',
               integrator__step=0.1, duration=1.0, output_interval=0.1, real_time_factor=0.0)
     assert ros.spin_until(lambda: status and status[-1].state == SimStatus.DIVERGED, 10.0)
     assert 'non-finite' in status[-1].message

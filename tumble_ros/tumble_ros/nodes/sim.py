@@ -17,7 +17,7 @@ and publishes every ``output_interval`` of simulated time:
 Every stamp is ROS time carrying simulated time, ``status`` included (the time of the last
 published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year) (``core.timebase``). The node
 is the clock source: it paces on the steady clock whatever ``use_sim_time`` says. Services:
-``apply_impact`` (tumble_ros_interfaces/ApplyImpact), ``pause``,
+``apply_impact`` (tumble_ros_interfaces/ApplyImpact, every request answered), ``pause``,
 ``resume``, ``step`` (std_srvs/Trigger). Impacts are queued by the service and applied at the
 next step boundary, never inside the callback. The node holds no physics.
 """
