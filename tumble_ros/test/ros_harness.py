@@ -54,6 +54,26 @@ class RosHarness:
             self.executor.spin_once(timeout_sec=0.01)
         return predicate()
 
+    def spin_ticks(self, timer, n: int, timeout: float = 10.0) -> bool:
+        """
+        Spin until ``timer`` (a node's rclpy Timer) has fired ``n`` more times.
+
+        For checks that something does NOT happen: after the node's own timer ran n times the
+        node had every chance to act, however slow the machine (no wall-clock guess).
+        """
+        fired = [0]
+        callback = timer.callback
+
+        def counting():
+            fired[0] += 1
+            callback()
+
+        timer.callback = counting
+        try:
+            return self.spin_until(lambda: fired[0] >= n, timeout)
+        finally:
+            timer.callback = callback
+
     def spin_for(self, seconds: float) -> None:
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline:

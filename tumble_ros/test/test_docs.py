@@ -28,7 +28,8 @@ def test_every_topic_and_service_has_a_readme_row(ros):
 
     ros.start(SimNode, start_paused=True)
     ros.start(ComparatorNode)
-    ros.spin_until(lambda: len(ros.probe.get_topic_names_and_types()) >= 12, 5.0)
+    assert ros.spin_until(lambda: len(ros.probe.get_topic_names_and_types()) >= 12, 10.0), \
+        ros.probe.get_topic_names_and_types()
     rows = table_rows(README) | {'pause', 'resume', 'step'}
     topics = {n.lstrip('/') if n != '/clock' else n
               for n, _ in ros.probe.get_topic_names_and_types()}
