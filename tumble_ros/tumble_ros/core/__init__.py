@@ -1,4 +1,5 @@
-"""tumble_ros.core: the numerical core, plain numpy/scipy, no ROS.
+"""
+tumble_ros.core: the numerical core, plain numpy/scipy, no ROS.
 
 Quick start::
 
@@ -15,58 +16,58 @@ bodies at once), ``analytic`` (the paper's approximate solution, better linearis
 exact torque-free motion), ``timebase`` (simulated years <-> ROS stamps).
 Performance and long runs: docs/performance.md.
 """
+from .analytic import AnalyticModel, AnchorState, applicability, make_model, ModelNotApplicable
 from .analytic import MODELS as ANALYTIC_MODELS
-from .analytic import AnalyticModel, AnchorState, ModelNotApplicable, applicability, make_model
-from .dynamics import ATTITUDE_MODELS, angular_momentum_orbital, jacobi_integral, kinetic_energy
-from .integrators import INTEGRATORS, METHODS, SPLITTING_METHODS, SegmentProblem
+from .dynamics import angular_momentum_orbital, ATTITUDE_MODELS, jacobi_integral, kinetic_energy
+from .ensemble import ensemble_scenarios, EnsembleResult, random_impacts, simulate_ensemble
+from .integrators import INTEGRATORS, METHODS, SegmentProblem, SPLITTING_METHODS
 from .propagator import IntegrationError, Propagator, Sample
 from .scenario import (
-    PARAMETER_DOCS,
+    dump_scenario,
     Impact,
     ImpactLimits,
     IntegratorSettings,
+    load_scenario,
+    PARAMETER_DOCS,
+    parse_scenario,
     Scenario,
     ScenarioError,
-    dump_scenario,
-    load_scenario,
-    parse_scenario,
 )
+from .simulate import simulate, SimulationResult
 from .timebase import TimeBase
-from .simulate import SimulationResult, simulate
-from .ensemble import EnsembleResult, ensemble_scenarios, random_impacts, simulate_ensemble
 
 __all__ = [
-    "ANALYTIC_MODELS",
-    "AnalyticModel",
-    "AnchorState",
-    "ModelNotApplicable",
-    "applicability",
-    "make_model",
-    "ATTITUDE_MODELS",
-    "METHODS",
-    "SPLITTING_METHODS",
-    "INTEGRATORS",
-    "SegmentProblem",
-    "EnsembleResult",
-    "ensemble_scenarios",
-    "random_impacts",
-    "simulate_ensemble",
-    "PARAMETER_DOCS",
-    "Impact",
-    "ImpactLimits",
-    "IntegrationError",
-    "IntegratorSettings",
-    "Propagator",
-    "Sample",
-    "Scenario",
-    "ScenarioError",
-    "SimulationResult",
-    "TimeBase",
-    "angular_momentum_orbital",
-    "jacobi_integral",
-    "kinetic_energy",
-    "dump_scenario",
-    "load_scenario",
-    "parse_scenario",
-    "simulate",
+    'ANALYTIC_MODELS',
+    'AnalyticModel',
+    'AnchorState',
+    'ModelNotApplicable',
+    'applicability',
+    'make_model',
+    'ATTITUDE_MODELS',
+    'METHODS',
+    'SPLITTING_METHODS',
+    'INTEGRATORS',
+    'SegmentProblem',
+    'EnsembleResult',
+    'ensemble_scenarios',
+    'random_impacts',
+    'simulate_ensemble',
+    'PARAMETER_DOCS',
+    'Impact',
+    'ImpactLimits',
+    'IntegrationError',
+    'IntegratorSettings',
+    'Propagator',
+    'Sample',
+    'Scenario',
+    'ScenarioError',
+    'SimulationResult',
+    'TimeBase',
+    'angular_momentum_orbital',
+    'jacobi_integral',
+    'kinetic_energy',
+    'dump_scenario',
+    'load_scenario',
+    'parse_scenario',
+    'simulate',
 ]

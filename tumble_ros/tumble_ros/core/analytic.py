@@ -1,4 +1,5 @@
-"""Analytic models of the angular velocity, to compare with the numerical integration.
+"""
+Analytic models of the angular velocity, to compare with the numerical integration.
 
 One interface, :class:`AnalyticModel`, a registry :data:`MODELS` and a factory
 :func:`make_model`. Every model is built from an *anchor state*: the time ``t0`` [yr], the
@@ -44,9 +45,9 @@ Units: time [yr], angles [rad], rates [rad/yr]. Plain numpy/scipy, no ROS.
 """
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+import math
 from typing import ClassVar
 
 import numpy as np
@@ -56,20 +57,20 @@ from .rotation import quaternion_to_euler
 from .scenario import Scenario, ScenarioError
 
 __all__ = [
-    "AnalyticModel",
-    "AnchorState",
-    "ModelNotApplicable",
-    "MODELS",
-    "make_model",
-    "applicability",
-    "PaperModel",
-    "FastSpinModel",
-    "FastSpinPrecessingModel",
-    "FastSpinAdiabaticModel",
-    "TorqueFreeSymmetricModel",
-    "TorqueFreeExactModel",
-    "SYMMETRY_TOL",
-    "SEPARATRIX_TOL",
+    'AnalyticModel',
+    'AnchorState',
+    'ModelNotApplicable',
+    'MODELS',
+    'make_model',
+    'applicability',
+    'PaperModel',
+    'FastSpinModel',
+    'FastSpinPrecessingModel',
+    'FastSpinAdiabaticModel',
+    'TorqueFreeSymmetricModel',
+    'TorqueFreeExactModel',
+    'SYMMETRY_TOL',
+    'SEPARATRIX_TOL',
 ]
 
 #: Two principal moments count as equal when they differ by at most this, relative.
@@ -82,14 +83,15 @@ COS_THETA_TOL = 1e-9
 
 
 class ModelNotApplicable(ScenarioError):
-    """An analytic model does not apply to a scenario or anchor state.
+    """
+    An analytic model does not apply to a scenario or anchor state.
 
     The message starts with the offending field (as every ScenarioError) and names the
     model; ``model`` and ``reason`` hold the two parts.
     """
 
     def __init__(self, model: str, reason: str) -> None:
-        super().__init__(f"{reason} (analytic model {model!r} does not apply)")
+        super().__init__(f'{reason} (analytic model {model!r} does not apply)')
         self.model = model
         self.reason = reason
 
@@ -99,7 +101,8 @@ class ModelNotApplicable(ScenarioError):
 
 @dataclass(frozen=True)
 class AnchorState:
-    """The state a model starts from.
+    """
+    The state a model starts from.
 
     Attributes
     ----------
@@ -109,6 +112,7 @@ class AnchorState:
         Angular velocity at t0 [rad/yr], body axes.
     euler : (3,) array
         The paper's Euler angles (phi, psi, theta) at t0 [rad].
+
     """
 
     t0: float
@@ -116,8 +120,10 @@ class AnchorState:
     euler: np.ndarray
 
     @classmethod
-    def build(cls, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None, euler=None) -> "AnchorState":
-        """Anchor state from the optional pieces; defaults come from the scenario.
+    def build(cls, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None,
+              euler=None) -> 'AnchorState':
+        """
+        Anchor state from the optional pieces; defaults come from the scenario.
 
         ``omega`` defaults to ``scenario.omega0`` and the attitude to ``scenario.euler0``,
         but only for ``t0 = 0``: a later anchor needs both. Give the attitude either as
@@ -125,37 +131,41 @@ class AnchorState:
         """
         t0 = float(t0)
         if not math.isfinite(t0):
-            raise ScenarioError(f"t0: must be finite, got {t0!r}")
+            raise ScenarioError(f't0: must be finite, got {t0!r}')
         if t0 != 0.0 and (omega is None or (euler is None and quaternion is None)):
-            raise ScenarioError(f"t0: an anchor at t0 = {t0!r} != 0 needs omega and the attitude "
-                                "(euler or quaternion) at t0; the scenario's initial state is at t = 0")
+            raise ScenarioError(f't0: an anchor at t0 = {t0!r} != 0 needs omega and the attitude '
+                                "(euler or quaternion) at t0; the scenario's initial state is at "
+                                't = 0')
         if euler is not None and quaternion is not None:
-            raise ScenarioError("quaternion: give the attitude as euler or as quaternion, not both")
+            raise ScenarioError('quaternion: give the attitude as euler or as quaternion, '
+                                'not both')
         w = np.array(scenario.omega0 if omega is None else omega, dtype=float)
         if w.shape != (3,) or not np.all(np.isfinite(w)):
-            raise ScenarioError(f"omega: must be 3 finite numbers, got {omega!r}")
+            raise ScenarioError(f'omega: must be 3 finite numbers, got {omega!r}')
         if quaternion is not None:
             q = np.asarray(quaternion, dtype=float)
             if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.linalg.norm(q) > 0.0:
-                raise ScenarioError(f"quaternion: must be 4 finite numbers, not all 0, got {quaternion!r}")
+                raise ScenarioError(f'quaternion: must be 4 finite numbers, not all 0, '
+                                    f'got {quaternion!r}')
             e = np.array(quaternion_to_euler(q / np.linalg.norm(q)))
         else:
             e = np.array(scenario.euler0 if euler is None else euler, dtype=float)
             if e.shape != (3,) or not np.all(np.isfinite(e)):
-                raise ScenarioError(f"euler: must be 3 finite numbers (phi, psi, theta), got {euler!r}")
+                raise ScenarioError(f'euler: must be 3 finite numbers (phi, psi, theta), '
+                                    f'got {euler!r}')
         return cls(t0, w, e)
 
 
 def _attitude_name(scenario: Scenario, state: AnchorState) -> str:
     if state.t0 == 0.0 and np.array_equal(state.euler, scenario.euler0):
-        return "euler0"
-    return f"attitude at t0 = {state.t0:g}"
+        return 'euler0'
+    return f'attitude at t0 = {state.t0:g}'
 
 
 def _omega_name(scenario: Scenario, state: AnchorState) -> str:
     if state.t0 == 0.0 and np.array_equal(state.omega, scenario.omega0):
-        return "omega0"
-    return f"omega at t0 = {state.t0:g}"
+        return 'omega0'
+    return f'omega at t0 = {state.t0:g}'
 
 
 def _equal(x: float, y: float) -> bool:
@@ -163,7 +173,8 @@ def _equal(x: float, y: float) -> bool:
 
 
 class AnalyticModel(ABC):
-    """An analytic angular velocity omega(t), anchored at a state.
+    """
+    An analytic angular velocity omega(t), anchored at a state.
 
     Subclasses set ``name`` (registry key) and ``label`` (where the model comes from) and
     implement ``_reason`` (why the model does not apply, or None) and ``_omega``.
@@ -179,12 +190,14 @@ class AnalyticModel(ABC):
     ------
     ModelNotApplicable
         (a ScenarioError, hence a ValueError) with the reason.
+
     """
 
     name: ClassVar[str]
     label: ClassVar[str]
 
-    def __init__(self, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None, euler=None) -> None:
+    def __init__(self, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None,
+                 euler=None) -> None:
         state = AnchorState.build(scenario, t0, omega, quaternion, euler)
         reason = type(self)._reason(scenario, state)
         if reason is not None:
@@ -195,7 +208,8 @@ class AnalyticModel(ABC):
 
     @classmethod
     def applies(cls, scenario: Scenario, state: AnchorState | None = None) -> str | None:
-        """None if the model applies to ``scenario`` (anchored at ``state``), else why not.
+        """
+        None if the model applies to ``scenario`` (anchored at ``state``), else why not.
 
         ``state`` defaults to the scenario's initial state.
         """
@@ -223,14 +237,15 @@ class AnalyticModel(ABC):
         """(n, 3) angular velocity at tau = t - t0 (1-D)."""
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}(t0={self.state.t0!r}, omega={self.state.omega.tolist()!r})"
+        return f'{type(self).__name__}(t0={self.state.t0!r}, omega={self.state.omega.tolist()!r})'
 
 
 # --------------------------------------------------------------------------------------
 # Linearised symmetric-body models (paper eqs 16-19 and beyond)
 # --------------------------------------------------------------------------------------
 def _forced_rotator(tau, lam, w_anchor, b, coeffs, freqs) -> np.ndarray:
-    """Solution of dw/dt = i lam w + b sum_k C_k exp(i W_k tau), w(0) = w_anchor.
+    """
+    Solution of dw/dt = i lam w + b sum_k C_k exp(i W_k tau), w(0) = w_anchor.
 
     Variation of constants; the sinc form covers resonant terms (W_k = lam) exactly and
     does not lose precision near them.
@@ -243,7 +258,8 @@ def _forced_rotator(tau, lam, w_anchor, b, coeffs, freqs) -> np.ndarray:
 
 
 class _LinearSymmetric(AnalyticModel):
-    """dw/dt = i lam w + b F(t) with F along prescribed kinematics (theta constant).
+    """
+    dw/dt = i lam w + b F(t) with F along prescribed kinematics (theta constant).
 
     Subclasses give the free frequency lam and the rates of psi and phi (``_rates``), and
     may modulate the phase of the free term (``_free_phase``).
@@ -253,8 +269,8 @@ class _LinearSymmetric(AnalyticModel):
     def _reason(cls, scenario, state):
         ix, iy, _ = scenario.inertia
         if not _equal(ix, iy):
-            return (f"inertia: a linearised model needs a symmetric body, Ix == Iy within "
-                    f"{SYMMETRY_TOL:g} relative; got {list(scenario.inertia)}")
+            return (f'inertia: a linearised model needs a symmetric body, Ix == Iy within '
+                    f'{SYMMETRY_TOL:g} relative; got {list(scenario.inertia)}')
         return None
 
     def _rates(self) -> tuple[float, float, float]:
@@ -284,7 +300,8 @@ class _LinearSymmetric(AnalyticModel):
             -0.5 * st * e_psi * 0.5 * (1.0 + ct) / e_2b,
         )
         self.beta_dot = ws + self.phi_dot
-        self.freqs = (-self.psi_dot, -self.psi_dot + 2.0 * self.beta_dot, -self.psi_dot - 2.0 * self.beta_dot)
+        self.freqs = (-self.psi_dot, -self.psi_dot + 2.0 * self.beta_dot,
+                      -self.psi_dot - 2.0 * self.beta_dot)
         self.w_anchor = complex(self.state.omega[0], self.state.omega[1])
 
     def _omega(self, tau):
@@ -295,15 +312,17 @@ class _LinearSymmetric(AnalyticModel):
         return np.stack([w.real, w.imag, np.full_like(tau, self.w0)], axis=-1)
 
     def euler(self, t) -> np.ndarray:
-        """The model's kinematics: (phi, psi, theta) [rad] at times ``t``, shape t.shape + (3,)."""
+        """Return the model's kinematics (phi, psi, theta) [rad] at ``t``, shape t.shape + (3,)."""
         t = np.asarray(t, dtype=float)
         tau = t - self.state.t0
         phi, psi, theta = (float(v) for v in self.state.euler)
-        return np.stack([phi + self.phi_dot * tau, psi + self.psi_dot * tau, np.full_like(tau, theta)], -1)
+        return np.stack([phi + self.phi_dot * tau, psi + self.psi_dot * tau,
+                         np.full_like(tau, theta)], -1)
 
 
 class PaperModel(_LinearSymmetric):
-    """The paper's approximate solution (eqs 16-19) with ERRATA 1-10 applied.
+    """
+    The paper's approximate solution (eqs 16-19) with ERRATA 1-10 applied.
 
     Regular precession of the figure axis about the orbit normal: theta constant,
     psi = psi0 - wE tau, phi = phi0 + (w0 + wE) tau / cos(theta), wE = a w0. The constant
@@ -311,15 +330,16 @@ class PaperModel(_LinearSymmetric):
     magnitude b sin(2 theta) / 4 per year (``secular_rate``).
     """
 
-    name = "paper"
-    label = "paper eqs 16-19 with ERRATA 1-10"
+    name = 'paper'
+    label = 'paper eqs 16-19 with ERRATA 1-10'
 
     @classmethod
     def _reason(cls, scenario, state):
         reason = super()._reason(scenario, state)
         if reason is None and abs(math.cos(state.euler[2])) < COS_THETA_TOL:
-            reason = (f"{_attitude_name(scenario, state)}: theta = {state.euler[2]!r} is pi/2 to within "
-                      f"{COS_THETA_TOL:g}; the paper's phi rate (w0 + wE)/cos(theta) diverges")
+            reason = (f'{_attitude_name(scenario, state)}: theta = {state.euler[2]!r} is pi/2 '
+                      f"to within {COS_THETA_TOL:g}; the paper's phi rate (w0 + wE)/cos(theta) "
+                      'diverges')
         return reason
 
     def _rates(self):
@@ -328,7 +348,7 @@ class PaperModel(_LinearSymmetric):
 
     @property
     def w_a(self) -> float:
-        """The paper's wA = 2 (ws + (w0 + wE)/cos theta) (ERRATA 6) [rad/yr]."""
+        """Return the paper's wA = 2 (ws + (w0 + wE)/cos theta) (ERRATA 6) [rad/yr]."""
         return 2.0 * self.beta_dot
 
     @property
@@ -338,14 +358,15 @@ class PaperModel(_LinearSymmetric):
 
 
 class FastSpinModel(_LinearSymmetric):
-    """Fast spin about a figure axis fixed in space (ERRATA 11, beyond the paper).
+    """
+    Fast spin about a figure axis fixed in space (ERRATA 11, beyond the paper).
 
     theta and phi constant, psi = psi0 + w0 tau. Forcing frequencies -w0, -w0 +- 2 ws:
     no resonance with lam = a w0 (unless (1 + a) w0 = 0 or +-2 ws), no secular term.
     """
 
-    name = "fast_spin"
-    label = "beyond the paper (ERRATA 11): linearised, fast spin about a fixed figure axis"
+    name = 'fast_spin'
+    label = 'beyond the paper (ERRATA 11): linearised, fast spin about a fixed figure axis'
 
     def _rates(self):
         return self.a * self.w0, self.w0, 0.0
@@ -358,13 +379,13 @@ class _Precessing(_LinearSymmetric):
     def _reason(cls, scenario, state):
         reason = super()._reason(scenario, state)
         if reason is None and state.omega[2] == 0.0:
-            reason = (f"{_omega_name(scenario, state)}: wz = 0; the precession rate "
-                      "(3/2) ws^2 a cos(theta)/((1+a) wz) needs a spin about the figure axis")
+            reason = (f'{_omega_name(scenario, state)}: wz = 0; the precession rate '
+                      '(3/2) ws^2 a cos(theta)/((1+a) wz) needs a spin about the figure axis')
         return reason
 
     @property
     def precession_rate(self) -> float:
-        """Op = (3/2) ws^2 a cos(theta0) / ((1 + a) w0) [rad/yr]; the axis turns at -Op about Z'."""
+        """Op = (3/2) ws^2 a cos(theta0)/((1 + a) w0) [rad/yr]; the axis turns at -Op about Z'."""
         return self.stiffness * math.cos(self.state.euler[2])
 
     @property
@@ -375,13 +396,15 @@ class _Precessing(_LinearSymmetric):
         return 1.5 * ws * ws * (iz - ix) / (iz * float(self.state.omega[2]))
 
     def _precessing_rates(self, shift: float) -> tuple[float, float, float]:
-        # phi turns at -Op (the measured drift of the numerics); wz = psi' + phi' cos(theta) stays w0.
+        # phi turns at -Op (the measured drift of the numerics);
+        # wz = psi' + phi' cos(theta) stays w0.
         op = self.precession_rate
         return self.a * self.w0 + shift, self.w0 + op * math.cos(self.state.euler[2]), -op
 
 
 class FastSpinPrecessingModel(_Precessing):
-    """``fast_spin`` with the gravity-gradient precession (ERRATA 11, beyond the paper).
+    """
+    ``fast_spin`` with the gravity-gradient precession (ERRATA 11, beyond the paper).
 
     The figure axis precesses about the orbit normal at -Op, Op = (3/2) ws^2 a cos(theta0)
     / ((1 + a) w0): phi = phi0 - Op tau, psi = psi0 + (w0 + Op cos theta0) tau; and, as
@@ -390,16 +413,18 @@ class FastSpinPrecessingModel(_Precessing):
     ``fast_spin_adiabatic`` has the theta dependence.
     """
 
-    name = "fast_spin_precessing"
-    label = ("beyond the paper (ERRATA 11): fast_spin with the gravity-gradient precession "
-             "Op = (3/2) ws^2 a cos(theta0)/((1+a) w0) of the figure axis and of the free term's phase")
+    name = 'fast_spin_precessing'
+    label = ('beyond the paper (ERRATA 11): fast_spin with the gravity-gradient precession '
+             'Op = (3/2) ws^2 a cos(theta0)/((1+a) w0) of the figure axis and of the free '
+             "term's phase")
 
     def _rates(self):
         return self._precessing_rates(self.precession_rate)
 
 
 class FastSpinAdiabaticModel(_Precessing):
-    """``fast_spin_precessing`` with the nutation-frequency shift derived to first order.
+    """
+    ``fast_spin_precessing`` with the nutation-frequency shift derived to first order.
 
     The tidal potential V = (3/2) ws^2 (Iz - Ix) (u.k)^2 (k the figure axis) shifts the
     body-frame frequency of the free term by (its Laplacian on the unit sphere) / (2 Iz w0),
@@ -409,9 +434,10 @@ class FastSpinAdiabaticModel(_Precessing):
     and vanishes at cos^2 theta = 1/3. Derivation in docs/analytic.md.
     """
 
-    name = "fast_spin_adiabatic"
-    label = ("beyond the paper: fast_spin_precessing with the first-order nutation-frequency shift "
-             "S[(3cos^2 theta-1)/2 - (3/2) sin^2 theta cos 2 beta(t)], S = (3/2) ws^2 a/((1+a) w0)")
+    name = 'fast_spin_adiabatic'
+    label = ('beyond the paper: fast_spin_precessing with the first-order nutation-frequency '
+             'shift S[(3cos^2 theta-1)/2 - (3/2) sin^2 theta cos 2 beta(t)], '
+             'S = (3/2) ws^2 a/((1+a) w0)')
 
     def _rates(self):
         c = math.cos(self.state.euler[2])
@@ -432,15 +458,15 @@ class FastSpinAdiabaticModel(_Precessing):
 # --------------------------------------------------------------------------------------
 def _torque_free_reason(scenario: Scenario) -> str | None:
     if scenario.orbit_rate != 0.0:
-        return (f"orbit_rate: the exact free-body solution needs no torque, orbit_rate = 0; "
-                f"got {scenario.orbit_rate!r}")
+        return (f'orbit_rate: the exact free-body solution needs no torque, orbit_rate = 0; '
+                f'got {scenario.orbit_rate!r}')
     return None
 
 
 class TorqueFreeSymmetricModel(AnalyticModel):
     """Exact symmetric top (Ix = Iy, orbit_rate = 0): w_perp turns at wE = a wz, wz constant."""
 
-    name = "torque_free_symmetric"
+    name = 'torque_free_symmetric'
     label = "exact: torque-free symmetric top (Euler's equations, Ix = Iy)"
 
     @classmethod
@@ -448,8 +474,8 @@ class TorqueFreeSymmetricModel(AnalyticModel):
         reason = _torque_free_reason(scenario)
         ix, iy, _ = scenario.inertia
         if reason is None and not _equal(ix, iy):
-            reason = (f"inertia: the symmetric top needs Ix == Iy within {SYMMETRY_TOL:g} relative; "
-                      f"got {list(scenario.inertia)} (use torque_free_exact)")
+            reason = (f'inertia: the symmetric top needs Ix == Iy within {SYMMETRY_TOL:g} '
+                      f'relative; got {list(scenario.inertia)} (use torque_free_exact)')
         return reason
 
     def _setup(self):
@@ -466,7 +492,8 @@ def _is_cyclic(i: int, j: int, k: int) -> bool:
 
 
 class TorqueFreeExactModel(AnalyticModel):
-    """Exact Euler-Poinsot motion of any rigid body (orbit_rate = 0).
+    """
+    Exact Euler-Poinsot motion of any rigid body (orbit_rate = 0).
 
     The moments are sorted internally. With 2E = sum I w^2, L^2 = sum I^2 w^2 and I_mid
     the middle moment, the axis whose component never changes sign is p (the largest
@@ -479,8 +506,8 @@ class TorqueFreeExactModel(AnalyticModel):
     States within ``SEPARATRIX_TOL`` of the separatrix (1 - m) are refused.
     """
 
-    name = "torque_free_exact"
-    label = "exact: torque-free Euler-Poinsot solution (Jacobi elliptic functions)"
+    name = 'torque_free_exact'
+    label = 'exact: torque-free Euler-Poinsot solution (Jacobi elliptic functions)'
 
     @classmethod
     def _reason(cls, scenario, state):
@@ -488,7 +515,7 @@ class TorqueFreeExactModel(AnalyticModel):
         if reason is None:
             setup = cls._solve(scenario.inertia, state.omega)
             if isinstance(setup, str):
-                reason = f"{_omega_name(scenario, state)}: {setup}"
+                reason = f'{_omega_name(scenario, state)}: {setup}'
         return reason
 
     @staticmethod
@@ -496,19 +523,19 @@ class TorqueFreeExactModel(AnalyticModel):
         """('const' | 'sym' | 'ell', parameters) for the state, or a reason string."""
         inertia = [float(v) for v in inertia]
         w = [float(v) for v in w]
-        lo, q, hi = (int(k) for k in np.argsort(inertia, kind="stable"))
+        lo, q, hi = (int(k) for k in np.argsort(inertia, kind='stable'))
         i_lo, i_q, i_hi = inertia[lo], inertia[q], inertia[hi]
         eq_lo, eq_hi = _equal(i_lo, i_q), _equal(i_q, i_hi)
         if eq_lo and eq_hi:
-            return "const", ()
+            return 'const', ()
         if eq_lo or eq_hi:
             p = hi if eq_lo else lo  # the distinct moment: the symmetry axis
             j, k = (p + 1) % 3, (p + 2) % 3  # (p, j, k) cyclic
             i_perp = 0.5 * (inertia[j] + inertia[k])
             lam = (inertia[p] - i_perp) / i_perp * w[p]
-            return "sym", (p, j, k, lam)
+            return 'sym', (p, j, k, lam)
         if w[lo] == 0.0 and w[hi] == 0.0:
-            return "const", ()  # steady spin about the middle axis (an unstable equilibrium)
+            return 'const', ()  # steady spin about the middle axis (an unstable equilibrium)
         # L^2 - 2E I_q without cancellation between large terms of the same sign:
         d_mid = i_lo * (i_lo - i_q) * w[lo] ** 2 + i_hi * (i_hi - i_q) * w[hi] ** 2
         if d_mid > 0.0:
@@ -520,7 +547,7 @@ class TorqueFreeExactModel(AnalyticModel):
         e_p = i_r * (i_p - i_r) * w[r] ** 2 + i_q * (i_p - i_q) * w[q] ** 2
         e_r = i_q * (i_q - i_r) * w[q] ** 2 + i_p * (i_p - i_r) * w[p] ** 2
         if e_p == 0.0:
-            return "const", ()  # steady spin about p
+            return 'const', ()  # steady spin about p
         a_r = math.sqrt(e_p / (i_r * (i_p - i_r)))
         a_q = math.sqrt(e_p / (i_q * (i_p - i_q)))
         a_p = math.copysign(math.sqrt(e_r / (i_p * (i_p - i_r))), w[p])
@@ -528,15 +555,15 @@ class TorqueFreeExactModel(AnalyticModel):
         m = (i_q - i_r) * e_p / den
         m1 = (i_p - i_r) * d_mid / den  # 1 - m, without cancellation
         if not m1 >= SEPARATRIX_TOL:
-            return (f"the state is within {SEPARATRIX_TOL:g} of the separatrix L^2 = 2 E I_mid "
-                    f"(1 - m = {m1:.3g}): the elliptic solution is ill-conditioned there")
+            return (f'the state is within {SEPARATRIX_TOL:g} of the separatrix L^2 = 2 E I_mid '
+                    f'(1 - m = {m1:.3g}): the elliptic solution is ill-conditioned there')
         sigma = 1.0 if _is_cyclic(r, q, p) else -1.0
         nu = sigma * math.copysign(1.0, w[p]) * math.copysign(1.0, i_p - i_q) * math.sqrt(
             (i_p - i_q) * e_r / (i_r * i_q * i_p))
         u0 = float(ellipkinc(math.atan2(w[q] / a_q, w[r] / a_r), m))
         period = 4.0 * float(ellipk(m))
-        mode = "short-axis" if p == hi else "long-axis"
-        return "ell", (p, q, r, a_p, a_q, a_r, m, nu, u0, period, mode)
+        mode = 'short-axis' if p == hi else 'long-axis'
+        return 'ell', (p, q, r, a_p, a_q, a_r, m, nu, u0, period, mode)
 
     def _setup(self):
         self.kind, self.params = self._solve(self.scenario.inertia, self.state.omega)
@@ -544,23 +571,23 @@ class TorqueFreeExactModel(AnalyticModel):
     @property
     def mode(self) -> str:
         """'short-axis', 'long-axis', 'symmetric' or 'constant'."""
-        return {"const": "constant", "sym": "symmetric"}.get(self.kind) or self.params[-1]
+        return {'const': 'constant', 'sym': 'symmetric'}.get(self.kind) or self.params[-1]
 
     @property
     def period(self) -> float:
         """Period of omega in the body [yr] (inf for a constant omega)."""
-        if self.kind == "ell":
+        if self.kind == 'ell':
             return self.params[9] / abs(self.params[7])
-        if self.kind == "sym" and self.params[3] != 0.0:
+        if self.kind == 'sym' and self.params[3] != 0.0:
             return 2.0 * math.pi / abs(self.params[3])
         return math.inf
 
     def _omega(self, tau):
         w0 = self.state.omega
         out = np.empty(tau.shape + (3,))
-        if self.kind == "const":
+        if self.kind == 'const':
             out[:] = w0
-        elif self.kind == "sym":
+        elif self.kind == 'sym':
             p, j, k, lam = self.params
             w = np.exp(1j * lam * tau) * complex(w0[j], w0[k])
             out[:, p], out[:, j], out[:, k] = w0[p], w.real, w.imag
@@ -586,12 +613,14 @@ def _model_class(name: str) -> type[AnalyticModel]:
     try:
         return MODELS[name]
     except (KeyError, TypeError):
-        raise ScenarioError(f"model: unknown analytic model {name!r} (known: {', '.join(MODELS)})") from None
+        raise ScenarioError(f'model: unknown analytic model {name!r} '
+                            f"(known: {', '.join(MODELS)})") from None
 
 
 def make_model(name: str, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None,
                euler=None) -> AnalyticModel:
-    """Build the analytic model ``name`` anchored at (t0, omega, attitude).
+    """
+    Build the analytic model ``name`` anchored at (t0, omega, attitude).
 
     Without ``omega`` and an attitude the scenario's initial state is used (t0 must then
     be 0). Raises ScenarioError for an unknown name or a bad anchor, and its subclass

@@ -1,4 +1,5 @@
-"""Euler-Liouville equations of a rigid asteroid under the Sun's gravity-gradient torque.
+"""
+Euler-Liouville equations of a rigid asteroid under the Sun's gravity-gradient torque.
 
 State vector ``y`` (all in body principal axes, time in years):
 
@@ -23,8 +24,8 @@ are written on plain floats: they are the integration's hot path.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+import math
 from typing import Callable
 
 import numpy as np
@@ -37,12 +38,12 @@ from .rotation import (
 )
 
 __all__ = [
-    "AttitudeModel",
-    "ATTITUDE_MODELS",
-    "Rhs",
-    "kinetic_energy",
-    "angular_momentum_orbital",
-    "jacobi_integral",
+    'AttitudeModel',
+    'ATTITUDE_MODELS',
+    'Rhs',
+    'kinetic_energy',
+    'angular_momentum_orbital',
+    'jacobi_integral',
 ]
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
@@ -133,7 +134,8 @@ def _make_euler_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO
 
 @dataclass(frozen=True)
 class AttitudeModel:
-    """One way of carrying the attitude in the state vector.
+    """
+    One way of carrying the attitude in the state vector.
 
     Attributes
     ----------
@@ -143,6 +145,7 @@ class AttitudeModel:
     to_matrix : attitude components -> C (body -> orbital) 3x3 matrix.
     make_rhs : (inertia, orbit_rate, torque_body, torque_orbital) -> f(t, y).
     singular : attitude components -> True where this representation breaks down.
+
     """
 
     name: str
@@ -158,16 +161,16 @@ class AttitudeModel:
 
 
 ATTITUDE_MODELS: dict[str, AttitudeModel] = {
-    "quaternion": AttitudeModel(
-        name="quaternion",
+    'quaternion': AttitudeModel(
+        name='quaternion',
         size=4,
         from_euler=euler_to_quaternion,
         to_matrix=quaternion_to_matrix,
         make_rhs=_make_quaternion_rhs,
         singular=lambda a: False,
     ),
-    "euler": AttitudeModel(
-        name="euler",
+    'euler': AttitudeModel(
+        name='euler',
         size=3,
         from_euler=lambda phi, psi, theta: np.array([phi, psi, theta], dtype=float),
         to_matrix=lambda a: euler_to_matrix(a[0], a[1], a[2]).T,
@@ -185,16 +188,18 @@ def kinetic_energy(omega, inertia) -> np.ndarray:
 
 
 def angular_momentum_orbital(omega, c_body_to_orbital, inertia) -> np.ndarray:
-    """Angular momentum L = C (I w) in orbital-frame components.
+    """
+    Angular momentum L = C (I w) in orbital-frame components.
 
     Shapes: omega (3,) with a (3, 3) matrix, or (n, 3) with (n, 3, 3).
     """
     h = np.asarray(omega, dtype=float) * np.asarray(inertia, dtype=float)
-    return np.einsum("...ij,...j->...i", c_body_to_orbital, h)
+    return np.einsum('...ij,...j->...i', c_body_to_orbital, h)
 
 
 def jacobi_integral(t, omega, c_body_to_orbital, inertia, orbit_rate: float) -> np.ndarray:
-    """Jacobi integral of the circular-orbit problem (conserved without impacts).
+    """
+    Jacobi integral of the circular-orbit problem (conserved without impacts).
 
     In the frame turning with the Sun line (angular velocity Omega = -ws Z') the tidal
     potential is time independent, so H = T + V - Omega.L is conserved::
@@ -211,7 +216,7 @@ def jacobi_integral(t, omega, c_body_to_orbital, inertia, orbit_rate: float) -> 
     w = np.asarray(omega, dtype=float)
     u_orbital = np.stack([np.sin(orbit_rate * t), np.cos(orbit_rate * t), np.zeros_like(t)], -1)
     # body components of an orbital vector v are C^T v
-    u = np.einsum("...ji,...j->...i", c, u_orbital)
+    u = np.einsum('...ji,...j->...i', c, u_orbital)
     z = c[..., 2, :]
     h = i * w
     return (

@@ -1,4 +1,5 @@
-"""Ensembles: one asteroid, N bodies integrated at once (the paper's conclusion).
+r"""
+Ensembles: one asteroid, N bodies integrated at once (the paper's conclusion).
 
 Each body is the scenario with its own impact sequence and/or initial state, e.g. one
 asteroid under N random impact sequences::
@@ -22,19 +23,19 @@ path when numba is available; otherwise the bodies are run one after the other w
 
 Command line (progress on stderr, summary on stdout)::
 
-    python -m tumble_ros.core.ensemble tumble_ros/config/fig9.yaml --bodies 10000 \\
-        --duration 20 --output-interval 1 --impact-rate 0.5 --impact-torque 1e6 \\
+    python -m tumble_ros.core.ensemble tumble_ros/config/fig9.yaml --bodies 10000 \
+        --duration 20 --output-interval 1 --impact-rate 0.5 --impact-torque 1e6 \
         --method splitting6 --step 0.01 --out ensemble.npz
 """
 from __future__ import annotations
 
 import argparse
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 import math
 import os
 import sys
 import time
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
@@ -44,16 +45,18 @@ from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import INTEGRATORS
 from .integrators.compiled import failure_message, why_no_fast_path
 from .propagator import quaternions_to_matrices, segment_torques
-from .scenario import MAX_OMEGA, MAX_ROTATION, Impact, IntegratorSettings, Scenario, ScenarioError, load_scenario
+from .scenario import (Impact, IntegratorSettings, load_scenario, MAX_OMEGA, MAX_ROTATION,
+                       Scenario, ScenarioError)
 from .simulate import _check_times, simulate
 
-__all__ = ["EnsembleResult", "simulate_ensemble", "ensemble_scenarios", "random_impacts",
-           "ProgressBar", "main"]
+__all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts',
+           'ProgressBar', 'main']
 
 
 @dataclass(frozen=True)
 class EnsembleResult:
-    """Samples of N bodies at the same n times.
+    """
+    Samples of N bodies at the same n times.
 
     Attributes
     ----------
@@ -67,6 +70,7 @@ class EnsembleResult:
     n_steps, nfev : (N,) integration steps and right-hand-side (torque) evaluations.
     wall_time : seconds spent integrating (set-up and post-processing excluded).
     compiled : whether the compiled ensemble loop ran (else one simulate() per body).
+
     """
 
     t: np.ndarray
@@ -95,48 +99,54 @@ class EnsembleResult:
 # Inputs
 # ---------------------------------------------------------------------------------------
 def _bodies(scenario, impacts, omega0, euler0, n_bodies):
-    sizes = {name: len(v) for name, v in (("impacts", impacts), ("omega0", omega0), ("euler0", euler0))
+    sizes = {name: len(v) for name, v in (('impacts', impacts), ('omega0', omega0),
+                                          ('euler0', euler0))
              if v is not None}
     if n_bodies is not None:
-        sizes["n_bodies"] = int(n_bodies)
+        sizes['n_bodies'] = int(n_bodies)
     if not sizes:
-        raise ScenarioError("ensemble: give impacts, omega0, euler0 (one entry per body) or n_bodies")
+        raise ScenarioError(
+            'ensemble: give impacts, omega0, euler0 (one entry per body) or n_bodies')
     if len(set(sizes.values())) != 1:
-        raise ScenarioError(f"ensemble: inconsistent numbers of bodies {sizes}")
+        raise ScenarioError(f'ensemble: inconsistent numbers of bodies {sizes}')
     n = next(iter(sizes.values()))
     if n < 1:
-        raise ScenarioError("ensemble: needs at least one body")
+        raise ScenarioError('ensemble: needs at least one body')
     if omega0 is not None:
         omega0 = np.asarray(omega0, dtype=float)
         if omega0.shape != (n, 3) or not np.all(np.isfinite(omega0)):
-            raise ScenarioError(f"omega0: must be a finite (N, 3) array, got shape {omega0.shape}")
+            raise ScenarioError(f'omega0: must be a finite (N, 3) array, got shape {omega0.shape}')
         # the bounds of Scenario (every body of the reference path is one), checked here for the
         # compiled path too
         fastest = float(np.max(np.linalg.norm(omega0, axis=1)))
         if fastest > MAX_OMEGA:
-            raise ScenarioError(f"omega0: |omega0| = {fastest:.3g} rad/yr exceeds {MAX_OMEGA:g} rad/yr")
+            raise ScenarioError(
+                f'omega0: |omega0| = {fastest:.3g} rad/yr exceeds {MAX_OMEGA:g} rad/yr')
         if fastest * scenario.duration > MAX_ROTATION:
-            raise ScenarioError(f"duration: a body turns by |omega0| * duration = {fastest * scenario.duration:.3g} "
-                                f"rad, above {MAX_ROTATION:.0e} rad")
+            raise ScenarioError(f'duration: a body turns by |omega0| * duration = '
+                                f'{fastest * scenario.duration:.3g} rad, above '
+                                f'{MAX_ROTATION:.0e} rad')
     if euler0 is not None:
         euler0 = np.asarray(euler0, dtype=float)
         if euler0.shape != (n, 3) or not np.all(np.isfinite(euler0)):
-            raise ScenarioError(f"euler0: must be a finite (N, 3) array, got shape {euler0.shape}")
+            raise ScenarioError(f'euler0: must be a finite (N, 3) array, got shape {euler0.shape}')
     if impacts is not None:
         impacts = [tuple(body) for body in impacts]
         for b, body in enumerate(impacts):
             for k, impact in enumerate(body):
                 if not isinstance(impact, Impact):
-                    raise ScenarioError(f"impacts[{b}][{k}]: must be an Impact, got {impact!r}")
+                    raise ScenarioError(f'impacts[{b}][{k}]: must be an Impact, got {impact!r}')
                 if impact.end > scenario.duration:
-                    raise ScenarioError(f"impacts[{b}][{k}].start: the pulse must end by the end of the run "
-                                        f"({scenario.duration:g} yr); it ends at {impact.end!r}")
+                    raise ScenarioError(f'impacts[{b}][{k}].start: the pulse must end by the end '
+                                        f'of the run ({scenario.duration:g} yr); it ends at '
+                                        f'{impact.end!r}')
     return n, impacts, omega0, euler0
 
 
 def ensemble_scenarios(scenario: Scenario, *, impacts=None, omega0=None, euler0=None,
                        n_bodies: int | None = None) -> list[Scenario]:
-    """The N single-body scenarios an ensemble integrates (body k = element k).
+    """
+    Return the N single-body scenarios an ensemble integrates (body k = element k).
 
     ``impacts[k]`` (a sequence of :class:`Impact`) replaces the scenario's impacts for body k;
     ``omega0[k]`` and ``euler0[k]`` replace its initial state. Fields not given are the
@@ -147,24 +157,29 @@ def ensemble_scenarios(scenario: Scenario, *, impacts=None, omega0=None, euler0=
     for b in range(n):
         changes = {}
         if impacts is not None:
-            changes["impacts"] = impacts[b]
+            changes['impacts'] = impacts[b]
         if omega0 is not None:
-            changes["omega0"] = tuple(omega0[b])
+            changes['omega0'] = tuple(omega0[b])
         if euler0 is not None:
-            changes["euler0"] = tuple(euler0[b])
+            changes['euler0'] = tuple(euler0[b])
         out.append(scenario.replace(**changes) if changes else scenario)
     return out
 
 
-def random_impacts(n_bodies: int, duration: float, *, rate: float, torque: float, pulse: float = 3e-7,
-                   frame: str = "body", seed=None) -> list[tuple[Impact, ...]]:
-    """N independent random impact sequences: Poisson arrivals at ``rate`` per year on
-    [0, duration - pulse], each a pulse of length ``pulse`` [yr] and magnitude ``torque``
-    [I rad/yr^2] in an isotropic random direction, fixed in ``frame``."""
+def random_impacts(n_bodies: int, duration: float, *, rate: float, torque: float,
+                   pulse: float = 3e-7, frame: str = 'body',
+                   seed=None) -> list[tuple[Impact, ...]]:
+    """
+    Draw N independent random impact sequences.
+
+    Poisson arrivals at ``rate`` per year on [0, duration - pulse], each a pulse of length
+    ``pulse`` [yr] and magnitude ``torque`` [I rad/yr^2] in an isotropic random direction,
+    fixed in ``frame``.
+    """
     if rate < 0 or not math.isfinite(rate):
-        raise ScenarioError(f"rate: must be a finite number >= 0, got {rate!r}")
+        raise ScenarioError(f'rate: must be a finite number >= 0, got {rate!r}')
     if not 0 < pulse < duration:
-        raise ScenarioError(f"pulse: must lie in (0, duration = {duration!r}), got {pulse!r}")
+        raise ScenarioError(f'pulse: must lie in (0, duration = {duration!r}), got {pulse!r}')
     rng = np.random.default_rng(seed)
     span = duration - pulse
     counts = rng.poisson(rate * span, size=n_bodies)
@@ -182,14 +197,18 @@ def random_impacts(n_bodies: int, duration: float, *, rate: float, torque: float
 # Progress display
 # ---------------------------------------------------------------------------------------
 class ProgressBar:
-    """Progress of a long run on a stream (stderr): a bar redrawn in place on a terminal,
-    a line every 10 % otherwise. Call with (fraction done, t [yr], body-steps so far)."""
+    """
+    Progress display of a long run on a stream (stderr).
+
+    A bar redrawn in place on a terminal, a line every 10 % otherwise. Call with (fraction
+    done, t [yr], body-steps so far).
+    """
 
     def __init__(self, total_time: float, n_bodies: int, stream=None, width: int = 30) -> None:
         self.stream = stream if stream is not None else sys.stderr
         self.total_time, self.n_bodies, self.width = total_time, n_bodies, width
         self.start = time.perf_counter()
-        self._tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self._tty = hasattr(self.stream, 'isatty') and self.stream.isatty()
         self._last_decile = -1
 
     def __call__(self, fraction: float, t: float, body_steps: int) -> None:
@@ -198,16 +217,16 @@ class ProgressBar:
         eta = elapsed * (1.0 - fraction) / fraction if fraction > 0 else math.inf
         filled = int(round(self.width * fraction))
         text = (f"[{'#' * filled}{'.' * (self.width - filled)}] {100 * fraction:5.1f}%  "
-                f"t = {t:.6g}/{self.total_time:.6g} yr  {self.n_bodies} bodies  "
-                f"{rate:.3g} body-steps/s  elapsed {elapsed:.1f} s  ETA {eta:.1f} s")
+                f't = {t:.6g}/{self.total_time:.6g} yr  {self.n_bodies} bodies  '
+                f'{rate:.3g} body-steps/s  elapsed {elapsed:.1f} s  ETA {eta:.1f} s')
         if self._tty:
-            self.stream.write("\r" + text + ("\n" if fraction >= 1.0 else ""))
+            self.stream.write('\r' + text + ('\n' if fraction >= 1.0 else ''))
             self.stream.flush()
         else:
             decile = int(fraction * 10 + 1e-9)
             if decile != self._last_decile:
                 self._last_decile = decile
-                self.stream.write(text + "\n")
+                self.stream.write(text + '\n')
                 self.stream.flush()
 
 
@@ -217,31 +236,41 @@ class ProgressBar:
 def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=None, euler0=None,
                       n_bodies: int | None = None, fast: bool | None = None,
                       progress: bool | Callable[[float, float, int], None] | None = None,
-                      checkpoints: int | None = None, threads: int | None = None) -> EnsembleResult:
-    """Integrate N bodies of one scenario at once and sample them at the times ``t_eval``.
+                      checkpoints: int | None = None,
+                      threads: int | None = None) -> EnsembleResult:
+    """
+    Integrate N bodies of one scenario at once and sample them at the times ``t_eval``.
 
     Parameters
     ----------
-    scenario : the common scenario (body, orbit, integrator, duration, output grid).
-    t_eval : output times [yr] (default ``scenario.output_times``).
-    impacts, omega0, euler0, n_bodies : per-body inputs (see :func:`ensemble_scenarios`);
-        N is their common length (``n_bodies`` alone: N identical bodies).
-    fast : compiled ensemble loop: None = when available, True = required (ValueError saying
+    scenario
+        The common scenario (body, orbit, integrator, duration, output grid).
+    t_eval
+        Output times [yr] (default ``scenario.output_times``).
+    impacts, omega0, euler0, n_bodies
+        Per-body inputs (see :func:`ensemble_scenarios`); N is their common length
+        (``n_bodies`` alone: N identical bodies).
+    fast
+        Compiled ensemble loop: None = when available, True = required (ValueError saying
         why not), False = one reference :func:`simulate` per body.
-    progress : True for a progress display on stderr (:class:`ProgressBar`), or a callable
+    progress
+        True for a progress display on stderr (:class:`ProgressBar`), or a callable
         ``progress(fraction, t, body_steps)``, called after each of ``checkpoints`` chunks.
-    checkpoints : number of chunks of the time span, each one compiled call (default: 100
-        with progress, else 1; every chunk costs a little per body, and the steps taken do
-        not depend on it).
-    threads : threads running blocks of bodies at once (default: the number of cores; the
-        results do not depend on it).
+    checkpoints
+        Number of chunks of the time span, each one compiled call (default: 100 with
+        progress, else 1; every chunk costs a little per body, and the steps taken do not
+        depend on it).
+    threads
+        Threads running blocks of bodies at once (default: the number of cores; the results
+        do not depend on it).
+
     """
     times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
     n, impacts, omega0, euler0 = _bodies(scenario, impacts, omega0, euler0, n_bodies)
     method = INTEGRATORS[scenario.integrator.method]
     why = why_no_fast_path(method, scenario.attitude)
     if fast and why:
-        raise ValueError(f"compiled ensemble not available: {why}")
+        raise ValueError(f'compiled ensemble not available: {why}')
     use_fast = not why if fast is None else bool(fast)
     if progress is True:
         progress = ProgressBar(float(times[-1]), n)
@@ -257,31 +286,39 @@ def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=N
 
 
 def _ensemble_reference(scenario, times, n, impacts, omega0, euler0, progress) -> EnsembleResult:
+    per_body = any(v is not None for v in (impacts, omega0, euler0))
     bodies = ensemble_scenarios(scenario, impacts=impacts, omega0=omega0, euler0=euler0,
-                                n_bodies=None if any(v is not None for v in (impacts, omega0, euler0)) else n)
+                                n_bodies=None if per_body else n)
     m = times.size
     omega, euler = np.full((n, m, 3), np.nan), np.full((n, m, 3), np.nan)
     quat, jac = np.full((n, m, 4), np.nan), np.full((n, m), np.nan)
-    success, n_steps, nfev, messages = np.zeros(n, bool), np.zeros(n, np.int64), np.zeros(n, np.int64), []
+    success, n_steps, nfev, messages = (np.zeros(n, bool), np.zeros(n, np.int64),
+                                        np.zeros(n, np.int64), [])
     start = time.perf_counter()
     for b, body in enumerate(bodies):
         r = simulate(body, times, fast=False)
         k = r.t.size
-        omega[b, :k], euler[b, :k], quat[b, :k], jac[b, :k] = r.omega, r.euler, r.quaternion, r.jacobi
+        omega[b, :k], euler[b, :k], quat[b, :k], jac[b, :k] = (r.omega, r.euler, r.quaternion,
+                                                               r.jacobi)
         success[b], n_steps[b], nfev[b] = r.success, r.n_steps, r.nfev
         messages.append(r.message)
         if progress is not None:
             progress((b + 1) / n, float(times[-1]), int(n_steps.sum()))
     wall = time.perf_counter() - start
-    return EnsembleResult(times, omega, euler, quat, jac, success, tuple(messages), n_steps, nfev, wall, False)
+    return EnsembleResult(times, omega, euler, quat, jac, success, tuple(messages), n_steps, nfev,
+                          wall, False)
 
 
 def _segments(scenario, body_impacts):
-    """The Propagator's segments for one impact sequence: (t0, t1, body torque, orbital torque).
+    """
+    Return the Propagator's segments for one impact sequence.
+
+    Each is (t0, t1, body torque, orbital torque).
 
     Same edges as ``Propagator._edges`` and the same sums as ``segment_torques`` (over the
     impacts sorted by start, in that order), by a sweep over time instead of a scan of every
-    impact for every segment (a body may have thousands of impacts)."""
+    impact for every segment (a body may have thousands of impacts).
+    """
     ordered = sorted(body_impacts, key=lambda i: i.start)
     edges = {scenario.duration}
     for impact in ordered:
@@ -305,9 +342,10 @@ def _segments(scenario, body_impacts):
 _ZERO_TORQUES = segment_torques((), 0.0, 1.0)
 
 
-def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, progress, checkpoints, threads):
+def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, progress, checkpoints,
+                       threads):
     settings = scenario.integrator
-    gammas = method.composition() if hasattr(method, "composition") else ()
+    gammas = method.composition() if hasattr(method, 'composition') else ()
     cfg = K.config_array(method.kernel, settings, gammas)
     base = K.problem_array(scenario.inertia, scenario.orbit_rate)
     # segment tables
@@ -328,9 +366,12 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
             j += 1
     probs = np.tile(base, (total, 1))
     ix, iy, iz = (float(v) for v in scenario.inertia)
-    probs[:, K.P_BX], probs[:, K.P_BY], probs[:, K.P_BZ] = torques[:, 0] / ix, torques[:, 1] / iy, torques[:, 2] / iz
-    probs[:, K.P_TBX], probs[:, K.P_TBY], probs[:, K.P_TBZ] = torques[:, 0], torques[:, 1], torques[:, 2]
-    probs[:, K.P_MOX], probs[:, K.P_MOY], probs[:, K.P_MOZ] = torques[:, 3], torques[:, 4], torques[:, 5]
+    probs[:, K.P_BX], probs[:, K.P_BY], probs[:, K.P_BZ] = (torques[:, 0] / ix, torques[:, 1] / iy,
+                                                            torques[:, 2] / iz)
+    probs[:, K.P_TBX], probs[:, K.P_TBY], probs[:, K.P_TBZ] = (torques[:, 0], torques[:, 1],
+                                                               torques[:, 2])
+    probs[:, K.P_MOX], probs[:, K.P_MOY], probs[:, K.P_MOZ] = (torques[:, 3], torques[:, 4],
+                                                               torques[:, 5])
     probs[:, K.P_ORB] = np.where(np.any(torques[:, 3:] != 0.0, axis=1), 1.0, 0.0)
     # initial states
     model = ATTITUDE_MODELS[scenario.attitude]
@@ -358,19 +399,23 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
 
     start = time.perf_counter()
     with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool:
-        list(pool.map(lambda blk: K.ensemble_init(cfg, probs, seg_t, seg_ptr, states, *blk), blocks))
+        list(pool.map(lambda blk: K.ensemble_init(cfg, probs, seg_t, seg_ptr, states, *blk),
+                      blocks))
         t_end = float(times[-1])
         stops = [t_end * (c + 1) / checkpoints for c in range(checkpoints - 1)] + [t_end]
         for c, t_stop in enumerate(stops):
-            list(pool.map(lambda blk: K.ensemble_advance(cfg, probs, seg_t, seg_ptr, cur, states, tracks, t_stop,
-                                                          times, y_out, e_out, k_out, steps, *blk), blocks))
+            list(pool.map(lambda blk: K.ensemble_advance(cfg, probs, seg_t, seg_ptr, cur, states,
+                                                         tracks, t_stop, times, y_out, e_out,
+                                                         k_out, steps, *blk),
+                          blocks))
             if progress is not None:
                 progress((c + 1) / len(stops), t_stop, int(steps.sum()))
     wall = time.perf_counter() - start
 
     failed = states[:, K.S_STATUS] == K.FAILED
     success = (k_out == m) & ~failed
-    messages = tuple(failure_message(states[b], method.name) if failed[b] else "" for b in range(n))
+    messages = tuple(failure_message(states[b], method.name) if failed[b] else ''
+                     for b in range(n))
     nfev = (states[:, K.S_NFEVDONE] + states[:, K.S_NFEV]).astype(np.int64)
     omega = y_out[:, :, :3].copy()
     quat = np.full((n, m, 4), np.nan)
@@ -386,7 +431,8 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
             c = quaternions_to_matrices(q)
             jac[rows, :kk] = jacobi_integral(times[:kk], omega[rows, :kk], c, scenario.inertia,
                                              scenario.orbit_rate)
-    return EnsembleResult(times, omega, e_out, quat, jac, success, messages, steps, nfev, wall, True)
+    return EnsembleResult(times, omega, e_out, quat, jac, success, messages, steps, nfev, wall,
+                          True)
 
 
 class _NoPool:
@@ -399,7 +445,7 @@ class _NoPool:
         return False
 
     @staticmethod
-    def map(fn, items):
+    def map(fn, items):  # noqa: A003 (the name of the Executor method it stands in for)
         return map(fn, items)
 
 
@@ -408,7 +454,7 @@ def _continuous_quaternions(q: np.ndarray) -> np.ndarray:
     q = q / np.sqrt(np.sum(q * q, axis=-1, keepdims=True))
     if q.shape[1] < 2:
         return q
-    dots = np.einsum("bij,bij->bi", q[:, 1:], q[:, :-1])
+    dots = np.einsum('bij,bij->bi', q[:, 1:], q[:, :-1])
     flips = np.concatenate([np.ones((q.shape[0], 1)), np.where(dots < 0.0, -1.0, 1.0)], axis=1)
     return q * np.cumprod(flips, axis=1)[:, :, None]
 
@@ -418,27 +464,36 @@ def _continuous_quaternions(q: np.ndarray) -> np.ndarray:
 # ---------------------------------------------------------------------------------------
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
-        prog="python -m tumble_ros.core.ensemble",
-        description="Integrate N copies of a scenario (random impact sequences and/or spread initial "
-                    "spin) at once; progress on stderr, a summary on stdout, arrays to --out (.npz).")
-    p.add_argument("config", nargs="?", help="scenario file (ROS 2 params YAML); default: the default scenario")
-    p.add_argument("--bodies", "-n", type=int, default=100, help="number of bodies N (default 100)")
-    p.add_argument("--duration", type=float, help="override the scenario's duration [yr]")
-    p.add_argument("--output-interval", type=float, help="override the output interval [yr]")
-    p.add_argument("--method", help="override integrator.method (e.g. splitting6, dop853, rk4)")
-    p.add_argument("--step", type=float, help="override integrator.step [yr]")
-    p.add_argument("--rtol", type=float, help="override integrator.rtol")
-    p.add_argument("--atol", type=float, help="override integrator.atol")
-    p.add_argument("--impact-rate", type=float, default=0.0, help="random impacts per year per body (default 0)")
-    p.add_argument("--impact-torque", type=float, default=1e6, help="impact torque magnitude [I rad/yr^2]")
-    p.add_argument("--impact-duration", type=float, default=3e-7, help="pulse length [yr] (default 3e-7)")
-    p.add_argument("--impact-frame", choices=("body", "orbital"), default="body")
-    p.add_argument("--omega-spread", type=float, default=0.0,
-                   help="standard deviation [rad/yr] of a Gaussian perturbation of omega0 per body")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--reference", action="store_true", help="run the reference path (one simulate() per body)")
-    p.add_argument("--out", help="write t, omega, euler, quaternion, jacobi, success, n_steps to this .npz")
-    p.add_argument("--quiet", "-q", action="store_true", help="no progress display")
+        prog='python -m tumble_ros.core.ensemble',
+        description='Integrate N copies of a scenario (random impact sequences and/or spread '
+                    'initial spin) at once; progress on stderr, a summary on stdout, arrays to '
+                    '--out (.npz).')
+    p.add_argument('config', nargs='?',
+                   help='scenario file (ROS 2 params YAML); default: the default scenario')
+    p.add_argument('--bodies', '-n', type=int, default=100,
+                   help='number of bodies N (default 100)')
+    p.add_argument('--duration', type=float, help="override the scenario's duration [yr]")
+    p.add_argument('--output-interval', type=float, help='override the output interval [yr]')
+    p.add_argument('--method', help='override integrator.method (e.g. splitting6, dop853, rk4)')
+    p.add_argument('--step', type=float, help='override integrator.step [yr]')
+    p.add_argument('--rtol', type=float, help='override integrator.rtol')
+    p.add_argument('--atol', type=float, help='override integrator.atol')
+    p.add_argument('--impact-rate', type=float, default=0.0,
+                   help='random impacts per year per body (default 0)')
+    p.add_argument('--impact-torque', type=float, default=1e6,
+                   help='impact torque magnitude [I rad/yr^2]')
+    p.add_argument('--impact-duration', type=float, default=3e-7,
+                   help='pulse length [yr] (default 3e-7)')
+    p.add_argument('--impact-frame', choices=('body', 'orbital'), default='body')
+    p.add_argument('--omega-spread', type=float, default=0.0,
+                   help='standard deviation [rad/yr] of a Gaussian perturbation of omega0 '
+                        'per body')
+    p.add_argument('--seed', type=int, default=0, help='random seed (default 0)')
+    p.add_argument('--reference', action='store_true',
+                   help='run the reference path (one simulate() per body)')
+    p.add_argument('--out',
+                   help='write t, omega, euler, quaternion, jacobi, success, n_steps to this .npz')
+    p.add_argument('--quiet', '-q', action='store_true', help='no progress display')
     return p
 
 
@@ -446,59 +501,65 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         sc = load_scenario(args.config) if args.config else Scenario()
-        changes = {k: v for k, v in (("duration", args.duration), ("output_interval", args.output_interval))
+        changes = {k: v for k, v in (('duration', args.duration),
+                                     ('output_interval', args.output_interval))
                    if v is not None}
-        if "duration" in changes and "output_interval" not in changes:
-            changes["output_interval"] = min(sc.output_interval, changes["duration"])
-        integ = {k: v for k, v in (("method", args.method), ("step", args.step), ("rtol", args.rtol),
-                                   ("atol", args.atol)) if v is not None}
+        if 'duration' in changes and 'output_interval' not in changes:
+            changes['output_interval'] = min(sc.output_interval, changes['duration'])
+        integ = {k: v for k, v in (('method', args.method), ('step', args.step),
+                                   ('rtol', args.rtol), ('atol', args.atol)) if v is not None}
         if integ:
-            fields = {f: getattr(sc.integrator, f) for f in ("method", "rtol", "atol", "step", "max_step")}
-            changes["integrator"] = IntegratorSettings(**{**fields, **integ})
+            fields = {f: getattr(sc.integrator, f)
+                      for f in ('method', 'rtol', 'atol', 'step', 'max_step')}
+            changes['integrator'] = IntegratorSettings(**{**fields, **integ})
         if changes:
             sc = sc.replace(**changes)
         if args.bodies < 1:
-            raise ScenarioError(f"--bodies: must be >= 1, got {args.bodies}")
+            raise ScenarioError(f'--bodies: must be >= 1, got {args.bodies}')
         rng = np.random.default_rng(args.seed)
         impacts = None
         if args.impact_rate > 0:
-            impacts = random_impacts(args.bodies, sc.duration, rate=args.impact_rate, torque=args.impact_torque,
-                                     pulse=args.impact_duration, frame=args.impact_frame,
-                                     seed=rng.integers(2**63))
+            impacts = random_impacts(args.bodies, sc.duration, rate=args.impact_rate,
+                                     torque=args.impact_torque, pulse=args.impact_duration,
+                                     frame=args.impact_frame, seed=rng.integers(2**63))
         omega0 = None
         if args.omega_spread > 0:
             omega0 = np.array(sc.omega0) + args.omega_spread * rng.normal(size=(args.bodies, 3))
         result = simulate_ensemble(sc, impacts=impacts, omega0=omega0, n_bodies=args.bodies,
                                    fast=False if args.reference else None, progress=not args.quiet)
     except (ScenarioError, ValueError) as err:
-        print(f"error: {err}", file=sys.stderr)
+        print(f'error: {err}', file=sys.stderr)
         return 2
-    n_impacts = sum(len(b) for b in impacts) if impacts is not None else len(sc.impacts) * args.bodies
+    n_impacts = (sum(len(b) for b in impacts) if impacts is not None
+                 else len(sc.impacts) * args.bodies)
     ok = int(result.success.sum())
     w_end = result.omega[:, -1]
-    print(f"bodies: {result.n_bodies} ({ok} succeeded), impacts: {n_impacts}, method: {sc.integrator.method}, "
+    print(f'bodies: {result.n_bodies} ({ok} succeeded), impacts: {n_impacts}, '
+          f'method: {sc.integrator.method}, '
           f"{'compiled' if result.compiled else 'reference'} path")
-    print(f"time: {sc.duration:g} yr, {result.t.size} samples per body, "
-          f"{int(result.n_steps.sum())} body-steps in {result.wall_time:.3f} s = "
-          f"{result.body_steps_per_second:.3g} body-steps/s")
+    print(f'time: {sc.duration:g} yr, {result.t.size} samples per body, '
+          f'{int(result.n_steps.sum())} body-steps in {result.wall_time:.3f} s = '
+          f'{result.body_steps_per_second:.3g} body-steps/s')
     if ok:
         good = result.success
         w_perp = np.hypot(w_end[good, 0], w_end[good, 1])
-        print(f"final |w_perp| [rad/yr]: mean {w_perp.mean():.6g}, std {w_perp.std():.3g}; "
-              f"final wz: mean {w_end[good, 2].mean():.6g}, std {w_end[good, 2].std():.3g}")
+        print(f'final |w_perp| [rad/yr]: mean {w_perp.mean():.6g}, std {w_perp.std():.3g}; '
+              f'final wz: mean {w_end[good, 2].mean():.6g}, std {w_end[good, 2].std():.3g}')
         jac = result.jacobi[good]
-        print(f"Jacobi integral: start {np.mean(jac[:, 0]):.10g}, end mean {np.mean(jac[:, -1]):.10g}, "
-              f"std {np.std(jac[:, -1]):.3g}")
+        print(f'Jacobi integral: start {np.mean(jac[:, 0]):.10g}, '
+              f'end mean {np.mean(jac[:, -1]):.10g}, '
+              f'std {np.std(jac[:, -1]):.3g}')
     for b, msg in enumerate(result.messages):
         if msg:
-            print(f"body {b} failed: {msg}")
+            print(f'body {b} failed: {msg}')
     if args.out:
         np.savez_compressed(args.out, t=result.t, omega=result.omega, euler=result.euler,
-                            quaternion=result.quaternion, jacobi=result.jacobi, success=result.success,
+                            quaternion=result.quaternion, jacobi=result.jacobi,
+                            success=result.success,
                             n_steps=result.n_steps)
-        print(f"wrote {args.out}")
+        print(f'wrote {args.out}')
     return 0 if ok == result.n_bodies else 1
 
 
-if __name__ == "__main__":  # pragma: no cover
+if __name__ == '__main__':  # pragma: no cover
     sys.exit(main())

@@ -1,4 +1,5 @@
-"""Compiled integration loops: the hot path without interpreter overhead.
+"""
+Compiled integration loops: the hot path without interpreter overhead.
 
 Everything here is plain Python written in the subset numba compiles (floats, 1-D/2-D float64
 arrays, loops). With numba installed the functions are compiled once (``cache=True``: the
@@ -33,31 +34,31 @@ import os
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
-__all__ = ["COMPILED", "NUMBA_VERSION", "problem_array", "config_array", "new_state", "KERNEL_IDS"]
+__all__ = ['COMPILED', 'NUMBA_VERSION', 'problem_array', 'config_array', 'new_state', 'KERNEL_IDS']
 
 try:  # pragma: no cover - exercised by the environment, not by a test
     import numba as _numba
 except ImportError:  # pragma: no cover
     _numba = None
 
-NUMBA_VERSION = getattr(_numba, "__version__", None)
+NUMBA_VERSION = getattr(_numba, '__version__', None)
 #: True when the kernels below are compiled (numba present and not disabled).
 COMPILED = bool(_numba is not None and not _numba.config.DISABLE_JIT
-                and os.environ.get("TUMBLE_ROS_NO_JIT", "") in ("", "0"))
+                and os.environ.get('TUMBLE_ROS_NO_JIT', '') in ('', '0'))
 
 if COMPILED:
     def jit(f):
         # nogil: ensembles run blocks of bodies in several Python threads at once
-        return _numba.njit(cache=True, error_model="numpy", nogil=True)(f)
+        return _numba.njit(cache=True, error_model='numpy', nogil=True)(f)
 
     def jit_inline(f):
         # Inlined into callers at numba's IR level: no call, no reference counting of the
         # array arguments (which costs more than the arithmetic of a small step). Only for
         # the per-step hot path: inlining multiplies compile time.
-        return _numba.njit(cache=True, error_model="numpy", nogil=True, inline="always")(f)
+        return _numba.njit(cache=True, error_model='numpy', nogil=True, inline='always')(f)
 
     def called(f):
-        """A separately compiled (not inlined) version of a jit_inline function, for cold paths."""
+        """Compile a jit_inline function separately (not inlined), for cold paths."""
         return jit(f.py_func)
 else:
     def jit(f):
@@ -67,7 +68,7 @@ else:
 
 # -- method ids (cfg[C_METHOD]) ---------------------------------------------------------
 M_RK4, M_DOP853, M_SPLIT = 1, 2, 3
-KERNEL_IDS = {"rk4": M_RK4, "dop853": M_DOP853, "splitting": M_SPLIT}
+KERNEL_IDS = {'rk4': M_RK4, 'dop853': M_DOP853, 'splitting': M_SPLIT}
 
 # -- cfg layout -------------------------------------------------------------------------
 C_METHOD, C_STEP, C_RTOL, C_ATOL, C_MAXSTEP, C_NG = 0, 1, 2, 3, 4, 5
@@ -89,7 +90,8 @@ N_P = 27
 
 # -- st (state) layout --------------------------------------------------------------------
 S_T, S_TOLD, S_TBOUND, S_H, S_NTOTAL, S_NSTEPS, S_NFEV, S_STATUS = 0, 1, 2, 3, 4, 5, 6, 7
-S_FAIL, S_FAILT, S_FAILDT, S_FVALID, S_DENSE, S_HPREV, S_NFEVDONE, S_T0 = 8, 9, 10, 11, 12, 13, 14, 15
+S_FAIL, S_FAILT, S_FAILDT, S_FVALID, S_DENSE, S_HPREV, S_NFEVDONE, S_T0 = (8, 9, 10, 11, 12, 13,
+                                                                           14, 15)
 S_BUDGET = 16             # Euler tracking: angle change bound accumulated since the last update
 S_COLLAPSE = 17           # 16 ulp of the segment's largest t: no step longer than this collapses
 RUNNING, FINISHED, FAILED = 0.0, 1.0, 2.0
@@ -103,7 +105,7 @@ O_FOLD = O_F + N          # f at the start of the last step (rk4 dense output)
 O_TAU = O_FOLD + N        # splitting: body torque at (t, y)
 O_TAUOLD = O_TAU + 3      # splitting: body torque at the start of the last step
 O_PI = O_TAUOLD + 3       # splitting: body angular momentum I w (kept, not recomputed from w:
-O_PIOLD = O_PI + 3        #   the round trip w -> I w -> w would bias |L| at the 1e-17/step level)
+O_PIOLD = O_PI + 3        # the round trip w -> I w -> w would bias |L| at the 1e-17/step level)
 O_TMP = O_PIOLD + 3       # stage argument
 O_YNEW = O_TMP + N        # candidate state (dop853)
 O_SCR = O_YNEW + N        # dense output result
@@ -136,8 +138,9 @@ _TWO_PI = 2.0 * math.pi
 # =======================================================================================
 # Python-side constructors of the arrays (not compiled)
 # =======================================================================================
-def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0), torque_orbital=(0.0, 0.0, 0.0)):
-    """The ``p`` array of one segment; coefficients computed as ``_make_quaternion_rhs`` does."""
+def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0),
+                  torque_orbital=(0.0, 0.0, 0.0)):
+    """Return the ``p`` array of one segment (coefficients as ``_make_quaternion_rhs``)."""
     ix, iy, iz = (float(v) for v in inertia)
     ws = float(orbit_rate)
     k = 3.0 * ws * ws
@@ -161,7 +164,7 @@ def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0), torque_orbit
 
 
 def config_array(kernel: str, settings, gammas=()) -> np.ndarray:
-    """The ``cfg`` array: method id, step, tolerances and composition coefficients."""
+    """Return the ``cfg`` array: method id, step, tolerances and composition coefficients."""
     cfg = np.zeros(N_CFG)
     cfg[C_METHOD] = KERNEL_IDS[kernel]
     cfg[C_STEP] = settings.step
@@ -170,7 +173,7 @@ def config_array(kernel: str, settings, gammas=()) -> np.ndarray:
     cfg[C_MAXSTEP] = settings.max_step if settings.max_step > 0 else np.inf
     gammas = tuple(float(g) for g in gammas)
     if len(gammas) > MAX_STAGES:
-        raise ValueError(f"at most {MAX_STAGES} composition stages")
+        raise ValueError(f'at most {MAX_STAGES} composition stages')
     cfg[C_NG] = len(gammas)
     total = 0.0
     for j, g in enumerate(gammas):
@@ -183,7 +186,7 @@ def config_array(kernel: str, settings, gammas=()) -> np.ndarray:
 
 
 def new_state() -> np.ndarray:
-    """A zeroed ``st`` array."""
+    """Return a zeroed ``st`` array."""
     return np.zeros(N_STATE)
 
 
@@ -326,11 +329,14 @@ def free_flow(p, a, px, py, pz, q0, q1, q2, q3):
         cf = p[P_CX + first]
         cs = p[P_CX + second]
         pi = (px, py, pz)
-        px, py, pz, q0, q1, q2, q3 = _axis_rotation(first, cf * pi[first] * (0.5 * a), px, py, pz, q0, q1, q2, q3)
+        px, py, pz, q0, q1, q2, q3 = _axis_rotation(first, cf * pi[first] * (0.5 * a), px, py, pz,
+                                                    q0, q1, q2, q3)
         pi = (px, py, pz)
-        px, py, pz, q0, q1, q2, q3 = _axis_rotation(second, cs * pi[second] * a, px, py, pz, q0, q1, q2, q3)
+        px, py, pz, q0, q1, q2, q3 = _axis_rotation(second, cs * pi[second] * a, px, py, pz, q0,
+                                                    q1, q2, q3)
         pi = (px, py, pz)
-        px, py, pz, q0, q1, q2, q3 = _axis_rotation(first, cf * pi[first] * (0.5 * a), px, py, pz, q0, q1, q2, q3)
+        px, py, pz, q0, q1, q2, q3 = _axis_rotation(first, cf * pi[first] * (0.5 * a), px, py, pz,
+                                                    q0, q1, q2, q3)
     elif first >= 0:
         pi = (px, py, pz)
         px, py, pz, q0, q1, q2, q3 = _axis_rotation(first, p[P_CX + first] * pi[first] * a,
@@ -340,9 +346,13 @@ def free_flow(p, a, px, py, pz, q0, q1, q2, q3):
 
 @jit_inline
 def split_flow(p, cfg, st, yo, po, to, t0, h, yd, pd, td):
-    """One composed splitting step of length h from time t0: attitude st[yo+3:yo+7], angular
-    momentum st[po:po+3], cached torque st[to:to+3]; result to st[yd:yd+7] (w and q),
-    st[pd:pd+3] (momentum) and st[td:td+3] (torque at the end)."""
+    """
+    Take one composed splitting step of length h from time t0.
+
+    From attitude st[yo+3:yo+7], angular momentum st[po:po+3], cached torque st[to:to+3];
+    result to st[yd:yd+7] (w and q), st[pd:pd+3] (momentum) and st[td:td+3] (torque at the
+    end).
+    """
     px = st[po]
     py = st[po + 1]
     pz = st[po + 2]
@@ -387,7 +397,7 @@ split_flow_called = called(split_flow)
 # =======================================================================================
 @jit
 def _rms(st, o, scale_o):
-    """scipy's norm(x) = ||x|| / sqrt(n) of st[o:o+7] / st[scale_o:scale_o+7]."""
+    """Return scipy's norm(x) = ||x|| / sqrt(n) of st[o:o+7] / st[scale_o:scale_o+7]."""
     acc = 0.0
     for i in range(N):
         v = st[o + i] / st[scale_o + i]
@@ -491,16 +501,18 @@ def _rk4_step(p, st):
     st[S_NFEV] += 3.0
     for i in range(N):
         st[O_FOLD + i] = st[O_F + i]
-        st[O_Y + i] = st[O_Y + i] + (h / 6.0) * (st[O_F + i] + 2.0 * (st[k2 + i] + st[k3 + i]) + st[k4 + i])
+        st[O_Y + i] = st[O_Y + i] + (h / 6.0) * (
+            st[O_F + i] + 2.0 * (st[k2 + i] + st[k3 + i]) + st[k4 + i])
     st[S_TOLD] = t
-    st[S_T] = st[S_TBOUND] if st[S_NSTEPS] + 1.0 >= st[S_NTOTAL] else st[S_T0] + (st[S_NSTEPS] + 1.0) * h
+    st[S_T] = (st[S_TBOUND] if st[S_NSTEPS] + 1.0 >= st[S_NTOTAL]
+               else st[S_T0] + (st[S_NSTEPS] + 1.0) * h)
     st[S_FVALID] = 0.0
     return FAIL_NONE
 
 
 @jit
 def _dop853_step(p, cfg, st):
-    """scipy's RungeKutta._step_impl with DOP853's rk_step and error norm."""
+    """Take a step as scipy's RungeKutta._step_impl with DOP853's rk_step and error norm."""
     t = st[S_T]
     t_bound = st[S_TBOUND]
     rtol = cfg[C_RTOL]
@@ -605,17 +617,20 @@ def _split_step(p, cfg, st):
     split_flow(p, cfg, st, O_YOLD, O_PIOLD, O_TAUOLD, t, h, O_Y, O_PI, O_TAU)
     st[S_TOLD] = t
     # t_k = t0 + k h (no accumulated rounding in t over millions of steps)
-    st[S_T] = st[S_TBOUND] if st[S_NSTEPS] + 1.0 >= st[S_NTOTAL] else st[S_T0] + (st[S_NSTEPS] + 1.0) * h
+    st[S_T] = (st[S_TBOUND] if st[S_NSTEPS] + 1.0 >= st[S_NTOTAL]
+               else st[S_T0] + (st[S_NSTEPS] + 1.0) * h)
     st[S_NFEV] += cfg[C_NG]
     return FAIL_NONE
 
 
 @jit_inline
 def step(p, cfg, st):
-    """One step of the segment's method with the checks of ``integrators.base.Stepper.step``.
+    """
+    One step of the segment's method with the checks of ``integrators.base.Stepper.step``.
 
     Returns True on success; on failure the state is left at the last good step and
-    st[S_FAIL] says why."""
+    st[S_FAIL] says why.
+    """
     t_good = st[S_T]
     for i in range(N):
         st[O_YOLD + i] = st[O_Y + i]
@@ -714,7 +729,8 @@ def dense(p, cfg, st, t):
             st[O_SCR + i] = y + st[O_YOLD + i]
     else:
         # splitting: a step of the same method from the start of the step, of length t - t_old
-        split_flow_called(p, cfg, st, O_YOLD, O_PIOLD, O_TAUOLD, t_old, t - t_old, O_SCR, O_TMP, O_TMP + 3)
+        split_flow_called(p, cfg, st, O_YOLD, O_PIOLD, O_TAUOLD, t_old, t - t_old, O_SCR, O_TMP,
+                          O_TMP + 3)
 
 
 # =======================================================================================
@@ -727,8 +743,11 @@ def _unwrap(angle, reference):
 
 @jit
 def unwrapped_euler(st, o, track):
-    """The paper's (phi, psi, theta) of quaternion st[o+3:o+7], phi and psi unwrapped towards
-    track (``Propagator._unwrapped``)."""
+    """
+    Return the paper's (phi, psi, theta) of quaternion st[o+3:o+7].
+
+    phi and psi are unwrapped towards track (``Propagator._unwrapped``).
+    """
     q0 = st[o + 3]
     q1 = st[o + 4]
     q2 = st[o + 5]
@@ -755,8 +774,12 @@ def unwrapped_euler(st, o, track):
 
 @jit
 def set_track(st, o, track):
-    """track <- the unwrapped Euler angles of st[o:o+7], unless they are not finite (a dense
-    output inside a step whose state ran away: ``Propagator._unwrapped`` returns None)."""
+    """
+    Set track to the unwrapped Euler angles of st[o:o+7], unless they are not finite.
+
+    Not finite: a dense output inside a step whose state ran away (``Propagator._unwrapped``
+    returns None).
+    """
     phi, psi, theta = unwrapped_euler(st, o, track)
     if math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta):
         track[0] = phi
@@ -766,8 +789,11 @@ def set_track(st, o, track):
 
 @jit_inline
 def track_increment(st):
-    """Bound on how far phi, psi turned during the last step [rad] (``Propagator._track_euler``:
-    |w| / max(0.1, sin theta) times the step)."""
+    """
+    Return a bound on how far phi, psi turned during the last step [rad].
+
+    As ``Propagator._track_euler``: |w| / max(0.1, sin theta) times the step.
+    """
     wx = st[O_Y]
     wy = st[O_Y + 1]
     wz = st[O_Y + 2]
@@ -785,9 +811,13 @@ def track_increment(st):
 
 @jit
 def track_update(p, cfg, st, track, increment):
-    """Update the track through the last step (the reference's subdivision), after catching up
-    from wherever it was left at the start of the step (see :func:`track_euler`). Returns the
-    number of dense-output evaluations it took (work, at most _MAX_TRACK_PIECES - 1)."""
+    """
+    Update the track through the last step (the reference's subdivision).
+
+    It first catches up from wherever it was left at the start of the step (see
+    :func:`track_euler`). Returns the number of dense-output evaluations it took (work, at
+    most _MAX_TRACK_PIECES - 1).
+    """
     if st[S_BUDGET] > 0.0:
         set_track(st, O_YOLD, track)
     st[S_BUDGET] = 0.0
@@ -813,7 +843,8 @@ def track_update(p, cfg, st, track, increment):
 
 @jit_inline
 def track_euler(p, cfg, st, track):
-    """Follow phi, psi continuously through the step just taken (``Propagator._track_euler``).
+    """
+    Follow phi, psi continuously through the step just taken (``Propagator._track_euler``).
 
     The reference updates the track at the end of every step, subdividing steps over which
     phi or psi may turn by more than ~1 rad (bound: :func:`track_increment`). Here the bound
@@ -822,7 +853,8 @@ def track_euler(p, cfg, st, track):
     :func:`refresh_track`: the track is then never more than 1 rad of bound away from the
     state, so every unwrapped angle gets the same 2 pi multiple as on the reference path,
     while most steps skip the three atan2 of the conversion. Returns the dense-output
-    evaluations taken (work)."""
+    evaluations taken (work).
+    """
     increment = track_increment(st)
     if st[S_BUDGET] + increment < _UNWRAP_STEP:
         st[S_BUDGET] += increment
@@ -861,13 +893,17 @@ def emit(p, cfg, st, track, t_out, y_out, e_out, k):
 
 @jit
 def advance(p, cfg, st, track, t_target, t_out, y_out, e_out, k, budget):
-    """Step the segment until t >= t_target (or it finishes or fails, or ``budget`` units of
-    work are spent), tracking the Euler angles and writing the outputs passed on the way.
+    """
+    Step the segment until t >= t_target, tracking the Euler angles and writing the outputs.
+
+    It stops early when the segment finishes or fails, or when ``budget`` units of work are
+    spent; the outputs written are those passed on the way.
 
     Work: one unit per step plus one per dense evaluation of the Euler-angle tracking
     (:func:`track_update`), so one call does a bounded amount of work however long the
     interval; the caller calls again to go on (same steps, same results). Returns
-    (k, steps, work)."""
+    (k, steps, work).
+    """
     n_out = t_out.shape[0]
     k = emit(p, cfg, st, track, t_out, y_out, e_out, k)
     steps = 0
@@ -889,8 +925,12 @@ def advance(p, cfg, st, track, t_target, t_out, y_out, e_out, k, budget):
 # =======================================================================================
 @jit
 def body_advance(cfg, probs, seg_t, first, last, cur, st, track, t_stop, t_out, y_out, e_out, k):
-    """Advance one body through its segments probs[first:last] until t >= t_stop, starting a
-    new segment where the propagator would (``Propagator.advance_to``). Returns (cur, k, steps)."""
+    """
+    Advance one body through its segments probs[first:last] until t >= t_stop.
+
+    A new segment starts where the propagator would start it (``Propagator.advance_to``).
+    Returns (cur, k, steps).
+    """
     steps = 0
     while True:
         k = emit(probs[cur], cfg, st, track, t_out, y_out, e_out, k)
@@ -910,11 +950,14 @@ def body_advance(cfg, probs, seg_t, first, last, cur, st, track, t_stop, t_out, 
 @jit
 def ensemble_advance(cfg, probs, seg_t, seg_ptr, cur, states, tracks, t_stop, t_out, y_out, e_out,
                      k_out, steps_out, b0, b1):
-    """body_advance for bodies b0 .. b1-1 (releases the GIL: blocks of bodies run in parallel
-    Python threads, see ensemble.py)."""
+    """
+    Run body_advance for bodies b0 .. b1-1.
+
+    Releases the GIL: blocks of bodies run in parallel Python threads, see ensemble.py.
+    """
     for b in range(b0, b1):
-        c, k, n = body_advance(cfg, probs, seg_t, seg_ptr[b], seg_ptr[b + 1], cur[b], states[b], tracks[b],
-                               t_stop, t_out, y_out[b], e_out[b], k_out[b])
+        c, k, n = body_advance(cfg, probs, seg_t, seg_ptr[b], seg_ptr[b + 1], cur[b], states[b],
+                               tracks[b], t_stop, t_out, y_out[b], e_out[b], k_out[b])
         cur[b] = c
         k_out[b] = k
         steps_out[b] += n

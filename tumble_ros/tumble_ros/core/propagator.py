@@ -1,4 +1,5 @@
-"""Incremental integration of a scenario, split at impact edges (tstops).
+"""
+Incremental integration of a scenario, split at impact edges (tstops).
 
 :class:`Propagator` owns the state of one simulated asteroid and advances it to any
 requested time, so a ROS node can publish as it goes, stop, or schedule a new impact at
@@ -22,8 +23,8 @@ rounding (tests/test_core_fast.py).
 from __future__ import annotations
 
 import bisect
-import math
 from dataclasses import dataclass
+import math
 
 import numpy as np
 
@@ -34,8 +35,8 @@ from .integrators.compiled import CompiledStepper, why_no_fast_path
 from .rotation import matrix_to_quaternion, unwrap_towards
 from .scenario import Impact, Scenario, ScenarioError
 
-__all__ = ["Propagator", "IntegrationError", "Sample", "segment_torques", "quaternions_to_matrices",
-           "FAST_WORK_BUDGET", "REFERENCE_WORK_BUDGET"]
+__all__ = ['Propagator', 'IntegrationError', 'Sample', 'segment_torques',
+           'quaternions_to_matrices', 'FAST_WORK_BUDGET', 'REFERENCE_WORK_BUDGET']
 
 #: Largest attitude change [rad] between two points used to unwrap Euler angles.
 _UNWRAP_STEP = 1.0
@@ -57,7 +58,7 @@ REFERENCE_WORK_BUDGET = 1_000
 
 
 def _interpolated_nonfinite_message(t: float) -> str:
-    return f"non-finite state at t = {t:.10g} yr (interpolated inside a step that ran away)"
+    return f'non-finite state at t = {t:.10g} yr (interpolated inside a step that ran away)'
 
 
 class IntegrationError(RuntimeError):
@@ -69,12 +70,12 @@ class IntegrationError(RuntimeError):
 
 
 def segment_torques(impacts, t0: float, t1: float) -> tuple[tuple, tuple]:
-    """(body, orbital) pulse torques active on the segment [t0, t1] (whose edges are pulse edges)."""
+    """Return the (body, orbital) pulse torques on the segment [t0, t1] (edges: pulse edges)."""
     mid = 0.5 * (t0 + t1)
     body, orbital = np.zeros(3), np.zeros(3)
     for impact in impacts:
         if impact.start <= mid < impact.end:
-            (body if impact.frame == "body" else orbital)[:] += impact.torque
+            (body if impact.frame == 'body' else orbital)[:] += impact.torque
     return tuple(body), tuple(orbital)
 
 
@@ -96,12 +97,15 @@ def quaternions_to_matrices(q: np.ndarray) -> np.ndarray:
 
 
 def continuous_quaternions(q: np.ndarray, previous=None) -> np.ndarray:
-    """Normalise (n, 4) quaternions and flip signs so that consecutive ones have q.q' >= 0
-    (as :meth:`Propagator.sample` does one at a time; ``previous`` is the last one handed out)."""
+    """
+    Normalise (n, 4) quaternions and flip signs so that consecutive ones have q.q' >= 0.
+
+    As :meth:`Propagator.sample` does one at a time; ``previous`` is the last one handed out.
+    """
     q = q / np.sqrt(np.sum(q * q, axis=-1, keepdims=True))
     if len(q) == 0:
         return q
-    dots = np.einsum("ij,ij->i", q[1:], q[:-1])
+    dots = np.einsum('ij,ij->i', q[1:], q[:-1])
     first = -1.0 if previous is not None and np.dot(q[0], previous) < 0.0 else 1.0
     signs = np.cumprod(np.concatenate([[first], np.where(dots < 0.0, -1.0, 1.0)]))
     return q * signs[:, None]
@@ -109,7 +113,8 @@ def continuous_quaternions(q: np.ndarray, previous=None) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Sample:
-    """The state at one time.
+    """
+    The state at one time.
 
     Attributes
     ----------
@@ -124,6 +129,7 @@ class Sample:
     matrix : (3, 3) array
         C = body -> orbital rotation matrix.
     inertia, orbit_rate : the scenario's, for :attr:`jacobi`.
+
     """
 
     t: float
@@ -137,11 +143,13 @@ class Sample:
     @property
     def jacobi(self) -> float:
         """Jacobi integral (``dynamics.jacobi_integral``), computed on demand."""
-        return float(jacobi_integral(self.t, self.omega, self.matrix, self.inertia, self.orbit_rate))
+        return float(jacobi_integral(self.t, self.omega, self.matrix, self.inertia,
+                                     self.orbit_rate))
 
 
 class Propagator:
-    """Advance a scenario's state in time, impacts included.
+    """
+    Advance a scenario's state in time, impacts included.
 
     Parameters
     ----------
@@ -156,28 +164,31 @@ class Propagator:
         Use the method's compiled loop (:mod:`~.integrators.compiled`): ``None`` (default)
         when available, ``True`` to require it (ValueError saying why if it is not),
         ``False`` for the reference step-by-step path. Both give the same trajectory.
+
     """
 
-    def __init__(self, scenario: Scenario, *, split_impacts: bool = True, fast: bool | None = None) -> None:
+    def __init__(self, scenario: Scenario, *, split_impacts: bool = True,
+                 fast: bool | None = None) -> None:
         self.scenario = scenario
         self._model = ATTITUDE_MODELS[scenario.attitude]
         self._method = INTEGRATORS[scenario.integrator.method]
         self._split = split_impacts
         if self._method.needs_problem and not split_impacts:
-            raise ValueError(f"split_impacts=False is not available with method {self._method.name!r}: "
-                             "it needs a constant torque on each segment")
+            raise ValueError('split_impacts=False is not available with method '
+                             f'{self._method.name!r}: it needs a constant torque on each segment')
         why = why_no_fast_path(self._method, scenario.attitude)
         if not split_impacts:
-            why = "split_impacts=False (a time-switched right-hand side) runs on the reference path"
+            why = ('split_impacts=False (a time-switched right-hand side) runs on the reference '
+                   'path')
         if fast and why:
-            raise ValueError(f"fast path not available: {why}")
+            raise ValueError(f'fast path not available: {why}')
         self.fast = not why if fast is None else bool(fast)
         self._impacts: list[Impact] = []
         self._edges: list[float] = [scenario.duration]
         self.t = 0.0
         self.y = np.concatenate([scenario.omega0, self._model.from_euler(*scenario.euler0)])
         self.status = RUNNING
-        self.message = ""
+        self.message = ''
         self._nfev_done = 0
         self.n_steps = 0
         self._euler_track = np.array(scenario.euler0, dtype=float)
@@ -209,10 +220,11 @@ class Propagator:
     def schedule(self, impact: Impact) -> None:
         """Add an impact; its start must not lie before the current time ``t``."""
         if impact.start < self.t:
-            raise ScenarioError(f"impact.start: must be >= the current time {self.t!r} yr, got {impact.start!r}")
+            raise ScenarioError(
+                f'impact.start: must be >= the current time {self.t!r} yr, got {impact.start!r}')
         if impact.end > self.t_end:
-            raise ScenarioError(f"impact: must end by the end of the scenario ({self.t_end!r} yr), "
-                                f"ends at {impact.end!r}")
+            raise ScenarioError(f'impact: must end by the end of the scenario ({self.t_end!r} '
+                                f'yr), ends at {impact.end!r}')
         bisect.insort(self._impacts, impact, key=lambda i: i.start)
         affects_segment = self._stepper is not None and impact.start < self._stepper.t_bound
         if self._split:
@@ -228,7 +240,8 @@ class Propagator:
             self._start_segment(self.t, self.y)
 
     def advance_to(self, t: float) -> np.ndarray:
-        """Integrate to time ``t`` [yr] (not before the current time) and return the state.
+        """
+        Integrate to time ``t`` [yr] (not before the current time) and return the state.
 
         Raises IntegrationError when the integration fails; ``status`` is then
         ``"failed"`` and stays so. The work is done in bounded compiled calls
@@ -237,7 +250,7 @@ class Propagator:
         if self.status == FAILED:
             raise IntegrationError(self.message, self.t)
         if not self.t <= t <= self.t_end:
-            raise ValueError(f"t = {t!r} must lie in [{self.t!r}, {self.t_end!r}] yr")
+            raise ValueError(f't = {t!r} must lie in [{self.t!r}, {self.t_end!r}] yr')
         while not self._advance_until(t, self._default_budget())[1]:
             pass
         y = self._stepper.state_at(t)
@@ -249,9 +262,12 @@ class Propagator:
         self.y, self.t, self._track_at_t = y, t, euler
         return self.y
 
-    def sample_many(self, times, *, budget: float | None = None) -> tuple[int, dict[str, np.ndarray], str]:
-        """:meth:`sample` at every time of the sorted sequence ``times``, as arrays, with
-        bounded work per call.
+    def sample_many(self, times, *,
+                    budget: float | None = None) -> tuple[int, dict[str, np.ndarray], str]:
+        """
+        Sample (as :meth:`sample`) every time of the sorted sequence ``times``, into arrays.
+
+        The work per call is bounded.
 
         Returns ``(n_done, arrays, message)``: ``arrays`` has ``omega`` (n, 3), ``euler``
         (n, 3), ``quaternion`` (n, 4) and ``matrix`` (n, 3, 3), of which the first ``n_done``
@@ -275,16 +291,16 @@ class Propagator:
         times = np.ascontiguousarray(times, dtype=float)
         n = times.size
         if n and self.status != FAILED and not self.t <= times[0]:
-            raise ValueError(f"t = {times[0]!r} must lie in [{self.t!r}, {self.t_end!r}] yr")
+            raise ValueError(f't = {times[0]!r} must lie in [{self.t!r}, {self.t_end!r}] yr')
         if n and times[-1] > self.t_end:
-            raise ValueError(f"t = {times[-1]!r} must lie in [{self.t!r}, {self.t_end!r}] yr")
-        arrays = {"omega": np.empty((n, 3)), "euler": np.empty((n, 3)), "quaternion": np.empty((n, 4)),
-                  "matrix": np.empty((n, 3, 3))}
+            raise ValueError(f't = {times[-1]!r} must lie in [{self.t!r}, {self.t_end!r}] yr')
+        arrays = {'omega': np.empty((n, 3)), 'euler': np.empty((n, 3)),
+                  'quaternion': np.empty((n, 4)), 'matrix': np.empty((n, 3, 3))}
         y_out = np.empty((n, 7)) if self.fast else None
         chunk = self._default_budget() if budget is None or budget == math.inf else budget
         if not chunk >= 1:
-            raise ValueError(f"budget: must be >= 1 (or None, or math.inf), got {budget!r}")
-        k, message = 0, ""
+            raise ValueError(f'budget: must be >= 1 (or None, or math.inf), got {budget!r}')
+        k, message = 0, ''
         while True:
             k, message = self._sample_into(times, arrays, y_out, k, chunk)
             if message or k == n or budget != math.inf:
@@ -294,11 +310,16 @@ class Propagator:
         return FAST_WORK_BUDGET if self.fast else REFERENCE_WORK_BUDGET
 
     def _sample_into(self, times, arrays, y_out, k0: int, budget: float) -> tuple[int, str]:
-        """Sample times[k0:] into rows k0... of ``arrays`` with at most ~``budget`` units of work
-        (and samples); returns (next row, failure message or "")."""
+        """
+        Sample times[k0:] into rows k0... of ``arrays``.
+
+        At most ~``budget`` units of work (and samples); returns (next row, failure message or
+        "").
+        """
         n = times.size
         k_stop = min(n, k0 + int(min(budget, n)))  # at most `budget` samples per call as well
-        omega, euler, quat, matrices = arrays["omega"], arrays["euler"], arrays["quaternion"], arrays["matrix"]
+        omega, euler, quat, matrices = (arrays['omega'], arrays['euler'], arrays['quaternion'],
+                                        arrays['matrix'])
         work = 0
         if not self.fast:
             for k in range(k0, k_stop):
@@ -307,16 +328,16 @@ class Propagator:
                     used, reached = self._advance_until(t, budget - work)
                     work += used
                     if not reached:
-                        return k, ""
+                        return k, ''
                     s = self.sample(t)
                 except IntegrationError as err:
-                    return k, str(err) or "integration failed"
+                    return k, str(err) or 'integration failed'
                 omega[k], euler[k], quat[k], matrices[k] = s.omega, s.euler, s.quaternion, s.matrix
-            return k_stop, ""
+            return k_stop, ''
         if self.status == FAILED:
             return k0, self.message
         t_view = times[:k_stop]
-        k, message = k0, ""
+        k, message = k0, ''
         while k < k_stop:
             stepper = self._stepper
             if stepper.status != RUNNING and t_view[k] > stepper.t:
@@ -325,11 +346,12 @@ class Propagator:
                 continue
             if work >= budget:
                 break
-            k, steps = stepper.advance(t_view[-1], self._euler_track, t_view, y_out, euler, k, budget - work)
+            k, steps = stepper.advance(t_view[-1], self._euler_track, t_view, y_out, euler, k,
+                                       budget - work)
             work += stepper.work
             self.n_steps += steps
             if stepper.status == FAILED:
-                self.status, self.message = FAILED, stepper.message or "integration failed"
+                self.status, self.message = FAILED, stepper.message or 'integration failed'
                 message = self.message
                 break
         if k > k0:
@@ -341,7 +363,8 @@ class Propagator:
             bad = np.flatnonzero(~(np.isfinite(norm2) & np.isfinite(euler[k0:k]).all(axis=1)))
             if bad.size:
                 k = k0 + int(bad[0])
-                self.status, self.message = FAILED, _interpolated_nonfinite_message(float(times[k]))
+                self.status, self.message = (FAILED,
+                                             _interpolated_nonfinite_message(float(times[k])))
                 message = self.message
         if k > k0:
             y = y_out[k0:k]
@@ -354,7 +377,8 @@ class Propagator:
         return k, message
 
     def pop_completed_impacts(self) -> list[tuple[Impact, np.ndarray, np.ndarray]]:
-        """Impacts that ended by the current time and were not returned before.
+        """
+        Impacts that ended by the current time and were not returned before.
 
         Each entry is (impact, state at its start, state at its end); the measured change
         of w [rad/yr, body axes] is ``end[:3] - start[:3]``.
@@ -373,8 +397,8 @@ class Propagator:
         return done
 
     def quaternion_of(self, y: np.ndarray) -> np.ndarray:
-        """Unit quaternion (scalar first, body -> orbital) of a state vector."""
-        if self._model.name == "quaternion":
+        """Return the unit quaternion (scalar first, body -> orbital) of a state vector."""
+        if self._model.name == 'quaternion':
             return y[3:] / np.linalg.norm(y[3:])
         return matrix_to_quaternion(self._model.to_matrix(y[3:]))
 
@@ -408,14 +432,16 @@ class Propagator:
         problem = self._problem_for(t0, t_bound)
         settings = self.scenario.integrator
         if self.fast:
-            self._stepper = CompiledStepper(self._method, None, t0, y0, t_bound, settings, problem=problem)
+            self._stepper = CompiledStepper(self._method, None, t0, y0, t_bound, settings,
+                                            problem=problem)
         else:
             rhs = self._rhs_for(t0, t_bound)
             self._stepper = self._method(rhs, t0, y0, t_bound, settings, problem=problem)
 
     def _problem_for(self, t0: float, t1: float) -> SegmentProblem:
         sc = self.scenario
-        body, orbital = segment_torques(self._impacts, t0, t1) if self._split else ((0.0,) * 3, (0.0,) * 3)
+        body, orbital = (segment_torques(self._impacts, t0, t1) if self._split
+                         else ((0.0,) * 3, (0.0,) * 3))
         return SegmentProblem(sc.inertia, sc.orbit_rate, body, orbital, sc.attitude)
 
     def _rhs_for(self, t0: float, t1: float):
@@ -429,8 +455,9 @@ class Propagator:
         """Pulses as a time switch inside one smooth-looking RHS (demonstration only)."""
         sc, make = self.scenario, self._model.make_rhs
         free = make(sc.inertia, sc.orbit_rate)
-        pulses = [(i, make(sc.inertia, sc.orbit_rate, *((i.torque, (0, 0, 0)) if i.frame == "body"
-                                                          else ((0, 0, 0), i.torque))))
+        pulses = [(i, make(sc.inertia, sc.orbit_rate,
+                           *((i.torque, (0, 0, 0)) if i.frame == 'body'
+                             else ((0, 0, 0), i.torque))))
                   for i in self._impacts]
 
         def rhs(t, y):
@@ -442,8 +469,12 @@ class Propagator:
         return rhs
 
     def _advance_until(self, t: float, budget: float) -> tuple[int, bool]:
-        """Step towards ``t`` with at most ~``budget`` units of work (steps and tracking
-        evaluations); returns (work done, whether the stepper reached t). Raises IntegrationError."""
+        """
+        Step towards ``t`` with at most ~``budget`` units of work.
+
+        Work: steps and tracking evaluations. Returns (work done, whether the stepper reached
+        t). Raises IntegrationError.
+        """
         if self.status == FAILED:
             raise IntegrationError(self.message, self.t)
         stepper = self._stepper
@@ -465,7 +496,7 @@ class Propagator:
         _, steps = stepper.advance(t, self._euler_track, budget=budget)
         self.n_steps += steps
         if stepper.status == FAILED:
-            self.status, self.message = FAILED, stepper.message or "integration failed"
+            self.status, self.message = FAILED, stepper.message or 'integration failed'
             raise IntegrationError(self.message, stepper.t)
         return stepper.work
 
@@ -476,18 +507,22 @@ class Propagator:
         self.n_steps += 1
         message = stepper.message
         if stepper.status != FAILED and self._model.singular(stepper.y[3:]):
-            message = (f"attitude singular at t = {stepper.t:.10g} yr (theta = {stepper.y[5]:.3g} rad): the "
+            message = (f'attitude singular at t = {stepper.t:.10g} yr '
+                       f'(theta = {stepper.y[5]:.3g} rad): the '
                        "Euler-angle equations divide by sin(theta); use attitude 'quaternion'")
         if stepper.status == FAILED or message:
             self.status, self.message = FAILED, message
             raise IntegrationError(message, t_before)
-        if self._model.name == "quaternion":
+        if self._model.name == 'quaternion':
             return 1 + self._track_euler(stepper)
         return 1
 
     def _track_euler(self, stepper) -> int:
-        """Follow phi, psi continuously through the step just taken (quaternion mode); returns
-        the dense evaluations it took."""
+        """
+        Follow phi, psi continuously through the step just taken (quaternion mode).
+
+        Returns the dense evaluations it took.
+        """
         y = stepper.y
         w = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2)
         cos_theta = self._model.to_matrix(y[3:])[2, 2]
@@ -507,8 +542,12 @@ class Propagator:
         return n - 1
 
     def _unwrapped(self, attitude) -> np.ndarray | None:
-        """phi, psi unwrapped towards the track, theta; None if they are not finite (a state
-        that ran away: kernels.set_track skips it the same way)."""
+        """
+        Return phi, psi unwrapped towards the track, and theta.
+
+        None if they are not finite (a state that ran away: kernels.set_track skips it the
+        same way).
+        """
         phi, psi, theta = self._model.to_euler(attitude)
         if not (math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta)):
             return None
@@ -516,7 +555,7 @@ class Propagator:
         return np.array([unwrap_towards(phi, ref[0]), unwrap_towards(psi, ref[1]), theta])
 
     def _continuous_euler(self, attitude) -> np.ndarray | None:
-        if self._model.name != "quaternion":
+        if self._model.name != 'quaternion':
             euler = np.array(attitude, dtype=float)
             return euler if np.all(np.isfinite(euler)) else None
         return self._unwrapped(attitude)

@@ -1,4 +1,5 @@
-"""Attitude representations: the paper's Euler angles, rotation matrices and unit quaternions.
+"""
+Attitude representations: the paper's Euler angles, rotation matrices and unit quaternions.
 
 Frames
 ------
@@ -23,19 +24,19 @@ import math
 import numpy as np
 
 __all__ = [
-    "euler_to_matrix",
-    "matrix_to_euler",
-    "quaternion_to_matrix",
-    "matrix_to_quaternion",
-    "euler_to_quaternion",
-    "quaternion_to_euler",
-    "quaternion_multiply",
-    "unwrap_towards",
+    'euler_to_matrix',
+    'matrix_to_euler',
+    'quaternion_to_matrix',
+    'matrix_to_quaternion',
+    'euler_to_quaternion',
+    'quaternion_to_euler',
+    'quaternion_multiply',
+    'unwrap_towards',
 ]
 
 
 def euler_to_matrix(phi: float, psi: float, theta: float) -> np.ndarray:
-    """The paper's matrix R(phi, psi, theta) (orbital -> body components), 3x3."""
+    """Return the paper's matrix R(phi, psi, theta) (orbital -> body components), 3x3."""
     cf, sf = math.cos(phi), math.sin(phi)
     cp, sp = math.cos(psi), math.sin(psi)
     ct, st = math.cos(theta), math.sin(theta)
@@ -49,7 +50,8 @@ def euler_to_matrix(phi: float, psi: float, theta: float) -> np.ndarray:
 
 
 def matrix_to_euler(r: np.ndarray) -> tuple[float, float, float]:
-    """Euler angles (phi, psi, theta) of an orbital -> body matrix, theta in [0, pi].
+    """
+    Euler angles (phi, psi, theta) of an orbital -> body matrix, theta in [0, pi].
 
     phi and psi are returned in (-pi, pi]. At theta = 0 or pi only phi + psi (or
     phi - psi) is defined; psi is then set to 0.
@@ -65,7 +67,8 @@ def matrix_to_euler(r: np.ndarray) -> tuple[float, float, float]:
 
 
 def quaternion_to_matrix(q) -> np.ndarray:
-    """Rotation matrix C(q) (body -> orbital components) of a quaternion, scalar first.
+    """
+    Rotation matrix C(q) (body -> orbital components) of a quaternion, scalar first.
 
     The quaternion need not be normalised: C is built from q / |q|.
     """
@@ -81,7 +84,8 @@ def quaternion_to_matrix(q) -> np.ndarray:
 
 
 def matrix_to_quaternion(c: np.ndarray) -> np.ndarray:
-    """Unit quaternion (scalar first, q0 >= 0) of a body -> orbital rotation matrix.
+    """
+    Return the unit quaternion (scalar first, q0 >= 0) of a body -> orbital rotation matrix.
 
     Shepperd's method: picks the numerically largest component first.
     """
@@ -106,12 +110,12 @@ def matrix_to_quaternion(c: np.ndarray) -> np.ndarray:
 
 
 def euler_to_quaternion(phi: float, psi: float, theta: float) -> np.ndarray:
-    """Unit quaternion (body -> orbital, scalar first) of the paper's Euler angles."""
+    """Return the unit quaternion (body -> orbital, scalar first) of the paper's Euler angles."""
     return matrix_to_quaternion(euler_to_matrix(phi, psi, theta).T)
 
 
 def quaternion_to_euler(q) -> tuple[float, float, float]:
-    """The paper's Euler angles (phi, psi, theta) of a body -> orbital quaternion."""
+    """Return the paper's Euler angles (phi, psi, theta) of a body -> orbital quaternion."""
     return matrix_to_euler(quaternion_to_matrix(q).T)
 
 
@@ -130,5 +134,5 @@ def quaternion_multiply(p, q) -> np.ndarray:
 
 
 def unwrap_towards(angle: float, reference: float) -> float:
-    """The angle ``angle + 2 pi k`` closest to ``reference`` (continuous angle tracking)."""
+    """Return the angle ``angle + 2 pi k`` closest to ``reference`` (continuous tracking)."""
     return angle + 2.0 * math.pi * round((reference - angle) / (2.0 * math.pi))

@@ -1,4 +1,5 @@
-"""Scenarios: everything that defines one simulation, validated once at the boundary.
+"""
+Scenarios: everything that defines one simulation, validated once at the boundary.
 
 A :class:`Scenario` is a frozen dataclass. Building one validates every field and raises
 :class:`ScenarioError` (a ``ValueError``) whose message starts with the field's name,
@@ -17,8 +18,8 @@ inertia-units * rad/yr^2.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
+import math
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -26,20 +27,20 @@ from .dynamics import ATTITUDE_MODELS
 from .integrators import INTEGRATORS
 
 __all__ = [
-    "ScenarioError",
-    "Impact",
-    "IntegratorSettings",
-    "Scenario",
-    "IMPACT_FRAMES",
-    "ImpactLimits",
-    "PARAMETER_DOCS",
-    "time_resolution",
-    "load_scenario",
-    "parse_scenario",
-    "dump_scenario",
+    'ScenarioError',
+    'Impact',
+    'IntegratorSettings',
+    'Scenario',
+    'IMPACT_FRAMES',
+    'ImpactLimits',
+    'PARAMETER_DOCS',
+    'time_resolution',
+    'load_scenario',
+    'parse_scenario',
+    'dump_scenario',
 ]
 
-IMPACT_FRAMES = ("body", "orbital")
+IMPACT_FRAMES = ('body', 'orbital')
 MIN_RTOL, MAX_RTOL = 100 * 2.220446049250313e-16, 0.1  # scipy raises smaller rtol to 100 eps
 
 # -- Validated ranges (docs/physics.md, "Validated ranges"). Every bound keeps a run physically
@@ -84,35 +85,35 @@ class ScenarioError(ValueError):
 
 
 def _fail(name: str, why: str, value: Any) -> None:
-    raise ScenarioError(f"{name}: {why}, got {value!r}")
+    raise ScenarioError(f'{name}: {why}, got {value!r}')
 
 
 def _finite(name: str, value: Any) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
-        _fail(name, "must be a number", value)
+        _fail(name, 'must be a number', value)
     if isinstance(value, bool) or not math.isfinite(v):
-        _fail(name, "must be a finite number", value)
+        _fail(name, 'must be a finite number', value)
     return v
 
 
 def _vector(name: str, value: Any, n: int = 3) -> tuple[float, ...]:
-    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != n:
-        _fail(name, f"must be a list of {n} numbers", value)
-    return tuple(_finite(f"{name}[{k}]", v) for k, v in enumerate(value))
+    if isinstance(value, (str, bytes)) or not hasattr(value, '__len__') or len(value) != n:
+        _fail(name, f'must be a list of {n} numbers', value)
+    return tuple(_finite(f'{name}[{k}]', v) for k, v in enumerate(value))
 
 
 def _positive(name: str, value: Any) -> float:
     v = _finite(name, value)
     if v <= 0.0:
-        _fail(name, "must be > 0", value)
+        _fail(name, 'must be > 0', value)
     return v
 
 
 def _one_of(name: str, value: Any, allowed) -> str:
     if value not in allowed:
-        _fail(name, f"must be one of {sorted(allowed)}", value)
+        _fail(name, f'must be one of {sorted(allowed)}', value)
     return value
 
 
@@ -121,28 +122,38 @@ def _set(obj, name: str, value: Any) -> None:
 
 
 def time_resolution(t: float) -> float:
-    """Shortest interval [yr] that float64 times resolve at time ``t`` (RESOLUTION_ULPS ulp of
-    max(|t|, 1): the integrators' collapse test counts a step from t = 0 against ulp(1))."""
+    """
+    Return the shortest interval [yr] that float64 times resolve at time ``t``.
+
+    RESOLUTION_ULPS ulp of max(|t|, 1): the integrators' collapse test counts a step from
+    t = 0 against ulp(1).
+    """
     return RESOLUTION_ULPS * math.ulp(max(abs(t), 1.0))
 
 
 def _check_step(name: str, step: float, duration: float) -> None:
-    """A fixed step (or an adaptive method's max_step) that float64 resolves at the end of the
-    run and that covers ``duration`` in at most MAX_STEPS steps."""
+    """
+    Check a fixed step (or an adaptive method's max_step).
+
+    It must be one that float64 resolves at the end of the run and that covers ``duration`` in
+    at most MAX_STEPS steps.
+    """
     # 4x the resolution: the steps actually taken are span / ceil(span / step) >= step / 2,
     # and t_k = t0 + k h is itself rounded.
     shortest = 4.0 * time_resolution(duration)
     if step < shortest:
-        _fail(name, f"must be >= {shortest:.3g} yr: shorter steps are below the float64 time resolution "
-              f"at t = duration ({duration:g} yr)", step)
+        _fail(name,
+              f'must be >= {shortest:.3g} yr: shorter steps are below the float64 time resolution '
+              f'at t = duration ({duration:g} yr)', step)
     if duration / step > MAX_STEPS:
-        _fail(name, f"duration / step = {duration / step:.3g} steps exceeds {MAX_STEPS:.0e}: "
-              f"use a step >= {duration / MAX_STEPS:.3g} yr", step)
+        _fail(name, f'duration / step = {duration / step:.3g} steps exceeds {MAX_STEPS:.0e}: '
+              f'use a step >= {duration / MAX_STEPS:.3g} yr', step)
 
 
 @dataclass(frozen=True)
 class Impact:
-    """A short torque pulse (paper Fig. 10): constant torque on [start, start + duration).
+    """
+    A short torque pulse (paper Fig. 10): constant torque on [start, start + duration).
 
     Attributes
     ----------
@@ -155,31 +166,34 @@ class Impact:
     frame : str
         ``"body"``: fixed in the body's principal axes; ``"orbital"``: fixed in the orbital
         (inertial) frame X'Y'Z' and rotated into body axes as the body turns.
+
     """
 
     start: float
     duration: float
     torque: tuple[float, float, float]
-    frame: str = "body"
+    frame: str = 'body'
 
     def __post_init__(self) -> None:
-        self.validate("impact")
+        self.validate('impact')
 
     def validate(self, name: str) -> None:
         """Check and normalise the fields; ``name`` prefixes error messages."""
-        start = _finite(f"{name}.start", self.start)
+        start = _finite(f'{name}.start', self.start)
         if start < 0.0:
-            _fail(f"{name}.start", "must be >= 0 (the scenario starts at t = 0)", self.start)
-        _set(self, "start", start)
-        duration = _positive(f"{name}.duration", self.duration)
+            _fail(f'{name}.start', 'must be >= 0 (the scenario starts at t = 0)', self.start)
+        _set(self, 'start', start)
+        duration = _positive(f'{name}.duration', self.duration)
         # A pulse shorter than the time resolution at its end has start + duration == start
         # (or nearly): it would be applied as no pulse at all (delta w = 0) or with a wrong length.
         if duration < time_resolution(start + duration):
-            _fail(f"{name}.duration", f"must be >= {time_resolution(start + duration):.3g} yr, the float64 time "
-                  f"resolution at t = {start + duration:g} yr (a shorter pulse is not resolved)", self.duration)
-        _set(self, "duration", duration)
-        _set(self, "torque", _vector(f"{name}.torque", self.torque))
-        _one_of(f"{name}.frame", self.frame, IMPACT_FRAMES)
+            _fail(f'{name}.duration',
+                  f'must be >= {time_resolution(start + duration):.3g} yr, the float64 time '
+                  f'resolution at t = {start + duration:g} yr (a shorter pulse is not resolved)',
+                  self.duration)
+        _set(self, 'duration', duration)
+        _set(self, 'torque', _vector(f'{name}.torque', self.torque))
+        _one_of(f'{name}.frame', self.frame, IMPACT_FRAMES)
 
     @property
     def end(self) -> float:
@@ -189,7 +203,8 @@ class Impact:
 
 @dataclass(frozen=True)
 class ImpactLimits:
-    """Caps on impacts requested while a simulation runs (the simulator's service).
+    """
+    Caps on impacts requested while a simulation runs (the simulator's service).
 
     Attributes
     ----------
@@ -197,36 +212,40 @@ class ImpactLimits:
         Longest accepted pulse [yr].
     max_impulse : float
         Largest accepted |M| * duration [inertia-units * rad/yr].
+
     """
 
     max_duration: float = 1e-3
     max_impulse: float = 1e3
 
     def __post_init__(self) -> None:
-        _set(self, "max_duration", _positive("max_impact_duration", self.max_duration))
-        _set(self, "max_impulse", _positive("max_impact_impulse", self.max_impulse))
+        _set(self, 'max_duration', _positive('max_impact_duration', self.max_duration))
+        _set(self, 'max_impulse', _positive('max_impact_impulse', self.max_impulse))
 
     def check(self, impact: Impact, now: float, end: float) -> None:
-        """Raise ScenarioError (naming the field) unless ``impact`` may be scheduled.
+        """
+        Raise ScenarioError (naming the field) unless ``impact`` may be scheduled.
 
         ``now`` is the current simulated time and ``end`` the end of the run [yr].
         """
         if impact.duration > self.max_duration:
-            _fail("duration", f"must be <= max_impact_duration = {self.max_duration:g} yr", impact.duration)
+            _fail('duration', f'must be <= max_impact_duration = {self.max_duration:g} yr',
+                  impact.duration)
         impulse = math.hypot(*impact.torque) * impact.duration
         if impulse > self.max_impulse:
-            _fail("torque", f"|M| * duration = {impulse:.6g} exceeds max_impact_impulse = {self.max_impulse:g}",
-                  list(impact.torque))
+            _fail('torque', f'|M| * duration = {impulse:.6g} exceeds max_impact_impulse = '
+                            f'{self.max_impulse:g}', list(impact.torque))
         if impact.start < now:
-            _fail("start", f"is in the past (the simulation is at t = {now!r} yr)", impact.start)
+            _fail('start', f'is in the past (the simulation is at t = {now!r} yr)', impact.start)
         if impact.end > end:
-            _fail("start", f"the pulse would end at {impact.end!r} yr, after the end of the run ({end!r} yr)",
-                  impact.start)
+            _fail('start', f'the pulse would end at {impact.end!r} yr, after the end of the run '
+                           f'({end!r} yr)', impact.start)
 
 
 @dataclass(frozen=True)
 class IntegratorSettings:
-    """Which integrator, and how accurate.
+    """
+    Which integrator, and how accurate.
 
     Attributes
     ----------
@@ -241,39 +260,42 @@ class IntegratorSettings:
         are hit).
     max_step : float
         Largest step [yr] an adaptive method may take; 0 = no limit.
+
     """
 
-    method: str = "dop853"
+    method: str = 'dop853'
     rtol: float = 1e-10
     atol: float = 1e-12
     step: float = 1e-4
     max_step: float = 0.0
 
     def __post_init__(self) -> None:
-        self.validate("integrator")
+        self.validate('integrator')
 
     def validate(self, name: str) -> None:
         """Check and normalise the fields; ``name`` prefixes error messages."""
-        _one_of(f"{name}.method", self.method, INTEGRATORS)
-        rtol = _finite(f"{name}.rtol", self.rtol)
+        _one_of(f'{name}.method', self.method, INTEGRATORS)
+        rtol = _finite(f'{name}.rtol', self.rtol)
         if not MIN_RTOL <= rtol < MAX_RTOL:
-            _fail(f"{name}.rtol", f"must be in [{MIN_RTOL:g}, {MAX_RTOL:g})", self.rtol)
-        _set(self, "rtol", rtol)
-        atol = _positive(f"{name}.atol", self.atol)
+            _fail(f'{name}.rtol', f'must be in [{MIN_RTOL:g}, {MAX_RTOL:g})', self.rtol)
+        _set(self, 'rtol', rtol)
+        atol = _positive(f'{name}.atol', self.atol)
         if atol > MAX_ATOL:
-            _fail(f"{name}.atol", f"must be in (0, {MAX_ATOL:g}] (the attitude quaternion's components are <= 1)",
+            _fail(f'{name}.atol',
+                  f"must be in (0, {MAX_ATOL:g}] (the attitude quaternion's components are <= 1)",
                   self.atol)
-        _set(self, "atol", atol)
-        _set(self, "step", _positive(f"{name}.step", self.step))
-        max_step = _finite(f"{name}.max_step", self.max_step)
+        _set(self, 'atol', atol)
+        _set(self, 'step', _positive(f'{name}.step', self.step))
+        max_step = _finite(f'{name}.max_step', self.max_step)
         if max_step < 0.0:
-            _fail(f"{name}.max_step", "must be >= 0 (0 = no limit)", self.max_step)
-        _set(self, "max_step", max_step)
+            _fail(f'{name}.max_step', 'must be >= 0 (0 = no limit)', self.max_step)
+        _set(self, 'max_step', max_step)
 
 
 @dataclass(frozen=True)
 class Scenario:
-    """One simulation: body, orbit, initial state, integrator, impacts and output grid.
+    """
+    One simulation: body, orbit, initial state, integrator, impacts and output grid.
 
     The default is the paper's Fig. 4 case (a = 0.5, theta0 = 0.1), a physically
     realisable body for which the paper's approximate solution works well.
@@ -304,6 +326,7 @@ class Scenario:
         Spacing of output samples [yr] (the paper: tk / n with n = 1000).
     integrator : IntegratorSettings
     impacts : tuple of Impact
+
     """
 
     inertia: tuple[float, float, float] = (1.0, 1.0, 1.5)
@@ -311,217 +334,246 @@ class Scenario:
     orbit_rate: float = 1.0
     omega0: tuple[float, float, float] = (0.0, 1.0, 30.0)
     euler0: tuple[float, float, float] = (0.5, 0.0, 0.1)
-    attitude: str = "quaternion"
+    attitude: str = 'quaternion'
     duration: float = 2.0
     output_interval: float = 0.002
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
     impacts: tuple[Impact, ...] = ()
 
     def __post_init__(self) -> None:
-        inertia = _vector("inertia", self.inertia)
+        inertia = _vector('inertia', self.inertia)
         for k, v in enumerate(inertia):
             if v <= 0.0:
-                _fail(f"inertia[{k}]", "must be > 0", v)
+                _fail(f'inertia[{k}]', 'must be > 0', v)
         if not isinstance(self.allow_unphysical_inertia, bool):
-            _fail("allow_unphysical_inertia", "must be true or false", self.allow_unphysical_inertia)
+            _fail('allow_unphysical_inertia', 'must be true or false',
+                  self.allow_unphysical_inertia)
         if not self.allow_unphysical_inertia:
             for k in range(3):
                 others = sum(inertia) - inertia[k]
                 if inertia[k] > others * (1.0 + 1e-12):
                     _fail(
-                        "inertia",
-                        f"is not physically realisable: inertia[{k}] = {inertia[k]:g} exceeds the sum "
-                        f"of the other two ({others:g}); set allow_unphysical_inertia: true to "
-                        "simulate such a body anyway (as the paper's figures with a > 1 do)",
+                        'inertia',
+                        f'is not physically realisable: inertia[{k}] = {inertia[k]:g} exceeds the '
+                        f'sum of the other two ({others:g}); set allow_unphysical_inertia: true '
+                        "to simulate such a body anyway (as the paper's figures with a > 1 do)",
                         list(inertia),
                     )
-        _set(self, "inertia", inertia)
-        orbit_rate = _finite("orbit_rate", self.orbit_rate)
+        _set(self, 'inertia', inertia)
+        orbit_rate = _finite('orbit_rate', self.orbit_rate)
         if orbit_rate != 0.0 and not MIN_ORBIT_RATE <= orbit_rate <= MAX_ORBIT_RATE:
-            _fail("orbit_rate", f"must be 0 (no torque) or in [{MIN_ORBIT_RATE:g}, {MAX_ORBIT_RATE:g}] rad/yr "
-                  "(real heliocentric orbits: ~2e-7 to ~2e4 rad/yr)", self.orbit_rate)
-        _set(self, "orbit_rate", orbit_rate)
-        omega0 = _vector("omega0", self.omega0)
+            _fail('orbit_rate',
+                  f'must be 0 (no torque) or in [{MIN_ORBIT_RATE:g}, {MAX_ORBIT_RATE:g}] rad/yr '
+                  '(real heliocentric orbits: ~2e-7 to ~2e4 rad/yr)', self.orbit_rate)
+        _set(self, 'orbit_rate', orbit_rate)
+        omega0 = _vector('omega0', self.omega0)
         if math.hypot(*omega0) > MAX_OMEGA:
-            _fail("omega0", f"|omega0| = {math.hypot(*omega0):.3g} rad/yr exceeds {MAX_OMEGA:g} rad/yr "
-                  "(a spin period of 0.02 s; the fastest known asteroids take a few seconds)", list(omega0))
-        _set(self, "omega0", omega0)
-        euler0 = _vector("euler0", self.euler0)
-        _one_of("attitude", self.attitude, ATTITUDE_MODELS)
-        method = INTEGRATORS[self.integrator.method] if isinstance(self.integrator, IntegratorSettings) else None
+            _fail('omega0',
+                  f'|omega0| = {math.hypot(*omega0):.3g} rad/yr exceeds {MAX_OMEGA:g} rad/yr '
+                  '(a spin period of 0.02 s; the fastest known asteroids take a few seconds)',
+                  list(omega0))
+        _set(self, 'omega0', omega0)
+        euler0 = _vector('euler0', self.euler0)
+        _one_of('attitude', self.attitude, ATTITUDE_MODELS)
+        method = INTEGRATORS[self.integrator.method] if isinstance(self.integrator,
+                                                                   IntegratorSettings) else None
         if method is not None and self.attitude not in method.attitudes:
             # Capability check: the method says what it can integrate, and why not the rest.
-            _fail("integrator.method", f"{method.name!r} cannot integrate attitude {self.attitude!r}: "
+            _fail('integrator.method',
+                  f'{method.name!r} cannot integrate attitude {self.attitude!r}: '
                   f"{method.requirement or 'unsupported'}", self.integrator.method)
-        if self.attitude == "euler" and not 0.0 < euler0[2] < math.pi:
-            _fail("euler0[2]", "theta0 must lie strictly inside (0, pi) with attitude 'euler' "
+        if self.attitude == 'euler' and not 0.0 < euler0[2] < math.pi:
+            _fail('euler0[2]', "theta0 must lie strictly inside (0, pi) with attitude 'euler' "
                   "(eq 15 divides by sin theta); use attitude 'quaternion'", euler0[2])
         if ATTITUDE_MODELS[self.attitude].singular(euler0):
-            _fail("euler0[2]", "theta0 is too close to 0 or pi for attitude 'euler'; "
+            _fail('euler0[2]', "theta0 is too close to 0 or pi for attitude 'euler'; "
                   "use attitude 'quaternion'", euler0[2])
-        _set(self, "euler0", euler0)
-        duration = _positive("duration", self.duration)
+        _set(self, 'euler0', euler0)
+        duration = _positive('duration', self.duration)
         if duration > MAX_DURATION:
-            _fail("duration", f"must be <= {MAX_DURATION:g} yr (the model ignores orbital evolution and "
-                  "YORP, which act over such times)", self.duration)
-        _set(self, "duration", duration)
+            _fail('duration',
+                  f'must be <= {MAX_DURATION:g} yr (the model ignores orbital evolution and '
+                  'YORP, which act over such times)', self.duration)
+        _set(self, 'duration', duration)
         rotation = max(math.hypot(*self.omega0), self.orbit_rate) * duration
         if rotation > MAX_ROTATION:
-            _fail("duration", f"the body or its orbit turns by max(|omega0|, orbit_rate) * duration = "
-                  f"{rotation:.3g} rad, above {MAX_ROTATION:.0e} rad: every method needs about a step per "
-                  "radian", self.duration)
-        _set(self, "output_interval", _positive("output_interval", self.output_interval))
+            _fail('duration',
+                  f'the body or its orbit turns by max(|omega0|, orbit_rate) * duration = '
+                  f'{rotation:.3g} rad, above {MAX_ROTATION:.0e} rad: every method needs about a '
+                  'step per radian', self.duration)
+        _set(self, 'output_interval', _positive('output_interval', self.output_interval))
         if self.output_interval > self.duration:
-            _fail("output_interval", f"must be <= duration ({self.duration:g} yr)", self.output_interval)
+            _fail('output_interval', f'must be <= duration ({self.duration:g} yr)',
+                  self.output_interval)
         samples = self.duration / self.output_interval + 1.0
         if samples > MAX_SAMPLES:
-            _fail("output_interval", f"duration / output_interval + 1 = {samples:.3g} samples exceeds "
-                  f"{MAX_SAMPLES:.0e}: use an output_interval >= {self.duration / (MAX_SAMPLES - 1):.3g} yr",
+            _fail('output_interval',
+                  f'duration / output_interval + 1 = {samples:.3g} samples exceeds '
+                  f'{MAX_SAMPLES:.0e}: use an output_interval >= '
+                  f'{self.duration / (MAX_SAMPLES - 1):.3g} yr',
                   self.output_interval)
         if not isinstance(self.integrator, IntegratorSettings):
-            _fail("integrator", "must be an IntegratorSettings", self.integrator)
+            _fail('integrator', 'must be an IntegratorSettings', self.integrator)
         if method.adaptive:
             if self.integrator.max_step > 0.0:
-                _check_step("integrator.max_step", self.integrator.max_step, duration)
+                _check_step('integrator.max_step', self.integrator.max_step, duration)
         else:
-            _check_step("integrator.step", self.integrator.step, duration)
+            _check_step('integrator.step', self.integrator.step, duration)
         impacts = tuple(self.impacts)
         for k, impact in enumerate(impacts):
             if not isinstance(impact, Impact):
-                _fail(f"impacts[{k}]", "must be an Impact", impact)
-            impact.validate(f"impacts[{k}]")
+                _fail(f'impacts[{k}]', 'must be an Impact', impact)
+            impact.validate(f'impacts[{k}]')
             if impact.end > self.duration:
-                _fail(f"impacts[{k}].start", f"the pulse must end by the end of the run ({self.duration:g} yr); "
-                      f"it ends at {impact.end!r}", impact.start)
-        _set(self, "impacts", impacts)
+                _fail(f'impacts[{k}].start',
+                      f'the pulse must end by the end of the run ({self.duration:g} yr); '
+                      f'it ends at {impact.end!r}', impact.start)
+        _set(self, 'impacts', impacts)
 
     # -- derived quantities ---------------------------------------------------------
     @property
     def output_times(self):
-        """The default output grid: 0, dt, 2 dt, ... up to and including ``duration``."""
+        """Return the default output grid: 0, dt, 2 dt, ... up to and including ``duration``."""
         import numpy as np
 
         n = int(math.floor(self.duration / self.output_interval * (1.0 + 1e-12)))
         return np.minimum(np.arange(n + 1) * self.output_interval, self.duration)
 
-    def replace(self, **changes) -> "Scenario":
-        """A copy with some fields changed (validated again)."""
+    def replace(self, **changes) -> 'Scenario':
+        """Return a copy with some fields changed (validated again)."""
         return dataclasses.replace(self, **changes)
 
     # -- flat parameters (ROS 2 parameters, YAML) ----------------------------------
     def to_parameters(self) -> dict[str, Any]:
         """Flat parameter dictionary as ROS 2 parameters (``integrator.rtol``, ...)."""
         params: dict[str, Any] = {
-            "inertia": list(self.inertia),
-            "allow_unphysical_inertia": self.allow_unphysical_inertia,
-            "orbit_rate": self.orbit_rate,
-            "omega0": list(self.omega0),
-            "euler0": list(self.euler0),
-            "attitude": self.attitude,
-            "duration": self.duration,
-            "output_interval": self.output_interval,
+            'inertia': list(self.inertia),
+            'allow_unphysical_inertia': self.allow_unphysical_inertia,
+            'orbit_rate': self.orbit_rate,
+            'omega0': list(self.omega0),
+            'euler0': list(self.euler0),
+            'attitude': self.attitude,
+            'duration': self.duration,
+            'output_interval': self.output_interval,
         }
         for f in dataclasses.fields(IntegratorSettings):
-            params[f"integrator.{f.name}"] = getattr(self.integrator, f.name)
-        params["impacts.start"] = [i.start for i in self.impacts]
-        params["impacts.duration"] = [i.duration for i in self.impacts]
-        params["impacts.torque"] = [c for i in self.impacts for c in i.torque]
-        params["impacts.frame"] = [i.frame for i in self.impacts]
+            params[f'integrator.{f.name}'] = getattr(self.integrator, f.name)
+        params['impacts.start'] = [i.start for i in self.impacts]
+        params['impacts.duration'] = [i.duration for i in self.impacts]
+        params['impacts.torque'] = [c for i in self.impacts for c in i.torque]
+        params['impacts.frame'] = [i.frame for i in self.impacts]
         return params
 
     @classmethod
-    def from_parameters(cls, params: Mapping[str, Any]) -> "Scenario":
-        """Build from a flat parameter mapping; missing keys take their defaults.
+    def from_parameters(cls, params: Mapping[str, Any]) -> 'Scenario':
+        """
+        Build from a flat parameter mapping; missing keys take their defaults.
 
         Raises ScenarioError for unknown keys and invalid values.
         """
         known = set(PARAMETER_NAMES)
         unknown = sorted(set(params) - known)
         if unknown:
-            raise ScenarioError(f"{unknown[0]}: unknown scenario parameter (known: {', '.join(sorted(known))})")
+            raise ScenarioError(
+                f"{unknown[0]}: unknown scenario parameter (known: {', '.join(sorted(known))})")
         plain = {k: params[k] for k in _SCENARIO_PLAIN if k in params}
         integ = {
-            k.split(".", 1)[1]: params[k] for k in params if k.startswith("integrator.")
+            k.split('.', 1)[1]: params[k] for k in params if k.startswith('integrator.')
         }
-        plain["integrator"] = IntegratorSettings(**integ)
-        plain["impacts"] = _impacts_from_parameters(params)
+        plain['integrator'] = IntegratorSettings(**integ)
+        plain['impacts'] = _impacts_from_parameters(params)
         return cls(**plain)
 
 
 _SCENARIO_PLAIN = (
-    "inertia", "allow_unphysical_inertia", "orbit_rate", "omega0", "euler0", "attitude",
-    "duration", "output_interval",
+    'inertia', 'allow_unphysical_inertia', 'orbit_rate', 'omega0', 'euler0', 'attitude',
+    'duration', 'output_interval',
 )
-_IMPACT_KEYS = ("impacts.start", "impacts.duration", "impacts.torque", "impacts.frame")
+_IMPACT_KEYS = ('impacts.start', 'impacts.duration', 'impacts.torque', 'impacts.frame')
 PARAMETER_NAMES: tuple[str, ...] = (
     _SCENARIO_PLAIN
-    + tuple(f"integrator.{f.name}" for f in dataclasses.fields(IntegratorSettings))
+    + tuple(f'integrator.{f.name}' for f in dataclasses.fields(IntegratorSettings))
     + _IMPACT_KEYS
 )
 
 
 #: Unit and meaning of every scenario parameter (the nodes' descriptors, the README tables).
 PARAMETER_DOCS: dict[str, tuple[str, str]] = {
-    "inertia": ("normalised", "principal moments of inertia (Ix, Iy, Iz); only ratios matter"),
-    "allow_unphysical_inertia": ("", "accept moments that break the triangle inequality (paper Figs 3, 6-10)"),
-    "orbit_rate": ("rad/yr", "orbital rate ws of the circular orbit, GM/R0^3 = ws^2; 0 = no torque, else 1e-9 to 1e6"),
-    "omega0": ("rad/yr", "initial angular velocity (wx, wy, wz), body axes; |omega0| <= 1e10"),
-    "euler0": ("rad", "initial attitude as the paper's Euler angles (phi, psi, theta)"),
-    "attitude": ("", "attitude state: quaternion (no singularity) or euler (paper eq 15)"),
-    "duration": ("yr", "simulated time span tk, from t = 0; <= 1e9, max(|omega0|, orbit_rate) * duration <= 1e10 rad"),
-    "output_interval": ("yr", "spacing of published samples; at most 1e7 samples, at least 1 ns of ROS time"),
-    "integrator.method": ("", "integrator: " + ", ".join(INTEGRATORS)),
-    "integrator.rtol": ("", "relative tolerance (adaptive methods)"),
-    "integrator.atol": ("", "absolute tolerance (adaptive methods), in (0, 0.1]"),
-    "integrator.step": ("yr", "step of fixed-step methods (rk4, splitting*); at most 1e10 steps, above the float64 resolution"),
-    "integrator.max_step": ("yr", "largest step of adaptive methods; 0 = no limit, else as integrator.step"),
-    "impacts.start": ("yr", "start time of each scheduled impact"),
-    "impacts.duration": ("yr", "length of each impact pulse; >= 16 ulp of its end time"),
-    "impacts.torque": ("I rad/yr^2", "torque of each impact, 3 numbers per impact, flattened"),
-    "impacts.frame": ("", "frame of each impact's torque: body or orbital (empty = all body)"),
+    'inertia': ('normalised', 'principal moments of inertia (Ix, Iy, Iz); only ratios matter'),
+    'allow_unphysical_inertia': (
+        '', 'accept moments that break the triangle inequality (paper Figs 3, 6-10)'),
+    'orbit_rate': (
+        'rad/yr',
+        'orbital rate ws of the circular orbit, GM/R0^3 = ws^2; 0 = no torque, else 1e-9 to 1e6'),
+    'omega0': ('rad/yr', 'initial angular velocity (wx, wy, wz), body axes; |omega0| <= 1e10'),
+    'euler0': ('rad', "initial attitude as the paper's Euler angles (phi, psi, theta)"),
+    'attitude': ('', 'attitude state: quaternion (no singularity) or euler (paper eq 15)'),
+    'duration': (
+        'yr',
+        'simulated time span tk, from t = 0; <= 1e9, max(|omega0|, orbit_rate) * duration '
+        '<= 1e10 rad'),
+    'output_interval': (
+        'yr', 'spacing of published samples; at most 1e7 samples, at least 1 ns of ROS time'),
+    'integrator.method': ('', 'integrator: ' + ', '.join(INTEGRATORS)),
+    'integrator.rtol': ('', 'relative tolerance (adaptive methods)'),
+    'integrator.atol': ('', 'absolute tolerance (adaptive methods), in (0, 0.1]'),
+    'integrator.step': (
+        'yr',
+        'step of fixed-step methods (rk4, splitting*); at most 1e10 steps, above the float64 '
+        'resolution'),
+    'integrator.max_step': (
+        'yr', 'largest step of adaptive methods; 0 = no limit, else as integrator.step'),
+    'impacts.start': ('yr', 'start time of each scheduled impact'),
+    'impacts.duration': ('yr', 'length of each impact pulse; >= 16 ulp of its end time'),
+    'impacts.torque': ('I rad/yr^2', 'torque of each impact, 3 numbers per impact, flattened'),
+    'impacts.frame': ('', "frame of each impact's torque: body or orbital (empty = all body)"),
 }
 
 
 def _impacts_from_parameters(params: Mapping[str, Any]) -> tuple[Impact, ...]:
-    start = list(params.get("impacts.start", []) or [])
-    duration = list(params.get("impacts.duration", []) or [])
-    torque = list(params.get("impacts.torque", []) or [])
-    frame = list(params.get("impacts.frame", []) or [])
+    start = list(params.get('impacts.start', []) or [])
+    duration = list(params.get('impacts.duration', []) or [])
+    torque = list(params.get('impacts.torque', []) or [])
+    frame = list(params.get('impacts.frame', []) or [])
     n = len(start)
     if len(duration) != n:
-        _fail("impacts.duration", f"must have one entry per impacts.start ({n})", duration)
+        _fail('impacts.duration', f'must have one entry per impacts.start ({n})', duration)
     if len(torque) != 3 * n:
-        _fail("impacts.torque", f"must have 3 entries per impact ({3 * n})", torque)
+        _fail('impacts.torque', f'must have 3 entries per impact ({3 * n})', torque)
     if not frame:
-        frame = ["body"] * n
+        frame = ['body'] * n
     if len(frame) != n:
-        _fail("impacts.frame", f"must be empty (all 'body') or have one entry per impact ({n})", frame)
+        _fail('impacts.frame', f"must be empty (all 'body') or have one entry per impact ({n})",
+              frame)
     impacts = []
     for k in range(n):
         try:
-            impacts.append(Impact(start[k], duration[k], tuple(torque[3 * k: 3 * k + 3]), frame[k]))
+            impacts.append(Impact(start[k], duration[k], tuple(torque[3 * k: 3 * k + 3]),
+                                  frame[k]))
         except ScenarioError as err:
-            raise ScenarioError(str(err).replace("impact.", f"impacts[{k}].", 1)) from None
+            raise ScenarioError(str(err).replace('impact.', f'impacts[{k}].', 1)) from None
     return tuple(impacts)
 
 
-def _flatten(mapping: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+def _flatten(mapping: Mapping[str, Any], prefix: str = '') -> dict[str, Any]:
     flat: dict[str, Any] = {}
     for key, value in mapping.items():
-        name = f"{prefix}{key}"
+        name = f'{prefix}{key}'
         if isinstance(value, Mapping):
-            flat.update(_flatten(value, f"{name}."))
+            flat.update(_flatten(value, f'{name}.'))
         else:
             flat[name] = value
     return flat
 
 
-def load_scenario(path: str | Path, node: str = "sim", ignore: frozenset[str] = frozenset()) -> Scenario:
-    """Read a scenario from a ROS 2 parameters YAML file (``--params-file`` format).
+def load_scenario(path: str | Path, node: str = 'sim',
+                  ignore: frozenset[str] = frozenset()) -> Scenario:
+    """
+    Read a scenario from a ROS 2 parameters YAML file (``--params-file`` format).
 
-    The file is ``{node_name: {ros__parameters: {...}}}``; the section ``/**/<node>``, ``node``
-    or ``/<node>`` is used, else the wildcard ``/**``, else the only section. Nested keys are joined with
-    dots as ROS does (``integrator: {rtol: 1e-10}`` is ``integrator.rtol``). Keys in
+    The file is ``{node_name: {ros__parameters: {...}}}``; the section ``/**/<node>``, ``node`` or
+    ``/<node>`` is used, else the wildcard ``/**``, else the only section. Nested keys are joined
+    with dots as ROS does (``integrator: {rtol: 1e-10}`` is ``integrator.rtol``). Keys in
     ``ignore`` (a node's own, non-scenario parameters) are skipped.
 
     Raises ScenarioError for an unreadable file, a missing section or invalid values.
@@ -530,24 +582,24 @@ def load_scenario(path: str | Path, node: str = "sim", ignore: frozenset[str] = 
     try:
         text = path.read_text()
     except OSError as err:
-        raise ScenarioError(f"{path}: cannot read scenario file: {err}") from None
+        raise ScenarioError(f'{path}: cannot read scenario file: {err}') from None
     try:
         return parse_scenario(text, node, ignore)
     except ScenarioError as err:
-        raise ScenarioError(f"{path}: {err}") from None
+        raise ScenarioError(f'{path}: {err}') from None
 
 
-def parse_scenario(text: str, node: str = "sim", ignore: frozenset[str] = frozenset()) -> Scenario:
+def parse_scenario(text: str, node: str = 'sim', ignore: frozenset[str] = frozenset()) -> Scenario:
     """:func:`load_scenario` on the text of a parameters file."""
     import yaml
 
     try:
         document = yaml.safe_load(text)
     except yaml.YAMLError as err:
-        raise ScenarioError(f"cannot read scenario file: {err}") from None
+        raise ScenarioError(f'cannot read scenario file: {err}') from None
     if not isinstance(document, Mapping) or not document:
-        raise ScenarioError("expected a ROS 2 parameters file ({node: {ros__parameters: ...}})")
-    for key in (f"/**/{node}", node, f"/{node}", "/**"):
+        raise ScenarioError('expected a ROS 2 parameters file ({node: {ros__parameters: ...}})')
+    for key in (f'/**/{node}', node, f'/{node}', '/**'):
         if key in document:
             section = document[key]
             break
@@ -555,18 +607,20 @@ def parse_scenario(text: str, node: str = "sim", ignore: frozenset[str] = frozen
         if len(document) != 1:
             raise ScenarioError(f"no section for node {node!r} or '/**'")
         section = next(iter(document.values()))
-    if not isinstance(section, Mapping) or not isinstance(section.get("ros__parameters"), Mapping):
+    if not isinstance(section, Mapping) or not isinstance(section.get('ros__parameters'), Mapping):
         raise ScenarioError("the node section has no 'ros__parameters' mapping")
-    params = {k: v for k, v in _flatten(section["ros__parameters"]).items() if k not in ignore}
+    params = {k: v for k, v in _flatten(section['ros__parameters']).items() if k not in ignore}
     return Scenario.from_parameters(params)
 
 
-def dump_scenario(scenario: Scenario, node: str = "sim") -> str:
-    """The scenario as the text of a ROS 2 parameters file (inverse of :func:`parse_scenario`).
+def dump_scenario(scenario: Scenario, node: str = 'sim') -> str:
+    """
+    Return the scenario as the text of a ROS 2 parameters file (inverse of :func:`parse_scenario`).
 
     Keyed ``/**/<node>``: the section applies to the node in any namespace (a plain ``sim:`` key
     means ``/sim`` only, and a namespaced simulator would silently run the defaults).
     """
     import yaml
 
-    return yaml.safe_dump({f"/**/{node}": {"ros__parameters": scenario.to_parameters()}}, sort_keys=False)
+    return yaml.safe_dump({f'/**/{node}': {'ros__parameters': scenario.to_parameters()}},
+                          sort_keys=False)

@@ -1,8 +1,8 @@
 """The researcher's entry point: ``simulate(scenario, t_eval)`` without ROS."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+import math
 
 import numpy as np
 
@@ -10,12 +10,13 @@ from .dynamics import jacobi_integral
 from .propagator import Propagator
 from .scenario import Scenario, ScenarioError
 
-__all__ = ["simulate", "SimulationResult"]
+__all__ = ['simulate', 'SimulationResult']
 
 
 @dataclass(frozen=True)
 class SimulationResult:
-    """Samples of one run at the requested times (n of them).
+    """
+    Samples of one run at the requested times (n of them).
 
     Attributes
     ----------
@@ -30,6 +31,7 @@ class SimulationResult:
     message : str
         Why it failed, empty on success.
     nfev, n_steps : right-hand-side evaluations and integration steps.
+
     """
 
     t: np.ndarray
@@ -46,19 +48,22 @@ class SimulationResult:
 def _check_times(t_eval, duration: float) -> np.ndarray:
     t = np.asarray(t_eval, dtype=float)
     if t.ndim != 1 or t.size == 0:
-        raise ScenarioError(f"t_eval: must be a non-empty 1-D sequence of times, got shape {t.shape}")
+        raise ScenarioError(
+            f't_eval: must be a non-empty 1-D sequence of times, got shape {t.shape}')
     if not np.all(np.isfinite(t)):
-        raise ScenarioError("t_eval: must be finite")
+        raise ScenarioError('t_eval: must be finite')
     if np.any(np.diff(t) < 0):
-        raise ScenarioError("t_eval: must be sorted in increasing order")
+        raise ScenarioError('t_eval: must be sorted in increasing order')
     if t[0] < 0.0 or t[-1] > duration:
-        raise ScenarioError(f"t_eval: must lie in [0, duration = {duration!r}] yr, got [{t[0]!r}, {t[-1]!r}]")
+        raise ScenarioError(
+            f't_eval: must lie in [0, duration = {duration!r}] yr, got [{t[0]!r}, {t[-1]!r}]')
     return t
 
 
 def simulate(scenario: Scenario, t_eval=None, *, split_impacts: bool = True,
              fast: bool | None = None) -> SimulationResult:
-    """Integrate ``scenario`` and sample it at exactly the times ``t_eval`` [yr].
+    """
+    Integrate ``scenario`` and sample it at exactly the times ``t_eval`` [yr].
 
     ``t_eval`` defaults to ``scenario.output_times`` (every ``output_interval`` from 0 to
     ``duration``). ``split_impacts=False`` is a demonstration switch only (see
@@ -71,15 +76,16 @@ def simulate(scenario: Scenario, t_eval=None, *, split_impacts: bool = True,
     times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
     prop = Propagator(scenario, split_impacts=split_impacts, fast=fast)
     n = times.size
-    done, arrays, message = prop.sample_many(times, budget=math.inf)  # to the end, in bounded calls
+    # to the end, in bounded calls
+    done, arrays, message = prop.sample_many(times, budget=math.inf)
     t_out = times[:done]
-    omega, matrices = arrays["omega"][:done], arrays["matrix"][:done]
+    omega, matrices = arrays['omega'][:done], arrays['matrix'][:done]
     jacobi = jacobi_integral(t_out, omega, matrices, scenario.inertia, scenario.orbit_rate)
     return SimulationResult(
         t=t_out,
         omega=omega,
-        euler=arrays["euler"][:done],
-        quaternion=arrays["quaternion"][:done],
+        euler=arrays['euler'][:done],
+        quaternion=arrays['quaternion'][:done],
         jacobi=np.asarray(jacobi).reshape(-1),
         success=done == n,
         message=message,

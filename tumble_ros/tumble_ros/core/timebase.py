@@ -1,4 +1,5 @@
-"""The one mapping between simulated years and ROS time stamps.
+"""
+The one mapping between simulated years and ROS time stamps.
 
 Every message the simulator publishes is stamped with ROS time ``ns`` (integer nanoseconds,
 ``builtin_interfaces/Time`` = ``sec`` * 10^9 + ``nanosec``). The simulated time in years is
@@ -13,12 +14,12 @@ time; the integer nanoseconds also stay below 2^53, where float64 stops being ex
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+import math
 
 from .scenario import MAX_SAMPLES, ScenarioError
 
-__all__ = ["TimeBase", "MAX_STAMP_NS"]
+__all__ = ['TimeBase', 'MAX_STAMP_NS']
 
 #: Largest stamp: Time.sec is an int32.
 MAX_STAMP_NS = (2**31 - 1) * 10**9
@@ -26,20 +27,23 @@ MAX_STAMP_NS = (2**31 - 1) * 10**9
 
 @dataclass(frozen=True)
 class TimeBase:
-    """Conversion between simulated years and integer ROS nanoseconds.
+    """
+    Conversion between simulated years and integer ROS nanoseconds.
 
     Attributes
     ----------
     seconds_per_year : float
         ROS seconds per simulated year (> 0).
+
     """
 
     seconds_per_year: float = 1.0
 
     def __post_init__(self) -> None:
         s = self.seconds_per_year
-        if isinstance(s, bool) or not isinstance(s, (int, float)) or not math.isfinite(s) or s <= 0:
-            raise ValueError(f"seconds_per_year: must be a finite number > 0, got {s!r}")
+        if (isinstance(s, bool) or not isinstance(s, (int, float)) or not math.isfinite(s)
+                or s <= 0):
+            raise ValueError(f'seconds_per_year: must be a finite number > 0, got {s!r}')
 
     @property
     def ns_per_year(self) -> float:
@@ -47,7 +51,7 @@ class TimeBase:
         return 1e9 * self.seconds_per_year
 
     def to_years(self, ns: int) -> float:
-        """Simulated time [yr] of a stamp in integer nanoseconds."""
+        """Convert a stamp in integer nanoseconds to simulated time [yr]."""
         return ns / self.ns_per_year
 
     def to_ns(self, t: float) -> int:
@@ -60,38 +64,46 @@ class TimeBase:
         return int(sec) * 1_000_000_000 + int(nanosec)
 
     def check_span(self, duration: float) -> None:
-        """Raise ScenarioError (a ValueError) if a run of ``duration`` years overflows Time.sec (int32)."""
-        ns = duration * self.ns_per_year  # compared as a float first: 1e300 yr has no integer stamp
+        """Raise ScenarioError (a ValueError) if ``duration`` years overflow Time.sec (int32)."""
+        # compared as a float first: 1e300 yr has no integer stamp
+        ns = duration * self.ns_per_year
         if not ns <= MAX_STAMP_NS or self.to_ns(duration) > MAX_STAMP_NS:
             limit = MAX_STAMP_NS / self.ns_per_year
             raise ScenarioError(
-                f"duration: {duration:g} yr at seconds_per_year = {self.seconds_per_year:g} ends past the "
-                f"int32 limit of builtin_interfaces/Time ({limit:.4g} yr); lower seconds_per_year"
+                f'duration: {duration:g} yr at seconds_per_year = {self.seconds_per_year:g} ends '
+                f'past the int32 limit of builtin_interfaces/Time ({limit:.4g} yr); lower '
+                f'seconds_per_year'
             )
 
     def check(self, interval: float, duration: float) -> None:
-        """Raise ScenarioError (naming the field) unless the output grid of ``interval`` years over
-        ``duration`` years fits ROS stamps: the run ends within the int32 limit
-        (:meth:`check_span`), the interval is at least 1 ns of ROS time (the stamps' resolution:
-        a shorter one would be rounded to a different interval, or to 0) and the grid has at
-        most ``scenario.MAX_SAMPLES`` samples."""
+        """
+        Raise ScenarioError (naming the field) unless the output grid fits ROS stamps.
+
+        The grid of ``interval`` years over ``duration`` years fits when the run ends within the
+        int32 limit (:meth:`check_span`), the interval is at least 1 ns of ROS time (the stamps'
+        resolution: a shorter one would be rounded to a different interval, or to 0) and the grid
+        has at most ``scenario.MAX_SAMPLES`` samples.
+        """
         self.check_span(duration)
         ns = interval * self.ns_per_year
-        if not ns >= 1.0 - 1e-9:  # (1e-9: an interval computed as 1 / ns_per_year may round below 1)
+        # (1e-9: an interval computed as 1 / ns_per_year may round below 1)
+        if not ns >= 1.0 - 1e-9:
             raise ScenarioError(
-                f"output_interval: {interval:g} yr is {ns:.3g} ns of ROS time at seconds_per_year = "
-                f"{self.seconds_per_year:g}, below the 1 ns resolution of the stamps; raise output_interval "
-                f"to >= {1.0 / self.ns_per_year:.3g} yr or seconds_per_year"
+                f'output_interval: {interval:g} yr is {ns:.3g} ns of ROS time at '
+                f'seconds_per_year = {self.seconds_per_year:g}, below the 1 ns resolution of the '
+                f'stamps; raise output_interval to >= {1.0 / self.ns_per_year:.3g} yr or '
+                f'seconds_per_year'
             )
         samples = self.to_ns(duration) // max(1, self.to_ns(interval)) + 1
         if samples > MAX_SAMPLES:
             raise ScenarioError(
-                f"output_interval: {samples:.3g} samples of {interval:g} yr over {duration:g} yr exceed "
-                f"{MAX_SAMPLES:.0e}"
+                f'output_interval: {samples:.3g} samples of {interval:g} yr over {duration:g} yr '
+                f'exceed {MAX_SAMPLES:.0e}'
             )
 
     def sample_grid(self, interval: float, duration: float) -> tuple[int, int]:
-        """Output grid in stamps: (interval_ns, n_samples) with samples at k * interval_ns.
+        """
+        Output grid in stamps: (interval_ns, n_samples) with samples at k * interval_ns.
 
         The interval is rounded to whole nanoseconds; every sample time
         ``to_years(k * interval_ns)`` lies in [0, duration]. Raises ScenarioError (see

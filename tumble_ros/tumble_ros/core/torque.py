@@ -1,4 +1,5 @@
-"""The Sun's gravity-gradient torque on the asteroid (paper eqs 11-13).
+"""
+The Sun's gravity-gradient torque on the asteroid (paper eqs 11-13).
 
 Units: time in years, angular rates in rad/yr, inertia normalised (any unit), torque in
 inertia-units * rad/yr^2. The circular orbit has GM/R0^3 = ws^2 (Kepler's third law), so
@@ -10,11 +11,12 @@ import math
 
 import numpy as np
 
-__all__ = ["sun_direction_orbital", "gravity_gradient_torque", "gravity_gradient_potential"]
+__all__ = ['sun_direction_orbital', 'gravity_gradient_torque', 'gravity_gradient_potential']
 
 
 def sun_direction_orbital(t: float, orbit_rate: float) -> np.ndarray:
-    """Unit vector from the asteroid to the Sun in the orbital frame, R0(t)/R0.
+    """
+    Return the unit vector from the asteroid to the Sun in the orbital frame, R0(t)/R0.
 
     The paper's R0(t) = R0 [sin ws t, cos ws t, 0]: it starts on +Y' and turns clockwise
     about Z' (angular velocity -ws Z').
@@ -23,7 +25,8 @@ def sun_direction_orbital(t: float, orbit_rate: float) -> np.ndarray:
 
 
 def gravity_gradient_torque(u_body, inertia, orbit_rate: float) -> np.ndarray:
-    """Torque M = 3 ws^2 u x (I u) in body axes (paper eq 12 with GM/R0^3 = ws^2).
+    """
+    Torque M = 3 ws^2 u x (I u) in body axes (paper eq 12 with GM/R0^3 = ws^2).
 
     Component-wise this is eq 12: Mx = 3 ws^2 uy uz (Iz - Iy), My = 3 ws^2 ux uz (Ix - Iz),
     Mz = 3 ws^2 ux uy (Iy - Ix).
@@ -36,6 +39,7 @@ def gravity_gradient_torque(u_body, inertia, orbit_rate: float) -> np.ndarray:
         Principal moments (Ix, Iy, Iz).
     orbit_rate : float
         ws [rad/yr].
+
     """
     u = np.asarray(u_body, dtype=float)
     i = np.asarray(inertia, dtype=float)
@@ -43,7 +47,8 @@ def gravity_gradient_torque(u_body, inertia, orbit_rate: float) -> np.ndarray:
 
 
 def gravity_gradient_potential(u_body, inertia, orbit_rate: float) -> np.ndarray:
-    """Orientation-dependent part of the tidal potential energy, (3/2) ws^2 u.I.u.
+    """
+    Orientation-dependent part of the tidal potential energy, (3/2) ws^2 u.I.u.
 
     Its negative gradient with respect to a rotation of the body gives the torque above;
     it enters the Jacobi integral (see ``dynamics.jacobi_integral``).

@@ -1,4 +1,5 @@
-"""Integrators behind one interface (:class:`~.base.Stepper`) and a name registry.
+"""
+Integrators behind one interface (:class:`~.base.Stepper`) and a name registry.
 
 Two registries, one namespace of names (``integrator.method`` of a scenario):
 
@@ -15,7 +16,7 @@ compiled loop in ``core/kernels.py``; :mod:`.compiled`).
 """
 from __future__ import annotations
 
-from .adaptive import BDF, DOP853, LSODA, RK45, Adams, Radau
+from .adaptive import Adams, BDF, DOP853, LSODA, Radau, RK45
 from .base import FAILED, FINISHED, RUNNING, SegmentProblem, Stepper
 from .fixed_step import RK4
 from .splitting import Splitting, Splitting4, Splitting6
@@ -28,5 +29,5 @@ SPLITTING_METHODS: dict[str, type[Stepper]] = {
 }
 INTEGRATORS: dict[str, type[Stepper]] = {**METHODS, **SPLITTING_METHODS}
 
-__all__ = ["METHODS", "SPLITTING_METHODS", "INTEGRATORS", "Stepper", "SegmentProblem",
-           "RUNNING", "FINISHED", "FAILED"]
+__all__ = ['METHODS', 'SPLITTING_METHODS', 'INTEGRATORS', 'Stepper', 'SegmentProblem',
+           'RUNNING', 'FINISHED', 'FAILED']

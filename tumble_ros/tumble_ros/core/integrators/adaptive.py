@@ -1,4 +1,5 @@
-"""Adaptive methods: scipy's step-by-step solvers and VODE's Adams method.
+"""
+Adaptive methods: scipy's step-by-step solvers and VODE's Adams method.
 
 * ``rk45``, ``dop853``: explicit Runge-Kutta pairs (Dormand-Prince 5(4) and 8(5,3));
 * ``radau``, ``bdf``: implicit methods for stiff problems (Jacobian by finite differences);
@@ -11,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import integrate
 
-from .base import Stepper, step_nan_message
+from .base import step_nan_message, Stepper
 
-__all__ = ["RK45", "DOP853", "Radau", "BDF", "LSODA", "Adams"]
+__all__ = ['RK45', 'DOP853', 'Radau', 'BDF', 'LSODA', 'Adams']
 
 
 def _max_step(settings) -> float:
@@ -29,7 +30,7 @@ class _ScipyStepper(Stepper):
     def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         self._solver = None
-        if self.status == "running":
+        if self.status == 'running':
             self._solver = self.solver_class(
                 fun, self.t, self.y, self.t_bound,
                 rtol=settings.rtol, atol=settings.atol, max_step=_max_step(settings),
@@ -42,17 +43,17 @@ class _ScipyStepper(Stepper):
 
     def _step_impl(self):
         solver = self._solver
-        h_abs = getattr(solver, "h_abs", None)
+        h_abs = getattr(solver, 'h_abs', None)
         if h_abs is not None and h_abs != h_abs:
             # NaN step size (a non-finite right-hand side where the initial step was chosen):
             # scipy's step loop would neither accept nor fail, for ever (kernels._dop853_step)
             return False, step_nan_message(self.name, solver.t)
         message = solver.step()
-        if solver.status == "failed":
-            return False, f"{self.name} failed at t = {solver.t:.10g} yr: {message}"
+        if solver.status == 'failed':
+            return False, f'{self.name} failed at t = {solver.t:.10g} yr: {message}'
         self.t_old, self.t, self.y = solver.t_old, solver.t, solver.y
         self._dense = None
-        return True, ""
+        return True, ''
 
     def _state_at_impl(self, t):
         if self._dense is None:
@@ -61,30 +62,31 @@ class _ScipyStepper(Stepper):
 
 
 class RK45(_ScipyStepper):
-    name, solver_class = "rk45", integrate.RK45
+    name, solver_class = 'rk45', integrate.RK45
     order = 5
 
 
 class DOP853(_ScipyStepper):
-    name, solver_class = "dop853", integrate.DOP853
+    name, solver_class = 'dop853', integrate.DOP853
     order = 8
-    kernel = "dop853"  # core/kernels.py transcribes scipy's DOP853 step by step
+    kernel = 'dop853'  # core/kernels.py transcribes scipy's DOP853 step by step
 
 
 class Radau(_ScipyStepper):
-    name, solver_class = "radau", integrate.Radau
+    name, solver_class = 'radau', integrate.Radau
 
 
 class BDF(_ScipyStepper):
-    name, solver_class = "bdf", integrate.BDF
+    name, solver_class = 'bdf', integrate.BDF
 
 
 class LSODA(_ScipyStepper):
-    name, solver_class = "lsoda", integrate.LSODA
+    name, solver_class = 'lsoda', integrate.LSODA
 
 
 class Adams(Stepper):
-    """VODE's variable-order (1-12) Adams-Moulton method in one-step mode.
+    """
+    VODE's variable-order (1-12) Adams-Moulton method in one-step mode.
 
     VODE may step beyond ``t_bound`` (it has no stop time in scipy's wrapper); the
     right-hand side is smooth past the segment end (it is the same closed-form function
@@ -92,7 +94,7 @@ class Adams(Stepper):
     still ends exactly on ``t_bound``.
     """
 
-    name = "adams"
+    name = 'adams'
     adaptive = True
 
     def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
@@ -104,7 +106,7 @@ class Adams(Stepper):
             return fun(t, y)
 
         self._ode = integrate.ode(counted).set_integrator(
-            "vode", method="adams", rtol=settings.rtol, atol=settings.atol,
+            'vode', method='adams', rtol=settings.rtol, atol=settings.atol,
             max_step=settings.max_step, nsteps=100_000,
         )
         self._ode.set_initial_value(self.y, self.t)
@@ -120,7 +122,8 @@ class Adams(Stepper):
         if self._t_internal < self.t_bound:
             y = ode.integrate(self.t_bound, step=True)
             if not ode.successful():
-                return False, f"adams (VODE) failed near t = {ode.t:.10g} yr (istate {ode.get_return_code()})"
+                return False, (f'adams (VODE) failed near t = {ode.t:.10g} yr '
+                               f'(istate {ode.get_return_code()})')
             self._t_internal = ode.t
         if self._t_internal >= self.t_bound:
             y = self._interpolate(self.t_bound)
@@ -128,7 +131,7 @@ class Adams(Stepper):
         else:
             t_new = self._t_internal
         self.t_old, self.t, self.y = t_prev, t_new, np.array(y, dtype=float)
-        return True, ""
+        return True, ''
 
     def _interpolate(self, t):
         # With itask=1 and t behind VODE's current time, VODE interpolates within its last
@@ -140,7 +143,7 @@ class Adams(Stepper):
         ok = ode.successful()
         ode.t, ode._y = t_cur, y_cur
         if not ok:
-            raise RuntimeError(f"adams (VODE) could not interpolate at t = {t!r} yr")
+            raise RuntimeError(f'adams (VODE) could not interpolate at t = {t!r} yr')
         return y
 
     def _state_at_impl(self, t):

@@ -1,4 +1,5 @@
-"""The contract every integrator of tumble_ros fulfils.
+"""
+The contract every integrator of tumble_ros fulfils.
 
 Modelled on ``scipy.integrate._ivp.base.OdeSolver``. A *stepper* advances the solution
 of y' = fun(t, y) from t0 towards t_bound, one step per call to :meth:`Stepper.step`,
@@ -26,24 +27,28 @@ into a failure.
 """
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+import math
 from typing import Callable, ClassVar
 
 import numpy as np
 
-__all__ = ["Stepper", "SegmentProblem", "RUNNING", "FINISHED", "FAILED"]
+__all__ = ['Stepper', 'SegmentProblem', 'RUNNING', 'FINISHED', 'FAILED']
 
-RUNNING, FINISHED, FAILED = "running", "finished", "failed"
+RUNNING, FINISHED, FAILED = 'running', 'finished', 'failed'
 
 #: A step shorter than this many units in the last place of t counts as a collapse.
 _MIN_STEP_ULPS = 16
 
 
 def _finite_norm(y) -> bool:
-    """|y|^2 is finite: no component is NaN or infinite, nor so large that its square overflows
-    (such a state has no usable rotation matrix or energy; kernels.step sums the same way)."""
+    """
+    Return whether |y|^2 is finite.
+
+    No component is NaN or infinite, nor so large that its square overflows (such a state has
+    no usable rotation matrix or energy; kernels.step sums the same way).
+    """
     acc = 0.0
     for v in y.tolist():
         acc += v * v
@@ -52,13 +57,14 @@ def _finite_norm(y) -> bool:
 
 def step_nan_message(method_name: str, t: float) -> str:
     """Why an adaptive step whose size is not a number failed (the same on both paths)."""
-    return (f"{method_name} failed at t = {t:.10g} yr: the step size is not a number "
-            "(the right-hand side is not finite there)")
+    return (f'{method_name} failed at t = {t:.10g} yr: the step size is not a number '
+            '(the right-hand side is not finite there)')
 
 
 @dataclass(frozen=True)
 class SegmentProblem:
-    """The structure of the equations on one integration segment (built by the Propagator).
+    """
+    The structure of the equations on one integration segment (built by the Propagator).
 
     ``fun`` is this problem's right-hand side; methods that exploit the structure (the
     splitting methods, the compiled kernels) use these fields instead.
@@ -70,17 +76,19 @@ class SegmentProblem:
     torque_body, torque_orbital : constant pulse torques on this segment, body-fixed and
         orbital-frame-fixed (zero outside pulses).
     attitude : the attitude representation of the state vector ("quaternion" or "euler").
+
     """
 
     inertia: tuple[float, float, float]
     orbit_rate: float
     torque_body: tuple[float, float, float] = (0.0, 0.0, 0.0)
     torque_orbital: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    attitude: str = "quaternion"
+    attitude: str = 'quaternion'
 
 
 class Stepper(ABC):
-    """Base class of the step-by-step integrators.
+    """
+    Base class of the step-by-step integrators.
 
     Parameters
     ----------
@@ -102,6 +110,7 @@ class Stepper(ABC):
     status : ``"running"``, ``"finished"`` (reached t_bound) or ``"failed"``.
     message : why it failed, empty otherwise.
     n_steps : number of accepted steps.
+
     """
 
     name: ClassVar[str]
@@ -110,9 +119,9 @@ class Stepper(ABC):
     #: Order of convergence (informative).
     order: ClassVar[int | None] = None
     #: Attitude representations this method can integrate (``dynamics.ATTITUDE_MODELS`` keys).
-    attitudes: ClassVar[frozenset[str]] = frozenset({"quaternion", "euler"})
+    attitudes: ClassVar[frozenset[str]] = frozenset({'quaternion', 'euler'})
     #: Why other attitudes are refused (used in Scenario validation messages).
-    requirement: ClassVar[str] = ""
+    requirement: ClassVar[str] = ''
     #: Uses the SegmentProblem instead of only ``fun``.
     needs_problem: ClassVar[bool] = False
     #: Name of the compiled loop in ``core/kernels.py`` (quaternion attitude), or None.
@@ -128,25 +137,27 @@ class Stepper(ABC):
         self.t_bound = float(t_bound)
         self.settings = settings
         self.status = FINISHED if self.t >= self.t_bound else RUNNING
-        self.message = ""
+        self.message = ''
         self.n_steps = 0
 
     @property
     def nfev(self) -> int:
-        """Number of right-hand-side evaluations so far."""
+        """Return the number of right-hand-side evaluations so far."""
         return 0
 
     def step(self) -> str:
         """Take one step; returns the new status."""
         if self.status != RUNNING:
-            raise RuntimeError(f"step() on a stepper whose status is {self.status!r}")
+            raise RuntimeError(f'step() on a stepper whose status is {self.status!r}')
         t_good, y_good = self.t, self.y
         ok, message = self._step_impl()
         if ok and not _finite_norm(self.y):
-            ok, message = False, f"non-finite state after t = {t_good:.10g} yr"
-        elif ok and self.t < self.t_bound and self.t - t_good <= _MIN_STEP_ULPS * math.ulp(t_good or 1.0):
-            ok, message = False, (f"step size collapsed to {self.t - t_good:.3g} yr at t = {t_good:.10g} yr: "
-                                  "the solution is singular or diverging there")
+            ok, message = False, f'non-finite state after t = {t_good:.10g} yr'
+        elif (ok and self.t < self.t_bound
+              and self.t - t_good <= _MIN_STEP_ULPS * math.ulp(t_good or 1.0)):
+            ok, message = False, (f'step size collapsed to {self.t - t_good:.3g} yr at '
+                                  f't = {t_good:.10g} yr: '
+                                  'the solution is singular or diverging there')
         if not ok:
             # Keep the last good state: a failed step never hands out NaN or inf.
             self.t, self.y = t_good, y_good
@@ -162,7 +173,7 @@ class Stepper(ABC):
         if t == self.t:
             return self.y.copy()
         if self.t_old is None or not (self.t_old <= t <= self.t):
-            raise ValueError(f"t = {t!r} is outside the last step [{self.t_old!r}, {self.t!r}]")
+            raise ValueError(f't = {t!r} is outside the last step [{self.t_old!r}, {self.t!r}]')
         return self._state_at_impl(t)
 
     @abstractmethod

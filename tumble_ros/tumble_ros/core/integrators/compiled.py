@@ -1,4 +1,5 @@
-"""The fast path: a method's compiled loop (``core/kernels.py``) behind the Stepper interface.
+"""
+The fast path: a method's compiled loop (``core/kernels.py``) behind the Stepper interface.
 
 :class:`CompiledStepper` integrates one segment like the method's own stepper class (same
 steps, same dense output, same failure checks), but can also take many steps per call
@@ -12,10 +13,11 @@ import math
 
 import numpy as np
 
+from .base import FAILED, FINISHED, RUNNING, SegmentProblem, step_nan_message, Stepper
 from .. import kernels as K
-from .base import FAILED, FINISHED, RUNNING, SegmentProblem, Stepper, step_nan_message
 
-__all__ = ["CompiledStepper", "fast_path_available", "why_no_fast_path", "failure_message", "warm_up"]
+__all__ = ['CompiledStepper', 'fast_path_available', 'why_no_fast_path', 'failure_message',
+           'warm_up']
 
 _EMPTY_T = np.empty(0)
 _EMPTY_Y = np.empty((0, K.N))
@@ -24,37 +26,38 @@ _STATUS = {K.RUNNING: RUNNING, K.FINISHED: FINISHED, K.FAILED: FAILED}
 
 
 def failure_message(st: np.ndarray, method_name: str) -> str:
-    """The reference path's message for the failure recorded in a kernel state ``st``."""
+    """Return the reference path's message for the failure recorded in a kernel state ``st``."""
     t_good = float(st[K.S_FAILT])
     code = st[K.S_FAIL]
     if code == K.FAIL_NONFINITE:
-        return f"non-finite state after t = {t_good:.10g} yr"
+        return f'non-finite state after t = {t_good:.10g} yr'
     if code == K.FAIL_COLLAPSE:
-        return (f"step size collapsed to {float(st[K.S_FAILDT]):.3g} yr at t = {t_good:.10g} yr: "
-                "the solution is singular or diverging there")
+        return (f'step size collapsed to {float(st[K.S_FAILDT]):.3g} yr at t = {t_good:.10g} yr: '
+                'the solution is singular or diverging there')
     if code == K.FAIL_STEP_NAN:
         return step_nan_message(method_name, t_good)
     if code == K.FAIL_REJECTED:
-        return (f"{method_name} failed at t = {t_good:.10g} yr: {K._MAX_REJECTIONS} step sizes rejected "
-                "in a row")
-    return (f"{method_name} failed at t = {t_good:.10g} yr: "
-            "Required step size is less than spacing between numbers.")
+        return (f'{method_name} failed at t = {t_good:.10g} yr: '
+                f'{K._MAX_REJECTIONS} step sizes rejected in a row')
+    return (f'{method_name} failed at t = {t_good:.10g} yr: '
+            'Required step size is less than spacing between numbers.')
 
 
 def why_no_fast_path(method: type[Stepper], attitude: str) -> str:
     """Empty if ``method`` has a compiled loop usable for ``attitude``, else the reason."""
     if method.kernel is None:
-        return f"method {method.name!r} has no compiled loop"
-    if attitude != "quaternion":
+        return f'method {method.name!r} has no compiled loop'
+    if attitude != 'quaternion':
         return f"the compiled loops integrate attitude 'quaternion' only, not {attitude!r}"
     if not K.COMPILED:
-        return ("numba is not installed or is disabled (NUMBA_DISABLE_JIT / TUMBLE_ROS_NO_JIT); "
-                "the reference path gives the same results, slower")
-    return ""
+        return ('numba is not installed or is disabled (NUMBA_DISABLE_JIT / TUMBLE_ROS_NO_JIT); '
+                'the reference path gives the same results, slower')
+    return ''
 
 
 def warm_up() -> float:
-    """Compile the single-body and the ensemble loops now, or load them from numba's cache.
+    """
+    Compile the single-body and the ensemble loops now, or load them from numba's cache.
 
     The first use after a build compiles for ~15 s; ``make setup`` calls this so that no run
     waits for it. Returns the seconds taken (0 when numba is unavailable).
@@ -68,19 +71,21 @@ def warm_up() -> float:
     if not K.COMPILED:
         return 0.0
     started = time.perf_counter()
-    tiny = Scenario(duration=1e-3, output_interval=1e-3, integrator=IntegratorSettings(method="splitting", step=1e-4))
+    tiny = Scenario(duration=1e-3, output_interval=1e-3,
+                    integrator=IntegratorSettings(method='splitting', step=1e-4))
     simulate(tiny)
     simulate_ensemble(tiny, n_bodies=2)
     return time.perf_counter() - started
 
 
 def fast_path_available(method: type[Stepper], attitude: str) -> bool:
-    """True if the Propagator can run ``method`` through its compiled loop."""
+    """Return True if the Propagator can run ``method`` through its compiled loop."""
     return not why_no_fast_path(method, attitude)
 
 
 class CompiledStepper(Stepper):
-    """One segment of ``method`` run by its compiled kernel (quaternion attitude).
+    """
+    One segment of ``method`` run by its compiled kernel (quaternion attitude).
 
     Parameters are those of :class:`Stepper` plus ``method`` (the registry class whose
     ``kernel`` to run); ``problem`` is required, ``fun`` is not used.
@@ -92,13 +97,13 @@ class CompiledStepper(Stepper):
                  problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         if problem is None:
-            raise ValueError("CompiledStepper needs the SegmentProblem")
+            raise ValueError('CompiledStepper needs the SegmentProblem')
         self.method = method
         self.name = method.name
         self.adaptive = method.adaptive
         self.symplectic = method.symplectic
         self.order = method.order
-        gammas = method.composition() if hasattr(method, "composition") else ()
+        gammas = method.composition() if hasattr(method, 'composition') else ()
         self._cfg = K.config_array(method.kernel, settings, gammas)
         self._p = K.problem_array(problem.inertia, problem.orbit_rate, problem.torque_body,
                                   problem.torque_orbital)
@@ -128,29 +133,32 @@ class CompiledStepper(Stepper):
     def step(self) -> str:
         """Take one step; returns the new status."""
         if self.status != RUNNING:
-            raise RuntimeError(f"step() on a stepper whose status is {self.status!r}")
+            raise RuntimeError(f'step() on a stepper whose status is {self.status!r}')
         K.step(self._p, self._cfg, self._st)
         self._sync()
         return self.status
 
     def advance(self, t_target: float, track: np.ndarray, t_out=None, y_out=None, e_out=None,
                 k: int = 0, budget: float = math.inf) -> tuple[int, int]:
-        """Step until t >= t_target, the segment's end, a failure or ``budget`` units of work,
-        in compiled code.
+        """
+        Step in compiled code until t_target, the segment's end, a failure or the ``budget``.
 
-        ``track`` (3,) holds the continuous Euler angles and is updated in place after every
-        step (``Propagator._track_euler``). Outputs: every ``t_out[j]`` (j >= k) passed on the
-        way (up to the current t) is written to ``y_out[j]`` (state) and ``e_out[j]``
-        (unwrapped Euler angles). Work (:func:`~tumble_ros.core.kernels.advance`): a unit per
-        step and per dense evaluation of the tracking; ``self.work`` is what this call spent.
+        The run stops at t >= t_target or after ``budget`` units of work. ``track`` (3,) holds the
+        continuous Euler angles and is updated in place after every step
+        (``Propagator._track_euler``). Outputs: every ``t_out[j]`` (j >= k) passed on the way (up
+        to the current t) is written to ``y_out[j]`` (state) and ``e_out[j]`` (unwrapped Euler
+        angles). Work (:func:`~tumble_ros.core.kernels.advance`): a unit per step and per dense
+        evaluation of the tracking; ``self.work`` is what this call spent.
         Returns (next output index, steps taken).
         """
         if t_out is None:
             t_out, y_out, e_out = _EMPTY_T, _EMPTY_Y, _EMPTY_E
         if self.status != RUNNING:
-            k, steps, work = K.emit(self._p, self._cfg, self._st, track, t_out, y_out, e_out, k), 0, 0
+            k, steps, work = K.emit(self._p, self._cfg, self._st, track, t_out, y_out, e_out,
+                                    k), 0, 0
         else:
-            k, steps, work = K.advance(self._p, self._cfg, self._st, track, float(t_target), t_out, y_out, e_out,
+            k, steps, work = K.advance(self._p, self._cfg, self._st, track, float(t_target), t_out,
+                                       y_out, e_out,
                                        k, float(budget))
         self.work = int(work)
         self._sync()

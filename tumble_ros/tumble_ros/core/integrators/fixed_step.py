@@ -1,4 +1,5 @@
-"""Fixed-step explicit methods: the classical Runge-Kutta method of order 4 ('rk4').
+"""
+Fixed-step explicit methods: the classical Runge-Kutta method of order 4 ('rk4').
 
 This is the paper's "R-K" procedure. On a segment [t0, t_bound] it takes
 n = ceil((t_bound - t0) / step) equal steps, so it lands exactly on every segment edge
@@ -10,21 +11,22 @@ import math
 
 from .base import Stepper
 
-__all__ = ["RK4"]
+__all__ = ['RK4']
 
 
 class RK4(Stepper):
-    """Classical 4th-order Runge-Kutta with a fixed step ``settings.step`` [yr].
+    """
+    Classical 4th-order Runge-Kutta with a fixed step ``settings.step`` [yr].
 
     Dense output is the cubic Hermite interpolant on the step, whose O(h^4) error
     matches the method's global order. The end-of-step derivative it needs is reused as
     the first stage of the next step, so dense output costs no extra evaluation.
     """
 
-    name = "rk4"
+    name = 'rk4'
     adaptive = False
     order = 4
-    kernel = "rk4"
+    kernel = 'rk4'
 
     def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
@@ -62,9 +64,10 @@ class RK4(Stepper):
         # t_k = t0 + k h, and exactly t_bound at the last step: no rounding accumulates in t
         # (over 10^6 steps, t + h + h + ... drifts by ~1e-10 yr, enough to show in the Jacobi
         # integral at the 1e-13 level).
-        self.t = self.t_bound if self.n_steps + 1 >= self._n_total else self._t0 + (self.n_steps + 1) * h
+        self.t = (self.t_bound if self.n_steps + 1 >= self._n_total
+                  else self._t0 + (self.n_steps + 1) * h)
         self._f = None
-        return True, ""
+        return True, ''
 
     def _state_at_impl(self, t):
         h = self.t - self.t_old

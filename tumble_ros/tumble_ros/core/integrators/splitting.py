@@ -1,4 +1,5 @@
-"""Lie-Poisson splitting methods for the rigid body in the Sun's tidal field ('splitting*').
+"""
+Lie-Poisson splitting methods for the rigid body in the Sun's tidal field ('splitting*').
 
 Structure-preserving integrators for long runs (Touma & Wisdom 1994; Dullweber, Leimkuhler &
 McLachlan 1997; McLachlan 1993). The state is the body angular momentum pi = I w and the
@@ -51,7 +52,7 @@ import numpy as np
 
 from .base import Stepper
 
-__all__ = ["Splitting", "Splitting4", "Splitting6", "free_flow_split", "COMPOSITIONS"]
+__all__ = ['Splitting', 'Splitting4', 'Splitting6', 'free_flow_split', 'COMPOSITIONS']
 
 _Y4 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
 #: Symmetric composition coefficients gamma_j of the Strang step, by order.
@@ -67,7 +68,8 @@ COMPOSITIONS: dict[int, tuple[float, ...]] = {
 
 
 def free_flow_split(inertia) -> tuple[float, tuple[float, float, float]]:
-    """(1/I_r, (c_x, c_y, c_z)) with I_r the middle moment and c_i = 1/I_i - 1/I_r.
+    """
+    (1/I_r, (c_x, c_y, c_z)) with I_r the middle moment and c_i = 1/I_i - 1/I_r.
 
     c_r is exactly 0, and so is c_i for a moment equal to I_r (symmetric body: exact free flow).
     """
@@ -150,20 +152,21 @@ def free_flow(inv_ref, coeffs, a, pi, q):
 
 
 class Splitting(Stepper):
-    """Strang (kick-drift-kick) Lie-Poisson splitting, order 2, fixed step ``settings.step``.
+    """
+    Strang (kick-drift-kick) Lie-Poisson splitting, order 2, fixed step ``settings.step``.
 
     Needs the segment's :class:`~.base.SegmentProblem` (``problem=``); quaternion attitude only.
     """
 
-    name = "splitting"
+    name = 'splitting'
     adaptive = False
     symplectic = True
     order = 2
     needs_problem = True
-    attitudes = frozenset({"quaternion"})
-    requirement = ("it composes exact rotations of the attitude quaternion and needs the "
+    attitudes = frozenset({'quaternion'})
+    requirement = ('it composes exact rotations of the attitude quaternion and needs the '
                    "rigid-body structure; use attitude 'quaternion'")
-    kernel = "splitting"
+    kernel = 'splitting'
 
     @classmethod
     def composition(cls) -> tuple[float, ...]:
@@ -172,10 +175,12 @@ class Splitting(Stepper):
     def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         if problem is None:
-            raise ValueError(f"{self.name}: needs the rigid-body problem (problem=SegmentProblem), "
-                             "it cannot integrate a bare right-hand side")
+            raise ValueError(f'{self.name}: needs the rigid-body problem '
+                             '(problem=SegmentProblem), it cannot integrate a bare right-hand '
+                             'side')
         if problem.attitude not in self.attitudes:
-            raise ValueError(f"{self.name}: attitude {problem.attitude!r} not supported: {self.requirement}")
+            raise ValueError(
+                f'{self.name}: attitude {problem.attitude!r} not supported: {self.requirement}')
         span = self.t_bound - self.t
         n = max(1, math.ceil(span / settings.step * (1.0 - 1e-12))) if span > 0 else 1
         self._h = span / n
@@ -203,8 +208,11 @@ class Splitting(Stepper):
         return self._nfev
 
     def _flow(self, t0, y, pi, tau, h):
-        """A composed step of length h from (t0, attitude y[3:], momentum pi, torque tau):
-        returns (state, momentum, torque at the end)."""
+        """
+        Take a composed step of length h from (t0, attitude y[3:], momentum pi, torque tau).
+
+        Returns (state, momentum, torque at the end).
+        """
         problem = self.problem
         ix, iy, iz = problem.inertia
         px, py, pz = (float(v) for v in pi)
@@ -232,12 +240,13 @@ class Splitting(Stepper):
             # math.cos/sin of an infinite angle (|pi| overflowed): the compiled loop gets NaN
             # there and reports the same
             self.y, self._pi, self._tau = self._y_old, self._pi_old, self._tau_old
-            return False, f"non-finite state after t = {t:.10g} yr"
+            return False, f'non-finite state after t = {t:.10g} yr'
         self._nfev += len(self._gammas)
         self.t_old = t
         # t_k = t0 + k h: no rounding accumulated in t over millions of steps
-        self.t = self.t_bound if self.n_steps + 1 >= self._n_total else self._t0 + (self.n_steps + 1) * self._h
-        return True, ""
+        self.t = (self.t_bound if self.n_steps + 1 >= self._n_total
+                  else self._t0 + (self.n_steps + 1) * self._h)
+        return True, ''
 
     def _state_at_impl(self, t):
         return self._flow(self.t_old, self._y_old, self._pi_old, self._tau_old, t - self.t_old)[0]
@@ -246,12 +255,12 @@ class Splitting(Stepper):
 class Splitting4(Splitting):
     """Order 4: Yoshida's triple jump of the Strang step (3 stages)."""
 
-    name = "splitting4"
+    name = 'splitting4'
     order = 4
 
 
 class Splitting6(Splitting):
     """Order 6: Kahan & Li's 9-stage symmetric composition of the Strang step."""
 
-    name = "splitting6"
+    name = 'splitting6'
     order = 6
