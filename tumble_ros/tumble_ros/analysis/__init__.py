@@ -1,4 +1,5 @@
-"""Offline analysis of recorded MCAP files and the paper's figures.
+"""
+Offline analysis of recorded MCAP files and the paper's figures.
 
 Reads the files written by ``tumble_ros.io`` and computes errors, periods and plots without a
 ROS runtime: no rclpy, no running nodes, no sourced workspace needed.
@@ -13,7 +14,7 @@ Modules: ``recording`` (MCAP -> arrays), ``summary`` (the numbers and their text
 ``figures`` (matplotlib, Agg; imported lazily here so that the summary needs no matplotlib),
 ``cli`` (the ``analyze`` command, ``python -m tumble_ros.analysis``). See docs/analysis.md.
 """
-from .recording import AnalysisError, Recording, load_recording
+from .recording import AnalysisError, load_recording, Recording
 from .summary import AnalysisSummary, analyze, format_summary, summary_to_dict
 
 __all__ = ['AnalysisError', 'AnalysisSummary', 'Recording', 'analyze', 'format_summary',

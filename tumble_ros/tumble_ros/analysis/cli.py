@@ -1,4 +1,5 @@
-"""The ``analyze`` command: summarise a tumble_ros MCAP recording, optionally write figures.
+"""
+The ``analyze`` command: summarise a tumble_ros MCAP recording, optionally write figures.
 
     python -m tumble_ros.analysis RUN.mcap                     # text summary on stdout
     python -m tumble_ros.analysis RUN.mcap --json              # the same as JSON
@@ -131,7 +132,11 @@ def command(argv=None) -> int:
 
 
 def main(args: list[str] | None = None) -> int:
-    """Console-script entry point (``analyze = tumble_ros.analysis.cli:main``); ``args`` as sys.argv."""
+    """
+    Run the console-script entry point (``analyze = tumble_ros.analysis.cli:main``).
+
+    ``args`` is as sys.argv (program name first); None means sys.argv.
+    """
     return command(list(sys.argv if args is None else args)[1:])
 
 

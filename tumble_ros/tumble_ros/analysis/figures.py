@@ -1,4 +1,5 @@
-"""The paper's figures from a recording, as PNG files (matplotlib, Agg canvas: no display).
+"""
+The paper's figures from a recording, as PNG files (matplotlib, Agg canvas: no display).
 
     from tumble_ros.analysis import load_recording, write_figures
     paths = write_figures(load_recording("run.mcap"), "figures/")
@@ -36,9 +37,9 @@ import os
 from pathlib import Path
 import stat
 
-import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+import numpy as np
 
 from .recording import AnalysisError, Recording, ROOT_NAMESPACE
 from .summary import AnalysisSummary, analyze, impact_intervals, spectrum, theory_lines
@@ -93,7 +94,8 @@ def _open_dir(out_dir: Path) -> int:
 
 
 def _check_names(out_dir: Path, dir_fd: int, names: list[str], overwrite: bool) -> None:
-    """Refuse links and non-regular files at the figure paths.
+    """
+    Refuse links and non-regular files at the figure paths.
 
     Without ``overwrite``, refuse any existing file too.
     """
@@ -262,9 +264,12 @@ def _draw_error(rec: Recording) -> list[Drawing]:
 
 def plot_impacts(rec: Recording, out_dir, *, samples: int = 25,
                  overwrite: bool = False) -> list[Path]:
-    """``impact_<k>_id<id>.png`` per impact event: w over +-``samples`` sampling intervals
-    (at least +-10 pulse lengths) around the pulse, the pulse interval shaded and its edges
-    drawn (paper Fig 10)."""
+    """
+    Plot ``impact_<k>_id<id>.png`` per impact event (paper Fig 10).
+
+    Each shows w over +-``samples`` sampling intervals (at least +-10 pulse lengths) around the
+    pulse, the pulse interval shaded and its edges drawn.
+    """
     return _write(_draw_impacts(rec, samples), out_dir, overwrite)
 
 
@@ -306,8 +311,12 @@ def _draw_impacts(rec: Recording, samples: int = 25) -> list[Drawing]:
 
 def plot_spectrum(rec: Recording, out_dir, summary: AnalysisSummary | None = None, *,
                   overwrite: bool = False) -> list[Path]:
-    """``spectrum_wx.png``: amplitude spectrum of wx (as in the summary), the theory's lines
-    dashed, the Nyquist rate pi/dt marked; nothing for fewer than 8 samples."""
+    """
+    Plot ``spectrum_wx.png``: the amplitude spectrum of wx (as in the summary).
+
+    The theory's lines are dashed, the Nyquist rate pi/dt marked; nothing is drawn for fewer
+    than 8 samples.
+    """
     return _write(_draw_spectrum(rec, summary), out_dir, overwrite)
 
 
@@ -347,7 +356,8 @@ def _draw_spectrum(rec: Recording, summary: AnalysisSummary | None) -> list[Draw
 
 def write_figures(rec: Recording, out_dir, summary: AnalysisSummary | None = None, *,
                   overwrite: bool = False) -> list[Path]:
-    """Write every figure the recording supports; return the paths written.
+    """
+    Write every figure the recording supports; return the paths written.
 
     All are drawn before any is written: an existing file (without ``overwrite``) or a link
     refuses them all.

@@ -1,4 +1,5 @@
-"""Load a tumble_ros MCAP recording into numpy arrays, in one pass, without a ROS runtime.
+"""
+Load a tumble_ros MCAP recording into numpy arrays, in one pass, without a ROS runtime.
 
     from tumble_ros.analysis import load_recording
     rec = load_recording("run.mcap")
@@ -26,16 +27,16 @@ file (:func:`find_namespaces`); with several it refuses and lists them.
 """
 from __future__ import annotations
 
-import math
-import re
-import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+import math
 from pathlib import Path
+import re
+import sys
 
 import numpy as np
 
-from tumble_ros.core import Scenario, ScenarioError, TimeBase, parse_scenario
+from tumble_ros.core import parse_scenario, Scenario, ScenarioError, TimeBase
 from tumble_ros.io import read_messages, summarize
 
 __all__ = [
@@ -81,8 +82,7 @@ IMPACT_FRAMES = {0: 'body', 1: 'orbital'}
 
 
 class AnalysisError(Exception):
-    """The file is a readable MCAP file but not something the analysis can work on
-    (one-line message)."""
+    """A readable MCAP file that the analysis cannot work on (one-line message)."""
 
 
 # -- namespaces -------------------------------------------------------------------------------
@@ -92,7 +92,8 @@ _NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
 
 
 def normalize_namespace(namespace: str) -> str:
-    """Return ``'/ast1'`` for ``'ast1'``, ``'/ast1/'`` or ``'/ast1'``; ``'/'`` for ``''``.
+    """
+    Return ``'/ast1'`` for ``'ast1'``, ``'/ast1/'`` or ``'/ast1'``; ``'/'`` for ``''``.
 
     AnalysisError for a name that is not a ROS namespace.
     """
@@ -110,7 +111,8 @@ def topic_name(namespace: str, topic: str) -> str:
 
 
 def find_namespaces(topics: dict[str, str] | Iterable[str]) -> list[str]:
-    """Return the namespaces that hold an ``angular_velocity`` topic, sorted.
+    """
+    Return the namespaces that hold an ``angular_velocity`` topic, sorted.
 
     ``topics``: topic names, or a mapping topic -> type name; with types, only the namespaces
     whose ``angular_velocity`` has the expected type count, unless none has.
@@ -148,7 +150,7 @@ def _choose_namespace(path: Path, types: dict[str, str], namespace: str | None) 
 class ImpactRecord:
     """One ``/impact_events`` message (times in years, rates in rad/yr)."""
 
-    id: int
+    id: int  # noqa: A003 (public field, as in the ImpactEvent message)
     start: float
     end: float
     frame: str                      # 'body' or 'orbital' (or 'frame <n>' if unknown)
@@ -248,8 +250,12 @@ Progress = Callable[[int, int], None]
 
 
 def stderr_progress(min_total: int = 100_000, stream=None) -> Progress:
-    """A progress callback printing ``reading FILE: 40% (400000 of 1000000 messages)`` to
-    stderr every 10 %, for files of at least ``min_total`` messages (silent otherwise)."""
+    """
+    Return a progress callback that prints every 10 % to ``stream`` (default: stderr).
+
+    It prints ``reading FILE: 40% (400000 of 1000000 messages)``, for files of at least
+    ``min_total`` messages (silent otherwise).
+    """
     state = {'next': 0.1}
 
     def report(done: int, total: int) -> None:
@@ -311,7 +317,8 @@ def _select_topics(info, namespace: str | None
 
 def load_recording(path, *, namespace: str | None = None,
                    progress: Progress | None = None) -> Recording:
-    """Read ``path`` once and return its :class:`Recording`.
+    """
+    Read ``path`` once and return its :class:`Recording`.
 
     ``namespace``: the ROS namespace of the topics to read (``'/ast1'``, ``'/'`` for the root);
     None: the only namespace in the file that has an ``angular_velocity`` topic.

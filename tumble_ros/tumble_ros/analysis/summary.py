@@ -1,5 +1,8 @@
-"""What a recording shows: counts, duration, comparator error, invariant drift, impacts,
-dominant frequencies of wx against the theory's lines, and an aliasing check.
+"""
+What a recording shows.
+
+Counts, duration, comparator error, invariant drift, impacts, dominant frequencies of wx
+against the theory's lines, and an aliasing check.
 
     from tumble_ros.analysis import load_recording, analyze, format_summary, summary_to_dict
     summary = analyze(load_recording("run.mcap"))
@@ -12,18 +15,17 @@ briefly. Units: years, rad/yr, inertia normalised.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
+import math
 
 import numpy as np
 
-from tumble_ros.core import ModelNotApplicable, Scenario, jacobi_integral, make_model
+from tumble_ros.core import jacobi_integral, make_model, ModelNotApplicable, Scenario
 from tumble_ros.core.analytic import COS_THETA_TOL, SYMMETRY_TOL
 from tumble_ros.core.rotation import euler_to_matrix, quaternion_to_matrix
 
-from .recording import (ANGULAR_VELOCITY, ATTITUDE, ERROR, ERROR_NORM, EULER_ANGLES,
-                        MODEL_ANGULAR_VELOCITY, ROOT_NAMESPACE, SCENARIO, ImpactRecord,
-                        Recording, topic_name)
+from .recording import (ANGULAR_VELOCITY, ATTITUDE, ERROR, ERROR_NORM, EULER_ANGLES, ImpactRecord,
+                        MODEL_ANGULAR_VELOCITY, Recording, ROOT_NAMESPACE, SCENARIO, topic_name)
 
 __all__ = [
     'AliasingCheck', 'AnalysisSummary', 'ErrorStats', 'ImpactSummary', 'InvariantDrift',
@@ -82,8 +84,11 @@ def sampling(t: np.ndarray) -> Sampling:
 
 @dataclass(frozen=True)
 class ErrorStats:
-    """Max and RMS of the comparator's error |w_numeric - w_model| (absolute, rad/yr) and of
-    |error| / |w_numeric| (relative)."""
+    """
+    Max and RMS of the comparator's error, absolute and relative.
+
+    Absolute: |w_numeric - w_model| (rad/yr); relative: |error| / |w_numeric|.
+    """
 
     models: tuple[str, ...]
     source: str              # the topic the norms come from
@@ -99,13 +104,14 @@ class ErrorStats:
 
 
 def _match(t_a: np.ndarray, t_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Indices (ia, ib) of the samples of a and b at the same time (same stamp)."""
+    """Return the indices (ia, ib) of the samples of a and b at the same time (same stamp)."""
     _, ia, ib = np.intersect1d(t_a, t_b, assume_unique=False, return_indices=True)
     return ia, ib
 
 
 def comparator_errors(rec: Recording) -> tuple[ErrorStats | None, str | None]:
-    """(stats, None) or (None, why there are none).
+    """
+    (stats, None) or (None, why there are none).
 
     Sources in order of preference: ``/comparison/error_norm`` (norm and relative as the
     comparator computed them), ``/comparison/error`` (norm of the vector; relative to
@@ -194,8 +200,11 @@ class InvariantDrift:
 
 
 def impact_intervals(rec: Recording) -> list[tuple[float, float]]:
-    """[(start, end)] of every pulse: the recorded events and the scenario's scheduled impacts
-    (merged, sorted)."""
+    """
+    Return [(start, end)] of every pulse, merged and sorted.
+
+    The pulses are the recorded events and the scenario's scheduled impacts.
+    """
     intervals = {(i.start, i.end) for i in rec.impacts}
     if rec.scenario is not None:
         intervals |= {(i.start, i.end) for i in rec.scenario.impacts}
@@ -209,7 +218,7 @@ def impact_intervals(rec: Recording) -> list[tuple[float, float]]:
 
 
 def _attitude_matrices(rec: Recording) -> tuple[np.ndarray, np.ndarray, str] | None:
-    """(indices into rec.t, C body->orbital (k, 3, 3), source) at the omega stamps."""
+    """Return (indices into rec.t, C body->orbital (k, 3, 3), source) at the omega stamps."""
     if len(rec.quaternion_t):
         ia, ib = _match(rec.t, rec.quaternion_t)
         if len(ia):
@@ -225,9 +234,13 @@ def _attitude_matrices(rec: Recording) -> tuple[np.ndarray, np.ndarray, str] | N
 
 
 def jacobi_drift(rec: Recording) -> tuple[InvariantDrift | None, str | None]:
-    """The Jacobi integral J = 1/2 w.Iw + 3/2 ws^2 u.Iu + ws (Iw).z' (tumble_ros.core.
-    jacobi_integral) at every sample that has both w and the attitude, split into segments at
-    the impacts (samples inside a pulse are left out); per segment max |J - J(first)|."""
+    """
+    Return the drift of the Jacobi integral per segment between impacts.
+
+    J = 1/2 w.Iw + 3/2 ws^2 u.Iu + ws (Iw).z' (tumble_ros.core.jacobi_integral) at every sample
+    that has both w and the attitude, split into segments at the impacts (samples inside a
+    pulse are left out); per segment max |J - J(first)|.
+    """
     if rec.scenario is None:
         why = f'no {rec.topic(SCENARIO)} in the recording (inertia and orbit rate unknown)'
         if rec.scenario_error:
@@ -303,7 +316,8 @@ def _symmetric(scenario: Scenario) -> bool:
 
 def theory_lines(scenario: Scenario | None, omega: np.ndarray | None = None
                  ) -> tuple[list[TheoryLine], str]:
-    """The frequencies the theory expects in wx, and a one-line description of their basis.
+    """
+    Return the frequencies the theory expects in wx and a one-line description of their basis.
 
     Symmetric body (Ix = Iy), from the scenario's inputs a = (Iz - Ix)/Ix, w0 = omega0[2],
     ws = orbit_rate, theta0 = euler0[2] (docs/analytic.md):
@@ -386,8 +400,12 @@ def _alias(omega: float, nyquist: float) -> float:
 
 
 def check_aliasing(samp: Sampling, lines: list[TheoryLine]) -> AliasingCheck:
-    """WARNING when pi/dt is below any expected line (the fastest decides); each aliased line
-    is listed with the frequency it masquerades as."""
+    """
+    Check the sampling against the expected lines.
+
+    WARNING when pi/dt is below any expected line (the fastest decides); each aliased line is
+    listed with the frequency it masquerades as.
+    """
     if samp.dt is None or not lines:
         return AliasingCheck(samp.dt, None, None, (), None)
     nyquist = math.pi / samp.dt
@@ -451,11 +469,15 @@ def _uniform(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, float, bool]:
 
 def spectrum(t, x, lines: list[TheoryLine] = (), *, component: str = 'wx', n_peaks: int = 5,
              threshold: float = PEAK_THRESHOLD) -> Spectrum | None:
-    """Dominant frequencies of ``x(t)``: the ``n_peaks`` strongest local maxima of the windowed
-    amplitude spectrum above ``threshold`` times the strongest, at least 3 bins apart, each
-    refined by a parabola through the log amplitudes of its bin and the two neighbours and
-    matched to the theory line whose apparent frequency (the line itself, or its alias if it
-    lies above pi/dt) is nearest. None for fewer than 8 distinct samples."""
+    """
+    Return the dominant frequencies of ``x(t)``.
+
+    They are the ``n_peaks`` strongest local maxima of the windowed amplitude spectrum above
+    ``threshold`` times the strongest, at least 3 bins apart, each refined by a parabola through
+    the log amplitudes of its bin and the two neighbours and matched to the theory line whose
+    apparent frequency (the line itself, or its alias if it lies above pi/dt) is nearest. None for
+    fewer than 8 distinct samples.
+    """
     t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
     if len(np.unique(t)) < 8:
@@ -595,7 +617,7 @@ def _v(v, digits: int = 6) -> str:
 
 
 def format_summary(s: AnalysisSummary) -> str:
-    """The summary as text (one WARNING: line per warning, at the end)."""
+    """Return the summary as text (one WARNING: line per warning, at the end)."""
     out = [f'recording: {s.path}']
     if s.namespace != ROOT_NAMESPACE:
         out.append(f'namespace: {s.namespace}')
@@ -647,7 +669,7 @@ def format_summary(s: AnalysisSummary) -> str:
 
     if s.invariant is not None:
         inv = s.invariant
-        out.append(f'invariant drift: {inv.name} J = 1/2 w.Iw + 3/2 ws^2 u.Iu + ws (Iw).z\' '
+        out.append(f"invariant drift: {inv.name} J = 1/2 w.Iw + 3/2 ws^2 u.Iu + ws (Iw).z' "
                    f'(attitude from {inv.attitude_source}), per segment between impacts:')
         for seg in inv.segments:
             out.append(f'  segment {seg.index}: t = {_g(seg.t_start)} .. {_g(seg.t_end)} yr, '
@@ -734,8 +756,11 @@ def _jsonable(value):
 
 
 def summary_to_dict(s: AnalysisSummary) -> dict:
-    """The summary as plain JSON types; non-finite numbers become None. ``topics`` maps each
-    name to {"type", "count"}."""
+    """
+    Return the summary as plain JSON types; non-finite numbers become None.
+
+    ``topics`` maps each name to {"type", "count"}.
+    """
     out = _jsonable(s)
     out['topics'] = {name: {'type': t, 'count': n} for name, (t, n) in s.topics.items()}
     return out

@@ -1,4 +1,5 @@
-"""Read ROS 2 MCAP recordings without a ROS runtime (mcap + mcap-ros2-support, no rclpy).
+"""
+Read ROS 2 MCAP recordings without a ROS runtime (mcap + mcap-ros2-support, no rclpy).
 
 - :func:`read_messages` streams the decoded messages of a file in file order. It reads the file
   front to back like a non-seeking reader, so a file whose writer was killed (no summary, last
@@ -27,15 +28,15 @@ use; it is rewritten here into the event's real layout (``service_msgs/ServiceEv
 """
 from __future__ import annotations
 
-import io
-import os
-import stat
-import struct
-import zlib
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
+import io
+import os
 from pathlib import Path
+import stat
+import struct
 from typing import Any
+import zlib
 
 from mcap.data_stream import ReadDataStream
 from mcap.opcode import Opcode
@@ -93,7 +94,8 @@ class TopicSummary:
 
 @dataclass(frozen=True)
 class McapSummary:
-    """What :func:`summarize` found in a file.
+    """
+    What :func:`summarize` found in a file.
 
     ``finalised``: the file ends with a footer and the closing magic (a clean close wrote the
     summary); ``truncated`` is its negation (the writer died, or the file was cut).
@@ -145,7 +147,8 @@ def _not_regular(path: Path, mode: int) -> McapError:
 
 
 def _open_regular(path: Path) -> io.BufferedReader:
-    """Open ``path`` for reading without ever blocking on it.
+    """
+    Open ``path`` for reading without ever blocking on it.
 
     O_NONBLOCK makes the open of a FIFO return at once, and the opened file (not the name,
     which may change) must be a regular file.
@@ -203,7 +206,8 @@ def _remaining(stream) -> int:
 
 
 def _records(stream) -> Iterator[tuple[int, bytes]]:
-    """(opcode, body) of each record after the magic, up to and including the footer.
+    """
+    (opcode, body) of each record after the magic, up to and including the footer.
 
     Raises _Truncated where the stream ends or breaks before the footer and its closing magic,
     and at once, before reading it, for a record longer than what remains of the file.
@@ -309,7 +313,8 @@ def _chunk_data(chunk: Chunk) -> bytes:
 
 
 def _chunk_records(chunk: Chunk) -> list[Schema | Channel | Message]:
-    """Return the schemas, channels and messages of a chunk.
+    """
+    Return the schemas, channels and messages of a chunk.
 
     As the mcap library's breakup_chunk, with every record's length checked against what
     remains of the chunk.
@@ -438,7 +443,8 @@ def _split_sections(text: str) -> list[tuple[str, str]]:
 
 
 def _service_event_schema(schema: Schema) -> Schema:
-    """Rewrite rosbag2's 'SRV: pkg/srv/Name' schema into the event message layout.
+    """
+    Rewrite rosbag2's 'SRV: pkg/srv/Name' schema into the event message layout.
 
     The parser of mcap-ros2-support accepts no '_' in message names, so the event, request and
     response types are renamed NameEvent, NameRequest, NameResponse (decoding only needs the
@@ -508,7 +514,8 @@ class _Decoders:
 # -- public API ---------------------------------------------------------------------------------
 
 def read_messages(path, topics: Iterable[str] | str | None = None) -> Iterator[RecordedMessage]:
-    """Decoded messages of ``path`` in file order, optionally only those of ``topics``.
+    """
+    Yield the decoded messages of ``path`` in file order, optionally only those of ``topics``.
 
     Reads the file front to back (no seeking, the summary is not needed): a truncated file
     yields the messages of all its complete chunks, then the iteration ends. Raises McapError at
@@ -543,8 +550,12 @@ def _read_messages(path: Path, stream, wanted: set[str] | None) -> Iterator[Reco
 
 
 def summarize(path) -> McapSummary:
-    """Summarise ``path`` (see McapSummary). Raises McapError for a missing, empty or non-MCAP
-    file and for a truncated file without a complete chunk."""
+    """
+    Summarise ``path`` (see McapSummary).
+
+    Raises McapError for a missing, empty or non-MCAP file and for a truncated file without a
+    complete chunk.
+    """
     path, stream = _open(path)
     with stream:
         finalised = _summary_from_footer(path, stream)
