@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 import struct
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -141,7 +141,8 @@ def test_json_summary_of_golden(capsys, tmp_path):
     data = json.loads(capsys.readouterr().out)
     assert data['sampling']['n'] == 200 and data['sampling']['duration'] == pytest.approx(0.398)
     assert data['topics']['/impact_events']['count'] == 1
-    assert abs(data['spectrum']['peaks'][0]['omega'] - 2 * math.pi * 15) <= data['spectrum']['resolution']
+    assert (abs(data['spectrum']['peaks'][0]['omega'] - 2 * math.pi * 15)
+            <= data['spectrum']['resolution'])
     assert data['figures'] == [] and data['warnings'] == []
 
 
@@ -170,10 +171,13 @@ def test_every_figure_with_a_comparator_and_impacts(tmp_path):
     omega[t >= 0.3, 1] += 0.3
     model = omega.copy()
     model[:, 0] += 0.01 * t
-    impacts = [{'id': 4, 'start': 0.3 - 3e-7, 'end': 0.3, 'torque': (0, 1e6, 0), 'delta_omega': (0, 0.3, 0)},
-               {'id': 5, 'start': 0.5, 'end': 0.5 + 3e-7, 'torque': (0, 0, 1e3), 'delta_omega': (0, 0, 3e-4),
+    impacts = [{'id': 4, 'start': 0.3 - 3e-7, 'end': 0.3, 'torque': (0, 1e6, 0),
+                'delta_omega': (0, 0.3, 0)},
+               {'id': 5, 'start': 0.5, 'end': 0.5 + 3e-7, 'torque': (0, 0, 1e3),
+                'delta_omega': (0, 0, 3e-4),
                 'frame': 'orbital'}]
-    rec = load_recording(write_recording(tmp_path / 'all.mcap', t, omega, model=model, impacts=impacts,
+    rec = load_recording(write_recording(tmp_path / 'all.mcap', t, omega, model=model,
+                                         impacts=impacts,
                                          scenario=Scenario(duration=0.6)))
     paths = write_figures(rec, tmp_path / 'out')
     assert sorted(p.name for p in paths) == ['error.png', 'impact_0_id4.png', 'impact_1_id5.png',
@@ -197,20 +201,26 @@ def _run(*args, timeout=120):
 
 
 def test_python_dash_m_and_no_rclpy_is_imported(tmp_path):
-    """One subprocess: the module entry point runs, and importing and running the whole
-    analysis (figures and JSON included) loads no rclpy or rosidl module."""
+    """
+    Run the module entry point in one subprocess and check that no ROS module is loaded.
+
+    Importing and running the whole analysis (figures and JSON included) loads no rclpy or
+    rosidl module.
+    """
     code = (
-        "import sys, runpy\n"
+        'import sys, runpy\n'
         "sys.argv = ['analyze', sys.argv[1], '--json', '--figures', sys.argv[2]]\n"
-        "try:\n"
+        'try:\n'
         "    runpy.run_module('tumble_ros.analysis', run_name='__main__')\n"
-        "except SystemExit as e:\n"
-        "    assert e.code == 0, e.code\n"
-        "import tumble_ros.analysis.figures, tumble_ros.analysis.cli, tumble_ros.analysis.summary\n"
-        "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rosidl_runtime_py')\n"
+        'except SystemExit as e:\n'
+        '    assert e.code == 0, e.code\n'
+        'import tumble_ros.analysis.figures, tumble_ros.analysis.cli, '
+        'tumble_ros.analysis.summary\n'
+        "bad = sorted(m for m in sys.modules if m.split('.')[0] in "
+        "('rclpy', 'rosidl_runtime_py')\n"
         "             or m.startswith('rosidl') or m.endswith('_msgs') or '_msgs.' in m)\n"
         "print('LOADED', bad, file=sys.stderr)\n"
-        "sys.exit(3 if bad else 0)\n")
+        'sys.exit(3 if bad else 0)\n')
     done = _run('-c', code, str(GOLDEN), str(tmp_path / 'f'))
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)['sampling']['n'] == 200

@@ -1,4 +1,5 @@
-"""The analyze command on hostile or unusual input.
+"""
+The analyze command on hostile or unusual input.
 
 Bounded work, no blocking, no writing through links or over existing files, and recordings of
 simulators in ROS namespaces. Every refusal is one ``ERROR:`` line and status 1
@@ -72,7 +73,8 @@ def _chunk(data: bytes, uncompressed_size: int, compression: str) -> bytes:
 
 
 def _zeros_zstd(size: int, declare_size: bool) -> bytes:
-    """Return a zstd frame of ``size`` zero bytes, without holding the zeros in memory.
+    """
+    Return a zstd frame of ``size`` zero bytes, without holding the zeros in memory.
 
     ``declare_size``: the frame header states the size.
     """
@@ -95,7 +97,8 @@ def _zeros_lz4(size: int) -> bytes:
 
 def test_chunk_declaring_a_huge_uncompressed_size_is_refused_before_decompressing(tmp_path,
                                                                                   capsys):
-    """Refuse a decompression bomb from its declared sizes alone, without allocating.
+    """
+    Refuse a decompression bomb from its declared sizes alone, without allocating.
 
     32 MiB of zeros in 1 kB of zstd, declared as such: more than 1000 times the compressed size.
     """
@@ -118,7 +121,8 @@ def test_chunk_declaring_a_huge_uncompressed_size_is_refused_before_decompressin
 
 @pytest.mark.parametrize('compression', ['zstd', 'zstd, no size in the frame', 'lz4'])
 def test_chunk_that_expands_beyond_its_declared_size_stops_there(tmp_path, capsys, compression):
-    """Stop decompressing at the declared size, and refuse the chunk.
+    """
+    Stop decompressing at the declared size, and refuse the chunk.
 
     The chunk declares 100 kB but its frame holds 32 MiB (and may say so in its own header).
     """
@@ -165,7 +169,8 @@ sys.exit(command([sys.argv[1]]))
 
 @pytest.mark.skipif(not hasattr(os, 'mkfifo'), reason='no FIFOs here')
 def test_fifo_is_refused_without_blocking(tmp_path):
-    """Refuse a FIFO before opening it for reading, which would block without a writer.
+    """
+    Refuse a FIFO before opening it for reading, which would block without a writer.
 
     Run in a subprocess with a timeout, so that a regression fails this test instead of
     hanging the suite.
@@ -282,7 +287,8 @@ def test_python_api_refuses_existing_figures_unless_told(tmp_path):
 # -- namespaces -----------------------------------------------------------------------------------
 
 def _copy_into(writer: McapWriter, source: Path, namespace: str, channels: dict) -> None:
-    """Copy every message of ``source`` into ``writer``, its topic moved into ``namespace``.
+    """
+    Copy every message of ``source`` into ``writer``, its topic moved into ``namespace``.
 
     ``/clock`` stays global, as the simulator publishes it.
     """
@@ -304,7 +310,8 @@ def _namespaced(path: Path, sources: list[tuple[Path, str]]) -> Path:
 
 
 def _simulator_run(path: Path, frequency: float) -> Path:
-    """Write a recording as the simulator and the comparator publish it.
+    """
+    Write a recording as the simulator and the comparator publish it.
 
     wx at ``frequency`` rad/yr, a comparator with a known error, one impact, the scenario.
     """

@@ -1,6 +1,9 @@
-"""tumble_ros.analysis as functions: recordings with known content give the numbers they were
-built with (golden.mcap from scripts/make_golden_mcap.py's literal inputs; synthetic recordings
-written here)."""
+"""
+tumble_ros.analysis as functions.
+
+Recordings with known content give the numbers they were built with (golden.mcap from
+scripts/make_golden_mcap.py's literal inputs; synthetic recordings written here).
+"""
 from __future__ import annotations
 
 import json
@@ -47,7 +50,8 @@ def test_golden_counts_types_and_time_axis(golden):
     # attitude every 10th sample: q = (cos 15 t, 0, 0, sin 15 t)
     tq = t[::10]
     assert np.array_equal(rec.quaternion_t, rec.t[::10])
-    assert np.allclose(rec.quaternion, np.stack([np.cos(15 * tq), 0 * tq, 0 * tq, np.sin(15 * tq)], -1))
+    assert np.allclose(rec.quaternion,
+                       np.stack([np.cos(15 * tq), 0 * tq, 0 * tq, np.sin(15 * tq)], -1))
     assert len(rec.euler_t) == 0 and not rec.has_comparator
 
 
@@ -63,6 +67,7 @@ def test_golden_scenario_status_and_impact(golden):
     assert e.t == pytest.approx(0.1000003, abs=1e-15)
     # the samples around the pulse are t = 0.1 (k = 50) and 0.102 (k = 51)
     assert imp.t_before == pytest.approx(0.1) and imp.t_after == pytest.approx(0.102)
+
     def w(t):
         return np.array([math.cos(2 * math.pi * 15 * t), math.sin(2 * math.pi * 15 * t), 30.0])
     assert np.allclose(imp.sampled_jump, w(0.102) - w(0.1), atol=1e-12)
@@ -82,14 +87,19 @@ def test_golden_dominant_frequency_is_2_pi_15(golden):
 
 
 def test_golden_jacobi_is_constant_per_segment(golden):
-    """J = 1/2 w.Iw + 3/2 ws^2 u.Iu + ws (Iw).z' for the golden content, by hand: the attitude
-    turns about z, so z' = (0, 0, 1) and u stays in the body xy plane (u.Iu = Ix = 1); with
-    |w_perp| = 1, wz = 30, I = (1, 1, 1.5), ws = 1: J = 1/2 (1 + 1.5*900) + 3/2 + 1.5*30 = 722."""
+    """
+    Check J = 1/2 w.Iw + 3/2 ws^2 u.Iu + ws (Iw).z' for the golden content, by hand.
+
+    The attitude turns about z, so z' = (0, 0, 1) and u stays in the body xy plane
+    (u.Iu = Ix = 1); with |w_perp| = 1, wz = 30, I = (1, 1, 1.5), ws = 1:
+    J = 1/2 (1 + 1.5*900) + 3/2 + 1.5*30 = 722.
+    """
     _, s = golden
     inv = s.invariant
     assert inv.attitude_source == '/attitude'
     assert [seg.index for seg in inv.segments] == [0, 1]         # split at the impact
-    assert inv.segments[0].t_end == pytest.approx(0.1) and inv.segments[1].t_start == pytest.approx(0.12)
+    assert (inv.segments[0].t_end == pytest.approx(0.1)
+            and inv.segments[1].t_start == pytest.approx(0.12))
     assert sum(seg.n for seg in inv.segments) == 20
     for seg in inv.segments:
         assert seg.j0 == pytest.approx(722.0, rel=1e-14)
@@ -102,21 +112,29 @@ def test_golden_summary_text_and_json(golden):
     assert '/angular_velocity' in text and 'comparator error: none' in text
     assert 'WARNING' not in text
     data = json.loads(json.dumps(summary_to_dict(s), allow_nan=False))
-    assert data['topics']['/angular_velocity'] == {'type': 'geometry_msgs/msg/Vector3Stamped', 'count': 200}
-    assert data['comparator'] is None and data['impacts'][0]['event']['delta_omega'] == [0.0, 0.3, 0.0]
-    assert data['spectrum']['peaks'][0]['omega'] == pytest.approx(2 * math.pi * 15, abs=data['spectrum']['resolution'])
+    assert data['topics']['/angular_velocity'] == {'type': 'geometry_msgs/msg/Vector3Stamped',
+                                                   'count': 200}
+    assert (data['comparator'] is None
+            and data['impacts'][0]['event']['delta_omega'] == [0.0, 0.3, 0.0])
+    assert data['spectrum']['peaks'][0]['omega'] == pytest.approx(
+        2 * math.pi * 15, abs=data['spectrum']['resolution'])
     assert 'omega_axis' not in data['spectrum']
 
 
 # -- comparator error -------------------------------------------------------------------------
 
 def _comparator_case(tmp_path, **kwargs):
-    """101 samples, t = 0 .. 1 yr; w = (cos 20 t, sin 20 t, 30); error = w - model = (0.01 k, 0, 0)."""
+    """
+    Analyze a comparator recording of 101 samples, t = 0 .. 1 yr.
+
+    w = (cos 20 t, sin 20 t, 30); error = w - model = (0.01 k, 0, 0).
+    """
     t = np.arange(101) * 0.01
     omega = np.stack([np.cos(20 * t), np.sin(20 * t), np.full_like(t, 30.0)], -1)
     err = np.zeros_like(omega)
     err[:, 0] = 0.01 * np.arange(101)
-    path = write_recording(tmp_path / 'cmp.mcap', t, omega, model=omega - err, model_name='fast_spin',
+    path = write_recording(tmp_path / 'cmp.mcap', t, omega, model=omega - err,
+                           model_name='fast_spin',
                            scenario=Scenario(duration=1.0, output_interval=0.01), **kwargs)
     return analyze(load_recording(path))
 
@@ -124,7 +142,8 @@ def _comparator_case(tmp_path, **kwargs):
 @pytest.mark.parametrize('source, kwargs', [
     ('/comparison/error_norm', {}),
     ('/comparison/error', {'error_norm': False}),
-    ('/angular_velocity - /comparison/model_angular_velocity', {'error_norm': False, 'error_vectors': False}),
+    ('/angular_velocity - /comparison/model_angular_velocity',
+     {'error_norm': False, 'error_vectors': False}),
 ])
 def test_comparator_max_and_rms_error_come_out_as_constructed(tmp_path, source, kwargs):
     s = _comparator_case(tmp_path, **kwargs)
@@ -225,8 +244,12 @@ def _nutation(t, w_e=90.0):
 
 
 def test_paper_sampling_of_fig9_aliases_the_nutation(tmp_path):
-    """ERRATA.md: n = 1000 over 2000 yr (dt = 2 yr) undersamples the 2 pi/wE ~ 0.07-yr
-    oscillation (wE = a w0 = 3 * 30 = 90 rad/yr); pi/dt = 1.57 rad/yr."""
+    """
+    Check the aliasing of the nutation by the paper's sampling (ERRATA.md).
+
+    n = 1000 over 2000 yr (dt = 2 yr) undersamples the 2 pi/wE ~ 0.07-yr oscillation
+    (wE = a w0 = 3 * 30 = 90 rad/yr); pi/dt = 1.57 rad/yr.
+    """
     t = np.arange(1001) * 2.0
     path = write_recording(tmp_path / 'fig9.mcap', t, _nutation(t), scenario=FIG9, clock=False)
     s = analyze(load_recording(path))
@@ -290,7 +313,8 @@ def test_theory_lines_for_other_bodies():
 
 def test_only_angular_velocity(tmp_path):
     t = np.arange(50) * 0.01
-    path = write_recording(tmp_path / 'bare.mcap', t, _nutation(t, 40.0), clock=False, status=False)
+    path = write_recording(tmp_path / 'bare.mcap', t, _nutation(t, 40.0), clock=False,
+                           status=False)
     rec = load_recording(path)
     s = analyze(rec)
     assert rec.topics == {'/angular_velocity': ('geometry_msgs/msg/Vector3Stamped', 50)}
@@ -298,7 +322,8 @@ def test_only_angular_velocity(tmp_path):
     assert s.comparator is None and s.invariant is None and s.impacts == ()
     assert s.theory == () and s.aliasing.warning is None
     text = format_summary(s)
-    for phrase in ('comparator error: none', 'invariant drift: not computed', 'impacts: none recorded',
+    for phrase in ('comparator error: none', 'invariant drift: not computed',
+                   'impacts: none recorded',
                    'scenario: none', 'aliasing: not checked', 'seconds_per_year = 1 assumed'):
         assert phrase in text
     assert abs(s.spectrum.peaks[0].omega - 40.0) <= s.spectrum.resolution

@@ -1,4 +1,5 @@
-"""Helpers of the analysis tests: synthetic recordings with known content.
+"""
+Helpers of the analysis tests: synthetic recordings with known content.
 
 ``write_recording`` writes an MCAP file laid out as the simulator, comparator and recorder
 write theirs (same topics, types and stamps), from arrays given by the test, with
@@ -9,15 +10,14 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import QuaternionStamped, Vector3Stamped
+import numpy as np
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
-from tumble_ros_interfaces.msg import ErrorNorm, ImpactEvent, ScenarioDescription, SimStatus
-
-from tumble_ros.core import Scenario, TimeBase, dump_scenario
+from tumble_ros.core import dump_scenario, Scenario, TimeBase
 from tumble_ros.io import McapWriter, read_messages
+from tumble_ros_interfaces.msg import ErrorNorm, ImpactEvent, ScenarioDescription, SimStatus
 
 TYPES = {
     '/angular_velocity': ('geometry_msgs/msg/Vector3Stamped', Vector3Stamped),
@@ -50,11 +50,13 @@ def _vector3(msg, ns, v, frame='body'):
     return msg
 
 
-def write_recording(path, t, omega, *, quaternion=None, euler=None, scenario: Scenario | None = None,
+def write_recording(path, t, omega, *, quaternion=None, euler=None,
+                    scenario: Scenario | None = None,
                     seconds_per_year: float = 1.0, impacts=(), model=None, model_name='paper',
                     error_norm=True, error_vectors=True, clock=True, status=True,
                     segments=None, extra_topics=(), chunk_bytes=1_000_000):
-    """Write a recording; returns its path.
+    """
+    Write a recording; returns its path.
 
     ``t`` (n,) [yr], ``omega`` (n, 3); ``quaternion`` (n, 4) (w, x, y, z), ``euler`` (n, 3);
     ``scenario``: published on /scenario (revision 0 at t[0]) with ``seconds_per_year``;
@@ -81,7 +83,8 @@ def write_recording(path, t, omega, *, quaternion=None, euler=None, scenario: Sc
         desc.omega.x, desc.omega.y, desc.omega.z = (float(c) for c in omega[0])
         if quaternion is not None:
             q = quaternion[0]
-            desc.attitude.w, desc.attitude.x, desc.attitude.y, desc.attitude.z = (float(c) for c in q)
+            att = desc.attitude
+            att.w, att.x, att.y, att.z = (float(c) for c in q)
         add('/scenario', tb.to_ns(t[0]), desc, -2)
         for revision, start, w, q in segments or ():
             d = ScenarioDescription()
@@ -119,7 +122,8 @@ def write_recording(path, t, omega, *, quaternion=None, euler=None, scenario: Sc
         if euler is not None:
             add('/euler_angles', ns, _vector3(Vector3Stamped(), ns, euler[k], 'orbital'))
         if model is not None:
-            add('/comparison/model_angular_velocity', ns, _vector3(Vector3Stamped(), ns, model[k]), 1)
+            add('/comparison/model_angular_velocity', ns, _vector3(Vector3Stamped(), ns, model[k]),
+                1)
             err = omega[k] - model[k]
             if error_vectors:
                 add('/comparison/error', ns, _vector3(Vector3Stamped(), ns, err), 1)
@@ -139,9 +143,11 @@ def write_recording(path, t, omega, *, quaternion=None, euler=None, scenario: Sc
         ev.header.frame_id = 'body'
         ev.id = imp.get('id', 0)
         ev.start, ev.end = float(imp['start']), float(imp['end'])
-        ev.frame = ImpactEvent.FRAME_ORBITAL if imp.get('frame') == 'orbital' else ImpactEvent.FRAME_BODY
+        ev.frame = (ImpactEvent.FRAME_ORBITAL if imp.get('frame') == 'orbital'
+                    else ImpactEvent.FRAME_BODY)
         ev.torque.x, ev.torque.y, ev.torque.z = (float(c) for c in imp['torque'])
-        ev.delta_omega.x, ev.delta_omega.y, ev.delta_omega.z = (float(c) for c in imp['delta_omega'])
+        ev.delta_omega.x, ev.delta_omega.y, ev.delta_omega.z = (
+            float(c) for c in imp['delta_omega'])
         add('/impact_events', ns, ev, 2)
     if status:
         s = SimStatus()
@@ -169,11 +175,13 @@ def write_recording(path, t, omega, *, quaternion=None, euler=None, scenario: Sc
 def test_write_recording_round_trips_through_the_io_reader(tmp_path):
     t = np.arange(5) * 0.5
     omega = np.stack([np.cos(t), np.sin(t), np.full(5, 3.0)], -1)
-    path = write_recording(tmp_path / 'r.mcap', t, omega, scenario=Scenario(), seconds_per_year=2.0,
+    path = write_recording(tmp_path / 'r.mcap', t, omega, scenario=Scenario(),
+                           seconds_per_year=2.0,
                            model=omega * 0.5)
-    got = [m for m in read_messages(path, '/angular_velocity')]
+    got = list(read_messages(path, '/angular_velocity'))
     assert [m.message.header.stamp.sec * 10**9 + m.message.header.stamp.nanosec for m in got] == \
         [int(round(x * 2e9)) for x in t]
-    assert np.allclose([[m.message.vector.x, m.message.vector.y, m.message.vector.z] for m in got], omega)
+    assert np.allclose([[m.message.vector.x, m.message.vector.y, m.message.vector.z] for m in got],
+                       omega)
     norms = [m.message.norm for m in read_messages(path, '/comparison/error_norm')]
     assert np.allclose(norms, np.linalg.norm(omega * 0.5, axis=1))

@@ -6,37 +6,40 @@ import numpy as np
 import pytest
 
 from tumble_ros.core import (
+    ensemble_scenarios,
     Impact,
     IntegratorSettings,
-    ScenarioError,
-    ensemble_scenarios,
     kernels,
     load_scenario,
     random_impacts,
+    ScenarioError,
     simulate,
     simulate_ensemble,
 )
-from tumble_ros.core.ensemble import ProgressBar, main
+from tumble_ros.core.ensemble import main, ProgressBar
 
-CONFIG = Path(__file__).resolve().parents[1] / "config"
+CONFIG = Path(__file__).resolve().parents[1] / 'config'
 
 
-def fig9(method="splitting4", **changes):
-    settings = {"rk4": dict(step=1e-3), "dop853": dict(rtol=1e-10, atol=1e-12)}.get(method, dict(step=4e-3))
-    base = dict(duration=3.0, output_interval=0.25, integrator=IntegratorSettings(method=method, **settings))
-    return load_scenario(CONFIG / "fig9.yaml").replace(**{**base, **changes})
+def fig9(method='splitting4', **changes):
+    settings = {'rk4': {'step': 1e-3},
+                'dop853': {'rtol': 1e-10, 'atol': 1e-12}}.get(method, {'step': 4e-3})
+    base = {'duration': 3.0, 'output_interval': 0.25,
+            'integrator': IntegratorSettings(method=method, **settings)}
+    return load_scenario(CONFIG / 'fig9.yaml').replace(**{**base, **changes})
 
 
 def assert_body_equals_run(ens, b, single, tol=1e-12):
     assert single.success and ens.success[b]
     assert np.max(np.abs(ens.omega[b] - single.omega)) <= tol * np.max(np.abs(single.omega))
     assert np.max(np.abs(ens.quaternion[b] - single.quaternion)) <= tol
-    assert np.max(np.abs(ens.euler[b] - single.euler)) <= tol * max(1.0, np.max(np.abs(single.euler)))
+    assert (np.max(np.abs(ens.euler[b] - single.euler))
+            <= tol * max(1.0, np.max(np.abs(single.euler))))
     assert np.max(np.abs(ens.jacobi[b] - single.jacobi)) <= tol * np.max(np.abs(single.jacobi))
     assert ens.n_steps[b] == single.n_steps
 
 
-@pytest.mark.parametrize("method", ["splitting4", "rk4", "dop853"])
+@pytest.mark.parametrize('method', ['splitting4', 'rk4', 'dop853'])
 def test_identical_bodies_equal_single_runs(method):
     sc = fig9(method, impacts=(Impact(1.0, 3e-7, (2e6, 0.0, 1e6)),))
     ens = simulate_ensemble(sc, n_bodies=5)
@@ -48,12 +51,12 @@ def test_identical_bodies_equal_single_runs(method):
     assert ens.nfev[0] == simulate(sc).nfev
 
 
-@pytest.mark.parametrize("method", ["splitting", "dop853"])
+@pytest.mark.parametrize('method', ['splitting', 'dop853'])
 def test_bodies_with_their_own_impacts_and_initial_states_equal_their_single_runs(method):
     sc = fig9(method)
     n = 6
     hits = random_impacts(n, sc.duration, rate=1.0, torque=1e6, pulse=3e-7, seed=7)
-    hits[2] = hits[2] + (Impact(1.5, 0.01, (0.0, 0.0, 300.0), frame="orbital"),)
+    hits[2] = hits[2] + (Impact(1.5, 0.01, (0.0, 0.0, 300.0), frame='orbital'),)
     hits[4] = ()
     rng = np.random.default_rng(3)
     omega0 = np.array(sc.omega0) + 0.05 * rng.normal(size=(n, 3))
@@ -61,7 +64,8 @@ def test_bodies_with_their_own_impacts_and_initial_states_equal_their_single_run
     t_eval = np.array([0.0, 0.3, 1.5, 1.505, 2.999, 3.0])
     ens = simulate_ensemble(sc, t_eval, impacts=hits, omega0=omega0, euler0=euler0)
     bodies = ensemble_scenarios(sc, impacts=hits, omega0=omega0, euler0=euler0)
-    assert len(bodies) == n and bodies[4].impacts == () and bodies[2].impacts[-1].frame == "orbital"
+    assert (len(bodies) == n and bodies[4].impacts == ()
+            and bodies[2].impacts[-1].frame == 'orbital')
     for b, body in enumerate(bodies):
         assert_body_equals_run(ens, b, simulate(body, t_eval, fast=False))
     # the impacts really differ between bodies
@@ -69,34 +73,38 @@ def test_bodies_with_their_own_impacts_and_initial_states_equal_their_single_run
 
 
 def test_compiled_and_reference_ensembles_agree_and_failures_stay_per_body():
-    sc = fig9("rk4", duration=1.0)
-    kicks = [(), (Impact(0.0, 0.5, (1e300, 1e300, 1e300)),), ()]  # body 1's state overflows at once
+    sc = fig9('rk4', duration=1.0)
+    # body 1's state overflows at once
+    kicks = [(), (Impact(0.0, 0.5, (1e300, 1e300, 1e300)),), ()]
     ens = simulate_ensemble(sc, impacts=kicks, progress=False)
     ref = simulate_ensemble(sc, impacts=kicks, fast=False)
     assert ens.success.tolist() == ref.success.tolist() == [True, False, True]
-    assert "non-finite" in ens.messages[1] and ens.messages[1] == ref.messages[1] and ens.messages[0] == ""
+    assert ('non-finite' in ens.messages[1] and ens.messages[1] == ref.messages[1]
+            and ens.messages[0] == '')
     good = [0, 2]
     np.testing.assert_allclose(ens.omega[good], ref.omega[good], rtol=0, atol=1e-12 * 30)
     assert np.isnan(ens.omega[1, -1]).all() and np.isfinite(ens.omega[1, 0]).all()
 
 
 def test_progress_is_reported_and_inputs_are_checked():
-    sc = fig9("splitting", duration=1.0)
+    sc = fig9('splitting', duration=1.0)
     calls = []
-    simulate_ensemble(sc, n_bodies=3, progress=lambda f, t, steps: calls.append((f, t, steps)), checkpoints=4)
+    simulate_ensemble(sc, n_bodies=3, progress=lambda f, t, steps: calls.append((f, t, steps)),
+                      checkpoints=4)
     assert [c[0] for c in calls] == [0.25, 0.5, 0.75, 1.0] and calls[-1][1] == 1.0
     assert calls[-1][2] == 3 * 250 and all(a[2] <= b[2] for a, b in zip(calls, calls[1:]))
     stream = io.StringIO()
     bar = ProgressBar(2.0, 10, stream=stream)
     bar(0.5, 1.0, 1000)
     bar(1.0, 2.0, 2000)
-    assert "50.0%" in stream.getvalue() and "body-steps/s" in stream.getvalue()
-    with pytest.raises(ScenarioError, match="inconsistent"):
+    assert '50.0%' in stream.getvalue() and 'body-steps/s' in stream.getvalue()
+    with pytest.raises(ScenarioError, match='inconsistent'):
         simulate_ensemble(sc, n_bodies=2, omega0=np.zeros((3, 3)))
-    with pytest.raises(ScenarioError, match="end of the run"):
+    with pytest.raises(ScenarioError, match='end of the run'):
         simulate_ensemble(sc, impacts=[(Impact(0.99, 0.1, (1.0, 0.0, 0.0)),)])
-    with pytest.raises(ValueError, match="compiled ensemble not available"):
-        simulate_ensemble(sc.replace(integrator=IntegratorSettings(method="rk45")), n_bodies=1, fast=True)
+    with pytest.raises(ValueError, match='compiled ensemble not available'):
+        simulate_ensemble(sc.replace(integrator=IntegratorSettings(method='rk45')), n_bodies=1,
+                          fast=True)
 
 
 def test_random_impacts_are_reproducible_and_inside_the_run():
@@ -110,14 +118,16 @@ def test_random_impacts_are_reproducible_and_inside_the_run():
 
 
 def test_command_line(tmp_path, capsys):
-    out = tmp_path / "ens.npz"
-    code = main([str(CONFIG / "fig9.yaml"), "--bodies", "4", "--duration", "0.5", "--output-interval", "0.1",
-                 "--method", "splitting6", "--step", "0.01", "--impact-rate", "4", "--omega-spread", "0.01",
-                 "--seed", "1", "--out", str(out)])
+    out = tmp_path / 'ens.npz'
+    code = main([str(CONFIG / 'fig9.yaml'), '--bodies', '4', '--duration', '0.5',
+                 '--output-interval', '0.1',
+                 '--method', 'splitting6', '--step', '0.01', '--impact-rate', '4',
+                 '--omega-spread', '0.01',
+                 '--seed', '1', '--out', str(out)])
     captured = capsys.readouterr()
     assert code == 0, captured.err
-    assert "bodies: 4 (4 succeeded)" in captured.out and "body-steps/s" in captured.out
-    assert "100.0%" in captured.err  # progress display on stderr
+    assert 'bodies: 4 (4 succeeded)' in captured.out and 'body-steps/s' in captured.out
+    assert '100.0%' in captured.err  # progress display on stderr
     data = np.load(out)
-    assert data["omega"].shape == (4, 6, 3) and data["success"].all()
-    assert main(["--bodies", "0", "--quiet"]) == 2
+    assert data['omega'].shape == (4, 6, 3) and data['success'].all()
+    assert main(['--bodies', '0', '--quiet']) == 2

@@ -1,27 +1,34 @@
-"""The fast path (compiled loops, core/kernels.py) against the reference step-by-step path:
-same method and step, same trajectory to <= 1e-12; the same Propagator API and failures;
-the kernels' own source run as plain Python (numba disabled) gives the same numbers."""
+"""
+The fast path (compiled loops, core/kernels.py) against the reference step-by-step path.
+
+Same method and step, same trajectory to <= 1e-12; the same Propagator API and failures;
+the kernels' own source run as plain Python (numba disabled) gives the same numbers.
+"""
 import json
 import os
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tumble_ros.core import Impact, IntegrationError, IntegratorSettings, Propagator, Scenario, kernels, load_scenario, simulate
+from tumble_ros.core import (Impact, IntegrationError, IntegratorSettings, kernels, load_scenario,
+                             Propagator, Scenario, simulate)
 
-CONFIG = Path(__file__).resolve().parents[1] / "config"
-FAST_METHODS = {"rk4": dict(step=1e-3), "dop853": dict(rtol=1e-10, atol=1e-12), "splitting": dict(step=1e-3),
-                "splitting4": dict(step=2e-3), "splitting6": dict(step=5e-3)}
-needs_numba = pytest.mark.skipif(not kernels.COMPILED, reason="numba not available: only the reference path runs")
-IMPACTS = (Impact(0.5, 3e-7, (3e6, -1e6, 2e5)), Impact(1.2, 1e-3, (0.0, 1e3, 2e3), frame="orbital"),
+CONFIG = Path(__file__).resolve().parents[1] / 'config'
+FAST_METHODS = {'rk4': {'step': 1e-3}, 'dop853': {'rtol': 1e-10, 'atol': 1e-12},
+                'splitting': {'step': 1e-3},
+                'splitting4': {'step': 2e-3}, 'splitting6': {'step': 5e-3}}
+needs_numba = pytest.mark.skipif(not kernels.COMPILED,
+                                 reason='numba not available: only the reference path runs')
+IMPACTS = (Impact(0.5, 3e-7, (3e6, -1e6, 2e5)),
+           Impact(1.2, 1e-3, (0.0, 1e3, 2e3), frame='orbital'),
            Impact(1.2005, 2e-3, (5e2, 0.0, 0.0)))
 
 
 def fig9(**changes):
-    return load_scenario(CONFIG / "fig9.yaml").replace(**changes)
+    return load_scenario(CONFIG / 'fig9.yaml').replace(**changes)
 
 
 def assert_same(a, b, tol=1e-12):
@@ -35,7 +42,7 @@ def assert_same(a, b, tol=1e-12):
 
 
 @needs_numba
-@pytest.mark.parametrize("method", sorted(FAST_METHODS))
+@pytest.mark.parametrize('method', sorted(FAST_METHODS))
 def test_fast_and_reference_paths_give_the_same_trajectory(method):
     sc = fig9(duration=2.0, output_interval=0.01, impacts=IMPACTS,
               integrator=IntegratorSettings(method=method, **FAST_METHODS[method]))
@@ -45,27 +52,36 @@ def test_fast_and_reference_paths_give_the_same_trajectory(method):
 
 
 @needs_numba
-@pytest.mark.parametrize("method", ["rk4", "dop853", "splitting4"])
+@pytest.mark.parametrize('method', ['rk4', 'dop853', 'splitting4'])
 def test_euler_tracking_through_long_steps_matches(method):
-    """phi and psi turn by several radians per step: the tracking subdivides the step with
-    dense output on both paths, and the continuous angles agree."""
-    sc = Scenario(inertia=(1.0, 1.3, 1.9), omega0=(20.0, 5.0, 300.0), euler0=(0.5, 0.2, 0.6), duration=0.5,
-                  output_interval=0.05, integrator=IntegratorSettings(method=method, step=5e-3, rtol=1e-7, atol=1e-7))
+    """
+    Check the Euler angles when phi and psi turn by several radians per step.
+
+    The tracking subdivides the step with dense output on both paths, and the continuous
+    angles agree.
+    """
+    sc = Scenario(inertia=(1.0, 1.3, 1.9), omega0=(20.0, 5.0, 300.0), euler0=(0.5, 0.2, 0.6),
+                  duration=0.5, output_interval=0.05,
+                  integrator=IntegratorSettings(method=method, step=5e-3, rtol=1e-7, atol=1e-7))
     fast, ref = simulate(sc, fast=True), simulate(sc, fast=False)
     assert_same(fast, ref)
     assert np.ptp(ref.euler[:, 1]) > 20 * np.pi  # psi really winds up (~300 rad/yr)
 
 
 @needs_numba
-@pytest.mark.parametrize("method", ["dop853", "splitting"])
+@pytest.mark.parametrize('method', ['dop853', 'splitting'])
 def test_incremental_api_is_the_same_on_both_paths(method):
-    """advance_to/sample at irregular times, an impact scheduled while running,
-    pop_completed_impacts: what the sim node does."""
+    """
+    Drive both paths through the incremental API the way the sim node does.
+
+    advance_to/sample at irregular times, an impact scheduled while running,
+    pop_completed_impacts.
+    """
     sc = fig9(duration=3.0, output_interval=0.1, impacts=IMPACTS[:1],
               integrator=IntegratorSettings(method=method, **FAST_METHODS[method]))
     props = [Propagator(sc, fast=True), Propagator(sc, fast=False)]
     assert [p.fast for p in props] == [True, False]
-    late = Impact(2.0, 1e-3, (0.0, 0.0, 4e3), frame="orbital")
+    late = Impact(2.0, 1e-3, (0.0, 0.0, 4e3), frame='orbital')
     samples = [[], []]
     completed = [[], []]
     for t in (0.0, 0.25, 0.5, 0.5 + 3e-7, 0.9, 1.7, 1.75, 2.0005, 2.5, 3.0):
@@ -91,31 +107,35 @@ def test_incremental_api_is_the_same_on_both_paths(method):
 def test_failures_are_reported_the_same_way():
     # (|omega0| is bounded: a torque pulse of 1e300, which only needs to be finite, makes the
     # state overflow within the first step)
-    sc = Scenario(inertia=(1.0, 1.6, 2.2), impacts=(Impact(0.0, 0.5, (1e300, 1e300, 1e300)),), duration=1.0,
-                  integrator=IntegratorSettings(method="rk4", step=0.1))
-    with np.errstate(all="ignore"):
-        fast, ref = simulate(sc, t_eval=[0.0, 0.5, 1.0], fast=True), simulate(sc, t_eval=[0.0, 0.5, 1.0], fast=False)
-    assert not fast.success and fast.message == ref.message and "non-finite" in fast.message
+    sc = Scenario(inertia=(1.0, 1.6, 2.2), impacts=(Impact(0.0, 0.5, (1e300, 1e300, 1e300)),),
+                  duration=1.0,
+                  integrator=IntegratorSettings(method='rk4', step=0.1))
+    with np.errstate(all='ignore'):
+        fast, ref = (simulate(sc, t_eval=[0.0, 0.5, 1.0], fast=True),
+                     simulate(sc, t_eval=[0.0, 0.5, 1.0], fast=False))
+    assert not fast.success and fast.message == ref.message and 'non-finite' in fast.message
     np.testing.assert_array_equal(fast.omega, ref.omega)
-    with np.errstate(all="ignore"):
-        sc = sc.replace(integrator=IntegratorSettings(method="dop853", rtol=1e-13, atol=1e-300))
-        fast, ref = simulate(sc, t_eval=[0.0, 1.0], fast=True), simulate(sc, t_eval=[0.0, 1.0], fast=False)
+    with np.errstate(all='ignore'):
+        sc = sc.replace(integrator=IntegratorSettings(method='dop853', rtol=1e-13, atol=1e-300))
+        fast, ref = (simulate(sc, t_eval=[0.0, 1.0], fast=True),
+                     simulate(sc, t_eval=[0.0, 1.0], fast=False))
     assert not fast.success and fast.message == ref.message, (fast.message, ref.message)
-    prop = Propagator(sc.replace(integrator=IntegratorSettings(method="splitting", step=0.1)), fast=True)
-    with pytest.raises(IntegrationError, match="non-finite"):
+    prop = Propagator(sc.replace(integrator=IntegratorSettings(method='splitting', step=0.1)),
+                      fast=True)
+    with pytest.raises(IntegrationError, match='non-finite'):
         prop.advance_to(1.0)
-    assert prop.status == "failed"
+    assert prop.status == 'failed'
 
 
 def test_fast_path_capability_and_fallback():
     sc = fig9(duration=0.1, output_interval=0.01)
-    with pytest.raises(ValueError, match="no compiled loop"):
-        Propagator(sc.replace(integrator=IntegratorSettings(method="rk45")), fast=True)
-    euler = sc.replace(attitude="euler", integrator=IntegratorSettings(method="rk4", step=1e-3))
-    with pytest.raises(ValueError, match="quaternion"):
+    with pytest.raises(ValueError, match='no compiled loop'):
+        Propagator(sc.replace(integrator=IntegratorSettings(method='rk45')), fast=True)
+    euler = sc.replace(attitude='euler', integrator=IntegratorSettings(method='rk4', step=1e-3))
+    with pytest.raises(ValueError, match='quaternion'):
         Propagator(euler, fast=True)
     assert Propagator(euler).fast is False  # default: silently the reference path
-    assert Propagator(sc.replace(integrator=IntegratorSettings(method="rk45"))).fast is False
+    assert Propagator(sc.replace(integrator=IntegratorSettings(method='rk45'))).fast is False
     assert Propagator(sc).fast is kernels.COMPILED
     assert Propagator(sc, split_impacts=False).fast is False
 
@@ -126,13 +146,15 @@ def test_warm_up_compiles_the_single_body_and_ensemble_loops():
 
     assert warm_up() > 0.0
     for loop in (kernels.advance, kernels.ensemble_advance, kernels.ensemble_init):
-        assert loop.signatures, loop  # compiled (or loaded from the cache) for the real argument types
+        # compiled (or loaded from the cache) for the real argument types
+        assert loop.signatures, loop
 
 
 _SUBPROCESS = r"""
 import json, sys
 import numpy as np
-from tumble_ros.core import IntegratorSettings, Propagator, Impact, load_scenario, kernels, simulate
+from tumble_ros.core import (IntegratorSettings, Propagator, Impact, load_scenario, kernels,
+                             simulate)
 from tumble_ros.core.integrators import INTEGRATORS, SegmentProblem
 from tumble_ros.core.integrators.compiled import CompiledStepper
 sc = load_scenario(sys.argv[1])
@@ -140,13 +162,15 @@ out = {"compiled": kernels.COMPILED}
 problem = SegmentProblem(sc.inertia, sc.orbit_rate, (1e3, 0.0, 0.0), (0.0, 2e3, 0.0))
 y0 = np.concatenate([sc.omega0, [0.9, 0.1, 0.2, 0.3]])
 for name, kw in json.loads(sys.argv[2]).items():
-    st = CompiledStepper(INTEGRATORS[name], None, 0.0, y0, 0.2, IntegratorSettings(method=name, **kw), problem=problem)
+    st = CompiledStepper(INTEGRATORS[name], None, 0.0, y0, 0.2,
+                         IntegratorSettings(method=name, **kw), problem=problem)
     track = np.array(sc.euler0, dtype=float)
     t_out = np.array([0.05, 0.1234, 0.2])
     y_out, e_out = np.zeros((3, 7)), np.zeros((3, 3))
     k, steps = st.advance(0.2, track, t_out, y_out, e_out, 0)
     out[name] = [y_out.tolist(), e_out.tolist(), steps, st.nfev]
-r = simulate(sc.replace(duration=0.3, output_interval=0.1, integrator=IntegratorSettings(method="splitting", step=1e-3)))
+r = simulate(sc.replace(duration=0.3, output_interval=0.1,
+                        integrator=IntegratorSettings(method="splitting", step=1e-3)))
 out["simulate"] = r.omega.tolist()
 print(json.dumps(out))
 """
@@ -154,23 +178,27 @@ print(json.dumps(out))
 
 @needs_numba
 def test_kernels_run_as_plain_python_give_the_same_results():
-    """The pure-Python fallback: with numba disabled the kernels' source runs in the
-    interpreter and the Propagator takes the reference path; both agree with the compiled
-    loops to <= 1e-12."""
-    methods = {"rk4": dict(step=5e-3), "dop853": dict(rtol=1e-9, atol=1e-12), "splitting6": dict(step=2e-2)}
-    args = [sys.executable, "-c", _SUBPROCESS, str(CONFIG / "fig9.yaml"), json.dumps(methods)]
+    """
+    Check the pure-Python fallback against the compiled loops.
+
+    With numba disabled the kernels' source runs in the interpreter and the Propagator takes
+    the reference path; both agree with the compiled loops to <= 1e-12.
+    """
+    methods = {'rk4': {'step': 5e-3}, 'dop853': {'rtol': 1e-9, 'atol': 1e-12},
+               'splitting6': {'step': 2e-2}}
+    args = [sys.executable, '-c', _SUBPROCESS, str(CONFIG / 'fig9.yaml'), json.dumps(methods)]
     results = {}
-    for disabled in ("0", "1"):
+    for disabled in ('0', '1'):
         env = dict(os.environ, NUMBA_DISABLE_JIT=disabled)
         done = subprocess.run(args, capture_output=True, text=True, timeout=300, env=env)
         assert done.returncode == 0, done.stderr[-3000:]
         results[disabled] = json.loads(done.stdout.strip().splitlines()[-1])
-    jit, plain = results["0"], results["1"]
-    assert jit["compiled"] is True and plain["compiled"] is False
+    jit, plain = results['0'], results['1']
+    assert jit['compiled'] is True and plain['compiled'] is False
     for name in methods:
         y_j, e_j, steps_j, nfev_j = jit[name]
         y_p, e_p, steps_p, nfev_p = plain[name]
         assert (steps_j, nfev_j) == (steps_p, nfev_p)
         np.testing.assert_allclose(y_p, y_j, rtol=0, atol=1e-12 * 30)
         np.testing.assert_allclose(e_p, e_j, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(plain["simulate"], jit["simulate"], rtol=0, atol=1e-12 * 30)
+    np.testing.assert_allclose(plain['simulate'], jit['simulate'], rtol=0, atol=1e-12 * 30)

@@ -5,7 +5,7 @@ import pytest
 from tumble_ros.core.timebase import MAX_STAMP_NS, TimeBase
 
 
-@pytest.mark.parametrize("spy", [1.0, 0.001, 3600.0, 31557600.0 / 1e4])
+@pytest.mark.parametrize('spy', [1.0, 0.001, 3600.0, 31557600.0 / 1e4])
 def test_time_recovered_exactly_from_sec_nanosec(spy):
     tb = TimeBase(spy)
     interval_ns, n = tb.sample_grid(0.002, 10.0)
@@ -26,14 +26,14 @@ def test_ten_thousand_years_fit_in_int32_seconds():
 
 
 def test_span_past_int32_is_refused_with_a_reason():
-    with pytest.raises(ValueError, match="int32"):
+    with pytest.raises(ValueError, match='int32'):
         TimeBase(3.15576e7).check_span(10_000.0)  # real seconds per year: 3e11 s
     TimeBase(1.0).check_span(MAX_STAMP_NS / 1e9)
 
 
-@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf"), True])
+@pytest.mark.parametrize('bad', [0.0, -1.0, float('nan'), float('inf'), True])
 def test_bad_scale_refused(bad):
-    with pytest.raises(ValueError, match="seconds_per_year"):
+    with pytest.raises(ValueError, match='seconds_per_year'):
         TimeBase(bad)
 
 
@@ -41,13 +41,13 @@ def test_grid_is_rounded_to_whole_nanoseconds():
     interval_ns, n = TimeBase(1.0).sample_grid(1.4e-9, 1e-8)
     assert interval_ns == 1 and n == 11
     assert np.isclose(TimeBase(2.0).sample_grid(0.5, 2.0)[0], 1e9)
-    with pytest.raises(ValueError, match="^output_interval:.*1 ns"):  # below a nanosecond: refused
+    with pytest.raises(ValueError, match='^output_interval:.*1 ns'):  # below a nanosecond: refused
         TimeBase(1.0).sample_grid(1e-10, 1e-8)
 
 
 # (seconds_per_year = 0.01: 1e-7 yr is 1 ns, and a grid over 0.3 yr has 3e6 samples, within
 # MAX_SAMPLES)
-@pytest.mark.parametrize("duration", [0.3, 0.29999999999999999, 0.1 + 0.2, 2.0 / 3.0, 1e-7 * 7])
+@pytest.mark.parametrize('duration', [0.3, 0.29999999999999999, 0.1 + 0.2, 2.0 / 3.0, 1e-7 * 7])
 def test_grid_never_passes_the_end(duration):
     tb = TimeBase(0.01)
     interval_ns, n = tb.sample_grid(1e-7, duration)

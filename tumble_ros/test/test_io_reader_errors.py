@@ -1,9 +1,13 @@
-"""tumble_ros.io.mcap_reader: every problem with a file is an McapError with a one-line message;
-a truncated file yields exactly the messages of its complete chunks."""
+"""
+tumble_ros.io.mcap_reader's errors.
+
+Every problem with a file is an McapError with a one-line message; a truncated file yields
+exactly the messages of its complete chunks.
+"""
 from pathlib import Path
 
-import pytest
 from mcap.reader import make_reader
+import pytest
 
 from tumble_ros.io import McapError, McapWriter, read_messages, summarize
 
@@ -20,7 +24,7 @@ def one_line_error(call):
 
 
 def both(path):
-    """The error of read_messages and of summarize for ``path``."""
+    """Return the error of read_messages and of summarize for ``path``."""
     return (one_line_error(lambda: list(read_messages(path))),
             one_line_error(lambda: summarize(path)))
 
