@@ -27,20 +27,28 @@ def _is_ros(module: str) -> bool:
             or top.endswith(('_msgs', '_interfaces', '_srvs')))
 
 
+def _ros_imports(path: Path) -> list[str]:
+    names = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            names.append(node.module)
+    return [n for n in names if _is_ros(n)]
+
+
 @pytest.mark.parametrize('package', sorted(ROS_FREE))
 def test_sources_import_no_ros(package):
     folder = PACKAGE / package
-    offenders = []
-    for path in folder.rglob('*.py'):
-        for node in ast.walk(ast.parse(path.read_text())):
-            names = []
-            if isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            elif isinstance(node, ast.ImportFrom) and node.module:
-                names = [node.module]
-            offenders += [f'{path.relative_to(folder)}: {n}' for n in names if _is_ros(n)]
+    offenders = [f'{path.relative_to(folder)}: {name}'
+                 for path in folder.rglob('*.py') for name in _ros_imports(path)]
     assert not offenders
     assert {str(p.relative_to(folder)) for p in folder.rglob('*.py')} >= ROS_FREE[package]
+
+
+def test_the_topics_module_imports_no_ros():
+    """Nodes, analysis and tests share the topic names: the module must load without ROS."""
+    assert _ros_imports(PACKAGE / 'topics.py') == []
 
 
 def test_the_ros_check_catches_ros_imports():

@@ -40,6 +40,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
 
+from tumble_ros import topics
 from tumble_ros.core import ScenarioError
 from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
@@ -187,14 +188,11 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals) -> Bri
 
         def drained() -> bool:
             counts = recorder.counts
-            per_sample = ('angular_velocity', 'attitude', 'euler_angles', '/clock')
-            comparisons = ('comparison/model_angular_velocity', 'comparison/error',
-                           'comparison/error_norm')
+            expected = {**{t: sim.published_samples for t in topics.SIM_PER_SAMPLE},
+                        **{t: comparator.compared for t in topics.COMPARATOR_PER_SAMPLE}}
             return (comparator.consumed == sim.published_samples
-                    and all(counts.get(sim.resolve_topic_name(t), 0) == sim.published_samples
-                            for t in per_sample)
-                    and all(counts.get(comparator.resolve_topic_name(t), 0) == comparator.compared
-                            for t in comparisons))
+                    and all(counts.get(sim.resolve_topic_name(t), 0) == n
+                            for t, n in expected.items()))
 
         deadline = time.monotonic() + DRAIN_TIMEOUT
         while not drained() and not stopped() and time.monotonic() < deadline:

@@ -35,6 +35,7 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 
+from tumble_ros import topics
 from tumble_ros.core import ANALYTIC_MODELS, make_model, parse_scenario, ScenarioError, TimeBase
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.parameters import declare_node_parameters
@@ -81,18 +82,19 @@ class ComparatorNode(Node):
         self._pending: deque[Vector3Stamped] = deque(maxlen=MAX_PENDING)
         self._settle_timer = None
         self._pub_model = self.create_publisher(Vector3Stamped,
-                                                'comparison/model_angular_velocity', STATE_QOS)
-        self._pub_error = self.create_publisher(Vector3Stamped, 'comparison/error', STATE_QOS)
-        self._pub_norm = self.create_publisher(ErrorNorm, 'comparison/error_norm', STATE_QOS)
-        self._pub_status = self.create_publisher(DiagnosticStatus, 'comparison/status',
+                                                topics.MODEL_ANGULAR_VELOCITY, STATE_QOS)
+        self._pub_error = self.create_publisher(Vector3Stamped, topics.ERROR, STATE_QOS)
+        self._pub_norm = self.create_publisher(ErrorNorm, topics.ERROR_NORM, STATE_QOS)
+        self._pub_status = self.create_publisher(DiagnosticStatus, topics.COMPARISON_STATUS,
                                                  LATCHED_QOS)
         self._progress = ProgressReporter(self)
-        self.create_subscription(ScenarioDescription, 'scenario', self._on_scenario,
+        self.create_subscription(ScenarioDescription, topics.SCENARIO, self._on_scenario,
                                  DESCRIPTION_QOS)
-        self.create_subscription(Vector3Stamped, 'angular_velocity', self._on_omega, STATE_QOS)
+        self.create_subscription(Vector3Stamped, topics.ANGULAR_VELOCITY, self._on_omega,
+                                 STATE_QOS)
         self._status = (DiagnosticStatus.WARN, "waiting for the simulator's scenario description")
         self._report(*self._status)
-        self._sources = SourceMonitor(self, lambda: ('angular_velocity', 'scenario'),
+        self._sources = SourceMonitor(self, lambda: (topics.ANGULAR_VELOCITY, topics.SCENARIO),
                                       self._on_sources)
 
     # -- parameters ---------------------------------------------------------------------

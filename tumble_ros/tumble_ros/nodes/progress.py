@@ -19,12 +19,13 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from tumble_ros import topics
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros_interfaces.msg import ConsumerProgress
 
 __all__ = ['ProgressReporter', 'ConsumerTracker', 'PROGRESS_TOPIC', 'CONSUMER_TIMEOUT']
 
-PROGRESS_TOPIC = 'consumer_progress'
+PROGRESS_TOPIC = topics.CONSUMER_PROGRESS
 PROGRESS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                           reliability=ReliabilityPolicy.RELIABLE)
 #: Reporting period of a consumer [s] (when it made progress).

@@ -40,6 +40,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from tumble_ros import topics
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.mcap_writer import COMPRESSIONS
 from tumble_ros.nodes.clocks import steady_timer
@@ -53,18 +54,10 @@ __all__ = ['RecorderNode', 'DEFAULT_TOPICS', 'main']
 
 #: Recorded when neither ``topics`` nor ``topic_pattern`` is given (relative names resolve
 #: in the recorder's namespace).
-DEFAULT_TOPICS = (
-    'angular_velocity', 'attitude', 'euler_angles', '/clock', 'impact_events', 'status',
-    'scenario',
-    'comparison/model_angular_velocity', 'comparison/error', 'comparison/error_norm',
-    'comparison/status',
-)
+DEFAULT_TOPICS = topics.RECORDED
 #: Types whose CDR starts with a header stamp: one message per simulator sample. The recorder's
 #: progress is the oldest of their latest stamps. Not /clock: it is best effort (CLOCK_QOS).
-PER_SAMPLE_TYPES = {
-    'geometry_msgs/msg/Vector3Stamped', 'geometry_msgs/msg/QuaternionStamped',
-    'tumble_ros_interfaces/msg/ErrorNorm',
-}
+PER_SAMPLE_TYPES = {topics.TYPES[t] for t in topics.PER_SAMPLE}
 #: A per-sample topic silent for this long [s] no longer holds the recorder's progress back.
 STALE_TOPIC = 2.0
 

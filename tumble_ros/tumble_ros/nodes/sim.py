@@ -36,6 +36,7 @@ from rclpy.service_introspection import ServiceIntrospectionState
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 
+from tumble_ros import topics
 from tumble_ros.core import (
     dump_scenario,
     Impact,
@@ -71,10 +72,8 @@ WINDOW = 4 * BATCH
 MAX_PENDING_IMPACTS = 500
 #: Wall-clock seconds between two status messages while running (a heartbeat with a fresh t).
 STATUS_PERIOD = 1.0
-#: The state topics, relative to the node's namespace (one publisher each: this node).
-STATE_TOPICS = ('angular_velocity', 'attitude', 'euler_angles', 'impact_events', 'status',
-                'scenario')
-FRAMES = {ApplyImpact.Request.FRAME_BODY: 'body', ApplyImpact.Request.FRAME_ORBITAL: 'orbital'}
+FRAMES = {ApplyImpact.Request.FRAME_BODY: topics.FRAME_BODY,
+          ApplyImpact.Request.FRAME_ORBITAL: topics.FRAME_ORBITAL}
 FRAME_CODES = {name: code for code, name in FRAMES.items()}
 
 #: The simulator's own parameters (not part of the scenario): name -> (default, unit, description,
@@ -133,24 +132,25 @@ class SimNode(Node):
         self._min_consumers = params['min_consumers']
         self._consumers_gate_open = self._min_consumers == 0  # opens once, when they are all here
         self._consumers = ConsumerTracker(self, on_drop=self._publish_status)
-        self._pub_omega = self.create_publisher(Vector3Stamped, 'angular_velocity', STATE_QOS)
-        self._pub_attitude = self.create_publisher(QuaternionStamped, 'attitude', STATE_QOS)
-        self._pub_euler = self.create_publisher(Vector3Stamped, 'euler_angles', STATE_QOS)
-        self._pub_clock = (self.create_publisher(Clock, '/clock', CLOCK_QOS)
+        publish = self.create_publisher
+        self._pub_omega = publish(Vector3Stamped, topics.ANGULAR_VELOCITY, STATE_QOS)
+        self._pub_attitude = publish(QuaternionStamped, topics.ATTITUDE, STATE_QOS)
+        self._pub_euler = publish(Vector3Stamped, topics.EULER_ANGLES, STATE_QOS)
+        self._pub_clock = (publish(Clock, topics.CLOCK, CLOCK_QOS)
                            if params['publish_clock'] else None)
-        self._pub_events = self.create_publisher(ImpactEvent, 'impact_events', STATE_QOS)
-        self._pub_status = self.create_publisher(SimStatus, 'status', LATCHED_QOS)
-        self._pub_scenario = self.create_publisher(ScenarioDescription, 'scenario',
-                                                   DESCRIPTION_QOS)
-        self._srv_impact = self.create_service(ApplyImpact, 'apply_impact', self._on_apply_impact,
-                                               qos_profile=SERVICE_QOS)
+        self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, STATE_QOS)
+        self._pub_status = publish(SimStatus, topics.STATUS, LATCHED_QOS)
+        self._pub_scenario = publish(ScenarioDescription, topics.SCENARIO, DESCRIPTION_QOS)
+        self._srv_impact = self.create_service(ApplyImpact, topics.APPLY_IMPACT,
+                                               self._on_apply_impact, qos_profile=SERVICE_QOS)
         self._srv_impact.configure_introspection(
             self.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
-        self.create_service(Trigger, 'pause', self._on_pause)
-        self.create_service(Trigger, 'resume', self._on_resume)
-        self.create_service(Trigger, 'step', self._on_step)
+        self.create_service(Trigger, topics.PAUSE, self._on_pause)
+        self.create_service(Trigger, topics.RESUME, self._on_resume)
+        self.create_service(Trigger, topics.STEP, self._on_step)
+        own = [t for t in topics.SIM_TOPICS if t != topics.CLOCK or self._pub_clock is not None]
         self._sources = SourceMonitor(
-            self, lambda: (*STATE_TOPICS, *(('/clock',) if self._pub_clock else ())),
+            self, lambda: own,
             lambda problem: self._publish_status(
                 problem or "single source again on the simulator's topics"))
         self._publish_scenario(0.0, self._propagator.y)
@@ -284,13 +284,13 @@ class SimNode(Node):
         q0, q1, q2, q3 = quaternion.tolist()
         phi, psi, theta = euler.tolist()
         msg = Vector3Stamped()
-        msg.header.stamp, msg.header.frame_id = header_stamp, 'body'
+        msg.header.stamp, msg.header.frame_id = header_stamp, topics.FRAME_BODY
         msg.vector = Vector3(x=wx, y=wy, z=wz)
         attitude = QuaternionStamped()
-        attitude.header.stamp, attitude.header.frame_id = header_stamp, 'orbital'
+        attitude.header.stamp, attitude.header.frame_id = header_stamp, topics.FRAME_ORBITAL
         attitude.quaternion = Quaternion(w=q0, x=q1, y=q2, z=q3)
         angles = Vector3Stamped()
-        angles.header.stamp, angles.header.frame_id = header_stamp, 'euler_phi_psi_theta'
+        angles.header.stamp, angles.header.frame_id = header_stamp, topics.FRAME_EULER
         angles.vector = Vector3(x=phi, y=psi, z=theta)
         if self._pub_clock is not None:
             self._pub_clock.publish(Clock(clock=header_stamp))
@@ -304,7 +304,7 @@ class SimNode(Node):
         for impact, y_start, y_end in self._propagator.pop_completed_impacts():
             event = ImpactEvent()
             event.header.stamp = stamp(self.timebase.to_ns(impact.end))
-            event.header.frame_id = 'body'
+            event.header.frame_id = topics.FRAME_BODY
             event.id = self._impact_ids.get(id(impact), 0)
             event.start, event.end = impact.start, impact.end
             event.frame = FRAME_CODES[impact.frame]

@@ -1,0 +1,91 @@
+"""
+The tumble topics and services: names, types, frames, in one place, without ROS.
+
+Names are relative (they resolve in a node's namespace, so two asteroids run side by side in
+``/ast1`` and ``/ast2``), except ``/clock``, which is global by ROS convention. The nodes, the
+recorder's defaults, the offline analysis and the tests all take them from here.
+"""
+from __future__ import annotations
+
+__all__ = [
+    'ANGULAR_VELOCITY', 'ATTITUDE', 'EULER_ANGLES', 'CLOCK', 'IMPACT_EVENTS', 'STATUS', 'SCENARIO',
+    'CONSUMER_PROGRESS', 'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM', 'COMPARISON_STATUS',
+    'APPLY_IMPACT', 'PAUSE', 'RESUME', 'STEP', 'TYPES', 'SIM_TOPICS', 'COMPARATOR_TOPICS',
+    'RECORDED', 'PER_SAMPLE', 'SIM_PER_SAMPLE', 'COMPARATOR_PER_SAMPLE', 'FRAME_BODY',
+    'FRAME_ORBITAL', 'FRAME_EULER', 'in_namespace',
+]
+
+# -- the simulator's (sim) ---------------------------------------------------------------------
+#: w [rad/yr] in body axes (geometry_msgs/Vector3Stamped, frame ``body``).
+ANGULAR_VELOCITY = 'angular_velocity'
+#: rotation body -> orbital frame (geometry_msgs/QuaternionStamped, frame ``orbital``).
+ATTITUDE = 'attitude'
+#: the paper's (phi, psi, theta) [rad] in x, y, z (geometry_msgs/Vector3Stamped).
+EULER_ANGLES = 'euler_angles'
+#: the simulated clock (global).
+CLOCK = '/clock'
+#: one message per impact, after it ended.
+IMPACT_EVENTS = 'impact_events'
+#: RUNNING / PAUSED / FINISHED / DIVERGED (latched).
+STATUS = 'status'
+#: one description per integration segment (latched, history).
+SCENARIO = 'scenario'
+#: consumers' progress, for the simulator's pacing (subscribed by the simulator).
+CONSUMER_PROGRESS = 'consumer_progress'
+
+# -- the comparator's --------------------------------------------------------------------------
+MODEL_ANGULAR_VELOCITY = 'comparison/model_angular_velocity'
+ERROR = 'comparison/error'
+ERROR_NORM = 'comparison/error_norm'
+COMPARISON_STATUS = 'comparison/status'
+
+# -- the simulator's services --------------------------------------------------------------------
+APPLY_IMPACT = 'apply_impact'
+PAUSE = 'pause'
+RESUME = 'resume'
+STEP = 'step'
+
+#: ROS type of every topic.
+TYPES = {
+    ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
+    ATTITUDE: 'geometry_msgs/msg/QuaternionStamped',
+    EULER_ANGLES: 'geometry_msgs/msg/Vector3Stamped',
+    CLOCK: 'rosgraph_msgs/msg/Clock',
+    IMPACT_EVENTS: 'tumble_ros_interfaces/msg/ImpactEvent',
+    STATUS: 'tumble_ros_interfaces/msg/SimStatus',
+    SCENARIO: 'tumble_ros_interfaces/msg/ScenarioDescription',
+    CONSUMER_PROGRESS: 'tumble_ros_interfaces/msg/ConsumerProgress',
+    MODEL_ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
+    ERROR: 'geometry_msgs/msg/Vector3Stamped',
+    ERROR_NORM: 'tumble_ros_interfaces/msg/ErrorNorm',
+    COMPARISON_STATUS: 'diagnostic_msgs/msg/DiagnosticStatus',
+}
+
+#: What the simulator publishes (``/clock`` unless ``publish_clock`` is false).
+SIM_TOPICS = (ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, CLOCK, IMPACT_EVENTS, STATUS, SCENARIO)
+#: What the comparator publishes.
+COMPARATOR_TOPICS = (MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS)
+#: What the recorder records by default.
+RECORDED = SIM_TOPICS + COMPARATOR_TOPICS
+#: One message per simulator sample, reliable: a complete recording has as many of each as the
+#: simulator published samples (comparisons: one per compared sample). Not ``/clock``: best effort.
+SIM_PER_SAMPLE = (ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES)
+COMPARATOR_PER_SAMPLE = (MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM)
+PER_SAMPLE = SIM_PER_SAMPLE + COMPARATOR_PER_SAMPLE
+
+#: ``header.frame_id`` of body-axis vectors, of the attitude, and of the Euler angles.
+FRAME_BODY = 'body'
+FRAME_ORBITAL = 'orbital'
+FRAME_EULER = 'euler_phi_psi_theta'
+
+
+def in_namespace(namespace: str, topic: str) -> str:
+    """
+    Return the full name of ``topic`` in ``namespace`` (``'/ast1'``, ``'/'`` or ``''``).
+
+    A global name (``/clock``) is returned as it is, as ROS resolves it.
+    """
+    if topic.startswith('/'):
+        return topic
+    namespace = namespace.strip('/')
+    return f'/{namespace}/{topic}' if namespace else f'/{topic}'
