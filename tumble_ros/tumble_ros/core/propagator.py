@@ -28,6 +28,8 @@ import math
 
 import numpy as np
 
+from tumble_ros.errors import CoreError
+
 from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import FAILED, INTEGRATORS, RUNNING, SegmentProblem
 from .integrators.base import _finite_norm
@@ -61,7 +63,7 @@ def _interpolated_nonfinite_message(t: float) -> str:
     return f'non-finite state at t = {t:.10g} yr (interpolated inside a step that ran away)'
 
 
-class IntegrationError(RuntimeError):
+class IntegrationError(CoreError, RuntimeError):
     """The integration diverged or failed; ``t`` is the last good time [yr]."""
 
     def __init__(self, message: str, t: float) -> None:

@@ -23,6 +23,8 @@ import math
 from pathlib import Path
 from typing import Any, Mapping
 
+from tumble_ros.errors import CoreError
+
 from .dynamics import ATTITUDE_MODELS
 from .integrators import INTEGRATORS
 
@@ -80,7 +82,7 @@ MAX_ROTATION = 1e10
 RESOLUTION_ULPS = 16
 
 
-class ScenarioError(ValueError):
+class ScenarioError(CoreError, ValueError):
     """An invalid scenario field; the message starts with the field's name."""
 
 

@@ -42,6 +42,7 @@ from rclpy.parameter import Parameter
 
 from tumble_ros import topics
 from tumble_ros.core import ScenarioError
+from tumble_ros.errors import NodeError
 from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.recorder import RecorderNode
@@ -139,13 +140,13 @@ def run_bringup(params_file: str | None = None, output: str | None = None,
     be created (nothing is left running then).
     """
     if executor_name not in EXECUTORS:
-        raise ValueError(f"executor: must be one of {', '.join(EXECUTORS)}, got {executor_name!r}")
+        raise NodeError(f"executor: must be one of {', '.join(EXECUTORS)}, got {executor_name!r}")
     # The file first: what --ros-args says after it (-p duration:=...) overrides it.
     args = ['bringup', '--ros-args', *(['--params-file', str(params_file)] if params_file else []),
             *(ros_args or [])]
     problem = params_file_problem(args)
     if problem:
-        raise ValueError(problem)
+        raise NodeError(problem)
     with StopSignals('bringup') as stop, _isolated(visible):
         return _run(args, output, model, progress, executor_name, stop)
 
@@ -167,7 +168,7 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals) -> Bri
         nodes.append(recorder)
         problem = params_file_problem(args, sim.get_fully_qualified_name())
         if problem:
-            raise ValueError(problem)
+            raise NodeError(problem)
         refuse_unknown_parameters(nodes)
         for node in nodes:
             executor.add_node(node)

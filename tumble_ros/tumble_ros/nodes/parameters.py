@@ -16,6 +16,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from tumble_ros.core import PARAMETER_DOCS, Scenario
+from tumble_ros.errors import NodeError
 import yaml
 
 __all__ = ['declare_node_parameters', 'declare_scenario_parameters', 'node_parameter',
@@ -115,7 +116,7 @@ def refuse_unknown_parameters(nodes: Iterable[Node]) -> None:
             hint = f' (did you mean {near[0]!r}?)' if near else ''
             problems.append(f'{node.get_fully_qualified_name()}: unknown parameter {name!r}{hint}')
     if problems:
-        raise ValueError('; '.join(dict.fromkeys(problems)))
+        raise NodeError('; '.join(dict.fromkeys(problems)))
 
 
 def _params_files(args: list[str] | None) -> list[str]:

@@ -41,6 +41,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from tumble_ros import topics
+from tumble_ros.errors import NodeError
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.mcap_writer import COMPRESSIONS
 from tumble_ros.nodes.clocks import steady_timer
@@ -143,7 +144,7 @@ class RecorderNode(Node):
             return self.resolve_topic_name(topic)
         except (InvalidTopicNameException, _rclpy.RCLError) as err:
             reason = ' '.join(str(err).split())
-            raise ValueError(f'{parameter}: invalid topic name {topic!r}: {reason}') from None
+            raise NodeError(f'{parameter}: invalid topic name {topic!r}: {reason}') from None
 
     def _on_sources(self, problem: str | None) -> None:
         if problem:

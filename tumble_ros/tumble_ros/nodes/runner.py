@@ -11,6 +11,7 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from tumble_ros.core import ScenarioError
+from tumble_ros.errors import NodeError
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.shutdown import spin_until_stopped, StopSignals
 
@@ -51,7 +52,7 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
             problem = (params_file_problem(args, node.get_fully_qualified_name())
                        if needs_params_section else None)
             if problem:
-                raise ValueError(problem)
+                raise NodeError(problem)
             refuse_unknown_parameters([node])
             executor.add_node(node)
             spin_until_stopped(executor, lambda: stop.requested)
