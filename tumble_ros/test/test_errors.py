@@ -4,6 +4,7 @@ import pytest
 from tumble_ros import errors
 from tumble_ros.core import IntegrationError, Scenario, ScenarioError
 from tumble_ros.core.analytic import ModelNotApplicable
+from tumble_ros.io import McapError, MessageDefinitionError
 
 
 @pytest.mark.parametrize('error, package_class', [
@@ -11,6 +12,8 @@ from tumble_ros.core.analytic import ModelNotApplicable
     (IntegrationError, errors.CoreError),
     (ModelNotApplicable, errors.CoreError),
     (errors.NodeError, errors.TumbleRosError),
+    (McapError, errors.IoError),
+    (MessageDefinitionError, errors.IoError),
 ])
 def test_each_error_derives_from_its_package_class(error, package_class):
     assert issubclass(error, package_class) and issubclass(package_class, errors.TumbleRosError)

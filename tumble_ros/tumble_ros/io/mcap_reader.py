@@ -44,6 +44,8 @@ from mcap.records import (Channel, Chunk, ChunkIndex, Footer, Header, Message, S
                           Statistics)
 from mcap_ros2.decoder import DecoderFactory
 
+from tumble_ros.errors import IoError
+
 try:                                # both come with mcap; a missing one only refuses its chunks
     import lz4.frame as lz4_frame
 except ImportError:  # pragma: no cover
@@ -69,7 +71,7 @@ MAX_CHUNK_RATIO = 1000
 MAX_CHUNK_BYTES = 2 * 2 ** 30
 
 
-class McapError(Exception):
+class McapError(IoError):
     """Any failure to read an MCAP file (one-line message naming the file)."""
 
 

@@ -44,6 +44,8 @@ from pathlib import Path
 import re
 import sys
 
+from tumble_ros.errors import IoError
+
 __all__ = [
     'SEPARATOR',
     'Constant',
@@ -80,7 +82,7 @@ _FIELD_NAME_RE = re.compile(r'^[a-z][a-z0-9_]*$')
 _CONSTANT_NAME_RE = re.compile(r'^[A-Z][A-Z0-9_]*$')
 
 
-class MessageDefinitionError(LookupError):
+class MessageDefinitionError(IoError, LookupError):
     """A message definition could not be found or parsed (one-line message)."""
 
 
