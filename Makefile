@@ -63,7 +63,7 @@ $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 	@echo '== colcon build'
 	$(ENV) --build colcon build --symlink-install --base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
 	@# numba compiles the integration loops on first use (~15 s, cached): do it once here.
-	$(ENV) python -c "from tumble_ros.core.integrators.compiled import warm_up; print(f'== compiled loops ready ({warm_up():.1f} s)')"
+	$(ENV) python -m tumble_ros.cli.warmup
 	@mkdir -p $(STAMPS)
 	touch $@
 

@@ -35,7 +35,7 @@ setup(
             'recorder = tumble_ros.nodes.recorder:main',
             'bringup = tumble_ros.nodes.bringup:main',
             'analyze = tumble_ros.analysis.cli:main',
-            'ensemble = tumble_ros.core.ensemble:main',
+            'ensemble = tumble_ros.cli.ensemble:main',
         ],
     },
 )

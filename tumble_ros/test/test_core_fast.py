@@ -142,7 +142,7 @@ def test_fast_path_capability_and_fallback():
 
 @needs_numba
 def test_warm_up_compiles_the_single_body_and_ensemble_loops():
-    from tumble_ros.core.integrators.compiled import warm_up
+    from tumble_ros.cli.warmup import warm_up
 
     assert warm_up() > 0.0
     for loop in (kernels.advance, kernels.ensemble_advance, kernels.ensemble_init):

@@ -5,9 +5,10 @@ Each body is the scenario with its own impact sequence and/or initial state, e.g
 asteroid under N random impact sequences::
 
     from tumble_ros.core import load_scenario, random_impacts, simulate_ensemble
+    from tumble_ros.cli.progress import ProgressBar
     sc = load_scenario("tumble_ros/config/fig9.yaml").replace(duration=20.0, output_interval=1.0)
     hits = random_impacts(1000, sc.duration, rate=0.5, torque=1e6, pulse=3e-7, seed=1)
-    res = simulate_ensemble(sc, impacts=hits, progress=True)
+    res = simulate_ensemble(sc, impacts=hits, progress=ProgressBar(sc.duration, 1000))
     res.omega.shape        # (1000, 21, 3)
 
 Body k of the ensemble is exactly ``ensemble_scenarios(...)[k]``, and its samples are those
@@ -21,22 +22,16 @@ Methods with a compiled loop (rk4, dop853, splitting*) and the quaternion attitu
 path when numba is available; otherwise the bodies are run one after the other with
 :func:`~.simulate.simulate` (same results, slower).
 
-Command line (progress on stderr, summary on stdout)::
-
-    python -m tumble_ros.core.ensemble tumble_ros/config/fig9.yaml --bodies 10000 \
-        --duration 20 --output-interval 1 --impact-rate 0.5 --impact-torque 1e6 \
-        --method splitting6 --step 0.01 --out ensemble.npz
+The command line (progress on stderr, a summary on stdout) is :mod:`tumble_ros.cli.ensemble`.
 """
 from __future__ import annotations
 
-import argparse
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 import math
 import os
-import sys
 import time
-from typing import Callable, Sequence
+from typing import Callable
 
 import numpy as np
 
@@ -44,13 +39,12 @@ from . import kernels as K
 from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import INTEGRATORS
 from .integrators.compiled import failure_message, why_no_fast_path
-from .propagator import quaternions_to_matrices, segment_torques
-from .scenario import (Impact, IntegratorSettings, load_scenario, MAX_OMEGA, MAX_ROTATION,
-                       Scenario, ScenarioError)
+from .propagator import segment_torques
+from .rotation import continuous_quaternions, quaternions_to_matrices
+from .scenario import Impact, MAX_OMEGA, MAX_ROTATION, Scenario, ScenarioError
 from .simulate import _check_times, simulate
 
-__all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts',
-           'ProgressBar', 'main']
+__all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts']
 
 
 @dataclass(frozen=True)
@@ -194,48 +188,11 @@ def random_impacts(n_bodies: int, duration: float, *, rate: float, torque: float
 
 
 # ---------------------------------------------------------------------------------------
-# Progress display
-# ---------------------------------------------------------------------------------------
-class ProgressBar:
-    """
-    Progress display of a long run on a stream (stderr).
-
-    A bar redrawn in place on a terminal, a line every 10 % otherwise. Call with (fraction
-    done, t [yr], body-steps so far).
-    """
-
-    def __init__(self, total_time: float, n_bodies: int, stream=None, width: int = 30) -> None:
-        self.stream = stream if stream is not None else sys.stderr
-        self.total_time, self.n_bodies, self.width = total_time, n_bodies, width
-        self.start = time.perf_counter()
-        self._tty = hasattr(self.stream, 'isatty') and self.stream.isatty()
-        self._last_decile = -1
-
-    def __call__(self, fraction: float, t: float, body_steps: int) -> None:
-        elapsed = time.perf_counter() - self.start
-        rate = body_steps / elapsed if elapsed > 0 else 0.0
-        eta = elapsed * (1.0 - fraction) / fraction if fraction > 0 else math.inf
-        filled = int(round(self.width * fraction))
-        text = (f"[{'#' * filled}{'.' * (self.width - filled)}] {100 * fraction:5.1f}%  "
-                f't = {t:.6g}/{self.total_time:.6g} yr  {self.n_bodies} bodies  '
-                f'{rate:.3g} body-steps/s  elapsed {elapsed:.1f} s  ETA {eta:.1f} s')
-        if self._tty:
-            self.stream.write('\r' + text + ('\n' if fraction >= 1.0 else ''))
-            self.stream.flush()
-        else:
-            decile = int(fraction * 10 + 1e-9)
-            if decile != self._last_decile:
-                self._last_decile = decile
-                self.stream.write(text + '\n')
-                self.stream.flush()
-
-
-# ---------------------------------------------------------------------------------------
 # The ensemble
 # ---------------------------------------------------------------------------------------
 def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=None, euler0=None,
                       n_bodies: int | None = None, fast: bool | None = None,
-                      progress: bool | Callable[[float, float, int], None] | None = None,
+                      progress: Callable[[float, float, int], None] | None = None,
                       checkpoints: int | None = None,
                       threads: int | None = None) -> EnsembleResult:
     """
@@ -254,8 +211,8 @@ def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=N
         Compiled ensemble loop: None = when available, True = required (ValueError saying
         why not), False = one reference :func:`simulate` per body.
     progress
-        True for a progress display on stderr (:class:`ProgressBar`), or a callable
-        ``progress(fraction, t, body_steps)``, called after each of ``checkpoints`` chunks.
+        A callable ``progress(fraction, t, body_steps)``, called after each of ``checkpoints``
+        chunks (a display on stderr: :class:`tumble_ros.cli.progress.ProgressBar`).
     checkpoints
         Number of chunks of the time span, each one compiled call (default: 100 with
         progress, else 1; every chunk costs a little per body, and the steps taken do not
@@ -272,10 +229,6 @@ def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=N
     if fast and why:
         raise ValueError(f'compiled ensemble not available: {why}')
     use_fast = not why if fast is None else bool(fast)
-    if progress is True:
-        progress = ProgressBar(float(times[-1]), n)
-    elif progress is False:
-        progress = None
     if use_fast:
         if checkpoints is None:
             checkpoints = 1 if progress is None else 100
@@ -427,7 +380,7 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
             if kk == 0:
                 continue
             q = y_out[rows, :kk, 3:]
-            quat[rows, :kk] = _continuous_quaternions(q)
+            quat[rows, :kk] = continuous_quaternions(q)
             c = quaternions_to_matrices(q)
             jac[rows, :kk] = jacobi_integral(times[:kk], omega[rows, :kk], c, scenario.inertia,
                                              scenario.orbit_rate)
@@ -447,119 +400,3 @@ class _NoPool:
     @staticmethod
     def map(fn, items):  # noqa: A003 (the name of the Executor method it stands in for)
         return map(fn, items)
-
-
-def _continuous_quaternions(q: np.ndarray) -> np.ndarray:
-    """(B, n, 4) quaternions normalised, signs continuous along axis 1 (as Propagator.sample)."""
-    q = q / np.sqrt(np.sum(q * q, axis=-1, keepdims=True))
-    if q.shape[1] < 2:
-        return q
-    dots = np.einsum('bij,bij->bi', q[:, 1:], q[:, :-1])
-    flips = np.concatenate([np.ones((q.shape[0], 1)), np.where(dots < 0.0, -1.0, 1.0)], axis=1)
-    return q * np.cumprod(flips, axis=1)[:, :, None]
-
-
-# ---------------------------------------------------------------------------------------
-# Command line
-# ---------------------------------------------------------------------------------------
-def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog='python -m tumble_ros.core.ensemble',
-        description='Integrate N copies of a scenario (random impact sequences and/or spread '
-                    'initial spin) at once; progress on stderr, a summary on stdout, arrays to '
-                    '--out (.npz).')
-    p.add_argument('config', nargs='?',
-                   help='scenario file (ROS 2 params YAML); default: the default scenario')
-    p.add_argument('--bodies', '-n', type=int, default=100,
-                   help='number of bodies N (default 100)')
-    p.add_argument('--duration', type=float, help="override the scenario's duration [yr]")
-    p.add_argument('--output-interval', type=float, help='override the output interval [yr]')
-    p.add_argument('--method', help='override integrator.method (e.g. splitting6, dop853, rk4)')
-    p.add_argument('--step', type=float, help='override integrator.step [yr]')
-    p.add_argument('--rtol', type=float, help='override integrator.rtol')
-    p.add_argument('--atol', type=float, help='override integrator.atol')
-    p.add_argument('--impact-rate', type=float, default=0.0,
-                   help='random impacts per year per body (default 0)')
-    p.add_argument('--impact-torque', type=float, default=1e6,
-                   help='impact torque magnitude [I rad/yr^2]')
-    p.add_argument('--impact-duration', type=float, default=3e-7,
-                   help='pulse length [yr] (default 3e-7)')
-    p.add_argument('--impact-frame', choices=('body', 'orbital'), default='body')
-    p.add_argument('--omega-spread', type=float, default=0.0,
-                   help='standard deviation [rad/yr] of a Gaussian perturbation of omega0 '
-                        'per body')
-    p.add_argument('--seed', type=int, default=0, help='random seed (default 0)')
-    p.add_argument('--reference', action='store_true',
-                   help='run the reference path (one simulate() per body)')
-    p.add_argument('--out',
-                   help='write t, omega, euler, quaternion, jacobi, success, n_steps to this .npz')
-    p.add_argument('--quiet', '-q', action='store_true', help='no progress display')
-    return p
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
-    try:
-        sc = load_scenario(args.config) if args.config else Scenario()
-        changes = {k: v for k, v in (('duration', args.duration),
-                                     ('output_interval', args.output_interval))
-                   if v is not None}
-        if 'duration' in changes and 'output_interval' not in changes:
-            changes['output_interval'] = min(sc.output_interval, changes['duration'])
-        integ = {k: v for k, v in (('method', args.method), ('step', args.step),
-                                   ('rtol', args.rtol), ('atol', args.atol)) if v is not None}
-        if integ:
-            fields = {f: getattr(sc.integrator, f)
-                      for f in ('method', 'rtol', 'atol', 'step', 'max_step')}
-            changes['integrator'] = IntegratorSettings(**{**fields, **integ})
-        if changes:
-            sc = sc.replace(**changes)
-        if args.bodies < 1:
-            raise ScenarioError(f'--bodies: must be >= 1, got {args.bodies}')
-        rng = np.random.default_rng(args.seed)
-        impacts = None
-        if args.impact_rate > 0:
-            impacts = random_impacts(args.bodies, sc.duration, rate=args.impact_rate,
-                                     torque=args.impact_torque, pulse=args.impact_duration,
-                                     frame=args.impact_frame, seed=rng.integers(2**63))
-        omega0 = None
-        if args.omega_spread > 0:
-            omega0 = np.array(sc.omega0) + args.omega_spread * rng.normal(size=(args.bodies, 3))
-        result = simulate_ensemble(sc, impacts=impacts, omega0=omega0, n_bodies=args.bodies,
-                                   fast=False if args.reference else None, progress=not args.quiet)
-    except (ScenarioError, ValueError) as err:
-        print(f'error: {err}', file=sys.stderr)
-        return 2
-    n_impacts = (sum(len(b) for b in impacts) if impacts is not None
-                 else len(sc.impacts) * args.bodies)
-    ok = int(result.success.sum())
-    w_end = result.omega[:, -1]
-    print(f'bodies: {result.n_bodies} ({ok} succeeded), impacts: {n_impacts}, '
-          f'method: {sc.integrator.method}, '
-          f"{'compiled' if result.compiled else 'reference'} path")
-    print(f'time: {sc.duration:g} yr, {result.t.size} samples per body, '
-          f'{int(result.n_steps.sum())} body-steps in {result.wall_time:.3f} s = '
-          f'{result.body_steps_per_second:.3g} body-steps/s')
-    if ok:
-        good = result.success
-        w_perp = np.hypot(w_end[good, 0], w_end[good, 1])
-        print(f'final |w_perp| [rad/yr]: mean {w_perp.mean():.6g}, std {w_perp.std():.3g}; '
-              f'final wz: mean {w_end[good, 2].mean():.6g}, std {w_end[good, 2].std():.3g}')
-        jac = result.jacobi[good]
-        print(f'Jacobi integral: start {np.mean(jac[:, 0]):.10g}, '
-              f'end mean {np.mean(jac[:, -1]):.10g}, '
-              f'std {np.std(jac[:, -1]):.3g}')
-    for b, msg in enumerate(result.messages):
-        if msg:
-            print(f'body {b} failed: {msg}')
-    if args.out:
-        np.savez_compressed(args.out, t=result.t, omega=result.omega, euler=result.euler,
-                            quaternion=result.quaternion, jacobi=result.jacobi,
-                            success=result.success,
-                            n_steps=result.n_steps)
-        print(f'wrote {args.out}')
-    return 0 if ok == result.n_bodies else 1
-
-
-if __name__ == '__main__':  # pragma: no cover
-    sys.exit(main())

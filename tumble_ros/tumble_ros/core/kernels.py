@@ -34,7 +34,8 @@ import os
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
-__all__ = ['COMPILED', 'NUMBA_VERSION', 'problem_array', 'config_array', 'new_state', 'KERNEL_IDS']
+__all__ = ['free_flow_split', 'COMPILED', 'NUMBA_VERSION', 'problem_array', 'config_array',
+           'new_state', 'KERNEL_IDS']
 
 try:  # pragma: no cover - exercised by the environment, not by a test
     import numba as _numba
@@ -138,6 +139,18 @@ _TWO_PI = 2.0 * math.pi
 # =======================================================================================
 # Python-side constructors of the arrays (not compiled)
 # =======================================================================================
+def free_flow_split(inertia) -> tuple[float, tuple[float, float, float]]:
+    """
+    (1/I_r, (c_x, c_y, c_z)) with I_r the middle moment and c_i = 1/I_i - 1/I_r.
+
+    c_r is exactly 0, and so is c_i for a moment equal to I_r (symmetric body: exact free flow).
+    """
+    inertia = tuple(float(v) for v in inertia)
+    r = sorted(range(3), key=lambda i: inertia[i])[1]
+    inv_ref = 1.0 / inertia[r]
+    return inv_ref, tuple(0.0 if i == r else 1.0 / inertia[i] - inv_ref for i in range(3))
+
+
 def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0),
                   torque_orbital=(0.0, 0.0, 0.0)):
     """Return the ``p`` array of one segment (coefficients as ``_make_quaternion_rhs``)."""
@@ -155,8 +168,6 @@ def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0),
     p[P_ORB] = 1.0 if any(v != 0.0 for v in mo) else 0.0
     p[P_KX], p[P_KY], p[P_KZ] = k * (iz - iy), k * (ix - iz), k * (iy - ix)
     p[P_TBX], p[P_TBY], p[P_TBZ] = tb
-    from .integrators.splitting import free_flow_split
-
     inv_ref, coeffs = free_flow_split((ix, iy, iz))
     p[P_INVREF] = inv_ref
     p[P_CX], p[P_CY], p[P_CZ] = coeffs

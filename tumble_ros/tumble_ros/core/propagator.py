@@ -34,7 +34,8 @@ from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import FAILED, INTEGRATORS, RUNNING, SegmentProblem
 from .integrators.base import _finite_norm
 from .integrators.compiled import CompiledStepper, why_no_fast_path
-from .rotation import matrix_to_quaternion, unwrap_towards
+from .rotation import (continuous_quaternions, matrix_to_quaternion, quaternions_to_matrices,
+                       unwrap_towards)
 from .scenario import Impact, Scenario, ScenarioError
 
 __all__ = ['Propagator', 'IntegrationError', 'Sample', 'segment_torques',
@@ -79,38 +80,6 @@ def segment_torques(impacts, t0: float, t1: float) -> tuple[tuple, tuple]:
         if impact.start <= mid < impact.end:
             (body if impact.frame == 'body' else orbital)[:] += impact.torque
     return tuple(body), tuple(orbital)
-
-
-def quaternions_to_matrices(q: np.ndarray) -> np.ndarray:
-    """``rotation.quaternion_to_matrix`` for an (..., 4) array (same arithmetic): (..., 3, 3)."""
-    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    c = np.empty(q.shape[:-1] + (3, 3))
-    c[..., 0, 0] = 1.0 - s * (q2 * q2 + q3 * q3)
-    c[..., 0, 1] = s * (q1 * q2 - q0 * q3)
-    c[..., 0, 2] = s * (q1 * q3 + q0 * q2)
-    c[..., 1, 0] = s * (q1 * q2 + q0 * q3)
-    c[..., 1, 1] = 1.0 - s * (q1 * q1 + q3 * q3)
-    c[..., 1, 2] = s * (q2 * q3 - q0 * q1)
-    c[..., 2, 0] = s * (q1 * q3 - q0 * q2)
-    c[..., 2, 1] = s * (q2 * q3 + q0 * q1)
-    c[..., 2, 2] = 1.0 - s * (q1 * q1 + q2 * q2)
-    return c
-
-
-def continuous_quaternions(q: np.ndarray, previous=None) -> np.ndarray:
-    """
-    Normalise (n, 4) quaternions and flip signs so that consecutive ones have q.q' >= 0.
-
-    As :meth:`Propagator.sample` does one at a time; ``previous`` is the last one handed out.
-    """
-    q = q / np.sqrt(np.sum(q * q, axis=-1, keepdims=True))
-    if len(q) == 0:
-        return q
-    dots = np.einsum('ij,ij->i', q[1:], q[:-1])
-    first = -1.0 if previous is not None and np.dot(q[0], previous) < 0.0 else 1.0
-    signs = np.cumprod(np.concatenate([[first], np.where(dots < 0.0, -1.0, 1.0)]))
-    return q * signs[:, None]
 
 
 @dataclass(frozen=True)

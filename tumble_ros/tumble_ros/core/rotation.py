@@ -24,6 +24,8 @@ import math
 import numpy as np
 
 __all__ = [
+    'quaternions_to_matrices',
+    'continuous_quaternions',
     'euler_to_matrix',
     'matrix_to_euler',
     'quaternion_to_matrix',
@@ -136,3 +138,37 @@ def quaternion_multiply(p, q) -> np.ndarray:
 def unwrap_towards(angle: float, reference: float) -> float:
     """Return the angle ``angle + 2 pi k`` closest to ``reference`` (continuous tracking)."""
     return angle + 2.0 * math.pi * round((reference - angle) / (2.0 * math.pi))
+
+
+def quaternions_to_matrices(q: np.ndarray) -> np.ndarray:
+    """``rotation.quaternion_to_matrix`` for an (..., 4) array (same arithmetic): (..., 3, 3)."""
+    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    c = np.empty(q.shape[:-1] + (3, 3))
+    c[..., 0, 0] = 1.0 - s * (q2 * q2 + q3 * q3)
+    c[..., 0, 1] = s * (q1 * q2 - q0 * q3)
+    c[..., 0, 2] = s * (q1 * q3 + q0 * q2)
+    c[..., 1, 0] = s * (q1 * q2 + q0 * q3)
+    c[..., 1, 1] = 1.0 - s * (q1 * q1 + q3 * q3)
+    c[..., 1, 2] = s * (q2 * q3 - q0 * q1)
+    c[..., 2, 0] = s * (q1 * q3 - q0 * q2)
+    c[..., 2, 1] = s * (q2 * q3 + q0 * q1)
+    c[..., 2, 2] = 1.0 - s * (q1 * q1 + q2 * q2)
+    return c
+
+
+def continuous_quaternions(q: np.ndarray, previous=None) -> np.ndarray:
+    """
+    Normalise (..., n, 4) quaternions; flip signs so that consecutive ones have q.q' >= 0.
+
+    Along the sample axis (-2), as :meth:`Propagator.sample` does one at a time; ``previous``
+    (one body, (4,)) is the last quaternion handed out before these. (B, n, 4): B bodies.
+    """
+    q = q / np.sqrt(np.sum(q * q, axis=-1, keepdims=True))
+    if q.shape[-2] == 0:
+        return q
+    dots = np.einsum('...ij,...ij->...i', q[..., 1:, :], q[..., :-1, :])
+    first = -1.0 if previous is not None and np.dot(q[..., 0, :], previous) < 0.0 else 1.0
+    flips = np.concatenate([np.full(q.shape[:-2] + (1,), first), np.where(dots < 0.0, -1.0, 1.0)],
+                           axis=-1)
+    return q * np.cumprod(flips, axis=-1)[..., None]

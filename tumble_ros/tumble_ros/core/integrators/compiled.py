@@ -16,8 +16,7 @@ import numpy as np
 from .base import FAILED, FINISHED, RUNNING, SegmentProblem, step_nan_message, Stepper
 from .. import kernels as K
 
-__all__ = ['CompiledStepper', 'fast_path_available', 'why_no_fast_path', 'failure_message',
-           'warm_up']
+__all__ = ['CompiledStepper', 'fast_path_available', 'why_no_fast_path', 'failure_message']
 
 _EMPTY_T = np.empty(0)
 _EMPTY_Y = np.empty((0, K.N))
@@ -53,29 +52,6 @@ def why_no_fast_path(method: type[Stepper], attitude: str) -> str:
         return ('numba is not installed or is disabled (NUMBA_DISABLE_JIT / TUMBLE_ROS_NO_JIT); '
                 'the reference path gives the same results, slower')
     return ''
-
-
-def warm_up() -> float:
-    """
-    Compile the single-body and the ensemble loops now, or load them from numba's cache.
-
-    The first use after a build compiles for ~15 s; ``make setup`` calls this so that no run
-    waits for it. Returns the seconds taken (0 when numba is unavailable).
-    """
-    import time
-
-    from ..ensemble import simulate_ensemble
-    from ..scenario import IntegratorSettings, Scenario
-    from ..simulate import simulate
-
-    if not K.COMPILED:
-        return 0.0
-    started = time.perf_counter()
-    tiny = Scenario(duration=1e-3, output_interval=1e-3,
-                    integrator=IntegratorSettings(method='splitting', step=1e-4))
-    simulate(tiny)
-    simulate_ensemble(tiny, n_bodies=2)
-    return time.perf_counter() - started
 
 
 def fast_path_available(method: type[Stepper], attitude: str) -> bool:

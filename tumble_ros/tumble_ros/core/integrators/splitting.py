@@ -51,8 +51,9 @@ import math
 import numpy as np
 
 from .base import Stepper
+from ..kernels import free_flow_split
 
-__all__ = ['Splitting', 'Splitting4', 'Splitting6', 'free_flow_split', 'COMPOSITIONS']
+__all__ = ['Splitting', 'Splitting4', 'Splitting6', 'COMPOSITIONS']
 
 _Y4 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
 #: Symmetric composition coefficients gamma_j of the Strang step, by order.
@@ -65,18 +66,6 @@ COMPOSITIONS: dict[int, tuple[float, ...]] = {
         0.08221359629355080023149045, 0.79854399093482996339895035, 0.08221359629355080023149045,
         -0.70624617255763935980996482, 0.33259913678935943859974864, 0.39216144400731413927925056),
 }
-
-
-def free_flow_split(inertia) -> tuple[float, tuple[float, float, float]]:
-    """
-    (1/I_r, (c_x, c_y, c_z)) with I_r the middle moment and c_i = 1/I_i - 1/I_r.
-
-    c_r is exactly 0, and so is c_i for a moment equal to I_r (symmetric body: exact free flow).
-    """
-    inertia = tuple(float(v) for v in inertia)
-    r = sorted(range(3), key=lambda i: inertia[i])[1]
-    inv_ref = 1.0 / inertia[r]
-    return inv_ref, tuple(0.0 if i == r else 1.0 / inertia[i] - inv_ref for i in range(3))
 
 
 def _torque(problem, q0, q1, q2, q3, t):

@@ -1,0 +1,99 @@
+"""
+The import map: no circle, and every arrow points down the layers.
+
+Layers, bottom up: ``errors`` and ``topics`` (facts, no imports), ``core`` (numerics), ``io``
+(recordings), ``analysis`` and ``cli`` (offline tools over core and io), ``nodes`` (ROS).
+A module may import its own package and the layers below, never above.
+"""
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / 'tumble_ros'
+#: package -> the tumble_ros packages it may import (besides itself).
+ALLOWED = {
+    'errors': set(),
+    'topics': set(),
+    'core': {'errors'},
+    'io': {'errors', 'topics'},
+    'analysis': {'errors', 'topics', 'core', 'io'},
+    'cli': {'errors', 'core'},
+    'nodes': {'errors', 'topics', 'core', 'io'},
+    '__main__': {'nodes', 'analysis', 'cli'},
+    '__init__': set(),
+}
+
+
+def module_name(path: Path) -> str:
+    parts = ('tumble_ros',) + path.relative_to(PACKAGE).with_suffix('').parts
+    return '.'.join(parts[:-1] if parts[-1] == '__init__' else parts)
+
+
+def modules() -> dict[str, Path]:
+    return {module_name(p): p for p in PACKAGE.rglob('*.py')}
+
+
+def imports(path: Path, known: dict[str, Path]) -> set[str]:
+    """Return the tumble_ros modules that the file at ``path`` imports, at any depth."""
+    this = module_name(path)
+    package = this if path.name == '__init__.py' else this.rpartition('.')[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ''
+            if node.level:
+                anchor = package.split('.')
+                anchor = anchor[:len(anchor) - node.level + 1]
+                base = '.'.join(anchor + ([base] if base else []))
+            # `from pkg import submodule` imports the submodule, else the module itself.
+            targets = [f'{base}.{a.name}' if f'{base}.{a.name}' in known else base
+                       for a in node.names]
+        else:
+            continue
+        found |= {t for t in targets if t in known and t != this}
+    return found
+
+
+def graph() -> dict[str, set[str]]:
+    known = modules()
+    return {name: imports(path, known) for name, path in known.items()}
+
+
+def layer(module: str) -> str:
+    return module.split('.')[1] if '.' in module else '__init__'
+
+
+def test_no_import_circle():
+    edges = graph()
+    state, stack = {}, []
+
+    def visit(node):
+        state[node] = 'open'
+        stack.append(node)
+        for nxt in sorted(edges[node]):
+            if state.get(nxt) == 'open':
+                raise AssertionError('import circle: ' + ' -> '.join(
+                    stack[stack.index(nxt):] + [nxt]))
+            if nxt not in state:
+                visit(nxt)
+        stack.pop()
+        state[node] = 'done'
+
+    for node in sorted(edges):
+        if node not in state:
+            visit(node)
+
+
+def test_every_arrow_points_down():
+    upward = sorted(f'{a} -> {b}' for a, targets in graph().items() for b in targets
+                    if layer(b) != layer(a) and layer(b) not in ALLOWED[layer(a)])
+    assert not upward
+
+
+def test_the_check_sees_relative_and_nested_imports(tmp_path):
+    known = modules()
+    ensemble = imports(PACKAGE / 'core' / 'ensemble.py', known)
+    assert 'tumble_ros.core.kernels' in ensemble  # `from . import kernels as K`
+    assert 'tumble_ros.core.simulate' in ensemble  # `from .simulate import ...`
+    assert 'tumble_ros.core' in imports(PACKAGE / 'cli' / 'warmup.py', known)

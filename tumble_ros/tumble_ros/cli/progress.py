@@ -1,0 +1,42 @@
+"""A progress display for long runs on a stream (stderr): a bar on a terminal, else lines."""
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+__all__ = ['ProgressBar']
+
+
+class ProgressBar:
+    """
+    Progress display of a long run on a stream (stderr).
+
+    A bar redrawn in place on a terminal, a line every 10 % otherwise. Call with (fraction
+    done, t [yr], body-steps so far).
+    """
+
+    def __init__(self, total_time: float, n_bodies: int, stream=None, width: int = 30) -> None:
+        self.stream = stream if stream is not None else sys.stderr
+        self.total_time, self.n_bodies, self.width = total_time, n_bodies, width
+        self.start = time.perf_counter()
+        self._tty = hasattr(self.stream, 'isatty') and self.stream.isatty()
+        self._last_decile = -1
+
+    def __call__(self, fraction: float, t: float, body_steps: int) -> None:
+        elapsed = time.perf_counter() - self.start
+        rate = body_steps / elapsed if elapsed > 0 else 0.0
+        eta = elapsed * (1.0 - fraction) / fraction if fraction > 0 else math.inf
+        filled = int(round(self.width * fraction))
+        text = (f"[{'#' * filled}{'.' * (self.width - filled)}] {100 * fraction:5.1f}%  "
+                f't = {t:.6g}/{self.total_time:.6g} yr  {self.n_bodies} bodies  '
+                f'{rate:.3g} body-steps/s  elapsed {elapsed:.1f} s  ETA {eta:.1f} s')
+        if self._tty:
+            self.stream.write('\r' + text + ('\n' if fraction >= 1.0 else ''))
+            self.stream.flush()
+        else:
+            decile = int(fraction * 10 + 1e-9)
+            if decile != self._last_decile:
+                self._last_decile = decile
+                self.stream.write(text + '\n')
+                self.stream.flush()
