@@ -18,6 +18,7 @@ from tumble_ros.core import IntegratorSettings, Scenario, ScenarioError, simulat
 from tumble_ros.core.analytic import (
     AnchorState,
     applicability,
+    characteristic_frequencies,
     make_model,
     ModelNotApplicable,
     MODELS,
@@ -435,6 +436,139 @@ def test_importing_the_analytic_module_loads_no_rclpy():
     done = subprocess.run([sys.executable, '-c', code], cwd=PACKAGE_ROOT, env=env,
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+# -- frequencies ---------------------------------------------------------------------------
+@pytest.mark.parametrize('name', sorted(MODELS))
+def test_every_model_names_its_frequencies(name):
+    m = make_model(name, scenario_for(name))
+    lines = m.frequencies()
+    assert lines and len({f.name for f in lines}) == len(lines)
+    assert all(math.isfinite(f.omega) and f.omega >= 0.0 and f.meaning for f in lines)
+
+
+def _fit_residual(m, omegas, extra=()):
+    """Return max |w_perp - its least-squares fit on exp(+-i W tau), W in omegas|, relative."""
+    tau = np.linspace(0.0, 3.0, 3001)
+    w = m.omega(m.t0 + tau)
+    w_perp = w[:, 0] + 1j * w[:, 1]
+    basis = [np.exp(s * 1j * omega * tau) for omega in omegas for s in (1, -1)]
+    basis += [g(tau) for g in extra]
+    if not basis:
+        return 1.0
+    basis = np.stack(basis, -1)
+    coeffs = np.linalg.lstsq(basis, w_perp, rcond=None)[0]
+    return np.max(np.abs(basis @ coeffs - w_perp)) / np.max(np.abs(w_perp))
+
+
+@pytest.mark.parametrize('name', ('fast_spin', 'fast_spin_precessing', 'torque_free_symmetric'))
+def test_the_models_w_perp_is_made_of_its_frequencies_only(name):
+    """The model's w = wx + i wy is a sum of exp(+-i W t) over its named W, to rounding."""
+    m = make_model(name, scenario_for(name))
+    omegas = [f.omega for f in m.frequencies()]
+    assert _fit_residual(m, omegas) < 1e-10
+    for k in range(len(omegas)):  # and each of them is needed
+        assert _fit_residual(m, omegas[:k] + omegas[k + 1:]) > 1e-8
+
+
+def test_the_paper_models_w_perp_is_its_frequencies_plus_the_secular_term():
+    m = make_model('paper', scenario_for('paper'))
+    secular = (lambda tau: tau * np.exp(1j * m.lam * tau),)
+    assert _fit_residual(m, [f.omega for f in m.frequencies()], secular) < 1e-10
+
+
+def test_linear_model_frequencies_are_the_documented_formulas():
+    """Fig 4 body: a = 0.5, w0 = 30, ws = 1, theta0 = 0.1 (docs/analytic.md)."""
+    sc = scenario_for('paper')
+    a, w0, ws, th = 0.5, 30.0, 1.0, 0.1
+    w_e = a * w0
+    w_a = 2 * (ws + (w0 + w_e) / math.cos(th))  # ERRATA 6
+    paper = {f.name: f.omega for f in make_model('paper', sc).frequencies()}
+    assert paper == pytest.approx({'wE': w_e, '|wA+wE|': w_a + w_e, '|wA-wE|': w_a - w_e},
+                                  rel=1e-14)
+    fast = {f.name: f.omega for f in make_model('fast_spin', sc).frequencies()}
+    assert fast == pytest.approx({'wE': w_e, '|w0|': w0, '|w0-2ws|': w0 - 2 * ws,
+                                  '|w0+2ws|': w0 + 2 * ws}, rel=1e-14)
+    s = 1.5 * ws ** 2 * a / ((1 + a) * w0)
+    op, dbar = s * math.cos(th), s * (3 * math.cos(th) ** 2 - 1) / 2
+    precessing = make_model('fast_spin_precessing', sc).frequencies()
+    assert precessing[0].name == '|wE+Op|' and precessing[0].omega == pytest.approx(w_e + op)
+    forced = {f.name: f.omega for f in precessing[1:]}
+    w0p, wsp = w0 + op * math.cos(th), ws - op
+    assert forced == pytest.approx({"|w0'|": w0p, "|w0'-2ws'|": w0p - 2 * wsp,
+                                    "|w0'+2ws'|": w0p + 2 * wsp}, rel=1e-14)
+    adiabatic = make_model('fast_spin_adiabatic', sc)
+    assert adiabatic.mean_shift == pytest.approx(dbar, rel=1e-14)
+    (free, *rest) = adiabatic.frequencies()
+    assert (free.name, free.omega) == ('|wE+dbar|', pytest.approx(w_e + dbar, rel=1e-14))
+    assert {f.name: f.omega for f in rest} == forced
+
+
+@pytest.mark.parametrize('name,inertia,omega0,mode', FREE_CASES[1:])
+def test_euler_poinsot_frequency_is_the_period_of_omega(name, inertia, omega0, mode):
+    m = make_model(name, free_scenario(inertia, omega0))
+    (line,) = m.frequencies()
+    assert line.name == 'Euler-Poinsot' and mode in line.meaning
+    period = 2 * math.pi / line.omega
+    t = np.linspace(0.0, period, 101)
+    np.testing.assert_allclose(m.omega(t + period), m.omega(t), rtol=0,
+                               atol=1e-11 * np.linalg.norm(omega0))
+    assert np.max(np.abs(m.omega(t + period / 3) - m.omega(t))) > 1e-3  # not a shorter one
+
+
+def test_a_constant_omega_has_no_frequency():
+    m = make_model('torque_free_exact', free_scenario((1.0, 1.6, 2.2), (0.0, 0.0, 3.0)))
+    assert m.mode == 'constant' and m.frequencies() == ()
+
+
+def test_characteristic_frequencies_of_a_symmetric_body_are_asked_of_the_models():
+    sc = scenario_for('paper')
+    lines, basis = characteristic_frequencies(sc)
+    assert [f.name for f in lines] == ['wE', '|wA-wE|', '|wA+wE|', '|w0|', '|w0-2ws|',
+                                       '|w0+2ws|', '|wE+dbar|']
+    assert basis == ('symmetric body: a = 0.5, w0 = 30 rad/yr, ws = 1 rad/yr, theta0 = 0.1 rad '
+                     '(scenario inputs)')
+    models = {name: {f.name: f for f in make_model(name, sc).frequencies()}
+              for name in ('paper', 'fast_spin', 'fast_spin_adiabatic')}
+    owner = {'wE': 'fast_spin', '|wA-wE|': 'paper', '|wA+wE|': 'paper', '|w0|': 'fast_spin',
+             '|w0-2ws|': 'fast_spin', '|w0+2ws|': 'fast_spin', '|wE+dbar|': 'fast_spin_adiabatic'}
+    for line in lines:
+        assert line == models[owner[line.name]][line.name]   # the same numbers, bit for bit
+    # where a model does not apply, its lines are left out
+    upright = sc.replace(euler0=(0.5, 0.0, math.pi / 2))   # the paper's phi rate diverges
+    names = [f.name for f in characteristic_frequencies(upright).lines]
+    assert '|wA+wE|' not in names and 'wE' in names
+    names = [f.name for f in characteristic_frequencies(sc.replace(omega0=(0.0, 1.0, 0.0))).lines]
+    assert '|wE+dbar|' not in names and '|wA+wE|' in names
+
+
+def test_characteristic_frequencies_without_torque_and_of_asymmetric_bodies():
+    lines, basis = characteristic_frequencies(Scenario(orbit_rate=0.0))
+    assert [(f.name, f.omega) for f in lines] == [('wE', 15.0)]
+    assert basis.endswith('; no torque: wE only (exact)')
+    asym = Scenario(inertia=(1.0, 1.6, 2.2), orbit_rate=0.0, omega0=(3.0, 0.5, 10.0))
+    lines, basis = characteristic_frequencies(asym)
+    assert lines == make_model('torque_free_exact', asym).frequencies()
+    assert basis == ('asymmetric body: inertia (1.0, 1.6, 2.2), ws = 0 rad/yr; no torque: '
+                     'Euler-Poinsot motion (exact)')
+    torqued = asym.replace(orbit_rate=1.0)
+    lines, basis = characteristic_frequencies(torqued)
+    w = math.sqrt(9.0 + 0.25 + 100.0)
+    # max_i |Ij - Ik|/Ii = |2.2 - 1|/1.6 (i = y); |omega0| as the largest |w|
+    assert [(f.name, f.omega) for f in lines] == [
+        ('nutation (estimate)', pytest.approx(0.75 * w, rel=1e-14)),
+        ('|w|+2ws (estimate)', pytest.approx(w + 2.0, rel=1e-14))]
+    assert basis.endswith('; estimates only')
+    assert characteristic_frequencies(torqued, omega_max=20.0)[0][1].omega == 22.0
+
+
+def test_characteristic_frequencies_near_the_separatrix_say_why_there_are_none():
+    i1, i2, i3 = 1.0, 1.6, 2.2
+    w1, w2 = 3.0, 5.0
+    w3 = math.sqrt(i1 * (i2 - i1) / (i3 * (i3 - i2))) * w1
+    lines, basis = characteristic_frequencies(
+        Scenario(inertia=(i1, i2, i3), orbit_rate=0.0, omega0=(w1, w2, w3)))
+    assert lines == () and '; no torque-free frequency: ' in basis and 'separatrix' in basis
 
 
 # -- measurements for docs/analytic.md ---------------------------------------------------

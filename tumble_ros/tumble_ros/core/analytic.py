@@ -41,6 +41,11 @@ by prescribing the Euler angles; variation of constants then gives::
 b C_k tau exp(i lam tau)) or not, and never divides by W_k - lam. ``fast_spin_adiabatic``
 also modulates the phase of the first (free) term.
 
+Frequencies: every model names the frequencies at which its wx and wy oscillate
+(:meth:`AnalyticModel.frequencies`: |lam| and |W_k| for the linearised models, 2 pi/period
+for the exact ones), and :func:`characteristic_frequencies` gathers those the theory expects
+in a scenario's motion (the lines the offline analysis puts beside a recording's spectrum).
+
 Units: time [yr], angles [rad], rates [rad/yr]. Plain numpy/scipy, no ROS.
 """
 from __future__ import annotations
@@ -48,7 +53,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 import math
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 from scipy.special import ellipj, ellipk, ellipkinc
@@ -71,6 +76,10 @@ __all__ = [
     'TorqueFreeExactModel',
     'SYMMETRY_TOL',
     'SEPARATRIX_TOL',
+    'COS_THETA_TOL',
+    'Frequency',
+    'CharacteristicFrequencies',
+    'characteristic_frequencies',
 ]
 
 #: Two principal moments count as equal when they differ by at most this, relative.
@@ -80,6 +89,8 @@ SYMMETRY_TOL = 1e-12
 SEPARATRIX_TOL = 1e-9
 #: The paper's kinematics divide by cos(theta); refused below this.
 COS_THETA_TOL = 1e-9
+#: The meaning of wE = a w0, the free term of the symmetric body.
+_FREE_NUTATION = 'free nutation wE = a w0'
 
 
 class ModelNotApplicable(ScenarioError):
@@ -97,6 +108,20 @@ class ModelNotApplicable(ScenarioError):
 
     def __reduce__(self):
         return type(self), (self.model, self.reason)
+
+
+@dataclass(frozen=True)
+class Frequency:
+    """
+    A named angular frequency [rad/yr] at which wx and wy oscillate.
+
+    ``omega`` is >= 0: w_perp = wx + i wy turning at W, either way, shows in wx at |W|.
+    ``meaning`` says where the frequency comes from, in one line.
+    """
+
+    name: str
+    omega: float
+    meaning: str
 
 
 @dataclass(frozen=True)
@@ -236,6 +261,15 @@ class AnalyticModel(ABC):
     def _omega(self, tau: np.ndarray) -> np.ndarray:
         """(n, 3) angular velocity at tau = t - t0 (1-D)."""
 
+    @abstractmethod
+    def frequencies(self) -> tuple[Frequency, ...]:
+        """
+        Return the frequencies [rad/yr] at which this model's wx and wy oscillate, named.
+
+        The free term's first, then the forced terms' (body axes, from the anchor state);
+        empty for a constant omega.
+        """
+
     def __repr__(self) -> str:
         return f'{type(self).__name__}(t0={self.state.t0!r}, omega={self.state.omega.tolist()!r})'
 
@@ -280,6 +314,23 @@ class _LinearSymmetric(AnalyticModel):
     def _free_phase(self, tau: np.ndarray) -> np.ndarray | None:
         """Extra phase [rad] of the free term exp(i lam tau) w(t0), zero at tau = 0; None: none."""
         return None
+
+    def _frequency_names(self) -> tuple[tuple[str, str] | None, ...]:
+        """(name, meaning) of the free term and of the forcing at ``freqs`` (None: not listed)."""
+        raise NotImplementedError
+
+    def frequencies(self) -> tuple[Frequency, ...]:
+        """
+        Return |lam| (the free term) and |W_k| (the forcing ``freqs``), named by the model.
+
+        w = exp(i lam tau) w(t0) + b sum_k C_k (exp(i W_k tau) - exp(i lam tau))/(i (W_k - lam)):
+        wx oscillates at these frequencies [rad/yr] and no other.
+        """
+        (free, meaning), *forced = self._frequency_names()
+        out = [Frequency(free, abs(self.lam), meaning)]
+        out += [Frequency(names[0], abs(w), names[1])
+                for names, w in zip(forced, self.freqs) if names is not None]
+        return tuple(out)
 
     def _setup(self) -> None:
         ix, _, iz = self.scenario.inertia
@@ -351,6 +402,11 @@ class PaperModel(_LinearSymmetric):
         """Return the paper's wA = 2 (ws + (w0 + wE)/cos theta) (ERRATA 6) [rad/yr]."""
         return 2.0 * self.beta_dot
 
+    def _frequency_names(self):
+        # forcing at wE (resonant with the free term: the same line), wE + wA and wE - wA
+        forced = f"paper's forced term, wA = {self.w_a:.6g} rad/yr"
+        return (('wE', _FREE_NUTATION), None, ('|wA+wE|', forced), ('|wA-wE|', forced))
+
     @property
     def secular_rate(self) -> float:
         """|d/dt| of the secular term, b |sin 2 theta| / 4 [rad/yr per yr]."""
@@ -370,6 +426,11 @@ class FastSpinModel(_LinearSymmetric):
 
     def _rates(self):
         return self.a * self.w0, self.w0, 0.0
+
+    def _frequency_names(self):
+        # forcing at -w0, -w0 + 2 ws and -w0 - 2 ws
+        return (('wE', _FREE_NUTATION), ('|w0|', 'fast-spin forced term (spin)'),
+                ('|w0-2ws|', 'fast-spin forced term'), ('|w0+2ws|', 'fast-spin forced term'))
 
 
 class _Precessing(_LinearSymmetric):
@@ -391,15 +452,20 @@ class _Precessing(_LinearSymmetric):
     @property
     def stiffness(self) -> float:
         """(3/2) ws^2 a / ((1 + a) w0) = Op / cos(theta0) [rad/yr]."""
-        ix, _, iz = self.scenario.inertia
         ws = self.scenario.orbit_rate
-        return 1.5 * ws * ws * (iz - ix) / (iz * float(self.state.omega[2]))
+        return 1.5 * ws * ws * self.a / ((1.0 + self.a) * self.w0)
 
     def _precessing_rates(self, shift: float) -> tuple[float, float, float]:
         # phi turns at -Op (the measured drift of the numerics);
         # wz = psi' + phi' cos(theta) stays w0.
         op = self.precession_rate
         return self.a * self.w0 + shift, self.w0 + op * math.cos(self.state.euler[2]), -op
+
+    def _forced_names(self) -> tuple[tuple[str, str], ...]:
+        # forcing at -w0', -w0' + 2 ws' and -w0' - 2 ws' (w0' = psi', ws' = ws + phi')
+        spin = f"forced term, w0' = w0 + Op cos(theta0) = {self.psi_dot:.6g} rad/yr"
+        orbit = f"forced term, ws' = ws - Op = {self.beta_dot:.6g} rad/yr"
+        return ("|w0'|", spin), ("|w0'-2ws'|", orbit), ("|w0'+2ws'|", orbit)
 
 
 class FastSpinPrecessingModel(_Precessing):
@@ -421,6 +487,10 @@ class FastSpinPrecessingModel(_Precessing):
     def _rates(self):
         return self._precessing_rates(self.precession_rate)
 
+    def _frequency_names(self):
+        free = f'fast-spin nutation with the precession Op = {self.precession_rate:.4g}'
+        return (('|wE+Op|', free),) + self._forced_names()
+
 
 class FastSpinAdiabaticModel(_Precessing):
     """
@@ -439,9 +509,17 @@ class FastSpinAdiabaticModel(_Precessing):
              'shift S[(3cos^2 theta-1)/2 - (3/2) sin^2 theta cos 2 beta(t)], '
              'S = (3/2) ws^2 a/((1+a) w0)')
 
+    @property
+    def mean_shift(self) -> float:
+        """Mean shift of the nutation frequency, dbar = S (3 cos^2 theta0 - 1)/2 [rad/yr]."""
+        return self.stiffness * (3.0 * math.cos(self.state.euler[2]) ** 2 - 1.0) / 2.0
+
     def _rates(self):
-        c = math.cos(self.state.euler[2])
-        return self._precessing_rates(self.stiffness * 0.5 * (3.0 * c * c - 1.0))
+        return self._precessing_rates(self.mean_shift)
+
+    def _frequency_names(self):
+        free = f'fast-spin nutation with the tidal shift dbar = {self.mean_shift:.4g}'
+        return (('|wE+dbar|', free),) + self._forced_names()
 
     def _free_phase(self, tau):
         # integral over [t0, t] of -(3/2) S sin^2(theta) cos 2 beta, beta = beta0 + beta_dot tau,
@@ -485,6 +563,10 @@ class TorqueFreeSymmetricModel(AnalyticModel):
     def _omega(self, tau):
         w = np.exp(1j * self.w_e * tau) * complex(self.state.omega[0], self.state.omega[1])
         return np.stack([w.real, w.imag, np.full_like(tau, self.state.omega[2])], axis=-1)
+
+    def frequencies(self):
+        """Return wE = |a wz|, the one frequency of wx [rad/yr]."""
+        return (Frequency('wE', abs(self.w_e), _FREE_NUTATION),)
 
 
 def _is_cyclic(i: int, j: int, k: int) -> bool:
@@ -582,6 +664,14 @@ class TorqueFreeExactModel(AnalyticModel):
             return 2.0 * math.pi / abs(self.params[3])
         return math.inf
 
+    def frequencies(self):
+        """Return 2 pi/period [rad/yr] (the fundamental of omega in the body); none if constant."""
+        period = self.period
+        if not (math.isfinite(period) and period > 0):
+            return ()
+        return (Frequency('Euler-Poinsot', 2 * math.pi / period,
+                          f'torque-free period {period:.6g} yr ({self.mode})'),)
+
     def _omega(self, tau):
         w0 = self.state.omega
         out = np.empty(tau.shape + (3,))
@@ -633,3 +723,69 @@ def applicability(scenario: Scenario, state: AnchorState | None = None) -> dict[
     """{model name: None if it applies, else the reason} for every registered model."""
     state = state if state is not None else AnchorState.build(scenario)
     return {name: cls.applies(scenario, state) for name, cls in MODELS.items()}
+
+
+# --------------------------------------------------------------------------------------
+# The frequencies the theory expects in a scenario's motion
+# --------------------------------------------------------------------------------------
+class CharacteristicFrequencies(NamedTuple):
+    """The frequencies [rad/yr] expected in wx, and one line saying what they rest on."""
+
+    lines: tuple[Frequency, ...]
+    basis: str
+
+
+def _named(model: AnalyticModel) -> dict[str, Frequency]:
+    return {f.name: f for f in model.frequencies()}
+
+
+def characteristic_frequencies(scenario: Scenario,
+                               omega_max: float | None = None) -> CharacteristicFrequencies:
+    """
+    Return the frequencies [rad/yr] the theory expects in wx, asked of the models.
+
+    From the scenario's initial state (a = (Iz - Ix)/Ix, w0 = omega0[2], ws = orbit_rate,
+    theta0 = euler0[2]). Symmetric body (Ix = Iy): ``wE`` (the free term of ``fast_spin``, or of
+    ``torque_free_symmetric`` without torque, then the only line); with torque also the paper's
+    forced ``|wA-wE|``, ``|wA+wE|`` (if ``paper`` applies), the forced ``|w0|``, ``|w0-2ws|``,
+    ``|w0+2ws|`` of ``fast_spin`` and the nutation with the tidal shift ``|wE+dbar|`` of
+    ``fast_spin_adiabatic`` (if it applies). Asymmetric body: without torque the Euler-Poinsot
+    frequency of ``torque_free_exact``; with torque no model applies, so two estimates: the
+    Euler-equation rate max_i |Ij - Ik|/Ii * omega_max and the forcing omega_max + 2 ws, with
+    ``omega_max`` the largest |w| of the motion (default |omega0|).
+    """
+    ix, iy, iz = scenario.inertia
+    ws = scenario.orbit_rate
+    w0 = scenario.omega0[2]
+    theta = scenario.euler0[2]
+    if _equal(ix, iy):
+        basis = (f'symmetric body: a = {(iz - ix) / ix:.6g}, w0 = {w0:.6g} rad/yr, '
+                 f'ws = {ws:.6g} rad/yr, theta0 = {theta:.6g} rad (scenario inputs)')
+        if ws == 0.0:
+            return CharacteristicFrequencies(TorqueFreeSymmetricModel(scenario).frequencies(),
+                                             basis + '; no torque: wE only (exact)')
+        fast = _named(FastSpinModel(scenario))
+        lines = [fast['wE']]
+        if PaperModel.applies(scenario) is None:
+            paper = _named(PaperModel(scenario))
+            lines += [paper['|wA-wE|'], paper['|wA+wE|']]
+        lines += [fast['|w0|'], fast['|w0-2ws|'], fast['|w0+2ws|']]
+        if FastSpinAdiabaticModel.applies(scenario) is None:
+            lines.append(_named(FastSpinAdiabaticModel(scenario))['|wE+dbar|'])
+        return CharacteristicFrequencies(tuple(lines), basis)
+    moments = (ix, iy, iz)
+    basis = f'asymmetric body: inertia {moments}, ws = {ws:.6g} rad/yr'
+    if ws == 0.0:
+        try:
+            model = TorqueFreeExactModel(scenario)
+        except ModelNotApplicable as err:
+            return CharacteristicFrequencies((), basis + f'; no torque-free frequency: {err}')
+        return CharacteristicFrequencies(model.frequencies(),
+                                         basis + '; no torque: Euler-Poinsot motion (exact)')
+    w_max = float(np.linalg.norm(scenario.omega0)) if omega_max is None else float(omega_max)
+    rate = max(abs(moments[(i + 1) % 3] - moments[(i + 2) % 3]) / moments[i] for i in range(3))
+    return CharacteristicFrequencies((
+        Frequency('nutation (estimate)', rate * w_max,
+                  'max |Ij - Ik|/Ii * max|w| (no linear theory for Ix != Iy)'),
+        Frequency('|w|+2ws (estimate)', w_max + 2 * ws, 'forcing, upper estimate'),
+    ), basis + '; estimates only')
