@@ -406,6 +406,20 @@ def test_namespace_without_the_topics(tmp_path, capsys, runs):
            'topics: /)' in _one_error_line(capsys)
 
 
+def test_python_api_refusals_are_the_packages_analysis_error(tmp_path, runs):
+    """What the analysis refuses is tumble_ros.errors.AnalysisError, under the one root."""
+    from tumble_ros import analysis, errors
+    from tumble_ros.analysis.recording import normalize_namespace
+    assert analysis.AnalysisError is errors.AnalysisError
+    path = _namespaced(tmp_path / 'both.mcap', [(runs[0], '/ast1'), (runs[1], '/ast2')])
+    with pytest.raises(errors.AnalysisError, match='2 namespaces'):
+        load_recording(path)
+    with pytest.raises(errors.TumbleRosError, match='no /ast3/angular_velocity topic'):
+        load_recording(path, namespace='/ast3')
+    with pytest.raises(errors.TumbleRosError, match='not a ROS namespace'):
+        normalize_namespace('/1ast')
+
+
 @pytest.mark.parametrize('bad', ['a b', '/1ast', '/ast-1'])
 def test_invalid_namespace_option(capsys, bad):
     assert command([str(GOLDEN), '--namespace', bad]) == 1

@@ -2,6 +2,8 @@
 import pytest
 
 from tumble_ros import errors
+from tumble_ros.analysis import AnalysisError
+from tumble_ros.analysis.figures import FigureExistsError, FigurePathError
 from tumble_ros.core import IntegrationError, Scenario, ScenarioError
 from tumble_ros.core.analytic import ModelNotApplicable
 from tumble_ros.io import McapError, MessageDefinitionError
@@ -14,6 +16,9 @@ from tumble_ros.io import McapError, MessageDefinitionError
     (errors.NodeError, errors.TumbleRosError),
     (McapError, errors.IoError),
     (MessageDefinitionError, errors.IoError),
+    (AnalysisError, errors.AnalysisError),
+    (FigurePathError, errors.AnalysisError),
+    (FigureExistsError, errors.AnalysisError),
 ])
 def test_each_error_derives_from_its_package_class(error, package_class):
     assert issubclass(error, package_class) and issubclass(package_class, errors.TumbleRosError)

@@ -13,8 +13,14 @@ ROS runtime: no rclpy, no running nodes, no sourced workspace needed.
 Modules: ``recording`` (MCAP -> arrays), ``summary`` (the numbers and their text/JSON),
 ``figures`` (matplotlib, Agg; imported lazily here so that the summary needs no matplotlib),
 ``cli`` (the ``analyze`` command, ``python -m tumble_ros.analysis``). See docs/analysis.md.
+
+Errors: what the analysis refuses is a :class:`tumble_ros.errors.AnalysisError` (re-exported
+here; the figures' ``FigurePathError`` and ``FigureExistsError`` derive from it), an unreadable
+file a :class:`tumble_ros.io.McapError`; both are :class:`tumble_ros.errors.TumbleRosError`.
 """
-from .recording import AnalysisError, load_recording, Recording
+from tumble_ros.errors import AnalysisError
+
+from .recording import load_recording, Recording
 from .summary import AnalysisSummary, analyze, format_summary, summary_to_dict
 
 __all__ = ['AnalysisError', 'AnalysisSummary', 'Recording', 'analyze', 'format_summary',

@@ -20,9 +20,10 @@ import argparse
 import json
 import sys
 
+from tumble_ros.errors import AnalysisError
 from tumble_ros.io import McapError
 
-from .recording import AnalysisError, load_recording, normalize_namespace, stderr_progress
+from .recording import load_recording, normalize_namespace, stderr_progress
 from .summary import analyze, format_summary, summary_to_dict
 
 __all__ = ['command', 'main']

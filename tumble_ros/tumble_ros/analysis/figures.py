@@ -40,8 +40,9 @@ import stat
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 import numpy as np
+from tumble_ros.errors import AnalysisError
 
-from .recording import AnalysisError, Recording, ROOT_NAMESPACE
+from .recording import Recording, ROOT_NAMESPACE
 from .summary import AnalysisSummary, analyze, impact_intervals, spectrum, theory_lines
 
 __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
@@ -63,7 +64,7 @@ Drawing = tuple[str, bytes]
 
 
 class FigurePathError(AnalysisError):
-    """A figure path that is refused: a symbolic link, or not a regular file."""
+    """A figure path that is refused: a symbolic link, or not a regular file (an AnalysisError)."""
 
 
 class FigureExistsError(FigurePathError):

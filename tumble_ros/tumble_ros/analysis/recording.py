@@ -14,7 +14,8 @@ t = stamp_ns / (1e9 * seconds_per_year) (:class:`tumble_ros.core.TimeBase`), wit
 sorted by stamp (stable), so a file written out of order still gives monotonic series.
 
 Any topic may be absent: its arrays are then empty (shape (0, k)) and the optional objects
-None. Only ``/angular_velocity`` is required (:class:`AnalysisError` otherwise). File-level
+None. Only ``/angular_velocity`` is required (:class:`tumble_ros.errors.AnalysisError`
+otherwise: a readable file the analysis cannot work on, one-line message). File-level
 failures (missing, empty, not MCAP, truncated before the first complete chunk, undecodable
 message) are :class:`tumble_ros.io.McapError`. A file truncated after some complete chunks
 loads what it holds; ``finalised`` is then False and ``problem`` says why reading stopped.
@@ -37,6 +38,7 @@ import sys
 import numpy as np
 
 from tumble_ros.core import parse_scenario, Scenario, ScenarioError, TimeBase
+from tumble_ros.errors import AnalysisError
 from tumble_ros.io import read_messages, summarize
 
 __all__ = [
@@ -79,10 +81,6 @@ SIM_STATES = {0: 'RUNNING', 1: 'PAUSED', 2: 'FINISHED', 3: 'DIVERGED'}
 DIAGNOSTIC_LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
 #: ImpactEvent frames.
 IMPACT_FRAMES = {0: 'body', 1: 'orbital'}
-
-
-class AnalysisError(Exception):
-    """A readable MCAP file that the analysis cannot work on (one-line message)."""
 
 
 # -- namespaces -------------------------------------------------------------------------------
