@@ -10,9 +10,11 @@ ROS runtime: no rclpy, no running nodes, no sourced workspace needed.
     print(format_summary(summary))            # or summary_to_dict(summary) for JSON
     write_figures(rec, "figures/", summary)   # PNG paths (never over an existing file)
 
-Modules: ``recording`` (MCAP -> arrays), ``summary`` (the numbers and their text/JSON),
-``figures`` (matplotlib, Agg; imported lazily here so that the summary needs no matplotlib),
-``cli`` (the ``analyze`` command, ``python -m tumble_ros.analysis``). See docs/analysis.md.
+Modules: ``recording`` (MCAP -> arrays), ``summary`` (``analyze``: every number, gathered from
+one module per concern: ``timeaxis``, ``comparator``, ``invariants``, ``impacts``, ``theory``,
+``spectrum``; the text and JSON in ``report``), ``figures`` (matplotlib, Agg; imported lazily
+here so that the summary needs no matplotlib), ``cli`` (the ``analyze`` command,
+``python -m tumble_ros.analysis``). See docs/analysis.md.
 
 Errors: what the analysis refuses is a :class:`tumble_ros.errors.AnalysisError` (re-exported
 here; the figures' ``FigurePathError`` and ``FigureExistsError`` derive from it), an unreadable

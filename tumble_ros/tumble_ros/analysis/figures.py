@@ -42,8 +42,11 @@ from matplotlib.figure import Figure
 import numpy as np
 from tumble_ros.errors import AnalysisError
 
+from .impacts import impact_intervals
 from .recording import Recording, ROOT_NAMESPACE
-from .summary import AnalysisSummary, analyze, impact_intervals, spectrum, theory_lines
+from .spectrum import spectrum
+from .summary import AnalysisSummary, analyze
+from .theory import theory_lines
 
 __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
            'plot_impacts', 'plot_spectrum', 'plot_wy_vs_wx', 'write_figures']

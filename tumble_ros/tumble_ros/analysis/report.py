@@ -1,0 +1,204 @@
+"""
+The summary as text and as JSON.
+
+The text: one section per concern (file and topics, time axis, scenario, comparator error,
+invariant drift, impacts, expected frequencies, spectrum, aliasing), then the notes and one
+``WARNING:`` line per warning. The JSON: the same fields as plain types, NaN and inf as null.
+Units as computed: years [yr], rad/yr (body axes), J in normalised inertia times (rad/yr)^2.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .recording import ANGULAR_VELOCITY, ROOT_NAMESPACE, SCENARIO, topic_name
+
+if TYPE_CHECKING:
+    from .summary import AnalysisSummary
+
+__all__ = ['format_summary', 'summary_to_dict']
+
+
+def _finite_or_none(x):
+    return x if x is not None and math.isfinite(x) else None
+
+
+def _g(x, digits: int = 6) -> str:
+    if x is None:
+        return '-'
+    return f'{x:.{digits}g}'
+
+
+def _v(v, digits: int = 6) -> str:
+    return '(' + ', '.join(_g(x, digits) for x in v) + ')'
+
+
+def _file(s: AnalysisSummary) -> list[str]:
+    out = [f'recording: {s.path}']
+    if s.namespace != ROOT_NAMESPACE:
+        out.append(f'namespace: {s.namespace}')
+    state = 'finalised' if s.finalised else f'TRUNCATED ({s.problem})'
+    total = sum(count for _, count in s.topics.values())
+    out.append(f'file: {state}, {len(s.topics)} topics, {total} messages')
+    width = max((len(name) for name in s.topics), default=0)
+    twidth = max((len(t) for t, _ in s.topics.values()), default=0)
+    for name, (type_name, count) in sorted(s.topics.items()):
+        out.append(f'  {name:<{width}}  {type_name:<{twidth}}  {count:>9}')
+    return out
+
+
+def _time_and_scenario(s: AnalysisSummary) -> list[str]:
+    out = []
+    p = s.sampling
+    dt = (f'dt = {_g(p.dt)} yr' + (' (uniform)' if p.uniform else
+                                   f' (median; {_g(p.dt_min)} .. {_g(p.dt_max)})')
+          if p.dt is not None else 'one sample')
+    out.append(f'simulated time: {p.n} samples of {topic_name(s.namespace, ANGULAR_VELOCITY)}, '
+               f't = {_g(p.t_first)} .. '
+               f'{_g(p.t_last)} yr, duration {_g(p.duration)} yr, {dt}')
+    source = s.seconds_per_year_source
+    out.append(f'time base: seconds_per_year = {_g(s.seconds_per_year)} '
+               f'({"default" if source == "default" else f"from {source}"})')
+    if s.scenario is not None:
+        sc = s.scenario
+        out.append(f"scenario: inertia {_v(sc['inertia'])}, orbit_rate {_g(sc['orbit_rate'])} "
+                   f"rad/yr, omega0 {_v(sc['omega0'])} rad/yr, euler0 {_v(sc['euler0'])} rad, "
+                   f"duration {_g(sc['duration'])} yr, output_interval "
+                   f"{_g(sc['output_interval'])} yr, {sc['integrator.method']}, "
+                   f"{len(sc['impacts.start'])} scheduled impact(s)")
+    else:
+        out.append('scenario: none' + (f' ({s.scenario_error})' if s.scenario_error else
+                                       f' (no {topic_name(s.namespace, SCENARIO)} topic)'))
+    if s.final_status:
+        out.append(f'simulator status: {s.final_status}')
+    return out
+
+
+def _comparator(s: AnalysisSummary) -> list[str]:
+    if s.comparator is None:
+        return [f'comparator error: none ({s.comparator_note})']
+    c = s.comparator
+    models = ', '.join(repr(m) for m in c.models) or 'unknown'
+    out = [f'comparator error (model {models}; {c.n} samples from {c.source}):']
+    out.append(f'  |w - w_model|: max {_g(c.max_abs)} rad/yr at t = {_g(c.t_max_abs)} yr, '
+               f'RMS {_g(c.rms_abs)} rad/yr')
+    if c.max_rel is not None:
+        out.append(f'  relative |w - w_model|/|w|: max {_g(c.max_rel)} at t = '
+                   f'{_g(c.t_max_rel)} yr, RMS {_g(c.rms_rel)}'
+                   + (f' ({c.infinite_rel} samples with |w| = 0 left out)'
+                      if c.infinite_rel else ''))
+    if c.max_component is not None:
+        out.append(f'  max |error| per component (x, y, z): {_v(c.max_component)} rad/yr')
+    return out
+
+
+def _invariant(s: AnalysisSummary) -> list[str]:
+    if s.invariant is None:
+        return [f'invariant drift: not computed ({s.invariant_note})']
+    inv = s.invariant
+    out = [f"invariant drift: {inv.name} J = 1/2 w.Iw + 3/2 ws^2 u.Iu + ws (Iw).z' "
+           f'(attitude from {inv.attitude_source}), per segment between impacts:']
+    for seg in inv.segments:
+        out.append(f'  segment {seg.index}: t = {_g(seg.t_start)} .. {_g(seg.t_end)} yr, '
+                   f'{seg.n} samples, J0 = {_g(seg.j0, 10)}, max |J - J0| = '
+                   f'{_g(seg.max_drift, 3)} (relative {_g(seg.rel_drift, 3)})')
+    if inv.excluded:
+        out.append(f'  ({inv.excluded} samples inside a pulse left out)')
+    return out
+
+
+def _impacts(s: AnalysisSummary) -> list[str]:
+    if not s.impacts:
+        return ['impacts: none recorded']
+    out = [f'impacts: {len(s.impacts)}']
+    for imp in s.impacts:
+        e = imp.event
+        out.append(f'  #{e.id}: {e.frame} torque {_v(e.torque)} on [{_g(e.start, 10)}, '
+                   f'{_g(e.end, 10)}] yr ({_g(e.duration, 3)} yr): delta_omega '
+                   f'{_v(e.delta_omega)} rad/yr, |delta_omega| = '
+                   f'{_g(math.hypot(*e.delta_omega))}')
+        if imp.sampled_jump is not None:
+            out.append(f'      recorded w jump between the samples at t = '
+                       f'{_g(imp.t_before)} and {_g(imp.t_after)} yr: '
+                       f'{_v(imp.sampled_jump)} rad/yr (includes the free motion between)')
+    return out
+
+
+def _frequencies(s: AnalysisSummary) -> list[str]:
+    out = [f'expected frequencies: {s.theory_basis}']
+    for line in s.theory:
+        out.append(f'  {line.name:<20} {line.omega:12.6g} rad/yr  (period '
+                   f'{_g(2 * math.pi / line.omega if line.omega else math.inf, 4)} yr)  '
+                   f'{line.meaning}')
+    sp = s.spectrum
+    if sp is not None:
+        out.append(f'dominant frequencies of {sp.component}: {sp.window} window, {sp.n} samples'
+                   f'{" (resampled)" if sp.resampled else ""}, dt = {_g(sp.dt)} yr, resolution '
+                   f'{_g(sp.resolution, 4)} rad/yr, Nyquist pi/dt = {_g(sp.nyquist, 6)} rad/yr')
+        for k, peak in enumerate(sp.peaks, 1):
+            match = ''
+            if peak.nearest:
+                alias = (f' aliased to {_g(peak.omega - peak.offset)}' if peak.nearest_aliased
+                         else '')
+                match = (f', nearest line {peak.nearest} = {_g(peak.nearest_omega)}{alias} '
+                         f'(offset {peak.offset:+.3g})')
+            out.append(f'  {k}. {peak.omega:12.6g} rad/yr (period {_g(peak.period, 4)} yr), '
+                       f'amplitude {_g(peak.amplitude, 4)} rad/yr{match}')
+        if not sp.peaks:
+            out.append('  no peak (constant signal)')
+    else:
+        out.append('dominant frequencies: fewer than 8 samples, no spectrum')
+    al = s.aliasing
+    if al.nyquist is not None and al.fastest is not None and not al.aliased:
+        out.append(f'aliasing: none expected: Nyquist pi/dt = {_g(al.nyquist)} rad/yr > fastest '
+                   f'expected line {al.fastest.name} = {_g(al.fastest.omega)} rad/yr')
+    elif al.nyquist is None or al.fastest is None:
+        out.append('aliasing: not checked (no expected frequencies or a single sample)')
+    return out
+
+
+def format_summary(s: AnalysisSummary) -> str:
+    """Return the summary as text (one WARNING: line per warning, at the end)."""
+    out = (_file(s) + _time_and_scenario(s) + _comparator(s) + _invariant(s) + _impacts(s)
+           + _frequencies(s))
+    out += [f'note: {note}' for note in s.notes]
+    out += [f'WARNING: {warning}' for warning in s.warnings]
+    return '\n'.join(out)
+
+
+def _jsonable(value):
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        out = {}
+        for f in dataclasses.fields(value):
+            if f.metadata.get('json', True):
+                out[f.name] = _jsonable(getattr(value, f.name))
+        for name in ('duration', 'period', 'worst_rel'):
+            attr = getattr(type(value), name, None)
+            if isinstance(attr, property):
+                out[name] = _jsonable(getattr(value, name))
+        return out
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return [_jsonable(v) for v in value.tolist()]
+    if isinstance(value, (np.floating, float)):
+        return _finite_or_none(float(value))
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def summary_to_dict(s: AnalysisSummary) -> dict:
+    """
+    Return the summary as plain JSON types; non-finite numbers become None.
+
+    ``topics`` maps each name to {"type", "count"}.
+    """
+    out = _jsonable(s)
+    out['topics'] = {name: {'type': t, 'count': n} for name, (t, n) in s.topics.items()}
+    return out
