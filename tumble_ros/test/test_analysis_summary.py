@@ -309,6 +309,19 @@ def test_theory_lines_for_other_bodies():
     assert theory_lines(None)[0] == []
 
 
+def test_theory_lines_are_asked_of_the_analytic_models():
+    """The analysis derives no frequency itself: its lines are core.analytic's, bit for bit."""
+    from tumble_ros.core.analytic import characteristic_frequencies, make_model
+    lines, basis = theory_lines(FIG9)
+    assert (tuple(lines), basis) == characteristic_frequencies(FIG9)
+    paper = {f.name: f for f in make_model('paper', FIG9).frequencies()}
+    assert lines[1:3] == [paper['|wA-wE|'], paper['|wA+wE|']]
+    asym = Scenario(inertia=(1.0, 1.6, 2.2), omega0=(3.0, 0.5, 10.0))
+    omega = np.array([[3.0, 0.5, 10.0], [0.0, 0.0, 20.0]])
+    assert theory_lines(asym, omega) == (list(characteristic_frequencies(asym, 20.0).lines),
+                                         characteristic_frequencies(asym).basis)
+
+
 # -- what may be absent, odd sampling ----------------------------------------------------------
 
 def test_only_angular_velocity(tmp_path):

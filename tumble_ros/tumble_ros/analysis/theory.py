@@ -1,8 +1,10 @@
 """
 The theory's frequency lines for a recording, and the aliasing check of its sampling.
 
-Frequencies in rad/yr of wx (body axes), from the scenario's initial state; the sampling
-interval dt in simulated years, its Nyquist rate pi/dt in rad/yr.
+The lines are asked of the analytic models, not derived here
+(``tumble_ros.core.analytic.characteristic_frequencies``). Frequencies in rad/yr of wx (body
+axes), from the scenario's initial state; the sampling interval dt in simulated years, its
+Nyquist rate pi/dt in rad/yr.
 """
 from __future__ import annotations
 
@@ -11,26 +13,15 @@ import math
 
 import numpy as np
 
-from tumble_ros.core import make_model, ModelNotApplicable, Scenario
-from tumble_ros.core.analytic import COS_THETA_TOL, SYMMETRY_TOL
+from tumble_ros.core import Scenario
+from tumble_ros.core.analytic import characteristic_frequencies, Frequency
 
 from .timeaxis import Sampling
 
 __all__ = ['AliasingCheck', 'TheoryLine', 'alias', 'check_aliasing', 'theory_lines']
 
-
-@dataclass(frozen=True)
-class TheoryLine:
-    """A frequency [rad/yr] at which the theory expects wx to oscillate."""
-
-    name: str
-    omega: float
-    meaning: str
-
-
-def _symmetric(scenario: Scenario) -> bool:
-    ix, iy, _ = scenario.inertia
-    return abs(ix - iy) <= SYMMETRY_TOL * max(abs(ix), abs(iy))
+#: A frequency [rad/yr] at which the theory expects wx to oscillate: name, omega, meaning.
+TheoryLine = Frequency
 
 
 def theory_lines(scenario: Scenario | None, omega: np.ndarray | None = None
@@ -38,68 +29,19 @@ def theory_lines(scenario: Scenario | None, omega: np.ndarray | None = None
     """
     Return the frequencies the theory expects in wx and a one-line description of their basis.
 
-    Symmetric body (Ix = Iy), from the scenario's inputs a = (Iz - Ix)/Ix, w0 = omega0[2],
-    ws = orbit_rate, theta0 = euler0[2] (docs/analytic.md):
-
-    - wE = |a w0|, the free (nutation) term of every linearised model;
-    - the paper's forced lines |wE +- wA|, wA = 2 (ws + (w0 + wE)/cos theta0) (ERRATA 6),
-      present if the body precessed as the paper assumes;
-    - the fast-spin forced lines |w0| and |w0 -+ 2 ws|, and the nutation with the tidal
-      shift |a w0 + dbar|, dbar = S (3 cos^2 theta0 - 1)/2, S = (3/2) ws^2 a/((1 + a) w0).
-
-    Without torque (ws = 0) only wE (symmetric) or the Euler-Poinsot frequency 2 pi/period
-    (asymmetric, ``torque_free_exact``). Asymmetric body with torque: an estimate, the
-    Euler-equation rate max_i |Ij - Ik|/Ii * max|w| and the forcing |w| + 2 ws.
+    They are the analytic models' (:func:`tumble_ros.core.analytic.characteristic_frequencies`,
+    docs/analysis.md lists them): for a symmetric body wE, the paper's |wA -+ wE|, the fast-spin
+    lines |w0|, |w0 -+ 2 ws| and |wE + dbar|; without torque wE or the Euler-Poinsot frequency;
+    for an asymmetric body under torque two estimates, which use max|w| of ``omega`` (n, 3), the
+    recorded w [rad/yr] (|omega0| without it). Without a scenario: no lines, and the basis
+    says so.
     """
     if scenario is None:
         return [], 'no scenario: the expected frequencies are unknown'
-    ix, iy, iz = scenario.inertia
-    ws = scenario.orbit_rate
-    w0 = scenario.omega0[2]
-    theta = scenario.euler0[2]
-    lines: list[TheoryLine] = []
-    if _symmetric(scenario):
-        a = (iz - ix) / ix
-        w_e = a * w0
-        basis = (f'symmetric body: a = {a:.6g}, w0 = {w0:.6g} rad/yr, ws = {ws:.6g} rad/yr, '
-                 f'theta0 = {theta:.6g} rad (scenario inputs)')
-        lines.append(TheoryLine('wE', abs(w_e), 'free nutation wE = a w0'))
-        if ws == 0.0:
-            return lines, basis + '; no torque: wE only (exact)'
-        if abs(math.cos(theta)) >= COS_THETA_TOL:
-            w_a = 2.0 * (ws + (w0 + w_e) / math.cos(theta))
-            lines.append(TheoryLine('|wA-wE|', abs(w_e - w_a),
-                                    f"paper's forced term, wA = {w_a:.6g} rad/yr"))
-            lines.append(TheoryLine('|wA+wE|', abs(w_e + w_a),
-                                    f"paper's forced term, wA = {w_a:.6g} rad/yr"))
-        lines.append(TheoryLine('|w0|', abs(w0), 'fast-spin forced term (spin)'))
-        lines.append(TheoryLine('|w0-2ws|', abs(w0 - 2 * ws), 'fast-spin forced term'))
-        lines.append(TheoryLine('|w0+2ws|', abs(w0 + 2 * ws), 'fast-spin forced term'))
-        if w0 != 0.0:
-            s = 1.5 * ws * ws * a / ((1.0 + a) * w0)
-            dbar = s * (3.0 * math.cos(theta) ** 2 - 1.0) / 2.0
-            lines.append(TheoryLine('|wE+dbar|', abs(w_e + dbar),
-                                    f'fast-spin nutation with the tidal shift dbar = {dbar:.4g}'))
-        return lines, basis
-    moments = (ix, iy, iz)
-    basis = f'asymmetric body: inertia {tuple(moments)}, ws = {ws:.6g} rad/yr'
-    if ws == 0.0:
-        try:
-            model = make_model('torque_free_exact', scenario)
-        except ModelNotApplicable as err:
-            return [], basis + f'; no torque-free frequency: {err}'
-        period = model.period
-        if math.isfinite(period) and period > 0:
-            lines.append(TheoryLine('Euler-Poinsot', 2 * math.pi / period,
-                                    f'torque-free period {period:.6g} yr ({model.mode})'))
-        return lines, basis + '; no torque: Euler-Poinsot motion (exact)'
-    wmax = float(np.max(np.linalg.norm(omega, axis=1))) if omega is not None and len(omega) \
-        else float(np.linalg.norm(scenario.omega0))
-    rate = max(abs(moments[(i + 1) % 3] - moments[(i + 2) % 3]) / moments[i] for i in range(3))
-    lines.append(TheoryLine('nutation (estimate)', rate * wmax,
-                            'max |Ij - Ik|/Ii * max|w| (no linear theory for Ix != Iy)'))
-    lines.append(TheoryLine('|w|+2ws (estimate)', wmax + 2 * ws, 'forcing, upper estimate'))
-    return lines, basis + '; estimates only'
+    omega_max = (float(np.max(np.linalg.norm(omega, axis=1)))
+                 if omega is not None and len(omega) else None)
+    lines, basis = characteristic_frequencies(scenario, omega_max)
+    return list(lines), basis
 
 
 @dataclass(frozen=True)
