@@ -8,17 +8,33 @@ Read ROS 2 MCAP recordings without a ROS runtime (mcap + mcap-ros2-support, no r
   and last log time, chunk count, and whether the file was finalised (summary and footer written
   by a clean close) or is truncated.
 
-Every failure is an :class:`McapError` with a one-line message naming the file: a missing,
-unreadable or empty file, a path that is not a regular file (a directory, a FIFO, a device: a FIFO
-would block the reader forever, so it is refused before any read), a file that is not MCAP (bad
-magic), a truncated file without a single complete chunk, a message that cannot be decoded (topic
-and type named). Library errors are translated at this boundary.
+An adapter over the mcap library: its ``StreamReader`` reads the records (the footer and the
+summary section of a finalised file too), its ``breakup_chunk`` splits a chunk into its records
+and checks the chunk's CRC, and the decoder factory of ``mcap_ros2`` decodes the messages. What
+this module adds is at the boundary:
 
-The work and the memory are bounded by the file's size: a record that declares more bytes than
-remain in the file ends the reading at once (it is a truncation, nothing is allocated for it),
-and a chunk may expand to at most :data:`MAX_CHUNK_RATIO` times its compressed size and
-:data:`MAX_CHUNK_BYTES` in all; a chunk that declares more is damaged (it is not decompressed).
-Decompression never produces more than the declared size.
+- every failure is an :class:`McapError` with a one-line message naming the file: a missing,
+  unreadable or empty file, a path that is not a regular file (a directory, a FIFO, a device: a
+  FIFO would block the reader forever, so it is refused before any read), a file that is not MCAP
+  (bad magic), a truncated file without a single complete chunk, a message that cannot be decoded
+  (topic and type named). Library errors are translated here (``raise ... from None``);
+- a file that ends early (or a record that cannot be read) ends the reading after the messages
+  of the complete chunks before it, and the summary says why (``problem``: where the library
+  stops, the record headers after the last whole record tell where the file ends);
+- the work and the memory are bounded by the file's size. A read that asks for more bytes than
+  remain in the file (a record, or a chunk's data, that declares more than the file holds) ends
+  the reading at once: it is a truncation, nothing is allocated for it. A chunk may expand to at
+  most :data:`MAX_CHUNK_RATIO` times its compressed size and :data:`MAX_CHUNK_BYTES` in all; a
+  chunk that declares more is damaged (it is not decompressed). Decompression never produces more
+  than the declared size.
+
+Chunks are decompressed here, the one piece not left to the library, because its decompression
+cannot be bounded: it calls ``zstandard.decompress(data, uncompressed_size)``, which allocates
+what the zstd frame itself announces (32 MiB for a chunk that declares 100 kB), and
+``lz4.frame.decompress(data)``, which has no bound at all. So the library's ``SeekingReader`` and
+``NonSeekingReader`` (and ``SeekingReader.get_summary``, which decompresses any chunk it meets
+after a damaged footer) are not used: ``StreamReader(emit_chunks=True)`` hands the chunks over
+compressed, and ``breakup_chunk`` gets them decompressed.
 
 Service introspection events (``pkg/srv/Name_Event``) recorded by rosbag2 (Jazzy) or by
 :class:`~tumble_ros.io.mcap_writer.McapWriter` carry a schema holding the ``.srv`` file
@@ -29,19 +45,20 @@ use; it is rewritten here into the event's real layout (``service_msgs/ServiceEv
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import io
 import os
 from pathlib import Path
 import stat
 import struct
 from typing import Any
-import zlib
 
-from mcap.data_stream import ReadDataStream
+from mcap.exceptions import EndOfFile
 from mcap.opcode import Opcode
+from mcap.reader import FOOTER_SIZE
 from mcap.records import (Channel, Chunk, ChunkIndex, Footer, Header, Message, Schema,
                           Statistics)
+from mcap.stream_reader import breakup_chunk, MAGIC_SIZE, StreamReader
 from mcap_ros2.decoder import DecoderFactory
 
 from tumble_ros.errors import IoError
@@ -60,8 +77,10 @@ __all__ = ['MAX_CHUNK_BYTES', 'MAX_CHUNK_RATIO', 'McapError', 'McapSummary', 'Re
 
 MAGIC = b'\x89MCAP0\r\n'
 _SEPARATOR = '=' * 80
-_FOOTER_LENGTH = 8 + 8 + 4
 _RECORD_HEADER = 9            # opcode (1) + length (8)
+_OPCODES = frozenset(Opcode)  # the records the library reads; it skips others unseen
+#: Reads up to this size go to the file unchecked (all but a chunk's data, in practice).
+_UNCHECKED_READ = 2 ** 16
 #: A chunk that declares an uncompressed size above this many times its compressed size is
 #: damaged (or hostile: a zstd frame of zeros expands ~30,000 times). Recorded CDR compresses
 #: 3-5 times with zstd; lz4 cannot exceed ~255 times.
@@ -132,11 +151,7 @@ def _describe(err: BaseException) -> str:
     return text if text == name else f'{name}: {text}'
 
 
-# -- record stream ------------------------------------------------------------------------------
-
-class _Truncated(Exception):
-    """The record stream ends (or breaks) before the footer."""
-
+# -- opening --------------------------------------------------------------------------------------
 
 _FILE_KINDS = ((stat.S_ISDIR, 'is a directory'), (stat.S_ISFIFO, 'is a FIFO (named pipe)'),
                (stat.S_ISCHR, 'is a character device'), (stat.S_ISBLK, 'is a block device'),
@@ -181,6 +196,7 @@ def _open_regular(path: Path) -> io.BufferedReader:
 
 
 def _open(path) -> tuple[Path, io.BufferedReader]:
+    """Open ``path`` and check its magic (at once, with a message for each way it is wrong)."""
     try:
         path = Path(os.fspath(path))
     except TypeError:
@@ -202,42 +218,57 @@ def _open(path) -> tuple[Path, io.BufferedReader]:
     return path, stream
 
 
-def _remaining(stream) -> int:
-    """Return the bytes from the stream's position to the end of the file (as it is now)."""
-    return os.fstat(stream.fileno()).st_size - stream.tell()
+# -- records: the library's StreamReader on a bounded file ---------------------------------------
 
-
-def _records(stream) -> Iterator[tuple[int, bytes]]:
+class _BoundedFile:
     """
-    (opcode, body) of each record after the magic, up to and including the footer.
+    The open file as the library reads it: no read may ask for more than remains of the file.
 
-    Raises _Truncated where the stream ends or breaks before the footer and its closing magic,
-    and at once, before reading it, for a record longer than what remains of the file.
+    The library reads each field of a record straight from the file, and a length that lies (a
+    record's, a chunk's data) would have it allocate what it claims before meeting the end of the
+    file; such a read raises the library's EndOfFile at once instead.
     """
+
+    def __init__(self, file: io.BufferedReader):
+        self.file = file
+        self.seek, self.tell = file.seek, file.tell
+
+    def read(self, size: int = -1) -> bytes:
+        if size > _UNCHECKED_READ:
+            remaining = os.fstat(self.file.fileno()).st_size - self.file.tell()
+            if size > remaining:
+                raise EndOfFile(f'a read of {size} bytes, {remaining} remain in the file')
+        return self.file.read(size)
+
+
+def _records(file: io.BufferedReader) -> Iterator[Any]:
+    """Return the library's records from the file's position on, chunks still compressed."""
+    return StreamReader(_BoundedFile(file), skip_magic=True, emit_chunks=True).records
+
+
+def _truncation(file: io.BufferedReader, position: int) -> str | None:
+    """
+    Say how the file ends inside a record at or after ``position``; None if it does not.
+
+    ``position`` is the end of the last record read whole; the walk passes over the records of
+    unknown type after it, which the library skips without handing them over.
+    """
+    size = os.fstat(file.fileno()).st_size
     while True:
-        head = stream.read(_RECORD_HEADER)
+        file.seek(position)
+        head = file.read(_RECORD_HEADER)
         if len(head) < _RECORD_HEADER:
-            raise _Truncated('file ends before the footer' if not head
-                             else 'file ends inside a record header')
+            return 'file ends inside a record header' if head else 'file ends before the footer'
         opcode, length = struct.unpack('<BQ', head)
-        remaining = _remaining(stream)
+        remaining = size - position - _RECORD_HEADER
         if length > remaining:
-            raise _Truncated(f'file ends inside a record (opcode {opcode:#x}, '
-                             f'{remaining} of {length} bytes)')
-        body = stream.read(length)
-        if len(body) < length:
-            raise _Truncated(f'file ends inside a record (opcode {opcode:#x}, '
-                             f'{len(body)} of {length} bytes)')
-        yield opcode, body
-        if opcode == Opcode.FOOTER:
-            if stream.read(len(MAGIC)) != MAGIC:
-                raise _Truncated('footer without the closing magic')
-            return
+            return f'file ends inside a record (opcode {opcode:#x}, {remaining} of {length} bytes)'
+        if opcode in _OPCODES:
+            return None
+        position += _RECORD_HEADER + length
 
 
-def _parse(cls, body: bytes, *args):
-    return cls.read(ReadDataStream(io.BytesIO(body)), *args)
-
+# -- chunks: the one custom piece, bounded decompression -----------------------------------------
 
 class _Damaged(Exception):
     """A record that is complete in the file but cannot be used (one-line message)."""
@@ -304,101 +335,85 @@ def _decompressing_reader(chunk: Chunk):
                                                       read_across_frames=True)
 
 
-def _chunk_data(chunk: Chunk) -> bytes:
-    """Return the chunk's records, decompressed to at most its declared size, CRC checked."""
+def _chunk_records(chunk: Chunk) -> list[Any]:
+    """
+    Return the schemas, channels and messages of a chunk, split by the library's breakup_chunk.
+
+    The chunk is decompressed here first, within the bounds; breakup_chunk checks its CRC.
+    """
     _check_chunk_size(chunk)
     reader = _decompressing_reader(chunk)
-    data = chunk.data if reader is None else _read_exactly(reader, chunk.uncompressed_size)
-    if chunk.uncompressed_crc != 0 and zlib.crc32(data) != chunk.uncompressed_crc:
-        raise _Damaged('a chunk fails its CRC check')
-    return data
+    if reader is not None:
+        chunk = replace(chunk, compression='',
+                        data=_read_exactly(reader, chunk.uncompressed_size))
+    return breakup_chunk(chunk, validate_crc=True)
 
 
-def _chunk_records(chunk: Chunk) -> list[Schema | Channel | Message]:
-    """
-    Return the schemas, channels and messages of a chunk.
-
-    As the mcap library's breakup_chunk, with every record's length checked against what
-    remains of the chunk.
-    """
-    data = _chunk_data(chunk)
-    stream = ReadDataStream(io.BytesIO(data))
-    records: list[Schema | Channel | Message] = []
-    while stream.count < len(data):
-        if len(data) - stream.count < _RECORD_HEADER:
-            raise _Damaged('a chunk ends inside a record header')
-        opcode, length = stream.read1(), stream.read8()
-        if length > len(data) - stream.count:
-            raise _Damaged(f'a record in a chunk (opcode {opcode:#x}) declares {length} bytes, '
-                           f'{len(data) - stream.count} remain in the chunk')
-        if opcode == Opcode.SCHEMA:
-            records.append(Schema.read(stream))
-        elif opcode == Opcode.CHANNEL:
-            records.append(Channel.read(stream))
-        elif opcode == Opcode.MESSAGE:
-            records.append(Message.read(stream, length))
-        else:
-            stream.read(length)
-    return records
-
+# -- scanning -------------------------------------------------------------------------------------
 
 class _Scan:
-    """Walks a file's records; collects schemas, channels and statistics on the way."""
+    """Walks a file's records; collects header, schemas, channels and chunks on the way."""
 
-    def __init__(self, path: Path, stream):
+    def __init__(self, path: Path, file: io.BufferedReader):
         self.path = path
-        self.stream = stream
+        self.file = file
         self.header: Header | None = None
         self.schemas: dict[int, Schema] = {}
         self.channels: dict[int, Channel] = {}
-        self.statistics: Statistics | None = None
         self.chunk_count = 0
         self.compressions: set[str] = set()
         self.finalised = False
         self.problem: str | None = None
+        self._end = file.tell()           # the end of the last record read whole
+        self._footer = False
+
+    def add(self, record) -> None:
+        """Keep a header, schema or channel record."""
+        if isinstance(record, Schema):
+            self.schemas[record.id] = record
+        elif isinstance(record, Channel):
+            self.channels[record.id] = record
+        elif isinstance(record, Header):
+            self.header = record
 
     def messages(self) -> Iterator[Message]:
-        """Messages in file order (chunks expanded); stops cleanly at a truncation."""
+        """Messages in file order (chunks expanded); stops cleanly where the file breaks."""
         try:
-            for opcode, body in _records(self.stream):
-                if opcode == Opcode.HEADER:
-                    self.header = _parse(Header, body)
-                elif opcode == Opcode.SCHEMA:
-                    schema = _parse(Schema, body)
-                    self.schemas[schema.id] = schema
-                elif opcode == Opcode.CHANNEL:
-                    channel = _parse(Channel, body)
-                    self.channels[channel.id] = channel
-                elif opcode == Opcode.MESSAGE:
-                    yield _parse(Message, body, len(body))
-                elif opcode == Opcode.CHUNK:
-                    chunk = _parse(Chunk, body)
-                    records = _chunk_records(chunk)
+            for record in _records(self.file):
+                self._end = self.file.tell()
+                if isinstance(record, Chunk):
+                    records = _chunk_records(record)
                     self.chunk_count += 1
-                    self.compressions.add(chunk.compression or 'none')
-                    for record in records:
-                        if isinstance(record, Schema):
-                            self.schemas[record.id] = record
-                        elif isinstance(record, Channel):
-                            self.channels[record.id] = record
-                        elif isinstance(record, Message):
-                            yield record
-                elif opcode == Opcode.STATISTICS:
-                    self.statistics = _parse(Statistics, body)
-                elif opcode == Opcode.FOOTER:
-                    _parse(Footer, body)
+                    self.compressions.add(record.compression or 'none')
+                    for item in records:
+                        if isinstance(item, Message):
+                            yield item
+                        else:
+                            self.add(item)
+                elif isinstance(record, Message):
+                    yield record
+                elif isinstance(record, Footer):
+                    self._footer = True
+                else:
+                    self.add(record)
             self.finalised = True
-        except _Truncated as err:
-            self.problem = str(err)
-        except _Damaged as err:
-            self.problem = f'damaged record: {err}'
-        except OSError as err:
-            self.problem = f'read error: {_one_line(err.strerror or err)}'
-        except Exception as err:  # noqa: BLE001
-            # A record that does not parse, a chunk that does not decompress (zstd, lz4 raise
-            # their own types) or fails its CRC: the file is damaged from here on; a streaming
-            # reader cannot resynchronise.
-            self.problem = f'damaged record: {_describe(err)}'
+        except Exception as err:  # noqa: BLE001 - the library, zstd, lz4 raise their own types
+            # The file is truncated or damaged from here on: a streaming reader cannot
+            # resynchronise.
+            self.problem = self._stop_reason(err)
+
+    def _stop_reason(self, err: Exception) -> str:
+        if isinstance(err, _Damaged):
+            return f'damaged record: {err}'
+        if isinstance(err, OSError):
+            return f'read error: {_one_line(err.strerror or err)}'
+        if self._footer:
+            return 'footer without the closing magic'
+        try:
+            truncation = _truncation(self.file, self._end)
+        except OSError as walk_error:
+            return f'read error: {_one_line(walk_error.strerror or walk_error)}'
+        return truncation or f'damaged record: {_describe(err)}'
 
     def check_recoverable(self, message_count: int) -> None:
         if not self.finalised and message_count == 0 and self.chunk_count == 0:
@@ -598,49 +613,39 @@ def _make_summary(path, scan: _Scan, counts, total, start, end) -> McapSummary:
 
 
 def _summary_from_footer(path: Path, stream) -> McapSummary | None:
-    """Fast path for a finalised file with statistics in its summary section, else None."""
+    """
+    Return the summary of a finalised file with statistics in its summary section, else None.
+
+    As the library's ``SeekingReader.get_summary``: the footer (and the closing magic) at the
+    end of the file, then the summary records from its ``summary_start`` on. A chunk met there
+    (a damaged footer) is not decompressed, the file is scanned instead; so is a file with any
+    doubt about its summary.
+    """
     try:
-        size = stream.seek(0, os.SEEK_END)
-        footer_size = 9 + _FOOTER_LENGTH + len(MAGIC)
-        if size < len(MAGIC) + footer_size:
-            return None
-        stream.seek(size - footer_size)
-        tail = stream.read(footer_size)
-        if tail[-len(MAGIC):] != MAGIC or tail[0] != Opcode.FOOTER:
-            return None
-        (length,) = struct.unpack_from('<Q', tail, 1)
-        if length != _FOOTER_LENGTH:
-            return None
-        summary_start, _, _ = struct.unpack_from('<QQI', tail, 9)
-        if not len(MAGIC) < summary_start < size - footer_size:
+        stream.seek(-(FOOTER_SIZE + MAGIC_SIZE), os.SEEK_END)
+        (footer,) = _records(stream)
+        if not isinstance(footer, Footer) or not footer.summary_start:
             return None
         stream.seek(len(MAGIC))
         scan = _Scan(path, stream)
-        # The header is the first record; the summary section holds schemas, channels, stats.
-        records = _records(stream)
-        opcode, body = next(records)
-        if opcode != Opcode.HEADER:
+        scan.header = next(_records(stream))
+        if not isinstance(scan.header, Header):
             return None
-        scan.header = _parse(Header, body)
-        stream.seek(summary_start)
+        stream.seek(footer.summary_start)
         stats = None
-        compressions: set[str] = set()
-        for opcode, body in _records(stream):
-            if opcode == Opcode.SCHEMA:
-                schema = _parse(Schema, body)
-                scan.schemas[schema.id] = schema
-            elif opcode == Opcode.CHANNEL:
-                channel = _parse(Channel, body)
-                scan.channels[channel.id] = channel
-            elif opcode == Opcode.STATISTICS:
-                stats = _parse(Statistics, body)
-            elif opcode == Opcode.CHUNK_INDEX:
-                compressions.add(_parse(ChunkIndex, body).compression or 'none')
+        for record in _records(stream):
+            if isinstance(record, Chunk):
+                return None
+            if isinstance(record, Statistics):
+                stats = record
+            elif isinstance(record, ChunkIndex):
+                scan.compressions.add(record.compression or 'none')
+            else:
+                scan.add(record)
         if stats is None:
             return None
         scan.finalised = True
         scan.chunk_count = stats.chunk_count
-        scan.compressions = compressions
         total = stats.message_count
         start = stats.message_start_time if total else None
         end = stats.message_end_time if total else None
