@@ -5,6 +5,8 @@ Every problem with a file is an McapError with a one-line message; a truncated f
 exactly the messages of its complete chunks.
 """
 from pathlib import Path
+import struct
+import tracemalloc
 
 from mcap.reader import make_reader
 import pytest
@@ -12,6 +14,8 @@ import pytest
 from tumble_ros.io import McapError, McapWriter, read_messages, summarize
 
 GOLDEN = Path(__file__).parent / 'data' / 'golden.mcap'
+MAGIC = b'\x89MCAP0\r\n'
+MIB = 2 ** 20
 
 
 def one_line_error(call):
@@ -182,3 +186,85 @@ def test_corrupt_chunk_stops_cleanly(tmp_path):
     path.write_bytes(bytes(data))
     got = [(m.topic, m.log_time_ns) for m in read_messages(path)]
     assert got == full_messages()[:ends[0][1]]
+
+
+# -- the bounds the adapter keeps around the library's StreamReader -------------------------------
+
+def record(opcode, body):
+    return struct.pack('<BQ', opcode, len(body)) + body
+
+
+def string(text):
+    return struct.pack('<I', len(text)) + text.encode()
+
+
+def chunk(data, uncompressed_size, compression='zstd', data_length=None):
+    """Return a chunk record; ``data_length`` (default: the real one) may lie."""
+    length = len(data) if data_length is None else data_length
+    return record(0x06, struct.pack('<QQQI', 0, 0, uncompressed_size, 0) + string(compression)
+                  + struct.pack('<Q', length) + data)
+
+
+HEADER = record(0x01, string('ros2') + string('test'))
+
+
+def peak_of(call):
+    """Return (the McapError message of ``call``, peak bytes Python allocated meanwhile)."""
+    tracemalloc.start()
+    try:
+        return one_line_error(call), tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+def test_a_chunk_whose_data_length_lies_is_damaged_and_allocates_nothing(tmp_path):
+    # The record is complete, but its data claims 1 GiB: the library would read (and allocate)
+    # that much straight from the file; the read is refused because the file is shorter.
+    path = tmp_path / 'liar.mcap'
+    path.write_bytes(MAGIC + HEADER + chunk(bytes(100), 10, data_length=2 ** 30) + bytes(MIB))
+    for call in (lambda: list(read_messages(path)), lambda: summarize(path)):
+        message, peak = peak_of(call)
+        assert f'damaged record: EndOfFile: a read of {2 ** 30} bytes' in message
+        assert 'no messages recoverable' in message
+        assert peak < 4 * MIB, f'{peak / MIB:.0f} MiB allocated'
+
+
+def test_footer_pointing_at_a_chunk_is_not_trusted(tmp_path):
+    # A footer whose summary_start points at a (hostile) chunk: the library's get_summary would
+    # decompress it unguarded; summarize scans the file instead, where the chunk is refused.
+    zstandard = pytest.importorskip('zstandard')
+    bomb = zstandard.ZstdCompressor().compress(bytes(32 * MIB))
+    head = MAGIC + HEADER
+    footer = record(0x02, struct.pack('<QQI', len(head), 0, 0))
+    path = tmp_path / 'bomb.mcap'
+    path.write_bytes(head + chunk(bomb, 100_000) + footer + MAGIC)
+    message, peak = peak_of(lambda: summarize(path))
+    assert 'a chunk decompresses to more than 100000 bytes, it declares 100000' in message
+    assert peak < 4 * MIB, f'{peak / MIB:.0f} MiB allocated'
+
+
+@pytest.mark.parametrize('cut, problem', [
+    (3, 'footer without the closing magic'),
+    (8 + 9, 'file ends inside a record (opcode 0x2, 11 of 20 bytes)'),
+    (8 + 25, 'file ends inside a record header'),
+])
+def test_the_summary_says_where_a_cut_file_ends(tmp_path, cut, problem):
+    path = tmp_path / 'cut.mcap'
+    path.write_bytes(GOLDEN.read_bytes()[:-cut])
+    summary = summarize(path)
+    assert summary.truncated and summary.problem == problem
+    assert summary.message_count == len(full_messages())
+
+
+def test_unknown_records_are_skipped_and_a_cut_after_them_is_named(tmp_path):
+    path = tmp_path / 'unknown.mcap'
+    path.write_bytes(MAGIC + HEADER + record(0x80, b'future') + struct.pack('<BQ', 0x06, 1000)
+                     + bytes(10))
+    message = one_line_error(lambda: summarize(path))
+    assert 'file ends inside a record (opcode 0x6, 10 of 1000 bytes)' in message
+
+
+def test_unknown_compression_is_damage(tmp_path):
+    path = tmp_path / 'brotli.mcap'
+    path.write_bytes(MAGIC + HEADER + chunk(b'abc', 3, compression='brotli'))
+    assert "unknown compression 'brotli'" in one_line_error(lambda: list(read_messages(path)))
