@@ -406,6 +406,21 @@ def test_namespace_without_the_topics(tmp_path, capsys, runs):
            'topics: /)' in _one_error_line(capsys)
 
 
+def test_the_analysis_takes_topic_names_and_types_from_the_topics_module():
+    """tumble_ros.topics is the one list of names; the analysis spells none of them itself."""
+    from tumble_ros import topics
+    from tumble_ros.analysis import recording
+    assert set(recording.EXPECTED_TYPES) == set(topics.RECORDED) - {topics.CLOCK}
+    assert all(recording.EXPECTED_TYPES[name] == topics.TYPES[name]
+               for name in recording.EXPECTED_TYPES)
+    assert topics.in_namespace('/ast1', topics.ERROR_NORM) == '/ast1/comparison/error_norm'
+    for path in Path(recording.__file__).parent.glob('*.py'):
+        source = path.read_text()
+        for name in topics.TYPES:
+            literals = (f"'{name.lstrip('/')}'", f"'/{name.lstrip('/')}'")
+            assert not any(literal in source for literal in literals), (path.name, name)
+
+
 def test_python_api_refusals_are_the_packages_analysis_error(tmp_path, runs):
     """What the analysis refuses is tumble_ros.errors.AnalysisError, under the one root."""
     from tumble_ros import analysis, errors

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .recording import (ANGULAR_VELOCITY, ERROR, ERROR_NORM, MODEL_ANGULAR_VELOCITY,
-                        Recording)
+from tumble_ros.topics import ANGULAR_VELOCITY, ERROR, ERROR_NORM, MODEL_ANGULAR_VELOCITY
+
+from .recording import Recording
 from .timeaxis import same_stamps
 
 __all__ = ['ErrorStats', 'comparator_errors']
@@ -76,7 +77,7 @@ def comparator_errors(rec: Recording) -> tuple[ErrorStats | None, str | None]:
         with np.errstate(divide='ignore', invalid='ignore'):
             rel = norm / np.linalg.norm(rec.omega[ib], axis=1)
     else:
-        reason = f'no comparator topics ({rec.topic("/comparison/*")}) in the recording'
+        reason = f'no comparator topics ({rec.topic("comparison/*")}) in the recording'
         if rec.comparator_status is not None:
             reason = (f'the comparator published no errors; its last status: '
                       f'{rec.comparator_status.level}: {rec.comparator_status.message}')

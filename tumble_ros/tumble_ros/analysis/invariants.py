@@ -13,9 +13,10 @@ from dataclasses import dataclass
 import numpy as np
 from tumble_ros.core import jacobi_integral
 from tumble_ros.core.rotation import euler_to_matrix, quaternion_to_matrix
+from tumble_ros.topics import ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, SCENARIO
 
 from .impacts import impact_intervals
-from .recording import ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, Recording, SCENARIO
+from .recording import Recording
 from .timeaxis import same_stamps
 
 __all__ = ['InvariantDrift', 'JacobiSegment', 'jacobi_drift']

@@ -20,11 +20,13 @@ failures (missing, empty, not MCAP, truncated before the first complete chunk, u
 message) are :class:`tumble_ros.io.McapError`. A file truncated after some complete chunks
 loads what it holds; ``finalised`` is then False and ``problem`` says why reading stopped.
 
-Namespaces: the topic constants below are the names in the root namespace ``/``; a simulator
-started in a namespace (``--ros-args -r __ns:=/ast1``) publishes ``/ast1/angular_velocity``, ...
-:func:`topic_name` is the one place that puts a namespace in front of a name. ``load_recording``
-reads one namespace: the one given, or the only one whose ``angular_velocity`` topic is in the
-file (:func:`find_namespaces`); with several it refuses and lists them.
+Topics and namespaces: the names, types and frames are :mod:`tumble_ros.topics`' (relative
+names, as the nodes publish them); a simulator started in a namespace (``--ros-args -r
+__ns:=/ast1``) publishes ``/ast1/angular_velocity``, ..., and
+:func:`tumble_ros.topics.in_namespace` is the one place that puts a namespace in front of a
+name (:meth:`Recording.topic`). ``load_recording`` reads one namespace: the one given, or the
+only one whose ``angular_velocity`` topic is in the file (:func:`find_namespaces`); with several
+it refuses and lists them.
 """
 from __future__ import annotations
 
@@ -40,47 +42,29 @@ import numpy as np
 from tumble_ros.core import parse_scenario, Scenario, ScenarioError, TimeBase
 from tumble_ros.errors import AnalysisError
 from tumble_ros.io import read_messages, summarize
+from tumble_ros.topics import (ANGULAR_VELOCITY, ATTITUDE, COMPARISON_STATUS, ERROR, ERROR_NORM,
+                               EULER_ANGLES, FRAME_BODY, FRAME_ORBITAL, IMPACT_EVENTS,
+                               in_namespace, MODEL_ANGULAR_VELOCITY, SCENARIO, STATUS, TYPES)
 
 __all__ = [
-    'ANGULAR_VELOCITY', 'ATTITUDE', 'EULER_ANGLES', 'IMPACT_EVENTS', 'SCENARIO', 'STATUS',
-    'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM', 'COMPARISON_STATUS', 'EXPECTED_TYPES',
-    'ROOT_NAMESPACE', 'AnalysisError', 'ImpactRecord', 'SegmentStart', 'StatusRecord',
-    'ComparatorStatus', 'Recording', 'find_namespaces', 'load_recording', 'normalize_namespace',
-    'stderr_progress', 'topic_name',
+    'EXPECTED_TYPES', 'ROOT_NAMESPACE', 'AnalysisError', 'ImpactRecord', 'SegmentStart',
+    'StatusRecord', 'ComparatorStatus', 'Recording', 'find_namespaces', 'load_recording',
+    'normalize_namespace', 'stderr_progress',
 ]
 
-ANGULAR_VELOCITY = '/angular_velocity'
-ATTITUDE = '/attitude'
-EULER_ANGLES = '/euler_angles'
-IMPACT_EVENTS = '/impact_events'
-SCENARIO = '/scenario'
-STATUS = '/status'
-MODEL_ANGULAR_VELOCITY = '/comparison/model_angular_velocity'
-ERROR = '/comparison/error'
-ERROR_NORM = '/comparison/error_norm'
-COMPARISON_STATUS = '/comparison/status'
-
-#: The topics the analysis decodes, with the type each must have. Other topics (``/clock``,
-#: ``/consumer_progress``, service events) are only counted.
-EXPECTED_TYPES = {
-    ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
-    ATTITUDE: 'geometry_msgs/msg/QuaternionStamped',
-    EULER_ANGLES: 'geometry_msgs/msg/Vector3Stamped',
-    IMPACT_EVENTS: 'tumble_ros_interfaces/msg/ImpactEvent',
-    SCENARIO: 'tumble_ros_interfaces/msg/ScenarioDescription',
-    STATUS: 'tumble_ros_interfaces/msg/SimStatus',
-    MODEL_ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
-    ERROR: 'geometry_msgs/msg/Vector3Stamped',
-    ERROR_NORM: 'tumble_ros_interfaces/msg/ErrorNorm',
-    COMPARISON_STATUS: 'diagnostic_msgs/msg/DiagnosticStatus',
-}
+#: The topics the analysis decodes (relative names), with the type each must have
+#: (:data:`tumble_ros.topics.TYPES`). Other topics (``/clock``, ``consumer_progress``, service
+#: events) are only counted.
+EXPECTED_TYPES = {topic: TYPES[topic] for topic in (
+    ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, IMPACT_EVENTS, SCENARIO, STATUS,
+    MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS)}
 
 #: SimStatus states (tumble_ros_interfaces/msg/SimStatus.msg).
 SIM_STATES = {0: 'RUNNING', 1: 'PAUSED', 2: 'FINISHED', 3: 'DIVERGED'}
 #: DiagnosticStatus levels.
 DIAGNOSTIC_LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
 #: ImpactEvent frames.
-IMPACT_FRAMES = {0: 'body', 1: 'orbital'}
+IMPACT_FRAMES = {0: FRAME_BODY, 1: FRAME_ORBITAL}
 
 
 # -- namespaces -------------------------------------------------------------------------------
@@ -103,21 +87,17 @@ def normalize_namespace(namespace: str) -> str:
     return '/' + '/'.join(tokens)
 
 
-def topic_name(namespace: str, topic: str) -> str:
-    """Return the full name of a tumble topic (``ANGULAR_VELOCITY``, ...) in ``namespace``."""
-    return namespace.rstrip('/') + topic
-
-
-def find_namespaces(topics: dict[str, str] | Iterable[str]) -> list[str]:
+def find_namespaces(names: dict[str, str] | Iterable[str]) -> list[str]:
     """
     Return the namespaces that hold an ``angular_velocity`` topic, sorted.
 
-    ``topics``: topic names, or a mapping topic -> type name; with types, only the namespaces
+    ``names``: topic names, or a mapping topic -> type name; with types, only the namespaces
     whose ``angular_velocity`` has the expected type count, unless none has.
     """
-    types = topics if isinstance(topics, dict) else dict.fromkeys(topics)
-    found = {name[:-len(ANGULAR_VELOCITY)] or ROOT_NAMESPACE: type_name
-             for name, type_name in types.items() if name.endswith(ANGULAR_VELOCITY)}
+    types = names if isinstance(names, dict) else dict.fromkeys(names)
+    suffix = in_namespace(ROOT_NAMESPACE, ANGULAR_VELOCITY)      # /angular_velocity
+    found = {name[:-len(suffix)] or ROOT_NAMESPACE: type_name
+             for name, type_name in types.items() if name.endswith(suffix)}
     typed = [ns for ns, type_name in found.items()
              if type_name == EXPECTED_TYPES[ANGULAR_VELOCITY]]
     return sorted(typed or found)
@@ -128,19 +108,19 @@ def _choose_namespace(path: Path, types: dict[str, str], namespace: str | None) 
     found = find_namespaces(types)
     if namespace is not None:
         namespace = normalize_namespace(namespace)
-        if topic_name(namespace, ANGULAR_VELOCITY) in types:
+        if in_namespace(namespace, ANGULAR_VELOCITY) in types:
             return namespace
         where = (f'namespaces with the tumble topics: {", ".join(found)}' if found
                  else f'topics: {", ".join(sorted(types)) or "none"}')
-        raise AnalysisError(f'{path}: no {topic_name(namespace, ANGULAR_VELOCITY)} topic in '
+        raise AnalysisError(f'{path}: no {in_namespace(namespace, ANGULAR_VELOCITY)} topic in '
                             f'namespace {namespace} ({where})')
     if len(found) > 1:
         raise AnalysisError(f'{path}: the tumble topics are in {len(found)} namespaces: '
                             f'{", ".join(found)}; choose one with --namespace')
     if not found:
         present = ', '.join(sorted(types)) or 'none'
-        raise AnalysisError(f'{path}: no {ANGULAR_VELOCITY} topic: not a tumble_ros '
-                            f'simulator recording (topics: {present})')
+        raise AnalysisError(f'{path}: no {in_namespace(ROOT_NAMESPACE, ANGULAR_VELOCITY)} '
+                            f'topic: not a tumble_ros simulator recording (topics: {present})')
     return found[0]
 
 
@@ -203,7 +183,7 @@ class Recording:
     #: topic -> (type name, message count) of every topic in the file.
     topics: dict[str, tuple[str, int]]
     seconds_per_year: float
-    seconds_per_year_source: str            # the scenario topic ('/scenario') or 'default'
+    seconds_per_year_source: str            # the scenario topic's full name, or 'default'
     t: np.ndarray                           # (n,) [yr] of /angular_velocity
     omega: np.ndarray                       # (n, 3) [rad/yr]
     stamp_ns: np.ndarray                    # (n,) int64, the stamps of t
@@ -235,8 +215,8 @@ class Recording:
         return len(self.t)
 
     def topic(self, name: str) -> str:
-        """Return the full name of ``name`` (``ANGULAR_VELOCITY``, ...) in this namespace."""
-        return topic_name(self.namespace, name)
+        """Return the full name in this namespace of ``name``, a tumble topic's relative name."""
+        return in_namespace(self.namespace, name)
 
     @property
     def has_comparator(self) -> bool:
@@ -300,14 +280,14 @@ def _select_topics(info, namespace: str | None
     wanted: dict[str, str] = {}
     skipped: dict[str, str] = {}
     for topic, expected in EXPECTED_TYPES.items():
-        full = topic_name(namespace, topic)
+        full = in_namespace(namespace, topic)
         if full not in types:
             continue
         if types[full] != expected:
             skipped[full] = f'type {types[full]}, expected {expected}'
         else:
             wanted[full] = topic
-    velocity = topic_name(namespace, ANGULAR_VELOCITY)
+    velocity = in_namespace(namespace, ANGULAR_VELOCITY)
     if velocity in skipped:
         raise AnalysisError(f'{info.path}: {velocity} has {skipped[velocity]}')
     return namespace, wanted, skipped
@@ -377,7 +357,7 @@ def load_recording(path, *, namespace: str | None = None,
     for _, msg in scenarios:
         value = float(msg.seconds_per_year)
         if math.isfinite(value) and value > 0:
-            spy, spy_source = value, topic_name(namespace, SCENARIO)
+            spy, spy_source = value, in_namespace(namespace, SCENARIO)
             break
     timebase = TimeBase(spy)
 
@@ -386,7 +366,7 @@ def load_recording(path, *, namespace: str | None = None,
 
     stamps, omega = _sorted(*raw.get(ANGULAR_VELOCITY, ([], [])), 3)
     if len(stamps) == 0:
-        raise AnalysisError(f'{info.path}: {topic_name(namespace, ANGULAR_VELOCITY)} has no '
+        raise AnalysisError(f'{info.path}: {in_namespace(namespace, ANGULAR_VELOCITY)} has no '
                             f'messages'
                             + ('' if info.finalised else f' (file truncated: {info.problem})'))
     rec = Recording(path=info.path, finalised=info.finalised, problem=info.problem,

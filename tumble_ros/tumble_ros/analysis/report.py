@@ -14,7 +14,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .recording import ANGULAR_VELOCITY, ROOT_NAMESPACE, SCENARIO, topic_name
+from tumble_ros.topics import ANGULAR_VELOCITY, in_namespace, SCENARIO
+
+from .recording import ROOT_NAMESPACE
 
 if TYPE_CHECKING:
     from .summary import AnalysisSummary
@@ -56,7 +58,7 @@ def _time_and_scenario(s: AnalysisSummary) -> list[str]:
     dt = (f'dt = {_g(p.dt)} yr' + (' (uniform)' if p.uniform else
                                    f' (median; {_g(p.dt_min)} .. {_g(p.dt_max)})')
           if p.dt is not None else 'one sample')
-    out.append(f'simulated time: {p.n} samples of {topic_name(s.namespace, ANGULAR_VELOCITY)}, '
+    out.append(f'simulated time: {p.n} samples of {in_namespace(s.namespace, ANGULAR_VELOCITY)}, '
                f't = {_g(p.t_first)} .. '
                f'{_g(p.t_last)} yr, duration {_g(p.duration)} yr, {dt}')
     source = s.seconds_per_year_source
@@ -71,7 +73,7 @@ def _time_and_scenario(s: AnalysisSummary) -> list[str]:
                    f"{len(sc['impacts.start'])} scheduled impact(s)")
     else:
         out.append('scenario: none' + (f' ({s.scenario_error})' if s.scenario_error else
-                                       f' (no {topic_name(s.namespace, SCENARIO)} topic)'))
+                                       f' (no {in_namespace(s.namespace, SCENARIO)} topic)'))
     if s.final_status:
         out.append(f'simulator status: {s.final_status}')
     return out

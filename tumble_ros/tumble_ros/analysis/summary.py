@@ -17,10 +17,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from tumble_ros.topics import ANGULAR_VELOCITY, SCENARIO
+
 from .comparator import comparator_errors, ErrorStats
 from .impacts import impact_intervals, impact_summaries, ImpactSummary
 from .invariants import InvariantDrift, jacobi_drift, JacobiSegment
-from .recording import ANGULAR_VELOCITY, Recording, ROOT_NAMESPACE, SCENARIO
+from .recording import Recording, ROOT_NAMESPACE
 from .report import format_summary, summary_to_dict
 from .spectrum import Peak, Spectrum, spectrum
 from .theory import AliasingCheck, check_aliasing, theory_lines, TheoryLine
