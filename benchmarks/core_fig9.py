@@ -299,7 +299,8 @@ last/first decile: largest drift in the last tenth of the run over that in the f
   drift (~0: no trend; ~1: linear growth).
 max |w - w_ref|: largest distance of omega from the reference trajectory over the run's samples
   ({ref.label}, own error <= ~{ref.error:.1e} rad/yr, see the checks above); / |w|: the same
-  relative to |omega_ref| (~30 rad/yr). It grows with time for every method (a phase error).
+  relative to |omega_ref| (~30 rad/yr; here the error is all in (wx, wy), ~0.14-0.22 rad/yr).
+  It grows with time for most methods: a phase error, which the Jacobi drift does not show.
 vs scipy @drift / @error: the wall time of scipy's solve_ivp at matched drift (<= {TARGET:g}) /
   at matched trajectory error (<= that of the fastest project row meeting the drift target)
   over this row's wall time (higher = faster). The scipy rows 'matched at' drift / error are
