@@ -16,7 +16,8 @@ bodies at once), ``analytic`` (the paper's approximate solution, better linearis
 exact torque-free motion), ``timebase`` (simulated years <-> ROS stamps).
 Performance and long runs: docs/performance.md.
 """
-from .analytic import AnalyticModel, AnchorState, applicability, make_model, ModelNotApplicable
+from .analytic import (AnalyticModel, AnchorState, applicability, characteristic_frequencies,
+                       Frequency, make_model, ModelNotApplicable)
 from .analytic import MODELS as ANALYTIC_MODELS
 from .dynamics import angular_momentum_orbital, ATTITUDE_MODELS, jacobi_integral, kinetic_energy
 from .ensemble import ensemble_scenarios, EnsembleResult, random_impacts, simulate_ensemble
@@ -39,6 +40,8 @@ from .timebase import TimeBase
 __all__ = [
     'ANALYTIC_MODELS',
     'AnalyticModel',
+    'characteristic_frequencies',
+    'Frequency',
     'AnchorState',
     'ModelNotApplicable',
     'applicability',
