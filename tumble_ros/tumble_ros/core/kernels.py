@@ -21,6 +21,9 @@ What is compiled, for the quaternion attitude only:
   state, step collapse), the continuous Euler-angle tracking (``Propagator._track_euler``) and
   output sampling, so a whole segment (or a whole ensemble) runs without returning to Python.
 
+Like the reference steppers (``integrators.base``: "Local time") every method steps in the
+segment's local time tau = t - t0 (st[S_TAU]); st[S_T] is the absolute time handed out.
+
 Each body's integration state lives in one float64 array ``st`` (layout: the ``S_*``/``O_*``
 constants below); a segment's problem (inertia, orbit rate, pulse torques, precomputed
 coefficients) in ``p`` (:func:`problem_array`); the method and its settings in ``cfg``
@@ -94,12 +97,13 @@ S_T, S_TOLD, S_TBOUND, S_H, S_NTOTAL, S_NSTEPS, S_NFEV, S_STATUS = 0, 1, 2, 3, 4
 S_FAIL, S_FAILT, S_FAILDT, S_FVALID, S_DENSE, S_HPREV, S_NFEVDONE, S_T0 = (8, 9, 10, 11, 12, 13,
                                                                            14, 15)
 S_BUDGET = 16             # Euler tracking: angle change bound accumulated since the last update
-S_COLLAPSE = 17           # 16 ulp of the segment's largest t: no step longer than this collapses
+S_COLLAPSE = 17           # 16 ulp of the segment's largest tau: no step longer than this collapses
+S_TAU, S_TAUOLD, S_TAUBOUND = 18, 19, 20   # local times tau = t - S_T0 (S_T, S_TOLD, S_TBOUND)
 RUNNING, FINISHED, FAILED = 0.0, 1.0, 2.0
 FAIL_NONE, FAIL_NONFINITE, FAIL_COLLAPSE, FAIL_TOO_SMALL = 0.0, 1.0, 2.0, 3.0
 FAIL_STEP_NAN, FAIL_REJECTED = 4.0, 5.0   # dop853: step size not a number; too many rejections
 N = 7                     # state size: omega (3) + quaternion (4)
-O_Y = 20                  # current state
+O_Y = 24                  # current state
 O_YOLD = O_Y + N          # state at the start of the last step
 O_F = O_YOLD + N          # f(t, y) (rk4: valid if S_FVALID; dop853: always)
 O_FOLD = O_F + N          # f at the start of the last step (rk4 dense output)
@@ -356,9 +360,9 @@ def free_flow(p, a, px, py, pz, q0, q1, q2, q3):
 
 
 @jit_inline
-def split_flow(p, cfg, st, yo, po, to, t0, h, yd, pd, td):
+def split_flow(p, cfg, st, yo, po, to, t0, s0, h, yd, pd, td):
     """
-    Take one composed splitting step of length h from time t0.
+    Take one composed splitting step of length h from local time s0 (absolute time t0 + s0).
 
     From attitude st[yo+3:yo+7], angular momentum st[po:po+3], cached torque st[to:to+3];
     result to st[yd:yd+7] (w and q), st[pd:pd+3] (momentum) and st[td:td+3] (torque at the
@@ -381,7 +385,7 @@ def split_flow(p, cfg, st, yo, po, to, t0, h, yd, pd, td):
         py += half * ty
         pz += half * tz
         px, py, pz, q0, q1, q2, q3 = free_flow(p, a, px, py, pz, q0, q1, q2, q3)
-        tx, ty, tz = body_torque(p, q0, q1, q2, q3, t0 + cfg[C_CUM + j] * h)
+        tx, ty, tz = body_torque(p, q0, q1, q2, q3, t0 + (s0 + cfg[C_CUM + j] * h))
         px += half * tx
         py += half * ty
         pz += half * tz
@@ -423,6 +427,10 @@ def seg_init(p, cfg, st, t0, t_bound):
     st[S_T0] = t0
     st[S_TOLD] = t0
     st[S_TBOUND] = t_bound
+    span = t_bound - t0     # local time tau = t - t0 (integrators.base.Stepper.tau_bound)
+    st[S_TAU] = 0.0
+    st[S_TAUOLD] = 0.0
+    st[S_TAUBOUND] = span
     st[S_NSTEPS] = 0.0
     st[S_NFEVDONE] += st[S_NFEV]   # evaluations of earlier segments (ensembles)
     st[S_NFEV] = 0.0
@@ -430,10 +438,9 @@ def seg_init(p, cfg, st, t0, t_bound):
     st[S_FVALID] = 0.0
     st[S_DENSE] = 0.0
     st[S_STATUS] = FINISHED if t0 >= t_bound else RUNNING
-    big = max(abs(t_bound), abs(t0), 1.0)
+    big = abs(span)
     st[S_COLLAPSE] = _MIN_STEP_ULPS * (np.nextafter(big, np.inf) - big)
     method = int(cfg[C_METHOD])
-    span = t_bound - t0
     if method == M_RK4 or method == M_SPLIT:
         n = 1.0
         if span > 0:
@@ -446,7 +453,8 @@ def seg_init(p, cfg, st, t0, t_bound):
             st[O_PI] = p[P_IX] * st[O_Y]
             st[O_PI + 1] = p[P_IY] * st[O_Y + 1]
             st[O_PI + 2] = p[P_IZ] * st[O_Y + 2]
-            tx, ty, tz = body_torque(p, st[O_Y + 3], st[O_Y + 4], st[O_Y + 5], st[O_Y + 6], t0)
+            tx, ty, tz = body_torque(p, st[O_Y + 3], st[O_Y + 4], st[O_Y + 5], st[O_Y + 6],
+                                     t0 + 0.0)
             st[O_TAU] = tx
             st[O_TAU + 1] = ty
             st[O_TAU + 2] = tz
@@ -493,30 +501,32 @@ def seg_init(p, cfg, st, t0, t_bound):
 @jit_inline
 def _rk4_step(p, st):
     h = st[S_H]
-    t = st[S_T]
+    tau = st[S_TAU]
+    t0 = st[S_T0]
     if st[S_FVALID] == 0.0:
-        rhs(p, t, st, O_Y, O_F)
+        rhs(p, t0 + tau, st, O_Y, O_F)
         st[S_NFEV] += 1.0
     k2 = O_K
     k3 = O_K + N
     k4 = O_K + 2 * N
     for i in range(N):
         st[O_TMP + i] = st[O_Y + i] + (0.5 * h) * st[O_F + i]
-    rhs(p, t + 0.5 * h, st, O_TMP, k2)
+    rhs(p, t0 + (tau + 0.5 * h), st, O_TMP, k2)
     for i in range(N):
         st[O_TMP + i] = st[O_Y + i] + (0.5 * h) * st[k2 + i]
-    rhs(p, t + 0.5 * h, st, O_TMP, k3)
+    rhs(p, t0 + (tau + 0.5 * h), st, O_TMP, k3)
     for i in range(N):
         st[O_TMP + i] = st[O_Y + i] + h * st[k3 + i]
-    rhs(p, t + h, st, O_TMP, k4)
+    rhs(p, t0 + (tau + h), st, O_TMP, k4)
     st[S_NFEV] += 3.0
     for i in range(N):
         st[O_FOLD + i] = st[O_F + i]
         st[O_Y + i] = st[O_Y + i] + (h / 6.0) * (
             st[O_F + i] + 2.0 * (st[k2 + i] + st[k3 + i]) + st[k4 + i])
-    st[S_TOLD] = t
-    st[S_T] = (st[S_TBOUND] if st[S_NSTEPS] + 1.0 >= st[S_NTOTAL]
-               else st[S_T0] + (st[S_NSTEPS] + 1.0) * h)
+    st[S_TAUOLD] = tau
+    # tau_k = k h (no accumulated rounding in t over millions of steps)
+    st[S_TAU] = (st[S_TAUBOUND] if st[S_NSTEPS] + 1.0 >= st[S_NTOTAL]
+                 else (st[S_NSTEPS] + 1.0) * h)
     st[S_FVALID] = 0.0
     return FAIL_NONE
 
@@ -524,8 +534,9 @@ def _rk4_step(p, st):
 @jit
 def _dop853_step(p, cfg, st):
     """Take a step as scipy's RungeKutta._step_impl with DOP853's rk_step and error norm."""
-    t = st[S_T]
-    t_bound = st[S_TBOUND]
+    t = st[S_TAU]               # scipy's t is the local time (adaptive._ScipyStepper)
+    t_bound = st[S_TAUBOUND]
+    t0 = st[S_T0]
     rtol = cfg[C_RTOL]
     atol = cfg[C_ATOL]
     max_step = cfg[C_MAXSTEP]
@@ -560,13 +571,13 @@ def _dop853_step(p, cfg, st):
                 for j in range(s):
                     acc += st[O_K + j * N + i] * _D_A[s, j]
                 st[O_TMP + i] = st[O_Y + i] + acc * h
-            rhs(p, t + _D_C[s] * h, st, O_TMP, O_K + s * N)
+            rhs(p, t0 + (t + _D_C[s] * h), st, O_TMP, O_K + s * N)
         for i in range(N):
             acc = 0.0
             for j in range(ns):
                 acc += st[O_K + j * N + i] * _D_B[j]
             st[O_YNEW + i] = st[O_Y + i] + h * acc
-        rhs(p, t + h, st, O_YNEW, O_K + ns * N)
+        rhs(p, t0 + (t + h), st, O_YNEW, O_K + ns * N)
         st[S_NFEV] += float(ns)
         e5 = 0.0
         e3 = 0.0
@@ -611,8 +622,8 @@ def _dop853_step(p, cfg, st):
     for i in range(N):
         st[O_Y + i] = st[O_YNEW + i]
         st[O_F + i] = st[O_K + ns * N + i]
-    st[S_TOLD] = t
-    st[S_T] = t_new
+    st[S_TAUOLD] = t
+    st[S_TAU] = t_new
     st[S_H] = h_abs
     st[S_DENSE] = 0.0
     return FAIL_NONE
@@ -621,15 +632,15 @@ def _dop853_step(p, cfg, st):
 @jit_inline
 def _split_step(p, cfg, st):
     h = st[S_H]
-    t = st[S_T]
+    tau = st[S_TAU]
     for i in range(3):
         st[O_TAUOLD + i] = st[O_TAU + i]
         st[O_PIOLD + i] = st[O_PI + i]
-    split_flow(p, cfg, st, O_YOLD, O_PIOLD, O_TAUOLD, t, h, O_Y, O_PI, O_TAU)
-    st[S_TOLD] = t
-    # t_k = t0 + k h (no accumulated rounding in t over millions of steps)
-    st[S_T] = (st[S_TBOUND] if st[S_NSTEPS] + 1.0 >= st[S_NTOTAL]
-               else st[S_T0] + (st[S_NSTEPS] + 1.0) * h)
+    split_flow(p, cfg, st, O_YOLD, O_PIOLD, O_TAUOLD, st[S_T0], tau, h, O_Y, O_PI, O_TAU)
+    st[S_TAUOLD] = tau
+    # tau_k = k h (no accumulated rounding in t over millions of steps)
+    st[S_TAU] = (st[S_TAUBOUND] if st[S_NSTEPS] + 1.0 >= st[S_NTOTAL]
+                 else (st[S_NSTEPS] + 1.0) * h)
     st[S_NFEV] += cfg[C_NG]
     return FAIL_NONE
 
@@ -643,6 +654,8 @@ def step(p, cfg, st):
     st[S_FAIL] says why.
     """
     t_good = st[S_T]
+    tau_good = st[S_TAU]
+    tau_old_good = st[S_TAUOLD]
     for i in range(N):
         st[O_YOLD + i] = st[O_Y + i]
     method = int(cfg[C_METHOD])
@@ -660,15 +673,18 @@ def step(p, cfg, st):
             acc += st[O_Y + i] * st[O_Y + i]
         if not math.isfinite(acc):
             code = FAIL_NONFINITE
-    if code == FAIL_NONE and st[S_T] < st[S_TBOUND] and st[S_T] - t_good <= st[S_COLLAPSE]:
-        # the exact test of integrators.base (only reached for steps near the bound)
-        base = t_good if t_good != 0.0 else 1.0
-        ulp = np.nextafter(abs(base), np.inf) - abs(base)
-        if st[S_T] - t_good <= _MIN_STEP_ULPS * ulp:
+    if (code == FAIL_NONE and st[S_TAU] < st[S_TAUBOUND]
+            and st[S_TAU] - tau_good <= st[S_COLLAPSE]):
+        # the exact test of integrators.base, in local time (only reached for steps near the
+        # bound)
+        ulp = np.nextafter(abs(tau_good), np.inf) - abs(tau_good)
+        if st[S_TAU] - tau_good <= _MIN_STEP_ULPS * ulp:
             code = FAIL_COLLAPSE
-            st[S_FAILDT] = st[S_T] - t_good
+            st[S_FAILDT] = st[S_TAU] - tau_good
     if code != FAIL_NONE:
         st[S_T] = t_good
+        st[S_TAU] = tau_good
+        st[S_TAUOLD] = tau_old_good
         for i in range(N):
             st[O_Y + i] = st[O_YOLD + i]
         st[S_STATUS] = FAILED
@@ -676,7 +692,10 @@ def step(p, cfg, st):
         st[S_FAILT] = t_good
         return False
     st[S_NSTEPS] += 1.0
-    if st[S_T] >= st[S_TBOUND]:
+    st[S_TOLD] = t_good
+    # the absolute time handed out (integrators.base.Stepper.absolute)
+    st[S_T] = st[S_TBOUND] if st[S_TAU] >= st[S_TAUBOUND] else st[S_T0] + st[S_TAU]
+    if st[S_TAU] >= st[S_TAUBOUND]:
         st[S_STATUS] = FINISHED
     return True
 
@@ -689,14 +708,16 @@ def dense(p, cfg, st, t):
             st[O_SCR + i] = st[O_Y + i]
         return
     method = int(cfg[C_METHOD])
-    t_old = st[S_TOLD]
+    # local time, kept inside the step (integrators.base.Stepper.state_at)
+    t_old = st[S_TAUOLD]
+    t = min(max(t - st[S_T0], t_old), st[S_TAU])
     if method == M_RK4:
         # cubic Hermite (fixed_step.RK4._state_at_impl); needs f at the end of the step
         if st[S_FVALID] == 0.0:
-            rhs_called(p, st[S_T], st, O_Y, O_F)
+            rhs_called(p, st[S_T0] + st[S_TAU], st, O_Y, O_F)
             st[S_FVALID] = 1.0
             st[S_NFEV] += 1.0
-        h = st[S_T] - t_old
+        h = st[S_TAU] - t_old
         s = (t - t_old) / h
         h00 = (1.0 + 2.0 * s) * (1.0 - s) ** 2
         h10 = s * (1.0 - s) ** 2
@@ -714,7 +735,7 @@ def dense(p, cfg, st, t):
                     for j in range(s):
                         acc += st[O_K + j * N + i] * _D_A[s, j]
                     st[O_TMP + i] = st[O_YOLD + i] + acc * h
-                rhs_called(p, t_old + _D_C[s] * h, st, O_TMP, O_K + s * N)
+                rhs_called(p, st[S_T0] + (t_old + _D_C[s] * h), st, O_TMP, O_K + s * N)
                 st[S_NFEV] += 1.0
             for i in range(N):
                 delta = st[O_Y + i] - st[O_YOLD + i]
@@ -728,7 +749,7 @@ def dense(p, cfg, st, t):
                         acc += _D_D[r, j] * st[O_K + j * N + i]
                     st[O_FD + (3 + r) * N + i] = h * acc
             st[S_DENSE] = 1.0
-        x = (t - t_old) / (st[S_T] - t_old)
+        x = (t - t_old) / (st[S_TAU] - t_old)
         for i in range(N):
             y = 0.0
             for k in range(7):
@@ -740,8 +761,8 @@ def dense(p, cfg, st, t):
             st[O_SCR + i] = y + st[O_YOLD + i]
     else:
         # splitting: a step of the same method from the start of the step, of length t - t_old
-        split_flow_called(p, cfg, st, O_YOLD, O_PIOLD, O_TAUOLD, t_old, t - t_old, O_SCR, O_TMP,
-                          O_TMP + 3)
+        split_flow_called(p, cfg, st, O_YOLD, O_PIOLD, O_TAUOLD, st[S_T0], t_old, t - t_old,
+                          O_SCR, O_TMP, O_TMP + 3)
 
 
 # =======================================================================================

@@ -6,6 +6,8 @@ Adaptive methods: scipy's step-by-step solvers and VODE's Adams method.
 * ``lsoda``: ODEPACK's automatic Adams/BDF switching, the "ode" default of
   Scilab/Matlab-like platforms the paper used;
 * ``adams``: variable-order, variable-step Adams-Moulton (VODE), the paper's "Adams".
+
+Each solver integrates its segment in local time tau = t - t0 (``base``: "Local time").
 """
 from __future__ import annotations
 
@@ -32,7 +34,7 @@ class _ScipyStepper(Stepper):
         self._solver = None
         if self.status == 'running':
             self._solver = self.solver_class(
-                fun, self.t, self.y, self.t_bound,
+                self.local_fun, 0.0, self.y, self.tau_bound,
                 rtol=settings.rtol, atol=settings.atol, max_step=_max_step(settings),
             )
         self._dense = None
@@ -47,18 +49,18 @@ class _ScipyStepper(Stepper):
         if h_abs is not None and h_abs != h_abs:
             # NaN step size (a non-finite right-hand side where the initial step was chosen):
             # scipy's step loop would neither accept nor fail, for ever (kernels._dop853_step)
-            return False, step_nan_message(self.name, solver.t)
+            return False, step_nan_message(self.name, self.t0 + solver.t)
         message = solver.step()
         if solver.status == 'failed':
-            return False, f'{self.name} failed at t = {solver.t:.10g} yr: {message}'
-        self.t_old, self.t, self.y = solver.t_old, solver.t, solver.y
+            return False, f'{self.name} failed at t = {self.t0 + solver.t:.10g} yr: {message}'
+        self.tau_old, self.tau, self.y = solver.t_old, solver.t, solver.y
         self._dense = None
         return True, ''
 
-    def _state_at_impl(self, t):
+    def _state_at_impl(self, tau):
         if self._dense is None:
             self._dense = self._solver.dense_output()
-        return self._dense(t)
+        return self._dense(tau)
 
 
 class RK45(_ScipyStepper):
@@ -91,7 +93,7 @@ class Adams(Stepper):
     VODE may step beyond ``t_bound`` (it has no stop time in scipy's wrapper); the
     right-hand side is smooth past the segment end (it is the same closed-form function
     continued), and the state at ``t_bound`` is VODE's own interpolant, so the stepper
-    still ends exactly on ``t_bound``.
+    still ends exactly on ``t_bound``. VODE's time is the local time tau = t - t0.
     """
 
     name = 'adams'
@@ -100,17 +102,18 @@ class Adams(Stepper):
     def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         self._nfev = 0
+        t0 = self.t0
 
-        def counted(t, y):
+        def counted(tau, y):
             self._nfev += 1
-            return fun(t, y)
+            return fun(t0 + tau, y)
 
         self._ode = integrate.ode(counted).set_integrator(
             'vode', method='adams', rtol=settings.rtol, atol=settings.atol,
             max_step=settings.max_step, nsteps=100_000,
         )
-        self._ode.set_initial_value(self.y, self.t)
-        self._t_internal = self.t
+        self._ode.set_initial_value(self.y, 0.0)
+        self._tau_internal = 0.0
 
     @property
     def nfev(self) -> int:
@@ -118,33 +121,34 @@ class Adams(Stepper):
 
     def _step_impl(self):
         ode = self._ode
-        t_prev = self.t
-        if self._t_internal < self.t_bound:
-            y = ode.integrate(self.t_bound, step=True)
+        tau_prev = self.tau
+        if self._tau_internal < self.tau_bound:
+            y = ode.integrate(self.tau_bound, step=True)
             if not ode.successful():
-                return False, (f'adams (VODE) failed near t = {ode.t:.10g} yr '
+                return False, (f'adams (VODE) failed near t = {self.t0 + ode.t:.10g} yr '
                                f'(istate {ode.get_return_code()})')
-            self._t_internal = ode.t
-        if self._t_internal >= self.t_bound:
-            y = self._interpolate(self.t_bound)
-            t_new = self.t_bound
+            self._tau_internal = ode.t
+        if self._tau_internal >= self.tau_bound:
+            y = self._interpolate(self.tau_bound)
+            tau_new = self.tau_bound
         else:
-            t_new = self._t_internal
-        self.t_old, self.t, self.y = t_prev, t_new, np.array(y, dtype=float)
+            tau_new = self._tau_internal
+        self.tau_old, self.tau, self.y = tau_prev, tau_new, np.array(y, dtype=float)
         return True, ''
 
-    def _interpolate(self, t):
-        # With itask=1 and t behind VODE's current time, VODE interpolates within its last
+    def _interpolate(self, tau):
+        # With itask=1 and tau behind VODE's current time, VODE interpolates within its last
         # step (its Nordsieck history) without stepping. Keep the ode object's own
         # notion of "current" (t, y) unchanged so the next one-step call continues there.
         ode = self._ode
         t_cur, y_cur = ode.t, ode._y
-        y = np.array(ode.integrate(t), dtype=float)
+        y = np.array(ode.integrate(tau), dtype=float)
         ok = ode.successful()
         ode.t, ode._y = t_cur, y_cur
         if not ok:
-            raise RuntimeError(f'adams (VODE) could not interpolate at t = {t!r} yr')
+            raise RuntimeError(
+                f'adams (VODE) could not interpolate at t = {self.t0 + tau!r} yr')
         return y
 
-    def _state_at_impl(self, t):
-        return self._interpolate(t)
+    def _state_at_impl(self, tau):
+        return self._interpolate(tau)

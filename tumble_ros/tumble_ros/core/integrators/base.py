@@ -7,6 +7,17 @@ and never steps past ``t_bound``: the propagator gives each stepper one integrat
 segment on which the right-hand side is smooth (impact pulses start and end on segment
 edges), so no method can step over a pulse.
 
+Local time
+----------
+Every stepper integrates its segment in *local time* tau = t - t0 (t0: the segment's start):
+the method's own time variable, its step-size arithmetic and its dense output see tau, the
+right-hand side gets t = t0 + tau (:meth:`Stepper.local_fun`), and ``t``/``t_old`` are handed
+out in absolute time (``t0 + tau``, and exactly ``t_bound`` at the end). In absolute time a
+pulse of 3e-7 yr at t = 1 yr is ~1e9 ulp of t long: the steps of an implicit or multistep
+method inside it are rounded to ulp(t) (LSODA and VODE lose ~1e-10 rad/yr of the jump, and BDF
+at rtol <= 1e-12 wants steps below scipy's minimum of 10 ulp(t)); in local time a step is
+rounded to ulp(tau), relative to the pulse itself.
+
 Implementing a new method
 -------------------------
 1. Subclass :class:`Stepper`, set the class attributes ``name`` (the registry key),
@@ -16,14 +27,15 @@ Implementing a new method
    from ``requirement``), ``needs_problem`` (it uses the segment's :class:`SegmentProblem`
    rather than only ``fun``, like the splitting methods) and ``kernel`` (the name of its
    compiled loop in ``core/kernels.py``, if any).
-2. Implement ``_step_impl() -> (ok, message)``: advance ``self.t``/``self.y`` by one
-   step, keep the previous time in ``self.t_old``, and land exactly on ``t_bound`` at
-   the end. Return ``(False, reason)`` on numerical failure.
-3. Implement ``_state_at_impl(t)`` for any t in [t_old, t] (dense output).
+2. Implement ``_step_impl() -> (ok, message)``: advance the local time ``self.tau`` and
+   ``self.y`` by one step, keep the previous local time in ``self.tau_old``, and land exactly
+   on ``self.tau_bound`` at the end; evaluate the right-hand side through
+   :meth:`local_fun`. Return ``(False, reason)`` on numerical failure.
+3. Implement ``_state_at_impl(tau)`` for any local time tau in [tau_old, tau] (dense output).
 4. Add the class to ``METHODS`` (general-purpose methods: any y' = f(t, y)) or
    ``SPLITTING_METHODS`` (structure-exploiting methods) in ``integrators/__init__.py``.
-The base class counts steps, records status and message, and turns a non-finite state
-into a failure.
+The base class counts steps, records status and message, maps local to absolute time and
+turns a non-finite state into a failure.
 """
 from __future__ import annotations
 
@@ -107,6 +119,9 @@ class Stepper(ABC):
     ----------
     t, y : current time and state (y is owned by the stepper: copy before keeping).
     t_old : time at the start of the last step (None before the first step).
+    t0 : start of the segment [yr], the origin of the local time.
+    tau, tau_old, tau_bound : local times (t - t0) of the current state, of the start of the
+        last step (None before the first step) and of the segment's end.
     status : ``"running"``, ``"finished"`` (reached t_bound) or ``"failed"``.
     message : why it failed, empty otherwise.
     n_steps : number of accepted steps.
@@ -135,6 +150,10 @@ class Stepper(ABC):
         self.y = np.array(y0, dtype=float)
         self.t_old: float | None = None
         self.t_bound = float(t_bound)
+        self.t0 = self.t
+        self.tau = 0.0
+        self.tau_old: float | None = None
+        self.tau_bound = self.t_bound - self.t0
         self.settings = settings
         self.status = FINISHED if self.t >= self.t_bound else RUNNING
         self.message = ''
@@ -145,26 +164,36 @@ class Stepper(ABC):
         """Return the number of right-hand-side evaluations so far."""
         return 0
 
+    def local_fun(self, tau: float, y: np.ndarray) -> np.ndarray:
+        """Return the right-hand side at local time ``tau`` (absolute time t0 + tau)."""
+        return self.fun(self.t0 + tau, y)
+
+    def absolute(self, tau: float) -> float:
+        """Return the absolute time of local time ``tau``: t0 + tau, exactly t_bound at the end."""
+        return self.t_bound if tau >= self.tau_bound else self.t0 + tau
+
     def step(self) -> str:
         """Take one step; returns the new status."""
         if self.status != RUNNING:
             raise RuntimeError(f'step() on a stepper whose status is {self.status!r}')
-        t_good, y_good = self.t, self.y
+        t_good, tau_good, tau_old_good, y_good = self.t, self.tau, self.tau_old, self.y
         ok, message = self._step_impl()
         if ok and not _finite_norm(self.y):
             ok, message = False, f'non-finite state after t = {t_good:.10g} yr'
-        elif (ok and self.t < self.t_bound
-              and self.t - t_good <= _MIN_STEP_ULPS * math.ulp(t_good or 1.0)):
-            ok, message = False, (f'step size collapsed to {self.t - t_good:.3g} yr at '
+        elif (ok and self.tau < self.tau_bound
+              and self.tau - tau_good <= _MIN_STEP_ULPS * math.ulp(tau_good)):
+            # (in local time: a step of a pulse segment may be far below ulp(t))
+            ok, message = False, (f'step size collapsed to {self.tau - tau_good:.3g} yr at '
                                   f't = {t_good:.10g} yr: '
                                   'the solution is singular or diverging there')
         if not ok:
             # Keep the last good state: a failed step never hands out NaN or inf.
-            self.t, self.y = t_good, y_good
+            self.t, self.tau, self.tau_old, self.y = t_good, tau_good, tau_old_good, y_good
             self.status, self.message = FAILED, message
             return self.status
         self.n_steps += 1
-        if self.t >= self.t_bound:
+        self.t_old, self.t = t_good, self.absolute(self.tau)
+        if self.tau >= self.tau_bound:
             self.status = FINISHED
         return self.status
 
@@ -174,12 +203,13 @@ class Stepper(ABC):
             return self.y.copy()
         if self.t_old is None or not (self.t_old <= t <= self.t):
             raise ValueError(f't = {t!r} is outside the last step [{self.t_old!r}, {self.t!r}]')
-        return self._state_at_impl(t)
+        # t - t0 rounds: keep it inside the step's local times
+        return self._state_at_impl(min(max(t - self.t0, self.tau_old), self.tau))
 
     @abstractmethod
     def _step_impl(self) -> tuple[bool, str]:
-        """Advance one step; return (ok, message)."""
+        """Advance one step in local time; return (ok, message)."""
 
     @abstractmethod
-    def _state_at_impl(self, t: float) -> np.ndarray:
-        """Dense output inside the last step."""
+    def _state_at_impl(self, tau: float) -> np.ndarray:
+        """Dense output at local time ``tau`` inside the last step."""

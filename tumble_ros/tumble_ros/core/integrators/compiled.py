@@ -96,9 +96,11 @@ class CompiledStepper(Stepper):
     def _sync(self) -> None:
         st = self._st
         self.t = float(st[K.S_T])
+        self.tau = float(st[K.S_TAU])
         self.y = st[K.O_Y:K.O_Y + K.N].copy()
         self.n_steps = int(st[K.S_NSTEPS])
         self.t_old = float(st[K.S_TOLD]) if self.n_steps else None
+        self.tau_old = float(st[K.S_TAUOLD]) if self.n_steps else None
         self.status = _STATUS[st[K.S_STATUS]]
         if self.status == FAILED and not self.message:
             self.message = self._failure_message()
@@ -140,9 +142,16 @@ class CompiledStepper(Stepper):
         self._sync()
         return int(k), int(steps)
 
+    def state_at(self, t: float) -> np.ndarray:
+        """State at ``t`` within the last step [t_old, t] (dense output); a new array."""
+        if t == self.t or self.t_old is None or not (self.t_old <= t <= self.t):
+            return super().state_at(t)  # the end of the step, or the error
+        # the kernel maps t to local time as Stepper.state_at does
+        K.dense(self._p, self._cfg, self._st, float(t))
+        return self._st[K.O_SCR:K.O_SCR + K.N].copy()
+
     def _step_impl(self):  # pragma: no cover - step() is overridden
         raise NotImplementedError
 
-    def _state_at_impl(self, t):
-        K.dense(self._p, self._cfg, self._st, float(t))
-        return self._st[K.O_SCR:K.O_SCR + K.N].copy()
+    def _state_at_impl(self, tau):  # pragma: no cover - state_at() is overridden
+        raise NotImplementedError

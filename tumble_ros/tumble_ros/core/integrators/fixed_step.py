@@ -3,7 +3,8 @@ Fixed-step explicit methods: the classical Runge-Kutta method of order 4 ('rk4')
 
 This is the paper's "R-K" procedure. On a segment [t0, t_bound] it takes
 n = ceil((t_bound - t0) / step) equal steps, so it lands exactly on every segment edge
-(impact starts and ends) while never exceeding the requested step.
+(impact starts and ends) while never exceeding the requested step. Like every stepper it
+works in the segment's local time tau = t - t0 (``base``: "Local time").
 """
 from __future__ import annotations
 
@@ -30,11 +31,10 @@ class RK4(Stepper):
 
     def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
-        span = self.t_bound - self.t
+        span = self.tau_bound
         n = max(1, math.ceil(span / settings.step * (1.0 - 1e-12))) if span > 0 else 1
         self._h = span / n
         self._n_total = n
-        self._t0 = self.t
         self._f = None  # derivative at (t, y), computed lazily
         self._y_old = None
         self._f_old = None
@@ -46,32 +46,32 @@ class RK4(Stepper):
 
     def _deriv(self):
         if self._f is None:
-            self._f = self.fun(self.t, self.y)
+            self._f = self.local_fun(self.tau, self.y)
             self._nfev += 1
         return self._f
 
     def _step_impl(self):
-        h, t, y = self._h, self.t, self.y
-        fun = self.fun
+        h, tau, y = self._h, self.tau, self.y
+        fun = self.local_fun
         k1 = self._deriv()
-        k2 = fun(t + 0.5 * h, y + (0.5 * h) * k1)
-        k3 = fun(t + 0.5 * h, y + (0.5 * h) * k2)
-        k4 = fun(t + h, y + h * k3)
+        k2 = fun(tau + 0.5 * h, y + (0.5 * h) * k1)
+        k3 = fun(tau + 0.5 * h, y + (0.5 * h) * k2)
+        k4 = fun(tau + h, y + h * k3)
         self._nfev += 3
         self._y_old, self._f_old = y, k1
         self.y = y + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
-        self.t_old = t
-        # t_k = t0 + k h, and exactly t_bound at the last step: no rounding accumulates in t
+        self.tau_old = tau
+        # tau_k = k h, and exactly tau_bound at the last step: no rounding accumulates in t
         # (over 10^6 steps, t + h + h + ... drifts by ~1e-10 yr, enough to show in the Jacobi
         # integral at the 1e-13 level).
-        self.t = (self.t_bound if self.n_steps + 1 >= self._n_total
-                  else self._t0 + (self.n_steps + 1) * h)
+        self.tau = (self.tau_bound if self.n_steps + 1 >= self._n_total
+                    else (self.n_steps + 1) * h)
         self._f = None
         return True, ''
 
-    def _state_at_impl(self, t):
-        h = self.t - self.t_old
-        s = (t - self.t_old) / h
+    def _state_at_impl(self, tau):
+        h = self.tau - self.tau_old
+        s = (tau - self.tau_old) / h
         f1 = self._deriv()
         h00 = (1.0 + 2.0 * s) * (1.0 - s) ** 2
         h10 = s * (1.0 - s) ** 2

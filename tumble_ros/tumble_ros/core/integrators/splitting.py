@@ -37,9 +37,10 @@ stage (the closing kick's torque opens the next stage).
 
 Fixed step: a segment is covered by n = ceil(span / step) equal steps, so pulses start and end
 on step boundaries and are integrated with their own constant torque (exact splitting at
-impact edges, as for every method). Dense output: a step of the same method from the start
-of the step to the requested time, so interpolated values carry the method's own local
-error, O(h^{p+1}) (order p), and coincide with the step's end point at its end.
+impact edges, as for every method). The steps are taken in the segment's local time t - t0
+(``base``: "Local time"). Dense output: a step of the same method from the start of the step
+to the requested time, so interpolated values carry the method's own local error,
+O(h^{p+1}) (order p), and coincide with the step's end point at its end.
 
 This module is the readable reference implementation (plain Python floats); the compiled
 loop in ``core/kernels.py`` does the same arithmetic (tests/test_core_fast.py).
@@ -170,11 +171,10 @@ class Splitting(Stepper):
         if problem.attitude not in self.attitudes:
             raise ValueError(
                 f'{self.name}: attitude {problem.attitude!r} not supported: {self.requirement}')
-        span = self.t_bound - self.t
+        span = self.tau_bound
         n = max(1, math.ceil(span / settings.step * (1.0 - 1e-12))) if span > 0 else 1
         self._h = span / n
         self._n_total = n
-        self._t0 = self.t
         self._gammas = self.composition()
         total, cums = 0.0, []
         for g in self._gammas:
@@ -183,12 +183,12 @@ class Splitting(Stepper):
         cums[-1] = 1.0
         self._cums = tuple(cums)
         self._inv_ref, self._coeffs = free_flow_split(problem.inertia)
-        self._tau = _torque(problem, *self.y[3:].tolist(), self.t)
+        self._torq = _torque(problem, *self.y[3:].tolist(), self.t0 + self.tau)
         ix, iy, iz = problem.inertia
         # pi = I w is carried from step to step, not recomputed from w: the round trip
         # w -> I w -> w would bias |L| by ~1e-17 per step (1e-12 over 10^5 steps).
         self._pi = (ix * self.y[0], iy * self.y[1], iz * self.y[2])
-        self._y_old = self._pi_old = self._tau_old = None
+        self._y_old = self._pi_old = self._torq_old = None
         self._nfev = 0
 
     @property
@@ -196,17 +196,18 @@ class Splitting(Stepper):
         """Torque evaluations (one per stage)."""
         return self._nfev
 
-    def _flow(self, t0, y, pi, tau, h):
+    def _flow(self, s0, y, pi, torq, h):
         """
-        Take a composed step of length h from (t0, attitude y[3:], momentum pi, torque tau).
+        Take a composed step of length h.
 
-        Returns (state, momentum, torque at the end).
+        From local time s0, attitude y[3:], momentum pi and torque torq; returns (state,
+        momentum, torque at the end).
         """
         problem = self.problem
         ix, iy, iz = problem.inertia
         px, py, pz = (float(v) for v in pi)
         q = tuple(y[3:].tolist())
-        tx, ty, tz = tau
+        tx, ty, tz = torq
         for g, c in zip(self._gammas, self._cums):
             a = g * h
             half = 0.5 * a
@@ -214,31 +215,32 @@ class Splitting(Stepper):
             py += half * ty
             pz += half * tz
             (px, py, pz), q = free_flow(self._inv_ref, self._coeffs, a, (px, py, pz), q)
-            tx, ty, tz = _torque(problem, *q, t0 + c * h)
+            tx, ty, tz = _torque(problem, *q, self.t0 + (s0 + c * h))
             px += half * tx
             py += half * ty
             pz += half * tz
         return np.array((px / ix, py / iy, pz / iz) + q), (px, py, pz), (tx, ty, tz)
 
     def _step_impl(self):
-        t = self.t
-        self._y_old, self._pi_old, self._tau_old = self.y, self._pi, self._tau
+        s = self.tau
+        self._y_old, self._pi_old, self._torq_old = self.y, self._pi, self._torq
         try:
-            self.y, self._pi, self._tau = self._flow(t, self.y, self._pi, self._tau, self._h)
+            self.y, self._pi, self._torq = self._flow(s, self.y, self._pi, self._torq, self._h)
         except (ValueError, OverflowError):
             # math.cos/sin of an infinite angle (|pi| overflowed): the compiled loop gets NaN
             # there and reports the same
-            self.y, self._pi, self._tau = self._y_old, self._pi_old, self._tau_old
-            return False, f'non-finite state after t = {t:.10g} yr'
+            self.y, self._pi, self._torq = self._y_old, self._pi_old, self._torq_old
+            return False, f'non-finite state after t = {self.t:.10g} yr'
         self._nfev += len(self._gammas)
-        self.t_old = t
-        # t_k = t0 + k h: no rounding accumulated in t over millions of steps
-        self.t = (self.t_bound if self.n_steps + 1 >= self._n_total
-                  else self._t0 + (self.n_steps + 1) * self._h)
+        self.tau_old = s
+        # tau_k = k h: no rounding accumulated in t over millions of steps
+        self.tau = (self.tau_bound if self.n_steps + 1 >= self._n_total
+                    else (self.n_steps + 1) * self._h)
         return True, ''
 
-    def _state_at_impl(self, t):
-        return self._flow(self.t_old, self._y_old, self._pi_old, self._tau_old, t - self.t_old)[0]
+    def _state_at_impl(self, tau):
+        return self._flow(self.tau_old, self._y_old, self._pi_old, self._torq_old,
+                          tau - self.tau_old)[0]
 
 
 class Splitting4(Splitting):
