@@ -299,7 +299,7 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
                        threads):
     settings = scenario.integrator
     gammas = method.composition() if hasattr(method, 'composition') else ()
-    cfg = K.config_array(method.kernel, settings, gammas)
+    cfg = K.config_array(method.kernel, settings, gammas, method.order or 0)
     base = K.problem_array(scenario.inertia, scenario.orbit_rate)
     # segment tables
     if impacts is None:

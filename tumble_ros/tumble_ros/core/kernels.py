@@ -38,7 +38,7 @@ import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
 __all__ = ['free_flow_split', 'COMPILED', 'NUMBA_VERSION', 'problem_array', 'config_array',
-           'new_state', 'KERNEL_IDS']
+           'new_state', 'KERNEL_IDS', 'split_step_count', 'MAX_PULSE_SUBSTEPS']
 
 try:  # pragma: no cover - exercised by the environment, not by a test
     import numba as _numba
@@ -78,7 +78,8 @@ KERNEL_IDS = {'rk4': M_RK4, 'dop853': M_DOP853, 'splitting': M_SPLIT}
 C_METHOD, C_STEP, C_RTOL, C_ATOL, C_MAXSTEP, C_NG = 0, 1, 2, 3, 4, 5
 C_G = 6          # composition coefficients gamma_j (up to 16)
 C_CUM = 22       # cumulative sums c_j = gamma_1 + ... + gamma_j
-N_CFG = 38
+C_ORDER = 38     # order of the method (splitting: the pulse sub-step rule, split_step_count)
+N_CFG = 39
 MAX_STAGES = 16
 
 # -- p (segment problem) layout -----------------------------------------------------------
@@ -133,6 +134,8 @@ _MIN_STEP_ULPS = 16.0                    # integrators.base._MIN_STEP_ULPS
 _UNWRAP_STEP = 1.0                       # propagator._UNWRAP_STEP
 _UNWRAP_MIN_SIN = 0.1                    # propagator._UNWRAP_MIN_SIN
 _MAX_TRACK_PIECES = 100_000              # propagator._MAX_TRACK_PIECES
+#: splitting: most steps the pulse rule (split_step_count) adds to a segment's own count.
+MAX_PULSE_SUBSTEPS = 1000
 #: dop853: rejected step sizes in a row before the step fails. Each rejection divides h by >= 5
 #: (_MIN_FACTOR), so a finite h reaches min_step (FAIL_TOO_SMALL) within ~480 rejections even
 #: from 1e9 yr; this only bounds the loop by construction.
@@ -178,10 +181,11 @@ def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0),
     return p
 
 
-def config_array(kernel: str, settings, gammas=()) -> np.ndarray:
-    """Return the ``cfg`` array: method id, step, tolerances and composition coefficients."""
+def config_array(kernel: str, settings, gammas=(), order: int = 0) -> np.ndarray:
+    """Return the ``cfg`` array: method, step, tolerances, order, composition coefficients."""
     cfg = np.zeros(N_CFG)
     cfg[C_METHOD] = KERNEL_IDS[kernel]
+    cfg[C_ORDER] = float(order)
     cfg[C_STEP] = settings.step
     cfg[C_RTOL] = settings.rtol
     cfg[C_ATOL] = settings.atol
@@ -407,6 +411,60 @@ def split_flow(p, cfg, st, yo, po, to, t0, s0, h, yd, pd, td):
 split_flow_called = called(split_flow)
 
 
+@jit
+def split_step_count(p, span, step, order, wx, wy, wz):
+    """
+    Return the number of equal steps (a float) of a splitting method on a segment.
+
+    ``span`` is the segment's length, ``step`` the requested step, ``order`` the method's order
+    p and (wx, wy, wz) the angular velocity at its start; ``p`` holds the segment's pulse
+    torques. Outside pulses it is n = ceil(span / step), as for rk4.
+
+    A pulse segment is integrated with sub-steps a = step * min(1, rho): Strang's local error is
+    a^3 (1/12 [B, [B, A]] - 1/24 [A, [A, B]]) (BCH; A the kick, B the free flow). With the
+    pulse torque b in the kick, [B, [B, A]] ~ Lambda^2 |b| (the free rotation, rate Lambda,
+    acting twice on the kick) and [A, [A, B]] = 2 b x I^-1 b <= 2 Delta |b|^2 (pulse x pulse:
+    the kick acting twice on the free flow, Delta = 1/I_min - 1/I_max), so per unit time the
+    pulse makes an error ~ a^2 |b| (Lambda^2 + Delta |b|) / 12, ~1e6 times that of the tidal
+    kick. A regular step h at the body's rate makes ~ h^2 Lambda^3 P / 12 per unit time
+    (relative error (Lambda h)^2 / 12 per radian, P = |I w|). Making the two equal gives, for
+    order 2, rho^2 = Lambda^3 P / (|b| (Lambda^2 + Delta |b|)); for a symmetric composition of
+    order p (error terms of degree p + 1) the same reasoning gives
+    rho = Lambda / sqrt(Lambda^2 + Delta |b|) * (Lambda P / |b|)^(1/p). The pulse's jump then
+    converges with the order of the method (a single step over a short pulse, the rule n =
+    ceil(span / step), made an error independent of the step). Lambda and P are bounds over the
+    pulse: |w| + |b| span / I_min and |I w| + |b| span (a body at rest has Lambda = 0 before
+    it). At most MAX_PULSE_SUBSTEPS steps are added (bounded work: a weak pulse on a body
+    nearly at rest asks for many).
+    """
+    if not span > 0.0:
+        return 1.0
+    # np.ceil stays a float (math.ceil is an int64 in numba: a span / step above 9e18
+    # wrapped around to one step over the whole segment)
+    n = max(1.0, np.ceil(span / step * (1.0 - 1e-12)))
+    tb = math.sqrt(p[P_TBX] * p[P_TBX] + p[P_TBY] * p[P_TBY] + p[P_TBZ] * p[P_TBZ])
+    mo = math.sqrt(p[P_MOX] * p[P_MOX] + p[P_MOY] * p[P_MOY] + p[P_MOZ] * p[P_MOZ])
+    b = tb + mo
+    if not b > 0.0:
+        return n
+    ix = p[P_IX]
+    iy = p[P_IY]
+    iz = p[P_IZ]
+    i_min = min(ix, min(iy, iz))
+    i_max = max(ix, max(iy, iz))
+    lam = math.sqrt(wx * wx + wy * wy + wz * wz) + b * span / i_min
+    mom = math.sqrt((ix * wx) ** 2 + (iy * wy) ** 2 + (iz * wz) ** 2) + b * span
+    delta = 1.0 / i_min - 1.0 / i_max
+    rho = lam / math.sqrt(lam * lam + delta * b) * (lam * mom / b) ** (1.0 / order)
+    if rho < 1.0:
+        m = span / (step * rho) * (1.0 - 1e-12)
+        cap = n + MAX_PULSE_SUBSTEPS
+        if not m <= cap:  # (also inf or NaN)
+            m = cap
+        n = max(n, np.ceil(m))
+    return n
+
+
 # =======================================================================================
 # Segment set-up, steps, dense output
 # =======================================================================================
@@ -442,11 +500,15 @@ def seg_init(p, cfg, st, t0, t_bound):
     st[S_COLLAPSE] = _MIN_STEP_ULPS * (np.nextafter(big, np.inf) - big)
     method = int(cfg[C_METHOD])
     if method == M_RK4 or method == M_SPLIT:
-        n = 1.0
-        if span > 0:
-            # np.ceil stays a float (math.ceil is an int64 in numba: a span / step above 9e18
-            # wrapped around to one step over the whole segment)
-            n = max(1.0, np.ceil(span / cfg[C_STEP] * (1.0 - 1e-12)))
+        if method == M_RK4:
+            n = 1.0
+            if span > 0:
+                # np.ceil stays a float (math.ceil is an int64 in numba: a span / step above 9e18
+                # wrapped around to one step over the whole segment)
+                n = max(1.0, np.ceil(span / cfg[C_STEP] * (1.0 - 1e-12)))
+        else:
+            n = split_step_count(p, span, cfg[C_STEP], cfg[C_ORDER], st[O_Y], st[O_Y + 1],
+                                 st[O_Y + 2])
         st[S_H] = span / n
         st[S_NTOTAL] = n
         if method == M_SPLIT:

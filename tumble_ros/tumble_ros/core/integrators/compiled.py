@@ -80,7 +80,7 @@ class CompiledStepper(Stepper):
         self.symplectic = method.symplectic
         self.order = method.order
         gammas = method.composition() if hasattr(method, 'composition') else ()
-        self._cfg = K.config_array(method.kernel, settings, gammas)
+        self._cfg = K.config_array(method.kernel, settings, gammas, method.order or 0)
         self._p = K.problem_array(problem.inertia, problem.orbit_rate, problem.torque_body,
                                   problem.torque_orbital)
         self.work = 0  # units of work of the last advance()

@@ -37,10 +37,13 @@ stage (the closing kick's torque opens the next stage).
 
 Fixed step: a segment is covered by n = ceil(span / step) equal steps, so pulses start and end
 on step boundaries and are integrated with their own constant torque (exact splitting at
-impact edges, as for every method). The steps are taken in the segment's local time t - t0
-(``base``: "Local time"). Dense output: a step of the same method from the start of the step
-to the requested time, so interpolated values carry the method's own local error,
-O(h^{p+1}) (order p), and coincide with the step's end point at its end.
+impact edges, as for every method). A pulse segment gets more steps when its torque calls for
+them (``kernels.split_step_count``: the pulse's own error terms, made no larger per unit time
+than those of a regular step, so the jump converges with the order of the method). The steps
+are taken in the segment's local time t - t0 (``base``: "Local time"). Dense output: a step of
+the same method from the start of the step to the requested time, so interpolated values carry
+the method's own local error, O(h^{p+1}) (order p), and coincide with the step's end point at
+its end.
 
 This module is the readable reference implementation (plain Python floats); the compiled
 loop in ``core/kernels.py`` does the same arithmetic (tests/test_core_fast.py).
@@ -52,7 +55,7 @@ import math
 import numpy as np
 
 from .base import Stepper
-from ..kernels import free_flow_split
+from ..kernels import free_flow_split, problem_array, split_step_count
 
 __all__ = ['Splitting', 'Splitting4', 'Splitting6', 'COMPOSITIONS']
 
@@ -172,7 +175,10 @@ class Splitting(Stepper):
             raise ValueError(
                 f'{self.name}: attitude {problem.attitude!r} not supported: {self.requirement}')
         span = self.tau_bound
-        n = max(1, math.ceil(span / settings.step * (1.0 - 1e-12))) if span > 0 else 1
+        wx, wy, wz = self.y[:3].tolist()
+        n = int(split_step_count(problem_array(problem.inertia, problem.orbit_rate,
+                                               problem.torque_body, problem.torque_orbital),
+                                 span, float(settings.step), float(self.order), wx, wy, wz))
         self._h = span / n
         self._n_total = n
         self._gammas = self.composition()
