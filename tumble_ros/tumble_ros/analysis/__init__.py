@@ -23,7 +23,8 @@ file a :class:`tumble_ros.io.McapError`; both are :class:`tumble_ros.errors.Tumb
 from tumble_ros.errors import AnalysisError
 
 from .recording import load_recording, Recording
-from .summary import AnalysisSummary, analyze, format_summary, summary_to_dict
+from .report import format_summary, summary_to_dict
+from .summary import AnalysisSummary, analyze
 
 __all__ = ['AnalysisError', 'AnalysisSummary', 'Recording', 'analyze', 'format_summary',
            'load_recording', 'summary_to_dict', 'write_figures']

@@ -24,7 +24,8 @@ from tumble_ros.errors import AnalysisError
 from tumble_ros.io import McapError
 
 from .recording import load_recording, normalize_namespace, stderr_progress
-from .summary import analyze, format_summary, summary_to_dict
+from .report import format_summary, summary_to_dict
+from .summary import analyze
 
 __all__ = ['command', 'main']
 

@@ -23,7 +23,6 @@ from .comparator import comparator_errors, ErrorStats
 from .impacts import impact_intervals, impact_summaries, ImpactSummary
 from .invariants import InvariantDrift, jacobi_drift, JacobiSegment
 from .recording import Recording, ROOT_NAMESPACE
-from .report import format_summary, summary_to_dict
 from .spectrum import Peak, Spectrum, spectrum
 from .theory import AliasingCheck, check_aliasing, theory_lines, TheoryLine
 from .timeaxis import Sampling, sampling
@@ -31,8 +30,8 @@ from .timeaxis import Sampling, sampling
 __all__ = [
     'AliasingCheck', 'AnalysisSummary', 'ErrorStats', 'ImpactSummary', 'InvariantDrift',
     'JacobiSegment', 'Peak', 'Sampling', 'Spectrum', 'TheoryLine',
-    'analyze', 'check_aliasing', 'comparator_errors', 'format_summary', 'impact_intervals',
-    'impact_summaries', 'jacobi_drift', 'sampling', 'spectrum', 'summary_to_dict',
+    'analyze', 'check_aliasing', 'comparator_errors', 'impact_intervals',
+    'impact_summaries', 'jacobi_drift', 'sampling', 'spectrum',
     'theory_lines',
 ]
 
