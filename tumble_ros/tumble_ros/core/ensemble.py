@@ -39,9 +39,9 @@ from . import kernels as K
 from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import INTEGRATORS
 from .integrators.compiled import failure_message, why_no_fast_path
-from .propagator import segment_torques
 from .rotation import continuous_quaternions, quaternions_to_matrices
 from .scenario import Impact, MAX_OMEGA, MAX_ROTATION, Scenario, ScenarioError
+from .segments import split_at_impacts
 from .simulate import _check_times, simulate
 
 __all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts']
@@ -262,39 +262,6 @@ def _ensemble_reference(scenario, times, n, impacts, omega0, euler0, progress) -
                           wall, False)
 
 
-def _segments(scenario, body_impacts):
-    """
-    Return the Propagator's segments for one impact sequence.
-
-    Each is (t0, t1, body torque, orbital torque).
-
-    Same edges as ``Propagator._edges`` and the same sums as ``segment_torques`` (over the
-    impacts sorted by start, in that order), by a sweep over time instead of a scan of every
-    impact for every segment (a body may have thousands of impacts).
-    """
-    ordered = sorted(body_impacts, key=lambda i: i.start)
-    edges = {scenario.duration}
-    for impact in ordered:
-        edges.update((impact.start, impact.end))
-    bounds = [0.0] + sorted(e for e in edges if e > 0.0)
-    segs, active, nxt = [], [], 0
-    for t0, t1 in zip(bounds[:-1], bounds[1:]):
-        mid = 0.5 * (t0 + t1)
-        while nxt < len(ordered) and ordered[nxt].start <= mid:
-            active.append(nxt)
-            nxt += 1
-        active = [k for k in active if mid < ordered[k].end]
-        if active:
-            body, orbital = segment_torques([ordered[k] for k in active], t0, t1)
-        else:
-            body, orbital = _ZERO_TORQUES
-        segs.append((t0, t1, body, orbital))
-    return segs
-
-
-_ZERO_TORQUES = segment_torques((), 0.0, 1.0)
-
-
 def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, progress, checkpoints,
                        threads):
     settings = scenario.integrator
@@ -303,9 +270,9 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
     base = K.problem_array(scenario.inertia, scenario.orbit_rate)
     # segment tables
     if impacts is None:
-        per_body = [_segments(scenario, scenario.impacts)] * n
+        per_body = [split_at_impacts(scenario.duration, scenario.impacts)] * n
     else:
-        per_body = [_segments(scenario, body) for body in impacts]
+        per_body = [split_at_impacts(scenario.duration, body) for body in impacts]
     seg_ptr = np.zeros(n + 1, dtype=np.int64)
     seg_ptr[1:] = np.cumsum([len(s) for s in per_body])
     total = int(seg_ptr[-1])

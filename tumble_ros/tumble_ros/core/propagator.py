@@ -37,8 +37,9 @@ from .integrators.compiled import CompiledStepper, why_no_fast_path
 from .rotation import (continuous_quaternions, matrix_to_quaternion, quaternions_to_matrices,
                        unwrap_towards)
 from .scenario import Impact, Scenario, ScenarioError
+from .segments import split_at_impacts
 
-__all__ = ['Propagator', 'IntegrationError', 'Sample', 'segment_torques',
+__all__ = ['Propagator', 'IntegrationError', 'Sample',
            'quaternions_to_matrices', 'FAST_WORK_BUDGET', 'REFERENCE_WORK_BUDGET']
 
 #: Largest attitude change [rad] between two points used to unwrap Euler angles.
@@ -70,16 +71,6 @@ class IntegrationError(CoreError, RuntimeError):
     def __init__(self, message: str, t: float) -> None:
         super().__init__(message)
         self.t = t
-
-
-def segment_torques(impacts, t0: float, t1: float) -> tuple[tuple, tuple]:
-    """Return the (body, orbital) pulse torques on the segment [t0, t1] (edges: pulse edges)."""
-    mid = 0.5 * (t0 + t1)
-    body, orbital = np.zeros(3), np.zeros(3)
-    for impact in impacts:
-        if impact.start <= mid < impact.end:
-            (body if impact.frame == 'body' else orbital)[:] += impact.torque
-    return tuple(body), tuple(orbital)
 
 
 @dataclass(frozen=True)
@@ -155,7 +146,8 @@ class Propagator:
             raise ValueError(f'fast path not available: {why}')
         self.fast = not why if fast is None else bool(fast)
         self._impacts: list[Impact] = []
-        self._edges: list[float] = [scenario.duration]
+        self._segments = split_at_impacts(scenario.duration, ())
+        self._segment_starts = [0.0]
         self.t = 0.0
         self.y = np.concatenate([scenario.omega0, self._model.from_euler(*scenario.euler0)])
         self.status = RUNNING
@@ -199,10 +191,8 @@ class Propagator:
         bisect.insort(self._impacts, impact, key=lambda i: i.start)
         affects_segment = self._stepper is not None and impact.start < self._stepper.t_bound
         if self._split:
-            for edge in (impact.start, impact.end):
-                k = bisect.bisect_left(self._edges, edge)
-                if k == len(self._edges) or self._edges[k] != edge:
-                    self._edges.insert(k, edge)
+            self._segments = split_at_impacts(self.t_end, self._impacts)
+            self._segment_starts = [s.t0 for s in self._segments]
         if affects_segment or not self._split:
             # Restart from the last state handed out: the running segment's right-hand
             # side or end no longer holds. The Euler-angle track goes back with it (the
@@ -396,31 +386,21 @@ class Propagator:
     def _start_segment(self, t0: float, y0: np.ndarray) -> None:
         if any(t0 in (i.start, i.end) for i in self._impacts):
             self._edge_state[t0] = np.array(y0)
-        k = bisect.bisect_right(self._edges, t0)
-        t_bound = self._edges[k] if k < len(self._edges) else self.t_end
+        k = bisect.bisect_right(self._segment_starts, t0) - 1
+        segment = self._segments[max(0, k)]
         if self._stepper is not None:
             self._nfev_done += self._stepper.nfev
-        problem = self._problem_for(t0, t_bound)
-        settings = self.scenario.integrator
+        sc = self.scenario
+        problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
+                                 segment.torque_orbital, sc.attitude)
         if self.fast:
-            self._stepper = CompiledStepper(self._method, None, t0, y0, t_bound, settings,
+            self._stepper = CompiledStepper(self._method, None, t0, y0, segment.t1, sc.integrator,
                                             problem=problem)
         else:
-            rhs = self._rhs_for(t0, t_bound)
-            self._stepper = self._method(rhs, t0, y0, t_bound, settings, problem=problem)
-
-    def _problem_for(self, t0: float, t1: float) -> SegmentProblem:
-        sc = self.scenario
-        body, orbital = (segment_torques(self._impacts, t0, t1) if self._split
-                         else ((0.0,) * 3, (0.0,) * 3))
-        return SegmentProblem(sc.inertia, sc.orbit_rate, body, orbital, sc.attitude)
-
-    def _rhs_for(self, t0: float, t1: float):
-        sc, make = self.scenario, self._model.make_rhs
-        if not self._split:
-            return self._switching_rhs()
-        body, orbital = segment_torques(self._impacts, t0, t1)
-        return make(sc.inertia, sc.orbit_rate, body, orbital)
+            rhs = (self._model.make_rhs(sc.inertia, sc.orbit_rate, segment.torque_body,
+                                        segment.torque_orbital)
+                   if self._split else self._switching_rhs())
+            self._stepper = self._method(rhs, t0, y0, segment.t1, sc.integrator, problem=problem)
 
     def _switching_rhs(self):
         """Pulses as a time switch inside one smooth-looking RHS (demonstration only)."""
