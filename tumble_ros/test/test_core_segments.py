@@ -15,7 +15,8 @@ def test_overlapping_pulses_are_cut_at_every_edge_and_summed():
     assert segs[0].torque_body == (0.0, 0.0, 0.0)
     assert segs[2].torque_body == (1.0, 0.0, 4.0)                         # a and c
     assert segs[3].torque_body == (1.0, 0.0, 4.0) and segs[3].torque_orbital == (0.0, 2.0, 0.0)
-    assert segs[4].torque_body == (0.0, 0.0, 4.0)                         # a ended at 0.3
+    assert segs[4].torque_body == (1.0, 0.0, 0.0)                         # c ended at 0.25
+    assert segs[5].torque_body == (0.0, 0.0, 0.0) and segs[5].torque_orbital == (0.0, 2.0, 0.0)
     assert segs[-1].torque_body == segs[-1].torque_orbital == (0.0, 0.0, 0.0)
 
 
