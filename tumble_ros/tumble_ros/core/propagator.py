@@ -37,7 +37,7 @@ from .integrators.compiled import CompiledStepper, why_no_fast_path
 from .rotation import (continuous_quaternions, matrix_to_quaternion, quaternions_to_matrices,
                        unwrap_towards)
 from .scenario import Impact, Scenario, ScenarioError
-from .segments import split_at_impacts
+from .segments import Segment, split_at_impacts
 
 __all__ = ['Propagator', 'IntegrationError', 'Sample',
            'quaternions_to_matrices', 'FAST_WORK_BUDGET', 'REFERENCE_WORK_BUDGET']
@@ -145,6 +145,7 @@ class Propagator:
         if fast and why:
             raise ValueError(f'fast path not available: {why}')
         self.fast = not why if fast is None else bool(fast)
+        self._runner = (_CompiledRunner if self.fast else _ReferenceRunner)(self)
         self._impacts: list[Impact] = []
         self._segments = split_at_impacts(scenario.duration, ())
         self._segment_starts = [0.0]
@@ -257,7 +258,7 @@ class Propagator:
             raise ValueError(f't = {times[-1]!r} must lie in [{self.t!r}, {self.t_end!r}] yr')
         arrays = {'omega': np.empty((n, 3)), 'euler': np.empty((n, 3)),
                   'quaternion': np.empty((n, 4)), 'matrix': np.empty((n, 3, 3))}
-        y_out = np.empty((n, 7)) if self.fast else None
+        y_out = self._runner.output_buffer(n)
         chunk = self._default_budget() if budget is None or budget == math.inf else budget
         if not chunk >= 1:
             raise ValueError(f'budget: must be >= 1 (or None, or math.inf), got {budget!r}')
@@ -268,7 +269,7 @@ class Propagator:
                 return k, arrays, message
 
     def _default_budget(self) -> int:
-        return FAST_WORK_BUDGET if self.fast else REFERENCE_WORK_BUDGET
+        return self._runner.work_budget
 
     def _sample_into(self, times, arrays, y_out, k0: int, budget: float) -> tuple[int, str]:
         """
@@ -277,65 +278,8 @@ class Propagator:
         At most ~``budget`` units of work (and samples); returns (next row, failure message or
         "").
         """
-        n = times.size
-        k_stop = min(n, k0 + int(min(budget, n)))  # at most `budget` samples per call as well
-        omega, euler, quat, matrices = (arrays['omega'], arrays['euler'], arrays['quaternion'],
-                                        arrays['matrix'])
-        work = 0
-        if not self.fast:
-            for k in range(k0, k_stop):
-                t = float(times[k])
-                try:
-                    used, reached = self._advance_until(t, budget - work)
-                    work += used
-                    if not reached:
-                        return k, ''
-                    s = self.sample(t)
-                except IntegrationError as err:
-                    return k, str(err) or 'integration failed'
-                omega[k], euler[k], quat[k], matrices[k] = s.omega, s.euler, s.quaternion, s.matrix
-            return k_stop, ''
-        if self.status == FAILED:
-            return k0, self.message
-        t_view = times[:k_stop]
-        k, message = k0, ''
-        while k < k_stop:
-            stepper = self._stepper
-            if stepper.status != RUNNING and t_view[k] > stepper.t:
-                self._start_segment(stepper.t, stepper.y.copy())
-                work += 1
-                continue
-            if work >= budget:
-                break
-            k, steps = stepper.advance(t_view[-1], self._euler_track, t_view, y_out, euler, k,
-                                       budget - work)
-            work += stepper.work
-            self.n_steps += steps
-            if stepper.status == FAILED:
-                self.status, self.message = FAILED, stepper.message or 'integration failed'
-                message = self.message
-                break
-        if k > k0:
-            # the rule of advance_to: no sample with a non-finite state or Euler angles
-            y = y_out[k0:k]
-            norm2 = y[:, 0] * y[:, 0]
-            for i in range(1, y.shape[1]):
-                norm2 += y[:, i] * y[:, i]  # (summed in the order of base._finite_norm)
-            bad = np.flatnonzero(~(np.isfinite(norm2) & np.isfinite(euler[k0:k]).all(axis=1)))
-            if bad.size:
-                k = k0 + int(bad[0])
-                self.status, self.message = (FAILED,
-                                             _interpolated_nonfinite_message(float(times[k])))
-                message = self.message
-        if k > k0:
-            y = y_out[k0:k]
-            omega[k0:k] = y[:, :3]
-            quat[k0:k] = continuous_quaternions(y[:, 3:], self._quat_prev)
-            matrices[k0:k] = quaternions_to_matrices(y[:, 3:])
-            self._quat_prev = quat[k - 1].copy()
-            self.t, self.y = float(times[k - 1]), y_out[k - 1].copy()
-            self._track_at_t = euler[k - 1].copy()
-        return k, message
+        k_stop = min(times.size, k0 + int(min(budget, times.size)))
+        return self._runner.sample_into(times, arrays, y_out, k0, k_stop, budget)
 
     def pop_completed_impacts(self) -> list[tuple[Impact, np.ndarray, np.ndarray]]:
         """
@@ -393,14 +337,7 @@ class Propagator:
         sc = self.scenario
         problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
                                  segment.torque_orbital, sc.attitude)
-        if self.fast:
-            self._stepper = CompiledStepper(self._method, None, t0, y0, segment.t1, sc.integrator,
-                                            problem=problem)
-        else:
-            rhs = (self._model.make_rhs(sc.inertia, sc.orbit_rate, segment.torque_body,
-                                        segment.torque_orbital)
-                   if self._split else self._switching_rhs())
-            self._stepper = self._method(rhs, t0, y0, segment.t1, sc.integrator, problem=problem)
+        self._stepper = self._runner.new_stepper(segment, t0, y0, problem)
 
     def _switching_rhs(self):
         """Pulses as a time switch inside one smooth-looking RHS (demonstration only)."""
@@ -437,60 +374,8 @@ class Propagator:
                 continue
             if work >= budget:
                 return work, False
-            if self.fast:
-                work += self._advance_compiled(stepper, t, budget - work)
-            else:
-                work += self._step(stepper)
+            work += self._runner.advance(stepper, t, budget - work)
         return work, True
-
-    def _advance_compiled(self, stepper, t: float, budget: float) -> int:
-        _, steps = stepper.advance(t, self._euler_track, budget=budget)
-        self.n_steps += steps
-        if stepper.status == FAILED:
-            self.status, self.message = FAILED, stepper.message or 'integration failed'
-            raise IntegrationError(self.message, stepper.t)
-        return stepper.work
-
-    def _step(self, stepper) -> int:
-        """One reference-path step; returns its work (1 + the tracking's dense evaluations)."""
-        t_before = stepper.t
-        stepper.step()
-        self.n_steps += 1
-        message = stepper.message
-        if stepper.status != FAILED and self._model.singular(stepper.y[3:]):
-            message = (f'attitude singular at t = {stepper.t:.10g} yr '
-                       f'(theta = {stepper.y[5]:.3g} rad): the '
-                       "Euler-angle equations divide by sin(theta); use attitude 'quaternion'")
-        if stepper.status == FAILED or message:
-            self.status, self.message = FAILED, message
-            raise IntegrationError(message, t_before)
-        if self._model.name == 'quaternion':
-            return 1 + self._track_euler(stepper)
-        return 1
-
-    def _track_euler(self, stepper) -> int:
-        """
-        Follow phi, psi continuously through the step just taken (quaternion mode).
-
-        Returns the dense evaluations it took.
-        """
-        y = stepper.y
-        w = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2)
-        cos_theta = self._model.to_matrix(y[3:])[2, 2]
-        # phi and psi turn at up to |w| / sin(theta): subdivide long steps accordingly.
-        # Below theta ~ 0.1 only phi + psi is well defined, so the bound stops growing.
-        rate = w / max(_UNWRAP_MIN_SIN, math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta)))
-        h = stepper.t - stepper.t_old
-        pieces = rate * h / _UNWRAP_STEP
-        # (not <=: also an infinite rate, |w| overflowing in a state running away)
-        n = _MAX_TRACK_PIECES if not pieces <= _MAX_TRACK_PIECES else max(1, math.ceil(pieces))
-        for j in range(1, n + 1):
-            tj = stepper.t if j == n else stepper.t_old + h * j / n
-            att = y[3:] if j == n else stepper.state_at(tj)[3:]
-            euler = self._unwrapped(att)
-            if euler is not None:
-                self._euler_track = euler
-        return n - 1
 
     def _unwrapped(self, attitude) -> np.ndarray | None:
         """
@@ -510,3 +395,163 @@ class Propagator:
             euler = np.array(attitude, dtype=float)
             return euler if np.all(np.isfinite(euler)) else None
         return self._unwrapped(attitude)
+
+
+class _ReferenceRunner:
+    """The reference path: the method's own stepper, one step at a time, phi/psi in Python."""
+
+    work_budget = REFERENCE_WORK_BUDGET
+
+    def __init__(self, propagator: Propagator) -> None:
+        self._p = propagator
+
+    def output_buffer(self, n: int) -> None:
+        """Return no buffer: samples come one at a time from :meth:`Propagator.sample`."""
+        return None
+
+    def new_stepper(self, segment: Segment, t0: float, y0: np.ndarray, problem):
+        """Return the method's stepper for ``segment``, from ``t0``, ``y0``."""
+        p, sc = self._p, self._p.scenario
+        rhs = (p._model.make_rhs(sc.inertia, sc.orbit_rate, segment.torque_body,
+                                 segment.torque_orbital)
+               if p._split else p._switching_rhs())
+        return p._method(rhs, t0, y0, segment.t1, sc.integrator, problem=problem)
+
+    def advance(self, stepper, t: float, budget: float) -> int:
+        """Take one step; return its work (1 + the tracking's dense evaluations)."""
+        p = self._p
+        t_before = stepper.t
+        stepper.step()
+        p.n_steps += 1
+        message = stepper.message
+        if stepper.status != FAILED and p._model.singular(stepper.y[3:]):
+            message = (f'attitude singular at t = {stepper.t:.10g} yr '
+                       f'(theta = {stepper.y[5]:.3g} rad): the '
+                       "Euler-angle equations divide by sin(theta); use attitude 'quaternion'")
+        if stepper.status == FAILED or message:
+            p.status, p.message = FAILED, message
+            raise IntegrationError(message, t_before)
+        if p._model.name == 'quaternion':
+            return 1 + self._track_euler(stepper)
+        return 1
+
+    def _track_euler(self, stepper) -> int:
+        """
+        Follow phi, psi continuously through the step just taken (quaternion mode).
+
+        Returns the dense evaluations it took.
+        """
+        y = stepper.y
+        w = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2)
+        cos_theta = self._p._model.to_matrix(y[3:])[2, 2]
+        # phi and psi turn at up to |w| / sin(theta): subdivide long steps accordingly.
+        # Below theta ~ 0.1 only phi + psi is well defined, so the bound stops growing.
+        rate = w / max(_UNWRAP_MIN_SIN, math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta)))
+        h = stepper.t - stepper.t_old
+        pieces = rate * h / _UNWRAP_STEP
+        # (not <=: also an infinite rate, |w| overflowing in a state running away)
+        n = _MAX_TRACK_PIECES if not pieces <= _MAX_TRACK_PIECES else max(1, math.ceil(pieces))
+        for j in range(1, n + 1):
+            tj = stepper.t if j == n else stepper.t_old + h * j / n
+            att = y[3:] if j == n else stepper.state_at(tj)[3:]
+            euler = self._p._unwrapped(att)
+            if euler is not None:
+                self._p._euler_track = euler
+        return n - 1
+
+    def sample_into(self, times, arrays, y_out, k0: int, k_stop: int,
+                    budget: float) -> tuple[int, str]:
+        """Sample times[k0:k_stop] one by one (see :meth:`Propagator._sample_into`)."""
+        p = self._p
+        omega, euler, quat, matrices = (arrays['omega'], arrays['euler'], arrays['quaternion'],
+                                        arrays['matrix'])
+        work = 0
+        for k in range(k0, k_stop):
+            t = float(times[k])
+            try:
+                used, reached = p._advance_until(t, budget - work)
+                work += used
+                if not reached:
+                    return k, ''
+                s = p.sample(t)
+            except IntegrationError as err:
+                return k, str(err) or 'integration failed'
+            omega[k], euler[k], quat[k], matrices[k] = s.omega, s.euler, s.quaternion, s.matrix
+        return k_stop, ''
+
+
+class _CompiledRunner:
+    """The fast path: the method's compiled loop, many steps and samples per call."""
+
+    work_budget = FAST_WORK_BUDGET
+
+    def __init__(self, propagator: Propagator) -> None:
+        self._p = propagator
+
+    def output_buffer(self, n: int) -> np.ndarray:
+        """Return the (n, 7) array the compiled loop writes the sampled states into."""
+        return np.empty((n, 7))
+
+    def new_stepper(self, segment: Segment, t0: float, y0: np.ndarray, problem):
+        """Return a compiled stepper of the method for ``segment``, from ``t0``, ``y0``."""
+        p = self._p
+        return CompiledStepper(p._method, None, t0, y0, segment.t1, p.scenario.integrator,
+                               problem=problem)
+
+    def advance(self, stepper, t: float, budget: float) -> int:
+        """Run the compiled loop towards ``t`` within ``budget``; return the work done."""
+        p = self._p
+        _, steps = stepper.advance(t, p._euler_track, budget=budget)
+        p.n_steps += steps
+        if stepper.status == FAILED:
+            p.status, p.message = FAILED, stepper.message or 'integration failed'
+            raise IntegrationError(p.message, stepper.t)
+        return stepper.work
+
+    def sample_into(self, times, arrays, y_out, k0: int, k_stop: int,
+                    budget: float) -> tuple[int, str]:
+        """Sample times[k0:k_stop] inside the compiled loop (see Propagator._sample_into)."""
+        p = self._p
+        omega, euler, quat, matrices = (arrays['omega'], arrays['euler'], arrays['quaternion'],
+                                        arrays['matrix'])
+        work = 0
+        if p.status == FAILED:
+            return k0, p.message
+        t_view = times[:k_stop]
+        k, message = k0, ''
+        while k < k_stop:
+            stepper = p._stepper
+            if stepper.status != RUNNING and t_view[k] > stepper.t:
+                p._start_segment(stepper.t, stepper.y.copy())
+                work += 1
+                continue
+            if work >= budget:
+                break
+            k, steps = stepper.advance(t_view[-1], p._euler_track, t_view, y_out, euler, k,
+                                       budget - work)
+            work += stepper.work
+            p.n_steps += steps
+            if stepper.status == FAILED:
+                p.status, p.message = FAILED, stepper.message or 'integration failed'
+                message = p.message
+                break
+        if k > k0:
+            # the rule of advance_to: no sample with a non-finite state or Euler angles
+            y = y_out[k0:k]
+            norm2 = y[:, 0] * y[:, 0]
+            for i in range(1, y.shape[1]):
+                norm2 += y[:, i] * y[:, i]  # (summed in the order of base._finite_norm)
+            bad = np.flatnonzero(~(np.isfinite(norm2) & np.isfinite(euler[k0:k]).all(axis=1)))
+            if bad.size:
+                k = k0 + int(bad[0])
+                p.status, p.message = FAILED, _interpolated_nonfinite_message(float(times[k]))
+                message = p.message
+        if k > k0:
+            y = y_out[k0:k]
+            omega[k0:k] = y[:, :3]
+            quat[k0:k] = continuous_quaternions(y[:, 3:], p._quat_prev)
+            matrices[k0:k] = quaternions_to_matrices(y[:, 3:])
+            p._quat_prev = quat[k - 1].copy()
+            p.t, p.y = float(times[k - 1]), y_out[k - 1].copy()
+            p._track_at_t = euler[k - 1].copy()
+        return k, message
