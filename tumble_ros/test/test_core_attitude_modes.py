@@ -52,3 +52,18 @@ def test_quaternion_mode_is_accurate_through_theta_zero_where_euler_cannot_go():
     assert 'singular' in e.message and 'quaternion' in e.message
     assert e.t[-1] < 0.2
     assert np.all(np.isfinite(e.omega)) and np.all(np.isfinite(e.euler))
+
+
+def test_tracked_phi_and_psi_are_right_well_below_theta_0_1():
+    """
+    Follow phi and psi through their fast turns near theta = 0 (theta0 = 0.01).
+
+    The quaternion mode derives them from the attitude; the Euler mode integrates them (eq 15)
+    and is continuous by construction: the two agree, 2pi multiples included.
+    """
+    sc = Scenario(omega0=(0.0, 1.0, 30.0), euler0=(0.5, 0.0, 0.01), duration=2.0,
+                  integrator=IntegratorSettings(method='dop853', rtol=1e-11, atol=1e-13))
+    quaternion_mode, euler_mode = simulate(sc), simulate(sc.replace(attitude='euler'))
+    turns = np.ptp(euler_mode.euler[:, :2], axis=0) / (2 * math.pi)
+    assert euler_mode.success and turns.min() > 4  # phi and psi both turn several times
+    np.testing.assert_allclose(quaternion_mode.euler, euler_mode.euler, rtol=0, atol=1e-7)
