@@ -237,6 +237,9 @@ def test_status_carries_simulated_time_and_follows_step(ros):
 def test_an_invalid_topic_name_is_refused_with_the_reason(ros, tmp_path):
     with pytest.raises(ValueError, match=r"topics: invalid topic name 'bad name'"):
         ros.start(RecorderNode, topics=['bad name'], output=str(tmp_path / 'x.mcap'))
+    # The refused node is destroyed, not left half-built in the context (a leaked node crashed
+    # a later test's process with SIGSEGV, 1 run in 2).
+    assert 'recorder' not in ros.probe.get_node_names()
 
 
 def test_bringup_into_an_unwritable_place_says_so_in_one_line(tmp_path, capsys):

@@ -67,6 +67,13 @@ class ComparatorNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__('comparator', **kwargs)
+        try:
+            self._set_up()
+        except BaseException:
+            self.destroy_node()  # no half-built node outlives a refusal
+            raise
+
+    def _set_up(self) -> None:
         self.add_on_set_parameters_callback(self._on_set_parameters)
         params = declare_node_parameters(self, PARAMETERS)
         self._model_name: str = params['model']

@@ -100,6 +100,13 @@ class RecorderNode(Node):
         each record is then its receive time instead of the publisher's source timestamp.
         """
         super().__init__('recorder', **kwargs)
+        try:
+            self._set_up(message_info)
+        except BaseException:
+            self.destroy_node()  # no half-built node outlives a refusal
+            raise
+
+    def _set_up(self, message_info: bool) -> None:
         self._message_info = message_info
         self.add_on_set_parameters_callback(self._on_set_parameters)
         p = declare_node_parameters(self, PARAMETERS)

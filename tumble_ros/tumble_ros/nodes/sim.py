@@ -106,6 +106,13 @@ class SimNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__('sim', **kwargs)
+        try:
+            self._set_up()
+        except BaseException:
+            self.destroy_node()  # no half-built node outlives a refusal
+            raise
+
+    def _set_up(self) -> None:
         # Registered before declaring, so start-up values are validated too (rclpy docs).
         self.add_on_set_parameters_callback(self._on_set_parameters)
         declare_scenario_parameters(self)
