@@ -33,11 +33,11 @@ from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Vector3, Vector3Stamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.node import Node
 
 from tumble_ros import topics
 from tumble_ros.core import ANALYTIC_MODELS, make_model, parse_scenario, ScenarioError, TimeBase
 from tumble_ros.nodes.clocks import steady_timer
+from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.progress import ProgressReporter
 from tumble_ros.nodes.qos import DESCRIPTION_QOS, LATCHED_QOS, STATE_QOS
@@ -62,16 +62,11 @@ PARAMETERS = {
 }
 
 
-class ComparatorNode(Node):
+class ComparatorNode(GuardedNode):
     """Comparator node; see the module docstring."""
 
     def __init__(self, **kwargs) -> None:
         super().__init__('comparator', **kwargs)
-        try:
-            self._set_up()
-        except BaseException:
-            self.destroy_node()  # no half-built node outlives a refusal
-            raise
 
     def _set_up(self) -> None:
         self.add_on_set_parameters_callback(self._on_set_parameters)

@@ -37,7 +37,6 @@ import time
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidTopicNameException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
-from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from tumble_ros import topics
@@ -45,6 +44,7 @@ from tumble_ros.errors import NodeError
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.mcap_writer import COMPRESSIONS
 from tumble_ros.nodes.clocks import steady_timer
+from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.progress import ProgressReporter
 from tumble_ros.nodes.qos import STATE_QOS
@@ -88,7 +88,7 @@ def _policy_name(policy) -> str:
     return policy.name.lower()
 
 
-class RecorderNode(Node):
+class RecorderNode(GuardedNode):
     """Recorder node; see the module docstring."""
 
     def __init__(self, *, message_info: bool = True, **kwargs) -> None:
@@ -99,12 +99,7 @@ class RecorderNode(Node):
         cannot pass rclpy's MessageInfo, e.g. Jazzy's EventsExecutor); the publish time of
         each record is then its receive time instead of the publisher's source timestamp.
         """
-        super().__init__('recorder', **kwargs)
-        try:
-            self._set_up(message_info)
-        except BaseException:
-            self.destroy_node()  # no half-built node outlives a refusal
-            raise
+        super().__init__('recorder', message_info, **kwargs)
 
     def _set_up(self, message_info: bool) -> None:
         self._message_info = message_info

@@ -30,7 +30,6 @@ import time
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Quaternion, QuaternionStamped, Vector3, Vector3Stamped
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.service_introspection import ServiceIntrospectionState
 from rosgraph_msgs.msg import Clock
@@ -47,6 +46,7 @@ from tumble_ros.core import (
     TimeBase,
 )
 from tumble_ros.nodes.clocks import steady_timer
+from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import (
     declare_node_parameters,
     declare_scenario_parameters,
@@ -101,16 +101,11 @@ def stamp(ns: int) -> Time:
     return Time(sec=sec, nanosec=nanosec)
 
 
-class SimNode(Node):
+class SimNode(GuardedNode):
     """Simulator node; see the module docstring for its interface."""
 
     def __init__(self, **kwargs) -> None:
         super().__init__('sim', **kwargs)
-        try:
-            self._set_up()
-        except BaseException:
-            self.destroy_node()  # no half-built node outlives a refusal
-            raise
 
     def _set_up(self) -> None:
         # Registered before declaring, so start-up values are validated too (rclpy docs).
