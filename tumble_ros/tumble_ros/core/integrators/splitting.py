@@ -45,17 +45,16 @@ the same method from the start of the step to the requested time, so interpolate
 the method's own local error, O(h^{p+1}) (order p), and coincide with the step's end point at
 its end.
 
-This module is the readable reference implementation (plain Python floats); the compiled
-loop in ``core/kernels.py`` does the same arithmetic (tests/test_core_fast.py).
+The physics of a step (the torque, the free flow) is written once, in ``core/kernels.py``:
+this stepper calls those functions (compiled, or plain Python without numba) one step at a
+time, as the reference path; the compiled loop runs them many steps per call.
 """
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
 from .base import Stepper
-from ..kernels import free_flow_split, problem_array, split_step_count
+from ..kernels import body_torque, free_flow, problem_array, split_step_count
 
 __all__ = ['Splitting', 'Splitting4', 'Splitting6', 'COMPOSITIONS']
 
@@ -70,78 +69,6 @@ COMPOSITIONS: dict[int, tuple[float, ...]] = {
         0.08221359629355080023149045, 0.79854399093482996339895035, 0.08221359629355080023149045,
         -0.70624617255763935980996482, 0.33259913678935943859974864, 0.39216144400731413927925056),
 }
-
-
-def _torque(problem, q0, q1, q2, q3, t):
-    """Body-axis torque: 3 ws^2 u x Iu plus the segment's pulses (body- and orbital-fixed)."""
-    ix, iy, iz = problem.inertia
-    ws = problem.orbit_rate
-    k = 3.0 * ws * ws
-    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    c00 = 1.0 - s * (q2 * q2 + q3 * q3)
-    c01 = s * (q1 * q2 - q0 * q3)
-    c02 = s * (q1 * q3 + q0 * q2)
-    c10 = s * (q1 * q2 + q0 * q3)
-    c11 = 1.0 - s * (q1 * q1 + q3 * q3)
-    c12 = s * (q2 * q3 - q0 * q1)
-    sn, cs = math.sin(ws * t), math.cos(ws * t)
-    ux, uy, uz = c00 * sn + c10 * cs, c01 * sn + c11 * cs, c02 * sn + c12 * cs
-    mb = problem.torque_body
-    tx = k * (iz - iy) * uy * uz + mb[0]
-    ty = k * (ix - iz) * ux * uz + mb[1]
-    tz = k * (iy - ix) * ux * uy + mb[2]
-    mox, moy, moz = problem.torque_orbital
-    if mox != 0.0 or moy != 0.0 or moz != 0.0:
-        c20 = s * (q1 * q3 - q0 * q2)
-        c21 = s * (q2 * q3 + q0 * q1)
-        c22 = 1.0 - s * (q1 * q1 + q2 * q2)
-        tx += c00 * mox + c10 * moy + c20 * moz
-        ty += c01 * mox + c11 * moy + c21 * moz
-        tz += c02 * mox + c12 * moy + c22 * moz
-    return tx, ty, tz
-
-
-def _axis_rotation(axis, beta, pi, q):
-    """Exact flow of 1/2 c pi_axis^2 with beta = c pi_axis a: pi by -beta, q by +beta."""
-    c2, s2 = math.cos(0.5 * beta), math.sin(0.5 * beta)
-    # 1 - cos(beta) and sin(beta) from the half angle; pi' = pi - (v pi -/+ sb ...) so that the
-    # rounding of cos(beta/2) near 1 does not rescale |pi| by the same factor at every step.
-    v, sb = 2.0 * s2 * s2, 2.0 * s2 * c2
-    px, py, pz = pi
-    q0, q1, q2, q3 = q
-    if axis == 0:
-        return ((px, py - (v * py - sb * pz), pz - (v * pz + sb * py)),
-                (q0 * c2 - q1 * s2, q0 * s2 + q1 * c2, q2 * c2 + q3 * s2, q3 * c2 - q2 * s2))
-    if axis == 1:
-        return ((px - (v * px + sb * pz), py, pz - (v * pz - sb * px)),
-                (q0 * c2 - q2 * s2, q1 * c2 - q3 * s2, q0 * s2 + q2 * c2, q3 * c2 + q1 * s2))
-    return ((px - (v * px - sb * py), py - (v * py + sb * px), pz),
-            (q0 * c2 - q3 * s2, q1 * c2 + q2 * s2, q2 * c2 - q1 * s2, q0 * s2 + q3 * c2))
-
-
-def free_flow(inv_ref, coeffs, a, pi, q):
-    """Free rigid-body flow over time a (split as in the module docstring)."""
-    px, py, pz = pi
-    n = math.sqrt(px * px + py * py + pz * pz)
-    if n > 0.0:
-        # q <- q * (cos(alpha/2), sin(alpha/2) pi/|pi|), alpha = |pi| a / I_r
-        half = 0.5 * (n * a * inv_ref)
-        c, s = math.cos(half), math.sin(half) / n
-        r1, r2, r3 = s * px, s * py, s * pz
-        q0, q1, q2, q3 = q
-        q = (q0 * c - q1 * r1 - q2 * r2 - q3 * r3,
-             q0 * r1 + q1 * c + q2 * r3 - q3 * r2,
-             q0 * r2 - q1 * r3 + q2 * c + q3 * r1,
-             q0 * r3 + q1 * r2 - q2 * r1 + q3 * c)
-    axes = [i for i in range(3) if coeffs[i] != 0.0]
-    if len(axes) == 2:
-        first, second = axes
-        pi, q = _axis_rotation(first, coeffs[first] * pi[first] * (0.5 * a), pi, q)
-        pi, q = _axis_rotation(second, coeffs[second] * pi[second] * a, pi, q)
-        pi, q = _axis_rotation(first, coeffs[first] * pi[first] * (0.5 * a), pi, q)
-    elif len(axes) == 1:
-        pi, q = _axis_rotation(axes[0], coeffs[axes[0]] * pi[axes[0]] * a, pi, q)
-    return pi, q
 
 
 class Splitting(Stepper):
@@ -176,9 +103,12 @@ class Splitting(Stepper):
                 f'{self.name}: attitude {problem.attitude!r} not supported: {self.requirement}')
         span = self.tau_bound
         wx, wy, wz = self.y[:3].tolist()
-        n = int(split_step_count(problem_array(problem.inertia, problem.orbit_rate,
-                                               problem.torque_body, problem.torque_orbital),
-                                 span, float(settings.step), float(self.order), wx, wy, wz))
+        # The segment's coefficients, as the compiled loop has them: the torque and the free
+        # flow below are the kernels' own functions (one implementation of the physics).
+        self._p = problem_array(problem.inertia, problem.orbit_rate, problem.torque_body,
+                                problem.torque_orbital)
+        n = int(split_step_count(self._p, span, float(settings.step), float(self.order),
+                                 wx, wy, wz))
         self._h = span / n
         self._n_total = n
         self._gammas = self.composition()
@@ -188,8 +118,7 @@ class Splitting(Stepper):
             cums.append(total)
         cums[-1] = 1.0
         self._cums = tuple(cums)
-        self._inv_ref, self._coeffs = free_flow_split(problem.inertia)
-        self._torq = _torque(problem, *self.y[3:].tolist(), self.t0 + self.tau)
+        self._torq = body_torque(self._p, *self.y[3:].tolist(), self.t0 + self.tau)
         ix, iy, iz = problem.inertia
         # pi = I w is carried from step to step, not recomputed from w: the round trip
         # w -> I w -> w would bias |L| by ~1e-17 per step (1e-12 over 10^5 steps).
@@ -209,10 +138,10 @@ class Splitting(Stepper):
         From local time s0, attitude y[3:], momentum pi and torque torq; returns (state,
         momentum, torque at the end).
         """
-        problem = self.problem
-        ix, iy, iz = problem.inertia
+        p = self._p
+        ix, iy, iz = self.problem.inertia
         px, py, pz = (float(v) for v in pi)
-        q = tuple(y[3:].tolist())
+        q0, q1, q2, q3 = y[3:].tolist()
         tx, ty, tz = torq
         for g, c in zip(self._gammas, self._cums):
             a = g * h
@@ -220,12 +149,13 @@ class Splitting(Stepper):
             px += half * tx
             py += half * ty
             pz += half * tz
-            (px, py, pz), q = free_flow(self._inv_ref, self._coeffs, a, (px, py, pz), q)
-            tx, ty, tz = _torque(problem, *q, self.t0 + (s0 + c * h))
+            px, py, pz, q0, q1, q2, q3 = free_flow(p, a, px, py, pz, q0, q1, q2, q3)
+            tx, ty, tz = body_torque(p, q0, q1, q2, q3, self.t0 + (s0 + c * h))
             px += half * tx
             py += half * ty
             pz += half * tz
-        return np.array((px / ix, py / iy, pz / iz) + q), (px, py, pz), (tx, ty, tz)
+        return (np.array((px / ix, py / iy, pz / iz, q0, q1, q2, q3)), (px, py, pz),
+                (tx, ty, tz))
 
     def _step_impl(self):
         s = self.tau
