@@ -19,6 +19,8 @@ while J stays put.
 """
 from __future__ import annotations
 
+import math
+
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +29,6 @@ from scipy.integrate import solve_ivp
 from common import Timer, section
 
 from tumble_ros.core import IntegratorSettings, jacobi_integral, kernels, load_scenario, simulate
-from tumble_ros.core.dynamics import _make_quaternion_rhs
 from tumble_ros.core.propagator import quaternions_to_matrices
 from tumble_ros.core.rotation import euler_to_quaternion
 
@@ -69,6 +70,34 @@ REFERENCE_CHECKS = [("splitting6", dict(step=1e-3)), ("dop853", dict(rtol=1e-12,
 REFERENCE_SCIPY_RTOL = 1e-13
 
 
+
+def _python_rhs(inertia, orbit_rate):
+    """
+    Return the right-hand side a scipy user writes: Euler's equations + quaternion kinematics.
+
+    Plain Python on floats, no pulses: the baseline every compiled row is compared with. (The
+    project's own reference path runs the kernels' right-hand side instead.)
+    """
+    ix, iy, iz = (float(v) for v in inertia)
+    k = 3.0 * orbit_rate * orbit_rate
+    ax, ay, az = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
+    gx, gy, gz = k * (iz - iy) / ix, k * (ix - iz) / iy, k * (iy - ix) / iz
+    sin, cos, array = math.sin, math.cos, np.array
+
+    def rhs(t, y):
+        wx, wy, wz, q0, q1, q2, q3 = y.tolist()
+        s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+        c00, c01, c02 = 1.0 - s * (q2 * q2 + q3 * q3), s * (q1 * q2 - q0 * q3), s * (q1 * q3 + q0 * q2)
+        c10, c11, c12 = s * (q1 * q2 + q0 * q3), 1.0 - s * (q1 * q1 + q3 * q3), s * (q2 * q3 - q0 * q1)
+        sn, cs = sin(orbit_rate * t), cos(orbit_rate * t)
+        ux, uy, uz = c00 * sn + c10 * cs, c01 * sn + c11 * cs, c02 * sn + c12 * cs
+        return array((ax * wy * wz + gx * uy * uz, ay * wz * wx + gy * ux * uz,
+                      az * wx * wy + gz * ux * uy,
+                      0.5 * (-q1 * wx - q2 * wy - q3 * wz), 0.5 * (q0 * wx + q2 * wz - q3 * wy),
+                      0.5 * (q0 * wy - q1 * wz + q3 * wx), 0.5 * (q0 * wz + q1 * wy - q2 * wx)))
+
+    return rhs
+
 def drift_stats(t, jacobi):
     """(max relative drift, last-decile / first-decile max, trend = fitted slope * span / max)."""
     d = np.abs(jacobi - jacobi[0]) / abs(jacobi[0])
@@ -109,7 +138,7 @@ def run_project(sc, method, settings, span, fast, ref=None):
 
 
 def run_scipy_raw(sc, method, rtol, span, atol=None):
-    rhs = _make_quaternion_rhs(sc.inertia, sc.orbit_rate)  # plain Python on floats
+    rhs = _python_rhs(sc.inertia, sc.orbit_rate)  # plain Python on floats
     y0 = np.concatenate([sc.omega0, euler_to_quaternion(*sc.euler0)])
     t_eval = sc.replace(duration=span).output_times
     with Timer() as tm:

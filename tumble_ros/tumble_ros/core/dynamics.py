@@ -30,6 +30,7 @@ from typing import Callable
 
 import numpy as np
 
+from . import kernels
 from .rotation import (
     euler_to_matrix,
     euler_to_quaternion,
@@ -51,48 +52,20 @@ _ZERO = (0.0, 0.0, 0.0)
 
 
 def _make_quaternion_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO) -> Rhs:
-    ix, iy, iz = (float(v) for v in inertia)
-    k = 3.0 * orbit_rate * orbit_rate
-    ax, ay, az = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
-    gx, gy, gz = k * (iz - iy) / ix, k * (ix - iz) / iy, k * (iy - ix) / iz
-    bx, by, bz = torque_body[0] / ix, torque_body[1] / iy, torque_body[2] / iz
-    mox, moy, moz = (float(v) for v in torque_orbital)
-    orbital_pulse = mox != 0.0 or moy != 0.0 or moz != 0.0
-    sin, cos, array = math.sin, math.cos, np.array
+    """
+    Return f(t, y) for the quaternion attitude: the kernels' right-hand side (one implementation).
+
+    ``kernels.rhs`` (compiled, or plain Python without numba) is what the compiled loops run;
+    the reference steppers call it through this closure, one evaluation at a time.
+    """
+    p = kernels.problem_array(inertia, orbit_rate, torque_body, torque_orbital)
+    st = np.zeros(2 * kernels.N)
+    evaluate, n = kernels.rhs_called, kernels.N
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
-        wx, wy, wz, q0, q1, q2, q3 = y.tolist()  # Python floats: faster than numpy scalars
-        s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-        # First two rows of C(q) (body -> orbital): the Sun lies in the X'Y' plane.
-        c00 = 1.0 - s * (q2 * q2 + q3 * q3)
-        c01 = s * (q1 * q2 - q0 * q3)
-        c02 = s * (q1 * q3 + q0 * q2)
-        c10 = s * (q1 * q2 + q0 * q3)
-        c11 = 1.0 - s * (q1 * q1 + q3 * q3)
-        c12 = s * (q2 * q3 - q0 * q1)
-        sn, cs = sin(orbit_rate * t), cos(orbit_rate * t)
-        ux, uy, uz = c00 * sn + c10 * cs, c01 * sn + c11 * cs, c02 * sn + c12 * cs
-        dwx = ax * wy * wz + gx * uy * uz + bx
-        dwy = ay * wz * wx + gy * ux * uz + by
-        dwz = az * wx * wy + gz * ux * uy + bz
-        if orbital_pulse:
-            c20 = s * (q1 * q3 - q0 * q2)
-            c21 = s * (q2 * q3 + q0 * q1)
-            c22 = 1.0 - s * (q1 * q1 + q2 * q2)
-            dwx += (c00 * mox + c10 * moy + c20 * moz) / ix
-            dwy += (c01 * mox + c11 * moy + c21 * moz) / iy
-            dwz += (c02 * mox + c12 * moy + c22 * moz) / iz
-        return array(
-            (
-                dwx,
-                dwy,
-                dwz,
-                0.5 * (-q1 * wx - q2 * wy - q3 * wz),
-                0.5 * (q0 * wx + q2 * wz - q3 * wy),
-                0.5 * (q0 * wy - q1 * wz + q3 * wx),
-                0.5 * (q0 * wz + q1 * wy - q2 * wx),
-            )
-        )
+        st[:n] = y
+        evaluate(p, float(t), st, 0, n)
+        return st[n:].copy()
 
     return rhs
 

@@ -10,7 +10,7 @@ step-by-step path instead, which gives the same trajectory (tests/test_core_fast
 
 What is compiled, for the quaternion attitude only:
 
-* the right-hand side of ``dynamics._make_quaternion_rhs`` (same operations, same order);
+* the right-hand side (the reference steppers call it too, through ``dynamics``);
 * ``rk4``: ``integrators.fixed_step.RK4`` (n = ceil(span / step) equal steps, cubic Hermite
   dense output);
 * ``dop853``: scipy's ``DOP853`` step, error norm, step-size control, initial step and
@@ -160,7 +160,7 @@ def free_flow_split(inertia) -> tuple[float, tuple[float, float, float]]:
 
 def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0),
                   torque_orbital=(0.0, 0.0, 0.0)):
-    """Return the ``p`` array of one segment (coefficients as ``_make_quaternion_rhs``)."""
+    """Return the ``p`` array of one segment: inertia, orbit rate, pulses, coefficients."""
     ix, iy, iz = (float(v) for v in inertia)
     ws = float(orbit_rate)
     k = 3.0 * ws * ws
@@ -214,7 +214,7 @@ def new_state() -> np.ndarray:
 # =======================================================================================
 @jit_inline
 def rhs(p, t, st, yo, oo):
-    """f(t, y) for y = st[yo:yo+7], written to st[oo:oo+7] (``dynamics._make_quaternion_rhs``)."""
+    """Write f(t, y) for y = st[yo:yo+7] to st[oo:oo+7] (the only quaternion-attitude RHS)."""
     wx = st[yo]
     wy = st[yo + 1]
     wz = st[yo + 2]
