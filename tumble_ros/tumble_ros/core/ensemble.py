@@ -267,7 +267,6 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
     settings = scenario.integrator
     gammas = method.composition() if hasattr(method, 'composition') else ()
     cfg = K.config_array(method.kernel, settings, gammas, method.order or 0)
-    base = K.problem_array(scenario.inertia, scenario.orbit_rate)
     # segment tables
     if impacts is None:
         per_body = [split_at_impacts(scenario.duration, scenario.impacts)] * n
@@ -284,15 +283,7 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
             seg_t[j] = t0, t1
             torques[j, :3], torques[j, 3:] = body, orbital
             j += 1
-    probs = np.tile(base, (total, 1))
-    ix, iy, iz = (float(v) for v in scenario.inertia)
-    probs[:, K.P_BX], probs[:, K.P_BY], probs[:, K.P_BZ] = (torques[:, 0] / ix, torques[:, 1] / iy,
-                                                            torques[:, 2] / iz)
-    probs[:, K.P_TBX], probs[:, K.P_TBY], probs[:, K.P_TBZ] = (torques[:, 0], torques[:, 1],
-                                                               torques[:, 2])
-    probs[:, K.P_MOX], probs[:, K.P_MOY], probs[:, K.P_MOZ] = (torques[:, 3], torques[:, 4],
-                                                               torques[:, 5])
-    probs[:, K.P_ORB] = np.where(np.any(torques[:, 3:] != 0.0, axis=1), 1.0, 0.0)
+    probs = K.problem_arrays(scenario.inertia, scenario.orbit_rate, torques)
     # initial states
     model = ATTITUDE_MODELS[scenario.attitude]
     states = np.zeros((n, K.N_STATE))

@@ -37,8 +37,8 @@ import os
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
-__all__ = ['free_flow_split', 'COMPILED', 'NUMBA_VERSION', 'problem_array', 'config_array',
-           'new_state', 'KERNEL_IDS', 'split_step_count', 'MAX_PULSE_SUBSTEPS']
+__all__ = ['free_flow_split', 'COMPILED', 'NUMBA_VERSION', 'problem_array', 'problem_arrays',
+           'config_array', 'new_state', 'KERNEL_IDS', 'split_step_count', 'MAX_PULSE_SUBSTEPS']
 
 try:  # pragma: no cover - exercised by the environment, not by a test
     import numba as _numba
@@ -158,27 +158,36 @@ def free_flow_split(inertia) -> tuple[float, tuple[float, float, float]]:
     return inv_ref, tuple(0.0 if i == r else 1.0 / inertia[i] - inv_ref for i in range(3))
 
 
-def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0),
-                  torque_orbital=(0.0, 0.0, 0.0)):
-    """Return the ``p`` array of one segment: inertia, orbit rate, pulses, coefficients."""
+def problem_arrays(inertia, orbit_rate, torques) -> np.ndarray:
+    """
+    Return the ``p`` rows of n segments of one body: (n, N_P).
+
+    ``torques`` (n, 6): each segment's body pulse torque then orbital pulse torque [I rad/yr^2].
+    The one place that knows the layout of ``p`` (the single-body path and the ensembles).
+    """
     ix, iy, iz = (float(v) for v in inertia)
     ws = float(orbit_rate)
     k = 3.0 * ws * ws
-    p = np.zeros(N_P)
-    p[P_IX], p[P_IY], p[P_IZ], p[P_WS] = ix, iy, iz, ws
-    p[P_AX], p[P_AY], p[P_AZ] = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
-    p[P_GX], p[P_GY], p[P_GZ] = k * (iz - iy) / ix, k * (ix - iz) / iy, k * (iy - ix) / iz
-    tb = [float(v) for v in torque_body]
-    p[P_BX], p[P_BY], p[P_BZ] = tb[0] / ix, tb[1] / iy, tb[2] / iz
-    mo = [float(v) for v in torque_orbital]
-    p[P_MOX], p[P_MOY], p[P_MOZ] = mo
-    p[P_ORB] = 1.0 if any(v != 0.0 for v in mo) else 0.0
-    p[P_KX], p[P_KY], p[P_KZ] = k * (iz - iy), k * (ix - iz), k * (iy - ix)
-    p[P_TBX], p[P_TBY], p[P_TBZ] = tb
+    torques = np.asarray(torques, dtype=float).reshape(-1, 6)
+    p = np.zeros((len(torques), N_P))
+    p[:, P_IX], p[:, P_IY], p[:, P_IZ], p[:, P_WS] = ix, iy, iz, ws
+    p[:, P_AX], p[:, P_AY], p[:, P_AZ] = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
+    p[:, P_GX], p[:, P_GY], p[:, P_GZ] = k * (iz - iy) / ix, k * (ix - iz) / iy, k * (iy - ix) / iz
+    p[:, P_BX], p[:, P_BY], p[:, P_BZ] = torques[:, 0] / ix, torques[:, 1] / iy, torques[:, 2] / iz
+    p[:, P_MOX:P_MOZ + 1] = torques[:, 3:]
+    p[:, P_ORB] = np.where(np.any(torques[:, 3:] != 0.0, axis=1), 1.0, 0.0)
+    p[:, P_KX], p[:, P_KY], p[:, P_KZ] = k * (iz - iy), k * (ix - iz), k * (iy - ix)
+    p[:, P_TBX:P_TBZ + 1] = torques[:, :3]
     inv_ref, coeffs = free_flow_split((ix, iy, iz))
-    p[P_INVREF] = inv_ref
-    p[P_CX], p[P_CY], p[P_CZ] = coeffs
+    p[:, P_INVREF] = inv_ref
+    p[:, P_CX], p[:, P_CY], p[:, P_CZ] = coeffs
     return p
+
+
+def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0),
+                  torque_orbital=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Return the ``p`` array of one segment (see :func:`problem_arrays`)."""
+    return problem_arrays(inertia, orbit_rate, [*torque_body, *torque_orbital])[0]
 
 
 def config_array(kernel: str, settings, gammas=(), order: int = 0) -> np.ndarray:
