@@ -8,10 +8,10 @@ import struct
 import subprocess
 import sys
 
+from cli_checks import one_error_line
 import numpy as np
 import pytest
 from test_analysis_support import write_recording
-
 from tumble_ros.analysis import load_recording, write_figures
 from tumble_ros.analysis.cli import command
 from tumble_ros.analysis.figures import plot_error, plot_impacts
@@ -21,15 +21,6 @@ from tumble_ros.io import McapWriter
 DATA = Path(__file__).resolve().parent / 'data'
 GOLDEN = DATA / 'golden.mcap'
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
-
-
-def _one_error_line(capsys) -> str:
-    out, err = capsys.readouterr()
-    assert out == ''
-    lines = err.splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith('ERROR: ') and 'Traceback' not in err
-    return lines[0]
 
 
 # -- user errors --------------------------------------------------------------------------------
@@ -83,9 +74,9 @@ def test_bad_file_gives_one_error_line_and_status_1(tmp_path, capsys, kind):
     make, phrase = BAD_FILES[kind]
     path = make(tmp_path)
     assert command([str(path)]) == 1
-    assert phrase in _one_error_line(capsys)
+    assert phrase in one_error_line(capsys)
     assert command([str(path), '--json', '--figures', str(tmp_path / 'figs')]) == 1
-    _one_error_line(capsys)
+    one_error_line(capsys)
     assert not (tmp_path / 'figs').exists()
 
 
@@ -95,9 +86,9 @@ def test_bad_file_gives_one_error_line_and_status_1(tmp_path, capsys, kind):
     ([str(GOLDEN), '--peaks', 'x'], 'invalid int value'),
     ([str(GOLDEN), '--peaks', '0'], '--peaks must be >= 1'),
 ])
-def test_bad_options_give_one_error_line(capsys, argv, phrase):
+def test_bad_options_giveone_error_line(capsys, argv, phrase):
     assert command(argv) == 1
-    assert phrase in _one_error_line(capsys)
+    assert phrase in one_error_line(capsys)
 
 
 def test_help_exits_0(capsys):
@@ -109,7 +100,7 @@ def test_unwritable_figure_directory(tmp_path, capsys):
     blocker = tmp_path / 'file'
     blocker.write_text('x')
     assert command([str(GOLDEN), '--figures', str(blocker)]) == 1
-    assert 'cannot write figures to' in _one_error_line(capsys)
+    assert 'cannot write figures to' in one_error_line(capsys)
 
 
 def test_file_truncated_after_complete_chunks_is_analysed_with_a_warning(tmp_path, capsys):

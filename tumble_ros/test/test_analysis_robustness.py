@@ -15,6 +15,7 @@ import subprocess
 import sys
 import tracemalloc
 
+from cli_checks import one_error_line
 import lz4.frame
 from mcap.reader import make_reader
 import numpy as np
@@ -32,15 +33,6 @@ MAGIC = b'\x89MCAP0\r\n'
 MIB = 2 ** 20
 #: Reading a refused file may allocate at most this much (tracemalloc peak).
 SMALL = 8 * MIB
-
-
-def _one_error_line(capsys) -> str:
-    out, err = capsys.readouterr()
-    assert out == ''
-    lines = err.splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith('ERROR: ') and 'Traceback' not in err
-    return lines[0]
 
 
 def _peak_memory(call) -> tuple[object, int]:
@@ -108,7 +100,7 @@ def test_chunk_declaring_a_huge_uncompressed_size_is_refused_before_decompressin
     path.write_bytes(MAGIC + _header() + _chunk(data, 32 * MIB, 'zstd'))
     status, peak = _peak_memory(lambda: command([str(path)]))
     assert status == 1
-    line = _one_error_line(capsys)
+    line = one_error_line(capsys)
     assert f'declares {32 * MIB} bytes uncompressed from {len(data)} bytes of zstd' in line
     assert 'more than 1000 times' in line and 'no messages recoverable' in line
     assert peak < SMALL, f'{peak / MIB:.0f} MiB allocated'
@@ -136,7 +128,7 @@ def test_chunk_that_expands_beyond_its_declared_size_stops_there(tmp_path, capsy
     status, peak = _peak_memory(lambda: command([str(path)]))
     assert status == 1
     assert 'a chunk decompresses to more than 100000 bytes, it declares 100000' in \
-        _one_error_line(capsys)
+        one_error_line(capsys)
     assert peak < SMALL, f'{peak / MIB:.0f} MiB allocated'
 
 
@@ -147,7 +139,7 @@ def test_record_longer_than_the_file_is_refused_without_reading(tmp_path, capsys
     status, peak = _peak_memory(lambda: command([str(path)]))
     assert status == 1
     assert f'file ends inside a record (opcode 0x6, 16000 of {512 * MIB} bytes)' in \
-        _one_error_line(capsys)
+        one_error_line(capsys)
     assert peak < SMALL, f'{peak / MIB:.0f} MiB allocated'
 
 
@@ -191,7 +183,7 @@ def test_fifo_is_refused_without_blocking(tmp_path):
 @pytest.mark.skipif(not Path('/dev/null').exists(), reason='no /dev/null')
 def test_device_is_refused(capsys):
     assert command(['/dev/null']) == 1
-    assert _one_error_line(capsys) == \
+    assert one_error_line(capsys) == \
         'ERROR: /dev/null: is a character device, not an MCAP file (only regular files are read)'
 
 
@@ -205,7 +197,7 @@ def test_existing_figure_is_not_overwritten_and_nothing_is_written(tmp_path, cap
     out_dir.mkdir()
     (out_dir / 'omega.png').write_bytes(b'my own work')
     assert command([str(GOLDEN), '--figures', str(out_dir)]) == 1
-    line = _one_error_line(capsys)
+    line = one_error_line(capsys)
     assert line == (f'ERROR: {out_dir / "omega.png"}: exists, not overwritten (--overwrite '
                     f'replaces existing figures)')
     assert (out_dir / 'omega.png').read_bytes() == b'my own work'
@@ -218,7 +210,7 @@ def test_second_run_refuses_and_overwrite_replaces(tmp_path, capsys):
     capsys.readouterr()
     before = {name: (out_dir / name).stat().st_ino for name in FIGURES}
     assert command([str(GOLDEN), '--figures', str(out_dir)]) == 1
-    line = _one_error_line(capsys)
+    line = one_error_line(capsys)
     assert all(str(out_dir / name) in line for name in FIGURES)
     assert 'exist, not overwritten' in line
     assert command([str(GOLDEN), '--figures', str(out_dir), '--overwrite']) == 0
@@ -239,8 +231,8 @@ def test_link_at_a_figure_path_is_refused(tmp_path, capsys, overwrite, target):
     out_dir.mkdir()
     (out_dir / 'wy_vs_wx.png').symlink_to(victim)
     assert command([str(GOLDEN), '--figures', str(out_dir), *overwrite]) == 1
-    assert _one_error_line(capsys) == (f'ERROR: {out_dir / "wy_vs_wx.png"}: is a symbolic link: '
-                                       f'figures are not written through links')
+    assert one_error_line(capsys) == (f'ERROR: {out_dir / "wy_vs_wx.png"}: is a symbolic link: '
+                                      f'figures are not written through links')
     assert (victim.read_bytes() == b'precious') if target == 'existing' else not victim.exists()
     assert sorted(p.name for p in out_dir.iterdir()) == ['wy_vs_wx.png']
     assert (out_dir / 'wy_vs_wx.png').is_symlink()
@@ -254,8 +246,8 @@ def test_link_as_the_figure_directory_is_refused(tmp_path, capsys, overwrite):
     link.symlink_to(real)
     for given in (str(link), str(link) + '/'):
         assert command([str(GOLDEN), '--figures', given, *overwrite]) == 1
-        assert _one_error_line(capsys) == (f'ERROR: {link}: is a symbolic link: figures are not '
-                                           f'written through links')
+        assert one_error_line(capsys) == (f'ERROR: {link}: is a symbolic link: figures are not '
+                                          f'written through links')
     assert list(real.iterdir()) == []
 
 
@@ -263,13 +255,13 @@ def test_non_regular_file_at_a_figure_path_is_refused_even_with_overwrite(tmp_pa
     out_dir = tmp_path / 'figs'
     (out_dir / 'omega.png').mkdir(parents=True)
     assert command([str(GOLDEN), '--figures', str(out_dir), '--overwrite']) == 1
-    assert _one_error_line(capsys) == \
+    assert one_error_line(capsys) == \
         f'ERROR: {out_dir / "omega.png"}: exists and is not a regular file'
 
 
 def test_overwrite_needs_figures(capsys):
     assert command([str(GOLDEN), '--overwrite']) == 1
-    assert _one_error_line(capsys) == 'ERROR: --overwrite needs --figures DIR'
+    assert one_error_line(capsys) == 'ERROR: --overwrite needs --figures DIR'
 
 
 def test_python_api_refuses_existing_figures_unless_told(tmp_path):
@@ -365,8 +357,8 @@ def test_recording_in_a_namespace_is_found_and_analysed_like_without(tmp_path, c
 def test_two_namespaces_in_one_file_need_namespace(tmp_path, capsys, runs):
     path = _namespaced(tmp_path / 'both.mcap', [(runs[0], '/ast1'), (runs[1], '/ast2')])
     assert command([str(path)]) == 1
-    assert _one_error_line(capsys) == (f'ERROR: {path}: the tumble topics are in 2 namespaces: '
-                                       f'/ast1, /ast2; choose one with --namespace')
+    assert one_error_line(capsys) == (f'ERROR: {path}: the tumble topics are in 2 namespaces: '
+                                      f'/ast1, /ast2; choose one with --namespace')
     for namespace, frequency in (('/ast1', 100.0), ('ast2', 300.0), ('/ast2/', 300.0)):
         assert command([str(path), '--namespace', namespace]) == 0
         out = capsys.readouterr().out
@@ -390,7 +382,7 @@ def test_figures_of_one_namespace(tmp_path, capsys, runs):
 def test_root_namespace_beside_a_namespace(tmp_path, capsys, runs):
     path = _namespaced(tmp_path / 'mixed.mcap', [(runs[0], ''), (runs[1], '/ast2')])
     assert command([str(path)]) == 1
-    assert 'the tumble topics are in 2 namespaces: /, /ast2;' in _one_error_line(capsys)
+    assert 'the tumble topics are in 2 namespaces: /, /ast2;' in one_error_line(capsys)
     assert command([str(path), '--namespace', '/', '--json']) == 0
     assert '"namespace": "/"' in capsys.readouterr().out
 
@@ -398,12 +390,12 @@ def test_root_namespace_beside_a_namespace(tmp_path, capsys, runs):
 def test_namespace_without_the_topics(tmp_path, capsys, runs):
     path = _namespaced(tmp_path / 'both.mcap', [(runs[0], '/ast1'), (runs[1], '/ast2')])
     assert command([str(path), '--namespace', '/ast3']) == 1
-    assert _one_error_line(capsys) == (f'ERROR: {path}: no /ast3/angular_velocity topic in '
-                                       f'namespace /ast3 (namespaces with the tumble topics: '
-                                       f'/ast1, /ast2)')
+    assert one_error_line(capsys) == (f'ERROR: {path}: no /ast3/angular_velocity topic in '
+                                      f'namespace /ast3 (namespaces with the tumble topics: '
+                                      f'/ast1, /ast2)')
     assert command([str(GOLDEN), '--namespace', '/ast1']) == 1
     assert 'no /ast1/angular_velocity topic in namespace /ast1 (namespaces with the tumble ' \
-           'topics: /)' in _one_error_line(capsys)
+           'topics: /)' in one_error_line(capsys)
 
 
 def test_the_analysis_takes_topic_names_and_types_from_the_topics_module():
@@ -438,9 +430,9 @@ def test_python_api_refusals_are_the_packages_analysis_error(tmp_path, runs):
 @pytest.mark.parametrize('bad', ['a b', '/1ast', '/ast-1'])
 def test_invalid_namespace_option(capsys, bad):
     assert command([str(GOLDEN), '--namespace', bad]) == 1
-    assert _one_error_line(capsys) == (f'ERROR: --namespace: not a ROS namespace: {bad!r} (each '
-                                       f'name in it is letters, digits and _, not starting with '
-                                       f'a digit)')
+    assert one_error_line(capsys) == (f'ERROR: --namespace: not a ROS namespace: {bad!r} (each '
+                                      f'name in it is letters, digits and _, not starting with '
+                                      f'a digit)')
 
 
 def test_unrelated_angular_velocity_of_another_type_does_not_make_it_ambiguous(tmp_path, capsys):
