@@ -91,7 +91,7 @@ def test_every_arrow_points_down():
     assert not upward
 
 
-def test_the_check_sees_relative_and_nested_imports(tmp_path):
+def test_the_check_sees_relative_and_nested_imports():
     known = modules()
     ensemble = imports(PACKAGE / 'core' / 'ensemble.py', known)
     assert 'tumble_ros.core.kernels' in ensemble  # `from . import kernels as K`

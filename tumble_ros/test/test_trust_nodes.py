@@ -4,6 +4,7 @@ from geometry_msgs.msg import Vector3
 import pytest
 from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import GetParameters, ListParameters
+import rclpy
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_srvs.srv import Trigger
@@ -48,7 +49,7 @@ def test_a_flood_of_impact_requests_from_four_clients_gets_every_answer(ros, spa
     sim = spawn('sim', '--ros-args', '-p', 'duration:=40.0', '-p', 'real_time_factor:=1.0')
     clients = []
     for k in range(4):
-        node = ros.add(ros.probe.__class__(f'client{k}', context=ros.context))
+        node = ros.add(rclpy.create_node(f'client{k}', context=ros.context))
         clients.append(node.create_client(ApplyImpact, 'apply_impact', qos_profile=SERVICE_QOS))
     assert all(c.wait_for_service(timeout_sec=60.0) for c in clients), sim.output
     futures = [c.call_async(kick()) for _ in range(500) for c in clients]
