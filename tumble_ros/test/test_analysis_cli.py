@@ -12,6 +12,7 @@ from cli_checks import one_error_line
 import numpy as np
 import pytest
 from test_analysis_support import write_recording
+from tumble_ros import topics
 from tumble_ros.analysis import load_recording, write_figures
 from tumble_ros.analysis.cli import command
 from tumble_ros.analysis.figures import plot_error, plot_impacts
@@ -21,6 +22,8 @@ from tumble_ros.io import McapWriter
 DATA = Path(__file__).resolve().parent / 'data'
 GOLDEN = DATA / 'golden.mcap'
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
+#: The simulator's angular velocity in the root namespace, where the test recordings have it.
+OMEGA_TOPIC = '/' + topics.ANGULAR_VELOCITY
 
 
 # -- user errors --------------------------------------------------------------------------------
@@ -29,14 +32,14 @@ def _no_angular_velocity(path: Path) -> Path:
     from rclpy.serialization import serialize_message
     from tumble_ros_interfaces.msg import SimStatus
     with McapWriter(path) as writer:
-        ch = writer.add_channel('/status', 'tumble_ros_interfaces/msg/SimStatus')
+        ch = writer.add_channel('/' + topics.STATUS, 'tumble_ros_interfaces/msg/SimStatus')
         writer.write(ch, serialize_message(SimStatus(state=SimStatus.FINISHED)), 1, 1)
     return path
 
 
 def _empty_angular_velocity(path: Path) -> Path:
     with McapWriter(path) as writer:
-        writer.add_channel('/angular_velocity', 'geometry_msgs/msg/Vector3Stamped')
+        writer.add_channel(OMEGA_TOPIC, 'geometry_msgs/msg/Vector3Stamped')
     return path
 
 
@@ -44,7 +47,7 @@ def _wrong_type(path: Path) -> Path:
     from rclpy.serialization import serialize_message
     from std_msgs.msg import Float64
     with McapWriter(path) as writer:
-        ch = writer.add_channel('/angular_velocity', 'std_msgs/msg/Float64')
+        ch = writer.add_channel(OMEGA_TOPIC, 'std_msgs/msg/Float64')
         writer.write(ch, serialize_message(Float64(data=1.0)), 1, 1)
     return path
 
@@ -61,10 +64,10 @@ BAD_FILES = {
     'magic only': (lambda d: _bytes(d / 'm.mcap', GOLDEN.read_bytes()[:5]), 'truncated'),
     'not mcap': (lambda d: _bytes(d / 'x.mcap', b'hello, not a recording\n'), 'not an MCAP file'),
     'directory': (lambda d: d, 'is a directory'),
-    'no /angular_velocity': (lambda d: _no_angular_velocity(d / 'status.mcap'),
-                             'no /angular_velocity topic'),
-    'no /angular_velocity messages': (lambda d: _empty_angular_velocity(d / 'e.mcap'),
-                                      '/angular_velocity has no messages'),
+    f'no {OMEGA_TOPIC}': (lambda d: _no_angular_velocity(d / 'status.mcap'),
+                          f'no {OMEGA_TOPIC} topic'),
+    f'no {OMEGA_TOPIC} messages': (lambda d: _empty_angular_velocity(d / 'e.mcap'),
+                                   f'{OMEGA_TOPIC} has no messages'),
     'wrong type': (lambda d: _wrong_type(d / 'w.mcap'), 'std_msgs/msg/Float64'),
 }
 
@@ -113,7 +116,7 @@ def test_file_truncated_after_complete_chunks_is_analysed_with_a_warning(tmp_pat
     out, err = capsys.readouterr()
     assert 'file: TRUNCATED' in out and 'WARNING: the file is truncated' in out
     n = load_recording(cut).n
-    assert 50 < n < 400 and f'{n} samples of /angular_velocity' in out
+    assert 50 < n < 400 and f'{n} samples of {OMEGA_TOPIC}' in out
 
 
 # -- success ------------------------------------------------------------------------------------
@@ -122,7 +125,7 @@ def test_text_summary_of_golden(capsys):
     assert command([str(GOLDEN)]) == 0
     out, err = capsys.readouterr()
     assert err == ''
-    assert 'simulated time: 200 samples of /angular_velocity, t = 0 .. 0.398 yr' in out
+    assert f'simulated time: 200 samples of {OMEGA_TOPIC}, t = 0 .. 0.398 yr' in out
     assert 'delta_omega (0, 0.3, 0) rad/yr' in out
     assert 'figures' not in out.splitlines()[-1]
 
@@ -131,7 +134,7 @@ def test_json_summary_of_golden(capsys, tmp_path):
     assert command([str(GOLDEN), '--json', '--peaks', '2']) == 0
     data = json.loads(capsys.readouterr().out)
     assert data['sampling']['n'] == 200 and data['sampling']['duration'] == pytest.approx(0.398)
-    assert data['topics']['/impact_events']['count'] == 1
+    assert data['topics']['/' + topics.IMPACT_EVENTS]['count'] == 1
     assert (abs(data['spectrum']['peaks'][0]['omega'] - 2 * math.pi * 15)
             <= data['spectrum']['resolution'])
     assert data['figures'] == [] and data['warnings'] == []
@@ -166,7 +169,7 @@ def test_every_figure_with_a_comparator_and_impacts(tmp_path):
                 'delta_omega': (0, 0.3, 0)},
                {'id': 5, 'start': 0.5, 'end': 0.5 + 3e-7, 'torque': (0, 0, 1e3),
                 'delta_omega': (0, 0, 3e-4),
-                'frame': 'orbital'}]
+                'frame': topics.FRAME_ORBITAL}]
     rec = load_recording(write_recording(tmp_path / 'all.mcap', t, omega, model=model,
                                          impacts=impacts,
                                          scenario=Scenario(duration=0.6)))

@@ -7,6 +7,7 @@ simulators in ROS namespaces. Every refusal is one ``ERROR:`` line and status 1
 """
 from __future__ import annotations
 
+import functools
 import math
 import os
 from pathlib import Path
@@ -21,6 +22,7 @@ from mcap.reader import make_reader
 import numpy as np
 import pytest
 from test_analysis_support import write_recording
+from tumble_ros import topics
 from tumble_ros.analysis import analyze, load_recording, write_figures
 from tumble_ros.analysis.cli import command
 from tumble_ros.core import Scenario
@@ -286,7 +288,7 @@ def _copy_into(writer: McapWriter, source: Path, namespace: str, channels: dict)
     """
     with open(source, 'rb') as stream:
         for schema, channel, message in make_reader(stream).iter_messages():
-            topic = channel.topic if channel.topic == '/clock' else namespace + channel.topic
+            topic = channel.topic if channel.topic == topics.CLOCK else namespace + channel.topic
             if topic not in channels:
                 channels[topic] = writer.add_channel(topic, schema.name)
             writer.write(channels[topic], message.data, message.log_time, message.publish_time)
@@ -336,9 +338,11 @@ def test_recording_in_a_namespace_is_found_and_analysed_like_without(tmp_path, c
     assert command([str(path)]) == 0
     out = capsys.readouterr().out
     assert out.splitlines()[1] == 'namespace: /ast1'
-    assert '400 samples of /ast1/angular_velocity' in out
-    assert 'from /ast1/comparison/error_norm' in out and 'attitude from /ast1/attitude' in out
-    assert 'seconds_per_year = 1 (from /ast1/scenario)' in out
+    in_ast1 = functools.partial(topics.in_namespace, '/ast1')
+    assert f'400 samples of {in_ast1(topics.ANGULAR_VELOCITY)}' in out
+    assert (f'from {in_ast1(topics.ERROR_NORM)}' in out
+            and f'attitude from {in_ast1(topics.ATTITUDE)}' in out)
+    assert f'seconds_per_year = 1 (from {in_ast1(topics.SCENARIO)})' in out
     assert 'WARNING' not in out and 'note:' not in out
     ns, root = analyze(load_recording(path)), analyze(load_recording(plain))
     assert ns.namespace == '/ast1' and root.namespace == '/'
@@ -351,7 +355,8 @@ def test_recording_in_a_namespace_is_found_and_analysed_like_without(tmp_path, c
     assert command([str(plain)]) == 0
     out = capsys.readouterr().out
     assert out.splitlines()[1].startswith('file: finalised')
-    assert '400 samples of /angular_velocity' in out and '(from /scenario)' in out
+    assert (f'400 samples of /{topics.ANGULAR_VELOCITY}' in out
+            and f'(from /{topics.SCENARIO})' in out)
 
 
 def test_two_namespaces_in_one_file_need_namespace(tmp_path, capsys, runs):
@@ -363,7 +368,8 @@ def test_two_namespaces_in_one_file_need_namespace(tmp_path, capsys, runs):
         assert command([str(path), '--namespace', namespace]) == 0
         out = capsys.readouterr().out
         name = '/' + namespace.strip('/')
-        assert f'namespace: {name}\n' in out and f'samples of {name}/angular_velocity' in out
+        omega_topic = topics.in_namespace(name, topics.ANGULAR_VELOCITY)
+        assert f'namespace: {name}\n' in out and f'samples of {omega_topic}' in out
         assert abs(_dominant(out) - frequency) < 2 * math.pi / 0.8
         assert 'WARNING' not in out
 
@@ -390,21 +396,23 @@ def test_root_namespace_beside_a_namespace(tmp_path, capsys, runs):
 def test_namespace_without_the_topics(tmp_path, capsys, runs):
     path = _namespaced(tmp_path / 'both.mcap', [(runs[0], '/ast1'), (runs[1], '/ast2')])
     assert command([str(path), '--namespace', '/ast3']) == 1
-    assert one_error_line(capsys) == (f'ERROR: {path}: no /ast3/angular_velocity topic in '
+    omega_topic = topics.in_namespace('/ast3', topics.ANGULAR_VELOCITY)
+    assert one_error_line(capsys) == (f'ERROR: {path}: no {omega_topic} topic in '
                                       f'namespace /ast3 (namespaces with the tumble topics: '
                                       f'/ast1, /ast2)')
     assert command([str(GOLDEN), '--namespace', '/ast1']) == 1
-    assert 'no /ast1/angular_velocity topic in namespace /ast1 (namespaces with the tumble ' \
+    omega_topic = topics.in_namespace('/ast1', topics.ANGULAR_VELOCITY)
+    assert f'no {omega_topic} topic in namespace /ast1 (namespaces with the tumble ' \
            'topics: /)' in one_error_line(capsys)
 
 
 def test_the_analysis_takes_topic_names_and_types_from_the_topics_module():
     """tumble_ros.topics is the one list of names; the analysis spells none of them itself."""
-    from tumble_ros import topics
     from tumble_ros.analysis import recording
     assert set(recording.EXPECTED_TYPES) == set(topics.RECORDED) - {topics.CLOCK}
     assert all(recording.EXPECTED_TYPES[name] == topics.TYPES[name]
                for name in recording.EXPECTED_TYPES)
+    # Typed out on purpose: what in_namespace makes of a name, not computed by it.
     assert topics.in_namespace('/ast1', topics.ERROR_NORM) == '/ast1/comparison/error_norm'
     for path in Path(recording.__file__).parent.glob('*.py'):
         source = path.read_text()
@@ -421,7 +429,8 @@ def test_python_api_refusals_are_the_packages_analysis_error(tmp_path, runs):
     path = _namespaced(tmp_path / 'both.mcap', [(runs[0], '/ast1'), (runs[1], '/ast2')])
     with pytest.raises(errors.AnalysisError, match='2 namespaces'):
         load_recording(path)
-    with pytest.raises(errors.TumbleRosError, match='no /ast3/angular_velocity topic'):
+    omega_topic = topics.in_namespace('/ast3', topics.ANGULAR_VELOCITY)
+    with pytest.raises(errors.TumbleRosError, match=f'no {omega_topic} topic'):
         load_recording(path, namespace='/ast3')
     with pytest.raises(errors.TumbleRosError, match='not a ROS namespace'):
         normalize_namespace('/1ast')
@@ -442,9 +451,10 @@ def test_unrelated_angular_velocity_of_another_type_does_not_make_it_ambiguous(t
     t = np.arange(50) * 0.01
     plain = write_recording(
         tmp_path / 'extra.mcap', t, np.ones((50, 3)),
-        extra_topics=[('/wheel/angular_velocity', 'std_msgs/msg/Float64', 0,
-                       serialize_message(Float64(data=1.0)))])
+        extra_topics=[(topics.in_namespace('/wheel', topics.ANGULAR_VELOCITY),
+                       'std_msgs/msg/Float64', 0, serialize_message(Float64(data=1.0)))])
     path = _namespaced(tmp_path / 'ns.mcap', [(plain, '/ast1')])
-    assert '/ast1/wheel/angular_velocity' in summarize(path).topics
+    assert topics.in_namespace('/ast1/wheel', topics.ANGULAR_VELOCITY) in summarize(path).topics
     assert command([str(path)]) == 0
-    assert 'samples of /ast1/angular_velocity' in capsys.readouterr().out
+    omega_topic = topics.in_namespace('/ast1', topics.ANGULAR_VELOCITY)
+    assert f'samples of {omega_topic}' in capsys.readouterr().out

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from test_analysis_support import write_recording
 
+from tumble_ros import topics
 from tumble_ros.analysis import analyze, format_summary, load_recording, summary_to_dict
 from tumble_ros.analysis.summary import spectrum, theory_lines
 from tumble_ros.core import Impact, Scenario, simulate
@@ -39,7 +40,7 @@ def test_golden_counts_types_and_time_axis(golden):
     assert s.topics == {name: (e['type'], e['count']) for name, e in EXPECTED['topics'].items()}
     assert s.finalised and s.problem is None
     assert rec.n == GOLDEN_N == s.sampling.n
-    assert s.seconds_per_year == 1.0 and s.seconds_per_year_source == '/scenario'
+    assert s.seconds_per_year == 1.0 and s.seconds_per_year_source == '/' + topics.SCENARIO
     assert s.sampling.t_first == 0.0
     assert s.sampling.duration == pytest.approx((GOLDEN_N - 1) * GOLDEN_DT, abs=1e-15)
     assert s.sampling.dt == pytest.approx(GOLDEN_DT, rel=1e-12) and s.sampling.uniform
@@ -62,7 +63,7 @@ def test_golden_scenario_status_and_impact(golden):
     assert s.final_status == 'FINISHED at t = 0.398 yr: reached duration'
     (imp,) = s.impacts
     e = imp.event
-    assert (e.id, e.start, e.end, e.frame) == (1, 0.1, 0.1000003, 'body')
+    assert (e.id, e.start, e.end, e.frame) == (1, 0.1, 0.1000003, topics.FRAME_BODY)
     assert e.torque == (0.0, 1.0e6, 0.0) and e.delta_omega == (0.0, 0.3, 0.0)
     assert e.t == pytest.approx(0.1000003, abs=1e-15)
     # the samples around the pulse are t = 0.1 (k = 50) and 0.102 (k = 51)
@@ -96,7 +97,7 @@ def test_golden_jacobi_is_constant_per_segment(golden):
     """
     _, s = golden
     inv = s.invariant
-    assert inv.attitude_source == '/attitude'
+    assert inv.attitude_source == '/' + topics.ATTITUDE
     assert [seg.index for seg in inv.segments] == [0, 1]         # split at the impact
     assert (inv.segments[0].t_end == pytest.approx(0.1)
             and inv.segments[1].t_start == pytest.approx(0.12))
@@ -109,11 +110,11 @@ def test_golden_jacobi_is_constant_per_segment(golden):
 def test_golden_summary_text_and_json(golden):
     _, s = golden
     text = format_summary(s)
-    assert '/angular_velocity' in text and 'comparator error: none' in text
+    assert ('/' + topics.ANGULAR_VELOCITY) in text and 'comparator error: none' in text
     assert 'WARNING' not in text
     data = json.loads(json.dumps(summary_to_dict(s), allow_nan=False))
-    assert data['topics']['/angular_velocity'] == {'type': 'geometry_msgs/msg/Vector3Stamped',
-                                                   'count': 200}
+    assert data['topics']['/' + topics.ANGULAR_VELOCITY] == {
+        'type': 'geometry_msgs/msg/Vector3Stamped', 'count': 200}
     assert (data['comparator'] is None
             and data['impacts'][0]['event']['delta_omega'] == [0.0, 0.3, 0.0])
     assert data['spectrum']['peaks'][0]['omega'] == pytest.approx(
@@ -140,9 +141,9 @@ def _comparator_case(tmp_path, **kwargs):
 
 
 @pytest.mark.parametrize('source, kwargs', [
-    ('/comparison/error_norm', {}),
-    ('/comparison/error', {'error_norm': False}),
-    ('/angular_velocity - /comparison/model_angular_velocity',
+    ('/' + topics.ERROR_NORM, {}),
+    ('/' + topics.ERROR, {'error_norm': False}),
+    (f'/{topics.ANGULAR_VELOCITY} - /{topics.MODEL_ANGULAR_VELOCITY}',
      {'error_norm': False, 'error_vectors': False}),
 ])
 def test_comparator_max_and_rms_error_come_out_as_constructed(tmp_path, source, kwargs):
@@ -180,7 +181,8 @@ def test_comparator_status_without_errors_is_reported(tmp_path):
     st.values = [KeyValue(key='model', value='paper')]
     t = np.arange(10) * 0.1
     path = write_recording(tmp_path / 's.mcap', t, np.ones((10, 3)), extra_topics=[
-        ('/comparison/status', 'diagnostic_msgs/msg/DiagnosticStatus', 0, serialize_message(st))])
+        ('/' + topics.COMPARISON_STATUS, 'diagnostic_msgs/msg/DiagnosticStatus', 0,
+         serialize_message(st))])
     s = analyze(load_recording(path))
     assert s.comparator is None
     assert 'WARN: inertia: a linearised model needs a symmetric body' in s.comparator_note
@@ -228,7 +230,7 @@ def test_jacobi_from_euler_angles_without_attitude(tmp_path, impact_run):
     path = write_recording(tmp_path / 'eul.mcap', res.t[:n], res.omega[:n], euler=res.euler[:n],
                            scenario=scenario.replace(impacts=()))
     inv = analyze(load_recording(path)).invariant
-    assert inv.attitude_source == '/euler_angles'
+    assert inv.attitude_source == '/' + topics.EULER_ANGLES
     assert len(inv.segments) == 1 and inv.segments[0].rel_drift < 1e-8
     assert inv.segments[0].j0 == pytest.approx(res.jacobi[0], rel=1e-12)
 
@@ -330,7 +332,7 @@ def test_only_angular_velocity(tmp_path):
                            status=False)
     rec = load_recording(path)
     s = analyze(rec)
-    assert rec.topics == {'/angular_velocity': ('geometry_msgs/msg/Vector3Stamped', 50)}
+    assert rec.topics == {'/' + topics.ANGULAR_VELOCITY: ('geometry_msgs/msg/Vector3Stamped', 50)}
     assert s.seconds_per_year_source == 'default' and rec.scenario is None
     assert s.comparator is None and s.invariant is None and s.impacts == ()
     assert s.theory == () and s.aliasing.warning is None

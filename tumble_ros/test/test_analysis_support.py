@@ -15,22 +15,24 @@ from geometry_msgs.msg import QuaternionStamped, Vector3Stamped
 import numpy as np
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
+from tumble_ros import topics
 from tumble_ros.core import dump_scenario, Scenario, TimeBase
 from tumble_ros.io import McapWriter, read_messages
 from tumble_ros_interfaces.msg import ErrorNorm, ImpactEvent, ScenarioDescription, SimStatus
 
+#: The full names (root namespace) a recording holds, with each topic's type and class.
 TYPES = {
-    '/angular_velocity': ('geometry_msgs/msg/Vector3Stamped', Vector3Stamped),
-    '/attitude': ('geometry_msgs/msg/QuaternionStamped', QuaternionStamped),
-    '/euler_angles': ('geometry_msgs/msg/Vector3Stamped', Vector3Stamped),
-    '/clock': ('rosgraph_msgs/msg/Clock', Clock),
-    '/impact_events': ('tumble_ros_interfaces/msg/ImpactEvent', ImpactEvent),
-    '/status': ('tumble_ros_interfaces/msg/SimStatus', SimStatus),
-    '/scenario': ('tumble_ros_interfaces/msg/ScenarioDescription', ScenarioDescription),
-    '/comparison/model_angular_velocity': ('geometry_msgs/msg/Vector3Stamped', Vector3Stamped),
-    '/comparison/error': ('geometry_msgs/msg/Vector3Stamped', Vector3Stamped),
-    '/comparison/error_norm': ('tumble_ros_interfaces/msg/ErrorNorm', ErrorNorm),
-    '/comparison/status': ('diagnostic_msgs/msg/DiagnosticStatus', DiagnosticStatus),
+    '/' + topics.ANGULAR_VELOCITY: ('geometry_msgs/msg/Vector3Stamped', Vector3Stamped),
+    '/' + topics.ATTITUDE: ('geometry_msgs/msg/QuaternionStamped', QuaternionStamped),
+    '/' + topics.EULER_ANGLES: ('geometry_msgs/msg/Vector3Stamped', Vector3Stamped),
+    topics.CLOCK: ('rosgraph_msgs/msg/Clock', Clock),
+    '/' + topics.IMPACT_EVENTS: ('tumble_ros_interfaces/msg/ImpactEvent', ImpactEvent),
+    '/' + topics.STATUS: ('tumble_ros_interfaces/msg/SimStatus', SimStatus),
+    '/' + topics.SCENARIO: ('tumble_ros_interfaces/msg/ScenarioDescription', ScenarioDescription),
+    '/' + topics.MODEL_ANGULAR_VELOCITY: ('geometry_msgs/msg/Vector3Stamped', Vector3Stamped),
+    '/' + topics.ERROR: ('geometry_msgs/msg/Vector3Stamped', Vector3Stamped),
+    '/' + topics.ERROR_NORM: ('tumble_ros_interfaces/msg/ErrorNorm', ErrorNorm),
+    '/' + topics.COMPARISON_STATUS: ('diagnostic_msgs/msg/DiagnosticStatus', DiagnosticStatus),
 }
 
 
@@ -43,7 +45,7 @@ def _stamp(header, ns: int) -> None:
     _time(header.stamp, ns)
 
 
-def _vector3(msg, ns, v, frame='body'):
+def _vector3(msg, ns, v, frame=topics.FRAME_BODY):
     _stamp(msg.header, ns)
     msg.header.frame_id = frame
     msg.vector.x, msg.vector.y, msg.vector.z = (float(c) for c in v)
@@ -85,7 +87,7 @@ def write_recording(path, t, omega, *, quaternion=None, euler=None,
             q = quaternion[0]
             att = desc.attitude
             att.w, att.x, att.y, att.z = (float(c) for c in q)
-        add('/scenario', tb.to_ns(t[0]), desc, -2)
+        add('/' + topics.SCENARIO, tb.to_ns(t[0]), desc, -2)
         for revision, start, w, q in segments or ():
             d = ScenarioDescription()
             _stamp(d.header, tb.to_ns(start))
@@ -95,65 +97,66 @@ def write_recording(path, t, omega, *, quaternion=None, euler=None,
             d.segment_start = float(start)
             d.omega.x, d.omega.y, d.omega.z = (float(c) for c in w)
             d.attitude.w, d.attitude.x, d.attitude.y, d.attitude.z = (float(c) for c in q)
-            add('/scenario', tb.to_ns(start), d, 1)
+            add('/' + topics.SCENARIO, tb.to_ns(start), d, 1)
     if status:
         s = SimStatus()
         _stamp(s.header, tb.to_ns(t[0]))
         s.state, s.t = SimStatus.RUNNING, float(t[0])
-        add('/status', tb.to_ns(t[0]), s, -1)
+        add('/' + topics.STATUS, tb.to_ns(t[0]), s, -1)
     if model is not None:
         st = DiagnosticStatus(level=DiagnosticStatus.OK, name='/comparator', message='anchored')
         st.values = [KeyValue(key='model', value=model_name)]
-        add('/comparison/status', tb.to_ns(t[0]), st, -1)
+        add('/' + topics.COMPARISON_STATUS, tb.to_ns(t[0]), st, -1)
     for k in range(len(t)):
         ns = tb.to_ns(t[k])
         if clock:
             c = Clock()
             _time(c.clock, ns)
-            add('/clock', ns, c)
-        add('/angular_velocity', ns, _vector3(Vector3Stamped(), ns, omega[k]))
+            add(topics.CLOCK, ns, c)
+        add('/' + topics.ANGULAR_VELOCITY, ns, _vector3(Vector3Stamped(), ns, omega[k]))
         if quaternion is not None:
             m = QuaternionStamped()
             _stamp(m.header, ns)
-            m.header.frame_id = 'orbital'
+            m.header.frame_id = topics.FRAME_ORBITAL
             q = quaternion[k]
             m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z = (float(c) for c in q)
-            add('/attitude', ns, m)
+            add('/' + topics.ATTITUDE, ns, m)
         if euler is not None:
-            add('/euler_angles', ns, _vector3(Vector3Stamped(), ns, euler[k], 'orbital'))
+            add('/' + topics.EULER_ANGLES, ns,
+                _vector3(Vector3Stamped(), ns, euler[k], topics.FRAME_ORBITAL))
         if model is not None:
-            add('/comparison/model_angular_velocity', ns, _vector3(Vector3Stamped(), ns, model[k]),
-                1)
+            add('/' + topics.MODEL_ANGULAR_VELOCITY, ns,
+                _vector3(Vector3Stamped(), ns, model[k]), 1)
             err = omega[k] - model[k]
             if error_vectors:
-                add('/comparison/error', ns, _vector3(Vector3Stamped(), ns, err), 1)
+                add('/' + topics.ERROR, ns, _vector3(Vector3Stamped(), ns, err), 1)
             if error_norm:
                 e = ErrorNorm()
                 _stamp(e.header, ns)
-                e.header.frame_id = 'body'
+                e.header.frame_id = topics.FRAME_BODY
                 e.model = model_name
                 e.norm = float(np.linalg.norm(err))
                 mag = float(np.linalg.norm(omega[k]))
                 e.relative = e.norm / mag if mag > 0 else math.inf
-                add('/comparison/error_norm', ns, e, 1)
+                add('/' + topics.ERROR_NORM, ns, e, 1)
     for imp in impacts:
         ev = ImpactEvent()
         ns = tb.to_ns(imp['end'])
         _stamp(ev.header, ns)
-        ev.header.frame_id = 'body'
+        ev.header.frame_id = topics.FRAME_BODY
         ev.id = imp.get('id', 0)
         ev.start, ev.end = float(imp['start']), float(imp['end'])
-        ev.frame = (ImpactEvent.FRAME_ORBITAL if imp.get('frame') == 'orbital'
+        ev.frame = (ImpactEvent.FRAME_ORBITAL if imp.get('frame') == topics.FRAME_ORBITAL
                     else ImpactEvent.FRAME_BODY)
         ev.torque.x, ev.torque.y, ev.torque.z = (float(c) for c in imp['torque'])
         ev.delta_omega.x, ev.delta_omega.y, ev.delta_omega.z = (
             float(c) for c in imp['delta_omega'])
-        add('/impact_events', ns, ev, 2)
+        add('/' + topics.IMPACT_EVENTS, ns, ev, 2)
     if status:
         s = SimStatus()
         _stamp(s.header, tb.to_ns(t[-1]))
         s.state, s.t, s.message = SimStatus.FINISHED, float(t[-1]), 'reached duration'
-        add('/status', tb.to_ns(t[-1]), s, 3)
+        add('/' + topics.STATUS, tb.to_ns(t[-1]), s, 3)
     for topic, type_name, ns, data in extra_topics:
         events.append((ns, 4, (topic, type_name), data))
     events.sort(key=lambda e: (e[0], e[1]))
@@ -178,10 +181,10 @@ def test_write_recording_round_trips_through_the_io_reader(tmp_path):
     path = write_recording(tmp_path / 'r.mcap', t, omega, scenario=Scenario(),
                            seconds_per_year=2.0,
                            model=omega * 0.5)
-    got = list(read_messages(path, '/angular_velocity'))
+    got = list(read_messages(path, '/' + topics.ANGULAR_VELOCITY))
     assert [m.message.header.stamp.sec * 10**9 + m.message.header.stamp.nanosec for m in got] == \
         [int(round(x * 2e9)) for x in t]
     assert np.allclose([[m.message.vector.x, m.message.vector.y, m.message.vector.z] for m in got],
                        omega)
-    norms = [m.message.norm for m in read_messages(path, '/comparison/error_norm')]
+    norms = [m.message.norm for m in read_messages(path, '/' + topics.ERROR_NORM)]
     assert np.allclose(norms, np.linalg.norm(omega * 0.5, axis=1))
