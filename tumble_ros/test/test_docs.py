@@ -30,6 +30,9 @@ def test_every_topic_and_service_has_a_readme_row(ros):
     ros.start(ComparatorNode)
     assert ros.spin_until(lambda: len(ros.probe.get_topic_names_and_types()) >= 12, 10.0), \
         ros.probe.get_topic_names_and_types()
+    # The names as the README spells them, typed out on purpose (not from tumble_ros.topics):
+    # they are the contract checked here. Its row `pause`, `resume`, `step` gives
+    # table_rows only its first name; `/clock` keeps its slash there.
     rows = table_rows(README) | {'pause', 'resume', 'step'}
     topics = {n.lstrip('/') if n != '/clock' else n
               for n, _ in ros.probe.get_topic_names_and_types()}

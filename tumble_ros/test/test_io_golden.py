@@ -58,7 +58,7 @@ def test_reader_output_equals_golden_json(expected):
             assert message.log_time_ns == want['log_time_ns'], (topic, which)
             assert message.publish_time_ns == want['publish_time_ns'], (topic, which)
             assert plain(message.message) == want['message'], (topic, which)
-    # Spot checks in the terms of the brief.
+    # Spot checks in the terms of the brief. Names typed out: the committed file's own content.
     w = by_topic['/angular_velocity']
     assert w[100].message.header.stamp.sec == 0
     assert w[100].message.header.stamp.nanosec == 200_000_000
@@ -83,7 +83,7 @@ def test_channel_metadata_equals_golden_json(expected):
         summary = make_reader(stream).get_summary()
     qos = {c.topic: c.metadata['offered_qos_profiles'] for c in summary.channels.values()}
     assert qos == {t: spec['offered_qos_profiles'] for t, spec in expected['topics'].items()}
-    # The script's literal QoS text is what offered_qos_yaml makes.
+    # The script's literal QoS text is what offered_qos_yaml makes (names: the file's channels).
     assert qos['/scenario'] == offered_qos_yaml({'depth': 1, 'durability': 'transient_local'})
     assert qos['/clock'] == offered_qos_yaml({'depth': 1000})
 

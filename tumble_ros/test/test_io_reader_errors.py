@@ -11,6 +11,7 @@ import tracemalloc
 from mcap.reader import make_reader
 import pytest
 
+from tumble_ros import topics
 from tumble_ros.io import McapError, McapWriter, read_messages, summarize
 
 GOLDEN = Path(__file__).parent / 'data' / 'golden.mcap'
@@ -148,15 +149,16 @@ def test_bad_magic_prefix_and_garbage_after_header(tmp_path):
 
 def test_undecodable_message_names_topic_and_type(tmp_path):
     path = tmp_path / 'bad.mcap'
+    omega_topic = '/' + topics.ANGULAR_VELOCITY
     with McapWriter(path) as writer:
         good = writer.add_channel('/good', 'rosgraph_msgs/msg/Clock')
-        bad = writer.add_channel('/angular_velocity', 'geometry_msgs/msg/Vector3Stamped')
+        bad = writer.add_channel(omega_topic, 'geometry_msgs/msg/Vector3Stamped')
         writer.write(good, b'\x00\x01\x00\x00' + bytes(8), 1)
         writer.write(bad, b'\x00\x01\x00\x00\x05', 2)          # far too short
     messages = read_messages(path)
     assert next(messages).topic == '/good'
     message = one_line_error(lambda: next(messages))
-    assert "'/angular_velocity'" in message and 'geometry_msgs/msg/Vector3Stamped' in message
+    assert f"'{omega_topic}'" in message and 'geometry_msgs/msg/Vector3Stamped' in message
     # Filtering the bad topic out leaves a readable file.
     assert [m.topic for m in read_messages(path, topics='/good')] == ['/good']
 
@@ -165,7 +167,7 @@ def test_corrupt_uncompressed_chunk_fails_its_crc(tmp_path):
     path = tmp_path / 'plain.mcap'
     payload = b'\x00\x01\x00\x00' + bytes(range(8))
     with McapWriter(path, compression='none', chunk_bytes=len(payload) * 3) as writer:
-        channel = writer.add_channel('/clock', 'rosgraph_msgs/msg/Clock')
+        channel = writer.add_channel(topics.CLOCK, 'rosgraph_msgs/msg/Clock')
         for k in range(9):
             writer.write(channel, payload, k)
     data = bytearray(path.read_bytes())

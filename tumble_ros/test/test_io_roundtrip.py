@@ -16,18 +16,21 @@ import pytest
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from service_msgs.msg import ServiceEventInfo
+from tumble_ros import topics
 from tumble_ros.io import McapWriter, offered_qos_yaml, read_messages, summarize
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 
 TYPES = {
-    '/angular_velocity': 'geometry_msgs/msg/Vector3Stamped',
-    '/attitude': 'geometry_msgs/msg/QuaternionStamped',
-    '/clock': 'rosgraph_msgs/msg/Clock',
-    '/impact_events': 'tumble_ros_interfaces/msg/ImpactEvent',
-    '/scenario': 'tumble_ros_interfaces/msg/ScenarioDescription',
-    '/status': 'tumble_ros_interfaces/msg/SimStatus',
+    '/' + topics.ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
+    '/' + topics.ATTITUDE: 'geometry_msgs/msg/QuaternionStamped',
+    topics.CLOCK: 'rosgraph_msgs/msg/Clock',
+    '/' + topics.IMPACT_EVENTS: 'tumble_ros_interfaces/msg/ImpactEvent',
+    '/' + topics.SCENARIO: 'tumble_ros_interfaces/msg/ScenarioDescription',
+    '/' + topics.STATUS: 'tumble_ros_interfaces/msg/SimStatus',
 }
+#: The latched topics (offered transient local).
+LATCHED = ('/' + topics.SCENARIO, '/' + topics.STATUS)
 LATCHED_QOS = offered_qos_yaml({'depth': 1, 'durability': 'transient_local'})
 
 
@@ -59,37 +62,37 @@ def sample_messages():
     scenario.segment_start = 9999.5
     scenario.omega.z = 30.0
     scenario.attitude.w = 1.0
-    out.append(('/scenario', 10, 5, scenario))
+    out.append(('/' + topics.SCENARIO, 10, 5, scenario))
     base = 9_999_000_000_000   # t = 9999 yr: sec = 9999, well inside int32
     for k in range(40):
         ns = base + k * 2_000_000 + 123
         sec, nanosec = stamp_of(ns)
         w = Vector3Stamped()
         w.header.stamp.sec, w.header.stamp.nanosec = sec, nanosec
-        w.header.frame_id = 'body'
+        w.header.frame_id = topics.FRAME_BODY
         t = k * 0.002
         w.vector.x, w.vector.y, w.vector.z = math.cos(94.2 * t), -math.sin(94.2 * t), 30.0 + k
-        out.append(('/angular_velocity', ns + 1000, ns, w))
+        out.append(('/' + topics.ANGULAR_VELOCITY, ns + 1000, ns, w))
         if k % 4 == 0:
             q = QuaternionStamped()
             q.header.stamp.sec, q.header.stamp.nanosec = sec, nanosec
-            q.header.frame_id = 'orbital'
+            q.header.frame_id = topics.FRAME_ORBITAL
             q.quaternion.z, q.quaternion.w = math.sin(0.1 * k), math.cos(0.1 * k)
-            out.append(('/attitude', ns + 1001, ns, q))
+            out.append(('/' + topics.ATTITUDE, ns + 1001, ns, q))
             c = Clock()
             c.clock.sec, c.clock.nanosec = sec, nanosec
-            out.append(('/clock', ns + 1002, ns, c))
+            out.append((topics.CLOCK, ns + 1002, ns, c))
         if k == 17:
             e = ImpactEvent()
             e.header.stamp.sec, e.header.stamp.nanosec = sec, nanosec
-            e.header.frame_id = 'body'
+            e.header.frame_id = topics.FRAME_BODY
             e.id, e.start, e.end, e.frame = 7, 9999.03, 9999.0300003, ImpactEvent.FRAME_ORBITAL
             e.torque.y, e.delta_omega.y = -2.5e5, -0.075
-            out.append(('/impact_events', ns + 1003, ns, e))
+            out.append(('/' + topics.IMPACT_EVENTS, ns + 1003, ns, e))
     status = SimStatus()
     status.state, status.t = SimStatus.DIVERGED, 9999.08
     status.message = 'non-finite state: ω=nan'
-    out.append(('/status', base + 90_000_000, base + 90_000_000, status))
+    out.append(('/' + topics.STATUS, base + 90_000_000, base + 90_000_000, status))
     return out
 
 
@@ -97,7 +100,7 @@ def write_file(path, compression, chunk_bytes, messages):
     with McapWriter(path, compression=compression, chunk_bytes=chunk_bytes,
                     chunk_seconds=math.inf) as writer:
         channels = {topic: writer.add_channel(topic, type_name,
-                                              LATCHED_QOS if topic in ('/scenario', '/status')
+                                              LATCHED_QOS if topic in LATCHED
                                               else '')
                     for topic, type_name in TYPES.items()}
         for topic, log_time, publish_time, message in messages:
@@ -122,8 +125,9 @@ def test_round_trip(tmp_path, compression, chunk_bytes):
     assert all(m.type_name == TYPES[m.topic] for m in ours)
     first = ours[1]
     assert first.message.header.stamp.sec == 9999 and first.message.vector.z == 30.0
-    assert [m.topic for m in read_messages(path, topics=['/clock', '/status'])] == [
-        t for t, *_ in messages if t in ('/clock', '/status')]
+    selected = [topics.CLOCK, '/' + topics.STATUS]
+    assert [m.topic for m in read_messages(path, topics=selected)] == [
+        t for t, *_ in messages if t in selected]
 
     summary = summarize(path)
     assert summary.finalised and not summary.truncated and summary.profile == 'ros2'
@@ -143,7 +147,8 @@ def test_round_trip(tmp_path, compression, chunk_bytes):
     with AnyReader([path]) as reader:
         assert {c.topic: c.msgtype for c in reader.connections} == TYPES
         qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
-        assert qos['/scenario'][0].durability.name == 'TRANSIENT_LOCAL' and qos['/clock'] == []
+        assert (qos['/' + topics.SCENARIO][0].durability.name == 'TRANSIENT_LOCAL'
+                and qos[topics.CLOCK] == [])
         theirs = [(c.topic, t, plain(reader.deserialize(raw, c.msgtype)))
                   for c, t, raw in reader.messages()]
     assert sorted(theirs, key=lambda x: x[1]) == [(t, log, v) for t, log, _, v in expected]
@@ -162,7 +167,7 @@ def test_round_trip(tmp_path, compression, chunk_bytes):
     assert {c.message_encoding for c in channels.values()} == {'cdr'}
     assert all(c.metadata['topic_type_hash'].startswith('RIHS01_') for c in channels.values())
     assert {c.topic: c.metadata['offered_qos_profiles'] for c in channels.values()}[
-        '/status'] == LATCHED_QOS
+        '/' + topics.STATUS] == LATCHED_QOS
 
 
 def test_raw_bytes_are_stored_as_given(tmp_path):
@@ -191,7 +196,7 @@ def test_service_event_round_trip(tmp_path):
     response.accepted, response.message, response.id = True, 'scheduled', 4
     event.request, event.response = [request], [response]
     with McapWriter(path) as writer:
-        channel = writer.add_channel('/apply_impact/_service_event',
+        channel = writer.add_channel(f'/{topics.APPLY_IMPACT}/_service_event',
                                      'tumble_ros_interfaces/srv/ApplyImpact_Event')
         writer.write(channel, serialize_message(event), 5)
     (message,) = list(read_messages(path))
