@@ -7,6 +7,7 @@ from rcl_interfaces.srv import SetParameters
 from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 
+from tumble_ros import topics
 from tumble_ros.core import make_model, Scenario, TimeBase
 from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.qos import DESCRIPTION_QOS, STATE_QOS
@@ -25,10 +26,10 @@ def vec(msgs):
 
 
 def test_an_error_sample_for_every_omega_sample(ros):
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
-    model = ros.collect(Vector3Stamped, 'comparison/model_angular_velocity')
-    error = ros.collect(Vector3Stamped, 'comparison/error')
-    norm = ros.collect(ErrorNorm, 'comparison/error_norm')
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
+    model = ros.collect(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY)
+    error = ros.collect(Vector3Stamped, topics.ERROR)
+    norm = ros.collect(ErrorNorm, topics.ERROR_NORM)
     ros.start(ComparatorNode)
     ros.start(SimNode, **RUN)
     assert ros.spin_until(lambda: len(norm) == 101 and len(error) == 101 and len(model) == 101,
@@ -52,10 +53,10 @@ def test_a_sample_off_the_simulators_grid_is_compared_at_its_own_time(ros):
     The comparator evaluates the model ahead on the simulator's sample grid; any other stamp
     (another publisher, a changed grid) still gets the model at exactly its time.
     """
-    model = ros.collect(Vector3Stamped, 'comparison/model_angular_velocity')
+    model = ros.collect(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY)
     ros.start(ComparatorNode)
     ros.start(SimNode, start_paused=True, **RUN)
-    pub = ros.probe.create_publisher(Vector3Stamped, 'angular_velocity', STATE_QOS)
+    pub = ros.probe.create_publisher(Vector3Stamped, topics.ANGULAR_VELOCITY, STATE_QOS)
     assert ros.spin_until(lambda: pub.get_subscription_count() > 0, 5.0)
     ros.spin_for(0.3)  # the latched scenario description reaches the comparator
     # ns: 0.0123 s, on the grid (0.002 yr), 0.0543 s
@@ -70,8 +71,8 @@ def test_a_sample_off_the_simulators_grid_is_compared_at_its_own_time(ros):
 
 
 def test_decimation_compares_every_kth_sample(ros):
-    norm = ros.collect(ErrorNorm, 'comparison/error_norm')
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    norm = ros.collect(ErrorNorm, topics.ERROR_NORM)
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
     ros.start(ComparatorNode, decimation=3)
     ros.start(SimNode, **RUN)
     assert ros.spin_until(lambda: len(omega) == 101, 20.0)
@@ -80,9 +81,9 @@ def test_decimation_compares_every_kth_sample(ros):
 
 
 def test_a_model_that_does_not_apply_says_so_and_publishes_nothing(ros):
-    status = ros.collect(DiagnosticStatus, 'comparison/status', latched=True)
-    norm = ros.collect(ErrorNorm, 'comparison/error_norm')
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    status = ros.collect(DiagnosticStatus, topics.COMPARISON_STATUS, latched=True)
+    norm = ros.collect(ErrorNorm, topics.ERROR_NORM)
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
     ros.start(ComparatorNode)
     ros.start(SimNode, inertia=[1.0, 1.2, 1.5], **RUN)
     assert ros.spin_until(lambda: len(omega) == 101, 20.0)
@@ -96,12 +97,12 @@ def test_late_join_recovers_from_the_latched_scenario(ros):
     sim = ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002,
                     real_time_factor=0.0)
     for _ in range(5):
-        assert ros.call(Trigger, 'step', Trigger.Request()).success
-    status = ros.collect(DiagnosticStatus, 'comparison/status', latched=True)
-    model = ros.collect(Vector3Stamped, 'comparison/model_angular_velocity')
+        assert ros.call(Trigger, topics.STEP, Trigger.Request()).success
+    status = ros.collect(DiagnosticStatus, topics.COMPARISON_STATUS, latched=True)
+    model = ros.collect(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY)
     ros.start(ComparatorNode, model='fast_spin')
     assert ros.spin_until(lambda: status and status[-1].level == DiagnosticStatus.OK, 10.0)
-    assert ros.call(Trigger, 'resume', Trigger.Request()).success
+    assert ros.call(Trigger, topics.RESUME, Trigger.Request()).success
     assert ros.spin_until(lambda: sim._next_k == 101, 20.0)
     # the 5 samples published before it started come from the topics' transient-local history
     assert ros.spin_until(lambda: len(model) == 101, 10.0), len(model)
@@ -111,8 +112,8 @@ def test_late_join_recovers_from_the_latched_scenario(ros):
 
 
 def test_an_impact_re_anchors_the_model(ros):
-    norm = ros.collect(ErrorNorm, 'comparison/error_norm')
-    status = ros.collect(DiagnosticStatus, 'comparison/status', latched=True)
+    norm = ros.collect(ErrorNorm, topics.ERROR_NORM)
+    status = ros.collect(DiagnosticStatus, topics.COMPARISON_STATUS, latched=True)
     ros.start(ComparatorNode)
     # an axial kick of 0.2 rad/yr at t = 0.1: without re-anchoring the model would be off by 0.2
     ros.start(SimNode, impacts__start=[0.1], impacts__duration=[3e-7],
@@ -140,7 +141,7 @@ def test_invalid_model_is_refused_at_start_up_and_at_run_time(ros):
 
 def test_samples_before_an_impact_keep_the_pre_impact_model(ros):
     """With the simulator far ahead, pre-impact samples are still compared with their anchor."""
-    model = ros.collect(Vector3Stamped, 'comparison/model_angular_velocity')
+    model = ros.collect(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY)
     ros.start(ComparatorNode)
     ros.start(SimNode, impacts__start=[0.1], impacts__duration=[3e-7],
               impacts__torque=[0.0, 0.0, 1e6], **RUN)
@@ -157,12 +158,12 @@ def test_a_comparator_started_after_an_impact_compares_every_segment(ros):
                     impacts__torque=[0.0, 0.0, 1e6],
                     **{k: v for k, v in RUN.items() if k != 'min_consumers'})
     for _ in range(60):  # to t = 0.118 yr, past the impact
-        assert ros.call(Trigger, 'step', Trigger.Request()).success
-    model = ros.collect(Vector3Stamped, 'comparison/model_angular_velocity')
-    norm = ros.collect(ErrorNorm, 'comparison/error_norm')
+        assert ros.call(Trigger, topics.STEP, Trigger.Request()).success
+    model = ros.collect(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY)
+    norm = ros.collect(ErrorNorm, topics.ERROR_NORM)
     ros.start(ComparatorNode)
     ros.spin_for(0.5)
-    assert ros.call(Trigger, 'resume', Trigger.Request()).success
+    assert ros.call(Trigger, topics.RESUME, Trigger.Request()).success
     assert ros.spin_until(lambda: sim.published_samples == 101 and len(model) == 101,
                           20.0), len(model)
     t = np.array([stamp_ns(m) * 1e-9 for m in model])
@@ -180,21 +181,23 @@ def test_held_samples_wait_for_the_whole_description_history(ros):
     held samples are compared only after the post-impact description is in, not with the first
     (pre-impact) anchor. Replayed by the probe in that order to a comparator in /replay.
     """
-    descriptions, omega = [], ros.collect(Vector3Stamped, 'angular_velocity')
-    ros.probe.create_subscription(ScenarioDescription, 'scenario', descriptions.append,
+    descriptions, omega = [], ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
+    ros.probe.create_subscription(ScenarioDescription, topics.SCENARIO, descriptions.append,
                                   DESCRIPTION_QOS)
     ros.start(SimNode, start_paused=True, impacts__start=[0.1], impacts__duration=[3e-7],
               impacts__torque=[0.0, 0.0, 1e6],
               **{k: v for k, v in RUN.items() if k != 'min_consumers'})
     for _ in range(60):  # to t = 0.118 yr, past the impact at 0.1
-        assert ros.call(Trigger, 'step', Trigger.Request()).success
+        assert ros.call(Trigger, topics.STEP, Trigger.Request()).success
     assert ros.spin_until(lambda: len(omega) == 60 and len(descriptions) == 2, 5.0)
 
-    comparator = ros.add(ComparatorNode(context=ros.context, namespace='/replay'))
-    norm = ros.collect(ErrorNorm, '/replay/comparison/error_norm')
-    pub_omega = ros.probe.create_publisher(Vector3Stamped, '/replay/angular_velocity', STATE_QOS)
-    pub_description = ros.probe.create_publisher(ScenarioDescription, '/replay/scenario',
-                                                 DESCRIPTION_QOS)
+    replay = '/replay'
+    comparator = ros.add(ComparatorNode(context=ros.context, namespace=replay))
+    norm = ros.collect(ErrorNorm, topics.in_namespace(replay, topics.ERROR_NORM))
+    pub_omega = ros.probe.create_publisher(
+        Vector3Stamped, topics.in_namespace(replay, topics.ANGULAR_VELOCITY), STATE_QOS)
+    pub_description = ros.probe.create_publisher(
+        ScenarioDescription, topics.in_namespace(replay, topics.SCENARIO), DESCRIPTION_QOS)
     assert ros.spin_until(lambda: pub_omega.get_subscription_count()
                           and pub_description.get_subscription_count(), 5.0)
     for msg in omega:

@@ -8,15 +8,17 @@ import numpy as np
 import pytest
 from std_msgs.msg import String
 
+from tumble_ros import topics
 from tumble_ros.core import load_scenario, simulate, TimeBase
 from tumble_ros.io import McapError, read_messages, summarize
 from tumble_ros.nodes.bringup import run_bringup
 from tumble_ros.nodes.recorder import RecorderNode
 from tumble_ros.nodes.sim import SimNode
 
-PER_SAMPLE = ['/angular_velocity', '/attitude', '/euler_angles', '/clock',
-              '/comparison/model_angular_velocity',
-              '/comparison/error', '/comparison/error_norm']
+PER_SAMPLE = [topics.in_namespace('/', name) for name in (
+    topics.ANGULAR_VELOCITY, topics.ATTITUDE, topics.EULER_ANGLES, topics.CLOCK,
+    topics.MODEL_ANGULAR_VELOCITY, topics.ERROR, topics.ERROR_NORM)]
+OMEGA_TOPIC = '/' + topics.ANGULAR_VELOCITY
 
 
 def write_params(tmp_path, extra=''):
@@ -44,11 +46,12 @@ def test_bringup_round_trip_counts_and_values(tmp_path, executor):
     assert summary.finalised and not summary.truncated and summary.profile == 'ros2'
     assert {t: s.message_count for t, s in summary.topics.items()} == result.counts
 
-    omega = [m.message for m in read_messages(result.output, topics=['/angular_velocity'])]
+    omega = [m.message for m in read_messages(result.output, topics=[OMEGA_TOPIC])]
     t = np.array([TimeBase().to_years(stamp_ns(m)) for m in omega])
     ref = simulate(load_scenario(params), t_eval=t)
     np.testing.assert_array_equal([[m.vector.x, m.vector.y, m.vector.z] for m in omega], ref.omega)
-    (event,) = [m.message for m in read_messages(result.output, topics=['/impact_events'])]
+    (event,) = [m.message
+                for m in read_messages(result.output, topics=['/' + topics.IMPACT_EVENTS])]
     assert event.delta_omega.y == pytest.approx(0.3, rel=1e-4)
 
     from rosbags.highlevel import AnyReader
@@ -62,7 +65,7 @@ def test_bringup_round_trip_counts_and_values(tmp_path, executor):
 
     # publish time: the publisher's source timestamp ('single'), the receive time ('events'
     # cannot pass MessageInfo); never after the receive time
-    records = list(read_messages(result.output, topics=['/angular_velocity']))
+    records = list(read_messages(result.output, topics=[OMEGA_TOPIC]))
     gaps = np.array([m.log_time_ns - m.publish_time_ns for m in records])
     assert np.all(gaps >= 0)
     assert np.all(gaps == 0) if executor == 'events' else np.any(gaps > 0)
@@ -80,18 +83,18 @@ def test_latched_and_late_topics_are_recorded(ros, tmp_path):
                     real_time_factor=0.0)
     ros.spin_for(0.2)
     recorder = ros.start(RecorderNode, output=str(tmp_path / 'late.mcap'),
-                         topics=['scenario', 'status'],
+                         topics=[topics.SCENARIO, topics.STATUS],
                          topic_pattern='^/late', discovery_period=0.05)
     late = ros.probe.create_publisher(String, '/late/news', 10)
     assert ros.spin_until(lambda: recorder.counts.get('/late/news') is not None, 5.0)
     late.publish(String(data='hello'))
     assert ros.spin_until(lambda: recorder.counts.get('/late/news') == 1, 5.0)
-    assert ros.spin_until(lambda: recorder.counts.get('/scenario') == 1
-                          and recorder.counts.get('/status') == 1, 5.0)
-    assert '/angular_velocity' not in recorder.counts  # not asked for
+    assert ros.spin_until(lambda: recorder.counts.get('/' + topics.SCENARIO) == 1
+                          and recorder.counts.get('/' + topics.STATUS) == 1, 5.0)
+    assert OMEGA_TOPIC not in recorder.counts  # not asked for
     recorder.close()
     got = {m.topic: m.message for m in read_messages(tmp_path / 'late.mcap')}
-    assert got['/late/news'].data == 'hello' and got['/scenario'].revision == 0
+    assert got['/late/news'].data == 'hello' and got['/' + topics.SCENARIO].revision == 0
     assert sim.state == 1  # still paused: the latched messages came from before the recorder
 
 
@@ -128,7 +131,7 @@ def test_sigterm_finalises_the_file(ros, tmp_path):
     assert proc.returncode == 0, out
     summary = summarize(path)
     assert summary.finalised
-    assert summary.topics['/angular_velocity'].message_count == 500
+    assert summary.topics[OMEGA_TOPIC].message_count == 500
 
 
 def test_sigkill_loses_at_most_the_last_chunk(ros, tmp_path):
@@ -143,7 +146,7 @@ def test_sigkill_loses_at_most_the_last_chunk(ros, tmp_path):
 
     def on_disk():
         try:
-            return len(list(read_messages(path, topics=['/angular_velocity'])))
+            return len(list(read_messages(path, topics=[OMEGA_TOPIC])))
         except McapError:  # nothing flushed yet
             return 0
 
@@ -157,5 +160,5 @@ def test_sigkill_loses_at_most_the_last_chunk(ros, tmp_path):
             proc.kill()
     summary = summarize(path)
     assert not summary.finalised
-    stamps = [stamp_ns(m.message) for m in read_messages(path, topics=['/angular_velocity'])]
+    stamps = [stamp_ns(m.message) for m in read_messages(path, topics=[OMEGA_TOPIC])]
     assert stamps == [k * 1_000_000 for k in range(sim.published_samples)]

@@ -11,6 +11,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 
+from tumble_ros import topics
 from tumble_ros.core import Impact, Scenario, ScenarioError, simulate, TimeBase
 from tumble_ros.nodes.qos import STATE_QOS
 from tumble_ros.nodes.sim import SimNode
@@ -35,13 +36,13 @@ def times(msgs, spy=1.0):
 def test_topics_have_their_documented_types(ros):
     ros.start(SimNode, **SHORT)
     expected = {
-        '/angular_velocity': 'geometry_msgs/msg/Vector3Stamped',
-        '/attitude': 'geometry_msgs/msg/QuaternionStamped',
-        '/euler_angles': 'geometry_msgs/msg/Vector3Stamped',
-        '/clock': 'rosgraph_msgs/msg/Clock',
-        '/impact_events': 'tumble_ros_interfaces/msg/ImpactEvent',
-        '/status': 'tumble_ros_interfaces/msg/SimStatus',
-        '/scenario': 'tumble_ros_interfaces/msg/ScenarioDescription',
+        '/' + topics.ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
+        '/' + topics.ATTITUDE: 'geometry_msgs/msg/QuaternionStamped',
+        '/' + topics.EULER_ANGLES: 'geometry_msgs/msg/Vector3Stamped',
+        topics.CLOCK: 'rosgraph_msgs/msg/Clock',
+        '/' + topics.IMPACT_EVENTS: 'tumble_ros_interfaces/msg/ImpactEvent',
+        '/' + topics.STATUS: 'tumble_ros_interfaces/msg/SimStatus',
+        '/' + topics.SCENARIO: 'tumble_ros_interfaces/msg/ScenarioDescription',
     }
 
     def listed():
@@ -49,18 +50,18 @@ def test_topics_have_their_documented_types(ros):
 
     assert ros.spin_until(lambda: expected.items() <= listed().items(), 10.0), listed()
     services = dict(ros.probe.get_service_names_and_types())
-    assert services['/apply_impact'] == ['tumble_ros_interfaces/srv/ApplyImpact']
-    for name in ('/pause', '/resume', '/step'):
-        assert services[name] == ['std_srvs/srv/Trigger']
+    assert services['/' + topics.APPLY_IMPACT] == ['tumble_ros_interfaces/srv/ApplyImpact']
+    for name in (topics.PAUSE, topics.RESUME, topics.STEP):
+        assert services['/' + name] == ['std_srvs/srv/Trigger']
     # service introspection: calls can be recorded
-    assert ros.spin_until(lambda: '/apply_impact/_service_event' in listed(), 5.0)
+    assert ros.spin_until(lambda: f'/{topics.APPLY_IMPACT}/_service_event' in listed(), 5.0)
 
 
 def test_published_state_equals_simulate_at_the_stamped_times(ros):
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
-    attitude = ros.collect(QuaternionStamped, 'attitude')
-    clock = ros.collect(Clock, '/clock', qos=CLOCK_READER_QOS)
-    status = ros.collect(SimStatus, 'status', latched=True)
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
+    attitude = ros.collect(QuaternionStamped, topics.ATTITUDE)
+    clock = ros.collect(Clock, topics.CLOCK, qos=CLOCK_READER_QOS)
+    status = ros.collect(SimStatus, topics.STATUS, latched=True)
     ros.start(SimNode, seconds_per_year=3.0, **SHORT)
     assert ros.spin_until(lambda: status and status[-1].state == SimStatus.FINISHED, 20.0)
     ros.spin_until(lambda: len(omega) == 101 and len(attitude) == 101 and len(clock) == 101, 5.0)
@@ -86,14 +87,14 @@ def impact_request(**fields):
 
 
 def test_accepted_impact_changes_omega_by_its_impulse(ros):
-    events = ros.collect(ImpactEvent, 'impact_events')
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
-    scenario_msgs = ros.collect(ScenarioDescription, 'scenario', latched=True)
+    events = ros.collect(ImpactEvent, topics.IMPACT_EVENTS)
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
+    scenario_msgs = ros.collect(ScenarioDescription, topics.SCENARIO, latched=True)
     ros.start(SimNode, start_paused=True, **SHORT)
-    reply = ros.call(ApplyImpact, 'apply_impact', impact_request())
+    reply = ros.call(ApplyImpact, topics.APPLY_IMPACT, impact_request())
     assert reply.accepted, reply.message
     assert (reply.scheduled_start, reply.scheduled_end, reply.id) == (0.1, 0.1 + 3e-7, 1)
-    ros.call(Trigger, 'resume', Trigger.Request())
+    ros.call(Trigger, topics.RESUME, Trigger.Request())
     assert ros.spin_until(lambda: events and len(omega) == 101, 20.0)
     (event,) = events
     dwz = 1.0e6 * 3e-7 / 1.5  # Mz dt / Iz (exact for Ix = Iy)
@@ -127,17 +128,17 @@ BAD_REQUESTS = [
 
 
 def test_bad_impact_requests_are_rejected_with_a_reason_and_the_node_goes_on(ros):
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
     ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002,
               real_time_factor=0.1)
     for fields, reason in BAD_REQUESTS:
-        reply = ros.call(ApplyImpact, 'apply_impact', impact_request(**fields))
+        reply = ros.call(ApplyImpact, topics.APPLY_IMPACT, impact_request(**fields))
         assert not reply.accepted, fields
         assert reason in reply.message, (fields, reply.message)
         assert reply.id == 0
-    ros.call(Trigger, 'resume', Trigger.Request())
+    ros.call(Trigger, topics.RESUME, Trigger.Request())
     assert ros.spin_until(lambda: len(omega) >= 20, 10.0)  # still publishing after all that
-    reply = ros.call(ApplyImpact, 'apply_impact', impact_request(start=0.01))
+    reply = ros.call(ApplyImpact, topics.APPLY_IMPACT, impact_request(start=0.01))
     assert not reply.accepted and 'past' in reply.message, reply.message
     assert ros.spin_until(lambda: len(omega) == 101, 10.0)
 
@@ -169,41 +170,42 @@ def test_invalid_parameters_are_refused_at_run_time(ros):
     result = set_param('max_impact_duration', 0.5)
     assert result.successful
     assert node.get_parameter('max_impact_duration').value == 0.5
-    reply = ros.call(ApplyImpact, 'apply_impact',
+    reply = ros.call(ApplyImpact, topics.APPLY_IMPACT,
                      impact_request(duration=0.01, torque=Vector3(x=0.0, y=0.0, z=1e3)))
     assert reply.accepted, reply.message  # the new cap is in force
 
 
 def test_pause_step_resume(ros):
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
     sim = ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002,
                     real_time_factor=0.1)
     assert ros.spin_ticks(sim._timer, 50)
     assert omega == [] and sim.published_samples == 0  # paused from the start
-    reply = ros.call(Trigger, 'step', Trigger.Request())
+    reply = ros.call(Trigger, topics.STEP, Trigger.Request())
     assert reply.success, reply.message
     assert ros.spin_until(lambda: len(omega) == 1, 5.0)
     assert ros.spin_ticks(sim._timer, 50)
     assert len(omega) == 1 and sim.published_samples == 1  # one sample, no more
-    assert ros.call(Trigger, 'resume', Trigger.Request()).success
+    assert ros.call(Trigger, topics.RESUME, Trigger.Request()).success
     assert ros.spin_until(lambda: len(omega) >= 5, 5.0)
-    assert ros.call(Trigger, 'pause', Trigger.Request()).success
+    assert ros.call(Trigger, topics.PAUSE, Trigger.Request()).success
     n = sim.published_samples
     assert ros.spin_until(lambda: len(omega) == n, 5.0)  # what was published before the pause
     assert ros.spin_ticks(sim._timer, 50)
     assert len(omega) == sim.published_samples == n < 101  # paused: nothing more
-    assert not ros.call(Trigger, 'pause', Trigger.Request()).success  # already paused: says so
-    assert ros.call(Trigger, 'step', Trigger.Request()).success
+    # already paused: says so
+    assert not ros.call(Trigger, topics.PAUSE, Trigger.Request()).success
+    assert ros.call(Trigger, topics.STEP, Trigger.Request()).success
     assert ros.spin_until(lambda: len(omega) == n + 1, 5.0)
-    assert ros.call(Trigger, 'resume', Trigger.Request()).success
+    assert ros.call(Trigger, topics.RESUME, Trigger.Request()).success
     assert ros.spin_until(lambda: len(omega) == 101, 10.0)
-    assert not ros.call(Trigger, 'step', Trigger.Request()).success  # finished: says so
+    assert not ros.call(Trigger, topics.STEP, Trigger.Request()).success  # finished: says so
 
 
 def test_real_time_factor_paces_the_run(ros):
     """0.2 yr at 0.2 yr/s take at least a second; a slow machine only makes it longer."""
     arrivals = []
-    ros.probe.create_subscription(Vector3Stamped, 'angular_velocity',
+    ros.probe.create_subscription(Vector3Stamped, topics.ANGULAR_VELOCITY,
                                   lambda msg: arrivals.append(time.monotonic()), STATE_QOS)
     ros.start(SimNode, duration=0.2, output_interval=0.002, real_time_factor=0.2)
     assert ros.spin_until(lambda: len(arrivals) == 101, 20.0), len(arrivals)
@@ -211,8 +213,8 @@ def test_real_time_factor_paces_the_run(ros):
 
 
 def test_divergence_stops_publishing_and_reports(ros):
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
-    status = ros.collect(SimStatus, 'status', latched=True)
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
+    status = ros.collect(SimStatus, topics.STATUS, latched=True)
     # A valid scenario whose state overflows: a 1e300 torque pulse (torques need only be finite).
     ros.start(SimNode, inertia=[1.0, 1.6, 2.2], impacts__start=[0.0], impacts__duration=[0.5],
               impacts__torque=[1e300, 1e300, 1e300], integrator__method='rk4',
@@ -226,7 +228,7 @@ def test_divergence_stops_publishing_and_reports(ros):
 
 def test_ten_thousand_year_run_keeps_exact_times(ros):
     """A cheap free spinner over 10,000 yr: stamps stay valid int32 and t is recovered exactly."""
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
     ros.start(SimNode, orbit_rate=0.0, omega0=[0.0, 0.001, 0.01], duration=10_000.0,
               output_interval=100.0,
               real_time_factor=0.0, integrator__rtol=1e-8)
@@ -251,7 +253,7 @@ def test_as_fast_as_the_consumers_take_it_loses_nothing(ros):
         time.sleep(2e-4)
         reporter.mark(TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec))
 
-    ros.probe.create_subscription(Vector3Stamped, 'angular_velocity', slow, STATE_QOS)
+    ros.probe.create_subscription(Vector3Stamped, topics.ANGULAR_VELOCITY, slow, STATE_QOS)
     ros.start(SimNode, duration=0.5, output_interval=1e-4, real_time_factor=0.0, min_consumers=1)
     assert ros.spin_until(lambda: len(got) == 5001, 60.0), len(got)
     ns = [TimeBase.stamp_ns(m.header.stamp.sec, m.header.stamp.nanosec) for m in got]
@@ -262,7 +264,7 @@ def test_min_consumers_holds_publication_until_they_report(ros):
     from tumble_ros.nodes.progress import ProgressReporter
     from tumble_ros.nodes.sim import WINDOW
 
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
     sim = ros.start(SimNode, real_time_factor=0.0, min_consumers=1,
                     **{k: v for k, v in SHORT.items() if k != 'real_time_factor'})
     assert ros.spin_ticks(sim._timer, 50)

@@ -7,6 +7,7 @@ import subprocess
 from geometry_msgs.msg import Vector3Stamped
 import pytest
 
+from tumble_ros import topics
 from tumble_ros_interfaces.msg import SimStatus
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
@@ -39,13 +40,13 @@ def process():
 
 
 def test_sim_process_publishes_and_exits_cleanly_on_sigint(ros, process):
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
-    status = ros.collect(SimStatus, 'status', latched=True)
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
+    status = ros.collect(SimStatus, topics.STATUS, latched=True)
     sim = process('--ros-args', '--params-file', str(CONFIG / 'fig4.yaml'), '-p',
                   'real_time_factor:=0.05')
     assert ros.spin_until(lambda: len(omega) >= 20, 30.0), sim.poll()
     assert status and status[0].state == SimStatus.RUNNING
-    assert omega[0].header.frame_id == 'body'
+    assert omega[0].header.frame_id == topics.FRAME_BODY
     sim.send_signal(signal.SIGINT)
     out, _ = sim.communicate(timeout=20)
     assert sim.returncode == 0, out
@@ -72,7 +73,7 @@ def test_sim_process_paces_on_a_consumer_in_another_process(ros, process):
         got.append(TimeBase.stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec))
         reporter.mark(got[-1])
 
-    ros.probe.create_subscription(Vector3Stamped, 'angular_velocity', on_omega, STATE_QOS)
+    ros.probe.create_subscription(Vector3Stamped, topics.ANGULAR_VELOCITY, on_omega, STATE_QOS)
     sim = process('--ros-args', '-p', 'duration:=0.5', '-p', 'output_interval:=0.0001',
                   '-p', 'real_time_factor:=0.0', '-p', 'min_consumers:=1')
     assert ros.spin_until(lambda: len(got) == 5001, 60.0), (len(got), sim.poll())

@@ -8,6 +8,7 @@ import rclpy
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_srvs.srv import Trigger
+from tumble_ros import topics
 from tumble_ros.core import TimeBase
 from tumble_ros.io import read_messages, summarize
 from tumble_ros.nodes.bringup import main as bringup_main, run_bringup
@@ -45,12 +46,13 @@ def test_a_flood_of_impact_requests_from_four_clients_gets_every_answer(ros, spa
     2,000 requests fired without waiting by 4 clients: 2,000 answers, the node still up, every
     accepted impact in impact_events, the refused ones with a reason.
     """
-    events = ros.collect(ImpactEvent, 'impact_events', qos=KEEP_ALL)
+    events = ros.collect(ImpactEvent, topics.IMPACT_EVENTS, qos=KEEP_ALL)
     sim = spawn('sim', '--ros-args', '-p', 'duration:=40.0', '-p', 'real_time_factor:=1.0')
     clients = []
     for k in range(4):
         node = ros.add(rclpy.create_node(f'client{k}', context=ros.context))
-        clients.append(node.create_client(ApplyImpact, 'apply_impact', qos_profile=SERVICE_QOS))
+        clients.append(node.create_client(ApplyImpact, topics.APPLY_IMPACT,
+                                          qos_profile=SERVICE_QOS))
     assert all(c.wait_for_service(timeout_sec=60.0) for c in clients), sim.output
     futures = [c.call_async(kick()) for _ in range(500) for c in clients]
     assert ros.spin_until(lambda: all(f.done() for f in futures), 120.0), \
@@ -74,14 +76,14 @@ def test_one_description_per_segment_of_constant_size(ros):
 
     /scenario grew quadratically with impacts (each description repeated every impact so far).
     """
-    descriptions = ros.collect(ScenarioDescription, 'scenario', qos=KEEP_ALL)
+    descriptions = ros.collect(ScenarioDescription, topics.SCENARIO, qos=KEEP_ALL)
     ros.start(SimNode, start_paused=True, duration=1.0, output_interval=0.002,
               real_time_factor=0.0)
     for k in range(20):
-        assert ros.call(ApplyImpact, 'apply_impact',
+        assert ros.call(ApplyImpact, topics.APPLY_IMPACT,
                         kick(start_now=False, start=0.01 * (k + 1))).accepted
     for _ in range(120):
-        assert ros.call(Trigger, 'step', Trigger.Request()).success
+        assert ros.call(Trigger, topics.STEP, Trigger.Request()).success
     assert ros.spin_until(lambda: len(descriptions) == 21, 10.0), len(descriptions)
     # the scenario as started, each time
     assert len({d.parameters_yaml for d in descriptions}) == 1
@@ -90,15 +92,16 @@ def test_one_description_per_segment_of_constant_size(ros):
 
 # -- second sources and namespaces ------------------------------------------------------------
 def test_a_second_simulator_on_the_same_topics_is_reported(ros):
-    status = ros.collect(SimStatus, 'status', qos=KEEP_ALL)
-    comparator_status = ros.collect(DiagnosticStatus, 'comparison/status', qos=KEEP_ALL)
+    status = ros.collect(SimStatus, topics.STATUS, qos=KEEP_ALL)
+    comparator_status = ros.collect(DiagnosticStatus, topics.COMPARISON_STATUS, qos=KEEP_ALL)
     ros.start(ComparatorNode)
     first = ros.start(SimNode, start_paused=True, **SHORT)
     ros.add(SimNode(context=ros.context,
                     parameter_overrides=[Parameter('start_paused', value=True)]))
     assert ros.spin_until(lambda: 'second source' in first.status_message, 10.0), \
         first.status_message
-    assert '/angular_velocity' in first.status_message and '/clock' in first.status_message
+    assert (('/' + topics.ANGULAR_VELOCITY) in first.status_message
+            and topics.CLOCK in first.status_message)
     assert ros.spin_until(lambda: any(s.message.startswith('second source') for s in status), 5.0)
     assert ros.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR
                                       and 'second source' in s.message
@@ -121,15 +124,16 @@ def test_two_asteroids_in_two_namespaces_record_apart(ros, tmp_path):
     expected = {'ast1': 101, 'ast2': 51}
     assert ros.spin_until(lambda: all(n[0].state == SimStatus.FINISHED for n in nodes.values()),
                           60.0)
-    assert ros.spin_until(lambda: all(n[2].counts.get(f'/{ns}/comparison/error', 0) == expected[ns]
-                                      for ns, n in nodes.items()), 20.0)
+    assert ros.spin_until(lambda: all(
+        n[2].counts.get(topics.in_namespace(ns, topics.ERROR), 0) == expected[ns]
+        for ns, n in nodes.items()), 20.0)
     for ns, (sim, _, recorder) in nodes.items():
         assert 'second source' not in sim.status_message
         recorder.close()
-        topics = set(summarize(recorder.path).topics)
-        assert topics and all(t.startswith(f'/{ns}/') for t in topics), topics
-        omega = [stamp_ns(m.message)
-                 for m in read_messages(recorder.path, topics=[f'/{ns}/angular_velocity'])]
+        recorded = set(summarize(recorder.path).topics)
+        assert recorded and all(t.startswith(f'/{ns}/') for t in recorded), recorded
+        omega_topic = topics.in_namespace(ns, topics.ANGULAR_VELOCITY)
+        omega = [stamp_ns(m.message) for m in read_messages(recorder.path, topics=[omega_topic])]
         assert omega == [k * 2_000_000 for k in range(expected[ns])]
 
 
@@ -141,9 +145,10 @@ def test_consumers_with_use_sim_time_work_on_clock(ros, tmp_path):
     recorder = ros.start(RecorderNode, use_sim_time=True, output=str(tmp_path / 'sim_time.mcap'))
     assert ros.spin_until(lambda: sim.state == SimStatus.FINISHED, 60.0), sim.published_samples
     assert ros.spin_until(lambda: comparator.consumed == 101
-                          and recorder.counts.get('/comparison/error', 0) == 101, 20.0)
+                          and recorder.counts.get('/' + topics.ERROR, 0) == 101, 20.0)
     recorder.close()
-    log_times = [m.log_time_ns for m in read_messages(recorder.path, topics=['/angular_velocity'])]
+    log_times = [m.log_time_ns
+                 for m in read_messages(recorder.path, topics=['/' + topics.ANGULAR_VELOCITY])]
     # ROS time from /clock, not wall time
     assert len(log_times) == 101 and max(log_times) <= 200_000_000
 
@@ -159,7 +164,7 @@ def dump_parameters(ros, node_name='/sim'):
 
 
 def test_every_parameter_has_a_value_and_a_dump_reproduces_the_run(ros, spawn, tmp_path):
-    descriptions = ros.collect(ScenarioDescription, 'scenario', qos=KEEP_ALL)
+    descriptions = ros.collect(ScenarioDescription, topics.SCENARIO, qos=KEEP_ALL)
     sim = ros.start(SimNode, start_paused=True, duration=0.3, omega0=[0.1, 0.9, 25.0])
     dumped = dump_parameters(ros)
     assert 'impacts.start' in dumped and 'duration' in dumped
@@ -224,10 +229,10 @@ def test_bringup_ros_args_override_the_scenario_file(tmp_path):
 
 
 def test_status_carries_simulated_time_and_follows_step(ros):
-    status = ros.collect(SimStatus, 'status', qos=KEEP_ALL)
+    status = ros.collect(SimStatus, topics.STATUS, qos=KEEP_ALL)
     ros.start(SimNode, start_paused=True, **SHORT)
     for _ in range(3):
-        assert ros.call(Trigger, 'step', Trigger.Request()).success
+        assert ros.call(Trigger, topics.STEP, Trigger.Request()).success
     assert ros.spin_until(lambda: len(status) >= 4, 5.0)
     assert [round(s.t, 9) for s in status[-3:]] == [0.0, 0.002, 0.004]
     # simulated time, not wall

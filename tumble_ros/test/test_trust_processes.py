@@ -13,6 +13,7 @@ from builtin_interfaces.msg import Time
 import pytest
 from rosgraph_msgs.msg import Clock
 
+from tumble_ros import topics
 from tumble_ros.core import TimeBase
 from tumble_ros.io import read_messages, summarize
 from tumble_ros_interfaces.msg import SimStatus
@@ -22,7 +23,7 @@ CONFIG = Path(__file__).resolve().parents[1] / 'config'
 SLOW = 120.0
 
 
-def stamps(path, topic='/angular_velocity'):
+def stamps(path, topic='/' + topics.ANGULAR_VELOCITY):
     return [TimeBase.stamp_ns(m.message.header.stamp.sec, m.message.header.stamp.nanosec)
             for m in read_messages(path, topics=[topic])]
 
@@ -37,7 +38,7 @@ def test_two_bringups_at_once_each_record_only_their_own_samples(ros, spawn, tmp
     runs = {name: spawn('bringup', CONFIG / f'{name}.yaml', '--output', tmp_path / f'{name}.mcap',
                         '--quiet')
             for name in ('fig5', 'fig10')}
-    foreign = ros.probe.create_publisher(Clock, '/clock', 10)
+    foreign = ros.probe.create_publisher(Clock, topics.CLOCK, 10)
     deadline = time.monotonic() + SLOW
     while any(p.popen.poll() is None for p in runs.values()) and time.monotonic() < deadline:
         foreign.publish(Clock(clock=Time(sec=999_999)))
@@ -47,11 +48,12 @@ def test_two_bringups_at_once_each_record_only_their_own_samples(ros, spawn, tmp
         path = tmp_path / f'{name}.mcap'
         # 1001 samples, each once
         assert stamps(path) == [k * 2_000_000 for k in range(1001)], name
-        clock = [m.message.clock.sec for m in read_messages(path, topics=['/clock'])]
+        clock = [m.message.clock.sec for m in read_messages(path, topics=[topics.CLOCK])]
         assert clock and max(clock) <= 2, name  # its own /clock only, none of the foreign one
-    events = [m.message for m in read_messages(tmp_path / 'fig10.mcap', topics=['/impact_events'])]
+    events_topic = '/' + topics.IMPACT_EVENTS
+    events = [m.message for m in read_messages(tmp_path / 'fig10.mcap', topics=[events_topic])]
     assert len(events) == 1
-    assert list(read_messages(tmp_path / 'fig5.mcap', topics=['/impact_events'])) == []
+    assert list(read_messages(tmp_path / 'fig5.mcap', topics=[events_topic])) == []
 
 
 @pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
@@ -65,10 +67,11 @@ def test_a_signal_stops_bringup_with_a_finalised_file_and_a_summary(spawn, tmp_p
     assert 'Traceback' not in run.output
     summary = summarize(output)
     assert summary.finalised
-    n = summary.topics['/angular_velocity'].message_count
+    omega_topic = '/' + topics.ANGULAR_VELOCITY
+    n = summary.topics[omega_topic].message_count
     assert 0 < n < 200_001  # stopped early, what was received is in
     # the summary's count
-    assert f"/angular_velocity {n:>{40 - len('/angular_velocity') + 8}d}" in run.output
+    assert f'{omega_topic} {n:>{40 - len(omega_topic) + 8}d}' in run.output
 
 
 def test_a_second_signal_during_shutdown_is_absorbed(spawn, tmp_path):
@@ -82,7 +85,7 @@ def test_a_second_signal_during_shutdown_is_absorbed(spawn, tmp_path):
     sim = spawn('sim', '--ros-args', '-p', 'duration:=100.0', '-p', 'real_time_factor:=1.0')
     recorder = spawn('recorder', '--ros-args', '-p', f'output:={output}')
     comparator = spawn('comparator')
-    assert recorder.wait_for('recording /angular_velocity', SLOW), recorder.output
+    assert recorder.wait_for(f'recording /{topics.ANGULAR_VELOCITY}', SLOW), recorder.output
     assert comparator.wait_for('anchored', SLOW), comparator.output
     for process in (sim, recorder, comparator):
         process.signal(signal.SIGINT)
@@ -109,7 +112,7 @@ def test_a_consumer_stopped_cleanly_says_goodbye(ros, spawn):
 
 
 def test_a_killed_consumer_is_dropped_even_with_min_consumers(ros, spawn):
-    status = ros.collect(SimStatus, 'status', latched=True)
+    status = ros.collect(SimStatus, topics.STATUS, latched=True)
     sim = spawn('sim', '--ros-args', '-p', 'duration:=8.0', '-p', 'real_time_factor:=2.0', '-p',
                 'min_consumers:=1')
     comparator = spawn('comparator')
@@ -149,7 +152,7 @@ def test_sim_with_use_sim_time_still_runs(ros, spawn):
     """The simulator is the clock source: use_sim_time must not freeze it."""
     from geometry_msgs.msg import Vector3Stamped
 
-    omega = ros.collect(Vector3Stamped, 'angular_velocity')
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
     spawn('sim', '--ros-args', '-p', 'use_sim_time:=true', '-p', 'duration:=0.2', '-p',
           'real_time_factor:=0.0')
     assert ros.spin_until(lambda: len(omega) == 101, SLOW), len(omega)
