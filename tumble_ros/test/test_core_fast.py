@@ -1,5 +1,5 @@
 """
-The fast path (compiled loops, core/kernels.py) against the reference step-by-step path.
+The fast path (compiled loops, core/kernels/) against the reference step-by-step path.
 
 Same method and step, same trajectory to <= 1e-12; the same Propagator API and failures;
 the kernels' own source run as plain Python (numba disabled) gives the same numbers.
@@ -202,3 +202,32 @@ def test_kernels_run_as_plain_python_give_the_same_results():
         np.testing.assert_allclose(y_p, y_j, rtol=0, atol=1e-12 * 30)
         np.testing.assert_allclose(e_p, e_j, rtol=0, atol=1e-12)
     np.testing.assert_allclose(plain['simulate'], jit['simulate'], rtol=0, atol=1e-12 * 30)
+
+
+@needs_numba
+def test_an_edit_to_any_kernel_file_invalidates_the_cache(tmp_path, monkeypatch):
+    """
+    The kernels inline each other across files: one cache stamp covers all of them.
+
+    numba alone checks a function's own file only (an edit to rk4.py would leave stepping.py's
+    cached machine code, which inlined the old rk4, in use).
+    """
+    from tumble_ros.core import jit
+    from tumble_ros.core.kernels import rk4, stepping
+
+    for function in (stepping.advance, rk4.start):
+        locator = function._cache._impl._locator  # numba's cache internals (checked here)
+        assert isinstance(locator, jit._CompiledSourcesLocator)
+        assert locator.get_source_stamp() == jit.compiled_sources_hash()
+    names = {p.name for p in jit.COMPILED_SOURCES}
+    assert {'jit.py', 'stepping.py', 'rk4.py', 'physics.py', 'gravity_gradient.py'} <= names
+    copies = []
+    for k, path in enumerate(jit.COMPILED_SOURCES):
+        copy = tmp_path / f'{k}_{path.name}'
+        copy.write_bytes(path.read_bytes())
+        copies.append(copy)
+    monkeypatch.setattr(jit, 'COMPILED_SOURCES', tuple(copies))
+    before = jit.compiled_sources_hash()
+    rk4_copy = next(c for c in copies if c.name.endswith('_rk4.py'))
+    rk4_copy.write_text(rk4_copy.read_text() + '\n# an edit\n')
+    assert jit.compiled_sources_hash() != before

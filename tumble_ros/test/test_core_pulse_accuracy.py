@@ -207,7 +207,7 @@ def test_a_pulse_late_in_a_run_is_integrated_as_at_t_1(method):
 @pytest.mark.parametrize('fast', [False, True])
 def test_splitting_jump_error_falls_with_the_step_at_order_2(fast):
     """
-    Halving the step divides the jump error by ~4 (kernels.split_step_count).
+    Halving the step divides the jump error by ~4 (kernels.splitting.pulse_step_count).
 
     Before, a pulse shorter than the step always got one Strang step: the jump error was
     5.06e-13 rad/yr (= (c pi_z)^2 dt^3 |M/I| / 12) whatever the step. Both paths take the same

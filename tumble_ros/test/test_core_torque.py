@@ -4,7 +4,7 @@ import pytest
 
 from tumble_ros.core.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.rotation import euler_to_matrix, quaternion_to_matrix
-from tumble_ros.core.torque import gravity_gradient_torque, sun_direction_orbital
+from tumble_ros.core.torques import gravity_gradient_torque, sun_direction_orbital
 
 RNG = np.random.default_rng(11)
 

@@ -7,10 +7,12 @@ Quick start::
     result = simulate(Scenario(), t_eval=[0.0, 1.0, 2.0])
     result.omega   # (3, 3) angular velocity [rad/yr], body axes
 
-Modules: ``rotation`` (Euler angles, matrices, quaternions), ``torque`` (gravity
-gradient), ``dynamics`` (equations of motion, invariants), ``integrators`` (one
-interface, name registries, the Lie-Poisson splitting methods), ``kernels`` (the
-compiled loops of the fast path, numba), ``scenario`` (validated inputs), ``propagator``
+Modules: ``rotation`` (Euler angles, matrices, quaternions), ``torques`` (the torques as
+components: gravity gradient, impact pulses, and :class:`TorqueComponent` for torques
+defined outside core), ``dynamics`` (equations of motion, invariants), ``integrators`` (one
+interface, name registries, the Lie-Poisson splitting methods), ``jit`` (the numba switch)
+and ``kernels`` (the physics every path runs and the compiled loops), ``scenario``
+(validated inputs), ``propagator``
 (incremental integration split at impacts), ``simulate`` (batch runs), ``ensemble`` (N
 bodies at once), ``analytic`` (the paper's approximate solution, better linearisations,
 exact torque-free motion), ``timebase`` (simulated years <-> ROS stamps).
@@ -36,6 +38,7 @@ from .scenario import (
 )
 from .simulate import simulate, SimulationResult
 from .timebase import TimeBase
+from .torques import torque_function, TorqueComponent
 
 __all__ = [
     'ANALYTIC_MODELS',
@@ -66,6 +69,8 @@ __all__ = [
     'ScenarioError',
     'SimulationResult',
     'TimeBase',
+    'TorqueComponent',
+    'torque_function',
     'angular_momentum_orbital',
     'jacobi_integral',
     'kinetic_energy',

@@ -17,8 +17,9 @@ Dynamics (Euler's equations, paper eq 14 with the third line corrected, ERRATA 1
     Iy dwy/dt = (Iz - Ix) wz wx + My
     Iz dwz/dt = (Ix - Iy) wx wy + Mz
 
-with M the gravity-gradient torque (paper eq 12, ``torque.gravity_gradient_torque``) plus
-any impact torque active on the current integration segment. Right-hand sides are built
+with M the total torque (``kernels.body_torque``): the gravity gradient (paper eq 12,
+``torques.gravity_gradient``), any impact torque active on the current integration segment
+and the scenario's extra torques (``torques.TorqueComponent``). Right-hand sides are built
 for one segment at a time with the impact torque held constant (see ``propagator``), and
 are written on plain floats: they are the integration's hot path.
 """
@@ -37,6 +38,7 @@ from .rotation import (
     matrix_to_euler,
     quaternion_to_matrix,
 )
+from .torques import extra_torque_arrays
 
 __all__ = [
     'AttitudeModel',
@@ -51,56 +53,55 @@ Rhs = Callable[[float, np.ndarray], np.ndarray]
 _ZERO = (0.0, 0.0, 0.0)
 
 
-def _make_quaternion_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO) -> Rhs:
+def _segment_arrays(inertia, orbit_rate, torque_body, torque_orbital, extra_torques):
+    """Return the kernels' problem array and ``extra`` argument of one segment."""
+    return (kernels.problem_array(inertia, orbit_rate, torque_body, torque_orbital),
+            extra_torque_arrays(extra_torques))
+
+
+def _make_quaternion_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO,
+                         extra_torques=()) -> Rhs:
     """
     Return f(t, y) for the quaternion attitude: the kernels' right-hand side (one implementation).
 
     ``kernels.rhs`` (compiled, or plain Python without numba) is what the compiled loops run;
     the reference steppers call it through this closure, one evaluation at a time.
     """
-    p = kernels.problem_array(inertia, orbit_rate, torque_body, torque_orbital)
+    p, extra = _segment_arrays(inertia, orbit_rate, torque_body, torque_orbital, extra_torques)
     st = np.zeros(2 * kernels.N)
     evaluate, n = kernels.rhs_called, kernels.N
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
         st[:n] = y
-        evaluate(p, float(t), st, 0, n)
+        evaluate(p, extra, float(t), st, 0, n)
         return st[n:].copy()
 
     return rhs
 
 
-def _make_euler_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO) -> Rhs:
-    ix, iy, iz = (float(v) for v in inertia)
-    k = 3.0 * orbit_rate * orbit_rate
-    ax, ay, az = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
-    gx, gy, gz = k * (iz - iy) / ix, k * (ix - iz) / iy, k * (iy - ix) / iz
-    bx, by, bz = torque_body[0] / ix, torque_body[1] / iy, torque_body[2] / iz
-    mo = np.asarray(torque_orbital, dtype=float)
-    orbital_pulse = bool(np.any(mo != 0.0))
+def _make_euler_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO,
+                    extra_torques=()) -> Rhs:
+    """
+    Return f(t, y) for the paper's Euler angles: eq 15 kinematics, the kernels' torque.
+
+    The torque is ``kernels.body_torque`` (the one total torque) at the attitude's quaternion;
+    Euler's equations as in ``kernels.rhs``.
+    """
+    p, extra = _segment_arrays(inertia, orbit_rate, torque_body, torque_orbital, extra_torques)
+    torque = kernels.body_torque
+    ex, ey, ez = p[kernels.PR.EULER:kernels.PR.EULER + 3].tolist()
+    jx, jy, jz = p[kernels.PR.INV_INERTIA:kernels.PR.INV_INERTIA + 3].tolist()
     sin, cos, array = math.sin, math.cos, np.array
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
         wx, wy, wz, phi, psi, theta = y.tolist()
-        cf, sf = cos(phi), sin(phi)
+        tx, ty, tz = torque(p, extra, float(t), *euler_to_quaternion(phi, psi, theta).tolist())
         cp, sp = cos(psi), sin(psi)
         ct, st = cos(theta), sin(theta)
-        sn, cs = sin(orbit_rate * t), cos(orbit_rate * t)
-        # u = R(phi, psi, theta) @ (sin ws t, cos ws t, 0), the paper's matrix R.
-        ux = (cf * cp - sf * sp * ct) * sn + (sf * cp + cf * sp * ct) * cs
-        uy = (-cf * sp - sf * cp * ct) * sn + (-sf * sp + cf * cp * ct) * cs
-        uz = sf * st * sn - cf * st * cs
-        dwx = ax * wy * wz + gx * uy * uz + bx
-        dwy = ay * wz * wx + gy * ux * uz + by
-        dwz = az * wx * wy + gz * ux * uy + bz
-        if orbital_pulse:
-            m = euler_to_matrix(phi, psi, theta) @ mo
-            dwx += m[0] / ix
-            dwy += m[1] / iy
-            dwz += m[2] / iz
         # Paper eq 15 (correct as printed).
         w_perp = wx * sp + wy * cp
-        return array((dwx, dwy, dwz, w_perp / st, wz - w_perp * ct / st, wx * cp - wy * sp))
+        return array((ex * wy * wz + tx * jx, ey * wz * wx + ty * jy, ez * wx * wy + tz * jz,
+                      w_perp / st, wz - w_perp * ct / st, wx * cp - wy * sp))
 
     return rhs
 
@@ -116,7 +117,7 @@ class AttitudeModel:
     size : number of attitude components in the state vector.
     from_euler : paper's Euler angles (phi, psi, theta) -> attitude components.
     to_matrix : attitude components -> C (body -> orbital) 3x3 matrix.
-    make_rhs : (inertia, orbit_rate, torque_body, torque_orbital) -> f(t, y).
+    make_rhs : (inertia, orbit_rate, torque_body, torque_orbital, extra_torques) -> f(t, y).
     singular : attitude components -> True where this representation breaks down.
 
     """

@@ -43,6 +43,7 @@ from .rotation import continuous_quaternions, quaternions_to_matrices
 from .scenario import Impact, MAX_OMEGA, MAX_ROTATION, Scenario, ScenarioError
 from .segments import split_at_impacts
 from .simulate import _check_times, simulate
+from .torques import extra_torque_arrays
 
 __all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts']
 
@@ -284,15 +285,16 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
             torques[j, :3], torques[j, 3:] = body, orbital
             j += 1
     probs = K.problem_arrays(scenario.inertia, scenario.orbit_rate, torques)
+    extra = extra_torque_arrays(scenario.torques)
     # initial states
     model = ATTITUDE_MODELS[scenario.attitude]
-    states = np.zeros((n, K.N_STATE))
-    states[:, K.O_Y:K.O_Y + 3] = scenario.omega0 if omega0 is None else omega0
+    states = np.zeros((n, K.ST.SIZE))
+    states[:, K.ST.Y:K.ST.Y + 3] = scenario.omega0 if omega0 is None else omega0
     if euler0 is None:
-        states[:, K.O_Y + 3:K.O_Y + 7] = model.from_euler(*scenario.euler0)
+        states[:, K.ST.Y + 3:K.ST.Y + 7] = model.from_euler(*scenario.euler0)
         tracks = np.tile(np.array(scenario.euler0, dtype=float), (n, 1))
     else:
-        states[:, K.O_Y + 3:K.O_Y + 7] = [model.from_euler(*e) for e in euler0]
+        states[:, K.ST.Y + 3:K.ST.Y + 7] = [model.from_euler(*e) for e in euler0]
         tracks = np.array(euler0, dtype=float)
     m = times.size
     times = np.ascontiguousarray(times, dtype=float)
@@ -310,24 +312,24 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
 
     start = time.perf_counter()
     with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool:
-        list(pool.map(lambda blk: K.ensemble_init(cfg, probs, seg_t, seg_ptr, states, *blk),
+        list(pool.map(lambda blk: K.ensemble_init(extra, cfg, probs, seg_t, seg_ptr, states, *blk),
                       blocks))
         t_end = float(times[-1])
         stops = [t_end * (c + 1) / checkpoints for c in range(checkpoints - 1)] + [t_end]
         for c, t_stop in enumerate(stops):
-            list(pool.map(lambda blk: K.ensemble_advance(cfg, probs, seg_t, seg_ptr, cur, states,
-                                                         tracks, t_stop, times, y_out, e_out,
-                                                         k_out, steps, *blk),
+            list(pool.map(lambda blk: K.ensemble_advance(extra, cfg, probs, seg_t, seg_ptr, cur,
+                                                         states, tracks, t_stop, times, y_out,
+                                                         e_out, k_out, steps, *blk),
                           blocks))
             if progress is not None:
                 progress((c + 1) / len(stops), t_stop, int(steps.sum()))
     wall = time.perf_counter() - start
 
-    failed = states[:, K.S_STATUS] == K.FAILED
+    failed = states[:, K.ST.STATUS] == K.STATUS.FAILED
     success = (k_out == m) & ~failed
     messages = tuple(failure_message(states[b], method.name) if failed[b] else ''
                      for b in range(n))
-    nfev = (states[:, K.S_NFEVDONE] + states[:, K.S_NFEV]).astype(np.int64)
+    nfev = (states[:, K.ST.NFEV_DONE] + states[:, K.ST.NFEV]).astype(np.int64)
     omega = y_out[:, :, :3].copy()
     quat = np.full((n, m, 4), np.nan)
     jac = np.full((n, m), np.nan)

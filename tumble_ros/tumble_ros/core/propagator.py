@@ -32,25 +32,15 @@ from tumble_ros.errors import CoreError
 
 from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import FAILED, INTEGRATORS, RUNNING, SegmentProblem
-from .integrators.base import _finite_norm
 from .integrators.compiled import CompiledStepper, why_no_fast_path
-from .rotation import (continuous_quaternions, matrix_to_quaternion, quaternions_to_matrices,
-                       unwrap_towards)
+from .kernels.checks import finite_norm
+from .kernels.tracking import track_pieces, track_rate, unwrapped_euler
+from .rotation import continuous_quaternions, matrix_to_quaternion, quaternions_to_matrices
 from .scenario import Impact, Scenario, ScenarioError
 from .segments import Segment, split_at_impacts
 
 __all__ = ['Propagator', 'IntegrationError', 'Sample',
            'quaternions_to_matrices', 'FAST_WORK_BUDGET', 'REFERENCE_WORK_BUDGET']
-
-#: Largest attitude change [rad] between two points used to unwrap Euler angles.
-_UNWRAP_STEP = 1.0
-_UNWRAP_MIN_SIN = 0.1
-#: Most pieces a single step is cut into to follow phi and psi (kernels._MAX_TRACK_PIECES). A
-#: step over which they may turn by more than this many radians is far too long for the spin
-#: (every method's result is meaningless there, except the splitting methods' exact free flow
-#: of a symmetric body); beyond it their 2 pi multiples are not followed, the attitude stays
-#: as integrated, and the work per step stays bounded.
-_MAX_TRACK_PIECES = 100_000
 
 #: Work per call of :meth:`Propagator.sample_many` (and per compiled call of
 #: :meth:`Propagator.advance_to`): steps plus the dense evaluations of the Euler-angle
@@ -59,6 +49,7 @@ _MAX_TRACK_PIECES = 100_000
 #: steps take 20-200 us in Python (scipy's implicit methods more).
 FAST_WORK_BUDGET = 50_000
 REFERENCE_WORK_BUDGET = 1_000
+_NO_OMEGA = np.zeros(3)
 
 
 def _interpolated_nonfinite_message(t: float) -> str:
@@ -217,7 +208,7 @@ class Propagator:
             pass
         y = self._stepper.state_at(t)
         euler = self._continuous_euler(y[3:])
-        if euler is None or not _finite_norm(y):
+        if euler is None or not finite_norm(y):
             # dense output inside a step whose end points are finite but whose state ran away
             self.status, self.message = FAILED, _interpolated_nonfinite_message(t)
             raise IntegrationError(self.message, self.t)
@@ -336,16 +327,16 @@ class Propagator:
             self._nfev_done += self._stepper.nfev
         sc = self.scenario
         problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
-                                 segment.torque_orbital, sc.attitude)
+                                 segment.torque_orbital, sc.attitude, sc.torques)
         self._stepper = self._runner.new_stepper(segment, t0, y0, problem)
 
     def _switching_rhs(self):
         """Pulses as a time switch inside one smooth-looking RHS (demonstration only)."""
         sc, make = self.scenario, self._model.make_rhs
-        free = make(sc.inertia, sc.orbit_rate)
+        free = make(sc.inertia, sc.orbit_rate, extra_torques=sc.torques)
         pulses = [(i, make(sc.inertia, sc.orbit_rate,
                            *((i.torque, (0, 0, 0)) if i.frame == 'body'
-                             else ((0, 0, 0), i.torque))))
+                             else ((0, 0, 0), i.torque)), extra_torques=sc.torques))
                   for i in self._impacts]
 
         def rhs(t, y):
@@ -381,14 +372,14 @@ class Propagator:
         """
         Return phi, psi unwrapped towards the track, and theta.
 
-        None if they are not finite (a state that ran away: kernels.set_track skips it the
-        same way).
+        The compiled loop's conversion (``kernels.tracking``); None if they are not finite (a
+        state that ran away: ``kernels.tracking.set_track`` skips it the same way).
         """
-        phi, psi, theta = self._model.to_euler(attitude)
+        y = np.concatenate((_NO_OMEGA, attitude))
+        phi, psi, theta = unwrapped_euler(y, 0, self._euler_track)
         if not (math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta)):
             return None
-        ref = self._euler_track
-        return np.array([unwrap_towards(phi, ref[0]), unwrap_towards(psi, ref[1]), theta])
+        return np.array([phi, psi, theta])
 
     def _continuous_euler(self, attitude) -> np.ndarray | None:
         if self._model.name != 'quaternion':
@@ -413,7 +404,7 @@ class _ReferenceRunner:
         """Return the method's stepper for ``segment``, from ``t0``, ``y0``."""
         p, sc = self._p, self._p.scenario
         rhs = (p._model.make_rhs(sc.inertia, sc.orbit_rate, segment.torque_body,
-                                 segment.torque_orbital)
+                                 segment.torque_orbital, problem.extra_torques)
                if p._split else p._switching_rhs())
         return p._method(rhs, t0, y0, segment.t1, sc.integrator, problem=problem)
 
@@ -442,15 +433,9 @@ class _ReferenceRunner:
         Returns the dense evaluations it took.
         """
         y = stepper.y
-        w = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2)
-        cos_theta = self._p._model.to_matrix(y[3:])[2, 2]
-        # phi and psi turn at up to |w| / sin(theta): subdivide long steps accordingly.
-        # Below theta ~ 0.1 only phi + psi is well defined, so the bound stops growing.
-        rate = w / max(_UNWRAP_MIN_SIN, math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta)))
+        # the compiled loop's bound and subdivision (kernels.tracking)
         h = stepper.t - stepper.t_old
-        pieces = rate * h / _UNWRAP_STEP
-        # (not <=: also an infinite rate, |w| overflowing in a state running away)
-        n = _MAX_TRACK_PIECES if not pieces <= _MAX_TRACK_PIECES else max(1, math.ceil(pieces))
+        n = track_pieces(track_rate(*y.tolist()) * h)
         for j in range(1, n + 1):
             tj = stepper.t if j == n else stepper.t_old + h * j / n
             att = y[3:] if j == n else stepper.state_at(tj)[3:]
@@ -540,7 +525,7 @@ class _CompiledRunner:
             y = y_out[k0:k]
             norm2 = y[:, 0] * y[:, 0]
             for i in range(1, y.shape[1]):
-                norm2 += y[:, i] * y[:, i]  # (summed in the order of base._finite_norm)
+                norm2 += y[:, i] * y[:, i]  # (summed in the order of kernels.checks.finite_norm)
             bad = np.flatnonzero(~(np.isfinite(norm2) & np.isfinite(euler[k0:k]).all(axis=1)))
             if bad.size:
                 k = k0 + int(bad[0])

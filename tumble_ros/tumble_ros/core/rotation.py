@@ -33,7 +33,6 @@ __all__ = [
     'euler_to_quaternion',
     'quaternion_to_euler',
     'quaternion_multiply',
-    'unwrap_towards',
 ]
 
 
@@ -133,11 +132,6 @@ def quaternion_multiply(p, q) -> np.ndarray:
             p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0,
         ]
     )
-
-
-def unwrap_towards(angle: float, reference: float) -> float:
-    """Return the angle ``angle + 2 pi k`` closest to ``reference`` (continuous tracking)."""
-    return angle + 2.0 * math.pi * round((reference - angle) / (2.0 * math.pi))
 
 
 def quaternions_to_matrices(q: np.ndarray) -> np.ndarray:

@@ -27,6 +27,7 @@ from tumble_ros.errors import CoreError
 
 from .dynamics import ATTITUDE_MODELS
 from .integrators import INTEGRATORS
+from .torques import TorqueComponent
 
 __all__ = [
     'ScenarioError',
@@ -78,7 +79,7 @@ MAX_SAMPLES = 10**7
 MAX_ROTATION = 1e10
 #: An interval (a step, an impact pulse) must span at least this many units in the last place
 #: of the time it ends at: shorter ones are what the integrators' step-collapse test refuses
-#: (integrators.base._MIN_STEP_ULPS), and t + dt rounds to t for dt < 1/2 ulp.
+#: (kernels.checks.MIN_STEP_ULPS), and t + dt rounds to t for dt < 1/2 ulp.
 RESOLUTION_ULPS = 16
 
 
@@ -328,6 +329,12 @@ class Scenario:
         Spacing of output samples [yr] (the paper: tk / n with n = 1000).
     integrator : IntegratorSettings
     impacts : tuple of Impact
+    torques : tuple of TorqueComponent
+        Extra torques added to the gravity gradient and the impacts, on the whole run
+        (``core.torques``: defined outside core, run by every integrator). Python API only:
+        they are functions, so they are not ROS parameters (:meth:`to_parameters` leaves them
+        out).
+
 
     """
 
@@ -341,6 +348,7 @@ class Scenario:
     output_interval: float = 0.002
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
     impacts: tuple[Impact, ...] = ()
+    torques: tuple[TorqueComponent, ...] = ()
 
     def __post_init__(self) -> None:
         inertia = _vector('inertia', self.inertia)
@@ -431,6 +439,11 @@ class Scenario:
                       f'the pulse must end by the end of the run ({self.duration:g} yr); '
                       f'it ends at {impact.end!r}', impact.start)
         _set(self, 'impacts', impacts)
+        torques = tuple(self.torques)
+        for k, torque in enumerate(torques):
+            if not isinstance(torque, TorqueComponent):
+                _fail(f'torques[{k}]', 'must be a core.torques.TorqueComponent', torque)
+        _set(self, 'torques', torques)
 
     # -- derived quantities ---------------------------------------------------------
     @property

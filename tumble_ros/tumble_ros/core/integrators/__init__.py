@@ -12,7 +12,7 @@ Two registries, one namespace of names (``integrator.method`` of a scenario):
 
 Capability flags on each class: ``adaptive``, ``symplectic``, ``order``, ``attitudes``
 (+ ``requirement``, the reason others are refused), ``needs_problem`` and ``kernel`` (a
-compiled loop in ``core/kernels.py``; :mod:`.compiled`).
+compiled loop in ``core/kernels/``; :mod:`.compiled`).
 """
 from __future__ import annotations
 

@@ -120,7 +120,7 @@ class _ScipyStepper(Stepper):
         h_abs = getattr(solver, 'h_abs', None)
         if h_abs is not None and h_abs != h_abs:
             # NaN step size (a non-finite right-hand side where the initial step was chosen):
-            # scipy's step loop would neither accept nor fail, for ever (kernels._dop853_step)
+            # scipy's step loop would neither accept nor fail, for ever (kernels.dop853.step)
             return False, step_nan_message(self.name, self.t0 + solver.t)
         message = solver.step()
         if solver.status == 'failed':
@@ -143,7 +143,7 @@ class RK45(_ScipyStepper):
 class DOP853(_ScipyStepper):
     name, solver_class = 'dop853', integrate.DOP853
     order = 8
-    kernel = 'dop853'  # core/kernels.py transcribes scipy's DOP853 step by step
+    kernel = 'dop853'  # core/kernels/dop853.py transcribes scipy's DOP853 step by step
 
 
 class Radau(_ScipyStepper):

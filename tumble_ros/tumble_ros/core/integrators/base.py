@@ -26,7 +26,7 @@ Implementing a new method
    representations it can integrate; Scenario validation refuses the others and says why,
    from ``requirement``), ``needs_problem`` (it uses the segment's :class:`SegmentProblem`
    rather than only ``fun``, like the splitting methods) and ``kernel`` (the name of its
-   compiled loop in ``core/kernels.py``, if any).
+   compiled loop in ``core/kernels/``, if any).
 2. Implement ``_step_impl() -> (ok, message)``: advance the local time ``self.tau`` and
    ``self.y`` by one step, keep the previous local time in ``self.tau_old``, and land exactly
    on ``self.tau_bound`` at the end; evaluate the right-hand side through
@@ -41,30 +41,15 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-import math
 from typing import Callable, ClassVar
 
 import numpy as np
 
+from ..kernels.checks import collapsed, finite_norm
+
 __all__ = ['Stepper', 'SegmentProblem', 'RUNNING', 'FINISHED', 'FAILED']
 
 RUNNING, FINISHED, FAILED = 'running', 'finished', 'failed'
-
-#: A step shorter than this many units in the last place of t counts as a collapse.
-_MIN_STEP_ULPS = 16
-
-
-def _finite_norm(y) -> bool:
-    """
-    Return whether |y|^2 is finite.
-
-    No component is NaN or infinite, nor so large that its square overflows (such a state has
-    no usable rotation matrix or energy; kernels.step sums the same way).
-    """
-    acc = 0.0
-    for v in y.tolist():
-        acc += v * v
-    return math.isfinite(acc)
 
 
 def step_nan_message(method_name: str, t: float) -> str:
@@ -87,6 +72,7 @@ class SegmentProblem:
     orbit_rate : ws [rad/yr].
     torque_body, torque_orbital : constant pulse torques on this segment, body-fixed and
         orbital-frame-fixed (zero outside pulses).
+    extra_torques : the scenario's extra torques (``torques.TorqueComponent``), on every segment.
     attitude : the attitude representation of the state vector ("quaternion" or "euler").
 
     """
@@ -96,6 +82,7 @@ class SegmentProblem:
     torque_body: tuple[float, float, float] = (0.0, 0.0, 0.0)
     torque_orbital: tuple[float, float, float] = (0.0, 0.0, 0.0)
     attitude: str = 'quaternion'
+    extra_torques: tuple = ()
 
 
 class Stepper(ABC):
@@ -139,7 +126,7 @@ class Stepper(ABC):
     requirement: ClassVar[str] = ''
     #: Uses the SegmentProblem instead of only ``fun``.
     needs_problem: ClassVar[bool] = False
-    #: Name of the compiled loop in ``core/kernels.py`` (quaternion attitude), or None.
+    #: Name of the compiled loop in ``core/kernels/`` (quaternion attitude), or None.
     kernel: ClassVar[str | None] = None
 
     def __init__(self, fun: Callable, t0: float, y0: np.ndarray, t_bound: float, settings,
@@ -178,10 +165,10 @@ class Stepper(ABC):
             raise RuntimeError(f'step() on a stepper whose status is {self.status!r}')
         t_good, tau_good, tau_old_good, y_good = self.t, self.tau, self.tau_old, self.y
         ok, message = self._step_impl()
-        if ok and not _finite_norm(self.y):
+        # the compiled loop's checks (kernels.checks), the same functions
+        if ok and not finite_norm(self.y):
             ok, message = False, f'non-finite state after t = {t_good:.10g} yr'
-        elif (ok and self.tau < self.tau_bound
-              and self.tau - tau_good <= _MIN_STEP_ULPS * math.ulp(tau_good)):
+        elif ok and collapsed(tau_good, self.tau, self.tau_bound):
             # (in local time: a step of a pulse segment may be far below ulp(t))
             ok, message = False, (f'step size collapsed to {self.tau - tau_good:.3g} yr at '
                                   f't = {t_good:.10g} yr: '

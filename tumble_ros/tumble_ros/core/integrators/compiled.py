@@ -1,5 +1,5 @@
 """
-The fast path: a method's compiled loop (``core/kernels.py``) behind the Stepper interface.
+The fast path: a method's compiled loop (``core/kernels/``) behind the Stepper interface.
 
 :class:`CompiledStepper` integrates one segment like the method's own stepper class (same
 steps, same dense output, same failure checks), but can also take many steps per call
@@ -15,29 +15,30 @@ import numpy as np
 
 from .base import FAILED, FINISHED, RUNNING, SegmentProblem, step_nan_message, Stepper
 from .. import kernels as K
+from ..torques import extra_torque_arrays
 
 __all__ = ['CompiledStepper', 'fast_path_available', 'why_no_fast_path', 'failure_message']
 
 _EMPTY_T = np.empty(0)
 _EMPTY_Y = np.empty((0, K.N))
 _EMPTY_E = np.empty((0, 3))
-_STATUS = {K.RUNNING: RUNNING, K.FINISHED: FINISHED, K.FAILED: FAILED}
+_STATUS = {K.STATUS.RUNNING: RUNNING, K.STATUS.FINISHED: FINISHED, K.STATUS.FAILED: FAILED}
 
 
 def failure_message(st: np.ndarray, method_name: str) -> str:
     """Return the reference path's message for the failure recorded in a kernel state ``st``."""
-    t_good = float(st[K.S_FAILT])
-    code = st[K.S_FAIL]
-    if code == K.FAIL_NONFINITE:
+    t_good = float(st[K.ST.FAIL_T])
+    code = st[K.ST.FAIL]
+    if code == K.FAIL.NONFINITE:
         return f'non-finite state after t = {t_good:.10g} yr'
-    if code == K.FAIL_COLLAPSE:
-        return (f'step size collapsed to {float(st[K.S_FAILDT]):.3g} yr at t = {t_good:.10g} yr: '
-                'the solution is singular or diverging there')
-    if code == K.FAIL_STEP_NAN:
+    if code == K.FAIL.COLLAPSE:
+        return (f'step size collapsed to {float(st[K.ST.FAIL_DT]):.3g} yr at '
+                f't = {t_good:.10g} yr: the solution is singular or diverging there')
+    if code == K.FAIL.STEP_NAN:
         return step_nan_message(method_name, t_good)
-    if code == K.FAIL_REJECTED:
+    if code == K.FAIL.REJECTED:
         return (f'{method_name} failed at t = {t_good:.10g} yr: '
-                f'{K._MAX_REJECTIONS} step sizes rejected in a row')
+                f'{K.MAX_REJECTIONS} step sizes rejected in a row')
     return (f'{method_name} failed at t = {t_good:.10g} yr: '
             'Required step size is less than spacing between numbers.')
 
@@ -83,25 +84,26 @@ class CompiledStepper(Stepper):
         self._cfg = K.config_array(method.kernel, settings, gammas, method.order or 0)
         self._p = K.problem_array(problem.inertia, problem.orbit_rate, problem.torque_body,
                                   problem.torque_orbital)
+        self._extra = extra_torque_arrays(problem.extra_torques)
         self.work = 0  # units of work of the last advance()
         self._st = K.new_state()
-        self._st[K.O_Y:K.O_Y + K.N] = self.y
-        K.seg_init(self._p, self._cfg, self._st, self.t, self.t_bound)
+        self._st[K.ST.Y:K.ST.Y + K.N] = self.y
+        K.seg_init(self._p, self._extra, self._cfg, self._st, self.t, self.t_bound)
         self._sync()
 
     @property
     def nfev(self) -> int:
-        return int(self._st[K.S_NFEV])
+        return int(self._st[K.ST.NFEV])
 
     def _sync(self) -> None:
         st = self._st
-        self.t = float(st[K.S_T])
-        self.tau = float(st[K.S_TAU])
-        self.y = st[K.O_Y:K.O_Y + K.N].copy()
-        self.n_steps = int(st[K.S_NSTEPS])
-        self.t_old = float(st[K.S_TOLD]) if self.n_steps else None
-        self.tau_old = float(st[K.S_TAUOLD]) if self.n_steps else None
-        self.status = _STATUS[st[K.S_STATUS]]
+        self.t = float(st[K.ST.T])
+        self.tau = float(st[K.ST.TAU])
+        self.y = st[K.ST.Y:K.ST.Y + K.N].copy()
+        self.n_steps = int(st[K.ST.N_STEPS])
+        self.t_old = float(st[K.ST.T_OLD]) if self.n_steps else None
+        self.tau_old = float(st[K.ST.TAU_OLD]) if self.n_steps else None
+        self.status = _STATUS[st[K.ST.STATUS]]
         if self.status == FAILED and not self.message:
             self.message = self._failure_message()
 
@@ -112,7 +114,7 @@ class CompiledStepper(Stepper):
         """Take one step; returns the new status."""
         if self.status != RUNNING:
             raise RuntimeError(f'step() on a stepper whose status is {self.status!r}')
-        K.step(self._p, self._cfg, self._st)
+        K.step(self._p, self._extra, self._cfg, self._st)
         self._sync()
         return self.status
 
@@ -125,19 +127,18 @@ class CompiledStepper(Stepper):
         continuous Euler angles and is updated in place after every step
         (``Propagator._track_euler``). Outputs: every ``t_out[j]`` (j >= k) passed on the way (up
         to the current t) is written to ``y_out[j]`` (state) and ``e_out[j]`` (unwrapped Euler
-        angles). Work (:func:`~tumble_ros.core.kernels.advance`): a unit per step and per dense
-        evaluation of the tracking; ``self.work`` is what this call spent.
+        angles). Work (:func:`~tumble_ros.core.kernels.stepping.advance`): a unit per step and per
+        dense evaluation of the tracking; ``self.work`` is what this call spent.
         Returns (next output index, steps taken).
         """
         if t_out is None:
             t_out, y_out, e_out = _EMPTY_T, _EMPTY_Y, _EMPTY_E
         if self.status != RUNNING:
-            k, steps, work = K.emit(self._p, self._cfg, self._st, track, t_out, y_out, e_out,
-                                    k), 0, 0
+            k, steps, work = K.emit(self._p, self._extra, self._cfg, self._st, track, t_out,
+                                    y_out, e_out, k), 0, 0
         else:
-            k, steps, work = K.advance(self._p, self._cfg, self._st, track, float(t_target), t_out,
-                                       y_out, e_out,
-                                       k, float(budget))
+            k, steps, work = K.advance(self._p, self._extra, self._cfg, self._st, track,
+                                       float(t_target), t_out, y_out, e_out, k, float(budget))
         self.work = int(work)
         self._sync()
         return int(k), int(steps)
@@ -147,8 +148,8 @@ class CompiledStepper(Stepper):
         if t == self.t or self.t_old is None or not (self.t_old <= t <= self.t):
             return super().state_at(t)  # the end of the step, or the error
         # the kernel maps t to local time as Stepper.state_at does
-        K.dense(self._p, self._cfg, self._st, float(t))
-        return self._st[K.O_SCR:K.O_SCR + K.N].copy()
+        K.dense(self._p, self._extra, self._cfg, self._st, float(t))
+        return self._st[K.ST.SCRATCH:K.ST.SCRATCH + K.N].copy()
 
     def _step_impl(self):  # pragma: no cover - step() is overridden
         raise NotImplementedError

@@ -35,26 +35,26 @@ The base step is Strang's kick-drift-kick (order 2, symmetric). ``splitting4`` a
 1997 nine-stage, order 6): each stage is a base step of gamma_j h. One torque evaluation per
 stage (the closing kick's torque opens the next stage).
 
-Fixed step: a segment is covered by n = ceil(span / step) equal steps, so pulses start and end
-on step boundaries and are integrated with their own constant torque (exact splitting at
-impact edges, as for every method). A pulse segment gets more steps when its torque calls for
-them (``kernels.split_step_count``: the pulse's own error terms, made no larger per unit time
-than those of a regular step, so the jump converges with the order of the method). The steps
-are taken in the segment's local time t - t0 (``base``: "Local time"). Dense output: a step of
-the same method from the start of the step to the requested time, so interpolated values carry
-the method's own local error, O(h^{p+1}) (order p), and coincide with the step's end point at
-its end.
+Fixed step: a segment is covered by n = ceil(span / step) equal steps, so pulses start and end on
+step boundaries and are integrated with their own constant torque (exact splitting at impact edges,
+as for every method). A pulse segment gets more steps when its torque calls for them
+(``kernels.splitting.pulse_step_count``: the pulse's own error terms, made no larger per unit time
+than those of a regular step, so the jump converges with the order of the method). The steps are
+taken in the segment's local time t - t0 (``base``: "Local time"). Dense output: a step of the same
+method from the start of the step to the requested time, so interpolated values carry the method's
+own local error, O(h^{p+1}) (order p), and coincide with the step's end point at its end.
 
-The physics of a step (the torque, the free flow) is written once, in ``core/kernels.py``:
-this stepper calls those functions (compiled, or plain Python without numba) one step at a
-time, as the reference path; the compiled loop runs them many steps per call.
+The physics of a step (the torque, the free flow) is written once, in ``core/kernels/physics.py``:
+this stepper calls those functions (compiled, or plain Python without numba) one step at a time, as
+the reference path; the compiled loop runs them many steps per call.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from .base import Stepper
-from ..kernels import body_torque, free_flow, problem_array, split_step_count
+from ..kernels import body_torque, free_flow, problem_array, pulse_step_count
+from ..torques import extra_torque_arrays
 
 __all__ = ['Splitting', 'Splitting4', 'Splitting6', 'COMPOSITIONS']
 
@@ -107,7 +107,8 @@ class Splitting(Stepper):
         # flow below are the kernels' own functions (one implementation of the physics).
         self._p = problem_array(problem.inertia, problem.orbit_rate, problem.torque_body,
                                 problem.torque_orbital)
-        n = int(split_step_count(self._p, span, float(settings.step), float(self.order),
+        self._extra = extra_torque_arrays(problem.extra_torques)
+        n = int(pulse_step_count(self._p, span, float(settings.step), float(self.order),
                                  wx, wy, wz))
         self._h = span / n
         self._n_total = n
@@ -118,7 +119,7 @@ class Splitting(Stepper):
             cums.append(total)
         cums[-1] = 1.0
         self._cums = tuple(cums)
-        self._torq = body_torque(self._p, *self.y[3:].tolist(), self.t0 + self.tau)
+        self._torq = body_torque(self._p, self._extra, self.t0 + self.tau, *self.y[3:].tolist())
         ix, iy, iz = problem.inertia
         # pi = I w is carried from step to step, not recomputed from w: the round trip
         # w -> I w -> w would bias |L| by ~1e-17 per step (1e-12 over 10^5 steps).
@@ -150,7 +151,7 @@ class Splitting(Stepper):
             py += half * ty
             pz += half * tz
             px, py, pz, q0, q1, q2, q3 = free_flow(p, a, px, py, pz, q0, q1, q2, q3)
-            tx, ty, tz = body_torque(p, q0, q1, q2, q3, self.t0 + (s0 + c * h))
+            tx, ty, tz = body_torque(p, self._extra, self.t0 + (s0 + c * h), q0, q1, q2, q3)
             px += half * tx
             py += half * ty
             pz += half * tz

@@ -1,0 +1,114 @@
+"""
+The numba switch: compile the kernels and torque functions, or run them as plain Python.
+
+With numba installed the decorated functions are compiled once (``cache=True``: the machine
+code is kept in ``__pycache__`` and reused by later processes); without numba, or with
+``TUMBLE_ROS_NO_JIT=1`` / ``NUMBA_DISABLE_JIT=1``, :data:`COMPILED` is False and the
+decorators return the functions unchanged, so the same source runs as plain Python (the
+reference path; tests/test_core_fast.py checks both give the same trajectory).
+
+One cache key for all compiled sources
+--------------------------------------
+numba validates a cached function against its *own* file only, but the kernels inline each
+other across files (``kernels/stepping.py`` inlines ``kernels/rk4.py``, which inlines
+``torques/gravity_gradient.py``): an edit to rk4.py would leave stale machine code in
+stepping.py's cache. :class:`_CompiledSourcesLocator` gives every function of the files in
+:data:`COMPILED_SOURCES` one source stamp, the hash of all of them, so an edit to any of them
+recompiles them all. It plugs into numba's documented locator list
+(``numba.core.caching.CacheImpl._locator_classes``, a private attribute: checked by
+tests/test_core_fast.py::test_an_edit_to_any_kernel_file_invalidates_the_cache).
+"""
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+from pathlib import Path
+
+__all__ = ['COMPILED', 'NUMBA_VERSION', 'jit', 'jit_inline', 'called', 'COMPILED_SOURCES',
+           'compiled_sources_hash']
+
+try:  # pragma: no cover - exercised by the environment, not by a test
+    import numba as _numba
+except ImportError:  # pragma: no cover
+    _numba = None
+
+NUMBA_VERSION = getattr(_numba, '__version__', None)
+#: True when the kernels are compiled (numba present and not disabled).
+COMPILED = bool(_numba is not None and not _numba.config.DISABLE_JIT
+                and os.environ.get('TUMBLE_ROS_NO_JIT', '') in ('', '0'))
+
+_CORE = Path(__file__).resolve().parent
+#: The files whose compiled functions inline each other: one cache stamp for all.
+COMPILED_SOURCES: tuple[Path, ...] = tuple(
+    [Path(__file__).resolve()]
+    + sorted((_CORE / 'kernels').glob('*.py')) + sorted((_CORE / 'torques').glob('*.py')))
+
+
+@functools.lru_cache(maxsize=None)
+def _hash(stamps: tuple) -> bytes:
+    digest = hashlib.sha256()
+    for path in COMPILED_SOURCES:
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.digest()
+
+
+def compiled_sources_hash() -> bytes:
+    """Return the SHA-256 of every file in :data:`COMPILED_SOURCES` (re-read when one changes)."""
+    stamps = tuple((os.stat(p).st_mtime_ns, os.stat(p).st_size) for p in COMPILED_SOURCES)
+    return _hash(stamps)
+
+
+if COMPILED:
+    from numba.core import caching as _caching
+
+    class _CompiledSourcesLocator(_caching.InTreeCacheLocator):
+        """numba's in-tree cache, stamped with the hash of all :data:`COMPILED_SOURCES`."""
+
+        def __init__(self, py_func, py_file):
+            super().__init__(py_func, py_file)
+            if _numba.config.CACHE_DIR:  # NUMBA_CACHE_DIR is honoured, as numba does
+                self._cache_path = os.path.join(_numba.config.CACHE_DIR,
+                                                self.get_suitable_cache_subpath(py_file))
+
+        def get_source_stamp(self):
+            return compiled_sources_hash()
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            try:
+                if Path(py_file).resolve() not in COMPILED_SOURCES:
+                    return None
+            except OSError:
+                return None
+            return super().from_function(py_func, py_file)
+
+    _IMPL = getattr(_caching, 'CacheImpl', None) or getattr(_caching, '_CacheImpl')
+    _LOCATORS = _IMPL._locator_classes
+    if _CompiledSourcesLocator not in _LOCATORS:
+        _LOCATORS.insert(0, _CompiledSourcesLocator)
+
+    def jit(f):
+        """Compile ``f`` (nogil: ensembles run blocks of bodies in several threads at once)."""
+        return _numba.njit(cache=True, error_model='numpy', nogil=True)(f)
+
+    def jit_inline(f):
+        """
+        Compile ``f`` to be inlined into its callers at numba's IR level.
+
+        No call, no reference counting of the array arguments (which costs more than the
+        arithmetic of a small step). Only for the per-step hot path: inlining multiplies
+        compile time.
+        """
+        return _numba.njit(cache=True, error_model='numpy', nogil=True, inline='always')(f)
+
+    def called(f):
+        """Compile a :func:`jit_inline` function separately (not inlined), for cold paths."""
+        return jit(f.py_func)
+else:
+    def jit(f):
+        """Return ``f`` unchanged (numba absent or disabled)."""
+        return f
+
+    jit_inline = called = jit

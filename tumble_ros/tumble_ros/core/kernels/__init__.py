@@ -1,0 +1,50 @@
+"""
+Compiled integration loops: the hot path without interpreter overhead.
+
+Everything here is plain Python written in the subset numba compiles (floats, 1-D/2-D float64
+arrays, loops); :mod:`tumble_ros.core.jit` compiles it, or leaves it as plain Python
+(:data:`COMPILED` False: the callers, :class:`~..integrators.compiled.CompiledStepper` and
+:mod:`..ensemble`, then take the reference path, which gives the same trajectory).
+
+One module per concern, every arrow downward:
+
+* :mod:`.layout`: the named fields of the three flat arrays a loop works on: a body's
+  state ``st`` (:data:`ST`), a segment's problem ``p`` (:data:`PR`), a method's settings
+  ``cfg`` (:data:`CF`); :mod:`.arrays` builds them;
+* :mod:`.physics`: total torque (the :mod:`..torques` components, plus the ``extra``
+  torques from outside core), right-hand side, free rigid-body flow: the physics, once;
+* :mod:`.checks`: the failure checks after a step; :mod:`.tracking`: continuous Euler angles;
+* one module per method, each with ``start`` / ``step`` / ``dense``: :mod:`.rk4`
+  (``integrators.fixed_step.RK4``), :mod:`.dop853` (scipy's DOP853 transcribed),
+  :mod:`.splitting` (``integrators.splitting``);
+* :mod:`.stepping`: the stepping loop of one body on one segment (set-up, step + checks,
+  Euler tracking, output sampling); :mod:`.ensemble`: the loop over bodies and segments.
+
+Quaternion attitude only. ``python -m tumble_ros.core.kernels`` prints the array layouts.
+"""
+from .arrays import config_array, free_flow_split, new_state, problem_array, problem_arrays
+from .checks import collapsed, finite_norm, MIN_STEP_ULPS
+from .dop853 import MAX_REJECTIONS
+from .ensemble import ensemble_advance, ensemble_init
+from .layout import CF, describe, FAIL, KERNEL_IDS, METHOD, N, PR, ST, STATUS
+from .physics import body_torque, free_flow, rhs, rhs_called
+from .splitting import flow_called, MAX_PULSE_SUBSTEPS, pulse_step_count
+from .stepping import advance, dense, emit, seg_init, step
+from .tracking import (
+    MAX_TRACK_PIECES,
+    set_track,
+    track_pieces,
+    track_rate,
+    UNWRAP_MIN_SIN,
+    UNWRAP_STEP,
+    unwrap_towards,
+)
+from ..jit import COMPILED, NUMBA_VERSION
+
+__all__ = ['COMPILED', 'NUMBA_VERSION', 'ST', 'PR', 'CF', 'N', 'STATUS', 'FAIL', 'METHOD',
+           'KERNEL_IDS', 'describe', 'config_array', 'free_flow_split', 'new_state',
+           'problem_array', 'problem_arrays', 'collapsed', 'finite_norm', 'MIN_STEP_ULPS',
+           'MAX_REJECTIONS', 'ensemble_advance', 'ensemble_init', 'body_torque', 'free_flow',
+           'rhs', 'rhs_called', 'flow_called', 'MAX_PULSE_SUBSTEPS', 'pulse_step_count',
+           'advance', 'dense', 'emit', 'seg_init', 'step', 'MAX_TRACK_PIECES', 'set_track',
+           'track_pieces', 'track_rate', 'UNWRAP_MIN_SIN', 'UNWRAP_STEP', 'unwrap_towards']

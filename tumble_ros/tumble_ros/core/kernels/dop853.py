@@ -1,0 +1,222 @@
+"""
+Compiled ``dop853``: scipy's ``DOP853`` transcribed (``scipy/integrate/_ivp/rk.py``, 1.17).
+
+The step, error norm, step-size control, initial step and 7th-order dense output, with
+scipy's own coefficient tables; steps are taken in the segment's local time as scipy's solver
+sees it (``integrators.adaptive``). Each function works on one body's state ``st``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as _dop
+
+from .layout import CF, FAIL, N, ST
+from .physics import rhs, rhs_called
+from ..jit import jit
+
+__all__ = ['start', 'step', 'dense', 'MAX_REJECTIONS']
+
+_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
+_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
+_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
+_E3 = np.ascontiguousarray(_dop.E3, dtype=np.float64)
+_E5 = np.ascontiguousarray(_dop.E5, dtype=np.float64)
+_D = np.ascontiguousarray(_dop.D, dtype=np.float64)
+_NSTAGES = int(_dop.N_STAGES)          # 12
+_NEXT = int(_dop.N_STAGES_EXTENDED)    # 16
+_SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
+_ERR_EXP = -1.0 / (7 + 1)              # DOP853: error_estimator_order = 7
+#: Rejected step sizes in a row before the step fails. Each rejection divides h by >= 5
+#: (_MIN_FACTOR), so a finite h reaches min_step (FAIL.TOO_SMALL) within ~480 rejections even
+#: from 1e9 yr; this only bounds the loop by construction.
+MAX_REJECTIONS = 1000
+
+
+@jit
+def _rms(st, o, scale_o):
+    """Return scipy's norm(x) = ||x|| / sqrt(n) of st[o:o+7] / st[scale_o:scale_o+7]."""
+    acc = 0.0
+    for i in range(N):
+        v = st[o + i] / st[scale_o + i]
+        acc += v * v
+    return math.sqrt(acc) / N ** 0.5
+
+
+@jit
+def start(p, extra, cfg, st):
+    """Evaluate f at the segment's start and choose the first step (select_initial_step)."""
+    rtol = cfg[CF.RTOL]
+    atol = cfg[CF.ATOL]
+    span = st[ST.TAU_BOUND]
+    t0 = st[ST.T0]
+    rhs_called(p, extra, t0, st, ST.Y, ST.F)
+    st[ST.F_VALID] = 1.0
+    # scipy.integrate._ivp.common.select_initial_step, direction = +1, order = 7
+    for i in range(N):
+        st[ST.SCRATCH + i] = atol + abs(st[ST.Y + i]) * rtol      # scale
+    d0 = _rms(st, ST.Y, ST.SCRATCH)
+    d1 = _rms(st, ST.F, ST.SCRATCH)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    if span < h0:
+        h0 = span
+    for i in range(N):
+        st[ST.TMP + i] = st[ST.Y + i] + h0 * st[ST.F + i]
+    rhs_called(p, extra, t0 + h0, st, ST.TMP, ST.Y_NEW)
+    for i in range(N):
+        st[ST.Y_NEW + i] = st[ST.Y_NEW + i] - st[ST.F + i]
+    d2 = _rms(st, ST.Y_NEW, ST.SCRATCH) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        dm = d2 if d2 > d1 else d1
+        h1 = (0.01 / dm) ** (1.0 / 8.0)
+    h = 100.0 * h0
+    if h1 < h:
+        h = h1
+    if span < h:
+        h = span
+    if cfg[CF.MAX_STEP] < h:
+        h = cfg[CF.MAX_STEP]
+    st[ST.H] = h
+    st[ST.NFEV] = 2.0
+
+
+@jit
+def step(p, extra, cfg, st):
+    """Take a step as scipy's RungeKutta._step_impl with DOP853's rk_step; returns a FAIL code."""
+    t = st[ST.TAU]               # scipy's t is the local time
+    t_bound = st[ST.TAU_BOUND]
+    t0 = st[ST.T0]
+    rtol = cfg[CF.RTOL]
+    atol = cfg[CF.ATOL]
+    max_step = cfg[CF.MAX_STEP]
+    min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+    h_abs = st[ST.H]
+    if h_abs > max_step:
+        h_abs = max_step
+    elif h_abs < min_step:
+        h_abs = min_step
+    rejected = False
+    ns = _NSTAGES
+    n_rejected = 0
+    while True:
+        if h_abs != h_abs:
+            # NaN (a non-finite right-hand side at the segment start): every comparison below
+            # is False, so without this the loop neither accepts nor fails, for ever
+            return FAIL.STEP_NAN
+        if h_abs < min_step:
+            return FAIL.TOO_SMALL
+        if n_rejected >= MAX_REJECTIONS:
+            return FAIL.REJECTED
+        t_new = t + h_abs
+        if t_new - t_bound > 0:
+            t_new = t_bound
+        h = t_new - t
+        h_abs = abs(h)
+        for i in range(N):
+            st[ST.K + i] = st[ST.F + i]
+        for s in range(1, ns):
+            for i in range(N):
+                acc = 0.0
+                for j in range(s):
+                    acc += st[ST.K + j * N + i] * _A[s, j]
+                st[ST.TMP + i] = st[ST.Y + i] + acc * h
+            rhs(p, extra, t0 + (t + _C[s] * h), st, ST.TMP, ST.K + s * N)
+        for i in range(N):
+            acc = 0.0
+            for j in range(ns):
+                acc += st[ST.K + j * N + i] * _B[j]
+            st[ST.Y_NEW + i] = st[ST.Y + i] + h * acc
+        rhs(p, extra, t0 + (t + h), st, ST.Y_NEW, ST.K + ns * N)
+        st[ST.NFEV] += float(ns)
+        e5 = 0.0
+        e3 = 0.0
+        for i in range(N):
+            ay = abs(st[ST.Y + i])
+            an = abs(st[ST.Y_NEW + i])
+            scale = atol + (an if an > ay else ay) * rtol
+            a5 = 0.0
+            a3 = 0.0
+            for j in range(ns + 1):
+                kj = st[ST.K + j * N + i]
+                a5 += kj * _E5[j]
+                a3 += kj * _E3[j]
+            a5 = a5 / scale
+            a3 = a3 / scale
+            e5 += a5 * a5
+            e3 += a3 * a3
+        e5 = math.sqrt(e5) ** 2
+        e3 = math.sqrt(e3) ** 2
+        if e5 == 0.0 and e3 == 0.0:
+            err = 0.0
+        else:
+            err = abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * N)
+        if err < 1.0:
+            if err == 0.0:
+                factor = _MAX_FACTOR
+            else:
+                factor = _SAFETY * err ** _ERR_EXP
+                if not factor < _MAX_FACTOR:
+                    factor = _MAX_FACTOR
+            if rejected and not factor < 1.0:
+                factor = 1.0
+            h_abs *= factor
+            break
+        factor = _SAFETY * err ** _ERR_EXP
+        if not factor > _MIN_FACTOR:
+            factor = _MIN_FACTOR
+        h_abs *= factor
+        rejected = True
+        n_rejected += 1
+    st[ST.H_PREV] = h
+    for i in range(N):
+        st[ST.Y + i] = st[ST.Y_NEW + i]
+        st[ST.F + i] = st[ST.K + ns * N + i]
+    st[ST.TAU_OLD] = t
+    st[ST.TAU] = t_new
+    st[ST.H] = h_abs
+    st[ST.DENSE] = 0.0
+    return FAIL.NONE
+
+
+@jit
+def dense(p, extra, cfg, st, tau):
+    """Write DOP853's 7th-order interpolant at local time tau of the last step to ST.SCRATCH."""
+    tau_old = st[ST.TAU_OLD]
+    if st[ST.DENSE] == 0.0:
+        h = st[ST.H_PREV]
+        for s in range(_NSTAGES + 1, _NEXT):
+            for i in range(N):
+                acc = 0.0
+                for j in range(s):
+                    acc += st[ST.K + j * N + i] * _A[s, j]
+                st[ST.TMP + i] = st[ST.Y_OLD + i] + acc * h
+            rhs_called(p, extra, st[ST.T0] + (tau_old + _C[s] * h), st, ST.TMP, ST.K + s * N)
+            st[ST.NFEV] += 1.0
+        for i in range(N):
+            delta = st[ST.Y + i] - st[ST.Y_OLD + i]
+            f_old = st[ST.K + i]
+            st[ST.FD + i] = delta
+            st[ST.FD + N + i] = h * f_old - delta
+            st[ST.FD + 2 * N + i] = 2 * delta - h * (st[ST.F + i] + f_old)
+            for r in range(4):
+                acc = 0.0
+                for j in range(_NEXT):
+                    acc += _D[r, j] * st[ST.K + j * N + i]
+                st[ST.FD + (3 + r) * N + i] = h * acc
+        st[ST.DENSE] = 1.0
+    x = (tau - tau_old) / (st[ST.TAU] - tau_old)
+    for i in range(N):
+        y = 0.0
+        for k in range(7):
+            y += st[ST.FD + (6 - k) * N + i]
+            if k % 2 == 0:
+                y *= x
+            else:
+                y *= 1 - x
+        st[ST.SCRATCH + i] = y + st[ST.Y_OLD + i]

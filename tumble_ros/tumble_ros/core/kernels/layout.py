@@ -1,0 +1,126 @@
+"""
+The named fields of the kernels' flat float64 arrays, with generated offsets.
+
+numba compiles loops over plain float64 arrays best, so a body's integration state, a
+segment's problem and a method's settings are each one flat array; the fields below give their
+parts names. :func:`layout` turns a list of (name, size, meaning) into a namedtuple of offsets
+(numba folds ``ST.TAU`` to a constant) whose last field ``SIZE`` is the array's length, and
+:func:`describe` prints the table (``python -m tumble_ros.core.kernels`` shows all three).
+
+Units: times [yr], rates [rad/yr], inertia normalised, torques [inertia units * rad/yr^2].
+Frames: omega and torques in body principal axes; the quaternion turns body into orbital
+(scalar first).
+"""
+from __future__ import annotations
+
+from collections import namedtuple
+
+__all__ = ['layout', 'describe', 'ST', 'PR', 'CF', 'N', 'MAX_STAGES', 'STATUS', 'FAIL',
+           'METHOD', 'KERNEL_IDS']
+
+#: Size of the state vector: omega (3) + quaternion (4).
+N = 7
+#: Most stages of a composition (splitting) the config holds.
+MAX_STAGES = 16
+#: Stages of the largest Runge-Kutta tableau (DOP853 with its dense-output stages).
+RK_STAGES = 16
+
+
+def layout(name: str, fields: list[tuple[str, int, str]]):
+    """Return a namedtuple ``name`` of the fields' offsets (consecutive), plus ``SIZE``."""
+    offsets, at = [], 0
+    for _, size, _ in fields:
+        offsets.append(at)
+        at += size
+    cls = namedtuple(name, [f[0] for f in fields] + ['SIZE'])
+    table = cls(*offsets, at)
+    _MEANINGS[name] = [(f[0], off, f[1], f[2]) for f, off in zip(fields, offsets)]
+    return table
+
+
+_MEANINGS: dict[str, list[tuple[str, int, int, str]]] = {}
+
+
+def describe(table) -> str:
+    """Return a table (offset, size, name, meaning) of a layout made by :func:`layout`."""
+    rows = _MEANINGS[type(table).__name__]
+    lines = [f'{type(table).__name__}: {table.SIZE} float64']
+    lines += [f'  {off:4d} {size:4d}  {name:<12} {meaning}' for name, off, size, meaning in rows]
+    return '\n'.join(lines)
+
+
+#: One body's integration state (``st``).
+ST = layout('State', [
+    ('T', 1, 'absolute time t [yr] handed out'),
+    ('T_OLD', 1, 'absolute time at the start of the last step'),
+    ('T_BOUND', 1, "the segment's end [yr]"),
+    ('H', 1, 'step size: fixed step, or the next adaptive step [yr]'),
+    ('N_TOTAL', 1, 'fixed-step methods: number of equal steps on the segment'),
+    ('N_STEPS', 1, 'accepted steps on the segment'),
+    ('NFEV', 1, 'right-hand-side (or torque) evaluations on the segment'),
+    ('STATUS', 1, 'STATUS.RUNNING / FINISHED / FAILED'),
+    ('FAIL', 1, 'why it failed: a FAIL code'),
+    ('FAIL_T', 1, 'time of the last good state when it failed [yr]'),
+    ('FAIL_DT', 1, 'the collapsed step [yr] (FAIL.COLLAPSE)'),
+    ('F_VALID', 1, 'rk4: 1 if F holds f(t, y)'),
+    ('DENSE', 1, 'dop853: 1 if the dense-output coefficients FD are built'),
+    ('H_PREV', 1, 'dop853: length of the last step [yr]'),
+    ('NFEV_DONE', 1, 'evaluations of earlier segments (ensembles)'),
+    ('T0', 1, "the segment's start t0: local time tau = t - t0"),
+    ('BUDGET', 1, 'Euler tracking: angle bound accumulated since the last update [rad]'),
+    ('COLLAPSE', 1, "16 ulp of the segment's largest tau: no longer step collapses"),
+    ('TAU', 1, 'local time of the state [yr]'),
+    ('TAU_OLD', 1, 'local time at the start of the last step'),
+    ('TAU_BOUND', 1, "local time of the segment's end"),
+    ('Y', N, 'current state: omega [rad/yr], quaternion'),
+    ('Y_OLD', N, 'state at the start of the last step'),
+    ('F', N, 'f(t, y) (rk4: valid if F_VALID; dop853: always)'),
+    ('F_OLD', N, 'f at the start of the last step (rk4 dense output)'),
+    ('TORQUE', 3, 'splitting: body torque at (t, y)'),
+    ('TORQUE_OLD', 3, 'splitting: body torque at the start of the last step'),
+    ('PI', 3, 'splitting: body angular momentum I w, carried (not recomputed from w: the '
+              'round trip would bias |L| at the 1e-17/step level)'),
+    ('PI_OLD', 3, 'splitting: momentum at the start of the last step'),
+    ('TMP', N, 'stage argument'),
+    ('Y_NEW', N, 'candidate state (dop853)'),
+    ('SCRATCH', N, 'dense output result'),
+    ('K', RK_STAGES * N, 'Runge-Kutta stages, 16 x 7 (dop853: scipy K_extended)'),
+    ('FD', 7 * N, 'dop853 dense-output coefficients, 7 x 7'),
+])
+
+#: One segment's problem (``p``): the body, the orbit and the constant pulse torques.
+PR = layout('Problem', [
+    ('INERTIA', 3, 'principal moments Ix, Iy, Iz'),
+    ('INV_INERTIA', 3, '1/Ix, 1/Iy, 1/Iz'),
+    ('EULER', 3, "Euler's equations: (Iy - Iz)/Ix, (Iz - Ix)/Iy, (Ix - Iy)/Iz"),
+    ('ORBIT_RATE', 1, 'ws [rad/yr] of the circular orbit (0: no tidal torque)'),
+    ('TIDAL', 3, 'gravity gradient: 3 ws^2 (Iz - Iy), 3 ws^2 (Ix - Iz), 3 ws^2 (Iy - Ix)'),
+    ('PULSE_BODY', 3, 'body-fixed pulse torque on the segment'),
+    ('PULSE_ORBITAL', 3, 'orbital-frame pulse torque on the segment'),
+    ('HAS_ORBITAL', 1, '1 if PULSE_ORBITAL is not zero'),
+    ('INV_REF', 1, 'free-flow split: 1/I_ref (the middle moment)'),
+    ('FLOW', 3, 'free-flow split: 1/I_i - 1/I_ref'),
+])
+
+#: A method and its settings (``cfg``).
+CF = layout('Config', [
+    ('METHOD', 1, 'METHOD.RK4 / DOP853 / SPLITTING'),
+    ('STEP', 1, 'fixed step [yr]'),
+    ('RTOL', 1, 'relative tolerance'),
+    ('ATOL', 1, 'absolute tolerance'),
+    ('MAX_STEP', 1, 'largest adaptive step [yr] (inf: none)'),
+    ('N_STAGES', 1, 'splitting: composition stages'),
+    ('GAMMA', MAX_STAGES, 'splitting: composition coefficients gamma_j'),
+    ('CUM', MAX_STAGES, 'splitting: c_j = gamma_1 + ... + gamma_j (the last exactly 1)'),
+    ('ORDER', 1, 'order of the method (splitting: the pulse sub-step rule)'),
+])
+
+#: ST.STATUS values (floats: they live in the state array).
+STATUS = namedtuple('Status', 'RUNNING FINISHED FAILED')(0.0, 1.0, 2.0)
+#: ST.FAIL values: why a step failed.
+FAIL = namedtuple('Fail', 'NONE NONFINITE COLLAPSE TOO_SMALL STEP_NAN REJECTED')(
+    0.0, 1.0, 2.0, 3.0, 4.0, 5.0)
+#: CF.METHOD values.
+METHOD = namedtuple('Method', 'RK4 DOP853 SPLITTING')(1, 2, 3)
+#: Registry key (``Stepper.kernel``) -> CF.METHOD value.
+KERNEL_IDS = {'rk4': METHOD.RK4, 'dop853': METHOD.DOP853, 'splitting': METHOD.SPLITTING}

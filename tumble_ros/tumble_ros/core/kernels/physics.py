@@ -1,0 +1,148 @@
+"""
+The physics every method runs: total torque, Euler-Liouville right-hand side, free flow.
+
+Written once, in the subset numba compiles; the compiled loops inline these functions and the
+reference steppers call them from Python (``dynamics``, ``integrators.splitting``). Arguments:
+``p`` a segment's problem (layout :data:`~.layout.PR`), ``extra`` the extra torques
+(:func:`~tumble_ros.core.torques.extra_torque_arrays`), t the absolute time [yr], q the
+attitude quaternion (body -> orbital), omega [rad/yr] and torques in body axes.
+"""
+from __future__ import annotations
+
+import math
+
+from .layout import PR
+from ..jit import called, jit, jit_inline
+from ..torques.gravity_gradient import sun_direction_body, tidal_torque
+from ..torques.pulses import pulse_torque
+
+__all__ = ['body_torque', 'rhs', 'rhs_called', 'free_flow', 'axis_rotation']
+
+
+@jit_inline
+def body_torque(p, extra, t, q0, q1, q2, q3):
+    """
+    Return the total torque on the body (body axes) at time t and attitude q.
+
+    The sum of the components: the circular-orbit gravity gradient, the segment's pulse, and
+    every extra torque (each called with its own parameter row).
+    """
+    ux, uy, uz = sun_direction_body(p[PR.ORBIT_RATE], t, q0, q1, q2, q3)
+    tx, ty, tz = tidal_torque(p[PR.TIDAL], p[PR.TIDAL + 1], p[PR.TIDAL + 2], ux, uy, uz)
+    bx, by, bz = pulse_torque(p[PR.PULSE_BODY], p[PR.PULSE_BODY + 1], p[PR.PULSE_BODY + 2],
+                              p[PR.HAS_ORBITAL], p[PR.PULSE_ORBITAL], p[PR.PULSE_ORBITAL + 1],
+                              p[PR.PULSE_ORBITAL + 2], q0, q1, q2, q3)
+    tx += bx
+    ty += by
+    tz += bz
+    if extra is not None:  # (None: numba compiles the loop away)
+        functions, parameters = extra
+        for j in range(parameters.shape[0]):
+            ex, ey, ez = functions[j](parameters[j], t, q0, q1, q2, q3)
+            tx += ex
+            ty += ey
+            tz += ez
+    return tx, ty, tz
+
+
+@jit_inline
+def rhs(p, extra, t, st, yo, oo):
+    """
+    Write f(t, y) for y = st[yo:yo+7] to st[oo:oo+7]: the quaternion-attitude equations.
+
+    Euler's equations (paper eq 14, third line corrected, ERRATA 1) with the total torque M:
+    I dw/dt = (I w) x w + M, i.e. dwx/dt = (Iy - Iz)/Ix wy wz + Mx/Ix, ...; and the kinematics
+    dq/dt = 1/2 q * (0, w).
+    """
+    wx = st[yo]
+    wy = st[yo + 1]
+    wz = st[yo + 2]
+    q0 = st[yo + 3]
+    q1 = st[yo + 4]
+    q2 = st[yo + 5]
+    q3 = st[yo + 6]
+    tx, ty, tz = body_torque(p, extra, t, q0, q1, q2, q3)
+    st[oo] = p[PR.EULER] * wy * wz + tx * p[PR.INV_INERTIA]
+    st[oo + 1] = p[PR.EULER + 1] * wz * wx + ty * p[PR.INV_INERTIA + 1]
+    st[oo + 2] = p[PR.EULER + 2] * wx * wy + tz * p[PR.INV_INERTIA + 2]
+    st[oo + 3] = 0.5 * (-q1 * wx - q2 * wy - q3 * wz)
+    st[oo + 4] = 0.5 * (q0 * wx + q2 * wz - q3 * wy)
+    st[oo + 5] = 0.5 * (q0 * wy - q1 * wz + q3 * wx)
+    st[oo + 6] = 0.5 * (q0 * wz + q1 * wy - q2 * wx)
+
+
+#: :func:`rhs` compiled on its own, for cold paths and for the reference steppers.
+rhs_called = called(rhs)
+
+
+@jit
+def axis_rotation(axis, beta, px, py, pz, q0, q1, q2, q3):
+    """Exact flow of 1/2 c pi_axis^2 (beta = c pi_axis a): pi turns by -beta, q by +beta."""
+    c2 = math.cos(0.5 * beta)
+    s2 = math.sin(0.5 * beta)
+    v = 2.0 * s2 * s2      # 1 - cos(beta), accurate for small beta
+    sb = 2.0 * s2 * c2     # sin(beta)
+    # pi' = pi - (v pi_perp -/+ sb ...): the rounding of cos(beta/2) near 1 does not scale |pi|
+    # (with cos(beta) = c2^2 - s2^2 it would, by the same factor at every step: a drift)
+    if axis == 0:
+        npy = py - (v * py - sb * pz)
+        npz = pz - (v * pz + sb * py)
+        return (px, npy, npz,
+                q0 * c2 - q1 * s2, q0 * s2 + q1 * c2, q2 * c2 + q3 * s2, q3 * c2 - q2 * s2)
+    if axis == 1:
+        npx = px - (v * px + sb * pz)
+        npz = pz - (v * pz - sb * px)
+        return (npx, py, npz,
+                q0 * c2 - q2 * s2, q1 * c2 - q3 * s2, q0 * s2 + q2 * c2, q3 * c2 + q1 * s2)
+    npx = px - (v * px - sb * py)
+    npy = py - (v * py + sb * px)
+    return (npx, npy, pz,
+            q0 * c2 - q3 * s2, q1 * c2 + q2 * s2, q2 * c2 - q1 * s2, q0 * s2 + q3 * c2)
+
+
+@jit_inline
+def free_flow(p, a, px, py, pz, q0, q1, q2, q3):
+    """
+    Return the free rigid body's exact-per-piece flow over time a: (pi, q) after it.
+
+    T = |pi|^2/(2 I_ref) + sum 1/2 c_i pi_i^2 (``integrators.splitting``): the |pi|^2 part
+    turns q about pi, the axis pieces are composed symmetrically.
+    """
+    n = math.sqrt(px * px + py * py + pz * pz)
+    if n > 0.0:
+        half = 0.5 * (n * a * p[PR.INV_REF])
+        c = math.cos(half)
+        s = math.sin(half) / n
+        r1 = s * px
+        r2 = s * py
+        r3 = s * pz
+        n0 = q0 * c - q1 * r1 - q2 * r2 - q3 * r3
+        n1 = q0 * r1 + q1 * c + q2 * r3 - q3 * r2
+        n2 = q0 * r2 - q1 * r3 + q2 * c + q3 * r1
+        n3 = q0 * r3 + q1 * r2 - q2 * r1 + q3 * c
+        q0, q1, q2, q3 = n0, n1, n2, n3
+    first = -1
+    second = -1
+    for axis in range(3):
+        if p[PR.FLOW + axis] != 0.0:
+            if first < 0:
+                first = axis
+            else:
+                second = axis
+    if second >= 0:  # Strang: B_first(a/2) B_second(a) B_first(a/2)
+        cf = p[PR.FLOW + first]
+        cs = p[PR.FLOW + second]
+        pi = (px, py, pz)
+        px, py, pz, q0, q1, q2, q3 = axis_rotation(first, cf * pi[first] * (0.5 * a), px, py, pz,
+                                                   q0, q1, q2, q3)
+        pi = (px, py, pz)
+        px, py, pz, q0, q1, q2, q3 = axis_rotation(second, cs * pi[second] * a, px, py, pz, q0,
+                                                   q1, q2, q3)
+        pi = (px, py, pz)
+        px, py, pz, q0, q1, q2, q3 = axis_rotation(first, cf * pi[first] * (0.5 * a), px, py, pz,
+                                                   q0, q1, q2, q3)
+    elif first >= 0:
+        pi = (px, py, pz)
+        px, py, pz, q0, q1, q2, q3 = axis_rotation(first, p[PR.FLOW + first] * pi[first] * a,
+                                                   px, py, pz, q0, q1, q2, q3)
+    return px, py, pz, q0, q1, q2, q3

@@ -1,0 +1,213 @@
+"""
+The stepping loop: one body through one segment, with the Propagator's per-step work.
+
+The method-independent part of every compiled method (``rk4``, ``dop853``, ``splitting``, each
+in its own module with ``start``/``step``/``dense``): the segment's set-up in local time, the
+failure checks after each step (:mod:`.checks`, as ``integrators.base.Stepper.step``), the
+continuous Euler angles (:mod:`.tracking`, as ``Propagator``) and output sampling, so a whole
+segment runs without returning to Python. Like the reference steppers (``integrators.base``:
+"Local time") every method steps in the segment's local time tau = t - t0 (st[ST.TAU]);
+st[ST.T] is the absolute time handed out.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import dop853, rk4, splitting
+from .checks import collapsed, finite_norm, MIN_STEP_ULPS
+from .layout import CF, FAIL, METHOD, N, ST, STATUS
+from .tracking import refresh_track, set_track, track_pieces, track_rate, unwrapped_euler
+from ..jit import jit, jit_inline
+
+__all__ = ['seg_init', 'step', 'dense', 'track_euler', 'emit', 'advance']
+
+
+@jit
+def seg_init(p, extra, cfg, st, t0, t_bound):
+    """Start a segment [t0, t_bound] from the state already in st[ST.Y] (counters reset)."""
+    st[ST.T] = t0
+    st[ST.T0] = t0
+    st[ST.T_OLD] = t0
+    st[ST.T_BOUND] = t_bound
+    span = t_bound - t0     # local time tau = t - t0 (integrators.base.Stepper.tau_bound)
+    st[ST.TAU] = 0.0
+    st[ST.TAU_OLD] = 0.0
+    st[ST.TAU_BOUND] = span
+    st[ST.N_STEPS] = 0.0
+    st[ST.NFEV_DONE] += st[ST.NFEV]   # evaluations of earlier segments (ensembles)
+    st[ST.NFEV] = 0.0
+    st[ST.FAIL] = FAIL.NONE
+    st[ST.F_VALID] = 0.0
+    st[ST.DENSE] = 0.0
+    st[ST.STATUS] = STATUS.FINISHED if t0 >= t_bound else STATUS.RUNNING
+    big = abs(span)
+    st[ST.COLLAPSE] = MIN_STEP_ULPS * (np.nextafter(big, np.inf) - big)
+    method = int(cfg[CF.METHOD])
+    if method == METHOD.RK4:
+        rk4.start(p, extra, cfg, st)
+    elif method == METHOD.SPLITTING:
+        splitting.start(p, extra, cfg, st)
+    elif st[ST.STATUS] == STATUS.RUNNING:  # scipy's solver is never built for an empty segment
+        dop853.start(p, extra, cfg, st)
+
+
+@jit_inline
+def step(p, extra, cfg, st):
+    """
+    One step of the segment's method with the checks of ``integrators.base.Stepper.step``.
+
+    Returns True on success; on failure the state is left at the last good step and
+    st[ST.FAIL] says why.
+    """
+    t_good = st[ST.T]
+    tau_good = st[ST.TAU]
+    tau_old_good = st[ST.TAU_OLD]
+    for i in range(N):
+        st[ST.Y_OLD + i] = st[ST.Y + i]
+    method = int(cfg[CF.METHOD])
+    if method == METHOD.RK4:
+        code = rk4.step(p, extra, cfg, st)
+    elif method == METHOD.DOP853:
+        code = dop853.step(p, extra, cfg, st)
+    else:
+        code = splitting.step(p, extra, cfg, st)
+    if code == FAIL.NONE and not finite_norm(st[ST.Y:ST.Y + N]):
+        code = FAIL.NONFINITE
+    # (the exact test only for steps near the collapse bound: ST.COLLAPSE >= 16 ulp(tau_good))
+    if (code == FAIL.NONE and st[ST.TAU] - tau_good <= st[ST.COLLAPSE]
+            and collapsed(tau_good, st[ST.TAU], st[ST.TAU_BOUND])):
+        code = FAIL.COLLAPSE
+        st[ST.FAIL_DT] = st[ST.TAU] - tau_good
+    if code != FAIL.NONE:
+        st[ST.T] = t_good
+        st[ST.TAU] = tau_good
+        st[ST.TAU_OLD] = tau_old_good
+        for i in range(N):
+            st[ST.Y + i] = st[ST.Y_OLD + i]
+        st[ST.STATUS] = STATUS.FAILED
+        st[ST.FAIL] = code
+        st[ST.FAIL_T] = t_good
+        return False
+    st[ST.N_STEPS] += 1.0
+    st[ST.T_OLD] = t_good
+    # the absolute time handed out (integrators.base.Stepper.absolute)
+    st[ST.T] = st[ST.T_BOUND] if st[ST.TAU] >= st[ST.TAU_BOUND] else st[ST.T0] + st[ST.TAU]
+    if st[ST.TAU] >= st[ST.TAU_BOUND]:
+        st[ST.STATUS] = STATUS.FINISHED
+    return True
+
+
+@jit
+def dense(p, extra, cfg, st, t):
+    """State at absolute time t in [t_old, t] of the last step, written to st[ST.SCRATCH]."""
+    if t == st[ST.T]:
+        for i in range(N):
+            st[ST.SCRATCH + i] = st[ST.Y + i]
+        return
+    # local time, kept inside the step (integrators.base.Stepper.state_at)
+    tau = min(max(t - st[ST.T0], st[ST.TAU_OLD]), st[ST.TAU])
+    method = int(cfg[CF.METHOD])
+    if method == METHOD.RK4:
+        rk4.dense(p, extra, cfg, st, tau)
+    elif method == METHOD.DOP853:
+        dop853.dense(p, extra, cfg, st, tau)
+    else:
+        splitting.dense(p, extra, cfg, st, tau)
+
+
+@jit
+def track_update(p, extra, cfg, st, track, increment):
+    """
+    Update the track through the last step (the reference's subdivision).
+
+    It first catches up from wherever it was left at the start of the step (see
+    :func:`track_euler`). Returns the number of dense-output evaluations it took (work, at
+    most MAX_TRACK_PIECES - 1).
+    """
+    if st[ST.BUDGET] > 0.0:
+        set_track(st, ST.Y_OLD, track)
+    st[ST.BUDGET] = 0.0
+    t = st[ST.T]
+    t_old = st[ST.T_OLD]
+    h = t - t_old
+    n = track_pieces(increment)
+    for j in range(1, n + 1):
+        if j == n:
+            o = ST.Y
+        else:
+            dense(p, extra, cfg, st, t_old + h * j / n)
+            o = ST.SCRATCH
+        set_track(st, o, track)
+    return n - 1
+
+
+@jit_inline
+def track_euler(p, extra, cfg, st, track):
+    """
+    Follow phi, psi continuously through the step just taken (``Propagator._track_euler``).
+
+    The reference updates the track at the end of every step, subdividing steps over which
+    phi or psi may turn by more than ~1 rad (bound: ``tracking.track_rate``). Here the bound
+    is accumulated over steps and the track is updated only when it would pass 1 rad (from
+    the start of the step, then through the step as the reference does), or by
+    ``tracking.refresh_track``: the track is then never more than 1 rad of bound away from the
+    state, so every unwrapped angle gets the same 2 pi multiple as on the reference path,
+    while most steps skip the three atan2 of the conversion. Returns the dense-output
+    evaluations taken (work).
+    """
+    increment = track_rate(st[ST.Y], st[ST.Y + 1], st[ST.Y + 2], st[ST.Y + 3], st[ST.Y + 4],
+                           st[ST.Y + 5], st[ST.Y + 6]) * (st[ST.T] - st[ST.T_OLD])
+    if st[ST.BUDGET] + increment < 1.0:  # tracking.UNWRAP_STEP
+        st[ST.BUDGET] += increment
+        return 0
+    return track_update(p, extra, cfg, st, track, increment)
+
+
+@jit
+def emit(p, extra, cfg, st, track, t_out, y_out, e_out, k):
+    """Write every output t_out[k:] <= t (state and unwrapped Euler angles); returns the new k."""
+    n_out = t_out.shape[0]
+    while k < n_out and t_out[k] <= st[ST.T]:
+        tk = t_out[k]
+        if tk == st[ST.T]:
+            o = ST.Y
+        else:
+            dense(p, extra, cfg, st, tk)
+            o = ST.SCRATCH
+        for i in range(N):
+            y_out[k, i] = st[o + i]
+        phi, psi, theta = unwrapped_euler(st, o, track)
+        e_out[k, 0] = phi
+        e_out[k, 1] = psi
+        e_out[k, 2] = theta
+        k += 1
+    return k
+
+
+@jit
+def advance(p, extra, cfg, st, track, t_target, t_out, y_out, e_out, k, budget):
+    """
+    Step the segment until t >= t_target, tracking the Euler angles and writing the outputs.
+
+    It stops early when the segment finishes or fails, or when ``budget`` units of work are
+    spent; the outputs written are those passed on the way.
+
+    Work: one unit per step plus one per dense evaluation of the Euler-angle tracking
+    (:func:`track_update`), so one call does a bounded amount of work however long the
+    interval; the caller calls again to go on (same steps, same results). Returns
+    (k, steps, work).
+    """
+    n_out = t_out.shape[0]
+    k = emit(p, extra, cfg, st, track, t_out, y_out, e_out, k)
+    steps = 0
+    work = 0
+    while st[ST.STATUS] == STATUS.RUNNING and st[ST.T] < t_target and work < budget:
+        ok = step(p, extra, cfg, st)
+        if not ok:
+            break
+        steps += 1
+        work += 1 + track_euler(p, extra, cfg, st, track)
+        if k < n_out and t_out[k] <= st[ST.T]:  # (no call, no array reference counting, otherwise)
+            k = emit(p, extra, cfg, st, track, t_out, y_out, e_out, k)
+    refresh_track(st, track)
+    return k, steps, work

@@ -1,0 +1,106 @@
+"""
+Continuous Euler angles: the paper's (phi, psi, theta) followed through every step.
+
+phi and psi are angles of a rotation and jump by 2 pi where atan2 wraps; the samples need them
+continuous, so the track (phi, psi, theta) is updated often enough that no update turns phi or
+psi by more than ~1 rad (:data:`UNWRAP_STEP`): a bound on their rate is |w| / sin(theta),
+capped at |w| / :data:`UNWRAP_MIN_SIN` (below theta ~ 0.1 only phi + psi is well defined).
+The reference path (``Propagator``) and the compiled loop (``stepping``) use these functions.
+"""
+from __future__ import annotations
+
+import math
+
+from .layout import ST
+from ..jit import jit, jit_inline
+
+__all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards',
+           'unwrapped_euler', 'set_track', 'track_rate', 'track_pieces', 'refresh_track']
+
+#: Largest turn of phi or psi between two track updates [rad].
+UNWRAP_STEP = 1.0
+#: sin(theta) below which the rate bound stops growing.
+UNWRAP_MIN_SIN = 0.1
+#: Most pieces a single step is cut into to follow phi and psi (bounded work per step: a step
+#: far too long for the spin, or a state running away, is followed in this many pieces).
+MAX_TRACK_PIECES = 100_000
+_TWO_PI = 2.0 * math.pi
+
+
+@jit
+def unwrap_towards(angle, reference):
+    """Return angle + 2 pi k nearest to ``reference`` [rad]."""
+    return angle + _TWO_PI * round((reference - angle) / _TWO_PI)
+
+
+@jit
+def unwrapped_euler(st, o, track):
+    """
+    Return the paper's (phi, psi, theta) of quaternion st[o+3:o+7].
+
+    phi and psi are unwrapped towards track[0], track[1] (z-x-z, orbital -> body; the
+    rotation.matrix_to_euler of C^T).
+    """
+    q0 = st[o + 3]
+    q1 = st[o + 4]
+    q2 = st[o + 5]
+    q3 = st[o + 6]
+    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    c00 = 1.0 - s * (q2 * q2 + q3 * q3)
+    c02 = s * (q1 * q3 + q0 * q2)
+    c10 = s * (q1 * q2 + q0 * q3)
+    c12 = s * (q2 * q3 - q0 * q1)
+    c20 = s * (q1 * q3 - q0 * q2)
+    c21 = s * (q2 * q3 + q0 * q1)
+    c22 = 1.0 - s * (q1 * q1 + q2 * q2)
+    sth = math.hypot(c20, c21)
+    theta = math.atan2(sth, c22)
+    if sth < 1e-300:
+        phi = math.atan2(c10, c00)
+        psi = 0.0
+    else:
+        psi = math.atan2(c20, c21)
+        phi = math.atan2(c02, -c12)
+    return unwrap_towards(phi, track[0]), unwrap_towards(psi, track[1]), theta
+
+
+@jit
+def set_track(st, o, track):
+    """
+    Set track to the unwrapped Euler angles of st[o:o+7], unless they are not finite.
+
+    Not finite: a dense output inside a step whose state ran away (skipped).
+    """
+    phi, psi, theta = unwrapped_euler(st, o, track)
+    if math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta):
+        track[0] = phi
+        track[1] = psi
+        track[2] = theta
+
+
+@jit_inline
+def track_rate(wx, wy, wz, q0, q1, q2, q3):
+    """Return the bound |w| / max(UNWRAP_MIN_SIN, sin theta) on how fast phi, psi turn [rad/yr]."""
+    w = math.sqrt(wx ** 2 + wy ** 2 + wz ** 2)
+    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    cos_theta = 1.0 - s * (q1 * q1 + q2 * q2)
+    sin_theta = math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta))
+    return w / max(UNWRAP_MIN_SIN, sin_theta)
+
+
+@jit
+def track_pieces(angle):
+    """Return how many pieces a step is followed in (1 .. MAX_TRACK_PIECES), from its bound."""
+    pieces = angle / UNWRAP_STEP
+    # (not <=: also an infinite rate, |w| overflowing in a state running away)
+    if not pieces <= MAX_TRACK_PIECES:
+        return MAX_TRACK_PIECES
+    return max(1, int(math.ceil(pieces)))
+
+
+@jit
+def refresh_track(st, track):
+    """Bring a lazily updated track to the current state (see ``stepping.track_euler``)."""
+    if st[ST.BUDGET] > 0.0:
+        set_track(st, ST.Y, track)
+        st[ST.BUDGET] = 0.0

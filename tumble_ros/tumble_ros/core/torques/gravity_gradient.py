@@ -1,0 +1,89 @@
+"""
+The Sun's gravity-gradient torque on the asteroid in a circular orbit (paper eqs 11-13).
+
+Units: time in years, angular rates in rad/yr, inertia normalised (any unit), torque in
+inertia-units * rad/yr^2. The circular orbit has GM/R0^3 = ws^2 (Kepler's third law), so the
+torque only needs the orbit rate ws and the Sun's direction. Frames: the orbital frame
+(X', Y' in the orbit plane, Z' its normal) and the body principal axes; a quaternion q turns
+body into orbital (scalar first).
+
+The scalar functions :func:`sun_direction_body` and :func:`tidal_torque` are what the
+compiled kernels inline; the array helpers below run the *same* functions (their Python
+source) on numpy arrays, so the formula exists once.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .frames import orbital_to_body
+from ..jit import jit_inline
+
+__all__ = ['sun_direction_orbital', 'sun_direction_body', 'tidal_torque', 'tidal_coefficients',
+           'gravity_gradient_torque', 'gravity_gradient_potential']
+
+
+@jit_inline
+def sun_direction_body(orbit_rate, t, q0, q1, q2, q3):
+    """
+    Return the unit Sun direction u = C(q)^T s(t) in body axes.
+
+    s(t) = (sin ws t, cos ws t, 0) in the orbital frame (the paper's R0(t)/R0: it starts on +Y'
+    and turns clockwise about Z'), C(q) the body -> orbital matrix of the quaternion q.
+    """
+    return orbital_to_body(math.sin(orbit_rate * t), math.cos(orbit_rate * t), 0.0,
+                           q0, q1, q2, q3)
+
+
+@jit_inline
+def tidal_torque(kx, ky, kz, ux, uy, uz):
+    """
+    Return M = 3 ws^2 u x (I u) in body axes (paper eq 12 with GM/R0^3 = ws^2).
+
+    (kx, ky, kz) = :func:`tidal_coefficients`: Mx = 3 ws^2 (Iz - Iy) uy uz, My = 3 ws^2
+    (Ix - Iz) ux uz, Mz = 3 ws^2 (Iy - Ix) ux uy.
+    """
+    return kx * uy * uz, ky * ux * uz, kz * ux * uy
+
+
+def tidal_coefficients(inertia, orbit_rate: float) -> tuple[float, float, float]:
+    """Return (3 ws^2 (Iz - Iy), 3 ws^2 (Ix - Iz), 3 ws^2 (Iy - Ix)) for :func:`tidal_torque`."""
+    ix, iy, iz = (float(v) for v in inertia)
+    ws = float(orbit_rate)
+    k = 3.0 * ws * ws
+    return k * (iz - iy), k * (ix - iz), k * (iy - ix)
+
+
+def _py(f):
+    """Return the Python source function of a compiled one (it runs on arrays too)."""
+    return getattr(f, 'py_func', f)
+
+
+def sun_direction_orbital(t: float, orbit_rate: float) -> np.ndarray:
+    """Return the unit vector from the asteroid to the Sun in the orbital frame, R0(t)/R0."""
+    return np.array([math.sin(orbit_rate * t), math.cos(orbit_rate * t), 0.0])
+
+
+def gravity_gradient_torque(u_body, inertia, orbit_rate: float) -> np.ndarray:
+    """
+    Torque M = 3 ws^2 u x (I u) in body axes for (3,) or (n, 3) Sun directions ``u_body``.
+
+    The same arithmetic as the kernels (:func:`tidal_torque`), on arrays.
+    """
+    u = np.asarray(u_body, dtype=float)
+    torque = _py(tidal_torque)(*tidal_coefficients(inertia, orbit_rate),
+                               u[..., 0], u[..., 1], u[..., 2])
+    return np.stack(np.broadcast_arrays(*torque), axis=-1)
+
+
+def gravity_gradient_potential(u_body, inertia, orbit_rate: float) -> np.ndarray:
+    """
+    Orientation-dependent part of the tidal potential energy, (3/2) ws^2 u.I.u.
+
+    Its negative gradient with respect to a rotation of the body gives the torque above;
+    it enters the Jacobi integral (see ``dynamics.jacobi_integral``).
+    """
+    u = np.asarray(u_body, dtype=float)
+    i = np.asarray(inertia, dtype=float)
+    return 1.5 * orbit_rate**2 * np.sum(u * u * i, axis=-1)
