@@ -53,3 +53,35 @@ def test_grid_never_passes_the_end(duration):
     interval_ns, n = tb.sample_grid(1e-7, duration)
     assert interval_ns == 1
     assert tb.to_years((n - 1) * interval_ns) <= duration < tb.to_years(n * interval_ns)
+
+
+@pytest.mark.parametrize('spy', [1.0, 3.0, 0.01])
+def test_the_grid_object_gives_the_stamps_times_of_sample_grid(spy):
+    tb = TimeBase(spy)
+    interval_ns, n = tb.sample_grid(0.0013, 0.7)
+    grid = tb.grid(0.0013, 0.7)
+    assert (grid.interval_ns, grid.count) == (interval_ns, n)
+    times = grid.times()
+    assert times.tolist() == [tb.to_years(k * interval_ns) for k in range(n)]  # bit for bit
+    assert grid.times(3, 7).tolist() == times[3:7].tolist()
+    assert grid.time(n - 1) == times[-1] <= 0.7
+    assert grid.index_of(grid.stamp(5)) == 5
+    assert grid.index_of(grid.stamp(5) + 1) is None and grid.index_of(grid.stamp(n)) is None
+
+
+def test_scenario_output_times_are_the_node_grid_at_one_second_per_year():
+    """simulate()'s default grid is the one the sim node publishes (one grid, not two)."""
+    from tumble_ros.core import Scenario
+
+    for interval, duration in [(0.002, 2.0), (0.01, 2000.0), (1e-4, 0.3), (0.1 + 0.2, 0.9)]:
+        sc = Scenario(output_interval=interval, duration=duration)
+        grid = TimeBase(1.0).grid(interval, duration)
+        assert sc.output_times.tolist() == grid.times().tolist()
+        assert sc.output_times[-1] <= duration
+
+
+def test_a_core_output_interval_below_a_nanosecond_is_refused_naming_t_eval():
+    from tumble_ros.core import Scenario, ScenarioError
+
+    with pytest.raises(ScenarioError, match=r'^output_interval:.*1 ns.*t_eval'):
+        Scenario(duration=1e-6, output_interval=1e-10)

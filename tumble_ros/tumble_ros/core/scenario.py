@@ -23,10 +23,25 @@ import math
 from pathlib import Path
 from typing import Any, Mapping
 
-from tumble_ros.errors import CoreError
+import numpy as np
 
 from .dynamics import ATTITUDE_MODELS
 from .integrators import INTEGRATORS
+from .limits import (
+    MAX_ATOL,
+    MAX_DURATION,
+    MAX_OMEGA,
+    MAX_ORBIT_RATE,
+    MAX_ROTATION,
+    MAX_RTOL,
+    MAX_SAMPLES,
+    MAX_STEPS,
+    MIN_ORBIT_RATE,
+    MIN_RTOL,
+    RESOLUTION_ULPS,
+    ScenarioError,
+)
+from .timebase import SampleGrid, TimeBase
 from .torques import TorqueComponent
 
 __all__ = [
@@ -44,47 +59,6 @@ __all__ = [
 ]
 
 IMPACT_FRAMES = ('body', 'orbital')
-MIN_RTOL, MAX_RTOL = 100 * 2.220446049250313e-16, 0.1  # scipy raises smaller rtol to 100 eps
-
-# -- Validated ranges (docs/physics.md, "Validated ranges"). Every bound keeps a run physically
-# meaningful and its work finite; none is near a value the paper or a real asteroid needs.
-
-#: Orbital rate ws [rad/yr]: 0 (no torque) or within [MIN, MAX]. Real heliocentric circular
-#: orbits: 2 pi / P, from ~2e-7 rad/yr (Oort cloud, 1e5 AU, P ~ 3e7 yr) to ~2e4 rad/yr (an orbit
-#: grazing the Sun's surface, P ~ 2.8 h); the bounds leave two orders of magnitude on each side.
-#: ws = 1e300 made 3 ws^2 infinite and the right-hand side NaN.
-MIN_ORBIT_RATE, MAX_ORBIT_RATE = 1e-9, 1e6
-#: Largest |omega0| [rad/yr]. The fastest known asteroids spin in a few seconds (~1e8 rad/yr);
-#: 1e10 rad/yr (a period of 0.02 s) leaves 100x. Every method needs at least a step per
-#: radian or so of rotation, so the work per simulated year grows with |omega|.
-MAX_OMEGA = 1e10
-#: Largest absolute tolerance: the state holds the unit quaternion (components <= 1), so an
-#: atol of 0.1 already accepts errors of a tenth of the attitude itself (as MAX_RTOL does for
-#: every component). atol = 1e300 accepted any step: the state ran away.
-MAX_ATOL = 0.1
-#: Longest run [yr]: the model (rigid body, fixed circular orbit, no YORP, no orbital
-#: evolution) means nothing over a fraction of the solar system's age (4.6e9 yr); at
-#: t = 1e9 yr float64 still resolves 1.2e-7 yr, below the paper's 3e-7-yr pulses.
-MAX_DURATION = 1e9
-#: Most integration steps of a fixed-step run (duration / step) and smallest duration /
-#: max_step of an adaptive one: 1e10 steps take ~40 min (rk4) to ~4 h (splitting6) compiled and
-#: weeks on the reference path; more is a typo, not a simulation.
-MAX_STEPS = 10**10
-#: Most output samples (duration / output_interval + 1): simulate() keeps ~230 bytes per
-#: sample (2.3 GB at the bound) and the ROS node publishes ~2,000 samples/s (1.4 h).
-MAX_SAMPLES = 10**7
-#: Largest max(|omega0|, orbit_rate) * duration [rad]: φ and ψ are followed at least every
-#: radian of rotation (Propagator._track_euler) and the torque turns with the orbit, so a run
-#: costs at least this many units of work; 1e10 matches MAX_STEPS.
-MAX_ROTATION = 1e10
-#: An interval (a step, an impact pulse) must span at least this many units in the last place
-#: of the time it ends at: shorter ones are what the integrators' step-collapse test refuses
-#: (kernels.checks.MIN_STEP_ULPS), and t + dt rounds to t for dt < 1/2 ulp.
-RESOLUTION_ULPS = 16
-
-
-class ScenarioError(CoreError, ValueError):
-    """An invalid scenario field; the message starts with the field's name."""
 
 
 def _fail(name: str, why: str, value: Any) -> None:
@@ -326,7 +300,8 @@ class Scenario:
     duration : float
         Simulated time span tk [yr], starting at t = 0.
     output_interval : float
-        Spacing of output samples [yr] (the paper: tk / n with n = 1000).
+        Spacing of output samples [yr] (the paper: tk / n with n = 1000); at least 1e-9 yr,
+        rounded to whole nanoseconds of ROS time (:attr:`output_times`).
     integrator : IntegratorSettings
     impacts : tuple of Impact
     torques : tuple of TorqueComponent
@@ -334,7 +309,6 @@ class Scenario:
         (``core.torques``: defined outside core, run by every integrator). Python API only:
         they are functions, so they are not ROS parameters (:meth:`to_parameters` leaves them
         out).
-
 
     """
 
@@ -415,6 +389,10 @@ class Scenario:
         if self.output_interval > self.duration:
             _fail('output_interval', f'must be <= duration ({self.duration:g} yr)',
                   self.output_interval)
+        try:  # the grid must fit ROS stamps (at least 1 ns apart: 1e-9 yr at 1 s per year)
+            TimeBase().check(self.output_interval, self.duration)
+        except ScenarioError as err:
+            raise ScenarioError(f'{err} (simulate(scenario, t_eval) samples any times)') from None
         samples = self.duration / self.output_interval + 1.0
         if samples > MAX_SAMPLES:
             _fail('output_interval',
@@ -447,12 +425,21 @@ class Scenario:
 
     # -- derived quantities ---------------------------------------------------------
     @property
-    def output_times(self):
-        """Return the default output grid: 0, dt, 2 dt, ... up to and including ``duration``."""
-        import numpy as np
+    def output_grid(self) -> SampleGrid:
+        """Return the output grid at the default time base (one ROS second per year)."""
+        return TimeBase().grid(self.output_interval, self.duration)
 
-        n = int(math.floor(self.duration / self.output_interval * (1.0 + 1e-12)))
-        return np.minimum(np.arange(n + 1) * self.output_interval, self.duration)
+    @property
+    def output_times(self) -> np.ndarray:
+        """
+        Return the default output grid [yr]: every ``output_interval`` from 0 to ``duration``.
+
+        The same grid as the sim node's (:class:`~.timebase.SampleGrid`: the interval rounded to
+        whole nanoseconds of ROS time at one second per year, times t_k = k interval_ns / 1e9),
+        so ``simulate(scenario)`` samples exactly the times the node publishes at its default
+        ``seconds_per_year``.
+        """
+        return self.output_grid.times()
 
     def replace(self, **changes) -> 'Scenario':
         """Return a copy with some fields changed (validated again)."""

@@ -17,9 +17,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 
-from .scenario import MAX_SAMPLES, ScenarioError
+import numpy as np
 
-__all__ = ['TimeBase', 'MAX_STAMP_NS']
+from .limits import MAX_SAMPLES, ScenarioError
+
+__all__ = ['TimeBase', 'SampleGrid', 'MAX_STAMP_NS']
 
 #: Largest stamp: Time.sec is an int32.
 MAX_STAMP_NS = (2**31 - 1) * 10**9
@@ -82,7 +84,7 @@ class TimeBase:
         The grid of ``interval`` years over ``duration`` years fits when the run ends within the
         int32 limit (:meth:`check_span`), the interval is at least 1 ns of ROS time (the stamps'
         resolution: a shorter one would be rounded to a different interval, or to 0) and the grid
-        has at most ``scenario.MAX_SAMPLES`` samples.
+        has at most ``limits.MAX_SAMPLES`` samples.
         """
         self.check_span(duration)
         ns = interval * self.ns_per_year
@@ -101,6 +103,11 @@ class TimeBase:
                 f'exceed {MAX_SAMPLES:.0e}'
             )
 
+    def grid(self, interval: float, duration: float) -> 'SampleGrid':
+        """Return the output grid of ``interval`` years over ``duration`` years."""
+        interval_ns, n = self.sample_grid(interval, duration)
+        return SampleGrid(self, interval_ns, n)
+
     def sample_grid(self, interval: float, duration: float) -> tuple[int, int]:
         """
         Output grid in stamps: (interval_ns, n_samples) with samples at k * interval_ns.
@@ -115,3 +122,48 @@ class TimeBase:
         while n > 1 and self.to_years((n - 1) * interval_ns) > duration:
             n -= 1  # the stamp rounded up past the end: the last sample must lie within the run
         return interval_ns, n
+
+
+@dataclass(frozen=True)
+class SampleGrid:
+    """
+    The output grid, the one for every consumer: sample k at stamp k * interval_ns.
+
+    Its time is ``timebase.to_years(k * interval_ns)`` [yr], the float the simulator integrates
+    to and a reader recovers from the stamp bit for bit. ``Scenario.output_times`` (the default
+    of ``simulate``) is this grid at the default time base; the sim node publishes it at its own
+    ``seconds_per_year``, and the comparator evaluates its model on it.
+
+    Attributes
+    ----------
+    timebase : TimeBase
+    interval_ns : int
+        Spacing of the stamps [ns] (the output interval rounded to whole nanoseconds).
+    count : int
+        Number of samples; the last lies within the run.
+
+    """
+
+    timebase: TimeBase
+    interval_ns: int
+    count: int
+
+    def stamp(self, k: int) -> int:
+        """Return the stamp [ns] of sample k."""
+        return k * self.interval_ns
+
+    def time(self, k: int) -> float:
+        """Return the time [yr] of sample k."""
+        return self.timebase.to_years(k * self.interval_ns)
+
+    def times(self, start: int = 0, stop: int | None = None) -> np.ndarray:
+        """Return the times [yr] of samples start .. stop - 1 (default: all), as :meth:`time`."""
+        stop = self.count if stop is None else stop
+        stamps = np.arange(start, stop, dtype=np.int64) * self.interval_ns
+        return stamps / self.timebase.ns_per_year
+
+    def index_of(self, stamp_ns: int) -> int | None:
+        """Return k if ``stamp_ns`` is the stamp of sample k, else None."""
+        if stamp_ns % self.interval_ns or not 0 <= stamp_ns // self.interval_ns < self.count:
+            return None
+        return stamp_ns // self.interval_ns

@@ -77,7 +77,7 @@ class ComparatorNode(GuardedNode):
         self._timebase = TimeBase()
         self._model = None  # anchored on the latest segment
         self._previous: list = []  # earlier segments' models, newest last: (segment_start, model)
-        self._interval_ns = 0  # the simulator's sample spacing [ns] (0: unknown)
+        self._grid = None  # the simulator's output grid (None: unknown)
         self._ahead = (None, 0, [])  # (model, index of its first sample, model omega on the grid)
         self._received = 0
         self.compared = 0  # comparisons published (each on the three comparison topics)
@@ -146,8 +146,7 @@ class ComparatorNode(GuardedNode):
             return
         try:
             scenario = parse_scenario(msg.parameters_yaml)
-            self._interval_ns = self._timebase.sample_grid(scenario.output_interval,
-                                                           scenario.duration)[0]
+            self._grid = self._timebase.grid(scenario.output_interval, scenario.duration)
             q = msg.attitude
             self._model = make_model(
                 self._model_name, scenario, t0=msg.segment_start,
@@ -204,13 +203,13 @@ class ComparatorNode(GuardedNode):
 
     def _model_omega(self, model, stamp_ns: int, t: float) -> list[float]:
         """Evaluate ``model`` at ``t`` [yr] (on the simulator's grid: LOOKAHEAD at once)."""
-        step = self._interval_ns
-        if not step or stamp_ns % step:
+        grid = self._grid
+        k = grid.index_of(stamp_ns) if grid is not None else None
+        if k is None:
             return model.omega(np.array([t]))[0].tolist()
-        k = stamp_ns // step
         cached_model, k0, values = self._ahead
         if model is not cached_model or not 0 <= k - k0 < len(values):
-            times = np.array([self._timebase.to_years(j * step) for j in range(k, k + LOOKAHEAD)])
+            times = grid.times(k, min(k + LOOKAHEAD, grid.count))
             k0, values = k, model.omega(times).tolist()
             self._ahead = (model, k0, values)
         return values[k - k0]

@@ -116,8 +116,8 @@ class SimNode(GuardedNode):
         self.scenario = Scenario.from_parameters(read_scenario_parameters(self))
         self.timebase = TimeBase(params['seconds_per_year'])
         self.timebase.check_span(self.scenario.duration)
-        self._interval_ns, self._n_samples = self.timebase.sample_grid(
-            self.scenario.output_interval, self.scenario.duration)
+        # the output grid (the one of Scenario.output_times, at this node's seconds_per_year)
+        self._grid = self.timebase.grid(self.scenario.output_interval, self.scenario.duration)
         self._limits = ImpactLimits(params['max_impact_duration'], params['max_impact_impulse'])
         self._rtf = params['real_time_factor']
         self._propagator = Propagator(self.scenario)
@@ -162,7 +162,7 @@ class SimNode(GuardedNode):
         steady_timer(self, STATUS_PERIOD, self._on_status_period)
         self.get_logger().info(
             f'simulating {self.scenario.duration:g} yr with {self.scenario.integrator.method}, '
-            f'{self._n_samples} samples every {self.scenario.output_interval:g} yr, '
+            f'{self._grid.count} samples every {self.scenario.output_interval:g} yr, '
             f'real_time_factor {self._rtf:g}')
 
     # -- parameters ---------------------------------------------------------------------
@@ -213,7 +213,7 @@ class SimNode(GuardedNode):
     @property
     def t(self) -> float:
         """Return the simulated time [yr] of the last published sample (0 before the first)."""
-        return self.timebase.to_years(max(0, self._next_k - 1) * self._interval_ns)
+        return self._grid.time(max(0, self._next_k - 1))
 
     def _on_tick(self) -> None:
         if self._state != SimStatus.RUNNING:
@@ -230,10 +230,10 @@ class SimNode(GuardedNode):
                 return self._next_k - 1  # not all expected consumers are here yet
             # for good: a consumer that leaves later is not waited for
             self._consumers_gate_open = True
-        slowest = self._consumers.slowest_ns(max(0, self._next_k - 1) * self._interval_ns)
+        slowest = self._consumers.slowest_ns(self._grid.stamp(max(0, self._next_k - 1)))
         if slowest is None:
-            return self._n_samples
-        return (slowest // self._interval_ns if slowest >= 0 else -1) + WINDOW
+            return self._grid.count
+        return (slowest // self._grid.interval_ns if slowest >= 0 else -1) + WINDOW
 
     def _paced_index(self) -> int:
         if self._rtf == 0.0:
@@ -242,16 +242,16 @@ class SimNode(GuardedNode):
         if self._pace_origin is None:
             self._pace_origin = (now, self._next_k)
         wall0, k0 = self._pace_origin
-        t_target = self.timebase.to_years(k0 * self._interval_ns) + self._rtf * (now - wall0)
-        return int(self.timebase.to_ns(t_target) // self._interval_ns)
+        t_target = self._grid.time(k0) + self._rtf * (now - wall0)
+        return int(self.timebase.to_ns(t_target) // self._grid.interval_ns)
 
     def _publish_up_to(self, k_last: int) -> None:
-        k_last = min(k_last, self._n_samples - 1)
+        k_last = min(k_last, self._grid.count - 1)
         if self._next_k <= k_last:
             self._schedule_pending()
-            stamps = [k * self._interval_ns for k in range(self._next_k, k_last + 1)]
+            stamps = [self._grid.stamp(k) for k in range(self._next_k, k_last + 1)]
             done, arrays, failure = self._propagator.sample_many(
-                [self.timebase.to_years(ns) for ns in stamps])
+                self._grid.times(self._next_k, k_last + 1))
             # Impacts that ended within the batch: their events and new descriptions go out
             # before its samples (the comparator keeps the previous segment's model for the
             # samples that trail a description).
@@ -265,7 +265,7 @@ class SimNode(GuardedNode):
                 return
             # done < len(stamps) without a failure: the call used its work budget; the next tick
             # goes on.
-        if self._next_k >= self._n_samples:
+        if self._next_k >= self._grid.count:
             self._set_state(SimStatus.FINISHED, f'finished at t = {self.t:g} yr')
 
     def _schedule_pending(self) -> None:
@@ -336,7 +336,7 @@ class SimNode(GuardedNode):
         """Publish the state, t and ``message``, stamped with simulated time like every sample."""
         self._status_message = message
         msg = SimStatus(state=self._state, t=self.t, message=message)
-        msg.header.stamp = stamp(max(0, self._next_k - 1) * self._interval_ns)
+        msg.header.stamp = stamp(self._grid.stamp(max(0, self._next_k - 1)))
         self._pub_status.publish(msg)
 
     def _on_status_period(self) -> None:
