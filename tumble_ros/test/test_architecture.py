@@ -97,3 +97,29 @@ def test_the_check_sees_relative_and_nested_imports():
     assert 'tumble_ros.core.kernels' in ensemble  # `from . import kernels as K`
     assert 'tumble_ros.core.simulate' in ensemble  # `from .simulate import ...`
     assert 'tumble_ros.core' in imports(PACKAGE / 'cli' / 'warmup.py', known)
+
+
+#: Inside core, bottom up: the compiled physics may import only the numba switch, the
+#: torques, the limits/kernels below it; never the integrators, the propagator or the scenario.
+CORE_BOTTOM = {
+    'tumble_ros.core.jit': set(),
+    'tumble_ros.core.torques': {'tumble_ros.core.jit'},
+    'tumble_ros.core.kernels': {'tumble_ros.core.jit', 'tumble_ros.core.torques'},
+    'tumble_ros.core.limits': {'tumble_ros.core.kernels', 'tumble_ros.core.jit',
+                               'tumble_ros.core.torques'},
+}
+
+
+def test_the_compiled_physics_is_the_bottom_of_core():
+    edges = graph()
+    wrong = []
+    for module, targets in edges.items():
+        for prefix, allowed in CORE_BOTTOM.items():
+            if module == prefix or module.startswith(prefix + '.'):
+                for target in targets:
+                    inside = target == prefix or target.startswith(prefix + '.')
+                    below = any(target == a or target.startswith(a + '.') for a in allowed)
+                    if target.startswith('tumble_ros.core') and not (inside or below):
+                        wrong.append(f'{module} -> {target}')
+    assert not wrong
+    assert 'tumble_ros.core.kernels.physics' in edges  # (the check sees the new modules)

@@ -50,10 +50,9 @@ the reference path; the compiled loop runs them many steps per call.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from .base import Stepper
-from ..kernels import body_torque, free_flow, problem_array, pulse_step_count
+from ..kernels import (body_torque, config_array, flow_called, N, new_state, problem_array,
+                       pulse_step_count, ST)
 from ..torques import extra_torque_arrays
 
 __all__ = ['Splitting', 'Splitting4', 'Splitting6', 'COMPOSITIONS']
@@ -103,8 +102,8 @@ class Splitting(Stepper):
                 f'{self.name}: attitude {problem.attitude!r} not supported: {self.requirement}')
         span = self.tau_bound
         wx, wy, wz = self.y[:3].tolist()
-        # The segment's coefficients, as the compiled loop has them: the torque and the free
-        # flow below are the kernels' own functions (one implementation of the physics).
+        # The segment's arrays, as the compiled loop has them: the step below is the kernels'
+        # own (one implementation of the method and its physics), taken one at a time.
         self._p = problem_array(problem.inertia, problem.orbit_rate, problem.torque_body,
                                 problem.torque_orbital)
         self._extra = extra_torque_arrays(problem.extra_torques)
@@ -113,12 +112,8 @@ class Splitting(Stepper):
         self._h = span / n
         self._n_total = n
         self._gammas = self.composition()
-        total, cums = 0.0, []
-        for g in self._gammas:
-            total += g
-            cums.append(total)
-        cums[-1] = 1.0
-        self._cums = tuple(cums)
+        self._cfg = config_array(self.kernel, settings, self._gammas, self.order)
+        self._work = new_state()  # the kernels' state layout, for their flow
         self._torq = body_torque(self._p, self._extra, self.t0 + self.tau, *self.y[3:].tolist())
         ix, iy, iz = problem.inertia
         # pi = I w is carried from step to step, not recomputed from w: the round trip
@@ -134,29 +129,19 @@ class Splitting(Stepper):
 
     def _flow(self, s0, y, pi, torq, h):
         """
-        Take a composed step of length h.
+        Take a composed step of length h: the kernels' own step (``kernels.splitting.flow``).
 
         From local time s0, attitude y[3:], momentum pi and torque torq; returns (state,
         momentum, torque at the end).
         """
-        p = self._p
-        ix, iy, iz = self.problem.inertia
-        px, py, pz = (float(v) for v in pi)
-        q0, q1, q2, q3 = y[3:].tolist()
-        tx, ty, tz = torq
-        for g, c in zip(self._gammas, self._cums):
-            a = g * h
-            half = 0.5 * a
-            px += half * tx
-            py += half * ty
-            pz += half * tz
-            px, py, pz, q0, q1, q2, q3 = free_flow(p, a, px, py, pz, q0, q1, q2, q3)
-            tx, ty, tz = body_torque(p, self._extra, self.t0 + (s0 + c * h), q0, q1, q2, q3)
-            px += half * tx
-            py += half * ty
-            pz += half * tz
-        return (np.array((px / ix, py / iy, pz / iz, q0, q1, q2, q3)), (px, py, pz),
-                (tx, ty, tz))
+        st = self._work
+        st[ST.Y_OLD:ST.Y_OLD + N] = y
+        st[ST.PI_OLD:ST.PI_OLD + 3] = pi
+        st[ST.TORQUE_OLD:ST.TORQUE_OLD + 3] = torq
+        flow_called(self._p, self._extra, self._cfg, st, ST.Y_OLD, ST.PI_OLD, ST.TORQUE_OLD,
+                    self.t0, s0, h, ST.Y, ST.PI, ST.TORQUE)
+        return (st[ST.Y:ST.Y + N].copy(), tuple(st[ST.PI:ST.PI + 3].tolist()),
+                tuple(st[ST.TORQUE:ST.TORQUE + 3].tolist()))
 
     def _step_impl(self):
         s = self.tau
