@@ -38,7 +38,7 @@ from .rotation import (
     matrix_to_euler,
     quaternion_to_matrix,
 )
-from .torques import extra_torque_arrays
+from .torques import extra_torque_arrays, gravity_gradient_potential
 
 __all__ = [
     'AttitudeModel',
@@ -192,9 +192,5 @@ def jacobi_integral(t, omega, c_body_to_orbital, inertia, orbit_rate: float) -> 
     # body components of an orbital vector v are C^T v
     u = np.einsum('...ji,...j->...i', c, u_orbital)
     z = c[..., 2, :]
-    h = i * w
-    return (
-        0.5 * np.sum(w * h, axis=-1)
-        + 1.5 * orbit_rate**2 * np.sum(u * u * i, axis=-1)
-        + orbit_rate * np.sum(h * z, axis=-1)
-    )
+    return (kinetic_energy(w, i) + gravity_gradient_potential(u, i, orbit_rate)
+            + orbit_rate * np.sum(i * w * z, axis=-1))
