@@ -7,12 +7,16 @@ ament index and, because sourcing install/setup.bash can drop the venv from AMEN
 also under ``sys.prefix``.
 """  # noqa: A005 (tumble_ros.io is a subpackage: absolute imports never confuse it with io)
 
+from .columns import FlatLayout, read_columns, TopicColumns
 from .mcap_reader import (McapError, McapSummary, read_messages, RecordedMessage, summarize,
                           TopicSummary)
 from .mcap_writer import McapWriter, offered_qos_yaml
 from .msgdefs import message_definition, MessageDefinitionError, normalize_type_name, type_hash
 
 __all__ = [
+    'FlatLayout',
+    'read_columns',
+    'TopicColumns',
     'McapError',
     'McapSummary',
     'McapWriter',

@@ -52,6 +52,7 @@ from pathlib import Path
 import stat
 import struct
 from typing import Any
+import zlib
 
 from mcap.exceptions import EndOfFile
 from mcap.opcode import Opcode
@@ -241,9 +242,25 @@ class _BoundedFile:
         return self.file.read(size)
 
 
+class _StreamReader(StreamReader):
+    """
+    mcap's StreamReader, passing over the message indexes without parsing them.
+
+    A front-to-back reader has no use for them, and the library parses each entry of an index
+    (two 8-byte reads per message): for a recording of 1.4 M messages that took longer than
+    decoding the messages themselves as columns (:mod:`.columns`). The record is consumed as
+    the library consumes a record it does not know (``_read_record`` returning None).
+    """
+
+    def _read_record(self, opcode: int, length: int):
+        if opcode == Opcode.MESSAGE_INDEX:
+            return None
+        return super()._read_record(opcode, length)
+
+
 def _records(file: io.BufferedReader) -> Iterator[Any]:
     """Return the library's records from the file's position on, chunks still compressed."""
-    return StreamReader(_BoundedFile(file), skip_magic=True, emit_chunks=True).records
+    return _StreamReader(_BoundedFile(file), skip_magic=True, emit_chunks=True).records
 
 
 def _truncation(file: io.BufferedReader, position: int) -> str | None:
@@ -335,18 +352,22 @@ def _decompressing_reader(chunk: Chunk):
                                                       read_across_frames=True)
 
 
-def _chunk_records(chunk: Chunk) -> list[Any]:
-    """
-    Return the schemas, channels and messages of a chunk, split by the library's breakup_chunk.
-
-    The chunk is decompressed here first, within the bounds; breakup_chunk checks its CRC.
-    """
+def _chunk_data(chunk: Chunk) -> bytes:
+    """Return the chunk's decompressed records, within the bounds, its CRC checked."""
     _check_chunk_size(chunk)
     reader = _decompressing_reader(chunk)
-    if reader is not None:
-        chunk = replace(chunk, compression='',
-                        data=_read_exactly(reader, chunk.uncompressed_size))
-    return breakup_chunk(chunk, validate_crc=True)
+    data = (_read_exactly(reader, chunk.uncompressed_size) if reader is not None
+            else bytes(chunk.data))
+    if len(data) != chunk.uncompressed_size:
+        raise _Damaged(f'a chunk holds {len(data)} bytes, it declares {chunk.uncompressed_size}')
+    if chunk.uncompressed_crc and zlib.crc32(data) != chunk.uncompressed_crc:
+        raise _Damaged('a chunk fails its CRC check (the data is damaged)')
+    return data
+
+
+def _chunk_records(chunk: Chunk, data: bytes) -> list[Any]:
+    """Return the schemas, channels and messages of a chunk (the library's breakup_chunk)."""
+    return breakup_chunk(replace(chunk, compression='', data=data), validate_crc=False)
 
 
 # -- scanning -------------------------------------------------------------------------------------
@@ -378,18 +399,32 @@ class _Scan:
 
     def messages(self) -> Iterator[Message]:
         """Messages in file order (chunks expanded); stops cleanly where the file breaks."""
+        def expand(chunk: Chunk, data: bytes) -> Iterator[Message]:
+            for item in _chunk_records(chunk, data):
+                if isinstance(item, Message):
+                    yield item
+                else:
+                    self.add(item)
+
+        return self.items(expand)
+
+    def items(self, chunk_items) -> Iterator[Any]:
+        """
+        Yield the file's Messages outside chunks, and the items ``chunk_items`` makes of chunks.
+
+        ``chunk_items(chunk, data)`` is called for each chunk, in file order.
+        ``data`` is a chunk's decompressed records (bounded, CRC checked). Stops cleanly where the
+        file breaks (``finalised`` / ``problem`` say how), ``chunk_items`` included: it parses,
+        the caller decodes.
+        """
         try:
             for record in _records(self.file):
                 self._end = self.file.tell()
                 if isinstance(record, Chunk):
-                    records = _chunk_records(record)
+                    data = _chunk_data(record)
                     self.chunk_count += 1
                     self.compressions.add(record.compression or 'none')
-                    for item in records:
-                        if isinstance(item, Message):
-                            yield item
-                        else:
-                            self.add(item)
+                    yield from chunk_items(record, data)
                 elif isinstance(record, Message):
                     yield record
                 elif isinstance(record, Footer):

@@ -1,0 +1,448 @@
+"""
+Columnar reading of flat CDR messages: a topic's numeric fields as numpy columns.
+
+Almost all of a recording is fixed-layout messages (``Vector3Stamped``, ``QuaternionStamped``,
+``Clock``, ``ErrorNorm``): a header, maybe a string or two, then numbers. Decoding each one
+generically (mcap-ros2-support builds a Python object per message, ~45 us) caps a reader at
+~20,000 messages/s. Here a topic whose type is *flat* (its fields, flattened, are primitives and
+strings: no sequence, no array) is read differently: the records of each decompressed chunk are
+located once, and every numeric field of the topic's messages is gathered at its offset in one
+numpy operation. The offsets are computed from the first message (the strings' lengths fix
+them); a message whose size or string lengths differ from it is decoded by the generic decoder
+and its values appended in order, so any file gives the same values as :func:`read_messages`
+(the reference, tests/test_io_columns.py).
+
+CDR (XCDR1, as ROS 2 writes it): a 4-byte encapsulation header (``00 01``: little endian), then
+the fields in order, each primitive aligned to its own size counted from the end of that header;
+a string is a uint32 length (including the terminating NUL) and its bytes.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+import struct
+from typing import Any
+
+from mcap.records import Message
+import numpy as np
+
+from .mcap_reader import (
+    _chunk_records,
+    _Decoders,
+    _open,
+    _Scan,
+    _SEPARATOR,
+    _split_sections,
+    McapError,
+    RecordedMessage,
+)
+from .msgdefs import MessageDefinitionError, parse_msg
+
+__all__ = ['FlatLayout', 'TopicColumns', 'read_columns']
+
+#: CDR sizes of the primitive types a flat layout may hold (strings apart).
+_SIZES = {'bool': 1, 'byte': 1, 'char': 1, 'int8': 1, 'uint8': 1, 'int16': 2, 'uint16': 2,
+          'int32': 4, 'uint32': 4, 'int64': 8, 'uint64': 8, 'float32': 4, 'float64': 8}
+_DTYPES = {'bool': '<u1', 'byte': '<u1', 'char': '<u1', 'int8': '<i1', 'uint8': '<u1',
+           'int16': '<i2', 'uint16': '<u2', 'int32': '<i4', 'uint32': '<u4', 'int64': '<i8',
+           'uint64': '<u8', 'float32': '<f4', 'float64': '<f8'}
+_ENCAPSULATION = 4
+_LITTLE_ENDIAN = (b'\x00\x01', b'\x00\x03')   # CDR_LE, PL_CDR_LE
+_RECORD = struct.Struct('<BQ')                 # opcode, length
+_MESSAGE = struct.Struct('<HIQQ')              # channel id, sequence, log time, publish time
+_RECORD_AND_MESSAGE = struct.Struct('<BQHIQQ')
+_MESSAGE_OPCODE = 0x05
+_MESSAGE_HEAD = _RECORD.size + _MESSAGE.size   # 31 bytes before a message's data
+
+
+@dataclass(frozen=True)
+class FlatLayout:
+    """
+    The flattened fields of a message type without sequences or arrays, in CDR order.
+
+    ``fields``: (dotted name, primitive type) pairs, e.g. ('header.stamp.sec', 'int32'),
+    ('header.frame_id', 'string'), ('vector.x', 'float64').
+    """
+
+    type_name: str
+    fields: tuple[tuple[str, str], ...]
+
+    @classmethod
+    def from_schema(cls, type_name: str, schema_text: str) -> FlatLayout | None:
+        """Return the layout of ``type_name`` from its ros2msg schema text; None if not flat."""
+        specs: dict[str, Any] = {}
+        try:
+            for header, body in _split_sections(schema_text):
+                name = type_name if not header else header.partition('MSG: ')[2].strip()
+                if not name or header.startswith('SRV: '):
+                    return None
+                package = name.split('/')[0]
+                specs[_short(name)] = parse_msg(body, package, source=name)
+        except MessageDefinitionError:
+            return None
+        fields: list[tuple[str, str]] = []
+        if not _flatten(specs, _short(type_name), '', fields, depth=0):
+            return None
+        return cls(type_name, tuple(fields))
+
+    def offsets(self, data: bytes) -> tuple[dict[str, int], dict[int, int]] | None:
+        """
+        Walk one message's CDR: (offset of each primitive field, {string length offset: length}).
+
+        Offsets count from the start of ``data`` (the encapsulation header included). None when
+        the message is not little-endian CDR or ends before its last field.
+        """
+        if data[:2] not in _LITTLE_ENDIAN:
+            return None
+        at, offsets, strings = 0, {}, {}
+        size = len(data) - _ENCAPSULATION
+        for name, kind in self.fields:
+            if kind == 'string':
+                at += -at % 4
+                if at + 4 > size:
+                    return None
+                length = int.from_bytes(data[_ENCAPSULATION + at:_ENCAPSULATION + at + 4],
+                                        'little')
+                strings[_ENCAPSULATION + at] = length
+                at += 4 + length
+            else:
+                width = _SIZES[kind]
+                at += -at % width
+                offsets[name] = _ENCAPSULATION + at
+                at += width
+            if at > size:
+                return None
+        return offsets, strings
+
+
+def _short(type_name: str) -> str:
+    """'pkg/msg/Type' or 'pkg/Type' -> 'pkg/Type'."""
+    parts = type_name.split('/')
+    return f'{parts[0]}/{parts[-1]}'
+
+
+def _flatten(specs, type_name: str, prefix: str, out: list, depth: int) -> bool:
+    spec = specs.get(type_name)
+    if spec is None or depth > 16:
+        return False
+    for f in spec.fields:
+        if f.array is not None:
+            return False
+        name = prefix + f.name
+        if f.type == 'string':
+            out.append((name, 'string'))
+        elif f.type in _SIZES:
+            out.append((name, f.type))
+        elif f.is_primitive:       # wstring and anything else not handled here
+            return False
+        elif not _flatten(specs, _short(f.type), name + '.', out, depth + 1):
+            return False
+    return True
+
+
+@dataclass
+class TopicColumns:
+    """
+    One topic's messages as columns, in file order.
+
+    ``columns``: dotted field name -> (n,) array of every numeric field; ``log_time_ns`` (n,);
+    ``strings``: dotted field name -> the distinct values of each string field, in order of
+    first appearance; ``columnar``/``generic``: how many messages each path decoded.
+    """
+
+    topic: str
+    type_name: str
+    layout: FlatLayout
+    log_time_ns: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))
+    columns: dict[str, np.ndarray] = field(default_factory=dict)
+    strings: dict[str, list[str]] = field(default_factory=dict)
+    columnar: int = 0
+    generic: int = 0
+
+    def __len__(self) -> int:
+        return len(self.log_time_ns)
+
+
+class _Builder:
+    """Collects one topic's columns, block by block (a block: its messages of one chunk)."""
+
+    def __init__(self, topic: str, type_name: str, layout: FlatLayout):
+        self.result = TopicColumns(topic, type_name, layout)
+        self.times: list[np.ndarray] = []
+        self.parts: dict[str, list[np.ndarray]] = {
+            name: [] for name, kind in layout.fields if kind != 'string'}
+        self.seen: dict[str, dict[str, None]] = {
+            name: {} for name, kind in layout.fields if kind == 'string'}
+
+    def add_block(self, buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
+                  times: np.ndarray, decode_one) -> None:
+        """
+        Add the messages whose data (``lengths`` bytes) start at ``starts`` in the chunk ``buf``.
+
+        The CDR walk of :meth:`FlatLayout.offsets`, done for all messages at once (strings of any
+        length); a message that is not little-endian CDR or ends early is decoded generically.
+        """
+        n = len(starts)
+        ok = (_gather(buf, starts, 0, '<u1') == 0) & np.isin(_gather(buf, starts, 1, '<u1'),
+                                                             (1, 3))
+        size = lengths - _ENCAPSULATION
+        at = np.zeros(n, dtype=np.int64)         # counted from the end of the encapsulation
+        where: dict[str, np.ndarray] = {}        # field -> offset from the data's start
+        spans: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        for name, kind in self.result.layout.fields:
+            width = 4 if kind == 'string' else _SIZES[kind]
+            at += -at % width
+            ok &= at + width <= size
+            if kind == 'string':
+                length = np.zeros(n, dtype=np.int64)
+                length[ok] = _gather(buf, starts[ok] + at[ok], _ENCAPSULATION, '<u4')
+                spans[name] = (at + _ENCAPSULATION + 4, length)
+                at += 4 + length
+                ok &= at <= size
+            else:
+                where[name] = at + _ENCAPSULATION
+                at += width
+        good = np.flatnonzero(ok)
+        for name, kind in self.result.layout.fields:
+            if kind == 'string':
+                offset, length = spans[name]
+                for text in _distinct_strings(buf, starts[good] + offset[good], length[good]):
+                    self.seen[name].setdefault(text, None)
+            else:
+                column = np.zeros(n, dtype=_DTYPES[kind])
+                column[good] = _gather(buf, starts[good] + where[name][good], 0, _DTYPES[kind])
+                self.parts[name].append(column)
+        for k in np.flatnonzero(~ok).tolist():   # in place, so the file order is kept
+            start = int(starts[k])
+            message = decode_one(buf[start:start + int(lengths[k])].tobytes())
+            self._set(message, k)
+        self.times.append(np.asarray(times, dtype=np.int64))
+        self.result.columnar += len(good)
+        self.result.generic += n - len(good)
+
+    def _set(self, message, k: int) -> None:
+        """Write a generically decoded message's values at row k of the last block."""
+        for name, kind in self.result.layout.fields:
+            value = _attribute(message, name)
+            if kind == 'string':
+                self.seen[name].setdefault(str(value), None)
+            else:
+                self.parts[name][-1][k] = value
+
+    def add_generic(self, message, log_time: int) -> None:
+        """Add one generically decoded message (outside chunks)."""
+        for name, kind in self.result.layout.fields:
+            if kind != 'string':
+                self.parts[name].append(np.zeros(1, dtype=_DTYPES[kind]))
+        self._set(message, 0)
+        self.times.append(np.array([log_time], dtype=np.int64))
+        self.result.generic += 1
+
+    def finish(self) -> TopicColumns:
+        r = self.result
+        r.log_time_ns = np.concatenate(self.times) if self.times else np.empty(0, np.int64)
+        for name, kind in r.layout.fields:
+            if kind != 'string':
+                native = np.dtype(_DTYPES[kind]).newbyteorder('=')
+                parts = self.parts[name]
+                r.columns[name] = (np.concatenate(parts) if parts
+                                   else np.empty(0, native)).astype(native)
+        r.strings = {name: list(values) for name, values in self.seen.items()}
+        return r
+
+
+def _distinct_strings(buf: np.ndarray, offsets: np.ndarray, lengths: np.ndarray) -> list[str]:
+    """Return the distinct strings (NUL stripped) at ``offsets``, in order of first appearance."""
+    found: dict[int, str] = {}
+    for length in np.unique(lengths).tolist():
+        rows = np.flatnonzero(lengths == length)
+        if length == 0:
+            found[int(rows[0])] = ''
+            continue
+        text = buf[offsets[rows][:, None] + np.arange(length)]
+        if (text == text[0]).all():
+            firsts = [0]
+        else:
+            firsts = np.unique(text, axis=0, return_index=True)[1].tolist()
+        for first in firsts:
+            raw = text[first].tobytes().rstrip(b'\x00')
+            found[int(rows[first])] = raw.decode('utf-8', 'replace')
+    return [found[k] for k in sorted(found)]
+
+
+def _gather(buf: np.ndarray, starts: np.ndarray, at: int, dtype: str) -> np.ndarray:
+    """Return the values of type ``dtype`` at ``starts + at`` in ``buf``."""
+    width = np.dtype(dtype).itemsize
+    index = (starts + at)[:, None] + np.arange(width)
+    return np.ascontiguousarray(buf[index]).view(dtype).reshape(-1)
+
+
+def _attribute(message, dotted: str):
+    for part in dotted.split('.'):
+        message = getattr(message, part)
+    return message
+
+
+def _chunk_messages(raw: bytes):
+    """
+    Locate the message records of a decompressed chunk.
+
+    Returns (channel ids, log times, data starts, data lengths) as arrays, and whether the
+    chunk also holds other records (schemas, channels).
+    """
+    channels, times, starts, lengths = [], [], [], []
+    others = False
+    position, end = 0, len(raw)
+    record, message = _RECORD.unpack_from, _RECORD_AND_MESSAGE.unpack_from
+    last = end - _MESSAGE_HEAD
+    while position < end:
+        if position <= last:
+            opcode, length, channel, _, log_time, _ = message(raw, position)
+        else:
+            (opcode, length), channel, log_time = record(raw, position), 0, 0
+        if opcode == _MESSAGE_OPCODE:
+            channels.append(channel)
+            times.append(log_time)
+            starts.append(position)
+            lengths.append(length)
+        else:
+            others = True
+        position += _RECORD.size + length
+    starts = np.array(starts, dtype=np.int64) + _MESSAGE_HEAD
+    lengths = np.array(lengths, dtype=np.int64) - _MESSAGE.size
+    return (np.array(channels, dtype=np.int64), np.array(times, dtype=np.int64), starts, lengths,
+            others)
+
+
+def read_columns(path, topics: Iterable[str], as_messages: Iterable[str] = (),
+                 progress: Callable[[int], None] | None = None
+                 ) -> tuple[dict[str, TopicColumns], list[RecordedMessage]]:
+    """
+    Read ``topics`` of ``path`` in one pass: flat topics as columns, the others decoded.
+
+    Returns ({topic: TopicColumns} for the flat topics, [RecordedMessage] of the other requested
+    topics, and of those in ``as_messages`` (decoded even if flat), in file order).
+    ``progress(messages_read)`` is called after every chunk (all topics counted). Same file
+    handling as :func:`~.mcap_reader.read_messages`: a truncated file gives the messages of its
+    complete chunks; McapError for a file that cannot be read or a message that cannot be
+    decoded.
+    """
+    wanted = set(topics) | set(as_messages)
+    if not all(isinstance(t, str) for t in wanted):
+        raise McapError(f'topics must be topic names (str), got {sorted(map(repr, wanted))}')
+    path, stream = _open(path)
+    with stream:
+        reader = _ColumnReader(path, stream, wanted, set(as_messages), progress)
+        reader.run()
+    return reader.results()
+
+
+class _ColumnReader:
+    """One pass over a file: chunks located and gathered, other messages decoded."""
+
+    def __init__(self, path, stream, wanted: set[str], as_messages: set[str], progress):
+        self.progress = progress
+        self.scan = _Scan(path, stream)
+        self.as_messages = as_messages
+        self.decoders = _Decoders(path)
+        self.wanted = wanted
+        self.builders: dict[int, _Builder | None] = {}
+        self.others: list[RecordedMessage] = []
+        self.count = 0
+
+    def run(self) -> None:
+        for item in self.scan.items(self._locate):
+            if isinstance(item, tuple):
+                self._chunk(*item)
+                if self.progress is not None:
+                    self.progress(self.count)
+            else:                               # a message outside chunks
+                self._one(item.channel_id, item.log_time, item.publish_time, bytes(item.data))
+        self.scan.check_recoverable(self.count)
+
+    def results(self) -> tuple[dict[str, TopicColumns], list[RecordedMessage]]:
+        return ({b.result.topic: b.finish() for b in self.builders.values() if b is not None},
+                self.others)
+
+    def _locate(self, chunk, data: bytes):
+        """Find the chunk's messages (parsing only); keep its schemas and channels."""
+        located = _chunk_messages(data)
+        if located[4]:
+            for record in _chunk_records(chunk, data):
+                if not isinstance(record, Message):
+                    self.scan.add(record)
+        yield (data, located)
+
+    def _builder(self, channel_id: int) -> _Builder | None:
+        if channel_id not in self.builders:
+            channel = self.scan.channels.get(channel_id)
+            schema = self.scan.schemas.get(channel.schema_id) if channel is not None else None
+            layout = None
+            if (channel is not None and schema is not None and channel.topic in self.wanted
+                    and channel.topic not in self.as_messages
+                    and channel.message_encoding == 'cdr' and schema.encoding == 'ros2msg'
+                    and not schema.data.startswith(f'{_SEPARATOR}\n'.encode())):
+                layout = FlatLayout.from_schema(schema.name, schema.data.decode('utf-8',
+                                                                                'replace'))
+            self.builders[channel_id] = (_Builder(channel.topic, schema.name, layout)
+                                         if layout is not None else None)
+        return self.builders[channel_id]
+
+    def _chunk(self, data: bytes, located) -> None:
+        ids, times, starts, lengths, _ = located
+        buf = np.frombuffer(data, dtype=np.uint8)
+        first = self.count
+        pending: list[tuple[int, RecordedMessage]] = []
+        if len(ids) and (ids.min() != ids.max()):
+            channel_ids = np.unique(ids).tolist()
+        else:
+            channel_ids = ids[:1].tolist()
+        for channel_id in channel_ids:
+            channel = self.scan.channels.get(channel_id)
+            if channel is not None and channel.topic not in self.wanted:
+                continue
+            picked = np.flatnonzero(ids == channel_id)
+            builder = self._builder(channel_id)
+            if builder is None:
+                for k in picked.tolist():
+                    _, _, log_time, publish_time = _MESSAGE.unpack_from(
+                        data, int(starts[k]) - _MESSAGE.size)
+                    record = _Record(channel_id, log_time, publish_time,
+                                     data[starts[k]:starts[k] + lengths[k]])
+                    pending.append((k, self.decoders.decode(self.scan, record, first + k)))
+                continue
+            index = first + int(picked[0])
+
+            def decode_one(raw, channel_id=channel_id, index=index):
+                return self.decoders.decode(self.scan, _Record(channel_id, 0, 0, raw),
+                                            index).message
+
+            builder.add_block(buf, starts[picked], lengths[picked], times[picked], decode_one)
+        self.count += len(ids)
+        if pending:  # the other topics' messages of this chunk, in file order
+            self.others.extend(m for _, m in sorted(pending, key=lambda item: item[0]))
+
+    def _one(self, channel_id, log_time, publish_time, data: bytes, index=None) -> None:
+        """Decode one message generically: into its topic's builder, or onto ``others``."""
+        if index is None:
+            index = self.count
+            self.count += 1
+        channel = self.scan.channels.get(channel_id)
+        if channel is not None and channel.topic not in self.wanted:
+            return
+        record = _Record(channel_id, log_time, publish_time, data)
+        builder = self._builder(channel_id)
+        if builder is not None:
+            builder.add_generic(self.decoders.decode(self.scan, record, index).message, log_time)
+            return
+        self.others.append(self.decoders.decode(self.scan, record, index))
+
+
+class _Record:
+    """The fields of an MCAP message record that the decoders use."""
+
+    __slots__ = ('channel_id', 'log_time', 'publish_time', 'data')
+
+    def __init__(self, channel_id: int, log_time: int, publish_time: int, data: bytes):
+        self.channel_id, self.log_time = channel_id, log_time
+        self.publish_time, self.data = publish_time, data
