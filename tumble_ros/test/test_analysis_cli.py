@@ -234,3 +234,23 @@ def test_main_is_the_console_script_entry(monkeypatch, capsys):
     monkeypatch.setattr(sys, 'argv', ['analyze', str(GOLDEN), '--quiet'])
     assert cli.main() == 0
     assert 'dominant frequencies of wx' in capsys.readouterr().out
+
+
+def test_a_long_path_is_drawn_as_a_density_that_counts_every_sample():
+    """The wy-vs-wx path above PATH_POINTS_MAX samples: an occupancy image (a line took 20 s)."""
+    from matplotlib.figure import Figure
+
+    from tumble_ros.analysis import figures
+
+    rng = np.random.default_rng(5)
+    phase = np.cumsum(rng.uniform(0.2, 0.4, 50_000))
+    x, y = 0.1 * np.cos(phase), 0.07 * np.sin(phase) + 0.01
+    ax = Figure().add_subplot()
+    figures._draw_path_density(ax, x, y)
+    (image,) = ax.get_images()
+    counts = 10.0 ** image.get_array()
+    assert np.isclose(counts.sum(), len(x))           # every sample in one pixel
+    left, right, bottom, top = image.get_extent()
+    assert left <= x.min() and x.max() <= right and bottom <= y.min() and y.max() <= top
+    assert np.isclose(right - left, top - bottom)     # equal axes, as the line plot
+    assert len(x) > figures.PATH_POINTS_MAX
