@@ -26,9 +26,9 @@ def sim_executable() -> str:
 def process():
     started = []
 
-    def start(*args):
+    def start(*args, env=None):
         p = subprocess.Popen([sim_executable(), *args], stdout=subprocess.PIPE,
-                             stderr=subprocess.STDOUT, text=True)
+                             stderr=subprocess.STDOUT, text=True, env=env)
         started.append(p)
         return p
 
@@ -58,6 +58,25 @@ def test_sim_process_refuses_invalid_parameters_with_a_reason(process):
     out, _ = sim.communicate(timeout=30)
     assert sim.returncode == 1
     assert 'inertia' in out and 'not physically realisable' in out
+    assert 'Traceback' not in out
+
+
+@pytest.mark.parametrize('executor', ['single', 'events'])
+def test_sim_process_runs_in_the_chosen_executor(ros, process, executor):
+    omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
+    sim = process('--ros-args', '-p', 'real_time_factor:=0.05',
+                  env=dict(os.environ, TUMBLE_ROS_EXECUTOR=executor))
+    assert ros.spin_until(lambda: len(omega) >= 5, 30.0), sim.poll()
+    sim.send_signal(signal.SIGINT)
+    out, _ = sim.communicate(timeout=20)
+    assert sim.returncode == 0, out
+
+
+def test_an_unknown_executor_is_refused_with_a_reason(process):
+    sim = process(env=dict(os.environ, TUMBLE_ROS_EXECUTOR='multi'))
+    out, _ = sim.communicate(timeout=30)
+    assert sim.returncode == 1
+    assert "TUMBLE_ROS_EXECUTOR='multi': must be one of ['events', 'single']" in out
     assert 'Traceback' not in out
 
 

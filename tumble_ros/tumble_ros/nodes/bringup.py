@@ -36,8 +36,6 @@ import time
 import rclpy
 from rclpy.context import Context
 from rclpy.exceptions import ParameterException
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
 
 from tumble_ros import topics
@@ -46,30 +44,13 @@ from tumble_ros.errors import NodeError
 from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.recorder import RecorderNode
-from tumble_ros.nodes.runner import close_node
+from tumble_ros.nodes.runner import close_node, EXECUTORS
 from tumble_ros.nodes.shutdown import StopSignals
 from tumble_ros.nodes.sim import SimNode
 from tumble_ros_interfaces.msg import SimStatus
 
 __all__ = ['run_bringup', 'BringupResult', 'main']
 
-
-def _events_executor(context: Context):
-    # rclpy's EventsExecutor() calls faulthandler.enable(), which needs sys.stderr to be a real
-    # file; pytest's capture (and some IDE consoles) replace it by one without a descriptor.
-    saved = sys.stderr
-    sys.stderr = sys.__stderr__ or saved
-    try:
-        return EventsExecutor(context=context)
-    finally:
-        sys.stderr = saved
-
-
-#: The executors bringup can run the nodes in. ``events`` (rclpy's C++ EventsExecutor,
-#: experimental in Jazzy) runs bringup about 4x faster than ``single`` (the Python
-#: SingleThreadedExecutor, which rebuilds its wait set over every entity of the three nodes);
-#: it cannot hand MessageInfo to callbacks, so the recorder stamps publish times on receipt.
-EXECUTORS = {'events': _events_executor, 'single': SingleThreadedExecutor}
 
 #: Wall-clock seconds between progress lines.
 PROGRESS_PERIOD = 1.0

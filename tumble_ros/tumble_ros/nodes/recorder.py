@@ -48,7 +48,7 @@ from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.progress import ProgressReporter
 from tumble_ros.nodes.qos import STATE_QOS
-from tumble_ros.nodes.runner import run_node
+from tumble_ros.nodes.runner import chosen_executor, run_node
 from tumble_ros.nodes.sources import SourceMonitor
 
 __all__ = ['RecorderNode', 'DEFAULT_TOPICS', 'main']
@@ -284,7 +284,9 @@ def _qos_dict(qos: QoSProfile) -> dict:
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run tumble_ros recorder``."""
-    return run_node(RecorderNode, args, 'recorder')
+    # the events executor cannot hand MessageInfo over: publish times are then receipt times
+    return run_node(lambda: RecorderNode(message_info=chosen_executor() != 'events'), args,
+                    'recorder')
 
 
 if __name__ == '__main__':

@@ -1,0 +1,148 @@
+"""Standalone nodes: sim, comparator and recorder as three processes (the `ros2 run` way).
+
+The installed executables (what `ros2 run tumble_ros <name>` starts), each in its own process,
+on an isolated DDS domain (a free ROS_DOMAIN_ID, discovery limited to this host). The simulator
+runs as fast as its consumers take it (real_time_factor 0, min_consumers 2: it waits for the
+comparator and the recorder and paces on their progress); when it reports FINISHED the three
+get SIGINT and the recorder finalises its file. From the recording: samples per second (first to
+last recorded sample), samples lost per per-sample topic, and the comparator's latency (receipt
+of its error_norm minus receipt of the angular_velocity sample it answers, both by the
+recorder: with the events executor there is no MessageInfo). Target: >= 2000 samples/s, 0 lost.
+Run once per executor (TUMBLE_ROS_EXECUTOR: events, the default, and single).
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+import signal
+import subprocess
+import tempfile
+import time
+
+import numpy as np
+
+TARGET_RATE = 2000.0
+PER_SAMPLE = ('/angular_velocity', '/attitude', '/euler_angles', '/clock',
+              '/comparison/model_angular_velocity', '/comparison/error', '/comparison/error_norm')
+
+
+def _executable(name: str) -> str:
+    from ament_index_python.packages import get_package_prefix
+
+    return str(Path(get_package_prefix('tumble_ros')) / 'lib' / 'tumble_ros' / name)
+
+
+def _finished(domain: int, timeout: float) -> bool:
+    """Wait (in this process, on the same domain) for the simulator's latched FINISHED."""
+    import rclpy
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    from tumble_ros_interfaces.msg import SimStatus
+
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=domain)
+    node = rclpy.create_node('bench_watch', context=context)
+    done = []
+    qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                     reliability=ReliabilityPolicy.RELIABLE)
+    node.create_subscription(SimStatus, '/status',
+                             lambda m: done.append(m.state == SimStatus.FINISHED), qos)
+    executor = rclpy.executors.SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    end = time.monotonic() + timeout
+    try:
+        while time.monotonic() < end and not any(done):
+            executor.spin_once(timeout_sec=0.2)
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)
+    return any(done)
+
+
+def measure(samples: int = 20_000, executor: str = 'events') -> dict:
+    """Run the three processes over ``samples`` samples; return the measured figures."""
+    from tumble_ros.io import read_columns
+
+    domain = 100 + os.getpid() % 100
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+               TUMBLE_ROS_EXECUTOR=executor)
+    interval = 2.0 / (samples - 1)
+    with tempfile.TemporaryDirectory() as tmp:
+        output = Path(tmp) / 'standalone.mcap'
+        quiet = ['--log-level', 'warn']
+        commands = {
+            'recorder': ['--ros-args', '-p', f'output:={output}', *quiet],
+            'comparator': ['--ros-args', *quiet],
+            'sim': ['--ros-args', '-p', 'duration:=2.0', '-p', f'output_interval:={interval!r}',
+                    '-p', 'real_time_factor:=0.0', '-p', 'min_consumers:=2', *quiet],
+        }
+        processes = {}
+        try:
+            for name, args in commands.items():
+                processes[name] = subprocess.Popen(
+                    [_executable(name), *args], env=env, stdin=subprocess.DEVNULL,
+                    stdout=subprocess.DEVNULL, stderr=open(Path(tmp) / f'{name}.log', 'w'),
+                    start_new_session=True)
+            finished = _finished(domain, timeout=120.0 + samples / 200.0)
+            time.sleep(1.0)  # the last samples reach the comparator and the recorder
+        finally:
+            for name in ('sim', 'comparator', 'recorder'):
+                if name in processes and processes[name].poll() is None:
+                    os.killpg(processes[name].pid, signal.SIGINT)
+            for p in processes.values():
+                try:
+                    p.wait(timeout=30)
+                except subprocess.TimeoutExpired:
+                    os.killpg(p.pid, signal.SIGKILL)
+        if not finished:
+            raise RuntimeError('the simulator did not finish: ' + (Path(tmp) / 'sim.log').read_text())
+        columns, _ = read_columns(output, PER_SAMPLE)
+    velocity = columns['/angular_velocity']
+    received = dict(zip(_stamps(velocity).tolist(), velocity.log_time_ns.tolist()))
+    norm = columns['/comparison/error_norm']
+    latency = np.array([t - received[s] for s, t in zip(_stamps(norm).tolist(),
+                                                          norm.log_time_ns.tolist())
+                        if s in received]) / 1e6
+    span = (velocity.log_time_ns.max() - velocity.log_time_ns.min()) / 1e9
+    return {
+        'executor': executor,
+        'samples': samples,
+        'samples_per_s': (len(velocity) - 1) / span if span > 0 else float('nan'),
+        'lost': {t: samples - len(columns[t]) if t in columns else samples for t in PER_SAMPLE},
+        'latency_p50_ms': float(np.percentile(latency, 50)) if latency.size else float('nan'),
+        'latency_p99_ms': float(np.percentile(latency, 99)) if latency.size else float('nan'),
+    }
+
+
+def _stamps(table) -> np.ndarray:
+    c = table.columns
+    return (c['header.stamp.sec'].astype(np.int64) * 1_000_000_000
+            + c['header.stamp.nanosec'].astype(np.int64))
+
+
+def _bench_section():
+    from common import section
+
+    @section('Standalone nodes: sim, comparator, recorder as three processes', order=31)
+    def standalone(ctx):
+        samples = 4_000 if ctx.quick else 20_000
+        rows, results = [], {}
+        for executor in ('events', 'single'):
+            f = measure(samples, executor)
+            lost = sum(f['lost'].values())
+            rows.append([executor, f['samples'], f'{f["samples_per_s"]:,.0f}',
+                         f'{f["samples_per_s"] / TARGET_RATE:.2f}x', lost,
+                         f'{f["latency_p50_ms"]:.2f}', f'{f["latency_p99_ms"]:.2f}'])
+            results[executor] = f
+        ctx.table(['executor', 'samples', 'samples/s', 'vs 2000/s target', 'lost',
+                   'latency p50 [ms]', 'p99 [ms]'], rows)
+        best = results['events']
+        ok = best['samples_per_s'] >= TARGET_RATE and sum(best['lost'].values()) == 0
+        verdict = 'MET' if ok else f'MISSED ({best["samples_per_s"]:,.0f}/s, ' \
+            f'{sum(best["lost"].values())} lost)'
+        ctx.note(f'target (>= 2000 samples/s, 0 lost, default executor events): {verdict}')
+        return results
+
+
+_bench_section()
