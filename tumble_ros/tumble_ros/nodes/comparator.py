@@ -29,8 +29,8 @@ from __future__ import annotations
 from collections import deque
 import math
 
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Vector3, Vector3Stamped
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import Vector3Stamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 
@@ -38,9 +38,10 @@ from tumble_ros import topics
 from tumble_ros.core import ANALYTIC_MODELS, make_model, parse_scenario, ScenarioError, TimeBase
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
+from tumble_ros.nodes.messages import comparison_messages, comparison_status
 from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.progress import ProgressReporter
-from tumble_ros.nodes.qos import DESCRIPTION_QOS, LATCHED_QOS, STATE_QOS
+from tumble_ros.nodes.qos import DESCRIPTION_QOS, PUBLISHER_QOS, STATE_QOS
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
 from tumble_ros_interfaces.msg import ErrorNorm, ScenarioDescription
@@ -62,6 +63,39 @@ PARAMETERS = {
 }
 
 
+def anchor_model(model_name: str, description: ScenarioDescription):
+    """
+    Return (model, the simulator's output grid, a line saying so) for a scenario description.
+
+    The model is anchored on the state the description's segment starts from. Raises
+    ScenarioError or ValueError (ModelNotApplicable) when the model cannot be built.
+    """
+    msg = description
+    scenario = parse_scenario(msg.parameters_yaml)
+    grid = TimeBase(msg.seconds_per_year).grid(scenario.output_interval, scenario.duration)
+    q = msg.attitude
+    model = make_model(model_name, scenario, t0=msg.segment_start,
+                       omega=(msg.omega.x, msg.omega.y, msg.omega.z),
+                       quaternion=(q.w, q.x, q.y, q.z))
+    text = (f'model {model_name!r} ({model.label}) anchored at t = '
+            f'{msg.segment_start:.9g} yr (segment {msg.revision})')
+    return model, grid, text
+
+
+class GridModelValues:
+    """A model's omega on the output grid, LOOKAHEAD samples computed at once."""
+
+    def __init__(self) -> None:
+        self._model, self._first, self._values = None, 0, []
+
+    def at(self, model, grid, k: int) -> list[float]:
+        """Return ``model``'s omega [rad/yr] at grid sample k."""
+        if model is not self._model or not 0 <= k - self._first < len(self._values):
+            times = grid.times(k, min(k + LOOKAHEAD, grid.count))
+            self._model, self._first, self._values = model, k, model.omega(times).tolist()
+        return self._values[k - self._first]
+
+
 class ComparatorNode(GuardedNode):
     """Comparator node; see the module docstring."""
 
@@ -78,17 +112,19 @@ class ComparatorNode(GuardedNode):
         self._model = None  # anchored on the latest segment
         self._previous: list = []  # earlier segments' models, newest last: (segment_start, model)
         self._grid = None  # the simulator's output grid (None: unknown)
-        self._ahead = (None, 0, [])  # (model, index of its first sample, model omega on the grid)
+        self._ahead = GridModelValues()
         self._received = 0
         self.compared = 0  # comparisons published (each on the three comparison topics)
         self._pending: deque[Vector3Stamped] = deque(maxlen=MAX_PENDING)
         self._settle_timer = None
-        self._pub_model = self.create_publisher(Vector3Stamped,
-                                                topics.MODEL_ANGULAR_VELOCITY, STATE_QOS)
-        self._pub_error = self.create_publisher(Vector3Stamped, topics.ERROR, STATE_QOS)
-        self._pub_norm = self.create_publisher(ErrorNorm, topics.ERROR_NORM, STATE_QOS)
+        qos = PUBLISHER_QOS
+        self._pub_model = self.create_publisher(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY,
+                                                qos[topics.MODEL_ANGULAR_VELOCITY])
+        self._pub_error = self.create_publisher(Vector3Stamped, topics.ERROR, qos[topics.ERROR])
+        self._pub_norm = self.create_publisher(ErrorNorm, topics.ERROR_NORM,
+                                               qos[topics.ERROR_NORM])
         self._pub_status = self.create_publisher(DiagnosticStatus, topics.COMPARISON_STATUS,
-                                                 LATCHED_QOS)
+                                                 qos[topics.COMPARISON_STATUS])
         self._progress = ProgressReporter(self)
         self.create_subscription(ScenarioDescription, topics.SCENARIO, self._on_scenario,
                                  DESCRIPTION_QOS)
@@ -145,19 +181,12 @@ class ComparatorNode(GuardedNode):
         if msg is None:
             return
         try:
-            scenario = parse_scenario(msg.parameters_yaml)
-            self._grid = self._timebase.grid(scenario.output_interval, scenario.duration)
-            q = msg.attitude
-            self._model = make_model(
-                self._model_name, scenario, t0=msg.segment_start,
-                omega=(msg.omega.x, msg.omega.y, msg.omega.z), quaternion=(q.w, q.x, q.y, q.z))
+            self._model, self._grid, text = anchor_model(self._model_name, msg)
         except (ScenarioError, ValueError) as err:
             self._model = None
             self.get_logger().warning(f'no comparison: {err}')
             self._report(DiagnosticStatus.WARN, str(err))
             return
-        text = (f'model {self._model_name!r} ({self._model.label}) anchored at t = '
-                f'{msg.segment_start:.9g} yr (segment {msg.revision})')
         self.get_logger().info(text)
         self._report(DiagnosticStatus.OK, text)
 
@@ -178,10 +207,8 @@ class ComparatorNode(GuardedNode):
             self._status = (level, message)
             if getattr(self, '_sources', None) is not None and self._sources.current:
                 return  # the second-source error stays on until it clears
-        status = DiagnosticStatus(level=level, name=self.get_fully_qualified_name(),
-                                  message=message)
-        status.values = [KeyValue(key='model', value=self._model_name)]
-        self._pub_status.publish(status)
+        self._pub_status.publish(comparison_status(level, self.get_fully_qualified_name(),
+                                                   message, self._model_name))
 
     # -- comparison ---------------------------------------------------------------------
     def _on_omega(self, msg: Vector3Stamped) -> None:
@@ -207,12 +234,7 @@ class ComparatorNode(GuardedNode):
         k = grid.index_of(stamp_ns) if grid is not None else None
         if k is None:
             return model.omega(np.array([t]))[0].tolist()
-        cached_model, k0, values = self._ahead
-        if model is not cached_model or not 0 <= k - k0 < len(values):
-            times = grid.times(k, min(k + LOOKAHEAD, grid.count))
-            k0, values = k, model.omega(times).tolist()
-            self._ahead = (model, k0, values)
-        return values[k - k0]
+        return self._ahead.at(model, grid, k)
 
     def _model_for(self, t: float):
         """Return the model of the segment containing ``t`` (samples can trail the description)."""
@@ -231,21 +253,15 @@ class ComparatorNode(GuardedNode):
     def _publish(self, header, numeric, model) -> None:
         """Publish the model, numeric - model and its norms (3-sequences of floats, rad/yr)."""
         self.compared += 1
-        error = [n - m for n, m in zip(numeric, model)]
-        self._pub_model.publish(Vector3Stamped(header=header, vector=_vector(model)))
-        self._pub_error.publish(Vector3Stamped(header=header, vector=_vector(error)))
-        norm = math.hypot(*error)
-        magnitude = math.hypot(*numeric)
-        self._pub_norm.publish(ErrorNorm(header=header, model=self._model_name, norm=norm,
-                                         relative=norm / magnitude if magnitude > 0 else math.inf))
+        model_msg, error_msg, norm_msg = comparison_messages(header, numeric, model,
+                                                             self._model_name)
+        self._pub_model.publish(model_msg)
+        self._pub_error.publish(error_msg)
+        self._pub_norm.publish(norm_msg)
 
     def close(self) -> None:
         """Tell the simulator this consumer leaves."""
         self._progress.close()
-
-
-def _vector(v) -> Vector3:
-    return Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
 
 
 def main(args=None) -> int:

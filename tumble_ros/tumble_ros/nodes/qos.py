@@ -1,7 +1,12 @@
 """QoS profiles shared by the tumble_ros nodes (one place, so publishers and subscribers match)."""
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.duration import Duration
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile,
+                       ReliabilityPolicy)
 
-__all__ = ['STATE_QOS', 'CLOCK_QOS', 'LATCHED_QOS', 'DESCRIPTION_QOS', 'SERVICE_QOS']
+from tumble_ros import topics
+
+__all__ = ['STATE_QOS', 'CLOCK_QOS', 'LATCHED_QOS', 'DESCRIPTION_QOS', 'SERVICE_QOS',
+           'PUBLISHER_QOS', 'as_discovered']
 
 #: Sampled state (w, attitude, Euler angles, /clock, events, comparisons): reliable with a deep
 #: queue, and transient-local, so a subscriber whose subscription is matched a moment after the
@@ -57,3 +62,34 @@ SERVICE_QOS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,
 )
+
+#: The QoS each of the simulator's and the comparator's topics is published with.
+PUBLISHER_QOS = {
+    topics.ANGULAR_VELOCITY: STATE_QOS,
+    topics.ATTITUDE: STATE_QOS,
+    topics.EULER_ANGLES: STATE_QOS,
+    topics.CLOCK: CLOCK_QOS,
+    topics.IMPACT_EVENTS: STATE_QOS,
+    topics.STATUS: LATCHED_QOS,
+    topics.SCENARIO: DESCRIPTION_QOS,
+    topics.MODEL_ANGULAR_VELOCITY: STATE_QOS,
+    topics.ERROR: STATE_QOS,
+    topics.ERROR_NORM: STATE_QOS,
+    topics.COMPARISON_STATUS: LATCHED_QOS,
+}
+
+_INFINITE = Duration(nanoseconds=2**63 - 1)
+
+
+def as_discovered(profile: QoSProfile) -> QoSProfile:
+    """
+    Return ``profile`` as another node discovers it (``get_publishers_info_by_topic``).
+
+    DDS discovery carries reliability and durability, not history nor depth (reported as
+    unknown / 0), and the default deadline, lifespan and lease duration as infinite; what the
+    recorder stores as a channel's offered QoS (the offline recording writes the same).
+    """
+    return QoSProfile(history=HistoryPolicy.UNKNOWN, depth=0, reliability=profile.reliability,
+                      durability=profile.durability, deadline=_INFINITE, lifespan=_INFINITE,
+                      liveliness=LivelinessPolicy.AUTOMATIC,
+                      liveliness_lease_duration=_INFINITE)

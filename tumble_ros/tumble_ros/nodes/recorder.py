@@ -109,8 +109,7 @@ class RecorderNode(GuardedNode):
         self._explicit = {self._resolve('topics', t)
                           for t in (topics or ([] if p['topic_pattern'] else DEFAULT_TOPICS))}
         self._pattern = re.compile(p['topic_pattern']) if p['topic_pattern'] else None
-        path = Path(p['output']
-                    or f'recordings/tumble_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap')
+        path = Path(p['output'] or default_output())
         path.parent.mkdir(parents=True, exist_ok=True)
         self._writer = McapWriter(path, chunk_bytes=p['chunk_bytes'],
                                   chunk_seconds=p['chunk_seconds'],
@@ -187,7 +186,7 @@ class RecorderNode(GuardedNode):
             return  # only subscribers so far: the type is known but nobody offers QoS yet
         try:
             msg_class = _import_type(type_name)
-            offered = offered_qos_yaml(*[_qos_dict(p.qos_profile) for p in publishers])
+            offered = offered_qos_yaml(*[qos_dict(p.qos_profile) for p in publishers])
             channel = self._writer.add_channel(topic, type_name, offered)
         except (LookupError, ImportError, ValueError) as err:
             self.get_logger().error(f'cannot record {topic} ({type_name}): {err}')
@@ -259,6 +258,11 @@ class RecorderNode(GuardedNode):
         self._progress.close()
 
 
+def default_output() -> Path:
+    """Return the default recording: recordings/tumble_<UTC time>.mcap."""
+    return Path(f'recordings/tumble_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap')
+
+
 def _import_type(type_name: str):
     """Import the Python class of 'pkg/msg/Type' (also 'pkg/srv/Name_Event')."""
     import importlib
@@ -267,7 +271,7 @@ def _import_type(type_name: str):
     return getattr(importlib.import_module(f'{package}.{kind}'), name)
 
 
-def _qos_dict(qos: QoSProfile) -> dict:
+def qos_dict(qos: QoSProfile) -> dict:
     def duration(d) -> tuple[int, int]:
         ns = d.nanoseconds
         return divmod(ns, 1_000_000_000)

@@ -27,7 +27,6 @@ from collections import deque
 import math
 import time
 
-from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Quaternion, QuaternionStamped, Vector3, Vector3Stamped
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.qos import QoSProfile
@@ -47,13 +46,15 @@ from tumble_ros.core import (
 )
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
+from tumble_ros.nodes.messages import (FRAMES, impact_event, scenario_description, sim_status,
+                                       stamp)
 from tumble_ros.nodes.parameters import (
     declare_node_parameters,
     declare_scenario_parameters,
     read_scenario_parameters,
 )
 from tumble_ros.nodes.progress import ConsumerTracker
-from tumble_ros.nodes.qos import CLOCK_QOS, DESCRIPTION_QOS, LATCHED_QOS, SERVICE_QOS, STATE_QOS
+from tumble_ros.nodes.qos import PUBLISHER_QOS, SERVICE_QOS
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
@@ -72,9 +73,6 @@ WINDOW = 4 * BATCH
 MAX_PENDING_IMPACTS = 500
 #: Wall-clock seconds between two status messages while running (a heartbeat with a fresh t).
 STATUS_PERIOD = 1.0
-FRAMES = {ApplyImpact.Request.FRAME_BODY: topics.FRAME_BODY,
-          ApplyImpact.Request.FRAME_ORBITAL: topics.FRAME_ORBITAL}
-FRAME_CODES = {name: code for code, name in FRAMES.items()}
 
 #: The simulator's own parameters (not part of the scenario): name -> (default, unit, description,
 #: (min, max) or None, read_only).
@@ -93,12 +91,6 @@ NODE_PARAMETERS = {
     'max_impact_impulse': (1e3, 'I rad/yr', 'largest |M| * duration the service accepts',
                            (1e-12, 1e15), False),
 }
-
-
-def stamp(ns: int) -> Time:
-    """builtin_interfaces/Time of integer nanoseconds."""
-    sec, nanosec = divmod(ns, 1_000_000_000)
-    return Time(sec=sec, nanosec=nanosec)
 
 
 class SimNode(GuardedNode):
@@ -135,14 +127,16 @@ class SimNode(GuardedNode):
         self._consumers_gate_open = self._min_consumers == 0  # opens once, when they are all here
         self._consumers = ConsumerTracker(self, on_drop=self._publish_status)
         publish = self.create_publisher
-        self._pub_omega = publish(Vector3Stamped, topics.ANGULAR_VELOCITY, STATE_QOS)
-        self._pub_attitude = publish(QuaternionStamped, topics.ATTITUDE, STATE_QOS)
-        self._pub_euler = publish(Vector3Stamped, topics.EULER_ANGLES, STATE_QOS)
-        self._pub_clock = (publish(Clock, topics.CLOCK, CLOCK_QOS)
+        qos = PUBLISHER_QOS
+        self._pub_omega = publish(Vector3Stamped, topics.ANGULAR_VELOCITY,
+                                  qos[topics.ANGULAR_VELOCITY])
+        self._pub_attitude = publish(QuaternionStamped, topics.ATTITUDE, qos[topics.ATTITUDE])
+        self._pub_euler = publish(Vector3Stamped, topics.EULER_ANGLES, qos[topics.EULER_ANGLES])
+        self._pub_clock = (publish(Clock, topics.CLOCK, qos[topics.CLOCK])
                            if params['publish_clock'] else None)
-        self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, STATE_QOS)
-        self._pub_status = publish(SimStatus, topics.STATUS, LATCHED_QOS)
-        self._pub_scenario = publish(ScenarioDescription, topics.SCENARIO, DESCRIPTION_QOS)
+        self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, qos[topics.IMPACT_EVENTS])
+        self._pub_status = publish(SimStatus, topics.STATUS, qos[topics.STATUS])
+        self._pub_scenario = publish(ScenarioDescription, topics.SCENARIO, qos[topics.SCENARIO])
         self._srv_impact = self.create_service(ApplyImpact, topics.APPLY_IMPACT,
                                                self._on_apply_impact, qos_profile=SERVICE_QOS)
         self._srv_impact.configure_introspection(
@@ -304,15 +298,9 @@ class SimNode(GuardedNode):
         """One event per impact that ended; one description per segment that starts at an end."""
         segment_starts = {}
         for impact, y_start, y_end in self._propagator.pop_completed_impacts():
-            event = ImpactEvent()
-            event.header.stamp = stamp(self.timebase.to_ns(impact.end))
-            event.header.frame_id = topics.FRAME_BODY
-            event.id = self._impact_ids.get(id(impact), 0)
-            event.start, event.end = impact.start, impact.end
-            event.frame = FRAME_CODES[impact.frame]
-            event.torque = Vector3(x=impact.torque[0], y=impact.torque[1], z=impact.torque[2])
             dw = y_end[:3] - y_start[:3]
-            event.delta_omega = Vector3(x=float(dw[0]), y=float(dw[1]), z=float(dw[2]))
+            event = impact_event(impact, self._impact_ids.get(id(impact), 0),
+                                 self.timebase.to_ns(impact.end), dw)
             self._pub_events.publish(event)
             self.get_logger().info(f'impact {event.id} applied on '
                                    f'[{impact.start:.9g}, {impact.end:.9g}] yr: '
@@ -335,9 +323,8 @@ class SimNode(GuardedNode):
     def _publish_status(self, message: str) -> None:
         """Publish the state, t and ``message``, stamped with simulated time like every sample."""
         self._status_message = message
-        msg = SimStatus(state=self._state, t=self.t, message=message)
-        msg.header.stamp = stamp(self._grid.stamp(max(0, self._next_k - 1)))
-        self._pub_status.publish(msg)
+        self._pub_status.publish(sim_status(self._state, self.t, message,
+                                            self._grid.stamp(max(0, self._next_k - 1))))
 
     def _on_status_period(self) -> None:
         if self._state == SimStatus.RUNNING:
@@ -345,18 +332,12 @@ class SimNode(GuardedNode):
 
     def _publish_scenario(self, t0: float, y0) -> None:
         """Describe the scenario and the state the current segment starts from (latched)."""
-        msg = ScenarioDescription()
-        msg.header.stamp = stamp(self.timebase.to_ns(t0))
         # The scenario as started (constant size: the impacts applied through the service are on
         # impact_events, not repeated in every later description).
-        msg.parameters_yaml = self._scenario_yaml
-        msg.seconds_per_year = self.timebase.seconds_per_year
-        msg.revision, self._revision = self._revision, self._revision + 1
-        msg.segment_start = t0
-        msg.omega = Vector3(x=float(y0[0]), y=float(y0[1]), z=float(y0[2]))
-        q = self._propagator.quaternion_of(y0)
-        msg.attitude = Quaternion(w=float(q[0]), x=float(q[1]), y=float(q[2]), z=float(q[3]))
-        self._pub_scenario.publish(msg)
+        revision, self._revision = self._revision, self._revision + 1
+        self._pub_scenario.publish(scenario_description(
+            self._scenario_yaml, self.timebase.seconds_per_year, revision,
+            self.timebase.to_ns(t0), t0, y0[:3], self._propagator.quaternion_of(y0)))
 
     # -- services -----------------------------------------------------------------------
     def _on_apply_impact(self, request, response):
