@@ -446,3 +446,40 @@ class _Record:
     def __init__(self, channel_id: int, log_time: int, publish_time: int, data: bytes):
         self.channel_id, self.log_time = channel_id, log_time
         self.publish_time, self.data = publish_time, data
+
+
+def encode_rows(layout: FlatLayout, count: int, values: dict[str, np.ndarray],
+                strings: dict[str, str]) -> np.ndarray:
+    """
+    Return ``count`` CDR messages of a flat type as a (count, size) uint8 array, one per row.
+
+    The inverse of the columnar read: ``values`` holds every numeric field (dotted name ->
+    (count,) array, cast to the field's type), ``strings`` every string field (one value for
+    all rows). Little-endian CDR as ROS 2 serializes it (tests/test_io_columns.py compares with
+    rclpy's serialize_message).
+    """
+    template = bytearray(b'\x00\x01\x00\x00')
+    at, offsets = 0, {}
+    for name, kind in layout.fields:
+        width = 4 if kind == 'string' else _SIZES[kind]
+        pad = -at % width
+        template += b'\x00' * pad
+        at += pad
+        if kind == 'string':
+            text = strings[name].encode() + b'\x00'
+            template += len(text).to_bytes(4, 'little') + text
+            at += 4 + len(text)
+        else:
+            offsets[name] = _ENCAPSULATION + at
+            template += b'\x00' * width
+            at += width
+    rows = np.empty((count, len(template)), dtype=np.uint8)
+    rows[:] = np.frombuffer(bytes(template), dtype=np.uint8)
+    for name, kind in layout.fields:
+        if kind != 'string':
+            column = np.ascontiguousarray(np.broadcast_to(values[name], (count,)),
+                                          dtype=_DTYPES[kind])
+            width = _SIZES[kind]
+            rows[:, offsets[name]:offsets[name] + width] = column.view(np.uint8).reshape(
+                count, width)
+    return rows

@@ -48,6 +48,7 @@ import threading
 import time
 
 from mcap.writer import CompressionType, LIBRARY_IDENTIFIER, Writer
+import numpy as np
 import yaml
 
 from .msgdefs import message_definition, normalize_type_name, type_hash
@@ -287,6 +288,47 @@ class McapWriter:
             self._pending_bytes += len(data)
             if self._pending_bytes >= self._chunk_bytes or self._too_old():
                 self._flush_locked()
+
+    def write_rows(self, channel_ids, rows, log_time_ns, publish_time_ns=None) -> None:
+        """
+        Append n samples of several channels, interleaved: for each k, one message per channel.
+
+        ``rows[j]`` is an (n, size_j) uint8 array, row k the CDR bytes of channel
+        ``channel_ids[j]``'s k-th message (:func:`~.columns.encode_rows`); ``log_time_ns`` and
+        ``publish_time_ns`` are (n,) integer arrays [ns]. The same records as n * len(rows)
+        calls of :meth:`write`, in that order, for ~1.5 us less per message (the checks are done
+        once for the block).
+        """
+        rows = [np.ascontiguousarray(r, dtype=np.uint8) for r in rows]
+        logs = [_check_time('log_time_ns', v) for v in np.asarray(log_time_ns).tolist()]
+        sent = logs if publish_time_ns is None else [
+            _check_time('publish_time_ns', v) for v in np.asarray(publish_time_ns).tolist()]
+        n = len(logs)
+        if len(rows) != len(channel_ids) or any(r.ndim != 2 or len(r) != n for r in rows):
+            raise ValueError(f'rows must be {len(channel_ids)} arrays of {n} rows, one per '
+                             'channel')
+        with self._lock:
+            self._check_open()
+            topics = [self._topics.get(c) if isinstance(c, int) else None for c in channel_ids]
+            if None in topics:
+                raise ValueError(f'channel ids {list(channel_ids)!r}: not all returned by '
+                                 'add_channel')
+            blobs = [(c, r.tobytes(), r.shape[1]) for c, r in zip(channel_ids, rows)]
+            sample_bytes = sum(size for _, _, size in blobs)
+            add = self._writer.add_message
+            for k in range(n):
+                log, pub = logs[k], sent[k]
+                for channel, blob, size in blobs:
+                    add(channel_id=channel, log_time=log, data=blob[k * size:(k + 1) * size],
+                        publish_time=pub)
+                if self._pending_messages == 0:
+                    self._pending_since = time.monotonic()
+                self._pending_messages += len(blobs)
+                self._pending_bytes += sample_bytes
+                if self._pending_bytes >= self._chunk_bytes or self._too_old():
+                    self._flush_locked()
+            for topic in topics:
+                self._counts[topic] += n
 
     def poll(self) -> bool:
         """
