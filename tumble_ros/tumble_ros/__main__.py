@@ -1,11 +1,13 @@
 """
 ``python -m tumble_ros``: the project's own entry point (the pip-only path has no ``ros2``).
 
-    python -m tumble_ros [SCENARIO.yaml]          the main job (default: the default scenario)
-    python -m tumble_ros <executable> [args ...]  run an executable, as `ros2 run tumble_ros` does
+    python -m tumble_ros [SCENARIO.yaml] [--live]  the main job (default: the default scenario)
+    python -m tumble_ros <executable> [args ...]   run an executable, as `ros2 run tumble_ros` does
 
 The main job simulates the scenario, compares it with the paper's analytic solution and records
-everything to ``recordings/<scenario>_<UTC time>.mcap`` (``bringup``), then analyses the file.
+everything to ``recordings/<scenario>_<UTC time>.mcap`` (``bringup --offline``: the recording is
+written straight from the simulation; ``--live`` runs the three nodes over the ROS graph
+instead, as ``bringup`` does), then analyses the file.
 """
 from __future__ import annotations
 
@@ -32,12 +34,15 @@ def run_executable(name: str, args: list[str]) -> int:
 
 def main_job(argv: list[str]) -> int:
     """Bringup on a scenario file (or the default scenario), then the analysis of the recording."""
+    live = '--live' in argv
+    argv = [a for a in argv if a != '--live']
     if len(argv) > 1 or (argv and argv[0].startswith('-')):
         print(__doc__.strip(), file=sys.stderr)
         return 2
     stem = Path(argv[0]).stem if argv else 'default'
     output = Path('recordings') / f'{stem}_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap'
-    code = run_executable('bringup', [*argv, '--output', str(output)])
+    mode = [] if live else ['--offline']
+    code = run_executable('bringup', [*argv, *mode, '--output', str(output)])
     if code != 0 or not output.exists():
         return code or 1
     return analyse(output)

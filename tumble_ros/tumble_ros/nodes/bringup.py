@@ -2,7 +2,7 @@
 ``bringup``: simulator + comparator + recorder in one process, for one scenario's duration.
 
     bringup [SCENARIO.yaml] [--output FILE.mcap] [--model NAME] [--quiet] [--visible]
-            [--ros-args ...]
+            [--offline] [--ros-args ...]
 
 Runs the three nodes in one executor, the simulator as fast as the comparator and the recorder
 take it (``real_time_factor = 0``, ``min_consumers = 2``: nothing is lost), shows progress on
@@ -10,6 +10,9 @@ stderr, and ends with a finalised MCAP file and a printed summary. The scenario 
 params file (``config/*.yaml``); its ``sim`` section configures the simulator, and ``comparator``
 or ``recorder`` sections, if present, those nodes; ``--ros-args -p name:=value`` overrides the
 file. Without a file, the default scenario runs.
+
+``--offline`` writes the same recording straight from the simulation, without the ROS graph
+(:mod:`tumble_ros.nodes.offline`: what differs is said there): the main job uses it.
 
 Isolation: the run is invisible to other ROS processes and sees none of them
 (``ROS_AUTOMATIC_DISCOVERY_RANGE=OFF`` for its own context, whatever the environment says), so
@@ -42,8 +45,9 @@ from tumble_ros import topics
 from tumble_ros.core import ScenarioError
 from tumble_ros.errors import NodeError
 from tumble_ros.nodes.comparator import ComparatorNode
+from tumble_ros.nodes.offline import record_offline
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
-from tumble_ros.nodes.recorder import RecorderNode
+from tumble_ros.nodes.recorder import default_output, RecorderNode
 from tumble_ros.nodes.runner import close_node, EXECUTORS
 from tumble_ros.nodes.shutdown import StopSignals
 from tumble_ros.nodes.sim import SimNode
@@ -110,15 +114,17 @@ def _isolated(visible: bool):
 def run_bringup(params_file: str | None = None, output: str | None = None,
                 model: str | None = None, ros_args: list[str] | None = None,
                 progress=sys.stderr, executor_name: str = 'events',
-                visible: bool = False) -> BringupResult:
+                visible: bool = False, offline: bool = False) -> BringupResult:
     """
     Run sim + comparator + recorder until the scenario ends; return what was recorded.
 
     ``executor_name`` is a key of :data:`EXECUTORS`; ``visible``: see the module docstring
-    (isolation). SIGINT and SIGTERM stop the run early with the file finalised
-    (``BringupResult.signal``). Raises ScenarioError / ParameterException / ValueError for
-    invalid parameters or params files, an unknown executor; OSError when the recording cannot
-    be created (nothing is left running then).
+    (isolation); ``offline``: write the recording straight from the simulation
+    (:mod:`.offline`), no ROS graph (the nodes are only built to read their parameters).
+    SIGINT and SIGTERM stop the run early with the file finalised (``BringupResult.signal``).
+    Raises ScenarioError / ParameterException / ValueError for invalid parameters or params
+    files, an unknown executor; OSError when the recording cannot be created (nothing is left
+    running then).
     """
     if executor_name not in EXECUTORS:
         raise NodeError(f"executor: must be one of {', '.join(EXECUTORS)}, got {executor_name!r}")
@@ -128,8 +134,56 @@ def run_bringup(params_file: str | None = None, output: str | None = None,
     problem = params_file_problem(args)
     if problem:
         raise NodeError(problem)
-    with StopSignals('bringup') as stop, _isolated(visible):
+    with StopSignals('bringup') as stop, _isolated(visible and not offline):
+        if offline:
+            return _run_offline(args, output, model, progress, stop)
         return _run(args, output, model, progress, executor_name, stop)
+
+
+def _run_offline(args, output, model, progress, stop: StopSignals) -> BringupResult:
+    """Build the simulator and comparator for their parameters only; record offline."""
+    context = Context()
+    rclpy.init(args=args, context=context, signal_handler_options=None)
+    nodes = []
+    try:
+        sim = SimNode(context=context, parameter_overrides=[
+            Parameter('real_time_factor', value=0.0)])
+        nodes.append(sim)
+        comparator_overrides = [Parameter('model', value=model)] if model else []
+        nodes.append(ComparatorNode(context=context, parameter_overrides=comparator_overrides))
+        problem = params_file_problem(args, sim.get_fully_qualified_name())
+        if problem:
+            raise NodeError(problem)
+        refuse_unknown_parameters(nodes)
+        scenario, timebase = sim.scenario, sim.timebase
+        model_name = nodes[1].get_parameter('model').value
+        publish_clock = sim.get_parameter('publish_clock').value
+    finally:
+        for node in reversed(nodes):
+            node.destroy_node()
+        rclpy.try_shutdown(context=context)
+    path = Path(output or default_output())
+    started = last_line = time.monotonic()
+
+    def show(t: float, samples: int, last: bool = False) -> None:
+        nonlocal last_line
+        if progress and (last or time.monotonic() - last_line > PROGRESS_PERIOD):
+            rate = samples / max(1e-9, time.monotonic() - started)
+            progress.write(f'\rbringup (offline): t = {t:.6g} / {scenario.duration:g} yr '
+                           f'({100 * t / scenario.duration:5.1f} %), {samples} samples, '
+                           f'{rate:,.0f} samples/s')
+            progress.flush()
+            last_line = time.monotonic()
+
+    result = record_offline(scenario, path, timebase=timebase, model_name=model_name,
+                            publish_clock=publish_clock, stop=lambda: stop.requested,
+                            progress=show)
+    show(result.t, result.samples, last=True)
+    if progress:
+        progress.write('\n')
+    return BringupResult(output=result.output, state=result.state, message=result.message,
+                         samples=result.samples, counts=result.counts,
+                         wall_seconds=result.wall_seconds, signal=stop.signum)
 
 
 def _run(args, output, model, progress, executor_name, stop: StopSignals) -> BringupResult:
@@ -229,6 +283,9 @@ def main(args: list[str] | None = None) -> int:
     parser.add_argument('--executor', choices=sorted(EXECUTORS), default='events',
                         help='rclpy executor running the three nodes '
                              '(default: events, the faster)')
+    parser.add_argument('--offline', action='store_true',
+                        help='write the recording straight from the simulation, without the '
+                             'ROS graph (the same file, see tumble_ros.nodes.offline)')
     parser.add_argument('--quiet', action='store_true', help='no progress display')
     parser.add_argument('--visible', action='store_true',
                         help='let other ROS processes see the run (default: isolated, see above)')
@@ -240,7 +297,7 @@ def main(args: list[str] | None = None) -> int:
         result = run_bringup(options.scenario, options.output, options.model, ros_args,
                              progress=None if options.quiet else sys.stderr,
                              executor_name=options.executor,
-                             visible=options.visible)
+                             visible=options.visible, offline=options.offline)
     except (ScenarioError, ValueError, ParameterException) as err:
         print(f"ERROR: {' '.join(str(err).split())}", file=sys.stderr)
         return 1

@@ -1,0 +1,136 @@
+"""
+The offline recording (bringup --offline, the main job) against a live one, message by message.
+
+The same scenario with impacts (config/fig10.yaml) recorded both ways: the same channels,
+schemas and offered-QoS metadata, and on every topic the same messages in the same order (all
+their fields), apart from what nodes/offline.py says differs (log times, the simulator's
+wall-clock heartbeats on /status).
+"""
+from pathlib import Path
+
+from mcap.reader import make_reader
+import numpy as np
+import pytest
+
+from tumble_ros import topics
+from tumble_ros.__main__ import main
+from tumble_ros.core import Impact, IntegratorSettings, load_scenario, Scenario
+from tumble_ros.io import read_messages, summarize
+from tumble_ros.nodes.bringup import run_bringup
+from tumble_ros.nodes.offline import record_offline
+from tumble_ros_interfaces.msg import SimStatus
+
+CONFIG = Path(__file__).resolve().parents[1] / 'config'
+
+
+def _by_topic(path) -> dict[str, list[dict]]:
+    result: dict[str, list[dict]] = {}
+    for m in read_messages(path):
+        result.setdefault(m.topic, []).append(_ros_fields(m.message))
+    return result
+
+
+def _ros_fields(decoded) -> dict:
+    """Return the decoded (mcap-ros2) message's fields as plain values."""
+    out = {}
+    for name in decoded.__slots__:
+        value = getattr(decoded, name)
+        if hasattr(value, '__slots__') and not isinstance(value, (str, bytes)):
+            out.update({f'{name}.{k}': v for k, v in _ros_fields(value).items()})
+        elif isinstance(value, list) and value and hasattr(value[0], '__slots__'):
+            out[name] = [_ros_fields(v) for v in value]
+        else:
+            out[name] = bytes(value) if isinstance(value, (bytes, bytearray)) else value
+    return out
+
+
+def _channels(path) -> dict[str, tuple]:
+    with open(path, 'rb') as f:
+        summary = make_reader(f).get_summary()
+    return {c.topic: (summary.schemas[c.schema_id].name, summary.schemas[c.schema_id].data,
+                      c.message_encoding, dict(c.metadata))
+            for c in summary.channels.values()}
+
+
+@pytest.fixture(scope='module')
+def both(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp('offline')
+    live = run_bringup(str(CONFIG / 'fig10.yaml'), str(tmp / 'live.mcap'), progress=None)
+    offline = run_bringup(str(CONFIG / 'fig10.yaml'), str(tmp / 'offline.mcap'), progress=None,
+                          offline=True)
+    assert live.ok and offline.ok, (live, offline)
+    return live, offline
+
+
+def test_the_same_channels_schemas_and_qos_metadata(both):
+    live, offline = both
+    assert _channels(offline.output) == _channels(live.output)
+
+
+def test_every_topic_holds_the_same_messages(both):
+    live, offline = both
+    a, b = _by_topic(live.output), _by_topic(offline.output)
+    assert set(a) == set(b)
+    status, latched = '/' + topics.STATUS, '/' + topics.COMPARISON_STATUS
+    for topic in sorted(set(a) - {status, latched}):
+        assert len(a[topic]) == len(b[topic]), topic
+        for k, (x, y) in enumerate(zip(a[topic], b[topic])):
+            assert x == y, (topic, k, x, y)
+    # impacts: fig10 has one; its event and the post-impact description are there
+    assert len(b['/' + topics.IMPACT_EVENTS]) == 1 and len(b['/' + topics.SCENARIO]) == 2
+    # comparison/status is latched with depth 1: a live recorder that subscribes after the
+    # comparator's first status misses it; the rest is the same
+    assert a[latched] == b[latched][len(b[latched]) - len(a[latched]):]
+    assert b[latched][0]['level'] == 1 and len(b[latched]) == 3   # WARN waiting, 2 anchors
+    # /status: the same state changes (a live run adds wall-clock heartbeats while running; it is
+    # latched with depth 1 too)
+    changes = [(s['state'], s['message']) for k, s in enumerate(a[status])
+               if k == 0 or s['state'] != a[status][k - 1]['state']]
+    offline_states = [(s['state'], s['message']) for s in b[status]]
+    assert changes == offline_states[len(offline_states) - len(changes):]
+    assert offline_states[0] == (SimStatus.RUNNING, 'started')
+    assert b[status][-1]['state'] == SimStatus.FINISHED
+
+
+def test_the_counts_are_the_live_counts(both):
+    live, offline = both
+    per_sample = {'/' + t if not t.startswith('/') else t for t in topics.PER_SAMPLE}
+    assert {t: n for t, n in offline.counts.items() if t in per_sample} == {
+        t: n for t, n in live.counts.items() if t in per_sample}
+    assert summarize(offline.output).finalised
+
+
+def test_a_diverging_run_is_stopped_and_reported_offline(tmp_path):
+    sc = Scenario(inertia=(1.0, 1.6, 2.2), duration=1.0, output_interval=0.1,
+                  impacts=(Impact(0.0, 0.5, (1e300, 1e300, 1e300)),),
+                  integrator=IntegratorSettings(method='rk4', step=0.1))
+    result = record_offline(sc, tmp_path / 'diverged.mcap')
+    assert result.state == SimStatus.DIVERGED and 'non-finite' in result.message
+    assert result.samples < 11
+    messages = list(read_messages(result.output, '/' + topics.ANGULAR_VELOCITY))
+    assert len(messages) == result.samples
+    assert all(np.isfinite([m.message.vector.x for m in messages]))
+    assert summarize(result.output).finalised
+
+
+def test_a_stop_request_finalises_what_was_written(tmp_path):
+    sc = load_scenario(CONFIG / 'fig9.yaml').replace(duration=200.0)
+    calls = []
+    result = record_offline(sc, tmp_path / 'stopped.mcap', stop=lambda: len(calls) > 0,
+                            progress=lambda t, k: calls.append(k))
+    assert 0 < result.samples < 20001 and result.state == SimStatus.RUNNING
+    assert summarize(result.output).finalised
+    assert summarize(result.output).topics['/' + topics.ANGULAR_VELOCITY].message_count == (
+        result.samples)
+
+
+def test_the_main_job_records_offline_unless_live_is_asked(tmp_path, monkeypatch, capsys):
+    scenario = tmp_path / 'short.yaml'
+    scenario.write_text(
+        'sim:\n  ros__parameters:\n    duration: 0.2\n    output_interval: 0.002\n')
+    monkeypatch.chdir(tmp_path)
+    assert main([str(scenario)]) == 0
+    assert 'bringup (offline)' in capsys.readouterr().err
+    assert main([str(scenario), '--live']) == 0
+    assert 'bringup (offline)' not in capsys.readouterr().err
+    assert len(list(Path('recordings').glob('short_*.mcap'))) >= 1

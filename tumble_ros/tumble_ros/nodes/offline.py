@@ -1,0 +1,262 @@
+"""
+Offline recording: the file the live pipeline records, written straight from the simulation.
+
+``bringup --offline`` and the main job (``python -m tumble_ros``, ``make run``) use it when
+nothing live needs the ROS graph. The simulator's samples (the same ``Propagator.sample_many``
+on the same output grid), its impact events, scenario descriptions and states, and the
+comparator's model, error and error norm (the same model anchoring, :func:`~.comparator.
+anchor_model`, the same grid look-ahead and arithmetic, :mod:`.messages`) go to the MCAP file
+without DDS: the per-sample messages encoded as numpy columns (:func:`tumble_ros.io.columns.
+encode_rows`), the others serialised by rclpy. Channels, schemas and the offered QoS metadata
+are those the live recorder writes (:func:`~.qos.as_discovered` of each publisher's profile).
+
+What differs from a live recording (tests/test_offline.py compares the two message by message):
+log and publish times are the wall-clock times of writing (the live recorder's are receipt
+times), the simulator's 1-Hz status heartbeats are absent (a live run has one per wall second
+while running; the state changes are the same), the first messages of the depth-1 latched topics
+(``status``, ``comparison/status``) are always there (a live recorder that subscribes after them
+gets only the latest), padding bytes inside CDR messages are zero (rclpy leaves whatever memory
+held), and messages of different topics may be interleaved differently.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+from pathlib import Path
+import time
+from typing import Callable
+
+from diagnostic_msgs.msg import DiagnosticStatus
+import numpy as np
+from rclpy.serialization import serialize_message
+
+from tumble_ros import topics
+from tumble_ros.core import dump_scenario, Propagator, Scenario, TimeBase
+from tumble_ros.core.scenario import ScenarioError
+from tumble_ros.io import McapWriter, offered_qos_yaml
+from tumble_ros.io.columns import encode_rows, FlatLayout
+from tumble_ros.io.msgdefs import message_definition
+from tumble_ros.nodes.comparator import anchor_model, GridModelValues
+from tumble_ros.nodes.messages import (comparison_status, comparison_values, impact_event,
+                                       scenario_description, sim_status)
+from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
+from tumble_ros.nodes.recorder import qos_dict
+from tumble_ros_interfaces.msg import SimStatus
+
+__all__ = ['record_offline', 'OfflineResult', 'BATCH']
+
+#: Samples simulated, compared and written per step of the loop (progress and SIGINT are served
+#: between steps).
+BATCH = 8192
+#: The live nodes' names (the comparator's DiagnosticStatus carries its node's name).
+COMPARATOR_NAME = '/comparator'
+
+
+@dataclass
+class OfflineResult:
+    """What an offline recording wrote (the fields of ``bringup.BringupResult``)."""
+
+    output: Path
+    state: int
+    message: str
+    samples: int
+    t: float = 0.0  # time of the last sample written [yr]
+    counts: dict[str, int] = field(default_factory=dict)
+    wall_seconds: float = 0.0
+
+
+class _Channels:
+    """The recording's channels, as the live recorder makes them, and their encoders."""
+
+    def __init__(self, writer: McapWriter, publish_clock: bool):
+        self.writer = writer
+        self.ids: dict[str, int] = {}
+        self.layouts: dict[str, FlatLayout] = {}
+        for topic in topics.RECORDED:
+            if topic == topics.CLOCK and not publish_clock:
+                continue
+            name = topic if topic.startswith('/') else '/' + topic
+            type_name = topics.TYPES[topic]
+            offered = offered_qos_yaml(qos_dict(as_discovered(PUBLISHER_QOS[topic])))
+            self.ids[topic] = writer.add_channel(name, type_name, offered)
+            self.layouts[topic] = FlatLayout.from_schema(type_name,
+                                                         message_definition(type_name))
+
+    def one(self, topic: str, msg) -> None:
+        """Write one message (serialised by rclpy), logged now."""
+        now = time.time_ns()
+        self.writer.write(self.ids[topic], serialize_message(msg), now, now)
+
+    def rows(self, topic: str, n: int, values: dict, frame: str | None = None,
+             strings: dict | None = None) -> np.ndarray:
+        """Encode n messages of a flat per-sample topic."""
+        strings = dict(strings or {})
+        if frame is not None:
+            strings['header.frame_id'] = frame
+        return encode_rows(self.layouts[topic], n, values, strings)
+
+
+def _stamped(sec, nanosec, names, columns) -> dict:
+    values = {'header.stamp.sec': sec, 'header.stamp.nanosec': nanosec}
+    values.update(zip(names, columns))
+    return values
+
+
+def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = None,
+                   model_name: str = 'paper', publish_clock: bool = True,
+                   stop: Callable[[], bool] = lambda: False,
+                   progress: Callable[[float, int], None] | None = None) -> OfflineResult:
+    """
+    Simulate ``scenario``, compare it with ``model_name`` and write the recording ``output``.
+
+    ``timebase``: the simulator's (its ``seconds_per_year``; default one second per year).
+    ``stop()`` is checked between batches: a stopped run keeps what it wrote (the file is
+    finalised). ``progress(t [yr], samples)`` is called after each batch. Raises OSError when
+    the file cannot be created or written, ScenarioError for a grid ROS stamps cannot carry.
+    """
+    started = time.monotonic()
+    timebase = timebase or TimeBase()
+    timebase.check_span(scenario.duration)
+    grid = timebase.grid(scenario.output_interval, scenario.duration)
+    output = Path(output)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    propagator = Propagator(scenario)
+    scenario_yaml = dump_scenario(scenario)
+    state, message, k = SimStatus.RUNNING, '', 0
+    with McapWriter(output, chunk_seconds=math.inf) as writer:
+        channels = _Channels(writer, publish_clock)
+        comparator = _Comparator(channels, model_name)
+        channels.one(topics.COMPARISON_STATUS, comparison_status(
+            DiagnosticStatus.WARN, COMPARATOR_NAME,
+            "waiting for the simulator's scenario description", model_name))
+        revision = _describe(channels, comparator, scenario_yaml, timebase, 0, 0.0,
+                             propagator.y, propagator)
+        channels.one(topics.STATUS, sim_status(state, 0.0, 'started', 0))
+        while k < grid.count and not stop():
+            k1 = min(grid.count, k + BATCH)
+            done, arrays, failure = propagator.sample_many(grid.times(k, k1))
+            segment_starts = {}
+            for impact, y_start, y_end in propagator.pop_completed_impacts():
+                channels.one(topics.IMPACT_EVENTS, impact_event(
+                    impact, 0, timebase.to_ns(impact.end), y_end[:3] - y_start[:3]))
+                segment_starts[impact.end] = y_end
+            for t0 in sorted(segment_starts):
+                revision = _describe(channels, comparator, scenario_yaml, timebase, revision, t0,
+                                     segment_starts[t0], propagator)
+            _write_samples(channels, comparator, grid, k, done, arrays, publish_clock)
+            k += done
+            if progress is not None:
+                progress(grid.time(max(0, k - 1)), k)
+            if failure:
+                state, message = SimStatus.DIVERGED, failure
+                break
+        if state == SimStatus.RUNNING and k >= grid.count:
+            state, message = SimStatus.FINISHED, f'finished at t = {grid.time(k - 1):g} yr'
+        if state != SimStatus.RUNNING:
+            channels.one(topics.STATUS, sim_status(state, grid.time(max(0, k - 1)), message,
+                                                   grid.stamp(max(0, k - 1))))
+        counts = dict(writer.counts)
+    return OfflineResult(output=output, state=state, message=message or 'stopped', samples=k,
+                         t=grid.time(max(0, k - 1)), counts=counts,
+                         wall_seconds=time.monotonic() - started)
+
+
+def _describe(channels, comparator, scenario_yaml, timebase, revision, t0, y0, propagator):
+    """Write a segment's description, anchor the comparator on it; return the next revision."""
+    description = scenario_description(scenario_yaml, timebase.seconds_per_year, revision,
+                                       timebase.to_ns(t0), t0, y0[:3],
+                                       propagator.quaternion_of(y0))
+    channels.one(topics.SCENARIO, description)
+    comparator.anchor(description)
+    return revision + 1
+
+
+class _Comparator:
+    """The comparator node's work on the samples, without its node."""
+
+    def __init__(self, channels: _Channels, model_name: str):
+        self.channels = channels
+        self.model_name = model_name
+        self.segments: list[tuple[float, object]] = []   # (segment start, model or None)
+        self.grid = None
+        self.values = GridModelValues()
+
+    def anchor(self, description) -> None:
+        try:
+            model, self.grid, text = anchor_model(self.model_name, description)
+            level = DiagnosticStatus.OK
+        except (ScenarioError, ValueError) as err:
+            model, level, text = None, DiagnosticStatus.WARN, str(err)
+        self.segments.append((description.segment_start, model))
+        self.channels.one(topics.COMPARISON_STATUS, comparison_status(
+            level, COMPARATOR_NAME, text, self.model_name))
+
+    def model_at(self, t: float):
+        for start, model in reversed(self.segments):
+            if t >= start:
+                return model
+        return None
+
+    def compare(self, k0: int, times: np.ndarray, omega: np.ndarray):
+        """Return (mask of the samples compared, model, error, norm, relative) of a batch."""
+        n = len(times)
+        model = np.zeros((n, 3))
+        error = np.zeros((n, 3))
+        norm = np.zeros(n)
+        relative = np.zeros(n)
+        compared = np.zeros(n, dtype=bool)
+        numeric = omega.tolist()
+        for j, t in enumerate(times.tolist()):
+            m = self.model_at(t)
+            if m is None:
+                continue
+            value = self.values.at(m, self.grid, k0 + j)
+            if not all(map(math.isfinite, value)):
+                continue
+            e, norm[j], relative[j] = comparison_values(numeric[j], value)
+            model[j], error[j], compared[j] = value, e, True
+        return compared, model, error, norm, relative
+
+
+def _write_samples(channels: _Channels, comparator: _Comparator, grid, k0: int, n: int,
+                   arrays: dict, publish_clock: bool) -> None:
+    """Write n samples from grid index k0: the simulator's four topics, the comparator's three."""
+    if n == 0:
+        return
+    ns = np.arange(k0, k0 + n, dtype=np.int64) * grid.interval_ns
+    sec, nanosec = ns // 1_000_000_000, ns % 1_000_000_000
+    omega, quaternion, euler = arrays['omega'][:n], arrays['quaternion'][:n], arrays['euler'][:n]
+    xyz = ('vector.x', 'vector.y', 'vector.z')
+    sim = []
+    if publish_clock:
+        sim.append((topics.CLOCK, channels.rows(
+            topics.CLOCK, n, {'clock.sec': sec, 'clock.nanosec': nanosec})))
+    sim += [
+        (topics.ANGULAR_VELOCITY, channels.rows(topics.ANGULAR_VELOCITY, n, _stamped(
+            sec, nanosec, xyz, omega.T), topics.FRAME_BODY)),
+        (topics.ATTITUDE, channels.rows(topics.ATTITUDE, n, _stamped(
+            sec, nanosec, ('quaternion.w', 'quaternion.x', 'quaternion.y', 'quaternion.z'),
+            quaternion.T), topics.FRAME_ORBITAL)),
+        (topics.EULER_ANGLES, channels.rows(topics.EULER_ANGLES, n, _stamped(
+            sec, nanosec, xyz, euler.T), topics.FRAME_EULER)),
+    ]
+    compared, model, error, norm, relative = comparator.compare(k0, grid.times(k0, k0 + n),
+                                                                omega)
+    comparison = [
+        (topics.MODEL_ANGULAR_VELOCITY, channels.rows(
+            topics.MODEL_ANGULAR_VELOCITY, n, _stamped(sec, nanosec, xyz, model.T),
+            topics.FRAME_BODY)),
+        (topics.ERROR, channels.rows(topics.ERROR, n, _stamped(sec, nanosec, xyz, error.T),
+                                     topics.FRAME_BODY)),
+        (topics.ERROR_NORM, channels.rows(
+            topics.ERROR_NORM, n, _stamped(sec, nanosec, ('norm', 'relative'), (norm, relative)),
+            topics.FRAME_BODY, {'model': comparator.model_name})),
+    ]
+    now = time.time_ns()
+    log = now + np.arange(n, dtype=np.int64)
+    # runs of samples with and without comparison, in order
+    edges = np.flatnonzero(np.diff(compared.astype(np.int8))) + 1
+    for a, b in zip([0, *edges.tolist()], [*edges.tolist(), n]):
+        parts = sim + (comparison if compared[a] else [])
+        channels.writer.write_rows([channels.ids[t] for t, _ in parts],
+                                   [rows[a:b] for _, rows in parts], log[a:b])
