@@ -254,3 +254,21 @@ def test_a_long_path_is_drawn_as_a_density_that_counts_every_sample():
     assert left <= x.min() and x.max() <= right and bottom <= y.min() and y.max() <= top
     assert np.isclose(right - left, top - bottom)     # equal axes, as the line plot
     assert len(x) > figures.PATH_POINTS_MAX
+
+
+def test_the_display_envelope_keeps_every_extreme_and_few_points():
+    from tumble_ros.analysis.figures import envelope
+
+    rng = np.random.default_rng(9)
+    t = np.linspace(0.0, 2000.0, 200_001)
+    y = np.sin(30.0 * t) + 0.01 * rng.normal(size=t.size)
+    y[123_457] = 7.0                                  # a one-sample spike
+    te, ye = envelope(t, y, bins=2000)
+    assert len(te) <= 3 * 2000 + 2 and np.all(np.diff(te) > 0)
+    assert ye.max() == 7.0 and ye.min() == y.min()
+    assert (te[0], ye[0], te[-1], ye[-1]) == (t[0], y[0], t[-1], y[-1])
+    # every bin's extremes are kept: the envelope's running max over any bin equals the data's
+    k = np.searchsorted(te, t[100_000:100_100])
+    assert set(ye[k[0]:k[-1]]) <= set(y[100_000:100_100])
+    short = np.arange(100.0)
+    assert envelope(short, short)[0] is short          # short series: drawn whole
