@@ -316,16 +316,16 @@ class McapWriter:
             blobs = [(c, r.tobytes(), r.shape[1]) for c, r in zip(channel_ids, rows)]
             sample_bytes = sum(size for _, _, size in blobs)
             add = self._writer.add_message
+            aging = self._chunk_seconds != math.inf
             for k in range(n):
                 log, pub = logs[k], sent[k]
                 for channel, blob, size in blobs:
-                    add(channel_id=channel, log_time=log, data=blob[k * size:(k + 1) * size],
-                        publish_time=pub)
-                if self._pending_messages == 0:
+                    add(channel, log, blob[k * size:(k + 1) * size], pub)
+                if self._pending_messages == 0 and aging:
                     self._pending_since = time.monotonic()
                 self._pending_messages += len(blobs)
                 self._pending_bytes += sample_bytes
-                if self._pending_bytes >= self._chunk_bytes or self._too_old():
+                if self._pending_bytes >= self._chunk_bytes or (aging and self._too_old()):
                     self._flush_locked()
             for topic in topics:
                 self._counts[topic] += n
