@@ -2,16 +2,25 @@
 Compile the integration loops ahead (build tooling): ``python -m tumble_ros.cli.warmup``.
 
 numba compiles the single-body and the ensemble loops on their first use (~15 s, then cached
-beside the sources); ``make setup`` runs this after each build so that no run waits for it.
+beside the sources); ``make setup`` runs this after each build so that no run waits for it. It
+also compiles the loops' variant for one extra torque (``core.torques.TorqueComponent``: every
+single extra torque shares it, whatever its function) and the reference path's calls.
 """
 from __future__ import annotations
 
 import sys
 import time
 
-from tumble_ros.core import IntegratorSettings, kernels, Scenario, simulate, simulate_ensemble
+from tumble_ros.core import (IntegratorSettings, kernels, Scenario, simulate, simulate_ensemble,
+                             torque_function, TorqueComponent)
 
 __all__ = ['warm_up', 'main']
+
+
+@torque_function
+def _no_torque(par, t, q0, q1, q2, q3):
+    """Return no torque: only the type matters (the kernels' variant for one extra torque)."""
+    return 0.0, 0.0, 0.0
 
 
 def warm_up() -> float:
@@ -25,8 +34,13 @@ def warm_up() -> float:
     started = time.perf_counter()
     tiny = Scenario(duration=1e-3, output_interval=1e-3,
                     integrator=IntegratorSettings(method='splitting', step=1e-4))
-    simulate(tiny)
-    simulate_ensemble(tiny, n_bodies=2)
+    with_extra = tiny.replace(torques=(TorqueComponent('warm-up', _no_torque),))
+    for scenario in (tiny, with_extra):
+        simulate(scenario)
+        simulate_ensemble(scenario, n_bodies=2)
+        for method in ('splitting', 'rk4', 'dop853'):   # the reference path's compiled calls
+            simulate(scenario.replace(integrator=IntegratorSettings(method=method, step=1e-4)),
+                     fast=False)
     return time.perf_counter() - started
 
 
