@@ -164,3 +164,57 @@ def test_orbit_state_gives_the_circular_direction_at_e_0():
         distance, angle = orbit_state(t, 4.0, 1.0, 0.0, 0.0, 0.0)
         assert distance == pytest.approx(1.0, abs=1e-15)
         assert angle == pytest.approx(2.0 * t, abs=1e-12)       # n = sqrt(GM / a^3) = 2
+
+
+def test_the_scenarios_orbit_section_round_trips_and_runs():
+    from tumble_ros.core import dump_scenario, parse_scenario
+
+    orbit = KeplerOrbit(gm=4.0, a=1.0, e=0.0)
+    circular = Scenario(inertia=(1.0, 1.3, 1.8), orbit_rate=2.0, omega0=(1.0, -2.0, 20.0),
+                        duration=0.5, output_interval=0.05)
+    kepler = circular.replace(orbit_rate=0.0, orbit=orbit)
+    assert parse_scenario(dump_scenario(kepler)) == kepler
+    params = kepler.to_parameters()
+    assert params['orbit.kind'] == 'kepler' and params['orbit.gm'] == 4.0
+    assert Scenario.from_parameters(params) == kepler
+    assert Scenario.from_parameters(circular.to_parameters()).orbit is None
+    np.testing.assert_allclose(simulate(kepler).omega, simulate(circular).omega, rtol=0,
+                               atol=1e-9)
+    assert [t.name for t in kepler.extra_torques] == ['kepler_orbit']
+
+
+@pytest.mark.parametrize('params, match', [
+    ({'orbit.e': 0.5}, r'^orbit\.e: is used only with orbit\.kind: kepler'),
+    ({'orbit.kind': 'kepler'}, r'^orbit_rate: must be 0 with a Kepler orbit'),
+    ({'orbit.kind': 'kepler', 'orbit_rate': 0.0, 'orbit.e': 1.0}, r'^orbit\.e: .*parabolic'),
+    ({'orbit.kind': 'elliptic'}, r'^orbit\.kind: must be one of'),
+])
+def test_a_bad_orbit_section_is_refused_naming_the_field(params, match):
+    from tumble_ros.core import ScenarioError
+
+    with pytest.raises(ScenarioError, match=match):
+        Scenario.from_parameters(params)
+
+
+def test_the_analytic_models_say_they_do_not_apply_to_a_kepler_orbit():
+    from tumble_ros.core import applicability, make_model, ModelNotApplicable
+
+    sc = Scenario(orbit_rate=0.0, orbit=KeplerOrbit(gm=1.0, a=1.0, e=0.3))
+    reasons = applicability(sc)
+    assert reasons and all('circular orbit' in why and 'kepler_orbit' in why
+                           for why in reasons.values())
+    with pytest.raises(ModelNotApplicable, match='kepler_orbit'):
+        make_model('paper', sc)
+
+
+def test_an_ensemble_runs_the_orbit_too():
+    from tumble_ros.core import simulate_ensemble
+
+    sc = Scenario(inertia=(1.0, 1.3, 1.8), orbit_rate=0.0, omega0=(1.0, -2.0, 20.0),
+                  duration=0.3, output_interval=0.1,
+                  orbit=KeplerOrbit(gm=4.0, a=1.0, e=0.6, t_p=0.1),
+                  integrator=IntegratorSettings(method='splitting6', step=1e-3))
+    ens = simulate_ensemble(sc, n_bodies=2, omega0=[sc.omega0, (0.5, 0.5, 10.0)])
+    np.testing.assert_allclose(ens.omega[0], simulate(sc).omega, rtol=0, atol=1e-10)
+    free = simulate(sc.replace(orbit=None))
+    assert np.max(np.abs(ens.omega[0] - free.omega)) > 1e-3

@@ -134,3 +134,22 @@ def test_the_main_job_records_offline_unless_live_is_asked(tmp_path, monkeypatch
     assert main([str(scenario), '--live']) == 0
     assert 'bringup (offline)' not in capsys.readouterr().err
     assert len(list(Path('recordings').glob('short_*.mcap'))) >= 1
+
+
+def test_a_kepler_orbit_from_a_params_file_runs_and_is_reported(tmp_path):
+    from tumble_ros.analysis import analyze, load_recording
+
+    params = tmp_path / 'kepler.yaml'
+    params.write_text('sim:\n  ros__parameters:\n    orbit_rate: 0.0\n    duration: 0.5\n'
+                      '    output_interval: 0.01\n    orbit.kind: kepler\n    orbit.gm: 39.5\n'
+                      '    orbit.a: 1.0\n    orbit.e: 0.5\n')
+    result = run_bringup(str(params), str(tmp_path / 'kepler.mcap'), progress=None,
+                         offline=True)
+    assert result.ok and result.samples == 51
+    status = [m.message for m in read_messages(result.output, '/' + topics.COMPARISON_STATUS)]
+    assert status[-1].level == 1 and 'circular orbit' in status[-1].message
+    rec = load_recording(result.output)
+    assert rec.scenario.orbit is not None and rec.scenario.orbit.e == 0.5
+    summary = analyze(rec)
+    assert summary.invariant is None
+    assert 'not conserved on a Kepler orbit' in summary.invariant_note

@@ -224,7 +224,7 @@ class AnalyticModel(ABC):
     def __init__(self, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None,
                  euler=None) -> None:
         state = AnchorState.build(scenario, t0, omega, quaternion, euler)
-        reason = type(self)._reason(scenario, state)
+        reason = type(self).applies(scenario, state)
         if reason is not None:
             raise ModelNotApplicable(self.name, reason)
         self.scenario = scenario
@@ -238,6 +238,11 @@ class AnalyticModel(ABC):
 
         ``state`` defaults to the scenario's initial state.
         """
+        extra = scenario.extra_torques
+        if extra:
+            names = ', '.join(t.name for t in extra)
+            return ("the analytic models know the circular orbit's torque only; this scenario "
+                    f'also has {names}')
         return cls._reason(scenario, state if state is not None else AnchorState.build(scenario))
 
     @classmethod
@@ -758,6 +763,16 @@ def characteristic_frequencies(scenario: Scenario,
     ws = scenario.orbit_rate
     w0 = scenario.omega0[2]
     theta = scenario.euler0[2]
+    moments = (ix, iy, iz)
+    if scenario.extra_torques:   # an orbit or torques the models do not know: estimates only
+        w_max = float(np.linalg.norm(scenario.omega0)) if omega_max is None else float(omega_max)
+        rate = max(abs(moments[(i + 1) % 3] - moments[(i + 2) % 3]) / moments[i]
+                   for i in range(3))
+        names = ', '.join(t.name for t in scenario.extra_torques)
+        return CharacteristicFrequencies((
+            Frequency('nutation (estimate)', rate * w_max,
+                      'max |Ij - Ik|/Ii * max|w| (no model knows the torque)'),
+        ), f'inertia {moments}, torques beyond the circular orbit ({names}): estimates only')
     if _equal(ix, iy):
         basis = (f'symmetric body: a = {(iz - ix) / ix:.6g}, w0 = {w0:.6g} rad/yr, '
                  f'ws = {ws:.6g} rad/yr, theta0 = {theta:.6g} rad (scenario inputs)')
@@ -773,7 +788,6 @@ def characteristic_frequencies(scenario: Scenario,
         if FastSpinAdiabaticModel.applies(scenario) is None:
             lines.append(_named(FastSpinAdiabaticModel(scenario))['|wE+dbar|'])
         return CharacteristicFrequencies(tuple(lines), basis)
-    moments = (ix, iy, iz)
     basis = f'asymmetric body: inertia {moments}, ws = {ws:.6g} rad/yr'
     if ws == 0.0:
         try:

@@ -285,7 +285,7 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
             torques[j, :3], torques[j, 3:] = body, orbital
             j += 1
     probs = K.problem_arrays(scenario.inertia, scenario.orbit_rate, torques)
-    extra = extra_torque_arrays(scenario.torques)
+    extra = extra_torque_arrays(scenario.extra_torques)
     # initial states
     model = ATTITUDE_MODELS[scenario.attitude]
     states = np.zeros((n, K.ST.SIZE))

@@ -327,16 +327,16 @@ class Propagator:
             self._nfev_done += self._stepper.nfev
         sc = self.scenario
         problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
-                                 segment.torque_orbital, sc.attitude, sc.torques)
+                                 segment.torque_orbital, sc.attitude, sc.extra_torques)
         self._stepper = self._runner.new_stepper(segment, t0, y0, problem)
 
     def _switching_rhs(self):
         """Pulses as a time switch inside one smooth-looking RHS (demonstration only)."""
         sc, make = self.scenario, self._model.make_rhs
-        free = make(sc.inertia, sc.orbit_rate, extra_torques=sc.torques)
+        free = make(sc.inertia, sc.orbit_rate, extra_torques=sc.extra_torques)
         pulses = [(i, make(sc.inertia, sc.orbit_rate,
                            *((i.torque, (0, 0, 0)) if i.frame == 'body'
-                             else ((0, 0, 0), i.torque)), extra_torques=sc.torques))
+                             else ((0, 0, 0), i.torque)), extra_torques=sc.extra_torques))
                   for i in self._impacts]
 
         def rhs(t, y):

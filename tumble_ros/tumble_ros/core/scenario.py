@@ -43,6 +43,7 @@ from .limits import (
 )
 from .timebase import SampleGrid, TimeBase
 from .torques import TorqueComponent
+from .torques.orbits import KeplerOrbit
 
 __all__ = [
     'ScenarioError',
@@ -304,6 +305,10 @@ class Scenario:
         rounded to whole nanoseconds of ROS time (:attr:`output_times`).
     integrator : IntegratorSettings
     impacts : tuple of Impact
+    orbit : KeplerOrbit or None
+        The torquing body's Kepler orbit (``core.torques.orbits``; elliptic or a hyperbolic
+        flyby); None: the circular orbit of ``orbit_rate`` (the paper's). With an orbit,
+        ``orbit_rate`` must be 0 (the orbit gives the tidal torque).
     torques : tuple of TorqueComponent
         Extra torques added to the gravity gradient and the impacts, on the whole run
         (``core.torques``: defined outside core, run by every integrator). Python API only:
@@ -323,6 +328,7 @@ class Scenario:
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
     impacts: tuple[Impact, ...] = ()
     torques: tuple[TorqueComponent, ...] = ()
+    orbit: KeplerOrbit | None = None
 
     def __post_init__(self) -> None:
         inertia = _vector('inertia', self.inertia)
@@ -422,8 +428,20 @@ class Scenario:
             if not isinstance(torque, TorqueComponent):
                 _fail(f'torques[{k}]', 'must be a core.torques.TorqueComponent', torque)
         _set(self, 'torques', torques)
+        if self.orbit is not None:
+            if not isinstance(self.orbit, KeplerOrbit):
+                _fail('orbit', 'must be a core.torques.orbits.KeplerOrbit or None', self.orbit)
+            if self.orbit_rate != 0.0:
+                _fail('orbit_rate', 'must be 0 with a Kepler orbit (orbit.kind kepler): the '
+                      'orbit gives the tidal torque', self.orbit_rate)
 
     # -- derived quantities ---------------------------------------------------------
+    @property
+    def extra_torques(self) -> tuple[TorqueComponent, ...]:
+        """Return the torques beyond the circular orbit's and the impacts': orbit, then torques."""
+        orbit = (self.orbit.torque_component(self.inertia),) if self.orbit is not None else ()
+        return orbit + self.torques
+
     @property
     def output_grid(self) -> SampleGrid:
         """Return the output grid at the default time base (one ROS second per year)."""
@@ -464,6 +482,10 @@ class Scenario:
         params['impacts.duration'] = [i.duration for i in self.impacts]
         params['impacts.torque'] = [c for i in self.impacts for c in i.torque]
         params['impacts.frame'] = [i.frame for i in self.impacts]
+        orbit = self.orbit if self.orbit is not None else _DEFAULT_ORBIT
+        params['orbit.kind'] = 'kepler' if self.orbit is not None else 'circular'
+        for name in _ORBIT_FIELDS:
+            params[f'orbit.{name}'] = getattr(orbit, name)
         return params
 
     @classmethod
@@ -484,6 +506,7 @@ class Scenario:
         }
         plain['integrator'] = IntegratorSettings(**integ)
         plain['impacts'] = _impacts_from_parameters(params)
+        plain['orbit'] = _orbit_from_parameters(params)
         return cls(**plain)
 
 
@@ -492,11 +515,33 @@ _SCENARIO_PLAIN = (
     'duration', 'output_interval',
 )
 _IMPACT_KEYS = ('impacts.start', 'impacts.duration', 'impacts.torque', 'impacts.frame')
+_ORBIT_FIELDS = ('gm', 'a', 'e', 't_p', 'lambda_p')
+_ORBIT_KINDS = ('circular', 'kepler')
+#: The orbit.* values of a scenario without a Kepler orbit (orbit.kind circular).
+_DEFAULT_ORBIT = KeplerOrbit(gm=1.0, a=1.0)
 PARAMETER_NAMES: tuple[str, ...] = (
     _SCENARIO_PLAIN
     + tuple(f'integrator.{f.name}' for f in dataclasses.fields(IntegratorSettings))
     + _IMPACT_KEYS
+    + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS)
 )
+
+
+def _orbit_from_parameters(params: Mapping[str, Any]) -> KeplerOrbit | None:
+    """Return the Kepler orbit of ``orbit.*`` (None for orbit.kind circular, the default)."""
+    kind = _one_of('orbit.kind', params.get('orbit.kind', 'circular'), _ORBIT_KINDS)
+    values = {name: params.get(f'orbit.{name}', getattr(_DEFAULT_ORBIT, name))
+              for name in _ORBIT_FIELDS}
+    if kind == 'circular':
+        for name, value in values.items():
+            if value != getattr(_DEFAULT_ORBIT, name):
+                _fail(f'orbit.{name}', 'is used only with orbit.kind: kepler (the circular orbit '
+                      'is given by orbit_rate)', value)
+        return None
+    try:
+        return KeplerOrbit(**values)
+    except ValueError as err:
+        raise ScenarioError(str(err)) from None
 
 
 #: Unit and meaning of every scenario parameter (the nodes' descriptors, the README tables).
@@ -529,6 +574,13 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'impacts.duration': ('yr', 'length of each impact pulse; >= 16 ulp of its end time'),
     'impacts.torque': ('I rad/yr^2', 'torque of each impact, 3 numbers per impact, flattened'),
     'impacts.frame': ('', "frame of each impact's torque: body or orbital (empty = all body)"),
+    'orbit.kind': ('', 'circular (orbit_rate, the paper) or kepler (the orbit.* elements; then '
+                   'orbit_rate must be 0)'),
+    'orbit.gm': ('L^3/yr^2', "the torquing body's GM, in the unit L of orbit.a (kepler)"),
+    'orbit.a': ('L', 'semi-major axis, > 0 (|a| of a hyperbolic flyby) (kepler)'),
+    'orbit.e': ('', 'eccentricity: 0 to 0.99 (ellipse) or >= 1.000001 (hyperbola) (kepler)'),
+    'orbit.t_p': ('yr', 'time of pericentre (kepler)'),
+    'orbit.lambda_p': ('rad', "direction of pericentre, clockwise from +Y' about Z' (kepler)"),
 }
 
 
