@@ -368,3 +368,33 @@ def test_spectrum_separates_two_lines():
     assert len(got) == 2
     assert abs(got[0] - 30.0) < 0.2 * sp.resolution and abs(got[1] - 90.0) < 0.2 * sp.resolution
     assert sp.peaks[1].amplitude == pytest.approx(0.05, rel=0.1)
+
+
+def test_the_spin_state_at_start_and_end_is_reported(tmp_path):
+    """An impact changes the tumbling state: the summary's start and end states say how."""
+    from tumble_ros.core.spinstate import spin_state
+
+    sc = Scenario(inertia=(1.0, 1.5, 2.0), orbit_rate=0.0, omega0=(2.0, 1.0, 10.0),
+                  duration=1.0, output_interval=0.01,
+                  impacts=(Impact(0.5, 1e-3, (0.0, 0.0, -18000.0)),))
+    r = simulate(sc)
+    path = write_recording(tmp_path / 'spin.mcap', r.t, r.omega, quaternion=r.quaternion,
+                           scenario=sc)
+    s = analyze(load_recording(path))
+    assert s.spin is not None
+    expected_start = spin_state(r.omega[0], sc.inertia, r.quaternion[0])
+    expected_end = spin_state(r.omega[-1], sc.inertia, r.quaternion[-1])
+    assert s.spin.start == expected_start and s.spin.end == expected_end
+    assert s.spin.start.mode == 'SAM' and s.spin.end.mode == 'LAM'   # the impact flipped it
+    assert s.spin.pole_shift > 0.01
+    text = format_summary(s)
+    assert 'start (t = 0 yr): SAM' in text and 'LAM' in text and 'pole shift' in text
+    assert summary_to_dict(s)['spin']['end']['mode'] == 'LAM'
+
+
+def test_no_spin_state_without_attitude(tmp_path):
+    sc = Scenario(duration=0.1, output_interval=0.01)
+    r = simulate(sc)
+    s = analyze(load_recording(write_recording(tmp_path / 'w.mcap', r.t, r.omega, scenario=sc)))
+    assert s.spin is None and s.spin_note == 'no attitude recorded'
+    assert 'spin state: not computed (no attitude recorded)' in format_summary(s)

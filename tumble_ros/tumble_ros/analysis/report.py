@@ -17,6 +17,7 @@ import numpy as np
 from tumble_ros.topics import ANGULAR_VELOCITY, in_namespace, SCENARIO
 
 from .recording import ROOT_NAMESPACE
+from .spin import period_text
 
 if TYPE_CHECKING:
     from .summary import AnalysisSummary
@@ -162,10 +163,28 @@ def _frequencies(s: AnalysisSummary) -> list[str]:
     return out
 
 
+def _spin(s: AnalysisSummary) -> list[str]:
+    if s.spin is None:
+        return [f'spin state: not computed ({s.spin_note})']
+    out = ['spin state (torque-free through the sample; docs/analysis.md):']
+    for label, t, state in (('start', s.spin.t_start, s.spin.start),
+                            ('end', s.spin.t_end, s.spin.end)):
+        pole = ''
+        if state.pole_longitude is not None:
+            pole = (f', pole lon {math.degrees(state.pole_longitude):.2f} deg, '
+                    f'lat {math.degrees(state.pole_latitude):.2f} deg')
+        out.append(f'  {label} (t = {_g(t, 10)} yr): {state.mode}, rotation '
+                   f'{period_text(state.rotation_period)}, precession '
+                   f'{period_text(state.precession_period)}{pole}')
+    if s.spin.pole_shift is not None:
+        out.append(f'  pole shift: {math.degrees(s.spin.pole_shift):.3g} deg')
+    return out
+
+
 def format_summary(s: AnalysisSummary) -> str:
     """Return the summary as text (one WARNING: line per warning, at the end)."""
     out = (_file(s) + _time_and_scenario(s) + _comparator(s) + _invariant(s) + _impacts(s)
-           + _frequencies(s))
+           + _spin(s) + _frequencies(s))
     out += [f'note: {note}' for note in s.notes]
     out += [f'WARNING: {warning}' for warning in s.warnings]
     return '\n'.join(out)

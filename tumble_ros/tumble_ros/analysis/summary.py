@@ -24,6 +24,7 @@ from .impacts import impact_intervals, impact_summaries, ImpactSummary
 from .invariants import InvariantDrift, jacobi_drift, JacobiSegment
 from .recording import Recording, ROOT_NAMESPACE
 from .spectrum import Peak, Spectrum, spectrum
+from .spin import spin_change, SpinChange
 from .theory import AliasingCheck, check_aliasing, theory_lines, TheoryLine
 from .timeaxis import Sampling, sampling
 
@@ -62,6 +63,8 @@ class AnalysisSummary:
     warnings: tuple[str, ...]
     notes: tuple[str, ...]
     namespace: str = ROOT_NAMESPACE          # the ROS namespace whose topics were analysed
+    spin: SpinChange | None = None           # the tumbling state at the start and the end
+    spin_note: str | None = None
 
 
 def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
@@ -103,6 +106,7 @@ def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
     if spec is not None and spec.resampled:
         notes.append('wx was linearly interpolated onto a uniform grid for the spectrum '
                      '(uneven sampling)')
+    spin, spin_note = spin_change(rec)
     aliasing = check_aliasing(samp, lines)
     if aliasing.warning:
         warnings.append(aliasing.warning)
@@ -115,4 +119,5 @@ def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
         comparator=comparator, comparator_note=comparator_note,
         invariant=invariant, invariant_note=invariant_note, impacts=tuple(impact_summaries(rec)),
         theory_basis=basis, theory=tuple(lines), spectrum=spec, aliasing=aliasing,
-        warnings=tuple(warnings), notes=tuple(notes), namespace=rec.namespace)
+        warnings=tuple(warnings), notes=tuple(notes), namespace=rec.namespace, spin=spin,
+        spin_note=spin_note)

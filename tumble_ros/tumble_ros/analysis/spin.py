@@ -1,0 +1,64 @@
+"""
+The tumbling state at the start and at the end of a recording (``core.spinstate``).
+
+The torque-free spin state through the first and the last sample that has both w and the
+attitude: mode (SAM / LAM), rotation and precession periods, the pole (L's direction in the
+orbital frame), and how far the pole moved between them: what an impact sequence or an
+encounter did to the tumbler. Periods are shown in years and in hours or days (a simulated
+year is 365.25 days).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+
+from tumble_ros.core.spinstate import spin_state, SpinState
+
+from .recording import Recording
+
+__all__ = ['SpinChange', 'spin_change', 'period_text', 'HOURS_PER_YEAR']
+
+HOURS_PER_YEAR = 365.25 * 24.0
+
+
+@dataclass(frozen=True)
+class SpinChange:
+    """The spin state at the first and the last sample with an attitude, and the pole's shift."""
+
+    t_start: float
+    start: SpinState
+    t_end: float
+    end: SpinState
+    pole_shift: float | None      # [rad]
+
+
+def spin_change(rec: Recording) -> tuple[SpinChange | None, str | None]:
+    """Return (the change, None), or (None, why it cannot be computed)."""
+    if rec.scenario is None:
+        return None, 'no scenario (the inertia is unknown)'
+    if not len(rec.quaternion_t):
+        return None, 'no attitude recorded'
+    ia = np.flatnonzero(np.isin(rec.t, rec.quaternion_t))
+    if not len(ia):
+        return None, 'no sample with both w and the attitude'
+    ib = np.searchsorted(rec.quaternion_t, rec.t[ia])
+    try:
+        first = spin_state(rec.omega[ia[0]], rec.scenario.inertia, rec.quaternion[ib[0]])
+        last = spin_state(rec.omega[ia[-1]], rec.scenario.inertia, rec.quaternion[ib[-1]])
+    except ValueError as err:
+        return None, str(err)
+    shift = None
+    if first.pole is not None and last.pole is not None:
+        shift = math.acos(max(-1.0, min(1.0, float(np.dot(first.pole, last.pole)))))
+    return SpinChange(float(rec.t[ia[0]]), first, float(rec.t[ia[-1]]), last, shift), None
+
+
+def period_text(years: float) -> str:
+    """Return a period in years and in hours (below 48 h) or days."""
+    if not math.isfinite(years):
+        return 'inf'
+    hours = years * HOURS_PER_YEAR
+    other = f'{hours:.4g} h' if hours < 48 else f'{hours / 24:.4g} d'
+    return f'{years:.6g} yr ({other})'

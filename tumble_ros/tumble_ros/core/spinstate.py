@@ -1,0 +1,136 @@
+"""
+The spin state of a tumbling body from one sample: mode, periods, pole.
+
+For the torque-free motion through a state (omega, attitude) — what the body would do if the
+torque stopped there — with the principal moments sorted I1 < I2 < I3 (I1: the long axis,
+I3: the short axis), the rotational energy E = 1/2 w.Iw and the angular momentum L = |Iw|:
+
+* the **mode**: the dynamical moment D = L^2 / (2E) lies in [I1, I3]; D > I2 is a short-axis
+  mode (SAM: the body turns about an axis circling I3), D < I2 a long-axis mode (LAM: about
+  I1), D = I2 the separatrix (Samarasinha & A'Hearn 1991, Icarus 93; Kaasalainen 2001, A&A 376);
+* the **rotation period** P_psi: the period of w(t) in body axes (Jacobi elliptic functions of
+  modulus k), P_psi = 4 K(k) sqrt(I1 I2 I3 / ((I3 - I2)(L^2 - 2E I1))) with
+  k^2 = (I2 - I1)(2E I3 - L^2) / ((I3 - I2)(L^2 - 2E I1)) for a SAM, and the same with
+  (I1 <-> I3) for a LAM (Landau & Lifshitz, Mechanics, sec. 37);
+* the **precession period** P_phi: the mean period of the reference axis (I3 in a SAM, I1 in a
+  LAM) about L, from the rate phi' = L (Ia wa^2 + Ib wb^2) / (Ia^2 wa^2 + Ib^2 wb^2) (a, b the two
+  other axes) averaged over one P_psi by quadrature of the Euler-Poinsot motion;
+* the **pole**: L's direction in the orbital frame (longitude from +X' towards +Y', latitude
+  from the orbit plane).
+
+For a symmetric body (I1 = I2 or I2 = I3) P_psi is the body-frame precession of w and P_phi =
+2 pi I_sym / L. Units: w [rad/yr], periods [yr]; inertia normalised. Tested against
+simulations (tests/test_core_spinstate.py).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.special import ellipk
+
+from .rotation import quaternion_to_matrix
+
+__all__ = ['SpinState', 'spin_state']
+
+_SEPARATRIX = 1e-12   # |D - I2| / I2 below this: the separatrix (infinite period)
+
+
+@dataclass(frozen=True)
+class SpinState:
+    """
+    The torque-free spin state through one sample.
+
+    Attributes
+    ----------
+    mode : 'SAM', 'LAM' or 'separatrix' (or 'principal' for a rotation about one axis).
+    energy : rotational energy E = 1/2 w.Iw [I rad^2/yr^2].
+    momentum : |L| = |Iw| [I rad/yr].
+    dynamic_inertia : D = L^2 / 2E, between I1 and I3.
+    rotation_period : P_psi [yr] (inf at the separatrix, the spin period for a principal
+        rotation).
+    precession_period : P_phi [yr] (the spin period for a principal rotation).
+    pole : L's unit vector in the orbital frame (None without an attitude).
+    pole_longitude, pole_latitude : [rad] (None without an attitude).
+
+    """
+
+    mode: str
+    energy: float
+    momentum: float
+    dynamic_inertia: float
+    rotation_period: float
+    precession_period: float
+    pole: tuple[float, float, float] | None = None
+    pole_longitude: float | None = None
+    pole_latitude: float | None = None
+
+
+def spin_state(omega, inertia, quaternion=None) -> SpinState:
+    """
+    Return the spin state through a sample: w [rad/yr] in body axes, principal ``inertia``.
+
+    ``quaternion`` (body -> orbital, scalar first) gives the pole. Raises ValueError for a body
+    at rest or bad inputs.
+    """
+    w = np.asarray(omega, dtype=float).reshape(3)
+    moments = np.asarray(inertia, dtype=float).reshape(3)
+    if not (np.all(np.isfinite(w)) and np.all(np.isfinite(moments)) and np.all(moments > 0)):
+        raise ValueError(f'spin_state: omega and inertia must be finite (inertia > 0), got '
+                         f'{w.tolist()}, {moments.tolist()}')
+    order = np.argsort(moments, kind='stable')
+    i1, i2, i3 = moments[order]
+    w1, w2, w3 = w[order]
+    energy = 0.5 * float(moments @ (w * w))
+    momentum = float(np.linalg.norm(moments * w))
+    if momentum == 0.0:
+        raise ValueError('spin_state: the body is at rest (w = 0)')
+    d = momentum * momentum / (2.0 * energy)
+    pole = lon = lat = None
+    if quaternion is not None:
+        c = quaternion_to_matrix(np.asarray(quaternion, dtype=float))
+        direction = c @ (moments * w) / momentum
+        pole = tuple(float(v) for v in direction)
+        lon = math.atan2(direction[1], direction[0])
+        lat = math.asin(max(-1.0, min(1.0, direction[2])))
+    principal = sum(abs(v) > 1e-12 * np.linalg.norm(w) for v in (w1, w2, w3)) == 1
+    if principal:
+        period = 2.0 * math.pi / float(np.linalg.norm(w))
+        return SpinState('principal', energy, momentum, d, period, period, pole, lon, lat)
+    if abs(d - i2) <= _SEPARATRIX * i2 and i1 < i2 < i3:
+        return SpinState('separatrix', energy, momentum, d, math.inf, math.inf, pole, lon, lat)
+    l2, e2 = momentum * momentum, 2.0 * energy
+    if d > i2 or i2 == i1:            # SAM (I3 the reference axis); also I1 = I2 symmetric
+        mode, (ia, ib, ic) = 'SAM', (i1, i2, i3)
+        scale = (i3 - i2) * (l2 - e2 * i1)
+        k2 = (i2 - i1) * (e2 * i3 - l2) / scale if i2 > i1 else 0.0
+        axes = (0, 1)                  # phi' from the I1, I2 components
+    else:                              # LAM (I1 the reference axis); also I2 = I3 symmetric
+        mode, (ia, ib, ic) = 'LAM', (i1, i2, i3)
+        scale = (i2 - i1) * (e2 * i3 - l2)
+        k2 = (i3 - i2) * (l2 - e2 * i1) / scale if i3 > i2 else 0.0
+        axes = (1, 2)
+    rotation = 4.0 * float(ellipk(k2)) * math.sqrt(ia * ib * ic / scale)
+    precession = _precession_period((i1, i2, i3), (w1, w2, w3), momentum, axes, rotation)
+    return SpinState(mode, energy, momentum, d, rotation, precession, pole, lon, lat)
+
+
+def _precession_period(moments, w0, momentum, axes, rotation) -> float:
+    """2 pi / <phi'> over one rotation period, by quadrature of the torque-free motion."""
+    i = np.asarray(moments, dtype=float)
+    a, b = axes
+
+    def rhs(t, y):
+        w = y[:3]
+        dw = np.array([(i[1] - i[2]) * w[1] * w[2] / i[0], (i[2] - i[0]) * w[2] * w[0] / i[1],
+                       (i[0] - i[1]) * w[0] * w[1] / i[2]])
+        num = i[a] * w[a] ** 2 + i[b] * w[b] ** 2
+        den = i[a] ** 2 * w[a] ** 2 + i[b] ** 2 * w[b] ** 2
+        return np.concatenate([dw, [momentum * num / den]])
+
+    sol = solve_ivp(rhs, (0.0, rotation), [*w0, 0.0], method='DOP853', rtol=1e-12,
+                    atol=1e-14 * max(1.0, float(np.max(np.abs(w0)))))
+    mean_rate = sol.y[3, -1] / rotation
+    return 2.0 * math.pi / abs(mean_rate)
