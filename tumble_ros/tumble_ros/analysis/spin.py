@@ -15,12 +15,11 @@ import math
 import numpy as np
 
 from tumble_ros.core.spinstate import spin_state, SpinState
+from tumble_ros.core.units import HOURS_PER_YEAR
 
 from .recording import Recording
 
 __all__ = ['SpinChange', 'spin_change', 'period_text', 'HOURS_PER_YEAR']
-
-HOURS_PER_YEAR = 365.25 * 24.0
 
 
 @dataclass(frozen=True)

@@ -44,6 +44,7 @@ from .limits import (
 from .timebase import SampleGrid, TimeBase
 from .torques import TorqueComponent
 from .torques.orbits import KeplerOrbit
+from .units import TIME_UNITS, to_years
 
 __all__ = [
     'ScenarioError',
@@ -467,6 +468,7 @@ class Scenario:
     def to_parameters(self) -> dict[str, Any]:
         """Flat parameter dictionary as ROS 2 parameters (``integrator.rtol``, ...)."""
         params: dict[str, Any] = {
+            'time_unit': 'yr',
             'inertia': list(self.inertia),
             'allow_unphysical_inertia': self.allow_unphysical_inertia,
             'orbit_rate': self.orbit_rate,
@@ -500,6 +502,8 @@ class Scenario:
         if unknown:
             raise ScenarioError(
                 f"{unknown[0]}: unknown scenario parameter (known: {', '.join(sorted(known))})")
+        unit = _one_of('time_unit', params.get('time_unit', 'yr'), TIME_UNITS)
+        params = to_years(params, unit)
         plain = {k: params[k] for k in _SCENARIO_PLAIN if k in params}
         integ = {
             k.split('.', 1)[1]: params[k] for k in params if k.startswith('integrator.')
@@ -520,7 +524,7 @@ _ORBIT_KINDS = ('circular', 'kepler')
 #: The orbit.* values of a scenario without a Kepler orbit (orbit.kind circular).
 _DEFAULT_ORBIT = KeplerOrbit(gm=1.0, a=1.0)
 PARAMETER_NAMES: tuple[str, ...] = (
-    _SCENARIO_PLAIN
+    ('time_unit',) + _SCENARIO_PLAIN
     + tuple(f'integrator.{f.name}' for f in dataclasses.fields(IntegratorSettings))
     + _IMPACT_KEYS
     + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS)
@@ -546,6 +550,8 @@ def _orbit_from_parameters(params: Mapping[str, Any]) -> KeplerOrbit | None:
 
 #: Unit and meaning of every scenario parameter (the nodes' descriptors, the README tables).
 PARAMETER_DOCS: dict[str, tuple[str, str]] = {
+    'time_unit': ('', 'unit of every time, rate, torque and GM below: yr (default), d, h, min or '
+                  's; converted to years once, when the scenario is read (core/units.py)'),
     'inertia': ('normalised', 'principal moments of inertia (Ix, Iy, Iz); only ratios matter'),
     'allow_unphysical_inertia': (
         '', 'accept moments that break the triangle inequality (paper Figs 3, 6-10)'),
