@@ -95,6 +95,16 @@ class GridModelValues:
             self._model, self._first, self._values = model, k, model.omega(times).tolist()
         return self._values[k - self._first]
 
+    def span(self, model, grid, k: int, stop: int) -> list[list[float]]:
+        """Return ``model``'s omega at grid samples k .. stop - 1: what :meth:`at` gives each."""
+        out: list[list[float]] = []
+        while k < stop:
+            self.at(model, grid, k)       # (re)fills the look-ahead from k if needed
+            end = min(stop, self._first + len(self._values))
+            out += self._values[k - self._first:end - self._first]
+            k = end
+        return out
+
 
 class ComparatorNode(GuardedNode):
     """Comparator node; see the module docstring."""

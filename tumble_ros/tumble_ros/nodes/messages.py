@@ -19,7 +19,8 @@ from tumble_ros_interfaces.msg import ErrorNorm, ImpactEvent, ScenarioDescriptio
 from tumble_ros_interfaces.srv import ApplyImpact
 
 __all__ = ['stamp', 'FRAMES', 'FRAME_CODES', 'scenario_description', 'impact_event',
-           'sim_status', 'comparison_status', 'comparison_values', 'comparison_messages']
+           'sim_status', 'comparison_status', 'comparison_values', 'error_norms',
+           'comparison_messages']
 
 #: ApplyImpact / ImpactEvent frame codes <-> Impact frames.
 FRAMES = {ApplyImpact.Request.FRAME_BODY: topics.FRAME_BODY,
@@ -83,9 +84,14 @@ def comparison_status(level: bytes, node_name: str, message: str,
 def comparison_values(numeric, model) -> tuple[list[float], float, float]:
     """Return (numeric - model, its norm, norm / |numeric|) of two 3-vectors [rad/yr]."""
     error = [n - m for n, m in zip(numeric, model)]
+    return (error, *error_norms(numeric, error))
+
+
+def error_norms(numeric, error) -> tuple[float, float]:
+    """Return (|error|, |error| / |numeric|) of two 3-vectors [rad/yr] (inf for numeric 0)."""
     norm = math.hypot(*error)
     magnitude = math.hypot(*numeric)
-    return error, norm, norm / magnitude if magnitude > 0 else math.inf
+    return norm, norm / magnitude if magnitude > 0 else math.inf
 
 
 def comparison_messages(header, numeric, model, model_name: str

@@ -37,7 +37,7 @@ from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.columns import encode_rows, FlatLayout
 from tumble_ros.io.msgdefs import message_definition
 from tumble_ros.nodes.comparator import anchor_model, GridModelValues
-from tumble_ros.nodes.messages import (comparison_status, comparison_values, impact_event,
+from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
                                        scenario_description, sim_status)
 from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
 from tumble_ros.nodes.recorder import qos_dict
@@ -191,30 +191,34 @@ class _Comparator:
         self.channels.one(topics.COMPARISON_STATUS, comparison_status(
             level, COMPARATOR_NAME, text, self.model_name))
 
-    def model_at(self, t: float):
-        for start, model in reversed(self.segments):
-            if t >= start:
-                return model
-        return None
-
     def compare(self, k0: int, times: np.ndarray, omega: np.ndarray):
-        """Return (mask of the samples compared, model, error, norm, relative) of a batch."""
+        """
+        Return (mask of the samples compared, model, error, norm, relative) of a batch.
+
+        Each sample takes the model of the segment its time falls in (the latest description
+        starting at or before it), evaluated on the grid's look-ahead blocks as the node does;
+        the arithmetic is the node's (messages.comparison_values), vectorised where it is
+        elementwise, per sample where it is not (math.hypot).
+        """
         n = len(times)
         model = np.zeros((n, 3))
-        error = np.zeros((n, 3))
+        has = np.zeros(n, dtype=bool)
+        starts = np.array([start for start, _ in self.segments])
+        which = np.searchsorted(starts, times, side='right') - 1
+        edges = [0, *(np.flatnonzero(np.diff(which)) + 1).tolist(), n]
+        for a, b in zip(edges[:-1], edges[1:]):
+            m = self.segments[which[a]][1] if which[a] >= 0 else None
+            if m is not None:
+                model[a:b] = self.values.span(m, self.grid, k0 + a, k0 + b)
+                has[a:b] = True
+        compared = has & np.isfinite(model).all(axis=1)
+        error = np.where(compared[:, None], omega - model, 0.0)
         norm = np.zeros(n)
         relative = np.zeros(n)
-        compared = np.zeros(n, dtype=bool)
-        numeric = omega.tolist()
-        for j, t in enumerate(times.tolist()):
-            m = self.model_at(t)
-            if m is None:
-                continue
-            value = self.values.at(m, self.grid, k0 + j)
-            if not all(map(math.isfinite, value)):
-                continue
-            e, norm[j], relative[j] = comparison_values(numeric[j], value)
-            model[j], error[j], compared[j] = value, e, True
+        numeric, errors = omega.tolist(), error.tolist()   # (numeric - model: elementwise)
+        for j in np.flatnonzero(compared).tolist():
+            norm[j], relative[j] = error_norms(numeric[j], errors[j])
+        model[~compared] = 0.0
         return compared, model, error, norm, relative
 
 
