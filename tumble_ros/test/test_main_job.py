@@ -31,3 +31,26 @@ def test_main_job_refuses_a_missing_scenario(tmp_path, monkeypatch, capsys):
 def test_executables_dispatch(capsys):
     assert main(['analyze', '/nonexistent.mcap']) == 1
     assert capsys.readouterr().err.startswith('ERROR')
+
+
+def test_runs_started_in_the_same_second_get_their_own_files(tmp_path, monkeypatch):
+    """The recording is named by the UTC second: a second run then gets _2, not a refusal."""
+    from datetime import datetime
+
+    from tumble_ros.nodes import recorder
+
+    class Frozen(datetime):
+        @classmethod
+        def now(cls, tz=None):
+            return datetime(2029, 4, 13, 21, 46, 0, tzinfo=tz)
+
+    monkeypatch.setattr(recorder, 'datetime', Frozen)
+    monkeypatch.chdir(tmp_path)
+    first = recorder.default_output('same')
+    assert str(first) == 'recordings/same_20290413T214600.mcap'
+    first.parent.mkdir()
+    first.write_bytes(b'')
+    second = recorder.default_output('same')
+    assert str(second) == 'recordings/same_20290413T214600_2.mcap'
+    second.write_bytes(b'')
+    assert str(recorder.default_output('same')) == 'recordings/same_20290413T214600_3.mcap'

@@ -11,7 +11,6 @@ instead, as ``bringup`` does), then analyses the file.
 """
 from __future__ import annotations
 
-from datetime import datetime, timezone
 import importlib
 from pathlib import Path
 import sys
@@ -39,8 +38,9 @@ def main_job(argv: list[str]) -> int:
     if len(argv) > 1 or (argv and argv[0].startswith('-')):
         print(__doc__.strip(), file=sys.stderr)
         return 2
-    stem = Path(argv[0]).stem if argv else 'default'
-    output = Path('recordings') / f'{stem}_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap'
+    from tumble_ros.nodes.recorder import default_output
+
+    output = default_output(Path(argv[0]).stem if argv else 'default')
     mode = [] if live else ['--offline']
     code = run_executable('bringup', [*argv, *mode, '--output', str(output)])
     if code != 0 or not output.exists():

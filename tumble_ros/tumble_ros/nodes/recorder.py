@@ -258,9 +258,19 @@ class RecorderNode(GuardedNode):
         self._progress.close()
 
 
-def default_output() -> Path:
-    """Return the default recording: recordings/tumble_<UTC time>.mcap."""
-    return Path(f'recordings/tumble_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}.mcap')
+def default_output(stem: str = 'tumble') -> Path:
+    """
+    Return a new recording's path: recordings/<stem>_<UTC time>.mcap.
+
+    A file of that name already there (a run started in the same second) gets _2, _3, ...
+    appended instead of a refusal to start (the writer still never overwrites a file).
+    """
+    base = f'recordings/{stem}_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}'
+    path, k = Path(base + '.mcap'), 1
+    while path.exists():
+        k += 1
+        path = Path(f'{base}_{k}.mcap')
+    return path
 
 
 def _import_type(type_name: str):
