@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from test_core_torque import point_cloud
 
 from tumble_ros.core import IntegratorSettings, Scenario, simulate
 from tumble_ros.core.dynamics import angular_momentum_orbital
@@ -81,18 +82,8 @@ def test_the_orbit_is_the_two_body_motion(e, span):
     assert np.max(np.abs(position - sol.y[:2].T)) < 1e-9 * scale
 
 
-def point_cloud(n=300):
-    """Random masses about their centre, in their principal axes; returns (m, r, I)."""
-    m = RNG.uniform(0.5, 1.5, n)
-    r = RNG.normal(size=(n, 3)) * np.array([1.0, 0.7, 0.4])
-    r -= (m[:, None] * r).sum(0) / m.sum()
-    tensor = sum(mi * (ri @ ri * np.eye(3) - np.outer(ri, ri)) for mi, ri in zip(m, r))
-    moments, axes = np.linalg.eigh(tensor)
-    return m, r @ axes, moments
-
-
 def test_the_torque_is_the_sum_over_point_masses_at_the_varying_distance():
-    m, r, inertia = point_cloud()
+    m, r, inertia = point_cloud(300)
     orbit = KeplerOrbit(gm=2.0e15, a=2.0e5, e=0.5, t_p=0.0, lambda_p=0.3)
     component = orbit.torque_component(inertia)
     for t in (0.0, 0.13, 0.5 / orbit.mean_motion * math.pi):

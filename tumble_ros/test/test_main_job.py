@@ -6,10 +6,15 @@ from tumble_ros.__main__ import main
 from tumble_ros.io import summarize
 
 
-def test_main_job_records_and_analyses(tmp_path, monkeypatch, capsys):
+def short_scenario(tmp_path) -> Path:
     scenario = tmp_path / 'short.yaml'
     scenario.write_text(
         'sim:\n  ros__parameters:\n    duration: 0.2\n    output_interval: 0.002\n')
+    return scenario
+
+
+def test_main_job_records_and_analyses(tmp_path, monkeypatch, capsys):
+    scenario = short_scenario(tmp_path)
     monkeypatch.chdir(tmp_path)
     assert main([str(scenario)]) == 0
     (recording,) = Path('recordings').glob('short_*.mcap')
@@ -17,9 +22,19 @@ def test_main_job_records_and_analyses(tmp_path, monkeypatch, capsys):
     figures = sorted(p.name
                      for p in recording.with_name(recording.stem + '_figures').glob('*.png'))
     assert 'omega.png' in figures and 'error.png' in figures
-    out = capsys.readouterr().out
-    assert ("comparator error (model 'paper'" in out
-            and f'101 samples of /{topics.ANGULAR_VELOCITY}' in out)
+    captured = capsys.readouterr()
+    assert ("comparator error (model 'paper'" in captured.out
+            and f'101 samples of /{topics.ANGULAR_VELOCITY}' in captured.out)
+    assert 'bringup (offline)' in captured.err    # written straight from the simulation
+
+
+def test_main_job_runs_the_ros_graph_when_asked(tmp_path, monkeypatch, capsys):
+    scenario = short_scenario(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    assert main([str(scenario), '--live']) == 0
+    assert 'bringup (offline)' not in capsys.readouterr().err
+    (recording,) = Path('recordings').glob('short_*.mcap')
+    assert summarize(recording).topics['/' + topics.ERROR_NORM].message_count == 101
 
 
 def test_main_job_refuses_a_missing_scenario(tmp_path, monkeypatch, capsys):

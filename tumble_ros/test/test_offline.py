@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from tumble_ros import topics
-from tumble_ros.__main__ import main
 from tumble_ros.core import Impact, IntegratorSettings, load_scenario, Scenario
 from tumble_ros.io import read_messages, summarize
 from tumble_ros.nodes.bringup import run_bringup
@@ -122,18 +121,6 @@ def test_a_stop_request_finalises_what_was_written(tmp_path):
     assert summarize(result.output).finalised
     assert summarize(result.output).topics['/' + topics.ANGULAR_VELOCITY].message_count == (
         result.samples)
-
-
-def test_the_main_job_records_offline_unless_live_is_asked(tmp_path, monkeypatch, capsys):
-    scenario = tmp_path / 'short.yaml'
-    scenario.write_text(
-        'sim:\n  ros__parameters:\n    duration: 0.2\n    output_interval: 0.002\n')
-    monkeypatch.chdir(tmp_path)
-    assert main([str(scenario)]) == 0
-    assert 'bringup (offline)' in capsys.readouterr().err
-    assert main([str(scenario), '--live']) == 0
-    assert 'bringup (offline)' not in capsys.readouterr().err
-    assert len(list(Path('recordings').glob('short_*.mcap'))) >= 1
 
 
 def test_a_kepler_orbit_from_a_params_file_runs_and_is_reported(tmp_path):

@@ -18,6 +18,7 @@ from tumble_ros.core.spinstate import spin_state, SpinState
 from tumble_ros.core.units import HOURS_PER_YEAR
 
 from .recording import Recording
+from .timeaxis import same_stamps
 
 __all__ = ['SpinChange', 'spin_change', 'period_text', 'HOURS_PER_YEAR']
 
@@ -39,10 +40,9 @@ def spin_change(rec: Recording) -> tuple[SpinChange | None, str | None]:
         return None, 'no scenario (the inertia is unknown)'
     if not len(rec.quaternion_t):
         return None, 'no attitude recorded'
-    ia = np.flatnonzero(np.isin(rec.t, rec.quaternion_t))
+    ia, ib = same_stamps(rec.t, rec.quaternion_t)
     if not len(ia):
         return None, 'no sample with both w and the attitude'
-    ib = np.searchsorted(rec.quaternion_t, rec.t[ia])
     try:
         first = spin_state(rec.omega[ia[0]], rec.scenario.inertia, rec.quaternion[ib[0]])
         last = spin_state(rec.omega[ia[-1]], rec.scenario.inertia, rec.quaternion[ib[-1]])

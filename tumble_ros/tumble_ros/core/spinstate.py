@@ -103,16 +103,16 @@ def spin_state(omega, inertia, quaternion=None) -> SpinState:
         return SpinState('separatrix', energy, momentum, d, math.inf, math.inf, pole, lon, lat)
     l2, e2 = momentum * momentum, 2.0 * energy
     if d > i2 or i2 == i1:            # SAM (I3 the reference axis); also I1 = I2 symmetric
-        mode, (ia, ib, ic) = 'SAM', (i1, i2, i3)
+        mode = 'SAM'
         scale = (i3 - i2) * (l2 - e2 * i1)
         k2 = (i2 - i1) * (e2 * i3 - l2) / scale if i2 > i1 else 0.0
         axes = (0, 1)                  # phi' from the I1, I2 components
     else:                              # LAM (I1 the reference axis); also I2 = I3 symmetric
-        mode, (ia, ib, ic) = 'LAM', (i1, i2, i3)
+        mode = 'LAM'
         scale = (i2 - i1) * (e2 * i3 - l2)
         k2 = (i3 - i2) * (l2 - e2 * i1) / scale if i3 > i2 else 0.0
         axes = (1, 2)
-    rotation = 4.0 * float(ellipk(k2)) * math.sqrt(ia * ib * ic / scale)
+    rotation = 4.0 * float(ellipk(k2)) * math.sqrt(i1 * i2 * i3 / scale)
     precession = _precession_period((i1, i2, i3), (w1, w2, w3), momentum, axes, rotation)
     return SpinState(mode, energy, momentum, d, rotation, precession, pole, lon, lat)
 

@@ -40,12 +40,12 @@ from .msgdefs import MessageDefinitionError, parse_msg
 
 __all__ = ['FlatLayout', 'TopicColumns', 'read_columns']
 
-#: CDR sizes of the primitive types a flat layout may hold (strings apart).
-_SIZES = {'bool': 1, 'byte': 1, 'char': 1, 'int8': 1, 'uint8': 1, 'int16': 2, 'uint16': 2,
-          'int32': 4, 'uint32': 4, 'int64': 8, 'uint64': 8, 'float32': 4, 'float64': 8}
+#: numpy types of the primitive types a flat layout may hold (strings apart), little-endian.
 _DTYPES = {'bool': '<u1', 'byte': '<u1', 'char': '<u1', 'int8': '<i1', 'uint8': '<u1',
            'int16': '<i2', 'uint16': '<u2', 'int32': '<i4', 'uint32': '<u4', 'int64': '<i8',
            'uint64': '<u8', 'float32': '<f4', 'float64': '<f8'}
+#: Their CDR sizes (and alignments) [bytes].
+_SIZES = {name: np.dtype(code).itemsize for name, code in _DTYPES.items()}
 _ENCAPSULATION = 4
 _LITTLE_ENDIAN = (b'\x00\x01', b'\x00\x03')   # CDR_LE, PL_CDR_LE
 _RECORD = struct.Struct('<BQ')                 # opcode, length

@@ -16,7 +16,8 @@ import numpy as np
 from . import dop853, rk4, splitting
 from .checks import collapsed, finite_norm, MIN_STEP_ULPS
 from .layout import CF, FAIL, METHOD, N, ST, STATUS
-from .tracking import refresh_track, set_track, track_pieces, track_rate, unwrapped_euler
+from .tracking import (refresh_track, set_track, track_pieces, track_rate, UNWRAP_STEP,
+                       unwrapped_euler)
 from ..jit import jit, jit_inline
 
 __all__ = ['seg_init', 'step', 'dense', 'track_euler', 'emit', 'advance']
@@ -157,7 +158,7 @@ def track_euler(p, extra, cfg, st, track):
     """
     increment = track_rate(st[ST.Y], st[ST.Y + 1], st[ST.Y + 2], st[ST.Y + 3], st[ST.Y + 4],
                            st[ST.Y + 5], st[ST.Y + 6]) * (st[ST.T] - st[ST.T_OLD])
-    if st[ST.BUDGET] + increment < 1.0:  # tracking.UNWRAP_STEP
+    if st[ST.BUDGET] + increment < UNWRAP_STEP:
         st[ST.BUDGET] += increment
         return 0
     return track_update(p, extra, cfg, st, track, increment)
