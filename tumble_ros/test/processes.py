@@ -54,8 +54,24 @@ class Process:
         self.popen.send_signal(signum)
 
     def wait(self, timeout: float = 30.0) -> int:
-        """Exit code (as Popen reports it: -N for a signal N)."""
-        return self.popen.wait(timeout=timeout)
+        """
+        Exit code (as Popen reports it: -N for a signal N).
+
+        A process still running after ``timeout`` is a hang: it gets SIGABRT, on which Python's
+        faulthandler (enabled by rclpy's EventsExecutor, the nodes' default) prints every
+        thread's stack to its output, and the AssertionError carries that output.
+        """
+        try:
+            return self.popen.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.popen.send_signal(signal.SIGABRT)
+            try:
+                self.popen.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                pass
+            raise AssertionError(f'{self.name} still running {timeout} s after being asked to '
+                                 f'stop; its output (with the stacks at SIGABRT):\n'
+                                 f'{self.output[-6000:]}') from None
 
     def kill_group(self) -> None:
         if self.popen.poll() is None:
