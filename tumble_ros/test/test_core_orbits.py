@@ -18,8 +18,14 @@ from tumble_ros.core.dynamics import angular_momentum_orbital
 from tumble_ros.core.rotation import quaternion_to_matrix
 from tumble_ros.core.torques.orbits import (eccentric_anomaly, hyperbolic_anomaly, KeplerOrbit,
                                             orbit_state)
+from tumble_ros.core.units import SECONDS_PER_YEAR
 
 RNG = np.random.default_rng(29)
+
+
+def kepler_orbit(gm: float, a: float, **elements) -> KeplerOrbit:
+    """Return the Kepler orbit of GM [km^3/yr^2] (the core's unit; the orbit takes km^3/s^2)."""
+    return KeplerOrbit(gm=gm / SECONDS_PER_YEAR ** 2, a=a, **elements)
 
 
 @pytest.mark.parametrize('e', [0.0, 0.3, 0.9, 0.99])
@@ -39,7 +45,7 @@ def test_keplers_equation_is_solved_to_rounding_for_hyperbolas(e):
 
 @pytest.mark.parametrize('e', [0.2, 0.95, 1.5])
 def test_the_anomalies_round_trip(e):
-    orbit = KeplerOrbit(gm=4.0, a=2.0, e=e, t_p=0.3, lambda_p=0.7)
+    orbit = kepler_orbit(gm=4.0, a=2.0, e=e, t_p=0.3, lambda_p=0.7)
     t = np.linspace(-3.0, 3.0, 301)
     distance, angle = orbit.state(t)
     nu = angle - orbit.lambda_p
@@ -64,15 +70,15 @@ def test_the_anomalies_round_trip(e):
 @pytest.mark.parametrize('e, span', [(0.0, 7.0), (0.6, 7.0), (0.97, 7.0), (2.5, 4.0)])
 def test_the_orbit_is_the_two_body_motion(e, span):
     """Integrate r'' = -GM r / r^3 from pericentre and compare positions (independent)."""
-    orbit = KeplerOrbit(gm=9.0, a=1.5, e=e, t_p=0.0, lambda_p=0.4)
+    orbit = kepler_orbit(gm=9.0, a=1.5, e=e, t_p=0.0, lambda_p=0.4)
     rp = orbit.pericentre
-    vp = math.sqrt(orbit.gm * (1 + e) / rp)
+    vp = math.sqrt(orbit.gm_per_yr2 * (1 + e) / rp)
     lam = orbit.lambda_p
     y0 = [rp * math.sin(lam), rp * math.cos(lam), vp * math.cos(lam), -vp * math.sin(lam)]
 
     def two_body(t, y):
         r3 = math.hypot(y[0], y[1]) ** 3
-        return [y[2], y[3], -orbit.gm * y[0] / r3, -orbit.gm * y[1] / r3]
+        return [y[2], y[3], -orbit.gm_per_yr2 * y[0] / r3, -orbit.gm_per_yr2 * y[1] / r3]
 
     times = np.linspace(0.0, span, 200)
     sol = solve_ivp(two_body, (0.0, span), y0, method='DOP853', rtol=1e-13, atol=1e-13,
@@ -84,7 +90,7 @@ def test_the_orbit_is_the_two_body_motion(e, span):
 
 def test_the_torque_is_the_sum_over_point_masses_at_the_varying_distance():
     m, r, inertia = point_cloud(300)
-    orbit = KeplerOrbit(gm=2.0e15, a=2.0e5, e=0.5, t_p=0.0, lambda_p=0.3)
+    orbit = kepler_orbit(gm=2.0e15, a=2.0e5, e=0.5, t_p=0.0, lambda_p=0.3)
     component = orbit.torque_component(inertia)
     for t in (0.0, 0.13, 0.5 / orbit.mean_motion * math.pi):
         q = RNG.normal(size=4)
@@ -92,7 +98,7 @@ def test_the_torque_is_the_sum_over_point_masses_at_the_varying_distance():
         c = quaternion_to_matrix(q)                         # body -> orbital
         sun = c.T @ orbit.position([t])[0]                  # the perturber in body axes
         d = sun - r
-        g = orbit.gm * d / np.linalg.norm(d, axis=1)[:, None] ** 3
+        g = orbit.gm_per_yr2 * d / np.linalg.norm(d, axis=1)[:, None] ** 3
         brute = np.sum(np.cross(r, m[:, None] * g), axis=0)
         torque = component.torque(t, q)
         assert np.linalg.norm(torque) > 0
@@ -108,7 +114,7 @@ def test_a_circular_kepler_orbit_is_the_built_in_circular_orbit(method):
     settings = IntegratorSettings(method=method, rtol=1e-12, atol=1e-12, step=1e-3)
     circular = Scenario(inertia=inertia, orbit_rate=ws, omega0=(1.0, -2.0, 20.0), duration=1.0,
                         output_interval=0.05, integrator=settings)
-    orbit = KeplerOrbit(gm=ws * ws, a=1.0, e=0.0)
+    orbit = kepler_orbit(gm=ws * ws, a=1.0, e=0.0)
     kepler = circular.replace(orbit_rate=0.0, torques=(orbit.torque_component(inertia),))
     a, b = simulate(circular), simulate(kepler)
     np.testing.assert_allclose(b.omega, a.omega, rtol=0, atol=1e-9)
@@ -118,7 +124,7 @@ def test_a_circular_kepler_orbit_is_the_built_in_circular_orbit(method):
 def test_a_flyby_changes_the_angular_momentum_by_the_integral_of_the_torque():
     """Delta L (inertial) = integral of C(q) M dt along the trajectory, by quadrature."""
     inertia = (1.0, 1.4, 2.0)
-    orbit = KeplerOrbit(gm=4.0e6, a=20.0, e=4.0, t_p=0.5, lambda_p=1.0)   # pericentre 60
+    orbit = kepler_orbit(gm=4.0e6, a=20.0, e=4.0, t_p=0.5, lambda_p=1.0)   # pericentre 60
     component = orbit.torque_component(inertia)
     sc = Scenario(inertia=inertia, orbit_rate=0.0, omega0=(3.0, -1.0, 40.0),
                   euler0=(0.3, 0.2, 0.8), duration=1.0, output_interval=1e-4,
@@ -160,13 +166,13 @@ def test_orbit_state_gives_the_circular_direction_at_e_0():
 def test_the_scenarios_orbit_section_round_trips_and_runs():
     from tumble_ros.core import dump_scenario, parse_scenario
 
-    orbit = KeplerOrbit(gm=4.0, a=1.0, e=0.0)
+    orbit = kepler_orbit(gm=4.0, a=1.0, e=0.0)
     circular = Scenario(inertia=(1.0, 1.3, 1.8), orbit_rate=2.0, omega0=(1.0, -2.0, 20.0),
                         duration=0.5, output_interval=0.05)
     kepler = circular.replace(orbit_rate=0.0, orbit=orbit)
     assert parse_scenario(dump_scenario(kepler)) == kepler
     params = kepler.to_parameters()
-    assert params['orbit.kind'] == 'kepler' and params['orbit.gm'] == 4.0
+    assert params['orbit.kind'] == 'kepler' and params['orbit.gm'] == orbit.gm
     assert Scenario.from_parameters(params) == kepler
     assert Scenario.from_parameters(circular.to_parameters()).orbit is None
     np.testing.assert_allclose(simulate(kepler).omega, simulate(circular).omega, rtol=0,
@@ -190,7 +196,7 @@ def test_a_bad_orbit_section_is_refused_naming_the_field(params, match):
 def test_the_analytic_models_say_they_do_not_apply_to_a_kepler_orbit():
     from tumble_ros.core import applicability, make_model, ModelNotApplicable
 
-    sc = Scenario(orbit_rate=0.0, orbit=KeplerOrbit(gm=1.0, a=1.0, e=0.3))
+    sc = Scenario(orbit_rate=0.0, orbit=kepler_orbit(gm=1.0, a=1.0, e=0.3))
     reasons = applicability(sc)
     assert reasons and all('circular orbit' in why and 'kepler_orbit' in why
                            for why in reasons.values())
@@ -203,9 +209,174 @@ def test_an_ensemble_runs_the_orbit_too():
 
     sc = Scenario(inertia=(1.0, 1.3, 1.8), orbit_rate=0.0, omega0=(1.0, -2.0, 20.0),
                   duration=0.3, output_interval=0.1,
-                  orbit=KeplerOrbit(gm=4.0, a=1.0, e=0.6, t_p=0.1),
+                  orbit=kepler_orbit(gm=4.0, a=1.0, e=0.6, t_p=0.1),
                   integrator=IntegratorSettings(method='splitting6', step=1e-3))
     ens = simulate_ensemble(sc, n_bodies=2, omega0=[sc.omega0, (0.5, 0.5, 10.0)])
     np.testing.assert_allclose(ens.omega[0], simulate(sc).omega, rtol=0, atol=1e-10)
     free = simulate(sc.replace(orbit=None))
     assert np.max(np.abs(ens.omega[0] - free.omega)) > 1e-3
+
+
+# -- the orbit plane's orientation, flybys in km and km/s, the invariants through a flyby ------
+
+def test_the_tilted_orbit_plane_is_the_rotation_of_the_flat_one():
+    from scipy.spatial.transform import Rotation
+
+    flat = kepler_orbit(gm=9.0, a=1.5, e=0.4, t_p=0.1, lambda_p=0.4)
+    incl, node = 0.7, -2.1
+    tilted = KeplerOrbit(gm=flat.gm, a=flat.a, e=flat.e, t_p=flat.t_p, lambda_p=flat.lambda_p,
+                         inclination=incl, node=node)
+    turn = Rotation.from_euler('ZX', [node, incl]).as_matrix()      # Rz(node) Rx(i), intrinsic
+    t = np.linspace(0.0, 3.0, 41)
+    np.testing.assert_allclose(tilted.position(t), flat.position(t) @ turn.T, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(tilted.direction(t), axis=1), 1.0, atol=1e-15)
+    # the torque of the tilted orbit on a body = the flat orbit's on the body turned back
+    inertia = (1.0, 1.4, 2.0)
+    for k in range(5):
+        q = RNG.normal(size=4)
+        q /= np.linalg.norm(q)
+        back = Rotation.from_matrix(turn.T @ quaternion_to_matrix(q)).as_quat()   # x, y, z, w
+        q_back = np.roll(back, 1)
+        np.testing.assert_allclose(tilted.torque_component(inertia).torque(t[k], q),
+                                   flat.torque_component(inertia).torque(t[k], q_back),
+                                   rtol=1e-9, atol=1e-12)
+
+
+def test_a_flyby_has_its_perigee_speed_and_the_two_body_integrals():
+    """Perigee, v_inf, energy and angular momentum from finite differences of the positions."""
+    from tumble_ros.core.units import GM_EARTH
+
+    rp, v_inf = 38000.0, 5.8                                       # km, km/s
+    orbit = KeplerOrbit.flyby(GM_EARTH, rp, v_inf=v_inf, t_p=0.01, inclination=0.3, node=1.0)
+    same = KeplerOrbit.flyby(GM_EARTH, rp, v_perigee=math.sqrt(v_inf ** 2 + 2 * GM_EARTH / rp),
+                             t_p=0.01, inclination=0.3, node=1.0)
+    assert same.a == pytest.approx(orbit.a, rel=1e-12) and same.e == pytest.approx(orbit.e)
+    hours = np.linspace(-30.0, 30.0, 121)
+    dt = 1.0                                                        # s
+    t = orbit.t_p + hours / 8766.0
+    r = orbit.position(t)
+    v = (orbit.position(t + dt / SECONDS_PER_YEAR)
+         - orbit.position(t - dt / SECONDS_PER_YEAR)) / (2 * dt)    # km/s
+    distance = np.linalg.norm(r, axis=1)
+    assert distance.min() == pytest.approx(rp, rel=1e-9)
+    energy = 0.5 * np.sum(v * v, axis=1) - GM_EARTH / distance
+    np.testing.assert_allclose(energy, 0.5 * v_inf ** 2, rtol=1e-6)
+    momentum = np.cross(r, v)
+    np.testing.assert_allclose(momentum, np.tile(momentum[60], (121, 1)), rtol=1e-6)
+    assert np.linalg.norm(momentum[60]) == pytest.approx(
+        rp * math.sqrt(v_inf ** 2 + 2 * GM_EARTH / rp), rel=1e-6)
+    # the plane's normal is Rz(node) Rx(i) Z'
+    normal = momentum[60] / np.linalg.norm(momentum[60])
+    expected = [math.sin(1.0) * math.sin(0.3), -math.cos(1.0) * math.sin(0.3), math.cos(0.3)]
+    np.testing.assert_allclose(np.abs(normal @ expected), 1.0, atol=1e-9)
+
+
+@pytest.mark.parametrize('kwargs, match', [
+    ({'v_inf': 5.0, 'v_perigee': 8.0}, 'exactly one'),
+    ({}, 'exactly one'),
+    ({'v_perigee': 1.0}, 'escape speed'),
+])
+def test_a_bad_flyby_is_refused_with_the_reason(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        KeplerOrbit.flyby(398600.4418, 38000.0, **kwargs)
+
+
+def test_a_flyby_from_parameters_is_the_flyby_orbit():
+    from tumble_ros.core import ScenarioError
+
+    params = {'orbit_rate': 0.0, 'orbit.kind': 'flyby', 'orbit.gm': 398600.4418,
+              'orbit.perigee': 38000.0, 'orbit.v_inf': 5.8, 'orbit.t_p': 0.001,
+              'orbit.inclination': 0.2, 'orbit.node': 0.4}
+    sc = Scenario.from_parameters(params)
+    assert sc.orbit == KeplerOrbit.flyby(398600.4418, 38000.0, v_inf=5.8, t_p=0.001,
+                                         inclination=0.2, node=0.4)
+    assert Scenario.from_parameters(sc.to_parameters()) == sc     # written back as kepler
+    with pytest.raises(ScenarioError, match=r'^orbit\.a: is used only with orbit\.kind: kepler'):
+        Scenario.from_parameters({**params, 'orbit.a': 5.0})
+    with pytest.raises(ScenarioError, match=r'^orbit\.perigee: is used only with orbit\.kind: '
+                                            r'flyby'):
+        Scenario.from_parameters({**params, 'orbit.kind': 'kepler'})
+
+
+def test_the_perturber_position_of_the_circular_orbit_is_the_sun_by_keplers_third_law():
+    from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital
+    from tumble_ros.core.units import GM_SUN, KM_PER_AU
+
+    sc = Scenario(orbit_rate=2.0 * math.pi)                        # one turn a year: 1 au
+    t = np.array([0.0, 0.1, 0.37])
+    position = sc.perturber_position(t)
+    np.testing.assert_allclose(np.linalg.norm(position, axis=1), KM_PER_AU, rtol=1e-4)
+    np.testing.assert_allclose(position / KM_PER_AU,
+                               [sun_direction_orbital(x, sc.orbit_rate) for x in t], atol=1e-4)
+    assert GM_SUN == pytest.approx(1.32712440018e11, rel=1e-9)
+    orbit = KeplerOrbit.flyby(398600.4418, 38000.0, v_inf=5.8)
+    flyby = sc.replace(orbit_rate=0.0, orbit=orbit)
+    np.testing.assert_allclose(flyby.perturber_position(t), orbit.position(t))
+
+
+def _flyby_scenario(**changes) -> Scenario:
+    """Return a tumbler met by an Earth-like flyby at 5 radii (hours; strong, but smooth)."""
+    orbit = KeplerOrbit.flyby(398600.4418, 32000.0, v_inf=4.0, t_p=10.0 / 8766.0,
+                              inclination=0.5, node=0.3)
+    rate = 2.0 * math.pi / 30.0 * 8766.0                            # one turn in 30 h [rad/yr]
+    base = Scenario(inertia=(0.6, 0.95, 1.0), orbit_rate=0.0, orbit=orbit,
+                    omega0=(0.4 * rate, 0.1 * rate, rate), euler0=(0.3, 0.2, 0.8),
+                    duration=20.0 / 8766.0, output_interval=1.0 / 8766.0,
+                    integrator=IntegratorSettings(method='dop853', rtol=1e-13, atol=1e-13))
+    return base.replace(**changes)
+
+
+@pytest.mark.parametrize('method, steps, order', [
+    ('rk4', (200, 400, 800), 4), ('splitting', (200, 400, 800), 2),
+    ('splitting4', (100, 200, 400), 4), ('splitting6', (50, 100, 200), 6),
+])
+def test_the_integrators_meet_their_orders_through_a_flyby(method, steps, order):
+    sc = _flyby_scenario()
+    ref = simulate(sc)
+    free = simulate(sc.replace(orbit=None))
+    assert np.max(np.abs(ref.omega[-1] - free.omega[-1])) > 1e-2 * np.max(np.abs(ref.omega))
+    errors = []
+    for n in steps:
+        r = simulate(sc.replace(integrator=IntegratorSettings(method=method,
+                                                              step=sc.duration / n)))
+        errors.append(np.linalg.norm(r.omega[-1] - ref.omega[-1]))
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all(np.abs(np.log2(ratios) - order) < 0.4), (errors, ratios)
+
+
+def test_through_a_flyby_the_energy_changes_by_the_work_of_the_torque():
+    """dE/dt = w . M: E(t) - E(0) equals the quadrature of w . M; |L| and E are not conserved."""
+    from scipy.integrate import cumulative_simpson
+
+    sc = _flyby_scenario(output_interval=0.02 / 8766.0)
+    r = simulate(sc)
+    inertia = np.array(sc.inertia)
+    energy = 0.5 * np.sum(inertia * r.omega ** 2, axis=1)
+    component = sc.extra_torques[0]
+    power = np.array([w @ component.torque(t, q) for t, w, q in zip(r.t, r.omega, r.quaternion)])
+    work = cumulative_simpson(power, x=r.t, initial=0.0)
+    assert abs(energy[-1] - energy[0]) > 1e-3 * energy[0]             # the flyby changes E
+    np.testing.assert_allclose(energy - energy[0], work, rtol=0, atol=1e-7 * energy[0])
+
+
+def test_standard_elements_place_the_orbit_as_an_ephemeris_does():
+    """Check r = Rz(Omega) Rx(i) Rz(omega) r_perifocal (perifocal r from the conic)."""
+    from scipy.spatial.transform import Rotation
+    from tumble_ros.core.torques.orbits import orientation_from_elements
+
+    gm, rp, v_inf = 398600.4418, 38000.0, 5.8
+    i, node, omega = np.radians([162.86, 152.0, 32.57])
+    orbit = KeplerOrbit.flyby(gm, rp, v_inf=v_inf, t_p=0.01,
+                              **orientation_from_elements(i, node, omega))
+    t = orbit.t_p + np.linspace(-5.0, 5.0, 21) / 8766.0
+    distance, angle = orbit.state(t)
+    nu = angle - orbit.lambda_p                                  # true anomaly
+    p = orbit.a * (orbit.e ** 2 - 1.0)
+    r = p / (1.0 + orbit.e * np.cos(nu))
+    perifocal = np.stack([r * np.cos(nu), r * np.sin(nu), np.zeros_like(nu)], axis=-1)
+    turn = Rotation.from_euler('ZXZ', [node, i, omega]).as_matrix()
+    np.testing.assert_allclose(orbit.position(t), perifocal @ turn.T, rtol=0, atol=1e-8 * rp)
+    # prograde about the standard normal Rz(Omega) Rx(i) Z
+    v = np.gradient(orbit.position(t), t, axis=0)
+    h = np.cross(orbit.position(t), v).mean(axis=0)
+    assert h @ turn[:, 2] > 0.99 * np.linalg.norm(h)

@@ -30,19 +30,19 @@ def test_a_scenario_in_hours_is_the_same_scenario_in_years():
         f'    impacts.start: [{0.2 * HOURS_PER_YEAR!r}]\n'
         f'    impacts.duration: [{1e-3 * HOURS_PER_YEAR!r}]\n'
         f'    impacts.torque: [{500.0 * h * h!r}, 0.0, 0.0]\n'
-        f'    orbit.kind: kepler\n    orbit.gm: {4.0 * h * h!r}\n    orbit.a: 1.0\n'
+        f'    orbit.kind: kepler\n    orbit.gm: 1.3271244e11\n    orbit.a: 2.0e8\n'
         f'    orbit.e: 0.3\n    orbit.t_p: {0.1 * HOURS_PER_YEAR!r}\n')
     years = Scenario.from_parameters({
         'inertia': [1.0, 1.3, 1.8], 'orbit_rate': 0.0, 'duration': 0.5, 'output_interval': 0.01,
         'omega0': [1.0, -2.0, 20.0], 'integrator.method': 'rk4', 'integrator.step': 1e-4,
         'impacts.start': [0.2], 'impacts.duration': [1e-3], 'impacts.torque': [500.0, 0, 0],
-        'orbit.kind': 'kepler', 'orbit.gm': 4.0, 'orbit.a': 1.0, 'orbit.e': 0.3,
+        'orbit.kind': 'kepler', 'orbit.gm': 1.3271244e11, 'orbit.a': 2.0e8, 'orbit.e': 0.3,
         'orbit.t_p': 0.1})
     for field in ('duration', 'output_interval'):
         assert getattr(hours, field) == pytest.approx(getattr(years, field), rel=1e-14)
     np.testing.assert_allclose(hours.omega0, years.omega0, rtol=1e-14)
     assert hours.impacts[0].torque[0] == pytest.approx(500.0, rel=1e-14)
-    assert hours.orbit.gm == pytest.approx(4.0, rel=1e-14)
+    assert hours.orbit.gm == years.orbit.gm == 1.3271244e11   # km^3/s^2 whatever time_unit
     assert hours.orbit.t_p == pytest.approx(0.1, rel=1e-14)
     np.testing.assert_allclose(simulate(hours).omega, simulate(years).omega, rtol=1e-9)
     # inside, and in every description the simulator publishes, the scenario is in years
@@ -61,3 +61,10 @@ def test_the_conversion_factors():
 def test_an_unknown_unit_is_refused_naming_the_field():
     with pytest.raises(ScenarioError, match=r"^time_unit: must be one of \['d', 'h', 'min', "):
         Scenario.from_parameters({'time_unit': 'hour'})
+
+
+def test_numbers_without_a_decimal_point_or_exponent_sign_are_numbers_as_in_ros():
+    """YAML 1.1 (PyYAML) reads 1.3271244e11 and 4e5 as strings; rcl and YAML 1.2 as numbers."""
+    sc = parse_scenario('sim:\n  ros__parameters:\n    orbit_rate: 0.0\n    orbit.kind: kepler\n'
+                        '    orbit.gm: 1.3271244e11\n    orbit.a: 2e8\n    duration: 1E-1\n')
+    assert (sc.orbit.gm, sc.orbit.a, sc.duration) == (1.3271244e11, 2e8, 0.1)

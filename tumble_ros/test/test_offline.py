@@ -128,8 +128,8 @@ def test_a_kepler_orbit_from_a_params_file_runs_and_is_reported(tmp_path):
 
     params = tmp_path / 'kepler.yaml'
     params.write_text('sim:\n  ros__parameters:\n    orbit_rate: 0.0\n    duration: 0.5\n'
-                      '    output_interval: 0.01\n    orbit.kind: kepler\n    orbit.gm: 39.5\n'
-                      '    orbit.a: 1.0\n    orbit.e: 0.5\n')
+                      '    output_interval: 0.01\n    orbit.kind: kepler\n'
+                      '    orbit.gm: 1.3271244e11\n    orbit.a: 1.5e8\n    orbit.e: 0.5\n')
     result = run_bringup(str(params), str(tmp_path / 'kepler.mcap'), progress=None,
                          offline=True)
     assert result.ok and result.samples == 51

@@ -25,8 +25,8 @@ import hashlib
 import os
 from pathlib import Path
 
-__all__ = ['COMPILED', 'NUMBA_VERSION', 'jit', 'jit_inline', 'called', 'COMPILED_SOURCES',
-           'compiled_sources_hash']
+__all__ = ['COMPILED', 'NUMBA_VERSION', 'jit', 'jit_inline', 'called', 'python_source',
+           'COMPILED_SOURCES', 'compiled_sources_hash']
 
 try:  # pragma: no cover - exercised by the environment, not by a test
     import numba as _numba
@@ -112,3 +112,8 @@ else:
         return f
 
     jit_inline = called = jit
+
+
+def python_source(f):
+    """Return the Python function behind a compiled one (it runs on numpy arrays too)."""
+    return getattr(f, 'py_func', f)

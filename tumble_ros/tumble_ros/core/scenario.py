@@ -27,6 +27,7 @@ import numpy as np
 
 from .dynamics import ATTITUDE_MODELS
 from .integrators import INTEGRATORS
+from .jit import python_source
 from .limits import (
     MAX_ATOL,
     MAX_DURATION,
@@ -42,8 +43,8 @@ from .limits import (
     ScenarioError,
 )
 from .timebase import SampleGrid, TimeBase
-from .torques import TorqueComponent
-from .torques.orbits import KeplerOrbit
+from .torques import orbital_to_body, TorqueComponent
+from .torques.orbits import KeplerOrbit, perturber_position
 from .units import TIME_UNITS, to_years
 
 __all__ = [
@@ -433,8 +434,8 @@ class Scenario:
             if not isinstance(self.orbit, KeplerOrbit):
                 _fail('orbit', 'must be a core.torques.orbits.KeplerOrbit or None', self.orbit)
             if self.orbit_rate != 0.0:
-                _fail('orbit_rate', 'must be 0 with a Kepler orbit (orbit.kind kepler): the '
-                      'orbit gives the tidal torque', self.orbit_rate)
+                _fail('orbit_rate', 'must be 0 with a Kepler orbit (orbit.kind kepler or flyby): '
+                      'the orbit gives the tidal torque', self.orbit_rate)
 
     # -- derived quantities ---------------------------------------------------------
     @property
@@ -442,6 +443,27 @@ class Scenario:
         """Return the torques beyond the circular orbit's and the impacts': orbit, then torques."""
         orbit = (self.orbit.torque_component(self.inertia),) if self.orbit is not None else ()
         return orbit + self.torques
+
+    def perturber_position(self, t) -> np.ndarray:
+        """
+        Return where the torquing body is in the orbital frame, (n, 3) [km], at ``t`` [yr].
+
+        The Kepler orbit's body, or on the circular orbit the Sun at the distance the orbit rate
+        gives (:func:`~.torques.orbits.perturber_position`).
+        """
+        return perturber_position(self.orbit_rate, self.orbit, t)
+
+    def perturber_in_body(self, t, quaternion) -> np.ndarray:
+        """
+        Return where the torquing body is in body axes, (n, 3) [km], at ``t`` [yr].
+
+        ``quaternion``: (n, 4) attitudes (scalar first, body -> orbital) at those times. Its
+        direction is the unit vector u of the tidal torque (paper eq 12), its norm the distance.
+        """
+        position = self.perturber_position(t)
+        q = np.asarray(quaternion, dtype=float).reshape(-1, 4)
+        body = python_source(orbital_to_body)(*position.T, *q.T)
+        return np.stack(body, axis=-1)
 
     @property
     def output_grid(self) -> SampleGrid:
@@ -488,6 +510,7 @@ class Scenario:
         params['orbit.kind'] = 'kepler' if self.orbit is not None else 'circular'
         for name in _ORBIT_FIELDS:
             params[f'orbit.{name}'] = getattr(orbit, name)
+        params.update(dict.fromkeys((f'orbit.{name}' for name in _FLYBY_FIELDS), 0.0))
         return params
 
     @classmethod
@@ -519,39 +542,58 @@ _SCENARIO_PLAIN = (
     'duration', 'output_interval',
 )
 _IMPACT_KEYS = ('impacts.start', 'impacts.duration', 'impacts.torque', 'impacts.frame')
-_ORBIT_FIELDS = ('gm', 'a', 'e', 't_p', 'lambda_p')
-_ORBIT_KINDS = ('circular', 'kepler')
+#: The fields of a Kepler orbit (orbit.kind kepler), and what a flyby states instead of a, e.
+_ORBIT_FIELDS = ('gm', 'a', 'e', 't_p', 'lambda_p', 'inclination', 'node')
+_FLYBY_FIELDS = ('perigee', 'v_inf', 'v_perigee')
+_ORBIT_KINDS = ('circular', 'kepler', 'flyby')
 #: The orbit.* values of a scenario without a Kepler orbit (orbit.kind circular).
 _DEFAULT_ORBIT = KeplerOrbit(gm=1.0, a=1.0)
 PARAMETER_NAMES: tuple[str, ...] = (
     ('time_unit',) + _SCENARIO_PLAIN
     + tuple(f'integrator.{f.name}' for f in dataclasses.fields(IntegratorSettings))
     + _IMPACT_KEYS
-    + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS)
+    + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS + _FLYBY_FIELDS)
 )
 
 
 def _orbit_from_parameters(params: Mapping[str, Any]) -> KeplerOrbit | None:
-    """Return the Kepler orbit of ``orbit.*`` (None for orbit.kind circular, the default)."""
+    """
+    Return the Kepler orbit of ``orbit.*`` (None for orbit.kind circular, the default).
+
+    ``flyby`` states the hyperbola by its perigee and speed (:meth:`KeplerOrbit.flyby`) instead
+    of a and e; the scenario keeps the resulting Kepler orbit (it is written back as ``kepler``).
+    """
     kind = _one_of('orbit.kind', params.get('orbit.kind', 'circular'), _ORBIT_KINDS)
     values = {name: params.get(f'orbit.{name}', getattr(_DEFAULT_ORBIT, name))
               for name in _ORBIT_FIELDS}
+    flyby = {name: params.get(f'orbit.{name}', 0.0) for name in _FLYBY_FIELDS}
+    unused = {'circular': {**values, **flyby}, 'kepler': flyby,
+              'flyby': {name: values[name] for name in ('a', 'e')}}[kind]
+    defaults = {**{n: getattr(_DEFAULT_ORBIT, n) for n in _ORBIT_FIELDS},
+                **dict.fromkeys(_FLYBY_FIELDS, 0.0)}
+    for name, value in unused.items():
+        if value != defaults[name]:
+            used_by = 'flyby' if name in _FLYBY_FIELDS else (
+                'kepler' if name in ('a', 'e') else 'kepler and flyby')
+            _fail(f'orbit.{name}', f'is used only with orbit.kind: {used_by}', value)
     if kind == 'circular':
-        for name, value in values.items():
-            if value != getattr(_DEFAULT_ORBIT, name):
-                _fail(f'orbit.{name}', 'is used only with orbit.kind: kepler (the circular orbit '
-                      'is given by orbit_rate)', value)
         return None
     try:
-        return KeplerOrbit(**values)
+        if kind == 'kepler':
+            return KeplerOrbit(**values)
+        for name in _FLYBY_FIELDS:
+            flyby[name] = _finite(f'orbit.{name}', flyby[name])
+        shared = {n: values[n] for n in ('t_p', 'lambda_p', 'inclination', 'node')}
+        return KeplerOrbit.flyby(values['gm'], flyby['perigee'], v_inf=flyby['v_inf'],
+                                 v_perigee=flyby['v_perigee'], **shared)
     except ValueError as err:
         raise ScenarioError(str(err)) from None
 
 
 #: Unit and meaning of every scenario parameter (the nodes' descriptors, the README tables).
 PARAMETER_DOCS: dict[str, tuple[str, str]] = {
-    'time_unit': ('', 'unit of every time, rate, torque and GM below: yr (default), d, h, min or '
-                  's; converted to years once, when the scenario is read (core/units.py)'),
+    'time_unit': ('', 'unit of every time, rate and torque below: yr (default), d, h, min or s; '
+                  'converted to years once, when the scenario is read (core/units.py)'),
     'inertia': ('normalised', 'principal moments of inertia (Ix, Iy, Iz); only ratios matter'),
     'allow_unphysical_inertia': (
         '', 'accept moments that break the triangle inequality (paper Figs 3, 6-10)'),
@@ -580,13 +622,20 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'impacts.duration': ('yr', 'length of each impact pulse; >= 16 ulp of its end time'),
     'impacts.torque': ('I rad/yr^2', 'torque of each impact, 3 numbers per impact, flattened'),
     'impacts.frame': ('', "frame of each impact's torque: body or orbital (empty = all body)"),
-    'orbit.kind': ('', 'circular (orbit_rate, the paper) or kepler (the orbit.* elements; then '
-                   'orbit_rate must be 0)'),
-    'orbit.gm': ('L^3/yr^2', "the torquing body's GM, in the unit L of orbit.a (kepler)"),
-    'orbit.a': ('L', 'semi-major axis, > 0 (|a| of a hyperbolic flyby) (kepler)'),
+    'orbit.kind': ('', 'circular (orbit_rate, the paper), kepler (the elements gm, a, e, ...) or '
+                   'flyby (gm, perigee, v_inf or v_perigee, ...); with kepler or flyby, '
+                   'orbit_rate must be 0'),
+    'orbit.gm': ('km^3/s^2', "the torquing body's GM (Sun 1.3271244e11, Earth 398600.4418)"),
+    'orbit.a': ('km', 'semi-major axis, > 0 (|a| of a hyperbola) (kepler)'),
     'orbit.e': ('', 'eccentricity: 0 to 0.99 (ellipse) or >= 1.000001 (hyperbola) (kepler)'),
-    'orbit.t_p': ('yr', 'time of pericentre (kepler)'),
-    'orbit.lambda_p': ('rad', "direction of pericentre, clockwise from +Y' about Z' (kepler)"),
+    'orbit.t_p': ('yr', 'time of pericentre (kepler, flyby)'),
+    'orbit.lambda_p': ('rad', "direction of pericentre in the orbit plane, clockwise from +Y' "
+                       "about Z' (kepler, flyby)"),
+    'orbit.inclination': ('rad', "tilt of the orbit plane about X' (kepler, flyby)"),
+    'orbit.node': ('rad', "turn of the tilted orbit plane about Z' (kepler, flyby)"),
+    'orbit.perigee': ('km', 'closest distance of the flyby (flyby)'),
+    'orbit.v_inf': ('km/s', 'hyperbolic excess speed; give it or v_perigee (flyby)'),
+    'orbit.v_perigee': ('km/s', 'speed at perigee; give it or v_inf (flyby)'),
 }
 
 
@@ -649,12 +698,34 @@ def load_scenario(path: str | Path, node: str = 'sim',
         raise ScenarioError(f'{path}: {err}') from None
 
 
+def _params_loader():
+    """
+    Return a YAML SafeLoader that reads numbers as ROS 2 does.
+
+    PyYAML follows YAML 1.1, where ``1.3271244e11`` (no sign in the exponent) or ``4e5`` is a
+    string; ROS 2's own params-file parser (rcl_yaml_param_parser) reads them as doubles, and so
+    does YAML 1.2. The scenario must mean the same in ``ros2 run --params-file`` and here.
+    """
+    import re
+
+    import yaml
+
+    class ParamsLoader(yaml.SafeLoader):
+        pass
+
+    ParamsLoader.add_implicit_resolver(
+        'tag:yaml.org,2002:float',
+        re.compile(r'^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$'),
+        list('-+0123456789.'))
+    return ParamsLoader
+
+
 def parse_scenario(text: str, node: str = 'sim', ignore: frozenset[str] = frozenset()) -> Scenario:
     """:func:`load_scenario` on the text of a parameters file."""
     import yaml
 
     try:
-        document = yaml.safe_load(text)
+        document = yaml.load(text, Loader=_params_loader())   # noqa: S506 (a SafeLoader)
     except yaml.YAMLError as err:
         raise ScenarioError(f'cannot read scenario file: {err}') from None
     if not isinstance(document, Mapping) or not document:

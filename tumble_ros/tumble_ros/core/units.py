@@ -1,21 +1,35 @@
 """
 Units at the boundary: a scenario may state its times in years, days, hours, minutes or seconds.
 
-Inside, everything is in years (times), rad/yr (rates), I rad/yr^2 (torques) and L^3/yr^2
-(GM). A scenario file or parameter set with ``time_unit: h`` states every time-like value in
-hours instead: ``duration``, ``output_interval``, ``integrator.step``, ``integrator.max_step``,
+Inside, everything is in years (times), rad/yr (rates) and I rad/yr^2 (torques). A scenario
+file or parameter set with ``time_unit: h`` states every time-like value in hours instead:
+``duration``, ``output_interval``, ``integrator.step``, ``integrator.max_step``,
 ``impacts.start``, ``impacts.duration``, ``orbit.t_p`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
-``impacts.torque`` [I rad/h^2]; ``orbit.gm`` [L^3/h^2]. :func:`to_years` converts them once,
-when the scenario is read; the scenario, the recordings and the analysis then speak years (the
-analysis also prints periods in hours or days). A year is the Julian year, 365.25 days.
+``impacts.torque`` [I rad/h^2]. :func:`to_years` converts them once, when the scenario is read;
+the scenario, the recordings and the analysis then speak years (the analysis also prints periods
+in hours or days). A year is the Julian year, 365.25 days.
+
+The orbit of the torquing body (``orbit.*``) is stated in the astrodynamics units every table
+uses, whatever ``time_unit``: GM [km^3/s^2], distances [km], speeds [km/s]; only its time of
+pericentre follows ``time_unit``. :data:`GM_SUN` and :data:`GM_EARTH` are the standard values.
 """
 from __future__ import annotations
 
 from typing import Any, Mapping
 
-__all__ = ['TIME_UNITS', 'HOURS_PER_YEAR', 'to_years', 'TIME_POWERS']
+__all__ = ['TIME_UNITS', 'HOURS_PER_YEAR', 'SECONDS_PER_YEAR', 'to_years', 'TIME_POWERS',
+           'GM_SUN', 'GM_EARTH', 'KM_PER_AU']
 
 HOURS_PER_YEAR = 365.25 * 24.0
+SECONDS_PER_YEAR = HOURS_PER_YEAR * 3600.0
+#: The Sun's GM [km^3/s^2] (IAU 2015 Resolution B3, nominal solar mass parameter
+#: 1.3271244e20 m^3/s^2).
+GM_SUN = 1.3271244e11
+#: The Earth's GM [km^3/s^2], including the atmosphere (IERS Conventions 2010, Petit & Luzum,
+#: IERS Technical Note 36, Table 1.1: 3.986004418e14 m^3/s^2).
+GM_EARTH = 398600.4418
+#: The astronomical unit [km] (IAU 2012 Resolution B2: 149,597,870,700 m exactly).
+KM_PER_AU = 149597870.7
 #: Years per unit of each accepted ``time_unit``.
 TIME_UNITS = {
     'yr': 1.0,
@@ -29,7 +43,7 @@ TIME_POWERS = {
     'duration': 1, 'output_interval': 1, 'integrator.step': 1, 'integrator.max_step': 1,
     'impacts.start': 1, 'impacts.duration': 1, 'orbit.t_p': 1,
     'omega0': -1, 'orbit_rate': -1,
-    'impacts.torque': -2, 'orbit.gm': -2,
+    'impacts.torque': -2,
 }
 
 

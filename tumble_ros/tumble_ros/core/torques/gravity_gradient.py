@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from .frames import orbital_to_body
-from ..jit import jit_inline
+from ..jit import jit_inline, python_source
 
 __all__ = ['sun_direction_orbital', 'sun_direction_body', 'tidal_torque', 'tidal_coefficients',
            'gravity_gradient_torque', 'gravity_gradient_potential']
@@ -55,11 +55,6 @@ def tidal_coefficients(inertia, orbit_rate: float) -> tuple[float, float, float]
     return k * (iz - iy), k * (ix - iz), k * (iy - ix)
 
 
-def _py(f):
-    """Return the Python source function of a compiled one (it runs on arrays too)."""
-    return getattr(f, 'py_func', f)
-
-
 def sun_direction_orbital(t: float, orbit_rate: float) -> np.ndarray:
     """Return the unit vector from the asteroid to the Sun in the orbital frame, R0(t)/R0."""
     return np.array([math.sin(orbit_rate * t), math.cos(orbit_rate * t), 0.0])
@@ -72,8 +67,8 @@ def gravity_gradient_torque(u_body, inertia, orbit_rate: float) -> np.ndarray:
     The same arithmetic as the kernels (:func:`tidal_torque`), on arrays.
     """
     u = np.asarray(u_body, dtype=float)
-    torque = _py(tidal_torque)(*tidal_coefficients(inertia, orbit_rate),
-                               u[..., 0], u[..., 1], u[..., 2])
+    torque = python_source(tidal_torque)(*tidal_coefficients(inertia, orbit_rate),
+                                         u[..., 0], u[..., 1], u[..., 2])
     return np.stack(np.broadcast_arrays(*torque), axis=-1)
 
 

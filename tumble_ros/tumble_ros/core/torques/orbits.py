@@ -8,11 +8,19 @@ two-body Kepler orbit relative to the asteroid, and the torque is
     M = 3 GM / R(t)^3  u x (I u)          (paper eq 12 with the instantaneous distance R)
 
 with u the unit direction to the perturber in body axes. Frame and time as for the circular
-orbit: the orbital frame (X', Y' in the orbit plane, Z' its normal, inertial), the perturber's
-direction s = (sin lambda, cos lambda, 0) with lambda = nu + lambda_p (nu the true anomaly,
-lambda_p the direction of pericentre, both measured from +Y' clockwise about Z', as the paper's
-R0(t) = R0 [sin ws t, cos ws t, 0]); so e = 0, t_p = 0, lambda_p = 0 is the circular orbit with
-ws = n. Units: time [yr], distances in any unit L, GM in L^3/yr^2, angles [rad].
+orbit: in the perturber's orbit plane the direction is (sin lambda, cos lambda, 0) with
+lambda = nu + lambda_p (nu the true anomaly, lambda_p the direction of pericentre, both measured
+from +Y' clockwise about Z', as the paper's R0(t) = R0 [sin ws t, cos ws t, 0]); that plane is
+then tilted by ``inclination`` about X' and turned by ``node`` about Z' into the scenario's
+(inertial) orbital frame, where the body's attitude is given:
+
+    s = Rz(node) Rx(inclination) (sin lambda, cos lambda, 0)
+
+so e = 0, t_p = 0, lambda_p = inclination = node = 0 is the circular orbit with ws = n.
+
+Units: the astrodynamics ones, as every table states them: GM [km^3/s^2], distances [km],
+speeds [km/s]; times [yr] (the core's unit; ``t_p``), angles [rad]. The mean motion and the
+torque coefficient are converted to years inside (``units.SECONDS_PER_YEAR``).
 
 Kepler's equation: elliptic (0 <= e < 1) M = E - e sin E, hyperbolic (e > 1) M = e sinh H - H,
 with the mean anomaly M = n (t - t_p), n = sqrt(GM / |a|^3). Both are solved by Newton's method
@@ -29,11 +37,13 @@ import numpy as np
 
 from .component import torque_function, TorqueComponent
 from .frames import orbital_to_body
-from .gravity_gradient import tidal_torque
-from ..jit import jit
+from .gravity_gradient import sun_direction_orbital, tidal_torque
+from ..jit import jit, jit_inline, python_source
+from ..units import GM_SUN, SECONDS_PER_YEAR
 
 __all__ = ['KeplerOrbit', 'eccentric_anomaly', 'hyperbolic_anomaly', 'orbit_state',
-           'kepler_tidal_torque', 'MAX_ECCENTRICITY']
+           'kepler_tidal_torque', 'perturber_position', 'orientation_from_elements',
+           'MAX_ECCENTRICITY']
 
 _TWO_PI = 2.0 * math.pi
 #: Largest eccentricity of an ellipse accepted (the solver is tested up to it), and the
@@ -87,11 +97,12 @@ def hyperbolic_anomaly(mean_anomaly, e):
 @jit
 def orbit_state(t, gm, a, e, t_p, lambda_p):
     """
-    Return (R, lambda): the perturber's distance [L] and direction angle [rad] at time t [yr].
+    Return (R, lambda): the perturber's distance [L] and in-plane angle [rad] at time t [yr].
 
-    ``a`` is the semi-major axis (> 0 for both kinds, |a| for the hyperbola), ``e`` the
-    eccentricity, ``t_p`` the time of pericentre [yr], ``lambda_p`` the direction of
-    pericentre [rad] (clockwise from +Y' about Z').
+    ``gm`` in L^3/yr^2 (the core's units; :attr:`KeplerOrbit.gm_per_yr2`), ``a`` the
+    semi-major axis [L] (> 0 for both kinds, |a| for the hyperbola), ``e`` the eccentricity,
+    ``t_p`` the time of pericentre [yr], ``lambda_p`` the direction of pericentre [rad]
+    (clockwise from +Y' about Z' in the orbit plane).
     """
     n = math.sqrt(gm / (a * a * a))
     mean = n * (t - t_p)
@@ -110,15 +121,26 @@ def orbit_state(t, gm, a, e, t_p, lambda_p):
     return distance, nu + lambda_p
 
 
+@jit_inline
+def plane_to_orbital(sin_angle, cos_angle, cos_i, sin_i, cos_node, sin_node):
+    """Return s = Rz(node) Rx(i) (sin lambda, cos lambda, 0): the orbit plane's direction."""
+    y = cos_angle * cos_i
+    return (sin_angle * cos_node - y * sin_node, sin_angle * sin_node + y * cos_node,
+            cos_angle * sin_i)
+
+
 @torque_function
 def kepler_tidal_torque(par, t, q0, q1, q2, q3):
     """
     Return the tidal torque of a perturber on a Kepler orbit, body axes.
 
-    par = (GM, a, e, t_p, lambda_p, Ix, Iy, Iz): see :func:`orbit_state`.
+    par = (GM [L^3/yr^2], a, e, t_p, lambda_p, Ix, Iy, Iz, cos i, sin i, cos node, sin node):
+    see :func:`orbit_state` and :func:`plane_to_orbital`.
     """
     distance, angle = orbit_state(t, par[0], par[1], par[2], par[3], par[4])
-    ux, uy, uz = orbital_to_body(math.sin(angle), math.cos(angle), 0.0, q0, q1, q2, q3)
+    sx, sy, sz = plane_to_orbital(math.sin(angle), math.cos(angle), par[8], par[9], par[10],
+                                  par[11])
+    ux, uy, uz = orbital_to_body(sx, sy, sz, q0, q1, q2, q3)
     k = 3.0 * par[0] / (distance * distance * distance)
     return tidal_torque(k * (par[7] - par[6]), k * (par[5] - par[7]), k * (par[6] - par[5]),
                         ux, uy, uz)
@@ -132,15 +154,19 @@ class KeplerOrbit:
     Attributes
     ----------
     gm : float
-        The perturber's GM [L^3/yr^2] (L: the unit of ``a``).
+        The perturber's GM [km^3/s^2] (the Sun 1.32712440018e11, the Earth 398600.4418:
+        ``units.GM_SUN``, ``units.GM_EARTH``).
     a : float
-        Semi-major axis [L], > 0 (for a hyperbola its absolute value).
+        Semi-major axis [km], > 0 (for a hyperbola its absolute value).
     e : float
         Eccentricity: 0 <= e <= 0.99 (ellipse) or e >= 1 + 1e-6 (hyperbola).
     t_p : float
         Time of pericentre [yr].
     lambda_p : float
         Direction of pericentre in the orbit plane [rad], clockwise from +Y' about Z'.
+    inclination, node : float
+        The orbit plane's orientation in the orbital frame [rad]: tilted by ``inclination``
+        about X', then turned by ``node`` about Z' (0, 0: the plane X'Y' of the paper).
 
     """
 
@@ -149,9 +175,11 @@ class KeplerOrbit:
     e: float = 0.0
     t_p: float = 0.0
     lambda_p: float = 0.0
+    inclination: float = 0.0
+    node: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ('gm', 'a', 'e', 't_p', 'lambda_p'):
+        for name in ('gm', 'a', 'e', 't_p', 'lambda_p', 'inclination', 'node'):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(
                     value):
@@ -166,31 +194,109 @@ class KeplerOrbit:
                              f'>= {1.0 + _NEAR_PARABOLIC} (hyperbola); parabolic orbits are not '
                              f'modelled, got {self.e!r}')
 
+    @classmethod
+    def flyby(cls, gm: float, perigee: float, *, v_inf: float = 0.0, v_perigee: float = 0.0,
+              t_p: float = 0.0, lambda_p: float = 0.0, inclination: float = 0.0,
+              node: float = 0.0) -> 'KeplerOrbit':
+        """
+        Return the hyperbola of a flyby.
+
+        Given GM [km^3/s^2], the perigee distance [km], and either the hyperbolic excess speed
+        ``v_inf`` or the speed at perigee ``v_perigee`` [km/s]:
+
+        a = GM / v_inf^2, e = 1 + perigee v_inf^2 / GM (vis-viva: v_inf^2 = v_p^2 - 2 GM / r_p).
+        """
+        if (v_inf > 0.0) == (v_perigee > 0.0):
+            raise ValueError('orbit.v_inf, orbit.v_perigee: give exactly one of them (> 0), got '
+                             f'{v_inf!r} and {v_perigee!r}')
+        if not (math.isfinite(perigee) and perigee > 0.0):
+            raise ValueError(f'orbit.perigee: must be > 0, got {perigee!r}')
+        if v_perigee > 0.0:
+            escape = 2.0 * gm / perigee
+            if not v_perigee * v_perigee > escape:
+                raise ValueError(f'orbit.v_perigee: must exceed the escape speed '
+                                 f'{math.sqrt(escape):.6g} km/s at perigee (a flyby is a '
+                                 f'hyperbola), got {v_perigee!r}')
+            v_inf = math.sqrt(v_perigee * v_perigee - escape)
+        return cls(gm=gm, a=gm / (v_inf * v_inf), e=1.0 + perigee * v_inf * v_inf / gm, t_p=t_p,
+                   lambda_p=lambda_p, inclination=inclination, node=node)
+
+    @property
+    def gm_per_yr2(self) -> float:
+        """Return GM in the core's units, km^3/yr^2."""
+        return self.gm * SECONDS_PER_YEAR * SECONDS_PER_YEAR
+
     @property
     def mean_motion(self) -> float:
-        """Return n = sqrt(GM / a^3) [rad/yr]."""
-        return math.sqrt(self.gm / self.a ** 3)
+        """Return n = sqrt(GM / |a|^3) [rad/yr]."""
+        return math.sqrt(self.gm_per_yr2 / self.a ** 3)
 
     @property
     def pericentre(self) -> float:
-        """Return the pericentre distance a |1 - e| [L]."""
+        """Return the pericentre distance a |1 - e| [km]."""
         return self.a * abs(1.0 - self.e)
 
+    def _plane(self) -> tuple[float, float, float, float]:
+        return (math.cos(self.inclination), math.sin(self.inclination), math.cos(self.node),
+                math.sin(self.node))
+
     def state(self, t) -> tuple[np.ndarray, np.ndarray]:
-        """Return the distances R [L] and directions lambda [rad] at times ``t`` [yr] (arrays)."""
+        """Return the distances R [km] and in-plane angles lambda [rad] at times ``t`` [yr]."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        out = np.array([orbit_state(float(x), self.gm, self.a, self.e, self.t_p, self.lambda_p)
+        gm = self.gm_per_yr2
+        out = np.array([orbit_state(float(x), gm, self.a, self.e, self.t_p, self.lambda_p)
                         for x in t])
         return out[:, 0], out[:, 1]
 
+    def direction(self, t) -> np.ndarray:
+        """Return the unit direction to the perturber in the orbital frame: (n, 3)."""
+        _, angle = self.state(t)
+        s = python_source(plane_to_orbital)(np.sin(angle), np.cos(angle), *self._plane())
+        return np.stack(s, axis=-1)
+
     def position(self, t) -> np.ndarray:
-        """Return where the perturber is in the orbital frame: (n, 3) coordinates [L]."""
-        distance, angle = self.state(t)
-        return np.stack([distance * np.sin(angle), distance * np.cos(angle),
-                         np.zeros_like(angle)], axis=-1)
+        """Return where the perturber is in the orbital frame: (n, 3) coordinates [km]."""
+        distance, _ = self.state(t)
+        return distance[:, None] * self.direction(t)
 
     def torque_component(self, inertia) -> TorqueComponent:
         """Return this orbit's tidal torque on a body of principal moments ``inertia``."""
         ix, iy, iz = (float(v) for v in inertia)
         return TorqueComponent('kepler_orbit', kepler_tidal_torque,
-                               (self.gm, self.a, self.e, self.t_p, self.lambda_p, ix, iy, iz))
+                               (self.gm_per_yr2, self.a, self.e, self.t_p, self.lambda_p,
+                                ix, iy, iz) + self._plane())
+
+
+def orientation_from_elements(inclination: float, node: float,
+                              argument_of_pericentre: float) -> dict[str, float]:
+    """
+    Return this module's (lambda_p, inclination, node) of the standard orbital elements [rad].
+
+    The standard elements (i, Omega, omega: the ones ephemerides such as JPL Horizons print)
+    place the perturber at Rz(Omega) Rx(i) (cos u, sin u, 0), u = omega + nu, counter-clockwise
+    about the orbit's normal. This module's direction (sin lambda, cos lambda, 0) runs clockwise
+    from +Y' (the paper's convention), and (sin x, cos x, 0) = Rx(pi) (cos(x - pi/2),
+    sin(x - pi/2), 0); so lambda_p = omega + pi/2, inclination = i - pi, node = Omega. The
+    orbital frame is then the ephemeris' frame (e.g. ecliptic J2000).
+    """
+    return {'lambda_p': argument_of_pericentre + 0.5 * math.pi,
+            'inclination': inclination - math.pi, 'node': node}
+
+
+def perturber_position(orbit_rate: float, orbit: KeplerOrbit | None, t) -> np.ndarray:
+    """
+    Return where the torquing body is, in the orbital frame: (n, 3) [km] at times ``t`` [yr].
+
+    With a Kepler orbit, its position. On the paper's circular orbit (``orbit`` None), the Sun:
+    the direction R0(t)/R0 at the distance R0 = (GM_sun / ws^2)^(1/3) that Kepler's third law
+    gives for the orbit rate ws (the paper states ws only; this assumes the perturber is the
+    Sun). Without a torque (ws = 0) the Sun is taken infinitely far along +Y'.
+    """
+    t = np.atleast_1d(np.asarray(t, dtype=float))
+    if orbit is not None:
+        return orbit.position(t)
+    if orbit_rate == 0.0:
+        return np.tile([0.0, math.inf, 0.0], (t.size, 1))
+    ws = orbit_rate / SECONDS_PER_YEAR
+    distance = (GM_SUN / (ws * ws)) ** (1.0 / 3.0)
+    return distance * np.array([sun_direction_orbital(x, orbit_rate) for x in t])
