@@ -9,7 +9,8 @@ from __future__ import annotations
 
 __all__ = [
     'ANGULAR_VELOCITY', 'ATTITUDE', 'EULER_ANGLES', 'CLOCK', 'IMPACT_EVENTS', 'STATUS', 'SCENARIO',
-    'CONSUMER_PROGRESS', 'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM', 'COMPARISON_STATUS',
+    'CONSUMER_PROGRESS', 'PERTURBER', 'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM',
+    'COMPARISON_STATUS',
     'APPLY_IMPACT', 'PAUSE', 'RESUME', 'STEP', 'TYPES', 'SIM_TOPICS', 'COMPARATOR_TOPICS',
     'RECORDED', 'PER_SAMPLE', 'SIM_PER_SAMPLE', 'COMPARATOR_PER_SAMPLE', 'FRAME_BODY',
     'FRAME_ORBITAL', 'FRAME_EULER', 'in_namespace',
@@ -32,6 +33,10 @@ STATUS = 'status'
 SCENARIO = 'scenario'
 #: consumers' progress, for the simulator's pacing (subscribed by the simulator).
 CONSUMER_PROGRESS = 'consumer_progress'
+#: where the torquing body is [km] in body axes (geometry_msgs/Vector3Stamped, frame ``body``):
+#: its direction is the u of the tidal torque, its norm the distance; one per sample, published
+#: when the scenario has a Kepler orbit or a flyby (orbit.kind kepler or flyby).
+PERTURBER = 'perturber'
 
 # -- the comparator's --------------------------------------------------------------------------
 MODEL_ANGULAR_VELOCITY = 'comparison/model_angular_velocity'
@@ -48,6 +53,7 @@ STEP = 'step'
 #: ROS type of every topic.
 TYPES = {
     ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
+    PERTURBER: 'geometry_msgs/msg/Vector3Stamped',
     ATTITUDE: 'geometry_msgs/msg/QuaternionStamped',
     EULER_ANGLES: 'geometry_msgs/msg/Vector3Stamped',
     CLOCK: 'rosgraph_msgs/msg/Clock',
@@ -62,7 +68,8 @@ TYPES = {
 }
 
 #: What the simulator publishes (``/clock`` unless ``publish_clock`` is false).
-SIM_TOPICS = (ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, CLOCK, IMPACT_EVENTS, STATUS, SCENARIO)
+SIM_TOPICS = (ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, CLOCK, IMPACT_EVENTS, STATUS, SCENARIO,
+              PERTURBER)
 #: What the comparator publishes.
 COMPARATOR_TOPICS = (MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS)
 #: What the recorder records by default.

@@ -5,6 +5,7 @@ Load a tumble_ros MCAP recording into numpy arrays, in one pass, without a ROS r
     rec = load_recording("run.mcap")
     rec.t, rec.omega                # (n,), (n, 3): simulated years, rad/yr (body axes)
     rec.quaternion_t, rec.quaternion  # (m,), (m, 4): scalar first (w, x, y, z), body -> orbital
+    rec.perturber_t, rec.perturber    # the torquing body [km], body axes (Kepler orbits only)
     rec.impacts, rec.scenario, rec.topics
 
 Every stamped series keeps its own time axis (the simulator may publish the attitude less
@@ -44,7 +45,8 @@ from tumble_ros.errors import AnalysisError
 from tumble_ros.io import read_columns, summarize
 from tumble_ros.topics import (ANGULAR_VELOCITY, ATTITUDE, COMPARISON_STATUS, ERROR, ERROR_NORM,
                                EULER_ANGLES, FRAME_BODY, FRAME_ORBITAL, IMPACT_EVENTS,
-                               in_namespace, MODEL_ANGULAR_VELOCITY, SCENARIO, STATUS, TYPES)
+                               in_namespace, MODEL_ANGULAR_VELOCITY, PERTURBER, SCENARIO, STATUS,
+                               TYPES)
 
 __all__ = [
     'EXPECTED_TYPES', 'ROOT_NAMESPACE', 'AnalysisError', 'ImpactRecord', 'SegmentStart',
@@ -56,7 +58,7 @@ __all__ = [
 #: (:data:`tumble_ros.topics.TYPES`). Other topics (``/clock``, ``consumer_progress``, service
 #: events) are only counted.
 EXPECTED_TYPES = {topic: TYPES[topic] for topic in (
-    ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, IMPACT_EVENTS, SCENARIO, STATUS,
+    ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, IMPACT_EVENTS, SCENARIO, STATUS, PERTURBER,
     MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS)}
 
 #: The per-sample topics read as columns: topic -> its value fields, in the columns' order.
@@ -67,6 +69,7 @@ _COLUMNS = {
     ERROR: ('vector.x', 'vector.y', 'vector.z'),
     ATTITUDE: ('quaternion.w', 'quaternion.x', 'quaternion.y', 'quaternion.z'),
     ERROR_NORM: ('norm', 'relative'),
+    PERTURBER: ('vector.x', 'vector.y', 'vector.z'),
 }
 
 #: SimStatus states (tumble_ros_interfaces/msg/SimStatus.msg).
@@ -201,6 +204,8 @@ class Recording:
     euler: np.ndarray = field(default_factory=lambda: _empty(3))          # (phi, psi, theta)
     quaternion_t: np.ndarray = field(default_factory=lambda: np.empty(0))
     quaternion: np.ndarray = field(default_factory=lambda: _empty(4))     # (w, x, y, z)
+    perturber_t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    perturber: np.ndarray = field(default_factory=lambda: _empty(3))      # [km], body axes
     model_t: np.ndarray = field(default_factory=lambda: np.empty(0))
     model_omega: np.ndarray = field(default_factory=lambda: _empty(3))
     error_t: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -385,6 +390,9 @@ def load_recording(path, *, namespace: str | None = None,
     if ATTITUDE in raw:
         ns, rec.quaternion = _sorted(*raw[ATTITUDE], 4)
         rec.quaternion_t = years(ns)
+    if PERTURBER in raw:
+        ns, rec.perturber = _sorted(*raw[PERTURBER], 3)
+        rec.perturber_t = years(ns)
     if MODEL_ANGULAR_VELOCITY in raw:
         ns, rec.model_omega = _sorted(*raw[MODEL_ANGULAR_VELOCITY], 3)
         rec.model_t = years(ns)

@@ -17,7 +17,7 @@ import numpy as np
 from tumble_ros.topics import ANGULAR_VELOCITY, in_namespace, SCENARIO
 
 from .recording import ROOT_NAMESPACE
-from .spin import period_text
+from .spin import HOURS_PER_YEAR, period_text
 
 if TYPE_CHECKING:
     from .summary import AnalysisSummary
@@ -171,13 +171,17 @@ def _spin(s: AnalysisSummary) -> list[str]:
                             ('end', s.spin.t_end, s.spin.end)):
         pole = ''
         if state.pole_longitude is not None:
-            pole = (f', pole lon {math.degrees(state.pole_longitude):.2f} deg, '
+            pole = (f', pole lon {math.degrees(state.pole_longitude) % 360.0:.2f} deg, '
                     f'lat {math.degrees(state.pole_latitude):.2f} deg')
         out.append(f'  {label} (t = {_g(t, 10)} yr): {state.mode}, rotation '
                    f'{period_text(state.rotation_period)}, precession '
                    f'{period_text(state.precession_period)}{pole}')
     if s.spin.pole_shift is not None:
         out.append(f'  pole shift: {math.degrees(s.spin.pole_shift):.3g} deg')
+    if s.closest_approach is not None:
+        t, km = s.closest_approach
+        out.append(f'  closest approach of the torquing body: {km:.6g} km at t = {_g(t, 10)} yr '
+                   f'({t * HOURS_PER_YEAR:.6g} h)')
     return out
 
 

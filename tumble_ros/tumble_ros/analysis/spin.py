@@ -20,7 +20,7 @@ from tumble_ros.core.units import HOURS_PER_YEAR
 from .recording import Recording
 from .timeaxis import same_stamps
 
-__all__ = ['SpinChange', 'spin_change', 'period_text', 'HOURS_PER_YEAR']
+__all__ = ['SpinChange', 'spin_change', 'closest_approach', 'period_text', 'HOURS_PER_YEAR']
 
 
 @dataclass(frozen=True)
@@ -52,6 +52,15 @@ def spin_change(rec: Recording) -> tuple[SpinChange | None, str | None]:
     if first.pole is not None and last.pole is not None:
         shift = math.acos(max(-1.0, min(1.0, float(np.dot(first.pole, last.pole)))))
     return SpinChange(float(rec.t[ia[0]]), first, float(rec.t[ia[-1]]), last, shift), None
+
+
+def closest_approach(rec: Recording) -> tuple[float, float] | None:
+    """Return (t [yr], distance [km]) of the torquing body's nearest recorded sample, or None."""
+    if not len(rec.perturber_t):
+        return None
+    distance = np.linalg.norm(rec.perturber, axis=1)
+    k = int(np.argmin(distance))
+    return float(rec.perturber_t[k]), float(distance[k])
 
 
 def period_text(years: float) -> str:

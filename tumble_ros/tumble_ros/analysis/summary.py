@@ -24,7 +24,7 @@ from .impacts import impact_intervals, impact_summaries, ImpactSummary
 from .invariants import InvariantDrift, jacobi_drift, JacobiSegment
 from .recording import Recording, ROOT_NAMESPACE
 from .spectrum import Peak, Spectrum, spectrum
-from .spin import spin_change, SpinChange
+from .spin import closest_approach, spin_change, SpinChange
 from .theory import AliasingCheck, check_aliasing, theory_lines, TheoryLine
 from .timeaxis import Sampling, sampling
 
@@ -65,6 +65,7 @@ class AnalysisSummary:
     namespace: str = ROOT_NAMESPACE          # the ROS namespace whose topics were analysed
     spin: SpinChange | None = None           # the tumbling state at the start and the end
     spin_note: str | None = None
+    closest_approach: tuple[float, float] | None = None   # (t [yr], km) of /perturber
 
 
 def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
@@ -120,4 +121,4 @@ def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
         invariant=invariant, invariant_note=invariant_note, impacts=tuple(impact_summaries(rec)),
         theory_basis=basis, theory=tuple(lines), spectrum=spec, aliasing=aliasing,
         warnings=tuple(warnings), notes=tuple(notes), namespace=rec.namespace, spin=spin,
-        spin_note=spin_note)
+        spin_note=spin_note, closest_approach=closest_approach(rec))

@@ -224,7 +224,7 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals) -> Bri
 
         def drained() -> bool:
             counts = recorder.counts
-            expected = {**{t: sim.published_samples for t in topics.SIM_PER_SAMPLE},
+            expected = {**{t: sim.published_samples for t in sim.per_sample_topics},
                         **{t: comparator.compared for t in topics.COMPARATOR_PER_SAMPLE}}
             return (comparator.consumed == sim.published_samples
                     and all(counts.get(sim.resolve_topic_name(t), 0) == n

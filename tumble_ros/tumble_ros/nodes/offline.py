@@ -68,12 +68,13 @@ class OfflineResult:
 class _Channels:
     """The recording's channels, as the live recorder makes them, and their encoders."""
 
-    def __init__(self, writer: McapWriter, publish_clock: bool):
+    def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool):
         self.writer = writer
         self.ids: dict[str, int] = {}
         self.layouts: dict[str, FlatLayout] = {}
         for topic in topics.RECORDED:
-            if topic == topics.CLOCK and not publish_clock:
+            if (topic == topics.CLOCK and not publish_clock
+                    or topic == topics.PERTURBER and not perturber):
                 continue
             name = topic if topic.startswith('/') else '/' + topic
             type_name = topics.TYPES[topic]
@@ -124,7 +125,7 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
     scenario_yaml = dump_scenario(scenario)
     state, message, k = SimStatus.RUNNING, '', 0
     with McapWriter(output, chunk_seconds=math.inf) as writer:
-        channels = _Channels(writer, publish_clock)
+        channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None)
         comparator = _Comparator(channels, model_name)
         channels.one(topics.COMPARISON_STATUS, comparison_status(
             DiagnosticStatus.WARN, COMPARATOR_NAME,
@@ -143,7 +144,7 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
             for t0 in sorted(segment_starts):
                 revision = _describe(channels, comparator, scenario_yaml, timebase, revision, t0,
                                      segment_starts[t0], propagator)
-            _write_samples(channels, comparator, grid, k, done, arrays, publish_clock)
+            _write_samples(channels, comparator, grid, k, done, arrays, publish_clock, scenario)
             k += done
             if progress is not None:
                 progress(grid.time(max(0, k - 1)), k)
@@ -223,8 +224,13 @@ class _Comparator:
 
 
 def _write_samples(channels: _Channels, comparator: _Comparator, grid, k0: int, n: int,
-                   arrays: dict, publish_clock: bool) -> None:
-    """Write n samples from grid index k0: the simulator's four topics, the comparator's three."""
+                   arrays: dict, publish_clock: bool, scenario: Scenario) -> None:
+    """
+    Write n samples from grid index k0: the simulator's topics, the comparator's three.
+
+    The simulator's: /clock (if published), ω, attitude, Euler angles, and the perturber's
+    position when the scenario has a Kepler orbit (as the live simulator).
+    """
     if n == 0:
         return
     ns = np.arange(k0, k0 + n, dtype=np.int64) * grid.interval_ns
@@ -244,6 +250,10 @@ def _write_samples(channels: _Channels, comparator: _Comparator, grid, k0: int, 
         (topics.EULER_ANGLES, channels.rows(topics.EULER_ANGLES, n, _stamped(
             sec, nanosec, xyz, euler.T), topics.FRAME_EULER)),
     ]
+    if topics.PERTURBER in channels.ids:
+        position = scenario.perturber_in_body(grid.times(k0, k0 + n), quaternion)
+        sim.append((topics.PERTURBER, channels.rows(topics.PERTURBER, n, _stamped(
+            sec, nanosec, xyz, position.T), topics.FRAME_BODY)))
     compared, model, error, norm, relative = comparator.compare(k0, grid.times(k0, k0 + n),
                                                                 omega)
     comparison = [

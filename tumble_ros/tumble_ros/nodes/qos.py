@@ -66,6 +66,7 @@ SERVICE_QOS = QoSProfile(
 #: The QoS each of the simulator's and the comparator's topics is published with.
 PUBLISHER_QOS = {
     topics.ANGULAR_VELOCITY: STATE_QOS,
+    topics.PERTURBER: STATE_QOS,
     topics.ATTITUDE: STATE_QOS,
     topics.EULER_ANGLES: STATE_QOS,
     topics.CLOCK: CLOCK_QOS,

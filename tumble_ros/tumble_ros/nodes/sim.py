@@ -132,6 +132,8 @@ class SimNode(GuardedNode):
                                   qos[topics.ANGULAR_VELOCITY])
         self._pub_attitude = publish(QuaternionStamped, topics.ATTITUDE, qos[topics.ATTITUDE])
         self._pub_euler = publish(Vector3Stamped, topics.EULER_ANGLES, qos[topics.EULER_ANGLES])
+        self._pub_perturber = (publish(Vector3Stamped, topics.PERTURBER, qos[topics.PERTURBER])
+                               if self.scenario.orbit is not None else None)
         self._pub_clock = (publish(Clock, topics.CLOCK, qos[topics.CLOCK])
                            if params['publish_clock'] else None)
         self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, qos[topics.IMPACT_EVENTS])
@@ -144,7 +146,9 @@ class SimNode(GuardedNode):
         self.create_service(Trigger, topics.PAUSE, self._on_pause)
         self.create_service(Trigger, topics.RESUME, self._on_resume)
         self.create_service(Trigger, topics.STEP, self._on_step)
-        own = [t for t in topics.SIM_TOPICS if t != topics.CLOCK or self._pub_clock is not None]
+        own = [t for t in topics.SIM_TOPICS
+               if (t != topics.CLOCK or self._pub_clock is not None)
+               and (t != topics.PERTURBER or self._pub_perturber is not None)]
         self._sources = SourceMonitor(
             self, lambda: own,
             lambda problem: self._publish_status(
@@ -200,6 +204,11 @@ class SimNode(GuardedNode):
         return self._status_message
 
     @property
+    def per_sample_topics(self) -> tuple[str, ...]:
+        """Return the topics with one message per published sample (not /clock)."""
+        return topics.SIM_PER_SAMPLE + ((topics.PERTURBER,) if self._pub_perturber else ())
+
+    @property
     def published_samples(self) -> int:
         """Count the samples published so far."""
         return self._next_k
@@ -244,15 +253,19 @@ class SimNode(GuardedNode):
         if self._next_k <= k_last:
             self._schedule_pending()
             stamps = [self._grid.stamp(k) for k in range(self._next_k, k_last + 1)]
-            done, arrays, failure = self._propagator.sample_many(
-                self._grid.times(self._next_k, k_last + 1))
+            times = self._grid.times(self._next_k, k_last + 1)
+            done, arrays, failure = self._propagator.sample_many(times)
             # Impacts that ended within the batch: their events and new descriptions go out
             # before its samples (the comparator keeps the previous segment's model for the
             # samples that trail a description).
             self._publish_impact_events()
+            perturber = (self.scenario.perturber_in_body(times[:done], arrays['quaternion'][:done])
+                         if self._pub_perturber is not None and done else None)
             for j in range(done):
                 self._publish_sample(stamps[j], arrays['omega'][j], arrays['quaternion'][j],
                                      arrays['euler'][j])
+                if perturber is not None:
+                    self._publish_perturber(stamps[j], perturber[j])
             self._next_k += done
             if failure:
                 self._diverged(failure)
@@ -293,6 +306,14 @@ class SimNode(GuardedNode):
         self._pub_omega.publish(msg)
         self._pub_attitude.publish(attitude)
         self._pub_euler.publish(angles)
+
+    def _publish_perturber(self, ns: int, position) -> None:
+        """Publish where the torquing body is [km], body axes (a Kepler orbit or flyby)."""
+        msg = Vector3Stamped()
+        msg.header.stamp, msg.header.frame_id = stamp(ns), topics.FRAME_BODY
+        x, y, z = position.tolist()
+        msg.vector = Vector3(x=x, y=y, z=z)
+        self._pub_perturber.publish(msg)
 
     def _publish_impact_events(self) -> None:
         """One event per impact that ended; one description per segment that starts at an end."""
