@@ -1,11 +1,13 @@
-"""Reproduce the paper's figures: every tumble_ros/config/fig*.yaml -> docs/figures/ (make figures).
+"""Reproduce the paper's figures and the Apophis study into docs/figures/ (make figures).
 
-For each figure's scenario: run bringup (simulate, compare with the paper's analytic solution,
-record to recordings/figures/<fig>.mcap), analyse the recording, write its PNGs to
-docs/figures/<fig>/ and its summary to docs/figures/<fig>/summary.txt, and finally the index
-docs/figures/README.md that sets each figure beside the paper's caption.
+For each figure's scenario (tumble_ros/config/fig*.yaml, apophis_2029.yaml): run bringup
+(simulate, compare with the paper's analytic solution, record to
+recordings/figures/<name>.mcap), analyse the recording, write its PNGs to docs/figures/<name>/
+and its summary to docs/figures/<name>/summary.txt; for apophis_2029 also the encounter
+ensemble (tumble_ros.cli.encounter, 1000 bodies) into docs/figures/apophis_2029/encounter/;
+finally the index docs/figures/README.md that sets each figure beside the paper's caption.
 
-    scripts/env.sh python scripts/make_figures.py [fig3 fig9 ...]   (default: all)
+    scripts/env.sh python scripts/make_figures.py [fig3 fig9 apophis_2029 ...]   (default: all)
 """
 from __future__ import annotations
 
@@ -14,6 +16,7 @@ from pathlib import Path
 
 from tumble_ros.analysis import analyze, format_summary, load_recording, write_figures
 from tumble_ros.analysis.recording import stderr_progress
+from tumble_ros.cli.encounter import main as encounter
 from tumble_ros.nodes.bringup import format_result, run_bringup
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,11 +41,21 @@ CAPTIONS = {
     "fig9": "Numerical solution E-L equation. a = 3; θ = 0.9; φ = 0.5; ωx0 = 0.1, ωy0 = 0.1; ωz0 = 30; "
             "ωs = 1; tk = 2000 years, n = 1000. Below wy vs. wx plot.",
     "fig10": "Simulation of impact interaction. Above R-K procedure, below \"ode\".",
+    "apophis_2029": "(not in the paper) (99942) Apophis, a tumbler, through its Earth flyby of "
+                    "2029-04-13 at 38,326 km: the Earth's tidal torque on the published spin state "
+                    "(tumble_ros/config/apophis_2029.yaml cites every number).",
 }
+#: Each section's heading in the index.
+TITLES = {name: name.replace("fig", "Figure ") for name in CAPTIONS if name.startswith("fig")}
+TITLES["apophis_2029"] = "Apophis 2029 encounter"
 NOTES = {
     "fig8": "Sampled every 0.02 yr (n = 1000 over 20 yr, as printed).",
     "fig9": "Sampled every 0.01 yr, not the paper's 2 yr (n = 1000 over 2000 yr), which aliases the "
             "~0.07-yr oscillation of ω⊥ (ERRATA.md, last section).",
+    "apophis_2029": "Above: the nominal tumbler (phase 0 of its cycle). Below: 1000 tumblers with the "
+                    "same observed periods and pole, drawn over the phase of the tumbling cycle, the "
+                    "turn about L and the moments of inertia (docs/physics.md, \"Apophis 2029\"; "
+                    "the comparison with Benson et al. 2023 is there).",
     "fig10": "The paper prints no parameters for this figure: the Fig 4 body receives a 3·10⁻⁷-yr pulse "
              "about body y at t = 1 yr (config/fig10.yaml). Integrated with the adaptive dop853: the "
              "integration is split at the pulse's edges, so unlike the paper's \"ode\" it does not step "
@@ -67,16 +80,24 @@ def make(name: str) -> str:
     figures = write_figures(rec, out, summary)
     text = format_summary(summary).replace(str(recording), f"recordings/figures/{name}.mcap")
     (out / "summary.txt").write_text(text + "\n")
-    lines = [f"## {name.replace('fig', 'Figure ')}", "", f"*Paper:* {CAPTIONS[name]}", ""]
+    lines = [f"## {TITLES[name]}", "", f"*Paper:* {CAPTIONS[name]}", ""]
     if name in NOTES:
         lines += [f"*Here:* {NOTES[name]}", ""]
     lines += [f"![{name} {p.stem}]({name}/{p.name})" for p in figures]
     lines += ["", f"Summary: [{name}/summary.txt]({name}/summary.txt)", ""]
+    if name == "apophis_2029":
+        status = encounter([str(CONFIG / f"{name}.yaml"), "--bodies", "1000", "--out",
+                            str(out / "encounter"), "--no-arrays"])
+        if status != 0:
+            raise SystemExit(f"the encounter ensemble failed ({status})")
+        lines += [f"![{name} encounter]({name}/encounter/encounter.png)", "",
+                  f"Ensemble summary: [{name}/encounter/summary.txt]({name}/encounter/summary.txt)",
+                  ""]
     return "\n".join(lines)
 
 
 def main(argv: list[str]) -> int:
-    names = argv or sorted(CAPTIONS, key=lambda n: int(n[3:]))
+    names = argv or list(CAPTIONS)
     unknown = [n for n in names if n not in CAPTIONS]
     if unknown:
         print(f"ERROR: unknown figure(s) {unknown}; known: {', '.join(CAPTIONS)}", file=sys.stderr)
@@ -85,15 +106,17 @@ def main(argv: list[str]) -> int:
     index = OUT / "README.md"
     existing = {}
     if index.exists():  # keep sections of figures not redone this time
+        by_title = {title: name for name, title in TITLES.items()}
         for part in index.read_text().split("\n## ")[1:]:
-            key = "fig" + part.split("\n", 1)[0].split()[-1]
-            existing[key] = "## " + part.rstrip() + "\n"
+            key = by_title.get(part.split("\n", 1)[0].strip())
+            if key is not None:
+                existing[key] = "## " + part.rstrip() + "\n"
     existing.update(sections)
-    header = ("# The paper's figures, reproduced\n\nMade by `make figures` (scripts/make_figures.py) from "
-              "`tumble_ros/config/fig*.yaml`: bringup (simulator, comparator with the paper's corrected "
+    header = ("# The paper's figures, reproduced, and the Apophis study\n\nMade by `make figures` "
+              "(scripts/make_figures.py) from `tumble_ros/config/fig*.yaml` and `apophis_2029.yaml`: bringup (simulator, comparator with the paper's corrected "
               "analytic solution, recorder), then the offline analysis. Where the analytic model is drawn, "
               "it is the paper's eqs 16–19 with the errata applied (docs/analytic.md).\n\n")
-    body = "\n".join(existing[k] for k in sorted(existing, key=lambda n: int(n[3:])))
+    body = "\n".join(existing[k] for k in CAPTIONS if k in existing)
     index.write_text(header + body)
     print(f"wrote {index}", file=sys.stderr)
     return 0

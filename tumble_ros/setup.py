@@ -36,6 +36,7 @@ setup(
             'bringup = tumble_ros.nodes.bringup:main',
             'analyze = tumble_ros.analysis.cli:main',
             'ensemble = tumble_ros.cli.ensemble:main',
+            'encounter = tumble_ros.cli.encounter:main',
         ],
     },
 )

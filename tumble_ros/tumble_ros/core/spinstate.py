@@ -29,11 +29,12 @@ import math
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 from scipy.special import ellipk
 
 from .rotation import quaternion_to_matrix
 
-__all__ = ['SpinState', 'spin_state']
+__all__ = ['SpinState', 'spin_state', 'omega_for_periods']
 
 _SEPARATRIX = 1e-12   # |D - I2| / I2 below this: the separatrix (infinite period)
 
@@ -134,3 +135,51 @@ def _precession_period(moments, w0, momentum, axes, rotation) -> float:
                     atol=1e-14 * max(1.0, float(np.max(np.abs(w0)))))
     mean_rate = sol.y[3, -1] / rotation
     return 2.0 * math.pi / abs(mean_rate)
+
+
+def omega_for_periods(inertia, precession_period: float, rotation_period: float) -> np.ndarray:
+    """
+    Return a w [rad/yr] (body axes) of the short-axis mode with the given periods [yr].
+
+    The inverse of :func:`spin_state` for a SAM, how photometric solutions state a tumbler
+    (e.g. Apophis: P_phi = 27.374 h, P_psi = 262.2 h). At a fixed dynamical moment D = L^2/2E
+    both periods scale as 1/L, so their ratio fixes D (a root in (I2, I3)) and P_phi then fixes
+    L. The w returned is the point of the polhode where the intermediate axis' component is 0,
+    with the short axis' component > 0; the rest of the polhode is that state moved on by the
+    torque-free motion. Raises ValueError when no SAM of these moments has these periods.
+    """
+    moments = np.asarray(inertia, dtype=float).reshape(3)
+    order = np.argsort(moments, kind='stable')
+    i1, i2, i3 = moments[order]
+    if not (0.0 < i1 < i2 < i3 and precession_period > 0.0 and rotation_period > 0.0):
+        raise ValueError(f'omega_for_periods: needs I1 < I2 < I3 (a triaxial body) and periods '
+                         f'> 0, got {moments.tolist()}, {precession_period!r}, '
+                         f'{rotation_period!r}')
+
+    def polhode_point(d: float, momentum: float) -> np.ndarray:
+        e2 = momentum * momentum / d                               # 2E
+        w1 = math.sqrt((momentum * momentum - e2 * i3) / (i1 * (i1 - i3)))
+        w3 = math.sqrt((momentum * momentum - e2 * i1) / (i3 * (i3 - i1)))
+        w = np.empty(3)
+        w[order] = (w1, 0.0, w3)
+        return w
+
+    def periods(d: float) -> SpinState:
+        return spin_state(polhode_point(d, 1.0), moments)
+
+    target = rotation_period / precession_period
+    span = i3 - i2
+
+    def mismatch(d: float) -> float:
+        state = periods(d)
+        return state.rotation_period / state.precession_period - target
+
+    low, high = i2 + 1e-9 * span, i3 - 1e-9 * span
+    if mismatch(low) * mismatch(high) > 0.0:
+        limit = periods(high)
+        raise ValueError(f'omega_for_periods: no short-axis mode of these moments has '
+                         f'P_psi / P_phi = {target:.6g} (the SAMs have ratios above '
+                         f'{limit.rotation_period / limit.precession_period:.6g})')
+    d = brentq(mismatch, low, high, xtol=1e-15 * i3, rtol=1e-14)
+    unit = periods(d)
+    return polhode_point(d, unit.precession_period / precession_period)

@@ -1,0 +1,193 @@
+"""
+The Apophis 2029 scenario (config/apophis_2029.yaml) and the encounter ensemble.
+
+The file's numbers are checked against the cited ones (periods, pole, inertia, the Earth's GM,
+perigee, the Horizons elements of the geocentric hyperbola); the ensemble's bodies keep the
+observed spin state before the encounter, one body equals a tight reference integration, and a
+body without the flyby does not change; the recording carries the Earth's position in body
+axes, live as offline, equal to the orbit turned by the recorded attitude.
+"""
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from tumble_ros import topics
+from tumble_ros.analysis import analyze, format_summary, load_recording
+from tumble_ros.analysis.encounter import encounter_ensemble, tumbler_states
+from tumble_ros.cli.encounter import main as encounter_main
+from tumble_ros.core import IntegratorSettings, load_scenario, simulate
+from tumble_ros.core.rotation import euler_to_quaternion, quaternion_to_matrix
+from tumble_ros.core.spinstate import omega_for_periods, spin_state
+from tumble_ros.core.torques.orbits import KeplerOrbit, orientation_from_elements
+from tumble_ros.core.units import GM_EARTH, HOURS_PER_YEAR
+from tumble_ros.io import read_messages
+from tumble_ros.nodes.bringup import run_bringup
+
+CONFIG = Path(__file__).resolve().parents[1] / 'config' / 'apophis_2029.yaml'
+H = HOURS_PER_YEAR
+# The cited numbers (apophis_2029.yaml says where each comes from).
+PRECESSION_H, ROTATION_H = 27.374, 262.2
+INERTIA = (0.64, 0.97, 1.0)
+POLE_DEG = (275.0, -85.0)
+PERIGEE_KM = 38326.0
+HORIZONS = {'a': -11681.81708373394, 'e': 4.253901873212790, 'i': 162.8561543134850,
+            'node': 152.0019490904037, 'omega': 32.56762207107416}
+
+
+@pytest.fixture(scope='module')
+def apophis():
+    return load_scenario(CONFIG)
+
+
+def _unit(lon_deg, lat_deg):
+    lon, lat = math.radians(lon_deg), math.radians(lat_deg)
+    return np.array([math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon),
+                     math.sin(lat)])
+
+
+def test_the_scenario_has_the_published_spin_state(apophis):
+    assert apophis.inertia == INERTIA
+    s = spin_state(apophis.omega0, apophis.inertia, euler_to_quaternion(*apophis.euler0))
+    assert s.mode == 'SAM'
+    assert s.precession_period * H == pytest.approx(PRECESSION_H, rel=1e-9)
+    assert s.rotation_period * H == pytest.approx(ROTATION_H, rel=1e-9)
+    np.testing.assert_allclose(s.pole, _unit(*POLE_DEG), atol=1e-12)
+    # E/E0 = I3 / D against Pravec et al. 2014's 1.024 +- 0.013 (3 sigma)
+    assert abs(INERTIA[2] / s.dynamic_inertia - 1.024) < 0.013
+
+
+def test_the_scenario_has_the_published_encounter(apophis):
+    gm = GM_EARTH
+    v_inf = math.sqrt(gm / abs(HORIZONS['a']))
+    # the Earth seen from Apophis: the same hyperbola, turned by 180 deg in its plane
+    elements = np.radians([HORIZONS['i'], HORIZONS['node'], HORIZONS['omega'] + 180.0])
+    expected = KeplerOrbit.flyby(gm, PERIGEE_KM, v_inf=v_inf, t_p=72.0 / H,
+                                 **orientation_from_elements(*elements))
+    for name in ('gm', 'a', 'e', 't_p', 'inclination', 'node'):
+        assert getattr(apophis.orbit, name) == pytest.approx(getattr(expected, name),
+                                                             rel=1e-12), name
+    assert math.remainder(apophis.orbit.lambda_p - expected.lambda_p, 2 * math.pi) == (
+        pytest.approx(0.0, abs=1e-12))
+    # at perigee Apophis is 38,326 km from the Earth, towards ecliptic (120.60, +9.13) deg
+    # (geocentric, derived from the same elements independently: docs/physics.md)
+    earth = apophis.perturber_position([apophis.orbit.t_p])[0]
+    assert np.linalg.norm(earth) == pytest.approx(PERIGEE_KM, rel=1e-12)
+    angle = math.degrees(math.acos(-earth @ _unit(120.60, 9.13) / PERIGEE_KM))
+    assert angle < 0.05
+    # the geocentric eccentricity differs from Horizons' only by the perigee used
+    assert apophis.orbit.e == pytest.approx(1 + PERIGEE_KM * v_inf ** 2 / gm, rel=1e-12)
+    assert abs(apophis.orbit.e - HORIZONS['e']) < 0.03
+
+
+def test_omega_for_periods_refuses_what_no_short_axis_mode_can_do():
+    with pytest.raises(ValueError, match='no short-axis mode'):
+        omega_for_periods((0.9, 0.97, 1.0), PRECESSION_H / H, ROTATION_H / H)
+    with pytest.raises(ValueError, match='triaxial'):
+        omega_for_periods((1.0, 1.0, 2.0), 1.0, 10.0)
+
+
+def test_tumbler_states_keep_the_spin_state_and_turn_about_the_pole():
+    pole = _unit(*POLE_DEG)
+    omega, euler = tumbler_states(INERTIA, PRECESSION_H / H, ROTATION_H / H, pole,
+                                  phase=[0.0, 0.3, 0.3, 0.71], turn=[0.0, 0.0, 2.0, 5.0])
+    for w, e in zip(omega, euler):
+        s = spin_state(w, INERTIA, euler_to_quaternion(*e))
+        assert s.precession_period * H == pytest.approx(PRECESSION_H, rel=1e-8)
+        assert s.rotation_period * H == pytest.approx(ROTATION_H, rel=1e-8)
+        np.testing.assert_allclose(s.pole, pole, atol=1e-9)
+    assert np.linalg.norm(omega[1] - omega[0]) > 1.0            # another phase of the cycle
+    np.testing.assert_allclose(omega[2], omega[1], rtol=1e-12)   # a turn keeps w in the body
+    c1 = quaternion_to_matrix(euler_to_quaternion(*euler[1]))
+    c2 = quaternion_to_matrix(euler_to_quaternion(*euler[2]))
+    turned = Rotation.from_rotvec(2.0 * pole).as_matrix() @ c1
+    np.testing.assert_allclose(c2, turned, atol=1e-12)
+
+
+@pytest.fixture(scope='module')
+def ensemble(apophis):
+    return encounter_ensemble(apophis, 6, seed=3, inertia_spread=(0.03, 0.015), n_inertia=2)
+
+
+def test_every_body_starts_in_the_observed_state(ensemble):
+    assert np.all(ensemble.success)
+    assert set(ensemble.mode_before) == {'SAM'}
+    np.testing.assert_allclose(ensemble.precession_before * H, PRECESSION_H, rtol=1e-7)
+    np.testing.assert_allclose(ensemble.rotation_before * H, ROTATION_H, rtol=1e-7)
+    np.testing.assert_allclose(ensemble.pole_before, np.tile(_unit(*POLE_DEG), (6, 1)),
+                               atol=1e-7)
+    assert np.all(ensemble.inertia[:3] == INERTIA)               # the nominal draw first
+    assert not np.allclose(ensemble.inertia[3:], INERTIA)
+    assert np.max(np.degrees(ensemble.pole_shift)) > 1.0         # the encounter does something
+
+
+def test_a_body_of_the_ensemble_is_the_tight_reference_integration(apophis, ensemble):
+    omega0, euler0 = tumbler_states(INERTIA, PRECESSION_H / H, ROTATION_H / H,
+                                    _unit(*POLE_DEG), ensemble.phase[:1], ensemble.turn[:1])
+    sc = apophis.replace(omega0=tuple(omega0[0]), euler0=tuple(euler0[0]),
+                         integrator=IntegratorSettings(method='splitting6', step=0.002 / H))
+    tight = simulate(sc, [0.0, sc.duration])
+    s = spin_state(tight.omega[-1], INERTIA, tight.quaternion[-1])
+    assert s.precession_period == pytest.approx(ensemble.precession_after[0], rel=1e-6)
+    assert s.rotation_period == pytest.approx(ensemble.rotation_after[0], rel=1e-6)
+    np.testing.assert_allclose(s.pole, ensemble.pole_after[0], atol=1e-7)
+    # and without the flyby nothing changes
+    free = simulate(sc.replace(orbit=None), [0.0, sc.duration])
+    quiet = spin_state(free.omega[-1], INERTIA, free.quaternion[-1])
+    assert quiet.precession_period * H == pytest.approx(PRECESSION_H, rel=1e-9)
+    np.testing.assert_allclose(quiet.pole, _unit(*POLE_DEG), atol=1e-9)
+
+
+def test_the_encounter_command_writes_its_figure_and_refuses_a_scenario_without_flyby(
+        tmp_path, capsys):
+    out = tmp_path / 'enc'
+    assert encounter_main([str(CONFIG), '--bodies', '8', '--inertia-draws', '2', '--out',
+                           str(out), '-q']) == 0
+    text = capsys.readouterr().out
+    assert 'bodies: 8 (0 failed)' in text and 'pole shift [deg]' in text
+    assert {p.name for p in out.iterdir()} == {'encounter.png', 'summary.txt', 'encounter.npz'}
+    assert np.load(out / 'encounter.npz')['pole_after'].shape == (8, 3)
+    no_flyby = Path(__file__).resolve().parents[1] / 'config' / 'fig3.yaml'
+    assert encounter_main([str(no_flyby), '-q']) == 2
+    assert 'needs an orbit.kind: flyby' in capsys.readouterr().err
+
+
+def _short_flyby(tmp_path) -> Path:
+    """Write the Apophis file cut to 12 h around perigee, every 0.1 h."""
+    text = CONFIG.read_text().replace('duration: 144.0', 'duration: 12.0').replace(
+        'output_interval: 0.05', 'output_interval: 0.1').replace('t_p: 72.0', 't_p: 6.0')
+    path = tmp_path / 'flyby.yaml'
+    path.write_text(text)
+    return path
+
+
+def test_the_earth_is_recorded_in_body_axes_live_and_offline(tmp_path):
+    params = _short_flyby(tmp_path)
+    scenario = load_scenario(params)
+    runs = {mode: run_bringup(str(params), str(tmp_path / f'{mode}.mcap'), progress=None,
+                              offline=mode == 'offline') for mode in ('live', 'offline')}
+    assert all(r.ok for r in runs.values()), runs
+    values = {}
+    for mode, result in runs.items():
+        perturber = [m.message for m in read_messages(result.output, '/' + topics.PERTURBER)]
+        attitude = [m.message for m in read_messages(result.output, '/' + topics.ATTITUDE)]
+        assert len(perturber) == len(attitude) == result.samples == 120
+        t = np.array([p.header.stamp.sec + 1e-9 * p.header.stamp.nanosec for p in perturber])
+        body = np.array([[p.vector.x, p.vector.y, p.vector.z] for p in perturber])
+        quat = np.array([[a.quaternion.x, a.quaternion.y, a.quaternion.z, a.quaternion.w]
+                         for a in attitude])
+        assert {p.header.frame_id for p in perturber} == {topics.FRAME_BODY}
+        # turned into the orbital frame by the recorded attitude: where the orbit puts the Earth
+        orbital = Rotation.from_quat(quat).apply(body)
+        np.testing.assert_allclose(orbital, scenario.perturber_position(t), rtol=0,
+                                   atol=1e-9 * PERIGEE_KM)
+        values[mode] = body
+    np.testing.assert_array_equal(values['live'], values['offline'])
+    # the analysis reports the encounter: the closest approach, the spin before and after
+    summary = analyze(load_recording(runs['offline'].output))
+    t, km = summary.closest_approach
+    assert t * H == pytest.approx(6.0, abs=0.051) and km == pytest.approx(PERIGEE_KM, rel=1e-3)
+    assert summary.spin.start.precession_period * H == pytest.approx(PRECESSION_H, rel=1e-9)
+    assert 'closest approach of the torquing body: 38' in format_summary(summary)
