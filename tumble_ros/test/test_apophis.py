@@ -154,26 +154,30 @@ def test_the_encounter_command_writes_its_figure_and_refuses_a_scenario_without_
     assert 'needs an orbit.kind: flyby' in capsys.readouterr().err
 
 
-def _short_flyby(tmp_path) -> Path:
-    """Write the Apophis file cut to 12 h around perigee, every 0.1 h."""
-    text = CONFIG.read_text().replace('duration: 144.0', 'duration: 12.0').replace(
-        'output_interval: 0.05', 'output_interval: 0.1').replace('t_p: 72.0', 't_p: 6.0')
-    path = tmp_path / 'flyby.yaml'
-    path.write_text(text)
+def _coarse(tmp_path) -> Path:
+    """Write the Apophis file sampled every hour (145 samples: the whole flyby, quickly)."""
+    path = tmp_path / 'apophis_hourly.yaml'
+    path.write_text(CONFIG.read_text().replace('output_interval: 0.05', 'output_interval: 1.0'))
     return path
 
 
-def test_the_earth_is_recorded_in_body_axes_live_and_offline(tmp_path):
-    params = _short_flyby(tmp_path)
-    scenario = load_scenario(params)
-    runs = {mode: run_bringup(str(params), str(tmp_path / f'{mode}.mcap'), progress=None,
+@pytest.fixture(scope='module')
+def recorded(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp('apophis')
+    params = _coarse(tmp)
+    runs = {mode: run_bringup(str(params), str(tmp / f'{mode}.mcap'), progress=None,
                               offline=mode == 'offline') for mode in ('live', 'offline')}
     assert all(r.ok for r in runs.values()), runs
+    return load_scenario(params), runs
+
+
+def test_the_earth_is_recorded_in_body_axes_live_and_offline(recorded):
+    scenario, runs = recorded
     values = {}
     for mode, result in runs.items():
         perturber = [m.message for m in read_messages(result.output, '/' + topics.PERTURBER)]
         attitude = [m.message for m in read_messages(result.output, '/' + topics.ATTITUDE)]
-        assert len(perturber) == len(attitude) == result.samples == 120
+        assert len(perturber) == len(attitude) == result.samples == 145
         t = np.array([p.header.stamp.sec + 1e-9 * p.header.stamp.nanosec for p in perturber])
         body = np.array([[p.vector.x, p.vector.y, p.vector.z] for p in perturber])
         quat = np.array([[a.quaternion.x, a.quaternion.y, a.quaternion.z, a.quaternion.w]
@@ -188,6 +192,30 @@ def test_the_earth_is_recorded_in_body_axes_live_and_offline(tmp_path):
     # the analysis reports the encounter: the closest approach, the spin before and after
     summary = analyze(load_recording(runs['offline'].output))
     t, km = summary.closest_approach
-    assert t * H == pytest.approx(6.0, abs=0.051) and km == pytest.approx(PERIGEE_KM, rel=1e-3)
+    assert t * H == pytest.approx(72.0, abs=0.01) and km == pytest.approx(PERIGEE_KM, rel=1e-6)
     assert summary.spin.start.precession_period * H == pytest.approx(PRECESSION_H, rel=1e-9)
     assert 'closest approach of the torquing body: 38' in format_summary(summary)
+
+
+def test_the_torque_free_model_is_anchored_on_each_side_of_the_encounter(recorded):
+    """The comparator: OK before the window, WARN inside (no model applies), OK after."""
+    scenario, runs = recorded
+    t_in, t_out = scenario.encounter_window
+    assert 30.0 < t_in * H < 40.0 and 104.0 < t_out * H < 114.0
+    for mode, result in runs.items():
+        descriptions = [m.message for m in read_messages(result.output, '/' + topics.SCENARIO)]
+        assert [d.segment_start for d in descriptions] == [0.0, t_in, t_out], mode
+        status = [m.message for m in read_messages(result.output,
+                                                   '/' + topics.COMPARISON_STATUS)]
+        levels = [(s.level, s.message.split(' ')[0]) for s in status[-3:]]
+        assert levels == [(0, 'model'), (1, 't0:'), (0, 'model')], mode     # OK, WARN, OK
+        assert 'encounter window' in status[-2].message
+        norm = [m.message for m in read_messages(result.output, '/' + topics.ERROR_NORM)]
+        t = np.array([n.header.stamp.sec + 1e-9 * n.header.stamp.nanosec for n in norm])
+        assert np.all((t < t_in) | (t >= t_out)) and np.any(t < t_in) and np.any(t >= t_out)
+        # outside the window the motion is torque-free to the window's 1e-4 of the torque
+        assert max(n.relative for n in norm) < 1e-3
+    offline = [m.message for m in read_messages(runs['offline'].output, '/' + topics.ERROR)]
+    live = [m.message for m in read_messages(runs['live'].output, '/' + topics.ERROR)]
+    assert [(e.vector.x, e.vector.y, e.vector.z) for e in offline] == [
+        (e.vector.x, e.vector.y, e.vector.z) for e in live]

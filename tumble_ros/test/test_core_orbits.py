@@ -380,3 +380,40 @@ def test_standard_elements_place_the_orbit_as_an_ephemeris_does():
     v = np.gradient(orbit.position(t), t, axis=0)
     h = np.cross(orbit.position(t), v).mean(axis=0)
     assert h @ turn[:, 2] > 0.99 * np.linalg.norm(h)
+
+
+def test_the_encounter_window_is_where_the_torque_exceeds_its_fraction():
+    from tumble_ros.core import make_model
+    from tumble_ros.core.scenario import ENCOUNTER_TORQUE_FRACTION
+    from tumble_ros.core.simulate import simulate as run
+
+    sc = _flyby_scenario(duration=60.0 / 8766.0, output_interval=0.5 / 8766.0)
+    sc = sc.replace(orbit=KeplerOrbit.flyby(398600.4418, 32000.0, v_inf=8.0, t_p=30.0 / 8766.0))
+    t_in, t_out = sc.encounter_window
+    distance, _ = sc.orbit.state([t_in, t_out])
+    expected = sc.orbit.pericentre * ENCOUNTER_TORQUE_FRACTION ** (-1 / 3)
+    np.testing.assert_allclose(distance, expected, rtol=1e-10)
+    assert sc.segment_cuts == (t_in, t_out)
+    # an ellipse has no window; a window beyond the run gives no cut
+    assert Scenario(orbit_rate=0.0, orbit=kepler_orbit(gm=4.0, a=1.0, e=0.5)).encounter_window \
+        is None
+    assert sc.replace(duration=t_in * 0.9).segment_cuts == ()
+    # the torque-free models apply outside the window only; the others never
+    r = run(sc, [0.0, t_in, 0.5 * (t_in + t_out), t_out])
+    anchors = [{'t0': t, 'omega': w, 'quaternion': q}
+               for t, w, q in zip(r.t, r.omega, r.quaternion)]
+    assert make_model('torque_free_exact', sc, **anchors[0]).t0 == 0.0
+    make_model('torque_free_exact', sc, **anchors[3])
+    for k in (1, 2):
+        with pytest.raises(ValueError, match='encounter window'):
+            make_model('torque_free_exact', sc, **anchors[k])
+    with pytest.raises(ValueError, match="circular orbit's torque only"):
+        make_model('paper', sc)
+    # the integration is cut at the window's edges: the propagator gives the state there
+    from tumble_ros.core import Propagator
+
+    p = Propagator(sc)
+    p.sample_many(sc.output_times, budget=math.inf)
+    edges = p.pop_window_edges()
+    assert [t for t, _ in edges] == [t_in, t_out]
+    np.testing.assert_allclose(edges[0][1][:3], r.omega[1], rtol=1e-9)

@@ -59,7 +59,7 @@ import numpy as np
 from scipy.special import ellipj, ellipk, ellipkinc
 
 from .rotation import quaternion_to_euler
-from .scenario import Scenario, ScenarioError
+from .scenario import ENCOUNTER_TORQUE_FRACTION, Scenario, ScenarioError
 
 __all__ = [
     'AnalyticModel',
@@ -220,6 +220,8 @@ class AnalyticModel(ABC):
 
     name: ClassVar[str]
     label: ClassVar[str]
+    #: A model of the torque-free motion: it also applies outside a flyby's encounter window.
+    torque_free: ClassVar[bool] = False
 
     def __init__(self, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None,
                  euler=None) -> None:
@@ -238,12 +240,12 @@ class AnalyticModel(ABC):
 
         ``state`` defaults to the scenario's initial state.
         """
-        extra = scenario.extra_torques
-        if extra:
-            names = ', '.join(t.name for t in extra)
-            return ("the analytic models know the circular orbit's torque only; this scenario "
-                    f'also has {names}')
-        return cls._reason(scenario, state if state is not None else AnchorState.build(scenario))
+        state = state if state is not None else AnchorState.build(scenario)
+        if scenario.extra_torques:
+            reason = _extra_torque_reason(scenario, state, cls.torque_free)
+            if reason is not None:
+                return reason
+        return cls._reason(scenario, state)
 
     @classmethod
     @abstractmethod
@@ -539,6 +541,32 @@ class FastSpinAdiabaticModel(_Precessing):
 # --------------------------------------------------------------------------------------
 # Torque-free exact models
 # --------------------------------------------------------------------------------------
+def _extra_torque_reason(scenario: Scenario, state: AnchorState, torque_free: bool) -> str | None:
+    """
+    Return why a model does not apply to a scenario with torques beyond the circular orbit's.
+
+    None for a torque-free model anchored outside a flyby's encounter window (the only extra
+    torque being the flyby's): there the motion is torque-free to ENCOUNTER_TORQUE_FRACTION,
+    and the simulator describes the state at the window's edges, where the comparator stops
+    comparing and anchors again.
+    """
+    window = scenario.encounter_window
+    names = ', '.join(t.name for t in scenario.extra_torques)
+    if not torque_free or window is None or scenario.torques:
+        return ("the analytic models know the circular orbit's torque only; this scenario "
+                f'also has {names}'
+                + ('' if window is None or scenario.torques else
+                   ' (outside its encounter window the torque-free models apply)'))
+    t_in, t_out = window
+    if t_in <= state.t0 < t_out:
+        distance = scenario.orbit.pericentre * ENCOUNTER_TORQUE_FRACTION ** (-1.0 / 3.0)
+        return (f"t0: inside the flyby's encounter window: from t = {t_in:.9g} to "
+                f'{t_out:.9g} yr its tidal torque exceeds {ENCOUNTER_TORQUE_FRACTION:g} of the '
+                f'perigee value (R < {distance:.6g} km) and no analytic model applies; the '
+                'torque-free model anchors again at its end')
+    return None
+
+
 def _torque_free_reason(scenario: Scenario) -> str | None:
     if scenario.orbit_rate != 0.0:
         return (f'orbit_rate: the exact free-body solution needs no torque, orbit_rate = 0; '
@@ -550,6 +578,7 @@ class TorqueFreeSymmetricModel(AnalyticModel):
     """Exact symmetric top (Ix = Iy, orbit_rate = 0): w_perp turns at wE = a wz, wz constant."""
 
     name = 'torque_free_symmetric'
+    torque_free = True
     label = "exact: torque-free symmetric top (Euler's equations, Ix = Iy)"
 
     @classmethod
@@ -594,6 +623,7 @@ class TorqueFreeExactModel(AnalyticModel):
     """
 
     name = 'torque_free_exact'
+    torque_free = True
     label = 'exact: torque-free Euler-Poinsot solution (Jacobi elliptic functions)'
 
     @classmethod

@@ -270,9 +270,11 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
     cfg = K.config_array(method.kernel, settings, gammas, method.order or 0)
     # segment tables
     if impacts is None:
-        per_body = [split_at_impacts(scenario.duration, scenario.impacts)] * n
+        per_body = [split_at_impacts(scenario.duration, scenario.impacts,
+                                     scenario.segment_cuts)] * n
     else:
-        per_body = [split_at_impacts(scenario.duration, body) for body in impacts]
+        per_body = [split_at_impacts(scenario.duration, body, scenario.segment_cuts)
+                    for body in impacts]
     seg_ptr = np.zeros(n + 1, dtype=np.int64)
     seg_ptr[1:] = np.cumsum([len(s) for s in per_body])
     total = int(seg_ptr[-1])

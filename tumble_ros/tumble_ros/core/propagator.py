@@ -138,8 +138,9 @@ class Propagator:
         self.fast = not why if fast is None else bool(fast)
         self._runner = (_CompiledRunner if self.fast else _ReferenceRunner)(self)
         self._impacts: list[Impact] = []
-        self._segments = split_at_impacts(scenario.duration, ())
-        self._segment_starts = [0.0]
+        self._cuts = scenario.segment_cuts    # the encounter window's edges (a flyby)
+        self._segments = split_at_impacts(scenario.duration, (), self._cuts)
+        self._segment_starts = [s.t0 for s in self._segments]
         self.t = 0.0
         self.y = np.concatenate([scenario.omega0, self._model.from_euler(*scenario.euler0)])
         self.status = RUNNING
@@ -151,6 +152,7 @@ class Propagator:
         self._quat_prev = None
         self._edge_state: dict[float, np.ndarray] = {}  # state at impact edges reached so far
         self._reported: set[int] = set()
+        self._reported_cuts: set[float] = set()
         self._stepper = None
         for impact in scenario.impacts:
             self.schedule(impact)
@@ -183,7 +185,7 @@ class Propagator:
         bisect.insort(self._impacts, impact, key=lambda i: i.start)
         affects_segment = self._stepper is not None and impact.start < self._stepper.t_bound
         if self._split:
-            self._segments = split_at_impacts(self.t_end, self._impacts)
+            self._segments = split_at_impacts(self.t_end, self._impacts, self._cuts)
             self._segment_starts = [s.t0 for s in self._segments]
         if affects_segment or not self._split:
             # Restart from the last state handed out: the running segment's right-hand
@@ -292,6 +294,25 @@ class Propagator:
                 done.append((impact, self._edge_state[impact.start], y_end))
         return done
 
+    def pop_window_edges(self) -> list[tuple[float, np.ndarray]]:
+        """
+        Return the encounter window's edges reached and not returned before: (t, state).
+
+        The simulator describes the state there (a new ``scenario`` segment), where the
+        comparator's torque-free model stops or anchors again (:attr:`Scenario.encounter_window`).
+        """
+        done = []
+        for t in self._cuts:
+            if t in self._reported_cuts or t > self.t:
+                continue
+            y = self._edge_state.get(t)
+            if y is None and self.t == t:
+                y = self.y.copy()
+            if y is not None:
+                self._reported_cuts.add(t)
+                done.append((t, y))
+        return done
+
     def quaternion_of(self, y: np.ndarray) -> np.ndarray:
         """Return the unit quaternion (scalar first, body -> orbital) of a state vector."""
         if self._model.name == 'quaternion':
@@ -319,7 +340,7 @@ class Propagator:
 
     # -- internals ------------------------------------------------------------------
     def _start_segment(self, t0: float, y0: np.ndarray) -> None:
-        if any(t0 in (i.start, i.end) for i in self._impacts):
+        if t0 in self._cuts or any(t0 in (i.start, i.end) for i in self._impacts):
             self._edge_state[t0] = np.array(y0)
         k = bisect.bisect_right(self._segment_starts, t0) - 1
         segment = self._segments[max(0, k)]

@@ -53,6 +53,7 @@ __all__ = [
     'IntegratorSettings',
     'Scenario',
     'IMPACT_FRAMES',
+    'ENCOUNTER_TORQUE_FRACTION',
     'ImpactLimits',
     'PARAMETER_DOCS',
     'time_resolution',
@@ -62,6 +63,9 @@ __all__ = [
 ]
 
 IMPACT_FRAMES = ('body', 'orbital')
+#: A flyby's encounter window: where its tidal torque exceeds this fraction of the perigee value
+#: (R < 21.5 r_p); outside, the motion is taken as torque-free (:attr:`Scenario.encounter_window`).
+ENCOUNTER_TORQUE_FRACTION = 1e-4
 
 
 def _fail(name: str, why: str, value: Any) -> None:
@@ -438,6 +442,32 @@ class Scenario:
                       'the orbit gives the tidal torque', self.orbit_rate)
 
     # -- derived quantities ---------------------------------------------------------
+    @property
+    def encounter_window(self) -> tuple[float, float] | None:
+        """
+        Return (t_in, t_out) [yr]: when a flyby's tidal torque exceeds ENCOUNTER_TORQUE_FRACTION.
+
+        The interval around perigee where the torque (~ 1/R^3) is above that fraction of its
+        perigee value, i.e. R < r_p * fraction^(-1/3), not clipped to the run; None without
+        a hyperbolic orbit (a circular or elliptic orbit torques all the time). Outside it the
+        motion is torque-free to that fraction: the comparator's torque-free models anchor on
+        each side (:mod:`.analytic`), and the integration is cut at its edges
+        (:attr:`segment_cuts`) so the simulator describes the state there.
+        """
+        if self.orbit is None or self.orbit.e < 1.0:
+            return None
+        tau = self.orbit.time_from_pericentre(
+            self.orbit.pericentre * ENCOUNTER_TORQUE_FRACTION ** (-1.0 / 3.0))
+        return self.orbit.t_p - tau, self.orbit.t_p + tau
+
+    @property
+    def segment_cuts(self) -> tuple[float, ...]:
+        """Return the times [yr] inside (0, duration) where the integration is cut: the window."""
+        window = self.encounter_window
+        if window is None:
+            return ()
+        return tuple(t for t in window if 0.0 < t < self.duration)
+
     @property
     def extra_torques(self) -> tuple[TorqueComponent, ...]:
         """Return the torques beyond the circular orbit's and the impacts': orbit, then torques."""

@@ -38,16 +38,20 @@ def segment_torques(impacts, t0: float, t1: float) -> tuple[tuple, tuple]:
 _ZERO_TORQUES = segment_torques((), 0.0, 1.0)
 
 
-def split_at_impacts(duration: float, impacts: Sequence) -> list[Segment]:
+def split_at_impacts(duration: float, impacts: Sequence,
+                     cuts: Sequence[float] = ()) -> list[Segment]:
     """
-    Return the segments of [0, ``duration``] cut at the edges of ``impacts``.
+    Return the segments of [0, ``duration``] cut at the edges of ``impacts`` and at ``cuts``.
+
+    ``cuts``: further times [yr] where a segment must end (a flyby's encounter window:
+    :attr:`~.scenario.Scenario.segment_cuts`); no torque changes there.
 
     The torques are those of :func:`segment_torques` over the impacts sorted by start (in that
     order), found by a sweep over time rather than a scan of every impact for every segment
     (a body may have thousands of impacts).
     """
     ordered = sorted(impacts, key=lambda i: i.start)
-    edges = {duration}
+    edges = {duration, *(t for t in cuts if 0.0 < t < duration)}
     for impact in ordered:
         edges.update((impact.start, impact.end))
     bounds = [0.0] + sorted(e for e in edges if e > 0.0)

@@ -136,7 +136,7 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
         while k < grid.count and not stop():
             k1 = min(grid.count, k + BATCH)
             done, arrays, failure = propagator.sample_many(grid.times(k, k1))
-            segment_starts = {}
+            segment_starts = dict(propagator.pop_window_edges())
             for impact, y_start, y_end in propagator.pop_completed_impacts():
                 channels.one(topics.IMPACT_EVENTS, impact_event(
                     impact, 0, timebase.to_ns(impact.end), y_end[:3] - y_start[:3]))

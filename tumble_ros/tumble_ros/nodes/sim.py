@@ -316,8 +316,12 @@ class SimNode(GuardedNode):
         self._pub_perturber.publish(msg)
 
     def _publish_impact_events(self) -> None:
-        """One event per impact that ended; one description per segment that starts at an end."""
-        segment_starts = {}
+        """
+        Publish one event per impact that ended and one description per new segment.
+
+        Segments start at an impact's end and at a flyby's encounter window edges.
+        """
+        segment_starts = dict(self._propagator.pop_window_edges())
         for impact, y_start, y_end in self._propagator.pop_completed_impacts():
             dw = y_end[:3] - y_start[:3]
             event = impact_event(impact, self._impact_ids.get(id(impact), 0),

@@ -236,6 +236,20 @@ class KeplerOrbit:
         """Return the pericentre distance a |1 - e| [km]."""
         return self.a * abs(1.0 - self.e)
 
+    def time_from_pericentre(self, distance: float) -> float:
+        """
+        Return tau >= 0 [yr]: a hyperbola is at ``distance`` [km] at t_p - tau and t_p + tau.
+
+        R = a (e cosh H - 1) gives H, Kepler's equation the time; ``distance`` at or inside
+        the pericentre gives 0. Raises ValueError for an ellipse (it never leaves).
+        """
+        if self.e < 1.0:
+            raise ValueError('time_from_pericentre: an ellipse has no encounter (e < 1)')
+        if distance <= self.pericentre:
+            return 0.0
+        h = math.acosh((distance / self.a + 1.0) / self.e)
+        return (self.e * math.sinh(h) - h) / self.mean_motion
+
     def _plane(self) -> tuple[float, float, float, float]:
         return (math.cos(self.inclination), math.sin(self.inclination), math.cos(self.node),
                 math.sin(self.node))
