@@ -380,8 +380,8 @@ def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=N
     """
     if client is not None:
         return _simulate_on_client(client, scenario, t_eval, impacts=impacts, omega0=omega0,
-                                  euler0=euler0, n_bodies=n_bodies, fast=fast,
-                                  chunk_size=chunk_size, progress=progress)
+                                   euler0=euler0, n_bodies=n_bodies, fast=fast,
+                                   chunk_size=chunk_size, progress=progress)
     times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
     n, impacts, omega0, euler0 = _bodies(scenario, impacts, omega0, euler0, n_bodies, first_body)
     method = INTEGRATORS[scenario.integrator.method]
