@@ -2,7 +2,8 @@
 The import map: no circle, and every arrow points down the layers.
 
 Layers, bottom up: ``errors`` and ``topics`` (facts, no imports), ``core`` (numerics), ``io``
-(recordings), ``analysis`` and ``cli`` (offline tools over core and io), ``nodes`` (ROS).
+(recordings, ensemble stores), ``ensembles`` (core's chunked runs into io's stores),
+``analysis`` and ``cli`` (offline tools over core and io), ``nodes`` (ROS).
 A module may import its own package and the layers below, never above.
 """
 import ast
@@ -15,8 +16,9 @@ ALLOWED = {
     'topics': set(),
     'core': {'errors'},
     'io': {'errors', 'topics'},
+    'ensembles': {'errors', 'core', 'io'},
     'analysis': {'errors', 'topics', 'core', 'io'},
-    'cli': {'errors', 'core'},
+    'cli': {'errors', 'core', 'ensembles'},
     'nodes': {'errors', 'topics', 'core', 'io'},
     '__main__': {'nodes', 'analysis', 'cli'},
     '__init__': set(),

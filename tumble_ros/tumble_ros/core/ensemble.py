@@ -47,7 +47,7 @@ from .torques import extra_torque_arrays
 
 __all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts',
            'RandomImpacts', 'GaussianSpread', 'body_rng', 'concatenate_results', 'ChunkResult',
-           'chunk_ranges', 'default_chunk_size', 'iter_chunks', 'run_chunk']
+           'chunk_ranges', 'default_chunk_size', 'iter_chunks', 'prepare_inputs', 'run_chunk']
 
 
 @dataclass(frozen=True)
@@ -568,8 +568,14 @@ def default_chunk_size(n_bodies: int, n_samples: int, workers: int = 1) -> int:
     return int(min(MAX_CHUNK_BODIES, by_memory, by_balance))
 
 
-def _explicit_inputs(scenario, impacts, omega0, euler0, n_bodies):
-    """Validate the inputs once on the driver; return N and the inputs to slice per chunk."""
+def prepare_inputs(scenario: Scenario, impacts, omega0, euler0,
+                   n_bodies: int | None) -> tuple[int, dict]:
+    """
+    Validate an ensemble's inputs once (the driver of a chunked run); return N and the inputs.
+
+    The inputs come back as a dict (``impacts``, ``omega0``, ``euler0``): explicit ones
+    validated and converted (arrays, tuples of :class:`Impact`), samplers as given.
+    """
     if n_bodies is None and any(_is_sampler(v) for v in (impacts, omega0, euler0)):
         raise ScenarioError('n_bodies: needed with RandomImpacts or GaussianSpread inputs '
                             '(they draw one entry per body)')
@@ -623,7 +629,7 @@ def iter_chunks(scenario: Scenario, t_eval=None, *, impacts=None, omega0=None, e
     :class:`~.ensemble_dask.EnsembleRunError` here.
     """
     times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
-    n, inputs = _explicit_inputs(scenario, impacts, omega0, euler0, n_bodies)
+    n, inputs = prepare_inputs(scenario, impacts, omega0, euler0, n_bodies)
     workers = 1 if client is None else max(1, len(client.nthreads()))
     size = default_chunk_size(n, times.size, workers) if chunk_size is None else chunk_size
     todo = [(i, a, b) for i, (a, b) in enumerate(chunk_ranges(n, size)) if i not in skip]
