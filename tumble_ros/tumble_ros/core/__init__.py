@@ -23,8 +23,9 @@ from .analytic import (AnalyticModel, AnchorState, applicability, characteristic
                        Frequency, make_model, ModelNotApplicable)
 from .analytic import MODELS as ANALYTIC_MODELS
 from .dynamics import angular_momentum_orbital, ATTITUDE_MODELS, jacobi_integral, kinetic_energy
-from .ensemble import (body_rng, concatenate_results, ensemble_scenarios, EnsembleResult,
-                       GaussianSpread, random_impacts, RandomImpacts, simulate_ensemble)
+from .ensemble import (body_rng, ChunkResult, concatenate_results, ensemble_scenarios,
+                       EnsembleResult, GaussianSpread, iter_chunks, random_impacts,
+                       RandomImpacts, simulate_ensemble)
 from .integrators import INTEGRATORS, METHODS, SegmentProblem, SPLITTING_METHODS
 from .propagator import IntegrationError, Propagator, Sample
 from .scenario import (
@@ -63,6 +64,8 @@ __all__ = [
     'GaussianSpread',
     'body_rng',
     'concatenate_results',
+    'ChunkResult',
+    'iter_chunks',
     'simulate_ensemble',
     'PARAMETER_DOCS',
     'Impact',

@@ -102,10 +102,11 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, *,
     Yield a Dask ``distributed.Client``; close it (and its local cluster) on exit.
 
     ``workers=N``: an embedded ``LocalCluster`` of N worker processes with one thread each
-    (no dashboard). ``scheduler='tcp://host:8786'``: the cluster of that scheduler, started
-    with ``dask scheduler`` and ``dask worker`` (its workers must run in this workspace's
-    environment: ``scripts/env.sh dask worker ADDRESS``). Raises :class:`EnsembleRunError`
-    when the scheduler cannot be reached within ``timeout`` seconds.
+    (its HTTP server, and the dashboard if bokeh is installed, on a free port: two runs at
+    once do not collide). ``scheduler='tcp://host:8786'``: the cluster of that scheduler,
+    started with ``dask scheduler`` and ``dask worker`` (its workers must run in this
+    workspace's environment: ``scripts/env.sh dask worker ADDRESS``). Raises
+    :class:`EnsembleRunError` when the scheduler cannot be reached within ``timeout`` seconds.
     """
     if (workers is None) == (scheduler is None):
         raise ScenarioError('dask_client: give workers (a local cluster) or scheduler '
@@ -126,7 +127,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, *,
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise ScenarioError(f'workers: must be an integer >= 1, got {workers!r}')
     cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+                           dashboard_address=':0')
     try:
         with Client(cluster) as client:
             yield client
