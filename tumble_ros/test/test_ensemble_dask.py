@@ -235,3 +235,31 @@ def test_command_line_on_a_local_cluster_and_on_a_running_scheduler(client, tmp_
     capsys.readouterr()
     assert main(args + ['--scheduler', 'tcp://127.0.0.1:9', '--scheduler-timeout', '1']) == 2
     assert 'cannot reach the Dask scheduler' in capsys.readouterr().err
+
+
+def test_the_analysis_reads_the_store(tmp_path, capsys):
+    from tumble_ros.analysis.ensemble import ensemble_statistics, final_spin, main as analyse
+    from tumble_ros.core.spinstate import spin_state
+
+    sc = fig9(duration=1.0)
+    inputs = random_inputs(sc, n=12)
+    reference = simulate_ensemble(sc, **inputs)
+    run_ensemble_to_store(sc, tmp_path / 'ens.zarr', **inputs, chunk_size=5)
+    ds = open_ensemble(tmp_path / 'ens.zarr')
+    stats = ensemble_statistics(ds)
+    w_end = reference.omega[:, -1]
+    assert stats['succeeded'] == 12 and stats['time'] == sc.duration
+    assert stats['omega_z']['mean'] == pytest.approx(w_end[:, 2].mean(), rel=1e-15)
+    assert stats['omega_perp']['std'] == pytest.approx(np.hypot(w_end[:, 0], w_end[:, 1]).std())
+    direct = spin_state(w_end[7], sc.inertia, reference.quaternion[7, -1])
+    spin = final_spin(ds, max_spin_states=12)
+    assert spin['rotation_period'][7] == direct.rotation_period
+    assert spin['pole_latitude'][7] == direct.pole_latitude and spin['mode'][7] == direct.mode
+    assert sum(stats['modes'].values()) == 12
+    # a subset of the bodies for the spin states, spread over the ensemble
+    assert final_spin(ds, max_spin_states=4)['spin_body'].tolist() == [0, 3, 7, 11]
+    assert analyse([str(tmp_path / 'ens.zarr'), '--figures', str(tmp_path / 'figs')]) == 0
+    assert 'omega_perp' in capsys.readouterr().out
+    assert (tmp_path / 'figs' / 'ensemble.png').read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+    assert analyse([str(tmp_path / 'nothing.zarr')]) == 1
+    assert 'no ensemble store' in capsys.readouterr().err
