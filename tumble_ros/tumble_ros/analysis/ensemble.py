@@ -24,6 +24,7 @@ from tumble_ros.core import parse_scenario
 from tumble_ros.core.spinstate import spin_state
 from tumble_ros.errors import AnalysisError, TumbleRosError
 from tumble_ros.io import open_ensemble
+from tumble_ros.io.ensemble_store import SCENARIO_ATTR
 
 __all__ = ['ensemble_statistics', 'final_spin', 'plot_ensemble', 'main']
 
@@ -50,7 +51,7 @@ def final_spin(ds, time: float | None = None, max_spin_states: int = MAX_SPIN_ST
     good = np.flatnonzero(ds.status.values == 1)
     omega = ds.omega.isel(time=k).values[good]
     quat = ds.quaternion.isel(time=k).values[good]
-    inertia = parse_scenario(ds.attrs['scenario']).inertia
+    inertia = parse_scenario(ds.attrs[SCENARIO_ATTR]).inertia
     pick = (np.unique(np.linspace(0, good.size - 1, max_spin_states).astype(int))
             if good.size > max_spin_states else np.arange(good.size))
     states = [spin_state(omega[i], inertia, quat[i]) for i in pick]

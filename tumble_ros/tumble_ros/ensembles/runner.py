@@ -23,8 +23,8 @@ import numpy as np
 from tumble_ros.core import dump_scenario, Scenario
 from tumble_ros.core.ensemble import default_chunk_size, iter_chunks, prepare_inputs
 from tumble_ros.core.simulate import _check_times
-from tumble_ros.io.ensemble_store import (EnsembleStore, STATUS_FAILED, STATUS_PENDING,
-                                          STATUS_SUCCEEDED)
+from tumble_ros.io.ensemble_store import (EnsembleStore, SCENARIO_ATTR, STATUS_FAILED,
+                                          STATUS_PENDING, STATUS_SUCCEEDED)
 
 __all__ = ['EnsembleRunSummary', 'run_ensemble_to_store', 'run_fingerprint']
 
@@ -174,7 +174,7 @@ def run_ensemble_to_store(scenario: Scenario, store, *, n_bodies: int | None = N
         size = default_chunk_size(n, times.size, workers) if chunk_size is None \
             else int(chunk_size)
         attrs = {'title': 'tumble_ros ensemble',
-                 'scenario': dump_scenario(scenario),
+                 SCENARIO_ATTR: dump_scenario(scenario),
                  'inputs': json.dumps({k: _describe(v) for k, v in inputs.items()}),
                  'duration_yr': float(scenario.duration),
                  'integrator': scenario.integrator.method,

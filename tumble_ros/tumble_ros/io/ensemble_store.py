@@ -38,11 +38,13 @@ import numpy as np
 from tumble_ros.errors import IoError
 
 __all__ = ['EnsembleStore', 'EnsembleStoreError', 'open_ensemble', 'STATUS_FAILED',
-           'STATUS_PENDING', 'STATUS_SUCCEEDED', 'REASON_WIDTH']
+           'STATUS_PENDING', 'STATUS_SUCCEEDED', 'REASON_WIDTH', 'SCENARIO_ATTR']
 
 FORMAT = 'tumble_ros ensemble'
 FORMAT_VERSION = 1
 STATUS_PENDING, STATUS_SUCCEEDED, STATUS_FAILED = 0, 1, 2
+#: The attribute holding the run's scenario (the text of a ROS 2 parameters file).
+SCENARIO_ATTR = 'scenario'
 #: Longest stored failure reason [characters] (longer ones are cut, ending with '...').
 REASON_WIDTH = 160
 
@@ -214,7 +216,7 @@ def open_ensemble(path) -> 'xarray.Dataset':  # noqa: F821 (xarray is imported l
 
     Everything needed to analyse the run is in it: the samples with their units, the status
     and failure reason of every body, its initial state and number of impacts, and the
-    scenario and inputs as attributes (``ds.attrs['scenario']``: a ROS 2 parameters file).
+    scenario and inputs as attributes (``ds.attrs[SCENARIO_ATTR]``: a ROS 2 parameters file).
     """
     import xarray as xr
 
