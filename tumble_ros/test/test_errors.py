@@ -6,6 +6,7 @@ from tumble_ros.analysis import AnalysisError
 from tumble_ros.analysis.figures import FigureExistsError, FigurePathError
 from tumble_ros.core import IntegrationError, Scenario, ScenarioError
 from tumble_ros.core.analytic import ModelNotApplicable
+from tumble_ros.ensembles import EnsembleRunError, EnsembleStoreError
 from tumble_ros.io import McapError, MessageDefinitionError
 
 
@@ -16,6 +17,8 @@ from tumble_ros.io import McapError, MessageDefinitionError
     (errors.NodeError, errors.TumbleRosError),
     (McapError, errors.IoError),
     (MessageDefinitionError, errors.IoError),
+    (EnsembleStoreError, errors.IoError),
+    (EnsembleRunError, errors.CoreError),
     (AnalysisError, errors.AnalysisError),
     (FigurePathError, errors.AnalysisError),
     (FigureExistsError, errors.AnalysisError),

@@ -14,8 +14,9 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'tumble_ros'
 #: The ROS-free packages (a researcher uses them without a ROS install) and files each must have.
 ROS_FREE = {
     'core': {'scenario.py', 'propagator.py', 'kernels/stepping.py', 'ensemble.py',
-             'integrators/splitting.py'},
-    'io': {'msgdefs.py', 'mcap_reader.py', 'mcap_writer.py'},
+             'ensemble_dask.py', 'integrators/splitting.py'},
+    'io': {'msgdefs.py', 'mcap_reader.py', 'mcap_writer.py', 'ensemble_store.py'},
+    'ensembles': {'__init__.py', 'runner.py'},
     'analysis': {'recording.py', 'summary.py', 'figures.py', 'cli.py', '__main__.py',
                  '__init__.py'},
 }
@@ -62,5 +63,14 @@ def test_importing_core_loads_no_rclpy():
     code = ('import sys, tumble_ros.core; from tumble_ros.core import Scenario, simulate; '
             "bad = [m for m in sys.modules if m.startswith(('rclpy', 'rosidl'))]; print(bad); "
             'sys.exit(1 if bad else 0)')
+    done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_importing_core_loads_no_dask_xarray_or_zarr():
+    """Dask, xarray and Zarr are imported by the runs that use them, not by every core user."""
+    code = ('import sys, tumble_ros.core, tumble_ros.io; '
+            "bad = [m for m in sys.modules if m.split('.')[0] in "
+            "('dask', 'distributed', 'xarray', 'zarr')]; print(bad); sys.exit(1 if bad else 0)")
     done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stdout + done.stderr

@@ -39,6 +39,8 @@ ROSDEP_KEYS = {
     'tumble_ros_interfaces': 'tumble_ros_interfaces',
     # Python libraries (rosdep/python.yaml of ros/rosdistro)
     'catkin_pkg': 'python3-catkin-pkg-modules',
+    'dask': 'python3-dask',
+    'distributed': 'python3-distributed',
     'matplotlib': 'python3-matplotlib',
     'mcap_ros2': 'mcap-ros2-support',  # pip installer
     'numba': 'python3-numba',
@@ -46,6 +48,8 @@ ROSDEP_KEYS = {
     'pytest': 'python3-pytest',
     'rosbags': 'python3-rosbags-pip',  # pip installer
     'scipy': 'python3-scipy',
+    'xarray': 'python3-xarray',
+    'zarr': 'python3-zarr',
     'setuptools': 'python3-setuptools',
     'yaml': 'python3-yaml',
 }

@@ -4,21 +4,32 @@ The ensemble command line: N copies of a scenario at once, progress on stderr, a
     python -m tumble_ros.cli.ensemble tumble_ros/config/fig9.yaml --bodies 10000 \
         --duration 20 --output-interval 1 --impact-rate 0.5 --impact-torque 1e6 \
         --method splitting6 --step 0.01 --out ensemble.npz
+    python -m tumble_ros.cli.ensemble ... --bodies 1000000 --workers 2 --out ens.zarr
+    python -m tumble_ros.cli.ensemble ... --scheduler tcp://head:8786 --out ens.zarr
 
 (``ros2 run tumble_ros ensemble ...`` on a ROS 2 install.) The work is
-:func:`tumble_ros.core.simulate_ensemble`; this module only parses, reports and saves.
+:func:`tumble_ros.core.simulate_ensemble` (``--out X.npz``: in memory) or
+:func:`tumble_ros.ensembles.run_ensemble_to_store` (``--out X.zarr``: a labelled store written
+chunk by chunk, resumed when the same command runs again), in this process (threads), on an
+embedded Dask ``LocalCluster`` (``--workers N``) or on a running Dask cluster
+(``--scheduler ADDRESS``); this module only parses, reports and saves. Random impacts and
+the ω0 spread are drawn body by body from ``--seed`` (the same bodies whatever the engine and
+chunking).
 """
 from __future__ import annotations
 
 import argparse
+from contextlib import nullcontext
 import sys
 from typing import Sequence
 
 import numpy as np
 
 from tumble_ros.cli.progress import ProgressBar
-from tumble_ros.core import (IntegratorSettings, load_scenario, random_impacts, Scenario,
-                             ScenarioError, simulate_ensemble)
+from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
+                             Scenario, ScenarioError, simulate_ensemble)
+from tumble_ros.ensembles import dask_client, open_ensemble, run_ensemble_to_store
+from tumble_ros.errors import TumbleRosError
 
 __all__ = ['main']
 
@@ -53,9 +64,51 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--reference', action='store_true',
                    help='run the reference path (one simulate() per body)')
     p.add_argument('--out',
-                   help='write t, omega, euler, quaternion, jacobi, success, n_steps to this .npz')
+                   help='X.npz: write t, omega, euler, quaternion, jacobi, success, n_steps '
+                        '(all in memory); X.zarr: a labelled xarray/Zarr store written chunk '
+                        'by chunk (memory does not grow with N), resumed when run again')
+    p.add_argument('--overwrite', action='store_true',
+                   help='replace an existing .zarr store instead of resuming it')
+    engine = p.add_mutually_exclusive_group()
+    engine.add_argument('--workers', type=int,
+                        help='run chunks of bodies on an embedded Dask LocalCluster of N '
+                             'worker processes (one thread each)')
+    engine.add_argument('--scheduler',
+                        help='run chunks of bodies on the Dask cluster of this scheduler '
+                             '(tcp://host:8786; started with `dask scheduler` and '
+                             '`dask worker`)')
+    p.add_argument('--scheduler-timeout', type=float, default=30.0,
+                   help='seconds to wait for --scheduler (default 30)')
+    p.add_argument('--chunk-size', type=int,
+                   help='bodies per task and per store chunk (default: up to 10,000, '
+                        'smaller for long outputs and to give every worker several)')
     p.add_argument('--quiet', '-q', action='store_true', help='no progress display')
     return p
+
+
+def _final_spin_lines(w_end: np.ndarray, jac_start: np.ndarray, jac_end: np.ndarray) -> list:
+    """Return the summary lines of the succeeded bodies' last samples."""
+    w_perp = np.hypot(w_end[:, 0], w_end[:, 1])
+    return [f'final |w_perp| [rad/yr]: mean {w_perp.mean():.6g}, std {w_perp.std():.3g}; '
+            f'final wz: mean {w_end[:, 2].mean():.6g}, std {w_end[:, 2].std():.3g}',
+            f'Jacobi integral: start {np.mean(jac_start):.10g}, '
+            f'end mean {np.mean(jac_end):.10g}, std {np.std(jac_end):.3g}']
+
+
+def _to_store(args, sc, inputs, client) -> int:
+    summary = run_ensemble_to_store(
+        sc, args.out, n_bodies=args.bodies, chunk_size=args.chunk_size, client=client,
+        fast=False if args.reference else None, overwrite=args.overwrite,
+        progress=None if args.quiet else ProgressBar(sc.duration, args.bodies, by='bodies'),
+        **inputs)
+    print('\n'.join(summary.lines()))
+    if summary.succeeded:
+        ds = open_ensemble(args.out)
+        good = (ds.status == 1).values
+        w_end = ds.omega.isel(time=-1).values[good]
+        jac = ds.jacobi.isel(time=[0, -1]).values[good]
+        print('\n'.join(_final_spin_lines(w_end, jac[:, 0], jac[:, 1])))
+    return 0 if summary.succeeded == summary.n_bodies else 1
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -77,24 +130,34 @@ def main(argv: Sequence[str] | None = None) -> int:
             sc = sc.replace(**changes)
         if args.bodies < 1:
             raise ScenarioError(f'--bodies: must be >= 1, got {args.bodies}')
-        rng = np.random.default_rng(args.seed)
-        impacts = None
+        if args.workers is not None and args.workers < 1:
+            raise ScenarioError(f'--workers: must be >= 1, got {args.workers}')
+        impacts = omega0 = None
         if args.impact_rate > 0:
-            impacts = random_impacts(args.bodies, sc.duration, rate=args.impact_rate,
-                                     torque=args.impact_torque, pulse=args.impact_duration,
-                                     frame=args.impact_frame, seed=rng.integers(2**63))
-        omega0 = None
+            impacts = RandomImpacts(rate=args.impact_rate, torque=args.impact_torque,
+                                    pulse=args.impact_duration, frame=args.impact_frame,
+                                    seed=args.seed)
         if args.omega_spread > 0:
-            omega0 = np.array(sc.omega0) + args.omega_spread * rng.normal(size=(args.bodies, 3))
-        result = simulate_ensemble(sc, impacts=impacts, omega0=omega0, n_bodies=args.bodies,
-                                   fast=False if args.reference else None,
-                                   progress=None if args.quiet else ProgressBar(sc.duration,
-                                                                                args.bodies))
-    except (ScenarioError, ValueError) as err:
+            omega0 = GaussianSpread(sc.omega0, args.omega_spread, seed=args.seed)
+        inputs = {'impacts': impacts, 'omega0': omega0}
+        to_store = bool(args.out) and args.out.rstrip('/').endswith('.zarr')
+        engine = (dask_client(workers=args.workers) if args.workers is not None else
+                  dask_client(scheduler=args.scheduler, timeout=args.scheduler_timeout)
+                  if args.scheduler else nullcontext())
+        with engine as client:
+            if to_store:
+                return _to_store(args, sc, inputs, client)
+            result = simulate_ensemble(
+                sc, n_bodies=args.bodies, fast=False if args.reference else None,
+                client=client, chunk_size=args.chunk_size,
+                progress=None if args.quiet else ProgressBar(
+                    sc.duration, args.bodies, by='time' if client is None else 'bodies'),
+                **inputs)
+    except (TumbleRosError, ValueError) as err:
         print(f'error: {err}', file=sys.stderr)
         return 2
-    n_impacts = (sum(len(b) for b in impacts) if impacts is not None
-                 else len(sc.impacts) * args.bodies)
+    n_impacts = (len(sc.impacts) * args.bodies if impacts is None else
+                 f'random, {args.impact_rate:g}/yr per body, seed {args.seed}')
     ok = int(result.success.sum())
     w_end = result.omega[:, -1]
     print(f'bodies: {result.n_bodies} ({ok} succeeded), impacts: {n_impacts}, '
@@ -105,13 +168,8 @@ def main(argv: Sequence[str] | None = None) -> int:
           f'{result.body_steps_per_second:.3g} body-steps/s')
     if ok:
         good = result.success
-        w_perp = np.hypot(w_end[good, 0], w_end[good, 1])
-        print(f'final |w_perp| [rad/yr]: mean {w_perp.mean():.6g}, std {w_perp.std():.3g}; '
-              f'final wz: mean {w_end[good, 2].mean():.6g}, std {w_end[good, 2].std():.3g}')
-        jac = result.jacobi[good]
-        print(f'Jacobi integral: start {np.mean(jac[:, 0]):.10g}, '
-              f'end mean {np.mean(jac[:, -1]):.10g}, '
-              f'std {np.std(jac[:, -1]):.3g}')
+        lines = _final_spin_lines(w_end[good], result.jacobi[good, 0], result.jacobi[good, -1])
+        print('\n'.join(lines))
     for b, msg in enumerate(result.messages):
         if msg:
             print(f'body {b} failed: {msg}')

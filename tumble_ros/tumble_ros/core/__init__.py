@@ -14,15 +14,18 @@ interface, name registries, the Lie-Poisson splitting methods), ``jit`` (the num
 and ``kernels`` (the physics every path runs and the compiled loops), ``scenario``
 (validated inputs), ``propagator``
 (incremental integration split at impacts), ``simulate`` (batch runs), ``ensemble`` (N
-bodies at once), ``analytic`` (the paper's approximate solution, better linearisations,
-exact torque-free motion), ``timebase`` (simulated years <-> ROS stamps).
+bodies at once), ``ensemble_dask`` (the same on a Dask cluster, chunk by chunk),
+``analytic`` (the paper's approximate solution, better linearisations, exact torque-free
+motion), ``timebase`` (simulated years <-> ROS stamps).
 Performance and long runs: docs/performance.md.
 """
 from .analytic import (AnalyticModel, AnchorState, applicability, characteristic_frequencies,
                        Frequency, make_model, ModelNotApplicable)
 from .analytic import MODELS as ANALYTIC_MODELS
 from .dynamics import angular_momentum_orbital, ATTITUDE_MODELS, jacobi_integral, kinetic_energy
-from .ensemble import ensemble_scenarios, EnsembleResult, random_impacts, simulate_ensemble
+from .ensemble import (body_rng, ChunkResult, concatenate_results, ensemble_scenarios,
+                       EnsembleResult, GaussianSpread, iter_chunks, random_impacts,
+                       RandomImpacts, simulate_ensemble)
 from .integrators import INTEGRATORS, METHODS, SegmentProblem, SPLITTING_METHODS
 from .propagator import IntegrationError, Propagator, Sample
 from .scenario import (
@@ -57,6 +60,12 @@ __all__ = [
     'EnsembleResult',
     'ensemble_scenarios',
     'random_impacts',
+    'RandomImpacts',
+    'GaussianSpread',
+    'body_rng',
+    'concatenate_results',
+    'ChunkResult',
+    'iter_chunks',
     'simulate_ensemble',
     'PARAMETER_DOCS',
     'Impact',

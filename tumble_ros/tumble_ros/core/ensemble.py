@@ -27,11 +27,11 @@ The command line (progress on stderr, a summary on stdout) is :mod:`tumble_ros.c
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 import os
 import time
-from typing import Callable
+from typing import Callable, Iterator
 
 import numpy as np
 
@@ -40,12 +40,14 @@ from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import INTEGRATORS
 from .integrators.compiled import failure_message, why_no_fast_path
 from .rotation import continuous_quaternions, quaternions_to_matrices
-from .scenario import Impact, MAX_OMEGA, MAX_ROTATION, Scenario, ScenarioError
+from .scenario import Impact, IMPACT_FRAMES, MAX_OMEGA, MAX_ROTATION, Scenario, ScenarioError
 from .segments import split_at_impacts
 from .simulate import _check_times, simulate
 from .torques import extra_torque_arrays
 
-__all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts']
+__all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts',
+           'RandomImpacts', 'GaussianSpread', 'body_rng', 'concatenate_results', 'ChunkResult',
+           'chunk_ranges', 'default_chunk_size', 'iter_chunks', 'prepare_inputs', 'run_chunk']
 
 
 @dataclass(frozen=True)
@@ -93,7 +95,29 @@ class EnsembleResult:
 # ---------------------------------------------------------------------------------------
 # Inputs
 # ---------------------------------------------------------------------------------------
-def _bodies(scenario, impacts, omega0, euler0, n_bodies):
+def _resolve(scenario, impacts, omega0, euler0, n_bodies, first_body):
+    """Draw the per-body inputs given as samplers (bodies first_body ... of the ensemble)."""
+    samplers = [v for v in (impacts, omega0, euler0) if _is_sampler(v)]
+    if isinstance(first_body, bool) or not isinstance(first_body, (int, np.integer)) \
+            or first_body < 0:
+        raise ScenarioError(f'first_body: must be an integer >= 0, got {first_body!r}')
+    if not samplers:
+        return impacts, omega0, euler0
+    if n_bodies is None:
+        raise ScenarioError('n_bodies: needed with RandomImpacts or GaussianSpread inputs '
+                            '(they draw one entry per body)')
+    n = int(n_bodies)
+    if isinstance(impacts, RandomImpacts):
+        impacts = impacts.draw(first_body, n, scenario.duration)
+    if isinstance(omega0, GaussianSpread):
+        omega0 = omega0.draw(first_body, n, stream=OMEGA0_STREAM)
+    if isinstance(euler0, GaussianSpread):
+        euler0 = euler0.draw(first_body, n, stream=EULER0_STREAM)
+    return impacts, omega0, euler0
+
+
+def _bodies(scenario, impacts, omega0, euler0, n_bodies, first_body=0):
+    impacts, omega0, euler0 = _resolve(scenario, impacts, omega0, euler0, n_bodies, first_body)
     sizes = {name: len(v) for name, v in (('impacts', impacts), ('omega0', omega0),
                                           ('euler0', euler0))
              if v is not None}
@@ -139,15 +163,18 @@ def _bodies(scenario, impacts, omega0, euler0, n_bodies):
 
 
 def ensemble_scenarios(scenario: Scenario, *, impacts=None, omega0=None, euler0=None,
-                       n_bodies: int | None = None) -> list[Scenario]:
+                       n_bodies: int | None = None, first_body: int = 0) -> list[Scenario]:
     """
     Return the N single-body scenarios an ensemble integrates (body k = element k).
 
     ``impacts[k]`` (a sequence of :class:`Impact`) replaces the scenario's impacts for body k;
     ``omega0[k]`` and ``euler0[k]`` replace its initial state. Fields not given are the
-    scenario's. Every body is validated as a :class:`Scenario`.
+    scenario's. Every body is validated as a :class:`Scenario`. ``impacts`` may also be a
+    :class:`RandomImpacts` and ``omega0``/``euler0`` a :class:`GaussianSpread` (then
+    ``n_bodies`` is needed): element k is then body ``first_body + k`` of that draw.
     """
-    n, impacts, omega0, euler0 = _bodies(scenario, impacts, omega0, euler0, n_bodies)
+    n, impacts, omega0, euler0 = _bodies(scenario, impacts, omega0, euler0, n_bodies,
+                                         first_body)
     out = []
     for b in range(n):
         changes = {}
@@ -183,9 +210,122 @@ def random_impacts(n_bodies: int, duration: float, *, rate: float, torque: float
         starts = np.sort(rng.uniform(0.0, span, size=count))
         directions = rng.normal(size=(count, 3))
         directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-        out.append(tuple(Impact(float(s), pulse, tuple(float(v) for v in torque * d), frame)
-                         for s, d in zip(starts, directions)))
+        out.append(_sequence(starts, directions, torque, pulse, frame))
     return out
+
+
+def _sequence(starts, directions, torque, pulse, frame) -> tuple[Impact, ...]:
+    """Return the impacts of one body: sorted ``starts`` [yr], unit ``directions`` (k, 3)."""
+    return tuple(Impact(float(s), pulse, tuple(float(v) for v in torque * d), frame)
+                 for s, d in zip(starts, directions))
+
+
+#: The random streams of one body (see :func:`body_rng`): each per-body input draws from its own.
+IMPACTS_STREAM, OMEGA0_STREAM, EULER0_STREAM = 0, 1, 2
+
+
+def body_rng(seed: int, body: int, stream: int) -> np.random.Generator:
+    """
+    Return the random generator of body ``body`` for one input ``stream`` of a run's ``seed``.
+
+    It depends on (seed, stream, body) only: not on the number of bodies, nor on how they are
+    split into chunks, processes or machines. It is NumPy's
+    ``SeedSequence(seed).spawn(...)[stream].spawn(...)[body]``, i.e.
+    ``SeedSequence(seed, spawn_key=(stream, body))``: statistically independent streams.
+    """
+    return np.random.default_rng(np.random.SeedSequence(int(seed),
+                                                        spawn_key=(int(stream), int(body))))
+
+
+def _check_seed(seed) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ScenarioError(f'seed: must be an integer >= 0, got {seed!r}')
+    return int(seed)
+
+
+@dataclass(frozen=True)
+class RandomImpacts:
+    """
+    Random impact sequences drawn body by body: body b's from (seed, b) alone.
+
+    Poisson arrivals at ``rate`` per year on [0, duration - pulse], each a pulse of ``pulse``
+    [yr] and magnitude ``torque`` [I rad/yr^2] in an isotropic random direction fixed in
+    ``frame`` (the law of :func:`random_impacts`, whose one stream depends on N). Being a
+    small description, it travels to the workers of a distributed run, which draw their own
+    bodies: the ensemble gives the same impacts whatever its chunking.
+    """
+
+    rate: float
+    torque: float
+    pulse: float = 3e-7
+    frame: str = 'body'
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ('rate', 'torque', 'pulse'):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
+                    or not math.isfinite(value) or value < 0:
+                raise ScenarioError(f'{name}: must be a finite number >= 0, got {value!r}')
+            object.__setattr__(self, name, float(value))
+        if self.pulse <= 0:
+            raise ScenarioError(f'pulse: must be > 0, got {self.pulse!r}')
+        if self.frame not in IMPACT_FRAMES:
+            raise ScenarioError(f'frame: must be one of {IMPACT_FRAMES}, got {self.frame!r}')
+        object.__setattr__(self, 'seed', _check_seed(self.seed))
+
+    def body(self, b: int, duration: float) -> tuple[Impact, ...]:
+        """Return the impacts of body ``b`` in a run of ``duration`` [yr]."""
+        if not 0 < self.pulse < duration:
+            raise ScenarioError(f'pulse: must lie in (0, duration = {duration!r}), '
+                                f'got {self.pulse!r}')
+        rng = body_rng(self.seed, b, IMPACTS_STREAM)
+        span = duration - self.pulse
+        count = rng.poisson(self.rate * span)
+        starts = np.sort(rng.uniform(0.0, span, size=count))
+        directions = rng.normal(size=(count, 3))
+        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+        return _sequence(starts, directions, self.torque, self.pulse, self.frame)
+
+    def draw(self, first: int, count: int, duration: float) -> list[tuple[Impact, ...]]:
+        """Return the impacts of bodies ``first`` ... ``first + count - 1``."""
+        return [self.body(b, duration) for b in range(first, first + count)]
+
+
+@dataclass(frozen=True)
+class GaussianSpread:
+    """
+    Per-body vectors ``center + sigma * N(0, 1)`` (omega0 [rad/yr] or euler0 [rad]).
+
+    Body b's vector is drawn from (seed, stream, b) alone (:func:`body_rng`; the stream is the
+    input's: omega0 and euler0 given the same seed are still independent). ``sigma`` is one
+    standard deviation or one per component.
+    """
+
+    center: tuple[float, float, float]
+    sigma: float | tuple[float, float, float]
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        center = np.asarray(self.center, dtype=float)
+        sigma = np.broadcast_to(np.asarray(self.sigma, dtype=float), (3,)) \
+            if np.ndim(self.sigma) in (0, 1) and np.size(self.sigma) in (1, 3) else None
+        if center.shape != (3,) or not np.all(np.isfinite(center)):
+            raise ScenarioError(f'center: must be 3 finite numbers, got {self.center!r}')
+        if sigma is None or not np.all(np.isfinite(sigma)) or np.any(sigma < 0):
+            raise ScenarioError(f'sigma: must be one or 3 finite numbers >= 0, '
+                                f'got {self.sigma!r}')
+        object.__setattr__(self, 'center', tuple(float(v) for v in center))
+        object.__setattr__(self, 'sigma', tuple(float(v) for v in sigma))
+        object.__setattr__(self, 'seed', _check_seed(self.seed))
+
+    def draw(self, first: int, count: int, stream: int) -> np.ndarray:
+        """Return the (count, 3) vectors of bodies ``first`` ... ``first + count - 1``."""
+        out = np.empty((count, 3))
+        center, sigma = np.array(self.center), np.array(self.sigma)
+        for k in range(count):
+            out[k] = center + sigma * body_rng(self.seed, first + k, stream).normal(size=3)
+        return out
 
 
 # ---------------------------------------------------------------------------------------
@@ -195,7 +335,8 @@ def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=N
                       n_bodies: int | None = None, fast: bool | None = None,
                       progress: Callable[[float, float, int], None] | None = None,
                       checkpoints: int | None = None,
-                      threads: int | None = None) -> EnsembleResult:
+                      threads: int | None = None, first_body: int = 0,
+                      client=None, chunk_size: int | None = None) -> EnsembleResult:
     """
     Integrate N bodies of one scenario at once and sample them at the times ``t_eval``.
 
@@ -207,7 +348,9 @@ def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=N
         Output times [yr] (default ``scenario.output_times``).
     impacts, omega0, euler0, n_bodies
         Per-body inputs (see :func:`ensemble_scenarios`); N is their common length
-        (``n_bodies`` alone: N identical bodies).
+        (``n_bodies`` alone: N identical bodies). ``impacts`` may be a :class:`RandomImpacts`
+        and ``omega0`` [rad/yr, body axes] / ``euler0`` [rad] a :class:`GaussianSpread`, drawn
+        body by body (then ``n_bodies`` is needed).
     fast
         Compiled ensemble loop: None = when available, True = required (ValueError saying
         why not), False = one reference :func:`simulate` per body.
@@ -221,10 +364,26 @@ def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=N
     threads
         Threads running blocks of bodies at once (default: the number of cores; the results
         do not depend on it).
+    first_body
+        Index in the whole ensemble of this call's first body: the samplers draw bodies
+        ``first_body``, ``first_body + 1``, ... (how a chunk of a bigger run draws its own).
+    client
+        A Dask ``distributed.Client``: the bodies are split into chunks of ``chunk_size``,
+        each integrated by this function in a task on the cluster's workers (one thread per
+        task), and gathered here; ``wall_time`` is then the wall-clock time of the whole
+        distributed run. The same results, bit for bit, as without it (:func:`iter_chunks`,
+        :mod:`tumble_ros.core.ensemble_dask`; results bigger than memory go to a store
+        instead: ``tumble_ros.ensembles.run_ensemble_to_store``).
+    chunk_size
+        Bodies per task with a ``client`` (default: :func:`default_chunk_size`).
 
     """
+    if client is not None:
+        return _simulate_on_client(client, scenario, t_eval, impacts=impacts, omega0=omega0,
+                                   euler0=euler0, n_bodies=n_bodies, fast=fast,
+                                   chunk_size=chunk_size, progress=progress)
     times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
-    n, impacts, omega0, euler0 = _bodies(scenario, impacts, omega0, euler0, n_bodies)
+    n, impacts, omega0, euler0 = _bodies(scenario, impacts, omega0, euler0, n_bodies, first_body)
     method = INTEGRATORS[scenario.integrator.method]
     why = why_no_fast_path(method, scenario.attitude)
     if fast and why:
@@ -348,6 +507,196 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
                                              scenario.orbit_rate)
     return EnsembleResult(times, omega, e_out, quat, jac, success, messages, steps, nfev, wall,
                           True)
+
+
+# ---------------------------------------------------------------------------------------
+# Chunks: the unit of work of big and distributed runs
+# ---------------------------------------------------------------------------------------
+#: Largest default chunk [bodies]; and the output a default chunk holds at most [bytes].
+MAX_CHUNK_BODIES = 10_000
+CHUNK_BYTES = 64 * 2**20
+#: Bytes of output per body and sample in a task (omega, euler, quaternion, jacobi and the
+#: loop's own (n, K.N) state samples), for the default chunk size.
+_BYTES_PER_SAMPLE = (3 + 3 + 4 + 1 + 7) * 8
+
+
+@dataclass(frozen=True)
+class ChunkResult:
+    """
+    Bodies ``start`` ... ``stop - 1`` of an ensemble, integrated in one task.
+
+    Attributes
+    ----------
+    index : the chunk's number (chunk i holds bodies [i * chunk_size, ...)).
+    start, stop : its bodies, half-open.
+    result : their :class:`EnsembleResult` (row k = body start + k).
+    omega0 : (n, 3) their initial angular velocity [rad/yr], body axes (as drawn).
+    euler0 : (n, 3) their initial Euler angles (phi, psi, theta) [rad] (as drawn).
+    n_impacts : (n,) number of impacts of each.
+
+    """
+
+    index: int
+    start: int
+    stop: int
+    result: EnsembleResult
+    omega0: np.ndarray
+    euler0: np.ndarray
+    n_impacts: np.ndarray
+
+
+def _is_sampler(value) -> bool:
+    return isinstance(value, (RandomImpacts, GaussianSpread))
+
+
+def chunk_ranges(n_bodies: int, chunk_size: int) -> list[tuple[int, int]]:
+    """Return the (start, stop) bodies of each chunk: chunk i is [i * size, (i + 1) * size)."""
+    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
+            or chunk_size < 1:
+        raise ScenarioError(f'chunk_size: must be an integer >= 1, got {chunk_size!r}')
+    return [(a, min(n_bodies, a + int(chunk_size))) for a in range(0, n_bodies, int(chunk_size))]
+
+
+def default_chunk_size(n_bodies: int, n_samples: int, workers: int = 1) -> int:
+    """
+    Return the bodies per task used when none is given.
+
+    At most :data:`MAX_CHUNK_BODIES`, at most :data:`CHUNK_BYTES` of output per task (so a
+    task's memory does not depend on N), and small enough for 4 chunks per worker when N allows
+    it (so that uneven chunks balance out).
+    """
+    by_memory = max(1, CHUNK_BYTES // (max(1, n_samples) * _BYTES_PER_SAMPLE))
+    by_balance = max(1, math.ceil(n_bodies / (4 * max(1, workers))))
+    return int(min(MAX_CHUNK_BODIES, by_memory, by_balance))
+
+
+def prepare_inputs(scenario: Scenario, impacts, omega0, euler0,
+                   n_bodies: int | None) -> tuple[int, dict]:
+    """
+    Validate an ensemble's inputs once (the driver of a chunked run); return N and the inputs.
+
+    The inputs come back as a dict (``impacts``, ``omega0``, ``euler0``): explicit ones
+    validated and converted (arrays, tuples of :class:`Impact`), samplers as given.
+    """
+    if n_bodies is None and any(_is_sampler(v) for v in (impacts, omega0, euler0)):
+        raise ScenarioError('n_bodies: needed with RandomImpacts or GaussianSpread inputs '
+                            '(they draw one entry per body)')
+    explicit = [None if _is_sampler(v) else v for v in (impacts, omega0, euler0)]
+    n, e_impacts, e_omega0, e_euler0 = _bodies(scenario, *explicit, n_bodies)
+    inputs = {'impacts': impacts if _is_sampler(impacts) else e_impacts,
+              'omega0': omega0 if _is_sampler(omega0) else e_omega0,
+              'euler0': euler0 if _is_sampler(euler0) else e_euler0}
+    return n, inputs
+
+
+def _chunk_inputs(inputs: dict, start: int, stop: int) -> dict:
+    """Samplers travel whole (the task draws its own bodies); explicit inputs are sliced."""
+    return {k: v if v is None or _is_sampler(v) else v[start:stop] for k, v in inputs.items()}
+
+
+def run_chunk(scenario: Scenario, t_eval, inputs: dict, index: int, start: int, stop: int,
+              fast: bool | None = None, threads: int | None = 1) -> ChunkResult:
+    """
+    Integrate bodies ``start`` ... ``stop - 1`` of an ensemble: the task of a chunk.
+
+    ``inputs`` holds ``impacts``, ``omega0`` and ``euler0``, each None, the chunk's slice of
+    an explicit per-body input, or a sampler (drawn here for bodies start ... stop - 1).
+    """
+    n = stop - start
+    impacts, omega0, euler0 = _resolve(scenario, inputs.get('impacts'), inputs.get('omega0'),
+                                       inputs.get('euler0'), n, start)
+    result = simulate_ensemble(scenario, t_eval, impacts=impacts, omega0=omega0,
+                               euler0=euler0, n_bodies=n, fast=fast, threads=threads)
+    omega0 = np.tile(scenario.omega0, (n, 1)) if omega0 is None else np.asarray(omega0, float)
+    euler0 = np.tile(scenario.euler0, (n, 1)) if euler0 is None else np.asarray(euler0, float)
+    n_impacts = (np.full(n, len(scenario.impacts), dtype=np.int32) if impacts is None
+                 else np.array([len(b) for b in impacts], dtype=np.int32))
+    return ChunkResult(index, start, stop, result, omega0, euler0, n_impacts)
+
+
+def iter_chunks(scenario: Scenario, t_eval=None, *, impacts=None, omega0=None, euler0=None,
+                n_bodies: int | None = None, chunk_size: int | None = None, client=None,
+                fast: bool | None = None, skip=frozenset(), threads: int | None = None,
+                max_in_flight: int | None = None) -> Iterator[ChunkResult]:
+    """
+    Yield the results of the ensemble's chunks as they finish (in any order).
+
+    Inputs as :func:`~.ensemble.simulate_ensemble`. ``client``: a Dask ``distributed.Client``
+    (None: the chunks run here one after the other, each on ``threads`` threads, default all
+    cores). Chunks whose index is in ``skip`` are not run. With a client at most
+    ``max_in_flight`` tasks (default: twice the cluster's threads, plus 2) are submitted at
+    once, so neither the workers nor this process hold more than that many chunks' results.
+    Closing the iterator early (an exception, Ctrl-C) cancels the tasks not finished.
+    With a client, a task that raises anything but a ScenarioError raises
+    :class:`~.ensemble_dask.EnsembleRunError` here.
+    """
+    times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
+    n, inputs = prepare_inputs(scenario, impacts, omega0, euler0, n_bodies)
+    workers = 1 if client is None else max(1, len(client.nthreads()))
+    size = default_chunk_size(n, times.size, workers) if chunk_size is None else chunk_size
+    todo = [(i, a, b) for i, (a, b) in enumerate(chunk_ranges(n, size)) if i not in skip]
+    if client is None:
+        for i, a, b in todo:
+            yield run_chunk(scenario, times, _chunk_inputs(inputs, a, b), i, a, b, fast,
+                            threads)
+        return
+    from .ensemble_dask import map_as_completed
+
+    yield from map_as_completed(client, run_chunk,
+                                [(scenario, times, _chunk_inputs(inputs, a, b), i, a, b, fast, 1)
+                                 for i, a, b in todo],
+                                names=[f'chunk-{i}' for i, _, _ in todo],
+                                max_in_flight=max_in_flight)
+
+
+def _simulate_on_client(client, scenario: Scenario, t_eval=None, *, impacts=None,
+                        omega0=None, euler0=None, n_bodies: int | None = None,
+                        fast: bool | None = None, chunk_size: int | None = None,
+                        progress: Callable[[float, float, int], None] | None = None
+                        ) -> EnsembleResult:
+    """
+    Return :func:`~.ensemble.simulate_ensemble` (same arguments) run as chunks on ``client``.
+
+    ``progress(fraction of bodies done, t_end [yr], body-steps so far)`` is called as each
+    chunk finishes; ``wall_time`` is the wall-clock time of the whole run.
+    """
+    start = time.perf_counter()
+    explicit = [v for v in (impacts, omega0, euler0) if v is not None and not _is_sampler(v)]
+    total = n_bodies if n_bodies is not None else len(explicit[0]) if explicit else 1
+    parts, done, steps = {}, 0, 0
+    for chunk in iter_chunks(scenario, t_eval, impacts=impacts, omega0=omega0, euler0=euler0,
+                             n_bodies=n_bodies, chunk_size=chunk_size, client=client,
+                             fast=fast):
+        parts[chunk.index] = chunk.result
+        done += chunk.stop - chunk.start
+        steps += int(chunk.result.n_steps.sum())
+        if progress is not None:
+            progress(done / total, float(chunk.result.t[-1]), steps)
+    result = concatenate_results(parts[i] for i in sorted(parts))
+    return replace(result, wall_time=time.perf_counter() - start)
+
+
+def concatenate_results(parts) -> EnsembleResult:
+    """
+    Join the results of consecutive groups of bodies (same times) into one, in the given order.
+
+    ``wall_time`` is the sum of the parts' (the caller may replace it with
+    ``dataclasses.replace``); ``compiled`` holds if it holds for every part.
+    """
+    parts = list(parts)
+    if not parts:
+        raise ValueError('concatenate_results: no parts')
+    t = parts[0].t
+    if any(p.t.shape != t.shape or np.any(p.t != t) for p in parts):
+        raise ValueError('concatenate_results: the parts have different sample times')
+
+    def cat(name):
+        return np.concatenate([getattr(p, name) for p in parts])
+
+    return EnsembleResult(t, cat('omega'), cat('euler'), cat('quaternion'), cat('jacobi'),
+                          cat('success'), tuple(m for p in parts for m in p.messages),
+                          cat('n_steps'), cat('nfev'), float(sum(p.wall_time for p in parts)),
+                          all(p.compiled for p in parts))
 
 
 class _NoPool:

@@ -1,0 +1,157 @@
+"""
+Analysis of an ensemble store: distributions of the final spin, periods, mode and pole.
+
+    python -m tumble_ros.analysis.ensemble ens.zarr [--figures DIR] [--time T]
+
+Works on what :func:`tumble_ros.io.open_ensemble` returns (any run written by
+``tumble_ros.ensembles.run_ensemble_to_store`` or ``ensemble --out X.zarr``), reading the store
+chunk by chunk: the final angular velocity of every succeeded body, and the torque-free spin
+state (:func:`tumble_ros.core.spinstate.spin_state`: SAM/LAM mode, rotation and precession
+periods [yr], pole of L in the orbital frame) of up to ``max_spin_states`` bodies spread evenly
+over the ensemble (the spin state costs ~1 ms per body).
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+import sys
+from typing import Sequence
+
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+import numpy as np
+from tumble_ros.core import parse_scenario
+from tumble_ros.core.spinstate import spin_state
+from tumble_ros.errors import AnalysisError, TumbleRosError
+from tumble_ros.io import open_ensemble
+from tumble_ros.io.ensemble_store import SCENARIO_ATTR
+
+__all__ = ['ensemble_statistics', 'final_spin', 'plot_ensemble', 'main']
+
+#: Bodies whose spin state is computed by default (evenly spread over the ensemble).
+MAX_SPIN_STATES = 2000
+
+
+def _index(ds, time) -> int:
+    if time is None:
+        return ds.sizes['time'] - 1
+    k = int(np.argmin(np.abs(ds.time.values - float(time))))
+    return k
+
+
+def final_spin(ds, time: float | None = None, max_spin_states: int = MAX_SPIN_STATES) -> dict:
+    """
+    Return per-body arrays of the spin at ``time`` [yr] (default the last sample).
+
+    Keys: ``body`` (the succeeded bodies), ``omega`` (n, 3) [rad/yr, body axes]; and for up to
+    ``max_spin_states`` of them (``spin_body``): ``mode`` (str), ``rotation_period`` and
+    ``precession_period`` [yr], ``pole_longitude`` and ``pole_latitude`` [rad, orbital frame].
+    """
+    k = _index(ds, time)
+    good = np.flatnonzero(ds.status.values == 1)
+    omega = ds.omega.isel(time=k).values[good]
+    quat = ds.quaternion.isel(time=k).values[good]
+    inertia = parse_scenario(ds.attrs[SCENARIO_ATTR]).inertia
+    pick = (np.unique(np.linspace(0, good.size - 1, max_spin_states).astype(int))
+            if good.size > max_spin_states else np.arange(good.size))
+    states = [spin_state(omega[i], inertia, quat[i]) for i in pick]
+    return {'time': float(ds.time.values[k]), 'body': good, 'omega': omega,
+            'spin_body': good[pick], 'mode': np.array([s.mode for s in states], dtype=object),
+            'rotation_period': np.array([s.rotation_period for s in states]),
+            'precession_period': np.array([s.precession_period for s in states]),
+            'pole_longitude': np.array([s.pole_longitude for s in states]),
+            'pole_latitude': np.array([s.pole_latitude for s in states])}
+
+
+def _stats(x: np.ndarray) -> dict:
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return {'n': 0}
+    p5, p50, p95 = np.percentile(x, [5, 50, 95])
+    return {'n': int(x.size), 'mean': float(x.mean()), 'std': float(x.std()), 'p5': float(p5),
+            'median': float(p50), 'p95': float(p95)}
+
+
+def ensemble_statistics(ds, time: float | None = None,
+                        max_spin_states: int = MAX_SPIN_STATES) -> dict:
+    """
+    Return the distributions of the spin at ``time`` [yr] (default the last sample).
+
+    Counts by status; mean, std, 5/50/95 percentiles of |omega|, omega_z and
+    omega_perp = |(omega_x, omega_y)| [rad/yr], of the rotation and precession periods [yr]
+    and of the pole latitude [rad]; counts of the spin modes (of the bodies whose spin state
+    was computed).
+    """
+    status = ds.status.values
+    spin = final_spin(ds, time, max_spin_states)
+    w = spin['omega']
+    modes, counts = np.unique(spin['mode'].astype(str), return_counts=True)
+    return {'time': spin['time'], 'bodies': int(status.size),
+            'succeeded': int(np.sum(status == 1)), 'failed': int(np.sum(status == 2)),
+            'pending': int(np.sum(status == 0)),
+            'omega_norm': _stats(np.linalg.norm(w, axis=1)), 'omega_z': _stats(w[:, 2]),
+            'omega_perp': _stats(np.hypot(w[:, 0], w[:, 1])),
+            'spin_states': int(spin['spin_body'].size),
+            'modes': {str(m): int(c) for m, c in zip(modes, counts)},
+            'rotation_period': _stats(spin['rotation_period']),
+            'precession_period': _stats(spin['precession_period']),
+            'pole_latitude': _stats(spin['pole_latitude'])}
+
+
+def plot_ensemble(ds, out_dir, time: float | None = None,
+                  max_spin_states: int = MAX_SPIN_STATES) -> Path:
+    """Draw the distributions of :func:`ensemble_statistics` into ``out_dir/ensemble.png``."""
+    spin = final_spin(ds, time, max_spin_states)
+    w = spin['omega']
+    fig = Figure(figsize=(10, 7), dpi=100, layout='constrained')
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(2, 2)
+    axes[0, 0].hist(w[:, 2], bins=50)
+    axes[0, 0].set_xlabel(r'final $\omega_z$ [rad/yr]')
+    axes[0, 1].hist(np.hypot(w[:, 0], w[:, 1]), bins=50)
+    axes[0, 1].set_xlabel(r'final $|\omega_\perp|$ [rad/yr]')
+    periods = spin['rotation_period'][np.isfinite(spin['rotation_period'])]
+    axes[1, 0].hist(periods, bins=50)
+    axes[1, 0].set_xlabel(r'rotation period $P_\psi$ [yr] (torque-free, from the final state)')
+    axes[1, 1].scatter(np.degrees(spin['pole_longitude']), np.degrees(spin['pole_latitude']),
+                       s=4)
+    axes[1, 1].set_xlabel('pole longitude [deg] (orbital frame)')
+    axes[1, 1].set_ylabel('pole latitude [deg]')
+    for ax in axes.flat[:3]:
+        ax.set_ylabel('bodies')
+    fig.suptitle(f"{int(np.sum(ds.status.values == 1))} of {ds.sizes['body']} bodies at "
+                 f"t = {spin['time']:g} yr ({spin['spin_body'].size} spin states)")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / 'ensemble.png'
+    fig.savefig(path)
+    return path
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Print the statistics of a store (and draw its figure with --figures DIR)."""
+    p = argparse.ArgumentParser(prog='python -m tumble_ros.analysis.ensemble',
+                                description='Distributions of the spin of an ensemble store.')
+    p.add_argument('store', help='an ensemble store (X.zarr)')
+    p.add_argument('--time', type=float, help='sample time [yr] (default: the last)')
+    p.add_argument('--figures', help='write ensemble.png into this directory')
+    p.add_argument('--spin-states', type=int, default=MAX_SPIN_STATES,
+                   help=f'bodies whose spin state is computed (default {MAX_SPIN_STATES})')
+    args = p.parse_args(argv)
+    try:
+        ds = open_ensemble(args.store)
+        stats = ensemble_statistics(ds, args.time, args.spin_states)
+        if stats['succeeded'] == 0:
+            raise AnalysisError(f'{args.store}: no succeeded body to analyse')
+        for key, value in stats.items():
+            print(f'{key}: {value}')
+        if args.figures:
+            print(f'wrote {plot_ensemble(ds, args.figures, args.time, args.spin_states)}')
+    except (TumbleRosError, OSError, ValueError) as err:
+        print(f'ERROR: {err}', file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == '__main__':  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,135 @@
+r"""
+The Dask engine of ensembles: tasks on a ``distributed`` cluster, results as they finish.
+
+:func:`~.ensemble.iter_chunks` and ``simulate_ensemble(..., client=...)`` cut the bodies of an
+ensemble into chunks; with a Dask client, each chunk is one task (:func:`~.ensemble.run_chunk`:
+the compiled loop runs inside it) on the workers of a ``distributed`` cluster: an embedded
+``LocalCluster`` (the default way to use every core in separate processes) or a cluster started
+with Dask's own ``dask scheduler`` and ``dask worker`` commands (README, "Running on a
+cluster"). Dask does the scheduling, the transport and the fault tolerance (a task whose worker
+dies is run again elsewhere); this module only submits, hands results back as they finish and
+cancels what is left when the caller stops::
+
+    from tumble_ros.core import load_scenario, RandomImpacts, simulate_ensemble
+    from tumble_ros.core.ensemble_dask import dask_client
+    sc = load_scenario('tumble_ros/config/fig9.yaml').replace(duration=20.0, output_interval=1.0)
+    with dask_client(workers=2) as client:
+        res = simulate_ensemble(sc, impacts=RandomImpacts(rate=0.5, torque=1e6, seed=1),
+                                n_bodies=100_000, client=client)
+
+**Same answer everywhere.** Body k's result depends on body k's inputs only: the compiled
+loop integrates each body on its own, and the per-body random inputs (``RandomImpacts``,
+``GaussianSpread``) are drawn from (seed, body) alone, inside the task. So the results are
+bit-identical whatever the chunk size, the number of workers or the engine (threads in this
+process, local cluster, remote cluster): ``test_ensemble_dask.py``.
+
+Results bigger than memory go to a labelled store chunk by chunk instead of being gathered:
+:func:`tumble_ros.ensembles.run_ensemble_to_store`. Dask is imported on first use only.
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+from typing import Callable, Iterator, Sequence
+import uuid
+
+import numpy as np
+
+from tumble_ros.errors import CoreError
+
+from .scenario import ScenarioError
+
+__all__ = ['EnsembleRunError', 'dask_client', 'map_as_completed']
+
+
+class EnsembleRunError(CoreError):
+    """A distributed ensemble run that could not run: no cluster, a task that raised."""
+
+
+def map_as_completed(client, fn: Callable, calls: Sequence[tuple], *,
+                     names: Sequence[str] | None = None,
+                     max_in_flight: int | None = None) -> Iterator:
+    """
+    Yield ``fn(*args)`` for each ``args`` of ``calls``, run as tasks on ``client``, as they finish.
+
+    At most ``max_in_flight`` tasks (default: twice the cluster's threads, plus 2) are submitted
+    at a time, so that the results waiting on the workers and here stay bounded whatever the
+    number of calls. A task that raises a ScenarioError re-raises it here; any other exception
+    becomes an :class:`EnsembleRunError` naming the task. Closing the iterator early (an
+    exception in the caller, Ctrl-C) cancels the tasks not finished.
+    """
+    from distributed import as_completed
+
+    if max_in_flight is None:
+        max_in_flight = 2 * max(1, sum(client.nthreads().values())) + 2
+    run = uuid.uuid4().hex[:8]
+    names = [str(k) for k in range(len(calls))] if names is None else list(names)
+    waiting = iter(zip(names, calls))
+    futures = as_completed()
+    submitted = []
+
+    def submit_next() -> None:
+        item = next(waiting, None)
+        if item is not None:
+            name, args = item
+            future = client.submit(fn, *args, key=f'tumble-ensemble-{run}-{name}')
+            submitted.append(future)
+            futures.add(future)
+
+    try:
+        for _ in range(max(1, int(max_in_flight))):
+            submit_next()
+        for future in futures:
+            try:
+                value = future.result()
+            except ScenarioError:
+                raise
+            except Exception as err:  # the task's own exception, re-raised by Dask here
+                raise EnsembleRunError(f'ensemble task {future.key} failed: '
+                                       f'{type(err).__name__}: {err}') from err
+            future.release()
+            submit_next()
+            yield value
+    finally:
+        pending = [f for f in submitted if not f.done()]
+        if pending:
+            client.cancel(pending)
+
+
+@contextmanager
+def dask_client(workers: int | None = None, scheduler: str | None = None, *,
+                timeout: float = 30.0):
+    """
+    Yield a Dask ``distributed.Client``; close it (and its local cluster) on exit.
+
+    ``workers=N``: an embedded ``LocalCluster`` of N worker processes with one thread each
+    (its HTTP server, and the dashboard if bokeh is installed, on a free port: two runs at
+    once do not collide). ``scheduler='tcp://host:8786'``: the cluster of that scheduler,
+    started with ``dask scheduler`` and ``dask worker`` (its workers must run in this
+    workspace's environment: ``scripts/env.sh dask worker ADDRESS``). Raises
+    :class:`EnsembleRunError` when the scheduler cannot be reached within ``timeout`` seconds.
+    """
+    if (workers is None) == (scheduler is None):
+        raise ScenarioError('dask_client: give workers (a local cluster) or scheduler '
+                            '(an address), one of them')
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=timeout)
+        except (OSError, TimeoutError, ValueError) as err:
+            raise EnsembleRunError(f'cannot reach the Dask scheduler at {scheduler!r}: '
+                                   f'{err}') from None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
+        raise ScenarioError(f'workers: must be an integer >= 1, got {workers!r}')
+    cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                           dashboard_address=':0')
+    try:
+        with Client(cluster) as client:
+            yield client
+    finally:
+        cluster.close()

@@ -1,0 +1,232 @@
+r"""
+Ensemble results on disk: a labelled xarray Dataset in a Zarr store, written chunk by chunk.
+
+The layout (what :func:`open_ensemble` returns)::
+
+    dims:   body (N), time (n samples), component (x, y, z), angle (phi, psi, theta),
+            quaternion_component (w, x, y, z), chunk (the run's chunks of bodies)
+    coords: body (0 ... N-1), time [yr], component, angle, quaternion_component
+    omega       (body, time, component)            angular velocity [rad/yr], body axes
+    euler       (body, time, angle)                the paper's Euler angles [rad]
+    quaternion  (body, time, quaternion_component) attitude, body -> orbital, scalar first
+    jacobi      (body, time)                       Jacobi integral [I rad^2/yr^2]
+    status      (body) int8                        0 pending, 1 succeeded, 2 failed
+    reason      (body) str                         why a failed body failed ('' otherwise)
+    n_steps, nfev (body)                           integration steps, torque evaluations
+    omega0 (body, component), euler0 (body, angle) the body's initial state [rad/yr], [rad]
+    n_impacts   (body)                             the body's number of impacts
+    chunk_done  (chunk) bool                       chunk written completely
+    attrs: the scenario (a ROS 2 parameters file), the per-body inputs, N, chunk size, ...
+
+Rows of a failed body after its last good sample are NaN; rows of a pending body (a chunk not
+written yet) read as NaN with status 0. The store is Zarr format 2 (every Zarr and xarray
+reader opens it; the body axis is chunked as the run's chunks, the other axes whole). It is
+created once with its full shape (metadata only), then each chunk of bodies is written into
+its own region as its task finishes, and only then marked in ``chunk_done``: a run
+interrupted at any point leaves complete chunks marked and the others not, and a restart
+writes the unmarked ones again (``tumble_ros.ensembles.run_ensemble_to_store``). Memory
+never holds more than the chunks being written. This module knows nothing of the physics: it
+stores the arrays it is given (``tumble_ros.io`` does not import ``tumble_ros.core``).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+import shutil
+
+import numpy as np
+
+from tumble_ros.errors import IoError
+
+__all__ = ['EnsembleStore', 'EnsembleStoreError', 'open_ensemble', 'STATUS_FAILED',
+           'STATUS_PENDING', 'STATUS_SUCCEEDED', 'REASON_WIDTH', 'SCENARIO_ATTR']
+
+FORMAT = 'tumble_ros ensemble'
+FORMAT_VERSION = 1
+STATUS_PENDING, STATUS_SUCCEEDED, STATUS_FAILED = 0, 1, 2
+#: The attribute holding the run's scenario (the text of a ROS 2 parameters file).
+SCENARIO_ATTR = 'scenario'
+#: Longest stored failure reason [characters] (longer ones are cut, ending with '...').
+REASON_WIDTH = 160
+
+#: name -> (dims, dtype, attrs) of the per-body variables.
+VARIABLES = {
+    'omega': (('body', 'time', 'component'), 'f8',
+              {'long_name': 'angular velocity', 'units': 'rad/yr',
+               'frame': 'body principal axes'}),
+    'euler': (('body', 'time', 'angle'), 'f8',
+              {'long_name': "the paper's Euler angles (phi, psi, theta), z-x-z",
+               'units': 'rad', 'note': 'phi and psi continuous (not wrapped)'}),
+    'quaternion': (('body', 'time', 'quaternion_component'), 'f8',
+                   {'long_name': 'attitude quaternion, scalar first, body -> orbital frame',
+                    'units': '1'}),
+    'jacobi': (('body', 'time'), 'f8',
+               {'long_name': 'Jacobi integral (constant between impacts)',
+                'units': 'I rad^2/yr^2 (inertia normalised)'}),
+    'status': (('body',), 'i1',
+               {'long_name': 'integration status', 'flag_values': [0, 1, 2],
+                'flag_meanings': 'pending succeeded failed'}),
+    'reason': (('body',), f'<U{REASON_WIDTH}',
+               {'long_name': 'why the body failed (empty when it succeeded)'}),
+    'n_steps': (('body',), 'i8', {'long_name': 'integration steps'}),
+    'nfev': (('body',), 'i8', {'long_name': 'torque (right-hand side) evaluations'}),
+    'omega0': (('body', 'component'), 'f8',
+               {'long_name': 'initial angular velocity', 'units': 'rad/yr',
+                'frame': 'body principal axes'}),
+    'euler0': (('body', 'angle'), 'f8',
+               {'long_name': 'initial Euler angles (phi, psi, theta)', 'units': 'rad'}),
+    'n_impacts': (('body',), 'i4', {'long_name': 'number of impacts on the body'}),
+}
+
+
+class EnsembleStoreError(IoError):
+    """An ensemble store that cannot be created, opened or resumed."""
+
+
+def _fit_reasons(reasons) -> np.ndarray:
+    out = []
+    for text in reasons:
+        text = str(text)
+        out.append(text if len(text) <= REASON_WIDTH else text[:REASON_WIDTH - 3] + '...')
+    return np.array(out, dtype=f'<U{REASON_WIDTH}')
+
+
+class EnsembleStore:
+    """
+    An ensemble store being written: create or resume it, write chunks, see which are done.
+
+    Create with :meth:`create` (a new run) or :meth:`resume` (the same run again: its
+    ``attrs['fingerprint']`` must match). Read results with :func:`open_ensemble`.
+    """
+
+    def __init__(self, path: Path) -> None:
+        import zarr
+
+        self.path = Path(path)
+        try:
+            self._group = zarr.open_group(str(self.path), mode='r+', zarr_format=2)
+        except Exception as err:  # zarr raises several types for a missing or foreign store
+            raise EnsembleStoreError(f'{self.path}: not an ensemble store ({err})') from None
+        self.attrs = dict(self._group.attrs)
+        if self.attrs.get('format') != FORMAT:
+            raise EnsembleStoreError(f'{self.path}: not a tumble_ros ensemble store')
+        self.n_bodies = int(self.attrs['n_bodies'])
+        self.chunk_size = int(self.attrs['chunk_size'])
+        self.n_chunks = -(-self.n_bodies // self.chunk_size)
+
+    @classmethod
+    def create(cls, path, *, n_bodies: int, times, chunk_size: int, attrs: dict,
+               overwrite: bool = False) -> 'EnsembleStore':
+        """
+        Create the store at ``path`` for N bodies sampled at ``times`` [yr]; nothing written.
+
+        ``attrs`` (JSON-serialisable: strings, numbers, lists) become the Dataset's attributes.
+        An existing path is refused unless ``overwrite`` (then it is removed first).
+        """
+        import dask.array as da
+        import xarray as xr
+
+        path = Path(path)
+        times = np.asarray(times, dtype=float)
+        if n_bodies < 1 or chunk_size < 1 or times.ndim != 1 or times.size < 1:
+            raise EnsembleStoreError(f'{path}: needs n_bodies >= 1, chunk_size >= 1 and '
+                                     f'sample times, got {n_bodies}, {chunk_size}, '
+                                     f'{times.shape}')
+        if path.exists() or path.is_symlink():
+            if not overwrite:
+                raise EnsembleStoreError(f'{path}: exists (resume the same run, or overwrite)')
+            if path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path)
+            else:
+                path.unlink()
+        sizes = {'body': n_bodies, 'time': times.size, 'component': 3, 'angle': 3,
+                 'quaternion_component': 4}
+        data = {}
+        for name, (dims, dtype, var_attrs) in VARIABLES.items():
+            shape = tuple(sizes[d] for d in dims)
+            chunks = (chunk_size,) + shape[1:]
+            data[name] = (dims, da.zeros(shape, dtype=dtype, chunks=chunks), var_attrs)
+        n_chunks = -(-n_bodies // chunk_size)
+        data['chunk_done'] = (('chunk',), np.zeros(n_chunks, dtype=bool),
+                              {'long_name': 'chunk of bodies written completely',
+                               'bodies': 'chunk i holds bodies [i * chunk_size, '
+                                         '(i + 1) * chunk_size)'})
+        coords = {'body': np.arange(n_bodies, dtype=np.int64),
+                  'time': ('time', times, {'long_name': 'simulated time', 'units': 'yr'}),
+                  'component': ['x', 'y', 'z'], 'angle': ['phi', 'psi', 'theta'],
+                  'quaternion_component': ['w', 'x', 'y', 'z']}
+        all_attrs = {**attrs, 'format': FORMAT, 'format_version': FORMAT_VERSION,
+                     'n_bodies': int(n_bodies), 'chunk_size': int(chunk_size)}
+        ds = xr.Dataset(data, coords=coords, attrs=all_attrs)
+        encoding = {'chunk_done': {'chunks': (1,)}}
+        for name, (dims, dtype, _) in VARIABLES.items():
+            if dtype.startswith('f'):
+                encoding[name] = {'_FillValue': np.nan}
+        try:
+            ds.to_zarr(str(path), mode='w-', compute=False, zarr_format=2, encoding=encoding,
+                       consolidated=True)
+        except OSError as err:
+            raise EnsembleStoreError(f'{path}: cannot create the store: {err}') from None
+        return cls(path)
+
+    @classmethod
+    def resume(cls, path, *, fingerprint: str) -> 'EnsembleStore':
+        """Open an existing store to go on writing the same run (same ``fingerprint``)."""
+        store = cls(path)
+        if store.attrs.get('fingerprint') != fingerprint:
+            raise EnsembleStoreError(
+                f'{store.path}: holds another run (its scenario, inputs, bodies, sample times '
+                f'or chunk size differ from this one); write to a new path, or overwrite it')
+        return store
+
+    def done(self) -> np.ndarray:
+        """Return (n_chunks,) bool: which chunks are written completely."""
+        return np.asarray(self._group['chunk_done'][:], dtype=bool)
+
+    def read(self, name: str, bodies=slice(None)) -> np.ndarray:
+        """Return the stored values of variable ``name`` for ``bodies`` (an index or slice)."""
+        return np.asarray(self._group[name][bodies])
+
+    def write_chunk(self, index: int, start: int, arrays: dict) -> None:
+        """
+        Write chunk ``index`` (bodies ``start`` ...) from ``arrays`` (every VARIABLES name).
+
+        The data first, then the chunk's ``chunk_done`` flag: a chunk is marked only once all
+        of it is on disk.
+        """
+        if not 0 <= index < self.n_chunks or start != index * self.chunk_size:
+            raise EnsembleStoreError(f'{self.path}: chunk {index} starts at body '
+                                     f'{index * self.chunk_size}, not {start}')
+        missing = sorted(set(VARIABLES) - set(arrays))
+        if missing:
+            raise EnsembleStoreError(f'{self.path}: chunk {index} lacks {missing}')
+        stop = min(self.n_bodies, start + self.chunk_size)
+        for name, (_, dtype, _) in VARIABLES.items():
+            values = _fit_reasons(arrays[name]) if name == 'reason' else np.asarray(
+                arrays[name], dtype=dtype)
+            if values.shape[0] != stop - start:
+                raise EnsembleStoreError(f'{self.path}: chunk {index}: {name} has '
+                                         f'{values.shape[0]} bodies, expected {stop - start}')
+            self._group[name][start:stop] = values
+        self._group['chunk_done'][index] = True
+
+
+def open_ensemble(path) -> 'xarray.Dataset':  # noqa: F821 (xarray is imported lazily)
+    """
+    Open an ensemble store as an xarray Dataset (lazy: read as needed, chunk by chunk).
+
+    Everything needed to analyse the run is in it: the samples with their units, the status
+    and failure reason of every body, its initial state and number of impacts, and the
+    scenario and inputs as attributes (``ds.attrs[SCENARIO_ATTR]``: a ROS 2 parameters file).
+    """
+    import xarray as xr
+
+    path = Path(path)
+    if not path.is_dir():
+        raise EnsembleStoreError(f'{path}: no ensemble store there')
+    try:
+        ds = xr.open_zarr(str(path), consolidated=True)
+    except Exception as err:  # zarr/xarray raise several types for a damaged store
+        raise EnsembleStoreError(f'{path}: cannot open the ensemble store ({err})') from None
+    if ds.attrs.get('format') != FORMAT:
+        raise EnsembleStoreError(f'{path}: not a tumble_ros ensemble store')
+    return ds
