@@ -219,3 +219,15 @@ def test_the_torque_free_model_is_anchored_on_each_side_of_the_encounter(recorde
     live = [m.message for m in read_messages(runs['live'].output, '/' + topics.ERROR)]
     assert [(e.vector.x, e.vector.y, e.vector.z) for e in offline] == [
         (e.vector.x, e.vector.y, e.vector.z) for e in live]
+
+
+def test_the_encounter_ensemble_on_a_dask_cluster_is_the_same_bit_for_bit(apophis, ensemble):
+    from tumble_ros.ensembles import dask_client
+
+    with dask_client(workers=2) as client:
+        on_cluster = encounter_ensemble(apophis, 6, seed=3, inertia_spread=(0.03, 0.015),
+                                        n_inertia=2, client=client)
+    for name in ('precession_after', 'rotation_after', 'spin_rate_after', 'pole_after',
+                 'inertia', 'phase', 'turn'):
+        np.testing.assert_array_equal(getattr(on_cluster, name), getattr(ensemble, name), name)
+    assert list(on_cluster.mode_after) == list(ensemble.mode_after)

@@ -167,7 +167,8 @@ def _draw_inertia(nominal: np.ndarray, spread, observed, rng, tries: int = 1000)
 
 def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
                        inertia_spread: tuple[float, float] = (0.0, 0.0), n_inertia: int = 1,
-                       progress: Callable[[int, int], None] | None = None) -> EncounterResult:
+                       progress: Callable[[int, int], None] | None = None,
+                       client=None) -> EncounterResult:
     """
     Run ``n_bodies`` tumblers of ``scenario``'s observed spin state through its encounter.
 
@@ -177,7 +178,9 @@ def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
     ones, keeping the draws that can have the observed periods (:func:`_draw_inertia`);
     ``n_inertia`` draws, the first the nominal moments, the bodies split evenly between them.
     The phase and the turn about L are uniform. Reproducible from ``seed``.
-    ``progress(done, total)`` after each inertia draw.
+    ``progress(done, total)`` after each inertia draw. ``client``: a Dask client
+    (``tumble_ros.ensembles.dask_client``): each draw's bodies run as chunks on its workers,
+    with the same results bit for bit.
     """
     if n_bodies < 1 or n_inertia < 1 or n_inertia > n_bodies:
         raise ValueError(f'encounter_ensemble: needs 1 <= n_inertia <= n_bodies, got '
@@ -203,7 +206,8 @@ def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
                                         observed.rotation_period, observed.pole, phase[body],
                                         turn[body])
         sc = scenario.replace(inertia=tuple(moments))
-        run = simulate_ensemble(sc, [0.0, sc.duration], omega0=omega0, euler0=euler0)
+        run = simulate_ensemble(sc, [0.0, sc.duration], omega0=omega0, euler0=euler0,
+                                client=client)
         parts.append((np.tile(moments, (size, 1)), run))
         if progress is not None:
             progress(k + 1, n_inertia)

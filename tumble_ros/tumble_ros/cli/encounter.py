@@ -3,6 +3,8 @@ The encounter command line: a tumbler's spin state through a flyby, over what is
 
     python -m tumble_ros.cli.encounter tumble_ros/config/apophis_2029.yaml --bodies 1000 \
         --inertia-draws 10 --inertia-spread 0.03 0.015 --seed 1 --out docs/figures/apophis
+    ... --workers 2                 # the bodies as chunks on a local Dask cluster
+    ... --scheduler tcp://HEAD:8786 # or on a cluster (README: Running on a cluster)
 
 (``ros2 run tumble_ros encounter ...`` on a ROS 2 install.) Writes ``encounter.png`` (the
 distributions after the encounter), ``summary.txt`` (the report printed on stdout) and
@@ -12,6 +14,7 @@ distributions after the encounter), ``summary.txt`` (the report printed on stdou
 from __future__ import annotations
 
 import argparse
+from contextlib import contextmanager
 from pathlib import Path
 import sys
 import time
@@ -22,6 +25,7 @@ import numpy as np
 from tumble_ros.analysis.encounter import (encounter_ensemble, encounter_figure,
                                            format_encounter)
 from tumble_ros.core import load_scenario, ScenarioError
+from tumble_ros.ensembles import dask_client, EnsembleRunError
 
 __all__ = ['main']
 
@@ -45,8 +49,24 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--out', type=Path, help='folder for encounter.png, summary.txt, '
                                             'encounter.npz')
     p.add_argument('--no-arrays', action='store_true', help='do not write encounter.npz')
+    engine = p.add_mutually_exclusive_group()
+    engine.add_argument('--workers', type=int, metavar='N',
+                        help='run the bodies on a local Dask cluster of N processes')
+    engine.add_argument('--scheduler', metavar='ADDRESS',
+                        help='run the bodies on the Dask cluster of this scheduler '
+                             '(tcp://host:8786)')
     p.add_argument('--quiet', '-q', action='store_true', help='no progress lines')
     return p
+
+
+@contextmanager
+def _engine(args):
+    """Yield the Dask client the options ask for, or None (threads in this process)."""
+    if args.workers is None and args.scheduler is None:
+        yield None
+        return
+    with dask_client(workers=args.workers, scheduler=args.scheduler) as client:
+        yield client
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -65,10 +85,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                                 'orbit); this scenario has none')
         if any(d < 0 for d in args.inertia_spread):
             raise ScenarioError(f'--inertia-spread: must be >= 0, got {args.inertia_spread}')
-        result = encounter_ensemble(sc, args.bodies, seed=args.seed,
-                                    inertia_spread=tuple(args.inertia_spread),
-                                    n_inertia=args.inertia_draws, progress=progress)
-    except (ScenarioError, ValueError) as err:
+        if args.workers is not None and args.workers < 1:
+            raise ScenarioError(f'--workers: must be >= 1, got {args.workers}')
+        with _engine(args) as client:
+            result = encounter_ensemble(sc, args.bodies, seed=args.seed,
+                                        inertia_spread=tuple(args.inertia_spread),
+                                        n_inertia=args.inertia_draws, progress=progress,
+                                        client=client)
+    except (ScenarioError, EnsembleRunError, ValueError) as err:
         print(f'error: {err}', file=sys.stderr)
         return 2
     report = (f'scenario: {Path(args.config).name}\n'
