@@ -417,3 +417,26 @@ def test_the_encounter_window_is_where_the_torque_exceeds_its_fraction():
     edges = p.pop_window_edges()
     assert [t for t, _ in edges] == [t_in, t_out]
     np.testing.assert_allclose(edges[0][1][:3], r.omega[1], rtol=1e-9)
+
+
+@pytest.mark.parametrize('e', [0.0, 0.5, 0.99])
+def test_an_ellipse_returns_after_its_period_with_its_energy_and_momentum(e):
+    """Period 2 pi / n, v^2/2 - GM/r = -GM/2a, |r x v| = sqrt(GM a (1 - e^2))."""
+    from tumble_ros.core.units import GM_SUN, KM_PER_AU
+
+    orbit = KeplerOrbit(gm=GM_SUN, a=KM_PER_AU, e=e, t_p=0.1, lambda_p=0.3, inclination=0.2,
+                        node=1.1)
+    period = 2 * math.pi / orbit.mean_motion                          # [yr]
+    assert period == pytest.approx(1.0, rel=1e-4)                     # 1 au: one year
+    t = np.linspace(0.0, period, 37)[:-1] + 0.013
+    np.testing.assert_allclose(orbit.position(t + period), orbit.position(t), rtol=0,
+                               atol=1e-9 * KM_PER_AU)
+    dt = 10.0                                                         # s
+    r = orbit.position(t)
+    v = (orbit.position(t + dt / SECONDS_PER_YEAR)
+         - orbit.position(t - dt / SECONDS_PER_YEAR)) / (2 * dt)      # km/s
+    energy = 0.5 * np.sum(v * v, axis=1) - GM_SUN / np.linalg.norm(r, axis=1)
+    np.testing.assert_allclose(energy, -GM_SUN / (2 * KM_PER_AU), rtol=1e-6)
+    momentum = np.linalg.norm(np.cross(r, v), axis=1)
+    np.testing.assert_allclose(momentum, math.sqrt(GM_SUN * KM_PER_AU * (1 - e * e)),
+                               rtol=1e-6, atol=1e-9 * math.sqrt(GM_SUN * KM_PER_AU))
