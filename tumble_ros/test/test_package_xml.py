@@ -37,6 +37,7 @@ ROSDEP_KEYS = {
     'std_msgs': 'std_msgs',
     'std_srvs': 'std_srvs',
     'tumble_ros_interfaces': 'tumble_ros_interfaces',
+    'visualization_msgs': 'visualization_msgs',
     # Python libraries (rosdep/python.yaml of ros/rosdistro)
     'catkin_pkg': 'python3-catkin-pkg-modules',
     'dask': 'python3-dask',

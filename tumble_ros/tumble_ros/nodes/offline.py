@@ -37,6 +37,7 @@ from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.columns import encode_rows, FlatLayout
 from tumble_ros.io.msgdefs import message_definition
 from tumble_ros.nodes.comparator import anchor_model, GridModelValues
+from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
                                        scenario_description, sim_status)
 from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
@@ -68,13 +69,14 @@ class OfflineResult:
 class _Channels:
     """The recording's channels, as the live recorder makes them, and their encoders."""
 
-    def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool):
+    def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool, markers: bool):
         self.writer = writer
         self.ids: dict[str, int] = {}
         self.layouts: dict[str, FlatLayout] = {}
         for topic in topics.RECORDED:
             if (topic == topics.CLOCK and not publish_clock
-                    or topic == topics.PERTURBER and not perturber):
+                    or topic == topics.PERTURBER and not perturber
+                    or topic == topics.MARKERS and not markers):
                 continue
             name = topic if topic.startswith('/') else '/' + topic
             type_name = topics.TYPES[topic]
@@ -105,12 +107,14 @@ def _stamped(sec, nanosec, names, columns) -> dict:
 
 def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = None,
                    model_name: str = 'paper', publish_clock: bool = True,
+                   markers: bool = True, marker_decimation: int = 0,
                    stop: Callable[[], bool] = lambda: False,
                    progress: Callable[[float, int], None] | None = None) -> OfflineResult:
     """
     Simulate ``scenario``, compare it with ``model_name`` and write the recording ``output``.
 
-    ``timebase``: the simulator's (its ``seconds_per_year``; default one second per year).
+    ``timebase``: the simulator's (its ``seconds_per_year``; default one second per year);
+    ``publish_clock``, ``markers``, ``marker_decimation``: the simulator's parameters.
     ``stop()`` is checked between batches: a stopped run keeps what it wrote (the file is
     finalised). ``progress(t [yr], samples)`` is called after each batch. Raises OSError when
     the file cannot be created or written, ScenarioError for a grid ROS stamps cannot carry.
@@ -124,8 +128,11 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
     propagator = Propagator(scenario)
     scenario_yaml = dump_scenario(scenario)
     state, message, k = SimStatus.RUNNING, '', 0
+    scene = _Scene(MarkerScene(scenario), marker_every(marker_decimation, grid.count),
+                   grid) if markers else None
     with McapWriter(output, chunk_seconds=math.inf) as writer:
-        channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None)
+        channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None,
+                             markers=markers)
         comparator = _Comparator(channels, model_name)
         channels.one(topics.COMPARISON_STATUS, comparison_status(
             DiagnosticStatus.WARN, COMPARATOR_NAME,
@@ -145,6 +152,8 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
                 revision = _describe(channels, comparator, scenario_yaml, timebase, revision, t0,
                                      segment_starts[t0], propagator)
             _write_samples(channels, comparator, grid, k, done, arrays, publish_clock, scenario)
+            if scene is not None:
+                scene.write(channels, k, done, arrays)
             k += done
             if progress is not None:
                 progress(grid.time(max(0, k - 1)), k)
@@ -221,6 +230,26 @@ class _Comparator:
             norm[j], relative[j] = error_norms(numeric[j], errors[j])
         model[~compared] = 0.0
         return compared, model, error, norm, relative
+
+
+@dataclass
+class _Scene:
+    """The simulator's markers (nodes.markers): the same scenes of the same samples."""
+
+    scene: MarkerScene
+    every: int
+    grid: object
+
+    def write(self, channels: _Channels, k0: int, n: int, arrays: dict) -> None:
+        """Write the scenes of the samples k0 .. k0 + n - 1 that get one."""
+        k = marker_samples(k0, k0 + n, self.every, self.grid.count)
+        if not len(k):
+            return
+        j = k - k0
+        rows = self.scene.encode(k * self.grid.interval_ns, self.grid.times(k0, k0 + n)[j],
+                                 arrays['quaternion'][j], arrays['omega'][j])
+        log = time.time_ns() + np.arange(len(k), dtype=np.int64)
+        channels.writer.write_rows([channels.ids[topics.MARKERS]], [rows], log)
 
 
 def _write_samples(channels: _Channels, comparator: _Comparator, grid, k0: int, n: int,
