@@ -31,7 +31,8 @@ import numpy as np
 from rclpy.serialization import serialize_message
 
 from tumble_ros import topics
-from tumble_ros.core import dump_scenario, Propagator, Scenario, TimeBase
+from tumble_ros.core import (DEPARTURE, departure_text, dump_scenario, Propagator, Scenario,
+                             TimeBase)
 from tumble_ros.core.scenario import ScenarioError
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.columns import encode_rows, FlatLayout
@@ -190,6 +191,7 @@ class _Comparator:
         self.segments: list[tuple[float, object]] = []   # (segment start, model or None)
         self.grid = None
         self.values = GridModelValues()
+        self.departed: set[int] = set()    # segments whose model left the numeric solution
 
     def anchor(self, description) -> None:
         try:
@@ -229,7 +231,20 @@ class _Comparator:
         for j in np.flatnonzero(compared).tolist():
             norm[j], relative[j] = error_norms(numeric[j], errors[j])
         model[~compared] = 0.0
+        self._report_departures(times, which, edges, compared & (relative > DEPARTURE))
         return compared, model, error, norm, relative
+
+    def _report_departures(self, times, which, edges, beyond) -> None:
+        """Say on the status when a segment's model first leaves the numeric solution."""
+        for a, b in zip(edges[:-1], edges[1:]):
+            segment = int(which[a])
+            hits = np.flatnonzero(beyond[a:b])
+            if segment < 0 or not len(hits) or segment in self.departed:
+                continue
+            self.departed.add(segment)
+            self.channels.one(topics.COMPARISON_STATUS, comparison_status(
+                DiagnosticStatus.WARN, COMPARATOR_NAME,
+                departure_text(self.model_name, float(times[a + hits[0]])), self.model_name))
 
 
 @dataclass
