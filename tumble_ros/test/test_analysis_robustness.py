@@ -263,7 +263,8 @@ def test_non_regular_file_at_a_figure_path_is_refused_even_with_overwrite(tmp_pa
 
 def test_overwrite_needs_figures(capsys):
     assert command([str(GOLDEN), '--overwrite']) == 1
-    assert one_error_line(capsys) == 'ERROR: --overwrite needs --figures DIR'
+    assert one_error_line(capsys) == ('ERROR: --overwrite needs --figures DIR, --animate FILE or '
+                                      '--still FILE')
 
 
 def test_python_api_refuses_existing_figures_unless_told(tmp_path):

@@ -46,6 +46,7 @@ ROSDEP_KEYS = {
     'mcap_ros2': 'mcap-ros2-support',  # pip installer
     'numba': 'python3-numba',
     'numpy': 'python3-numpy',
+    'PIL': 'python3-pil',
     'pytest': 'python3-pytest',
     'rosbags': 'python3-rosbags-pip',  # pip installer
     'scipy': 'python3-scipy',
@@ -61,6 +62,7 @@ PIP_ONLY = {
     'mcap': 'pip "mcap", a dependency of mcap-ros2-support',
     'lz4': 'pip "lz4", a dependency of mcap',
     'zstandard': 'pip "zstandard", a dependency of mcap',
+    'mpl_toolkits': 'part of matplotlib (python3-matplotlib): its 3D axes',
 }
 
 #: Where the imports are read, and which dependency kinds satisfy them.

@@ -13,7 +13,8 @@ __all__ = [
     'COMPARISON_STATUS',
     'APPLY_IMPACT', 'PAUSE', 'RESUME', 'STEP', 'TYPES', 'SIM_TOPICS', 'COMPARATOR_TOPICS',
     'RECORDED', 'PER_SAMPLE', 'SIM_PER_SAMPLE', 'COMPARATOR_PER_SAMPLE', 'FRAME_BODY',
-    'FRAME_ORBITAL', 'FRAME_EULER', 'in_namespace',
+    'FRAME_ORBITAL', 'FRAME_EULER', 'MARKER_BODY', 'MARKER_AXES', 'MARKER_MOMENTUM',
+    'MARKER_SUN', 'MARKER_PERTURBER', 'in_namespace',
 ]
 
 # -- the simulator's (sim) ---------------------------------------------------------------------
@@ -89,6 +90,14 @@ PER_SAMPLE = SIM_PER_SAMPLE + COMPARATOR_PER_SAMPLE
 FRAME_BODY = 'body'
 FRAME_ORBITAL = 'orbital'
 FRAME_EULER = 'euler_phi_psi_theta'
+
+#: Namespaces (``ns``) of the ``markers`` scene: the body, its principal axes (ids 0, 1, 2: x, y,
+#: z), the angular momentum's direction, the Sun (circular orbit) or the perturber (Kepler orbit).
+MARKER_BODY = 'body'
+MARKER_AXES = 'axes'
+MARKER_MOMENTUM = 'angular_momentum'
+MARKER_SUN = 'sun'
+MARKER_PERTURBER = 'perturber'
 
 
 def in_namespace(namespace: str, topic: str) -> str:

@@ -27,13 +27,29 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ['BodyShape', 'ELLIPSOID', 'BOX', 'MIN_THICKNESS', 'body_shape',
-           'torquing_body_direction']
+           'torquing_body_direction', 'AXIS_LENGTH', 'MOMENTUM_LENGTH', 'PERTURBER_LENGTH',
+           'COLORS']
 
 #: Shape kinds.
 ELLIPSOID = 'ellipsoid'
 BOX = 'box'
 #: Smallest semi-axis drawn, relative to the longest one.
 MIN_THICKNESS = 0.05
+#: Arrow lengths of a scene [display units; the body's longest semi-axis is 1]: the body axes,
+#: the angular momentum's direction, the torquing body's direction.
+AXIS_LENGTH = 1.5
+MOMENTUM_LENGTH = 2.0
+PERTURBER_LENGTH = 2.5
+#: Colours (r, g, b, a) of a scene: the live markers and the offline still and animation.
+COLORS = {
+    ELLIPSOID: (0.62, 0.57, 0.52, 0.85),
+    BOX: (0.9, 0.55, 0.25, 0.6),
+    'x': (0.9, 0.15, 0.15, 1.0),
+    'y': (0.15, 0.75, 0.15, 1.0),
+    'z': (0.2, 0.35, 0.95, 1.0),
+    'momentum': (0.8, 0.2, 0.8, 1.0),
+    'perturber': (1.0, 0.8, 0.1, 1.0),
+}
 
 
 @dataclass(frozen=True)

@@ -11,12 +11,12 @@ marker in the frame ``orbital`` and stamped with the sample's stamp, so that RVi
   or a CUBE when the moments break the triangle inequality (no body has them); position 0,
   orientation = the attitude quaternion (body -> orbital) of the sample;
 * ``axes`` 0, 1, 2: ARROWs along the body's principal axes x, y, z (red, green, blue),
-  :data:`AXIS_LENGTH` long: orientation = the attitude times the fixed rotation taking +x
-  onto the axis (:data:`AXIS_ROTATIONS`);
-* ``angular_momentum`` 0: an ARROW from 0 to L / |L| * :data:`MOMENTUM_LENGTH` (``points``),
+  ``AXIS_LENGTH`` long (lengths and colours: :mod:`tumble_ros.core.shape`): orientation = the
+  attitude times the fixed rotation taking +x onto the axis (:data:`AXIS_ROTATIONS`);
+* ``angular_momentum`` 0: an ARROW from 0 to L / |L| * ``MOMENTUM_LENGTH`` (``points``),
   L = C(q) I w in the orbital frame (its direction; |L| is in the recording's w);
 * ``sun`` 0 (circular orbit) or ``perturber`` 0 (Kepler orbit): an ARROW from 0 towards the
-  torquing body, :data:`PERTURBER_LENGTH` long; absent when nothing torques (``orbit_rate`` 0).
+  torquing body, ``PERTURBER_LENGTH`` long; absent when nothing torques (``orbit_rate`` 0).
 
 Every array of one run has the same markers, strings and sequence lengths, so its CDR differs
 from sample to sample only in numbers: :class:`~tumble_ros.io.MessageTemplate` writes them
@@ -37,27 +37,22 @@ from tumble_ros import topics
 from tumble_ros.core import Scenario
 from tumble_ros.core.dynamics import angular_momentum_orbital
 from tumble_ros.core.rotation import quaternions_to_matrices
-from tumble_ros.core.shape import body_shape, BOX, torquing_body_direction
+from tumble_ros.core.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, MOMENTUM_LENGTH,
+                                   PERTURBER_LENGTH, torquing_body_direction)
 from tumble_ros.io import message_definition, MessageTemplate
 from visualization_msgs.msg import Marker, MarkerArray
 
-__all__ = ['MarkerScene', 'marker_every', 'marker_samples', 'MARKER_FRAMES', 'AXIS_LENGTH',
-           'MOMENTUM_LENGTH', 'PERTURBER_LENGTH', 'AXIS_ROTATIONS', 'NS_BODY', 'NS_AXES',
-           'NS_MOMENTUM', 'NS_SUN', 'NS_PERTURBER']
+__all__ = ['MarkerScene', 'marker_every', 'marker_samples', 'MARKER_FRAMES', 'AXIS_ROTATIONS',
+           'NS_BODY', 'NS_AXES', 'NS_MOMENTUM', 'NS_SUN', 'NS_PERTURBER']
 
-#: Namespaces of the markers.
-NS_BODY, NS_AXES, NS_MOMENTUM = 'body', 'axes', 'angular_momentum'
-NS_SUN, NS_PERTURBER = 'sun', 'perturber'
-#: Arrow lengths [display units; the body's longest semi-axis is 1].
-AXIS_LENGTH = 1.5
-MOMENTUM_LENGTH = 2.0
-PERTURBER_LENGTH = 2.5
+#: Namespaces of the markers (:mod:`tumble_ros.topics`).
+NS_BODY, NS_AXES, NS_MOMENTUM = topics.MARKER_BODY, topics.MARKER_AXES, topics.MARKER_MOMENTUM
+NS_SUN, NS_PERTURBER = topics.MARKER_SUN, topics.MARKER_PERTURBER
 #: Auto decimation (``marker_decimation`` 0): at most about this many scenes per run.
 MARKER_FRAMES = 10_000
 _H = math.sqrt(0.5)
 #: Quaternions (w, x, y, z) turning an arrow along +x onto the body's x, y and z axes.
 AXIS_ROTATIONS = ((1.0, 0.0, 0.0, 0.0), (_H, 0.0, 0.0, _H), (_H, 0.0, -_H, 0.0))
-_AXIS_COLORS = ((0.9, 0.15, 0.15), (0.15, 0.75, 0.15), (0.2, 0.35, 0.95))
 
 
 def marker_every(decimation: int, samples: int) -> int:
@@ -77,7 +72,8 @@ def marker_samples(k0: int, k1: int, every: int, count: int) -> np.ndarray:
     return k[(k % every == 0) | (k == count - 1)]
 
 
-def _color(r: float, g: float, b: float, a: float = 1.0) -> ColorRGBA:
+def _color(rgba) -> ColorRGBA:
+    r, g, b, a = rgba
     return ColorRGBA(r=float(r), g=float(g), b=float(b), a=float(a))
 
 
@@ -117,17 +113,16 @@ class MarkerScene:
             m.points = [Point() for _ in range(points)]
             markers.append(m)
 
-        box = self.shape.kind == BOX
-        add(NS_BODY, 0, Marker.CUBE if box else Marker.SPHERE,
-            [2.0 * v for v in self.shape.semi_axes],
-            _color(0.9, 0.55, 0.25, 0.6) if box else _color(0.62, 0.57, 0.52, 0.85))
-        for i, rgb in enumerate(_AXIS_COLORS):
-            add(NS_AXES, i, Marker.ARROW, (AXIS_LENGTH, 0.04, 0.08), _color(*rgb))
+        add(NS_BODY, 0, Marker.CUBE if self.shape.kind == BOX else Marker.SPHERE,
+            [2.0 * v for v in self.shape.semi_axes], _color(COLORS[self.shape.kind]))
+        for i, axis in enumerate('xyz'):
+            add(NS_AXES, i, Marker.ARROW, (AXIS_LENGTH, 0.04, 0.08), _color(COLORS[axis]))
         # ARROW with points: scale = (shaft diameter, head diameter, head length)
-        add(NS_MOMENTUM, 0, Marker.ARROW, (0.05, 0.1, 0.2), _color(0.8, 0.2, 0.8), points=2)
+        add(NS_MOMENTUM, 0, Marker.ARROW, (0.05, 0.1, 0.2), _color(COLORS['momentum']),
+            points=2)
         if self.perturber_ns is not None:
-            add(self.perturber_ns, 0, Marker.ARROW, (0.05, 0.1, 0.2), _color(1.0, 0.8, 0.1),
-                points=2)
+            add(self.perturber_ns, 0, Marker.ARROW, (0.05, 0.1, 0.2),
+                _color(COLORS['perturber']), points=2)
         return MarkerArray(markers=markers)
 
     @property
