@@ -76,8 +76,8 @@ def _parser() -> argparse.ArgumentParser:
                         help='with --animate: frames per second (default: '
                              'analysis.animation.FPS, 12)')
     parser.add_argument('--still', metavar='FILE.png', default=None,
-                        help='also draw one recorded 3D scene (the markers topic of the simulator, '
-                             'what RViz and Foxglove show) with matplotlib')
+                        help='also draw one recorded 3D scene (the markers topic: what RViz and '
+                             'Foxglove show) with matplotlib')
     parser.add_argument('--at', type=float, default=None, metavar='T',
                         help='with --still: the first scene at or after T [yr] (default: the '
                              'first scene)')
