@@ -67,7 +67,7 @@ def test_mp4_without_ffmpeg_is_refused_in_one_line(tmp_path, capsys):
     (['--animate', 'x.avi'], '.gif (Pillow) or an .mp4'),
     (['--frames', '3'], '--frames and --fps need --animate'),
     (['--animate', 'x.gif', '--frames', '0'], '--frames must be >= 1'),
-    (['--at', '1.0'], '--at needs --still'),
+    (['--at', '1.0'], '--at needs --still FILE.png or --animate FILE.png'),
 ])
 def test_bad_options_give_one_error_line(tmp_path, capsys, argv, phrase):
     argv = [str(tmp_path / a) if a.endswith(('.avi', '.gif')) else a for a in argv]
@@ -98,3 +98,11 @@ def test_the_still_draws_a_recorded_scene(tmp_path, capsys):
     # a recording without scenes (the golden file predates them): one error line
     assert command([str(GOLDEN), '--still', str(tmp_path / 'g.png'), '--quiet']) == 1
     assert 'no /markers scenes' in one_error_line(capsys)
+
+
+def test_one_frame_of_the_animation_as_a_png(tmp_path, capsys):
+    out = tmp_path / 'frame.png'
+    assert command([str(GOLDEN), '--animate', str(out), '--at', '0.1', '--quiet']) == 0
+    assert f'animation: {out} (one frame)' in capsys.readouterr().out
+    with Image.open(out) as png:
+        assert png.size == _pixels(SIZE, DPI)

@@ -1,4 +1,4 @@
-"""The shipped Foxglove layout: every topic it references is one the nodes publish, fields exist."""
+"""The shipped Foxglove layout: every topic it shows is one the nodes publish, its fields exist."""
 import json
 from pathlib import Path
 

@@ -2,6 +2,7 @@
 The asteroid tumbling, drawn offline: an animation of a recording, a still of its 3D scene.
 
     python -m tumble_ros analyze RUN.mcap --animate tumble.gif [--frames 120] [--fps 12]
+    python -m tumble_ros analyze RUN.mcap --animate frame.png [--at 1.0]    # one frame
     python -m tumble_ros analyze RUN.mcap --still scene.png [--at 0.5]
 
 :func:`write_animation` draws, frame by frame, the body (the shape of
@@ -222,30 +223,43 @@ def _set_up_3d(ax) -> None:
 
 
 def _figure(with_plots: bool):
+    """Return (figure, 3D axes, [the plots' axes]): the still's, or the animation's."""
     if not with_plots:
         fig = Figure(figsize=STILL_SIZE, dpi=STILL_DPI)
         FigureCanvasAgg(fig)
-        return fig, fig.add_subplot(projection='3d'), None, None
+        return fig, fig.add_subplot(projection='3d'), []
     fig = Figure(figsize=SIZE, dpi=DPI)
     FigureCanvasAgg(fig)
-    grid = fig.add_gridspec(2, 2, width_ratios=(1.0, 1.25), left=0.0, right=0.97, bottom=0.12,
-                            top=0.9, wspace=0.12, hspace=0.35)
+    grid = fig.add_gridspec(3, 2, width_ratios=(1.0, 1.25), left=0.0, right=0.97, bottom=0.11,
+                            top=0.91, wspace=0.14, hspace=0.15)
     ax3d = fig.add_subplot(grid[:, 0], projection='3d')
-    return fig, ax3d, fig.add_subplot(grid[0, 1]), fig.add_subplot(grid[1, 1])
+    first = fig.add_subplot(grid[0, 1])
+    return fig, ax3d, [first, fig.add_subplot(grid[1, 1], sharex=first),
+                       fig.add_subplot(grid[2, 1], sharex=first)]
 
 
-def _draw_plots(rec: Recording, ax_w, ax_e) -> list:
-    """Draw w and |error| against t; return the two cursors (vertical lines)."""
-    for i, name in enumerate('xyz'):
-        ax_w.plot(*envelope(rec.t, rec.omega[:, i]), lw=0.6, color=COLORS[name][:3],
-                  label=f'$\\omega_{name}$')
-    limits = [numeric_limits(rec.omega[:, i]) for i in range(3)]
-    ax_w.set_ylim(min(lo for lo, _ in limits), max(hi for _, hi in limits))
-    ax_w.set_ylabel('$\\omega$ [rad/yr]', fontsize=8)
-    ax_w.legend(loc='upper right', fontsize=6, ncol=3)
+def _draw_plots(rec: Recording, axes: list) -> list:
+    """
+    Draw (wx, wy), wz and |error| against t on three axes; return their cursors.
+
+    w is scaled on the numeric solution (the model is not drawn here: omega.png has it).
+    """
+    ax_xy, ax_z, ax_e = axes
+    for ax, components in ((ax_xy, (0, 1)), (ax_z, (2,))):
+        limits = []
+        for i in components:
+            name = 'xyz'[i]
+            ax.plot(*envelope(rec.t, rec.omega[:, i]), lw=0.6, color=COLORS[name][:3],
+                    label=f'$\\omega_{name}$')
+            limits.append(numeric_limits(rec.omega[:, i]))
+        ax.set_ylim(min(lo for lo, _ in limits), max(hi for _, hi in limits))
+        ax.legend(loc='upper right', fontsize=6, ncol=2)
+        ax.set_ylabel('rad/yr', fontsize=7)
     if len(rec.norm_t):
-        ax_e.plot(*envelope(rec.norm_t, rec.error_norm), lw=0.6, color='black')
-        ax_e.set_ylabel('|$\\omega - \\omega_{model}$| [rad/yr]', fontsize=8)
+        ax_e.plot(*envelope(rec.norm_t, rec.error_norm), lw=0.6, color='black',
+                  label='$|\\omega - \\omega_{model}|$')
+        ax_e.legend(loc='upper left', fontsize=6)
+        ax_e.set_ylabel('rad/yr', fontsize=7)
         if np.nanmax(rec.error_norm) > 0:
             ax_e.set_yscale('log')
     else:
@@ -253,11 +267,13 @@ def _draw_plots(rec: Recording, ax_w, ax_e) -> list:
                   transform=ax_e.transAxes, fontsize=8)
     ax_e.set_xlabel('t [yr]', fontsize=8)
     cursors = []
-    for ax in (ax_w, ax_e):
+    for ax in axes:
         ax.set_xlim(rec.t[0], rec.t[-1] if rec.t[-1] > rec.t[0] else rec.t[0] + 1.0)
         ax.grid(True, lw=0.3)
         ax.tick_params(labelsize=7)
         cursors.append(ax.axvline(rec.t[0], color='tab:red', lw=1.0))
+    for ax in axes[:-1]:
+        ax.tick_params(labelbottom=False)
     return cursors
 
 
@@ -305,28 +321,35 @@ def _writer(path: Path, fps: float):
             raise AnalysisError(f'{path}: MP4 needs ffmpeg, which is not installed here; '
                                 'write a .gif (Pillow) instead')
         return animation.FFMpegWriter(fps=fps, bitrate=1800)
-    raise AnalysisError(f'{path}: the animation is a .gif (Pillow) or an .mp4 (ffmpeg)')
+    raise AnalysisError(f'{path}: the animation is a .gif (Pillow) or an .mp4 (ffmpeg), or '
+                        'one frame of it a .png')
 
 
 def write_animation(rec: Recording, path, *, frames: int = FRAMES, fps: float = FPS,
-                    overwrite: bool = False,
+                    at: float | None = None, overwrite: bool = False,
                     progress: Callable[[int, int], None] | None = None) -> tuple[Path, int]:
     """
     Write the animation of ``rec`` to ``path`` (.gif or .mp4); return (path, frames written).
 
     ``frames`` frames spread evenly over the attitude samples, ``fps`` frames per second;
-    ``progress(done, total)`` after each frame. AnalysisError for a recording without attitude
-    samples, a refused path or format, bad options.
+    ``progress(done, total)`` after each frame. A ``.png`` path gets one frame: the attitude
+    sample nearest ``at`` [yr] (default: the middle of the run). AnalysisError for a
+    recording without attitude samples, a refused path or format, bad options.
     """
     if frames < 1 or not fps > 0:
         raise AnalysisError(f'--frames must be >= 1 and --fps > 0, got {frames} and {fps}')
     path = _target(path, overwrite)
-    writer = _writer(path, fps)
+    single = path.suffix.lower() == '.png'
+    writer = None if single else _writer(path, fps)
     t, quaternion, omega = _attitude_samples(rec)
-    chosen = frame_indices(len(t), frames)
+    if single:
+        target = (t[0] + t[-1]) / 2 if at is None else at
+        chosen = np.array([int(np.argmin(np.abs(t - target)))])
+    else:
+        chosen = frame_indices(len(t), frames)
     scenes = recorded_scene(rec, t[chosen], quaternion[chosen], omega[chosen])
-    fig, ax3d, ax_w, ax_e = _figure(with_plots=True)
-    cursors = _draw_plots(rec, ax_w, ax_e)
+    fig, ax3d, plots = _figure(with_plots=True)
+    cursors = _draw_plots(rec, plots)
     step = int(np.median(np.diff(chosen))) if len(chosen) > 1 else 1
     title = fig.suptitle('', fontsize=9)
 
@@ -340,8 +363,16 @@ def write_animation(rec: Recording, path, *, frames: int = FRAMES, fps: float = 
         for cursor in cursors:
             cursor.set_xdata([t[chosen[j]]] * 2)
         title.set_text(f'{rec.path.name}: t = {t[chosen[j]]:.5g} yr (frame {j + 1} of '
-                       f'{len(chosen)}, every {step}th attitude sample)')
+                       f'{len(chosen)}, every {step}th attitude sample)' if not single else
+                       f'{rec.path.name}: t = {t[chosen[j]]:.5g} yr (attitude sample '
+                       f'{chosen[j]} of {len(t)})')
 
+    if single:
+        draw(0)
+        temporary = path.with_name(f'.{path.stem}.{os.getpid()}.tmp.png')
+        fig.savefig(temporary, format='png', dpi=DPI)
+        _replace(temporary, path)
+        return path, 1
     # The writer driven directly (not FuncAnimation.save, which draws every frame twice).
     temporary = path.with_name(f'.{path.stem}.{os.getpid()}.tmp{path.suffix}')
     try:
@@ -385,7 +416,7 @@ def write_still(rec: Recording, path, *, at: float | None = None,
             break
     if chosen is None:
         raise AnalysisError(f'{rec.path}: {topic} holds no markers')
-    fig, ax3d, _, _ = _figure(with_plots=False)
+    fig, ax3d, _ = _figure(with_plots=False)
     _set_up_3d(ax3d)
     _draw_scene(ax3d, marker_scene(chosen))
     ax3d.set_title(f'{rec.path.name}: {topic} at t = {t_chosen:.6g} yr, frame orbital',

@@ -68,7 +68,8 @@ def _parser() -> argparse.ArgumentParser:
                         help='number of spectral peaks to report (default: %(default)s)')
     parser.add_argument('--animate', metavar='FILE', default=None,
                         help='also write an animation of the body tumbling, with w and the '
-                             'error beside it: FILE.gif (Pillow) or FILE.mp4 (needs ffmpeg)')
+                             'error beside it: FILE.gif (Pillow) or FILE.mp4 (needs ffmpeg); '
+                             'FILE.png: one frame of it (see --at)')
     parser.add_argument('--frames', type=int, default=None, metavar='N',
                         help='with --animate: frames, spread evenly over the run (default: '
                              'analysis.animation.FRAMES, 120)')
@@ -80,7 +81,8 @@ def _parser() -> argparse.ArgumentParser:
                              'Foxglove show) with matplotlib')
     parser.add_argument('--at', type=float, default=None, metavar='T',
                         help='with --still: the first scene at or after T [yr] (default: the '
-                             'first scene)')
+                             'first scene); with --animate FILE.png: the sample nearest T '
+                             '(default: the middle of the run)')
     parser.add_argument('--quiet', action='store_true',
                         help='no progress messages on stderr')
     return parser
@@ -115,8 +117,8 @@ def _check_options(args) -> str | None:
         return f'--fps must be in (0, 100], got {args.fps:g}'
     if (args.frames is not None or args.fps is not None) and args.animate is None:
         return '--frames and --fps need --animate FILE'
-    if args.at is not None and args.still is None:
-        return '--at needs --still FILE.png'
+    if args.at is not None and args.still is None and not str(args.animate).endswith('.png'):
+        return '--at needs --still FILE.png or --animate FILE.png'
     if args.namespace is not None:
         try:
             args.namespace = normalize_namespace(args.namespace)
@@ -172,8 +174,9 @@ def _pictures(rec, args) -> dict[str, tuple]:
         fps = args.fps or animation.FPS
         bar = None if args.quiet else animation.stderr_bar(f'animating {args.animate}')
         path, count = animation.write_animation(rec, args.animate, frames=frames, fps=fps,
-                                                overwrite=args.overwrite, progress=bar)
-        out['animation'] = (path, f'{count} frames at {fps:g} fps')
+                                                at=args.at, overwrite=args.overwrite,
+                                                progress=bar)
+        out['animation'] = (path, f'{count} frames at {fps:g} fps' if count > 1 else 'one frame')
     if args.still is not None:
         path, t = animation.write_still(rec, args.still, at=args.at, overwrite=args.overwrite)
         out['still'] = (path, f'the {rec.topic(MARKERS)} scene at t = {t:.6g} yr')
