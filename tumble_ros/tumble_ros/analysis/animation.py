@@ -67,7 +67,7 @@ EXTENT = 2.6
 #: Marker types of visualization_msgs/Marker drawn by the still.
 _ARROW, _CUBE, _SPHERE = 0, 1, 2
 #: Labels of the arrows: body axes, angular momentum, torquing body.
-_LABELS = {MARKER_MOMENTUM: 'L', MARKER_SUN: 'Sun', MARKER_PERTURBER: 'perturber'}
+_LABELS = {MARKER_MOMENTUM: 'L', MARKER_SUN: 'Sun', MARKER_PERTURBER: 'orbiting body'}
 
 
 @dataclass(frozen=True)
@@ -139,7 +139,7 @@ def recorded_scene(rec: Recording, t: np.ndarray, quaternion: np.ndarray,
         if perturber is not None:
             name = MARKER_PERTURBER if rec.scenario.orbit is not None else MARKER_SUN
             scene.append(Arrow((0.0, 0.0, 0.0), tuple(PERTURBER_LENGTH * perturber[j]),
-                               COLORS['perturber'], _LABELS[name]))
+                               COLORS['torquing_body'], _LABELS[name]))
         scenes.append(scene)
     return scenes
 

@@ -122,7 +122,7 @@ class MarkerScene:
             points=2)
         if self.perturber_ns is not None:
             add(self.perturber_ns, 0, Marker.ARROW, (0.05, 0.1, 0.2),
-                _color(COLORS['perturber']), points=2)
+                _color(COLORS['torquing_body']), points=2)
         return MarkerArray(markers=markers)
 
     @property

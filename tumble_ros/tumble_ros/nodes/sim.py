@@ -327,6 +327,7 @@ class SimNode(GuardedNode):
         x, y, z = position.tolist()
         msg.vector = Vector3(x=x, y=y, z=z)
         self._pub_perturber.publish(msg)
+
     def _publish_markers(self, k0: int, n: int, arrays: dict) -> None:
         """Publish the 3D scene of the samples k0 .. k0 + n - 1 that get one (decimation)."""
         if self._scene is None or n == 0:
