@@ -14,8 +14,9 @@ setup(
         # Register the package in the ament index, so `ros2 run` / ament_index find it.
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        # Scenario files, found at run time under share/tumble_ros/config.
-        (os.path.join('share', package_name, 'config'), glob(os.path.join('config', '*.yaml'))),
+        # Scenario files and the Foxglove layout, found under share/tumble_ros/config.
+        (os.path.join('share', package_name, 'config'),
+         glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.json'))),
         # Launch files, found by `ros2 launch tumble_ros <file>` under share/tumble_ros/launch.
         (os.path.join('share', package_name, 'launch'),
          glob(os.path.join('launch', '*.launch.py'))),

@@ -43,6 +43,7 @@ def test_topics_have_their_documented_types(ros):
         '/' + topics.IMPACT_EVENTS: 'tumble_ros_interfaces/msg/ImpactEvent',
         '/' + topics.STATUS: 'tumble_ros_interfaces/msg/SimStatus',
         '/' + topics.SCENARIO: 'tumble_ros_interfaces/msg/ScenarioDescription',
+        '/' + topics.MARKERS: 'visualization_msgs/msg/MarkerArray',
     }
 
     def listed():

@@ -140,3 +140,29 @@ def test_a_kepler_orbit_from_a_params_file_runs_and_is_reported(tmp_path):
     summary = analyze(rec)
     assert summary.invariant is None
     assert 'not conserved on a Kepler orbit' in summary.invariant_note
+
+
+def test_a_model_that_leaves_the_solution_is_reported_live_and_offline(tmp_path):
+    """Fig 9's paper model outgrows w: the status says from when, live and offline alike."""
+    from tumble_ros.analysis import analyze, load_recording
+
+    params = tmp_path / 'fig9_20yr.yaml'
+    text = (CONFIG / 'fig9.yaml').read_text()
+    params.write_text(text.replace('duration: 2000.0', 'duration: 20.0'))
+    live = run_bringup(str(params), str(tmp_path / 'live.mcap'), progress=None)
+    offline = run_bringup(str(params), str(tmp_path / 'off.mcap'), progress=None, offline=True)
+    assert live.ok and offline.ok
+    latched = '/' + topics.COMPARISON_STATUS
+    a, b = _by_topic(live.output)[latched], _by_topic(offline.output)[latched]
+    assert a == b[len(b) - len(a):]
+    # the first sample whose |w - w_model| exceeds |w|, from the recorded w and model
+    rec = load_recording(offline.output)
+    rel = (np.linalg.norm(rec.omega - rec.model_omega, axis=1)
+           / np.linalg.norm(rec.omega, axis=1))
+    t_first = rec.t[np.argmax(rel > 1.0)]
+    assert rel.max() > 1.0 and 5.0 < t_first < 20.0
+    assert b[-1]['level'] == 1 and f'left the numeric solution at t = {t_first:.9g} yr' in (
+        b[-1]['message'])
+    summary = analyze(rec)
+    assert summary.comparator.t_departure == t_first
+    assert summary.comparator.departed == int(np.sum(rel > 1.0))

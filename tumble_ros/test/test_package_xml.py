@@ -37,6 +37,7 @@ ROSDEP_KEYS = {
     'std_msgs': 'std_msgs',
     'std_srvs': 'std_srvs',
     'tumble_ros_interfaces': 'tumble_ros_interfaces',
+    'visualization_msgs': 'visualization_msgs',
     # Python libraries (rosdep/python.yaml of ros/rosdistro)
     'catkin_pkg': 'python3-catkin-pkg-modules',
     'dask': 'python3-dask',
@@ -45,6 +46,7 @@ ROSDEP_KEYS = {
     'mcap_ros2': 'mcap-ros2-support',  # pip installer
     'numba': 'python3-numba',
     'numpy': 'python3-numpy',
+    'PIL': 'python3-pil',
     'pytest': 'python3-pytest',
     'rosbags': 'python3-rosbags-pip',  # pip installer
     'scipy': 'python3-scipy',
@@ -60,6 +62,7 @@ PIP_ONLY = {
     'mcap': 'pip "mcap", a dependency of mcap-ros2-support',
     'lz4': 'pip "lz4", a dependency of mcap',
     'zstandard': 'pip "zstandard", a dependency of mcap',
+    'mpl_toolkits': 'part of matplotlib (python3-matplotlib): its 3D axes',
 }
 
 #: Where the imports are read, and which dependency kinds satisfy them.

@@ -44,8 +44,9 @@ def test_sim_process_publishes_and_exits_cleanly_on_sigint(ros, process):
     status = ros.collect(SimStatus, topics.STATUS, latched=True)
     sim = process('--ros-args', '--params-file', str(CONFIG / 'fig4.yaml'), '-p',
                   'real_time_factor:=0.05')
-    assert ros.spin_until(lambda: len(omega) >= 20, 30.0), sim.poll()
-    assert status and status[0].state == SimStatus.RUNNING
+    # status and angular_velocity are matched separately across processes: wait for both
+    assert ros.spin_until(lambda: len(omega) >= 20 and status, 30.0), (sim.poll(), len(omega))
+    assert status[0].state == SimStatus.RUNNING
     assert omega[0].header.frame_id == topics.FRAME_BODY
     sim.send_signal(signal.SIGINT)
     out, _ = sim.communicate(timeout=20)

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 __all__ = [
     'ANGULAR_VELOCITY', 'ATTITUDE', 'EULER_ANGLES', 'CLOCK', 'IMPACT_EVENTS', 'STATUS', 'SCENARIO',
-    'CONSUMER_PROGRESS', 'PERTURBER', 'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM',
+    'CONSUMER_PROGRESS', 'PERTURBER', 'MARKERS', 'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM',
     'COMPARISON_STATUS',
     'APPLY_IMPACT', 'PAUSE', 'RESUME', 'STEP', 'TYPES', 'SIM_TOPICS', 'COMPARATOR_TOPICS',
     'RECORDED', 'PER_SAMPLE', 'SIM_PER_SAMPLE', 'COMPARATOR_PER_SAMPLE', 'FRAME_BODY',
-    'FRAME_ORBITAL', 'FRAME_EULER', 'in_namespace',
+    'FRAME_ORBITAL', 'FRAME_EULER', 'MARKER_BODY', 'MARKER_AXES', 'MARKER_MOMENTUM',
+    'MARKER_SUN', 'MARKER_PERTURBER', 'in_namespace',
 ]
 
 # -- the simulator's (sim) ---------------------------------------------------------------------
@@ -37,6 +38,8 @@ CONSUMER_PROGRESS = 'consumer_progress'
 #: its direction is the u of the tidal torque, its norm the distance; one per sample, published
 #: when the scenario has a Kepler orbit or a flyby (orbit.kind kepler or flyby).
 PERTURBER = 'perturber'
+#: the 3D scene (visualization_msgs/MarkerArray, frame ``orbital``): body, axes, L, Sun.
+MARKERS = 'markers'
 
 # -- the comparator's --------------------------------------------------------------------------
 MODEL_ANGULAR_VELOCITY = 'comparison/model_angular_velocity'
@@ -61,15 +64,17 @@ TYPES = {
     STATUS: 'tumble_ros_interfaces/msg/SimStatus',
     SCENARIO: 'tumble_ros_interfaces/msg/ScenarioDescription',
     CONSUMER_PROGRESS: 'tumble_ros_interfaces/msg/ConsumerProgress',
+    MARKERS: 'visualization_msgs/msg/MarkerArray',
     MODEL_ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
     ERROR: 'geometry_msgs/msg/Vector3Stamped',
     ERROR_NORM: 'tumble_ros_interfaces/msg/ErrorNorm',
     COMPARISON_STATUS: 'diagnostic_msgs/msg/DiagnosticStatus',
 }
 
-#: What the simulator publishes (``/clock`` unless ``publish_clock`` is false).
+#: What the simulator publishes (``/clock`` unless ``publish_clock`` is false, ``perturber``
+#: with a Kepler orbit, ``markers`` unless ``markers`` is false).
 SIM_TOPICS = (ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, CLOCK, IMPACT_EVENTS, STATUS, SCENARIO,
-              PERTURBER)
+              PERTURBER, MARKERS)
 #: What the comparator publishes.
 COMPARATOR_TOPICS = (MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS)
 #: What the recorder records by default.
@@ -80,10 +85,19 @@ SIM_PER_SAMPLE = (ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES)
 COMPARATOR_PER_SAMPLE = (MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM)
 PER_SAMPLE = SIM_PER_SAMPLE + COMPARATOR_PER_SAMPLE
 
-#: ``header.frame_id`` of body-axis vectors, of the attitude, and of the Euler angles.
+#: ``header.frame_id`` of body-axis vectors, of the attitude (and the markers), of the Euler
+#: angles.
 FRAME_BODY = 'body'
 FRAME_ORBITAL = 'orbital'
 FRAME_EULER = 'euler_phi_psi_theta'
+
+#: Namespaces (``ns``) of the ``markers`` scene: the body, its principal axes (ids 0, 1, 2: x, y,
+#: z), the angular momentum's direction, the Sun (circular orbit) or the perturber (Kepler orbit).
+MARKER_BODY = 'body'
+MARKER_AXES = 'axes'
+MARKER_MOMENTUM = 'angular_momentum'
+MARKER_SUN = 'sun'
+MARKER_PERTURBER = 'perturber'
 
 
 def in_namespace(namespace: str, topic: str) -> str:

@@ -5,6 +5,8 @@ The ``analyze`` command: summarise a tumble_ros MCAP recording, optionally write
     python -m tumble_ros.analysis RUN.mcap --json              # the same as JSON
     python -m tumble_ros.analysis RUN.mcap --figures figs/     # and PNG figures into figs/
     python -m tumble_ros.analysis RUN.mcap --namespace /ast1   # the simulator of /ast1
+    python -m tumble_ros.analysis RUN.mcap --animate run.gif   # the body tumbling (GIF / MP4)
+    python -m tumble_ros.analysis RUN.mcap --still scene.png   # the recorded 3D scene, one frame
 
 Exit status: 0 on success (warnings included), 1 on a user error (a missing, empty,
 truncated-before-any-chunk or non-MCAP file, a path that is not a regular file, a damaged
@@ -22,6 +24,7 @@ import sys
 
 from tumble_ros.errors import AnalysisError
 from tumble_ros.io import McapError
+from tumble_ros.topics import MARKERS
 
 from .recording import load_recording, normalize_namespace, stderr_progress
 from .report import format_summary, summary_to_dict
@@ -63,6 +66,23 @@ def _parser() -> argparse.ArgumentParser:
                         help='print the summary as JSON instead of text')
     parser.add_argument('--peaks', type=int, default=5, metavar='N',
                         help='number of spectral peaks to report (default: %(default)s)')
+    parser.add_argument('--animate', metavar='FILE', default=None,
+                        help='also write an animation of the body tumbling, with w and the '
+                             'error beside it: FILE.gif (Pillow) or FILE.mp4 (needs ffmpeg); '
+                             'FILE.png: one frame of it (see --at)')
+    parser.add_argument('--frames', type=int, default=None, metavar='N',
+                        help='with --animate: frames, spread evenly over the run (default: '
+                             'analysis.animation.FRAMES, 120)')
+    parser.add_argument('--fps', type=float, default=None, metavar='F',
+                        help='with --animate: frames per second (default: '
+                             'analysis.animation.FPS, 12)')
+    parser.add_argument('--still', metavar='FILE.png', default=None,
+                        help='also draw one recorded 3D scene (the markers topic: what RViz and '
+                             'Foxglove show) with matplotlib')
+    parser.add_argument('--at', type=float, default=None, metavar='T',
+                        help='with --still: the first scene at or after T [yr] (default: the '
+                             'first scene); with --animate FILE.png: the sample nearest T '
+                             '(default: the middle of the run)')
     parser.add_argument('--quiet', action='store_true',
                         help='no progress messages on stderr')
     return parser
@@ -89,8 +109,16 @@ def _check_options(args) -> str | None:
     """Why the options are wrong, or None."""
     if args.peaks < 1:
         return f'--peaks must be >= 1, got {args.peaks}'
-    if args.overwrite and args.figures is None:
-        return '--overwrite needs --figures DIR'
+    if args.overwrite and args.figures is None and args.animate is None and args.still is None:
+        return '--overwrite needs --figures DIR, --animate FILE or --still FILE'
+    if args.frames is not None and args.frames < 1:
+        return f'--frames must be >= 1, got {args.frames}'
+    if args.fps is not None and not 0 < args.fps <= 100:
+        return f'--fps must be in (0, 100], got {args.fps:g}'
+    if (args.frames is not None or args.fps is not None) and args.animate is None:
+        return '--frames and --fps need --animate FILE'
+    if args.at is not None and args.still is None and not str(args.animate).endswith('.png'):
+        return '--at needs --still FILE.png or --animate FILE.png'
     if args.namespace is not None:
         try:
             args.namespace = normalize_namespace(args.namespace)
@@ -116,6 +144,7 @@ def command(argv=None) -> int:
         rec = load_recording(args.file, namespace=args.namespace, progress=progress)
         summary = analyze(rec, n_peaks=args.peaks)
         figures = [] if args.figures is None else _figures(rec, summary, args)
+        extra = _pictures(rec, args)
     except (McapError, AnalysisError) as err:
         return _error(err)
     except KeyboardInterrupt:
@@ -123,6 +152,7 @@ def command(argv=None) -> int:
     if args.json:
         data = summary_to_dict(summary)
         data['figures'] = [str(p) for p in figures]
+        data.update({key: str(value) for key, (value, _) in extra.items()})
         print(json.dumps(data, indent=1, allow_nan=False))
     else:
         print(format_summary(summary))
@@ -130,7 +160,27 @@ def command(argv=None) -> int:
             print(f'figures: {len(figures)} written to {args.figures}')
             for path in figures:
                 print(f'  {path}')
+        for key, (path, what) in extra.items():
+            print(f'{key}: {path} ({what})')
     return 0
+
+
+def _pictures(rec, args) -> dict[str, tuple]:
+    """Write the animation and the still asked for: {'animation'|'still': (path, what)}."""
+    from . import animation   # matplotlib only when asked for
+    out = {}
+    if args.animate is not None:
+        frames = args.frames or animation.FRAMES
+        fps = args.fps or animation.FPS
+        bar = None if args.quiet else animation.stderr_bar(f'animating {args.animate}')
+        path, count = animation.write_animation(rec, args.animate, frames=frames, fps=fps,
+                                                at=args.at, overwrite=args.overwrite,
+                                                progress=bar)
+        out['animation'] = (path, f'{count} frames at {fps:g} fps' if count > 1 else 'one frame')
+    if args.still is not None:
+        path, t = animation.write_still(rec, args.still, at=args.at, overwrite=args.overwrite)
+        out['still'] = (path, f'the {rec.topic(MARKERS)} scene at t = {t:.6g} yr')
+    return out
 
 
 def main(args: list[str] | None = None) -> int:

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tumble_ros.core import DEPARTURE
 from tumble_ros.topics import ANGULAR_VELOCITY, ERROR, ERROR_NORM, MODEL_ANGULAR_VELOCITY
 
 from .recording import Recording
@@ -38,6 +39,10 @@ class ErrorStats:
     rms_rel: float | None
     infinite_rel: int        # samples with |w_numeric| = 0 (relative error infinite), left out
     max_component: tuple[float, float, float] | None   # max |error_i|, if the vectors are known
+    #: first t [yr] where relative > core.DEPARTURE (the model left the numeric solution), and
+    #: how many samples are beyond it
+    t_departure: float | None = None
+    departed: int = 0
 
 
 def comparator_errors(rec: Recording) -> tuple[ErrorStats | None, str | None]:
@@ -93,10 +98,13 @@ def comparator_errors(rec: Recording) -> tuple[ErrorStats | None, str | None]:
         j = int(np.nanargmax(np.where(rel_ok, rel, np.nan)))
         max_rel, t_max_rel = float(rel[j]), float(t[j])
         rms_rel = float(np.sqrt(np.mean(rel[rel_ok] ** 2)))
+    beyond = np.flatnonzero(rel_ok & (rel > DEPARTURE))
+    t_departure = float(t[beyond[0]]) if len(beyond) else None
     comp = None
     if vectors is not None and len(vectors):
         comp = tuple(float(v) for v in np.nanmax(np.abs(vectors), axis=0))
     return ErrorStats(
         models=models, source=source, n=len(t), max_abs=float(norm[k]), t_max_abs=float(t[k]),
         rms_abs=float(np.sqrt(np.mean(norm[finite] ** 2))), max_rel=max_rel, t_max_rel=t_max_rel,
-        rms_rel=rms_rel, infinite_rel=infinite, max_component=comp), None
+        rms_rel=rms_rel, infinite_rel=infinite, max_component=comp, t_departure=t_departure,
+        departed=len(beyond)), None

@@ -10,7 +10,15 @@ written, empty when the recording lacks what the figure needs:
 
 - :func:`plot_angular_velocity` ``omega.png``: wx, wy, wz against t (paper Figs 3-9), the
   analytic model's w overlaid as a bold line when the comparator recorded it (as the paper
-  draws its analytic solution), impact pulses marked;
+  draws its analytic solution), impact pulses marked. The axes are scaled on the numeric
+  solution: a model that leaves that range is clipped (its off-scale samples marked at the
+  edge) and the time it left the numeric solution (``ErrorStats.t_departure``) drawn, so that
+  a diverging model (Fig 9's grows to +-4,400 rad/yr about +-0.2) does not flatten the
+  solution into a line under a band;
+- :func:`plot_omega_windows` ``omega_windows.png``, for long runs (at least
+  :data:`WINDOWS_FROM` samples): w at full resolution in zoomed windows of
+  :data:`WINDOW_SAMPLES` samples: the start, each impact (up to :data:`MAX_IMPACT_WINDOWS`),
+  the end; ``omega.png`` shows the whole run as an envelope;
 - :func:`plot_wy_vs_wx` ``wy_vs_wx.png``: wy against wx (Fig 9, bottom);
 - :func:`plot_error` ``error.png``: the comparator's error components and |error| against t;
 - :func:`plot_impacts` ``impact_<k>_id<id>.png``: w around each impact with the pulse
@@ -42,6 +50,7 @@ from matplotlib.figure import Figure
 import numpy as np
 from tumble_ros.errors import AnalysisError
 
+from .comparator import comparator_errors
 from .impacts import impact_intervals
 from .recording import Recording, ROOT_NAMESPACE
 from .spectrum import spectrum
@@ -49,7 +58,8 @@ from .summary import AnalysisSummary, analyze
 from .theory import theory_lines
 
 __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
-           'plot_impacts', 'plot_spectrum', 'plot_wy_vs_wx', 'write_figures']
+           'plot_impacts', 'plot_omega_windows', 'plot_spectrum', 'plot_wy_vs_wx',
+           'write_figures', 'numeric_limits']
 
 DPI = 110
 #: Above this many samples the wy-vs-wx path is drawn as a density image (_draw_path_density).
@@ -58,6 +68,13 @@ PATH_DENSITY_BINS = 500
 #: Bins of a long time series' display envelope (about two per pixel column of a figure).
 ENVELOPE_BINS = 2000
 _LABELS = ('$\\omega_x$', '$\\omega_y$', '$\\omega_z$')
+#: Long runs (this many samples or more) also get zoomed windows (omega_windows.png).
+WINDOWS_FROM = 20_000
+#: Samples in a zoomed window; at most this many impact windows.
+WINDOW_SAMPLES = 400
+MAX_IMPACT_WINDOWS = 4
+#: Margin around the numeric solution's range on the w axes (fraction of the range).
+MARGIN = 0.08
 
 
 def _new(rows: int = 1, height: float = 3.0, width: float = 9.0):
@@ -195,19 +212,52 @@ def _mark_impacts(ax, rec: Recording) -> None:
 
 def plot_angular_velocity(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
     """``omega.png``: the three components against t, the model's overlaid if recorded."""
-    return _write(_draw_angular_velocity(rec), out_dir, overwrite)
+    return _write(_draw_angular_velocity(rec, _departure(rec)), out_dir, overwrite)
 
 
-def _draw_angular_velocity(rec: Recording) -> list[Drawing]:
+def _departure(rec: Recording) -> float | None:
+    stats, _ = comparator_errors(rec)
+    return stats.t_departure if stats is not None else None
+
+
+def numeric_limits(y: np.ndarray) -> tuple[float, float]:
+    """Return the axis range of a numeric series: its min and max with a :data:`MARGIN`."""
+    finite = y[np.isfinite(y)]
+    if not len(finite):
+        return -1.0, 1.0
+    lo, hi = float(finite.min()), float(finite.max())
+    pad = MARGIN * (hi - lo) or MARGIN * max(abs(lo), abs(hi), 1e-12)
+    return lo - pad, hi + pad
+
+
+def _draw_model(ax, t: np.ndarray, y: np.ndarray, limits: tuple[float, float], label: str,
+                off_label: bool) -> None:
+    """Draw the model's samples within ``limits``; mark the others at the edge they left by."""
+    lo, hi = limits
+    inside = (y >= lo) & (y <= hi)
+    ax.plot(t, np.where(inside, y, np.nan), lw=2.0, color='black', alpha=0.6, label=label)
+    if not inside.all():
+        off = ~inside & np.isfinite(y)
+        ax.plot(t[off], np.clip(y[off], lo, hi), ls='', marker='|', ms=4, color='tab:gray',
+                alpha=0.5, label='model off scale' if off_label else None)
+    ax.set_ylim(lo, hi)
+
+
+def _draw_angular_velocity(rec: Recording, departure: float | None = None) -> list[Drawing]:
     fig, axes = _new(3, 2.4)
     has_model = len(rec.model_t) > 0
     for i, ax in enumerate(axes):
         ax.plot(*envelope(rec.t, rec.omega[:, i]), lw=0.6, color='tab:blue', label='numeric')
+        limits = numeric_limits(rec.omega[:, i])
         if has_model:
-            ax.plot(*envelope(rec.model_t, rec.model_omega[:, i]), lw=2.0, color='black',
-                    alpha=0.6,
-                    label='analytic model' + (f' ({", ".join(rec.error_models)})'
-                                              if rec.error_models else ''))
+            _draw_model(ax, *envelope(rec.model_t, rec.model_omega[:, i]), limits,
+                        'analytic model' + (f' ({", ".join(rec.error_models)})'
+                                            if rec.error_models else ''), i == 0)
+        ax.set_ylim(*limits)
+        if departure is not None:
+            ax.axvline(departure, color='tab:orange', lw=1.0, ls='-.',
+                       label=f'model left the solution (t = {departure:.4g} yr)'
+                       if i == 0 else None)
         _mark_impacts(ax, rec)
         ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
         ax.grid(True, lw=0.3)
@@ -216,6 +266,57 @@ def _draw_angular_velocity(rec: Recording) -> list[Drawing]:
         axes[0].legend(loc='upper right', fontsize='small')
     axes[0].set_title(_title(rec), fontsize='small')
     return [_png(fig, 'omega.png')]
+
+
+def plot_omega_windows(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
+    """``omega_windows.png``: w at full resolution at the start, each impact and the end."""
+    return _write(_draw_omega_windows(rec), out_dir, overwrite)
+
+
+def _windows(rec: Recording) -> list[tuple[str, float, float]]:
+    """Return the zoomed windows of a long run: (title, t0, t1) [yr]."""
+    dt = float(np.median(np.diff(rec.t)))
+    span = WINDOW_SAMPLES * dt
+    windows = [('start', rec.t[0], rec.t[min(rec.n - 1, WINDOW_SAMPLES)])]
+    for event in rec.impacts[:MAX_IMPACT_WINDOWS]:
+        windows.append((f'impact {event.id}', event.start - span / 2, event.end + span / 2))
+    windows.append(('end', rec.t[max(0, rec.n - 1 - WINDOW_SAMPLES)], rec.t[-1]))
+    return windows
+
+
+def _draw_omega_windows(rec: Recording) -> list[Drawing]:
+    if rec.n < WINDOWS_FROM:
+        return []
+    windows = _windows(rec)
+    fig = Figure(figsize=(3.2 * len(windows) + 1.0, 7.2), dpi=DPI, layout='constrained')
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(3, len(windows), squeeze=False)
+    for col, (name, t0, t1) in enumerate(windows):
+        sel = (rec.t >= t0) & (rec.t <= t1)
+        msel = (rec.model_t >= t0) & (rec.model_t <= t1)
+        for i in range(3):
+            ax = axes[i, col]
+            ax.plot(rec.t[sel], rec.omega[sel, i], lw=0.7, color='tab:blue', label='numeric')
+            limits = numeric_limits(rec.omega[sel, i])
+            if msel.any():
+                _draw_model(ax, rec.model_t[msel], rec.model_omega[msel, i], limits,
+                            'analytic model', i == 0)
+            ax.set_ylim(*limits)
+            for start, end in impact_intervals(rec):
+                if end >= t0 and start <= t1:
+                    ax.axvspan(start, end, color='tab:red', alpha=0.3)
+                    ax.axvline(start, color='tab:red', lw=0.8, ls='--')
+            ax.set_xlim(t0, t1)
+            ax.grid(True, lw=0.3)
+            ax.tick_params(labelsize='x-small')
+            if col == 0:
+                ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
+        axes[0, col].set_title(f'{name}: t = {t0:.6g} .. {t1:.6g} yr', fontsize='small')
+        axes[-1, col].set_xlabel('t [yr]')
+    axes[0, 0].legend(loc='upper right', fontsize='x-small')
+    fig.suptitle(f'{_label(rec)}: $\\omega$ at full resolution ({WINDOW_SAMPLES} samples a '
+                 'window; omega.png: the whole run)', fontsize='small')
+    return [_png(fig, 'omega_windows.png')]
 
 
 def plot_wy_vs_wx(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
@@ -423,6 +524,8 @@ def write_figures(rec: Recording, out_dir, summary: AnalysisSummary | None = Non
     """
     if summary is None:
         summary = analyze(rec)
-    drawings = (_draw_angular_velocity(rec) + _draw_wy_vs_wx(rec) + _draw_error(rec)
-                + _draw_impacts(rec) + _draw_spectrum(rec, summary))
+    departure = summary.comparator.t_departure if summary.comparator is not None else None
+    drawings = (_draw_angular_velocity(rec, departure) + _draw_omega_windows(rec)
+                + _draw_wy_vs_wx(rec) + _draw_error(rec) + _draw_impacts(rec)
+                + _draw_spectrum(rec, summary))
     return _write(drawings, out_dir, overwrite)

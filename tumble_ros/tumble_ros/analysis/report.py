@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from tumble_ros.core import DEPARTURE
 from tumble_ros.topics import ANGULAR_VELOCITY, in_namespace, SCENARIO
 
 from .recording import ROOT_NAMESPACE
@@ -95,6 +96,10 @@ def _comparator(s: AnalysisSummary) -> list[str]:
                       if c.infinite_rel else ''))
     if c.max_component is not None:
         out.append(f'  max |error| per component (x, y, z): {_v(c.max_component)} rad/yr')
+    if c.t_departure is not None:
+        out.append(f'  the model left the numeric solution at t = {_g(c.t_departure)} yr '
+                   f'(|w - w_model| > {DEPARTURE:g} |w|; {c.departed} of {c.n} samples beyond): '
+                   'the w figure is scaled on the numeric solution, the model clipped')
     return out
 
 

@@ -20,7 +20,7 @@ motion), ``timebase`` (simulated years <-> ROS stamps).
 Performance and long runs: docs/performance.md.
 """
 from .analytic import (AnalyticModel, AnchorState, applicability, characteristic_frequencies,
-                       Frequency, make_model, ModelNotApplicable)
+                       DEPARTURE, departure_text, Frequency, make_model, ModelNotApplicable)
 from .analytic import MODELS as ANALYTIC_MODELS
 from .dynamics import angular_momentum_orbital, ATTITUDE_MODELS, jacobi_integral, kinetic_energy
 from .ensemble import (body_rng, ChunkResult, concatenate_results, ensemble_scenarios,
@@ -47,6 +47,8 @@ __all__ = [
     'ANALYTIC_MODELS',
     'AnalyticModel',
     'characteristic_frequencies',
+    'DEPARTURE',
+    'departure_text',
     'Frequency',
     'AnchorState',
     'ModelNotApplicable',

@@ -66,6 +66,8 @@ __all__ = [
     'AnchorState',
     'ModelNotApplicable',
     'MODELS',
+    'DEPARTURE',
+    'departure_text',
     'make_model',
     'applicability',
     'PaperModel',
@@ -84,6 +86,11 @@ __all__ = [
 
 #: Two principal moments count as equal when they differ by at most this, relative.
 SYMMETRY_TOL = 1e-12
+#: A model has left the numeric solution once its relative error |w - w_model| / |w| exceeds
+#: this: the error is then larger than the solution itself (the paper's model on Fig 9 grows
+#: to +-4,400 rad/yr about a w of 30 rad/yr). The comparator says so on its status, the
+#: analysis in its summary and figures (which scale w on the numeric solution).
+DEPARTURE = 1.0
 #: torque_free_exact refuses states with 1 - m below this (m the elliptic parameter):
 #: scipy's ellipj switches to an O(1 - m) approximation above m = 1 - 1e-9.
 SEPARATRIX_TOL = 1e-9
@@ -727,6 +734,13 @@ class TorqueFreeExactModel(AnalyticModel):
 # --------------------------------------------------------------------------------------
 # Registry
 # --------------------------------------------------------------------------------------
+def departure_text(model_name: str, t: float) -> str:
+    """Say that the model ``model_name`` left the numeric solution at ``t`` [yr]."""
+    return (f'model {model_name!r} left the numeric solution at t = {t:.9g} yr '
+            f'(|w - w_model| > {DEPARTURE:g} |w| from this sample on its segment); '
+            'the comparisons go on')
+
+
 MODELS: dict[str, type[AnalyticModel]] = {
     cls.name: cls
     for cls in (PaperModel, FastSpinModel, FastSpinPrecessingModel, FastSpinAdiabaticModel,

@@ -38,7 +38,7 @@ from .mcap_reader import (
 )
 from .msgdefs import MessageDefinitionError, parse_msg
 
-__all__ = ['FlatLayout', 'TopicColumns', 'read_columns']
+__all__ = ['FlatLayout', 'MessageTemplate', 'TopicColumns', 'read_columns', 'encode_rows']
 
 #: numpy types of the primitive types a flat layout may hold (strings apart), little-endian.
 _DTYPES = {'bool': '<u1', 'byte': '<u1', 'char': '<u1', 'int8': '<i1', 'uint8': '<u1',
@@ -70,15 +70,8 @@ class FlatLayout:
     @classmethod
     def from_schema(cls, type_name: str, schema_text: str) -> FlatLayout | None:
         """Return the layout of ``type_name`` from its ros2msg schema text; None if not flat."""
-        specs: dict[str, Any] = {}
-        try:
-            for header, body in _split_sections(schema_text):
-                name = type_name if not header else header.partition('MSG: ')[2].strip()
-                if not name or header.startswith('SRV: '):
-                    return None
-                package = name.split('/')[0]
-                specs[_short(name)] = parse_msg(body, package, source=name)
-        except MessageDefinitionError:
+        specs = _specs(type_name, schema_text)
+        if specs is None:
             return None
         fields: list[tuple[str, str]] = []
         if not _flatten(specs, _short(type_name), '', fields, depth=0):
@@ -113,6 +106,21 @@ class FlatLayout:
             if at > size:
                 return None
         return offsets, strings
+
+
+def _specs(type_name: str, schema_text: str) -> dict[str, Any] | None:
+    """Return {'pkg/Type': MsgSpec} of a ros2msg schema text (None if it does not parse)."""
+    specs: dict[str, Any] = {}
+    try:
+        for header, body in _split_sections(schema_text):
+            name = type_name if not header else header.partition('MSG: ')[2].strip()
+            if not name or header.startswith('SRV: '):
+                return None
+            package = name.split('/')[0]
+            specs[_short(name)] = parse_msg(body, package, source=name)
+    except MessageDefinitionError:
+        return None
+    return specs
 
 
 def _short(type_name: str) -> str:
@@ -483,3 +491,91 @@ def encode_rows(layout: FlatLayout, count: int, values: dict[str, np.ndarray],
             rows[:, offsets[name]:offsets[name] + width] = column.view(np.uint8).reshape(
                 count, width)
     return rows
+
+
+class MessageTemplate:
+    """
+    Messages of one shape (the same strings and sequence lengths), numbers from numpy columns.
+
+    A ``visualization_msgs/MarkerArray`` of one scene differs from sample to sample only in its
+    numbers (stamps, poses, points): its CDR bytes have the same length and the numbers sit at
+    the same offsets. ``MessageTemplate(type_name, schema_text, data)`` walks one serialised
+    message ``data`` (rclpy's ``serialize_message``) once and finds the offset of every numeric
+    field, named by its path (``markers[2].pose.orientation.w``); :meth:`encode` then writes
+    n messages as rows of a (n, size) uint8 array, the template's bytes with the given
+    columns put in: ~1 us a message instead of ~1 ms for building and serialising one in
+    Python. Padding bytes are zero. ValueError when the type is not known to the schema or
+    ``data`` does not hold a message of it.
+    """
+
+    def __init__(self, type_name: str, schema_text: str, data: bytes):
+        specs = _specs(type_name, schema_text)
+        if specs is None or _short(type_name) not in specs:
+            raise ValueError(f'{type_name}: no usable ros2msg definition')
+        if data[:2] not in _LITTLE_ENDIAN:
+            raise ValueError(f'{type_name}: not little-endian CDR')
+        self.type_name = type_name
+        self.fields: dict[str, tuple[int, str]] = {}     # path -> (offset, primitive type)
+        body = np.frombuffer(data, dtype=np.uint8)[_ENCAPSULATION:]
+        clean = np.zeros(len(body), dtype=np.uint8)      # the template, padding zeroed
+        end = self._walk(specs, _short(type_name), body, clean, 0, '')
+        if not 0 <= len(body) - end < 8:      # (CDR may pad the end to a multiple of 4 or 8)
+            raise ValueError(f'{type_name}: {len(body)} bytes of CDR, the definition reads {end}')
+        self.template = np.concatenate([np.frombuffer(data[:_ENCAPSULATION], dtype=np.uint8),
+                                        clean[:len(body)]])
+
+    def _walk(self, specs, type_name: str, body, clean, at: int, prefix: str) -> int:
+        for f in specs[type_name].fields:
+            name = prefix + f.name
+            if f.array is None:
+                at = self._one(specs, f, body, clean, at, name)
+                continue
+            if f.array == '' or f.array.startswith('<='):
+                at += -at % 4
+                count = int.from_bytes(bytes(body[at:at + 4]), 'little')
+                clean[at:at + 4] = body[at:at + 4]
+                at += 4
+            else:
+                count = int(f.array)
+            for k in range(count):
+                at = self._one(specs, f, body, clean, at, f'{name}[{k}]')
+        return at
+
+    def _one(self, specs, f, body, clean, at: int, name: str) -> int:
+        if f.type == 'string':
+            at += -at % 4
+            length = int.from_bytes(bytes(body[at:at + 4]), 'little')
+            clean[at:at + 4 + length] = body[at:at + 4 + length]
+            return at + 4 + length
+        if f.type in _SIZES:
+            width = _SIZES[f.type]
+            at += -at % width
+            if at + width > len(body):
+                raise ValueError(f'{self.type_name}: the message ends inside {name}')
+            self.fields[name] = (_ENCAPSULATION + at, f.type)
+            clean[at:at + width] = body[at:at + width]
+            return at + width
+        if f.is_primitive:
+            raise ValueError(f'{self.type_name}: {name}: type {f.type} is not handled')
+        return self._walk(specs, _short(f.type), body, clean, at, name + '.')
+
+    @property
+    def size(self) -> int:
+        """Return the size of one message [bytes], its encapsulation header included."""
+        return len(self.template)
+
+    def encode(self, count: int, values: dict[str, np.ndarray]) -> np.ndarray:
+        """
+        Return ``count`` messages as a (count, size) uint8 array, one CDR message per row.
+
+        ``values``: field path -> (count,) array or a number (cast to the field's type); the
+        fields not given keep the template's values. KeyError for a path the type lacks.
+        """
+        rows = np.empty((count, self.size), dtype=np.uint8)
+        rows[:] = self.template
+        for name, column in values.items():
+            offset, kind = self.fields[name]
+            width = _SIZES[kind]
+            data = np.ascontiguousarray(np.broadcast_to(column, (count,)), dtype=_DTYPES[kind])
+            rows[:, offset:offset + width] = data.view(np.uint8).reshape(count, width)
+        return rows

@@ -158,6 +158,8 @@ def _run_offline(args, output, model, progress, stop: StopSignals) -> BringupRes
         scenario, timebase = sim.scenario, sim.timebase
         model_name = nodes[1].get_parameter('model').value
         publish_clock = sim.get_parameter('publish_clock').value
+        markers = sim.get_parameter('markers').value
+        marker_decimation = sim.get_parameter('marker_decimation').value
     finally:
         for node in reversed(nodes):
             node.destroy_node()
@@ -176,7 +178,8 @@ def _run_offline(args, output, model, progress, stop: StopSignals) -> BringupRes
             last_line = time.monotonic()
 
     result = record_offline(scenario, path, timebase=timebase, model_name=model_name,
-                            publish_clock=publish_clock, stop=lambda: stop.requested,
+                            publish_clock=publish_clock, markers=markers,
+                            marker_decimation=marker_decimation, stop=lambda: stop.requested,
                             progress=show)
     show(result.t, result.samples, last=True)
     if progress:

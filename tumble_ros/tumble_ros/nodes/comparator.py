@@ -9,7 +9,9 @@ publishes, with the sample's own stamp:
 * ``comparison/error`` (geometry_msgs/Vector3Stamped): w_numeric - w_model [rad/yr];
 * ``comparison/error_norm`` (tumble_ros_interfaces/ErrorNorm): |error| and |error| / |w_numeric|;
 * ``comparison/status`` (diagnostic_msgs/DiagnosticStatus, latched): whether the model applies,
-  and ERROR when ``angular_velocity`` or ``scenario`` has more than one publisher (two runs mix).
+  WARN from the first sample where the model left the numeric solution (relative error above
+  :data:`tumble_ros.core.DEPARTURE`, once per segment), and ERROR when ``angular_velocity`` or
+  ``scenario`` has more than one publisher (two runs mix).
 
 The model is anchored on the state the simulator's current integration segment starts from
 (``scenario`` topic): at start-up, and again after every impact (the simulator re-publishes the
@@ -35,7 +37,8 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 
 from tumble_ros import topics
-from tumble_ros.core import ANALYTIC_MODELS, make_model, parse_scenario, ScenarioError, TimeBase
+from tumble_ros.core import (ANALYTIC_MODELS, DEPARTURE, departure_text, make_model,
+                             parse_scenario, ScenarioError, TimeBase)
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.messages import comparison_messages, comparison_status
@@ -123,6 +126,7 @@ class ComparatorNode(GuardedNode):
         self._previous: list = []  # earlier segments' models, newest last: (segment_start, model)
         self._grid = None  # the simulator's output grid (None: unknown)
         self._ahead = GridModelValues()
+        self._departed: list = []   # the models that left the numeric solution (said once each)
         self._received = 0
         self.compared = 0  # comparisons published (each on the three comparison topics)
         self._pending: deque[Vector3Stamped] = deque(maxlen=MAX_PENDING)
@@ -235,7 +239,12 @@ class ComparatorNode(GuardedNode):
         if model_at is not None and k % self._decimation == 0:
             model = self._model_omega(model_at, stamp_ns, t)
             if all(map(math.isfinite, model)):
-                self._publish(msg.header, (msg.vector.x, msg.vector.y, msg.vector.z), model)
+                relative = self._publish(msg.header, (msg.vector.x, msg.vector.y, msg.vector.z),
+                                         model)
+                if relative > DEPARTURE and not any(m is model_at for m in self._departed):
+                    self._departed.append(model_at)
+                    del self._departed[:-DESCRIPTION_QOS.depth]
+                    self._report(DiagnosticStatus.WARN, departure_text(self._model_name, t))
         self._progress.mark(stamp_ns)
 
     def _model_omega(self, model, stamp_ns: int, t: float) -> list[float]:
@@ -260,14 +269,19 @@ class ComparatorNode(GuardedNode):
         """Count the samples taken from angular_velocity and processed (compared or not)."""
         return self._received
 
-    def _publish(self, header, numeric, model) -> None:
-        """Publish the model, numeric - model and its norms (3-sequences of floats, rad/yr)."""
+    def _publish(self, header, numeric, model) -> float:
+        """
+        Publish the model, numeric - model and its norms (3-sequences of floats, rad/yr).
+
+        Return the relative error |numeric - model| / |numeric|.
+        """
         self.compared += 1
         model_msg, error_msg, norm_msg = comparison_messages(header, numeric, model,
                                                              self._model_name)
         self._pub_model.publish(model_msg)
         self._pub_error.publish(error_msg)
         self._pub_norm.publish(norm_msg)
+        return norm_msg.relative
 
     def close(self) -> None:
         """Tell the simulator this consumer leaves."""

@@ -31,12 +31,14 @@ import numpy as np
 from rclpy.serialization import serialize_message
 
 from tumble_ros import topics
-from tumble_ros.core import dump_scenario, Propagator, Scenario, TimeBase
+from tumble_ros.core import (DEPARTURE, departure_text, dump_scenario, Propagator, Scenario,
+                             TimeBase)
 from tumble_ros.core.scenario import ScenarioError
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.columns import encode_rows, FlatLayout
 from tumble_ros.io.msgdefs import message_definition
 from tumble_ros.nodes.comparator import anchor_model, GridModelValues
+from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
                                        scenario_description, sim_status)
 from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
@@ -68,13 +70,14 @@ class OfflineResult:
 class _Channels:
     """The recording's channels, as the live recorder makes them, and their encoders."""
 
-    def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool):
+    def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool, markers: bool):
         self.writer = writer
         self.ids: dict[str, int] = {}
         self.layouts: dict[str, FlatLayout] = {}
         for topic in topics.RECORDED:
             if (topic == topics.CLOCK and not publish_clock
-                    or topic == topics.PERTURBER and not perturber):
+                    or topic == topics.PERTURBER and not perturber
+                    or topic == topics.MARKERS and not markers):
                 continue
             name = topic if topic.startswith('/') else '/' + topic
             type_name = topics.TYPES[topic]
@@ -105,12 +108,14 @@ def _stamped(sec, nanosec, names, columns) -> dict:
 
 def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = None,
                    model_name: str = 'paper', publish_clock: bool = True,
+                   markers: bool = True, marker_decimation: int = 0,
                    stop: Callable[[], bool] = lambda: False,
                    progress: Callable[[float, int], None] | None = None) -> OfflineResult:
     """
     Simulate ``scenario``, compare it with ``model_name`` and write the recording ``output``.
 
-    ``timebase``: the simulator's (its ``seconds_per_year``; default one second per year).
+    ``timebase``: the simulator's (its ``seconds_per_year``; default one second per year);
+    ``publish_clock``, ``markers``, ``marker_decimation``: the simulator's parameters.
     ``stop()`` is checked between batches: a stopped run keeps what it wrote (the file is
     finalised). ``progress(t [yr], samples)`` is called after each batch. Raises OSError when
     the file cannot be created or written, ScenarioError for a grid ROS stamps cannot carry.
@@ -124,8 +129,11 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
     propagator = Propagator(scenario)
     scenario_yaml = dump_scenario(scenario)
     state, message, k = SimStatus.RUNNING, '', 0
+    scene = _Scene(MarkerScene(scenario), marker_every(marker_decimation, grid.count),
+                   grid) if markers else None
     with McapWriter(output, chunk_seconds=math.inf) as writer:
-        channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None)
+        channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None,
+                             markers=markers)
         comparator = _Comparator(channels, model_name)
         channels.one(topics.COMPARISON_STATUS, comparison_status(
             DiagnosticStatus.WARN, COMPARATOR_NAME,
@@ -145,6 +153,8 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
                 revision = _describe(channels, comparator, scenario_yaml, timebase, revision, t0,
                                      segment_starts[t0], propagator)
             _write_samples(channels, comparator, grid, k, done, arrays, publish_clock, scenario)
+            if scene is not None:
+                scene.write(channels, k, done, arrays)
             k += done
             if progress is not None:
                 progress(grid.time(max(0, k - 1)), k)
@@ -181,6 +191,7 @@ class _Comparator:
         self.segments: list[tuple[float, object]] = []   # (segment start, model or None)
         self.grid = None
         self.values = GridModelValues()
+        self.departed: set[int] = set()    # segments whose model left the numeric solution
 
     def anchor(self, description) -> None:
         try:
@@ -220,7 +231,40 @@ class _Comparator:
         for j in np.flatnonzero(compared).tolist():
             norm[j], relative[j] = error_norms(numeric[j], errors[j])
         model[~compared] = 0.0
+        self._report_departures(times, which, edges, compared & (relative > DEPARTURE))
         return compared, model, error, norm, relative
+
+    def _report_departures(self, times, which, edges, beyond) -> None:
+        """Say on the status when a segment's model first leaves the numeric solution."""
+        for a, b in zip(edges[:-1], edges[1:]):
+            segment = int(which[a])
+            hits = np.flatnonzero(beyond[a:b])
+            if segment < 0 or not len(hits) or segment in self.departed:
+                continue
+            self.departed.add(segment)
+            self.channels.one(topics.COMPARISON_STATUS, comparison_status(
+                DiagnosticStatus.WARN, COMPARATOR_NAME,
+                departure_text(self.model_name, float(times[a + hits[0]])), self.model_name))
+
+
+@dataclass
+class _Scene:
+    """The simulator's markers (nodes.markers): the same scenes of the same samples."""
+
+    scene: MarkerScene
+    every: int
+    grid: object
+
+    def write(self, channels: _Channels, k0: int, n: int, arrays: dict) -> None:
+        """Write the scenes of the samples k0 .. k0 + n - 1 that get one."""
+        k = marker_samples(k0, k0 + n, self.every, self.grid.count)
+        if not len(k):
+            return
+        j = k - k0
+        rows = self.scene.encode(k * self.grid.interval_ns, self.grid.times(k0, k0 + n)[j],
+                                 arrays['quaternion'][j], arrays['omega'][j])
+        log = time.time_ns() + np.arange(len(k), dtype=np.int64)
+        channels.writer.write_rows([channels.ids[topics.MARKERS]], [rows], log)
 
 
 def _write_samples(channels: _Channels, comparator: _Comparator, grid, k0: int, n: int,

@@ -12,7 +12,9 @@ and publishes every ``output_interval`` of simulated time:
 * ``status`` (tumble_ros_interfaces/SimStatus, latched) on every state change, on ``step``, when
   a consumer is dropped or a second source appears, and once a second while running;
 * ``scenario`` (tumble_ros_interfaces/ScenarioDescription, latched) at the start and after each
-  impact (one per segment): the scenario as started and the initial state of the segment.
+  impact (one per segment): the scenario as started and the initial state of the segment;
+* ``markers`` (visualization_msgs/MarkerArray, frame ``orbital``), unless ``markers`` is false:
+  the 3D scene of every ``marker_decimation``-th sample (:mod:`.markers`).
 
 Every stamp is ROS time carrying simulated time, ``status`` included (the time of the last
 published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year) (``core.timebase``). The node
@@ -46,6 +48,7 @@ from tumble_ros.core import (
 )
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
+from tumble_ros.nodes.markers import marker_every, MARKER_FRAMES, marker_samples, MarkerScene
 from tumble_ros.nodes.messages import (FRAMES, impact_event, scenario_description, sim_status,
                                        stamp)
 from tumble_ros.nodes.parameters import (
@@ -59,6 +62,7 @@ from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
+from visualization_msgs.msg import MarkerArray
 
 __all__ = ['SimNode', 'main']
 
@@ -90,6 +94,10 @@ NODE_PARAMETERS = {
                             False),
     'max_impact_impulse': (1e3, 'I rad/yr', 'largest |M| * duration the service accepts',
                            (1e-12, 1e15), False),
+    'markers': (True, '', 'publish the 3D scene (body, axes, L, Sun) on markers', None, True),
+    'marker_decimation': (0, '', 'a scene every k-th sample (and the last); 0 = auto: every '
+                          f'sample up to {MARKER_FRAMES} samples, at most ~{MARKER_FRAMES} '
+                          'scenes', (0, 1_000_000), True),
 }
 
 
@@ -139,6 +147,10 @@ class SimNode(GuardedNode):
         self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, qos[topics.IMPACT_EVENTS])
         self._pub_status = publish(SimStatus, topics.STATUS, qos[topics.STATUS])
         self._pub_scenario = publish(ScenarioDescription, topics.SCENARIO, qos[topics.SCENARIO])
+        self._scene = MarkerScene(self.scenario) if params['markers'] else None
+        self._marker_every = marker_every(params['marker_decimation'], self._grid.count)
+        self._pub_markers = (publish(MarkerArray, topics.MARKERS, qos[topics.MARKERS])
+                             if self._scene is not None else None)
         self._srv_impact = self.create_service(ApplyImpact, topics.APPLY_IMPACT,
                                                self._on_apply_impact, qos_profile=SERVICE_QOS)
         self._srv_impact.configure_introspection(
@@ -146,9 +158,9 @@ class SimNode(GuardedNode):
         self.create_service(Trigger, topics.PAUSE, self._on_pause)
         self.create_service(Trigger, topics.RESUME, self._on_resume)
         self.create_service(Trigger, topics.STEP, self._on_step)
-        own = [t for t in topics.SIM_TOPICS
-               if (t != topics.CLOCK or self._pub_clock is not None)
-               and (t != topics.PERTURBER or self._pub_perturber is not None)]
+        off = {topics.CLOCK: self._pub_clock, topics.PERTURBER: self._pub_perturber,
+               topics.MARKERS: self._pub_markers}
+        own = [t for t in topics.SIM_TOPICS if off.get(t, True) is not None]
         self._sources = SourceMonitor(
             self, lambda: own,
             lambda problem: self._publish_status(
@@ -266,6 +278,7 @@ class SimNode(GuardedNode):
                                      arrays['euler'][j])
                 if perturber is not None:
                     self._publish_perturber(stamps[j], perturber[j])
+            self._publish_markers(self._next_k, done, arrays)
             self._next_k += done
             if failure:
                 self._diverged(failure)
@@ -314,6 +327,19 @@ class SimNode(GuardedNode):
         x, y, z = position.tolist()
         msg.vector = Vector3(x=x, y=y, z=z)
         self._pub_perturber.publish(msg)
+
+    def _publish_markers(self, k0: int, n: int, arrays: dict) -> None:
+        """Publish the 3D scene of the samples k0 .. k0 + n - 1 that get one (decimation)."""
+        if self._scene is None or n == 0:
+            return
+        k = marker_samples(k0, k0 + n, self._marker_every, self._grid.count)
+        if not len(k):
+            return
+        j = k - k0
+        rows = self._scene.encode(k * self._grid.interval_ns, self._grid.times(k0, k0 + n)[j],
+                                  arrays['quaternion'][j], arrays['omega'][j])
+        for row in rows:
+            self._pub_markers.publish(row.tobytes())
 
     def _publish_impact_events(self) -> None:
         """
