@@ -14,7 +14,6 @@ distributions after the encounter), ``summary.txt`` (the report printed on stdou
 from __future__ import annotations
 
 import argparse
-from contextlib import contextmanager
 from pathlib import Path
 import sys
 import time
@@ -24,8 +23,9 @@ import numpy as np
 
 from tumble_ros.analysis.encounter import (encounter_ensemble, encounter_figure,
                                            format_encounter)
+from tumble_ros.cli.engine import add_engine_arguments, engine
 from tumble_ros.core import load_scenario, ScenarioError
-from tumble_ros.ensembles import dask_client, EnsembleRunError
+from tumble_ros.ensembles import EnsembleRunError
 
 __all__ = ['main']
 
@@ -49,24 +49,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--out', type=Path, help='folder for encounter.png, summary.txt, '
                                             'encounter.npz')
     p.add_argument('--no-arrays', action='store_true', help='do not write encounter.npz')
-    engine = p.add_mutually_exclusive_group()
-    engine.add_argument('--workers', type=int, metavar='N',
-                        help='run the bodies on a local Dask cluster of N processes')
-    engine.add_argument('--scheduler', metavar='ADDRESS',
-                        help='run the bodies on the Dask cluster of this scheduler '
-                             '(tcp://host:8786)')
+    add_engine_arguments(p)
     p.add_argument('--quiet', '-q', action='store_true', help='no progress lines')
     return p
-
-
-@contextmanager
-def _engine(args):
-    """Yield the Dask client the options ask for, or None (threads in this process)."""
-    if args.workers is None and args.scheduler is None:
-        yield None
-        return
-    with dask_client(workers=args.workers, scheduler=args.scheduler) as client:
-        yield client
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -85,9 +70,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                                 'orbit); this scenario has none')
         if any(d < 0 for d in args.inertia_spread):
             raise ScenarioError(f'--inertia-spread: must be >= 0, got {args.inertia_spread}')
-        if args.workers is not None and args.workers < 1:
-            raise ScenarioError(f'--workers: must be >= 1, got {args.workers}')
-        with _engine(args) as client:
+        with engine(args) as client:
             result = encounter_ensemble(sc, args.bodies, seed=args.seed,
                                         inertia_spread=tuple(args.inertia_spread),
                                         n_inertia=args.inertia_draws, progress=progress,

@@ -19,16 +19,16 @@ chunking).
 from __future__ import annotations
 
 import argparse
-from contextlib import nullcontext
 import sys
 from typing import Sequence
 
 import numpy as np
 
+from tumble_ros.cli.engine import add_engine_arguments, engine
 from tumble_ros.cli.progress import ProgressBar
 from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
                              Scenario, ScenarioError, simulate_ensemble)
-from tumble_ros.ensembles import dask_client, open_ensemble, run_ensemble_to_store
+from tumble_ros.ensembles import open_ensemble, run_ensemble_to_store
 from tumble_ros.errors import TumbleRosError
 
 __all__ = ['main']
@@ -69,16 +69,7 @@ def _parser() -> argparse.ArgumentParser:
                         'by chunk (memory does not grow with N), resumed when run again')
     p.add_argument('--overwrite', action='store_true',
                    help='replace an existing .zarr store instead of resuming it')
-    engine = p.add_mutually_exclusive_group()
-    engine.add_argument('--workers', type=int,
-                        help='run chunks of bodies on an embedded Dask LocalCluster of N '
-                             'worker processes (one thread each)')
-    engine.add_argument('--scheduler',
-                        help='run chunks of bodies on the Dask cluster of this scheduler '
-                             '(tcp://host:8786; started with `dask scheduler` and '
-                             '`dask worker`)')
-    p.add_argument('--scheduler-timeout', type=float, default=30.0,
-                   help='seconds to wait for --scheduler (default 30)')
+    add_engine_arguments(p)
     p.add_argument('--chunk-size', type=int,
                    help='bodies per task and per store chunk (default: up to 10,000, '
                         'smaller for long outputs and to give every worker several)')
@@ -130,8 +121,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             sc = sc.replace(**changes)
         if args.bodies < 1:
             raise ScenarioError(f'--bodies: must be >= 1, got {args.bodies}')
-        if args.workers is not None and args.workers < 1:
-            raise ScenarioError(f'--workers: must be >= 1, got {args.workers}')
         impacts = omega0 = None
         if args.impact_rate > 0:
             impacts = RandomImpacts(rate=args.impact_rate, torque=args.impact_torque,
@@ -141,10 +130,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             omega0 = GaussianSpread(sc.omega0, args.omega_spread, seed=args.seed)
         inputs = {'impacts': impacts, 'omega0': omega0}
         to_store = bool(args.out) and args.out.rstrip('/').endswith('.zarr')
-        engine = (dask_client(workers=args.workers) if args.workers is not None else
-                  dask_client(scheduler=args.scheduler, timeout=args.scheduler_timeout)
-                  if args.scheduler else nullcontext())
-        with engine as client:
+        with engine(args) as client:
             if to_store:
                 return _to_store(args, sc, inputs, client)
             result = simulate_ensemble(
