@@ -123,6 +123,11 @@ def _stop_all(event, context):
     return Shutdown(reason=f'{event.action.name} ended with exit code {event.returncode}')
 
 
+#: What the launch sets unless the scenario file says otherwise: the 3D scene on (the bare
+#: node's default is off, for throughput).
+DEFAULTS = {'sim': {'markers': True}}
+
+
 def launch_setup(context):
     """Build the three nodes from the launch arguments (resolved at launch time)."""
     def arg(name):
@@ -146,7 +151,8 @@ def launch_setup(context):
     nodes, files = [], []
     for node in NODES:
         # One file per node: its sections of the scenario file, then the launch's values.
-        files.append(params_file(node, {**sections[node], **overrides[node]}))
+        files.append(params_file(node, {**DEFAULTS.get(node, {}), **sections[node],
+                                        **overrides[node]}))
         nodes.append(Node(
             package=PACKAGE, executable=node, name=node, output='screen',
             parameters=[files[-1]],

@@ -49,7 +49,7 @@ def test_every_topic_the_layout_references_is_one_the_nodes_publish(ros):
     from tumble_ros.nodes.comparator import ComparatorNode
     from tumble_ros.nodes.sim import SimNode
 
-    ros.start(SimNode, start_paused=True)
+    ros.start(SimNode, start_paused=True, markers=True)
     ros.start(ComparatorNode)
     referenced = set(_references())
 

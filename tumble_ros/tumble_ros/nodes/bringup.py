@@ -114,13 +114,16 @@ def _isolated(visible: bool):
 def run_bringup(params_file: str | None = None, output: str | None = None,
                 model: str | None = None, ros_args: list[str] | None = None,
                 progress=sys.stderr, executor_name: str = 'events',
-                visible: bool = False, offline: bool = False) -> BringupResult:
+                visible: bool = False, offline: bool = False,
+                markers: bool = True) -> BringupResult:
     """
     Run sim + comparator + recorder until the scenario ends; return what was recorded.
 
     ``executor_name`` is a key of :data:`EXECUTORS`; ``visible``: see the module docstring
     (isolation); ``offline``: write the recording straight from the simulation
-    (:mod:`.offline`), no ROS graph (the nodes are only built to read their parameters).
+    (:mod:`.offline`), no ROS graph (the nodes are only built to read their parameters);
+    ``markers``: the simulator's 3D scene on ``markers`` (on unless False; it sets the sim's
+    ``markers`` parameter, whatever the params file says).
     SIGINT and SIGTERM stop the run early with the file finalised (``BringupResult.signal``).
     Raises ScenarioError / ParameterException / ValueError for invalid parameters or params
     files, an unknown executor; OSError when the recording cannot be created (nothing is left
@@ -136,18 +139,19 @@ def run_bringup(params_file: str | None = None, output: str | None = None,
         raise NodeError(problem)
     with StopSignals('bringup') as stop, _isolated(visible and not offline):
         if offline:
-            return _run_offline(args, output, model, progress, stop)
-        return _run(args, output, model, progress, executor_name, stop)
+            return _run_offline(args, output, model, progress, stop, markers)
+        return _run(args, output, model, progress, executor_name, stop, markers)
 
 
-def _run_offline(args, output, model, progress, stop: StopSignals) -> BringupResult:
+def _run_offline(args, output, model, progress, stop: StopSignals,
+                 markers: bool) -> BringupResult:
     """Build the simulator and comparator for their parameters only; record offline."""
     context = Context()
     rclpy.init(args=args, context=context, signal_handler_options=None)
     nodes = []
     try:
         sim = SimNode(context=context, parameter_overrides=[
-            Parameter('real_time_factor', value=0.0)])
+            Parameter('real_time_factor', value=0.0), Parameter('markers', value=markers)])
         nodes.append(sim)
         comparator_overrides = [Parameter('model', value=model)] if model else []
         nodes.append(ComparatorNode(context=context, parameter_overrides=comparator_overrides))
@@ -189,14 +193,16 @@ def _run_offline(args, output, model, progress, stop: StopSignals) -> BringupRes
                          wall_seconds=result.wall_seconds, signal=stop.signum)
 
 
-def _run(args, output, model, progress, executor_name, stop: StopSignals) -> BringupResult:
+def _run(args, output, model, progress, executor_name, stop: StopSignals,
+         markers: bool) -> BringupResult:
     context = Context()
     rclpy.init(args=args, context=context, signal_handler_options=None)
     executor = EXECUTORS[executor_name](context=context)
     nodes = []
     try:
         sim = SimNode(context=context, parameter_overrides=[
-            Parameter('real_time_factor', value=0.0), Parameter('min_consumers', value=2)])
+            Parameter('real_time_factor', value=0.0), Parameter('min_consumers', value=2),
+            Parameter('markers', value=markers)])
         nodes.append(sim)
         comparator_overrides = [Parameter('model', value=model)] if model else []
         nodes.append(ComparatorNode(context=context, parameter_overrides=comparator_overrides))
@@ -290,6 +296,8 @@ def main(args: list[str] | None = None) -> int:
                         help='write the recording straight from the simulation, without the '
                              'ROS graph (the same file, see tumble_ros.nodes.offline)')
     parser.add_argument('--quiet', action='store_true', help='no progress display')
+    parser.add_argument('--no-markers', action='store_true',
+                        help="do not publish and record the 3D scene ('markers')")
     parser.add_argument('--visible', action='store_true',
                         help='let other ROS processes see the run (default: isolated, see above)')
     options = parser.parse_args(argv)
@@ -300,7 +308,8 @@ def main(args: list[str] | None = None) -> int:
         result = run_bringup(options.scenario, options.output, options.model, ros_args,
                              progress=None if options.quiet else sys.stderr,
                              executor_name=options.executor,
-                             visible=options.visible, offline=options.offline)
+                             visible=options.visible, offline=options.offline,
+                             markers=not options.no_markers)
     except (ScenarioError, ValueError, ParameterException) as err:
         print(f"ERROR: {' '.join(str(err).split())}", file=sys.stderr)
         return 1

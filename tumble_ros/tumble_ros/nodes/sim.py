@@ -13,7 +13,9 @@ and publishes every ``output_interval`` of simulated time:
   a consumer is dropped or a second source appears, and once a second while running;
 * ``scenario`` (tumble_ros_interfaces/ScenarioDescription, latched) at the start and after each
   impact (one per segment): the scenario as started and the initial state of the segment;
-* ``markers`` (visualization_msgs/MarkerArray, frame ``orbital``), unless ``markers`` is false:
+* ``markers`` (visualization_msgs/MarkerArray, frame ``orbital``) when ``markers`` is true (off
+  for a bare ``ros2 run``, where it would cost ~30 % of the throughput; on in bringup, make run
+  and the launch files):
   the 3D scene of every ``marker_decimation``-th sample (:mod:`.markers`).
 
 Every stamp is ROS time carrying simulated time, ``status`` included (the time of the last
@@ -94,7 +96,8 @@ NODE_PARAMETERS = {
                             False),
     'max_impact_impulse': (1e3, 'I rad/yr', 'largest |M| * duration the service accepts',
                            (1e-12, 1e15), False),
-    'markers': (True, '', 'publish the 3D scene (body, axes, L, Sun) on markers', None, True),
+    'markers': (False, '', 'publish the 3D scene (body, axes, L, Sun) on markers (bringup, '
+                'make run and the launch files turn it on)', None, True),
     'marker_decimation': (0, '', 'a scene every k-th sample (and the last); 0 = auto: every '
                           f'sample up to {MARKER_FRAMES} samples, at most ~{MARKER_FRAMES} '
                           'scenes', (0, 1_000_000), True),
