@@ -51,6 +51,7 @@ from mcap.writer import CompressionType, LIBRARY_IDENTIFIER, Writer
 import numpy as np
 import yaml
 
+from .mcap_bulk import append_block, bulk_supported
 from .msgdefs import message_definition, normalize_type_name, type_hash
 
 __all__ = ['COMPRESSIONS', 'McapWriter', 'offered_qos_yaml']
@@ -186,6 +187,7 @@ class McapWriter:
         try:
             self._writer = Writer(self._stream, chunk_size=_NEVER,
                                   compression=COMPRESSIONS[compression])
+            self._bulk = bulk_supported(self._writer)   # write_rows' fast path (.mcap_bulk)
             self._writer.start(profile='ros2', library=_LIBRARY)
             self._stream.flush()
         except BaseException:
@@ -313,10 +315,15 @@ class McapWriter:
             if None in topics:
                 raise ValueError(f'channel ids {list(channel_ids)!r}: not all returned by '
                                  'add_channel')
+            aging = self._chunk_seconds != math.inf
+            if not aging and self._bulk:
+                self._write_blocks(list(channel_ids), rows, logs, sent)
+                for topic in topics:
+                    self._counts[topic] += n
+                return
             blobs = [(c, r.tobytes(), r.shape[1]) for c, r in zip(channel_ids, rows)]
             sample_bytes = sum(size for _, _, size in blobs)
             add = self._writer.add_message
-            aging = self._chunk_seconds != math.inf
             for k in range(n):
                 log, pub = logs[k], sent[k]
                 for channel, blob, size in blobs:
@@ -329,6 +336,30 @@ class McapWriter:
                     self._flush_locked()
             for topic in topics:
                 self._counts[topic] += n
+
+    def _write_blocks(self, channel_ids, rows, logs, sent) -> None:
+        """
+        Append rows in blocks that end where the per-message path would finalise a chunk.
+
+        :mod:`.mcap_bulk` builds each block's records at once; the chunks, their indexes and
+        the statistics are those of one :meth:`write` per message (``chunk_seconds`` = inf).
+        """
+        n = len(logs)
+        sample_bytes = sum(r.shape[1] for r in rows)
+        log_times = np.asarray(logs, dtype=np.int64)
+        publish_times = np.asarray(sent, dtype=np.int64)
+        k = 0
+        while k < n:
+            # the per-message path flushes after the first sample that reaches chunk_bytes
+            need = max(1, -(-(self._chunk_bytes - self._pending_bytes) // sample_bytes))
+            stop = min(n, k + need)
+            append_block(self._writer, channel_ids, [r[k:stop] for r in rows],
+                         log_times[k:stop], publish_times[k:stop])
+            self._pending_messages += (stop - k) * len(rows)
+            self._pending_bytes += (stop - k) * sample_bytes
+            if self._pending_bytes >= self._chunk_bytes:
+                self._flush_locked()
+            k = stop
 
     def poll(self) -> bool:
         """
