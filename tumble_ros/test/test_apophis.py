@@ -178,7 +178,11 @@ def test_the_earth_is_recorded_in_body_axes_live_and_offline(recorded):
         perturber = [m.message for m in read_messages(result.output, '/' + topics.PERTURBER)]
         attitude = [m.message for m in read_messages(result.output, '/' + topics.ATTITUDE)]
         assert len(perturber) == len(attitude) == result.samples == 145
-        t = np.array([p.header.stamp.sec + 1e-9 * p.header.stamp.nanosec for p in perturber])
+        # time_unit h: one ROS second per simulated hour (seconds_per_year 0 = auto)
+        description = next(read_messages(result.output, '/' + topics.SCENARIO)).message
+        assert description.seconds_per_year == pytest.approx(H, rel=1e-15)
+        assert [p.header.stamp.sec for p in perturber] == list(range(145))
+        t = np.array([p.header.stamp.sec + 1e-9 * p.header.stamp.nanosec for p in perturber]) / H
         body = np.array([[p.vector.x, p.vector.y, p.vector.z] for p in perturber])
         quat = np.array([[a.quaternion.x, a.quaternion.y, a.quaternion.z, a.quaternion.w]
                          for a in attitude])
@@ -211,7 +215,7 @@ def test_the_torque_free_model_is_anchored_on_each_side_of_the_encounter(recorde
         assert levels == [(0, 'model'), (1, 't0:'), (0, 'model')], mode     # OK, WARN, OK
         assert 'encounter window' in status[-2].message
         norm = [m.message for m in read_messages(result.output, '/' + topics.ERROR_NORM)]
-        t = np.array([n.header.stamp.sec + 1e-9 * n.header.stamp.nanosec for n in norm])
+        t = np.array([n.header.stamp.sec + 1e-9 * n.header.stamp.nanosec for n in norm]) / H
         assert np.all((t < t_in) | (t >= t_out)) and np.any(t < t_in) and np.any(t >= t_out)
         # outside the window the motion is torque-free to the window's 1e-4 of the torque
         assert max(n.relative for n in norm) < 1e-3

@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 __all__ = ['TIME_UNITS', 'HOURS_PER_YEAR', 'SECONDS_PER_YEAR', 'to_years', 'TIME_POWERS',
+           'seconds_per_year_of',
            'GM_SUN', 'GM_EARTH', 'KM_PER_AU']
 
 HOURS_PER_YEAR = 365.25 * 24.0
@@ -57,6 +58,11 @@ def _scaled(value: Any, factor: float) -> Any:
                                                 and not isinstance(v, bool) for v in value):
         return [v * factor for v in value]
     return value   # (the scenario's validation names the field and says what is wrong)
+
+
+def seconds_per_year_of(unit: str) -> float:
+    """Return the ROS seconds per simulated year that make one ROS second one ``unit``."""
+    return 1.0 / TIME_UNITS[unit]
 
 
 def to_years(params: Mapping[str, Any], unit: str) -> dict[str, Any]:

@@ -48,6 +48,7 @@ from tumble_ros.core import (
     ScenarioError,
     TimeBase,
 )
+from tumble_ros.core.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.markers import marker_every, MARKER_FRAMES, marker_samples, MarkerScene
@@ -83,8 +84,9 @@ STATUS_PERIOD = 1.0
 #: The simulator's own parameters (not part of the scenario): name -> (default, unit, description,
 #: (min, max) or None, read_only).
 NODE_PARAMETERS = {
-    'seconds_per_year': (1.0, 's/yr', 'ROS seconds per simulated year in every stamp and /clock',
-                         (1e-6, 1e6), True),
+    'seconds_per_year': (0.0, 's/yr', 'ROS seconds per simulated year in every stamp and /clock; '
+                         '0 = one ROS second per time_unit (1 for yr, 8766 for h)',
+                         (0.0, 1e6), True),
     'real_time_factor': (0.1, 'yr/s', 'simulated years per wall-clock second; 0 = as fast as the '
                          'subscribers take it', (0.0, 1e6), False),
     'start_paused': (False, '', 'start paused (resume or step with the services)', None, True),
@@ -116,8 +118,10 @@ class SimNode(GuardedNode):
         declare_scenario_parameters(self)
         params = declare_node_parameters(self, NODE_PARAMETERS)
         # ScenarioError: refused
-        self.scenario = Scenario.from_parameters(read_scenario_parameters(self))
-        self.timebase = TimeBase(params['seconds_per_year'])
+        scenario_parameters = read_scenario_parameters(self)
+        self.scenario = Scenario.from_parameters(scenario_parameters)
+        self.timebase = TimeBase(params['seconds_per_year'] or seconds_per_year_of(
+            scenario_parameters.get('time_unit', 'yr')))
         self.timebase.check_span(self.scenario.duration)
         # the output grid (the one of Scenario.output_times, at this node's seconds_per_year)
         self._grid = self.timebase.grid(self.scenario.output_interval, self.scenario.duration)
@@ -189,7 +193,7 @@ class SimNode(GuardedNode):
                     ImpactLimits(1.0, p.value)
                 elif p.name == 'real_time_factor' and not math.isfinite(p.value):
                     raise ScenarioError(f'real_time_factor: must be finite, got {p.value!r}')
-                elif p.name == 'seconds_per_year':
+                elif p.name == 'seconds_per_year' and p.value != 0.0:
                     TimeBase(p.value)
             except (ScenarioError, ValueError) as err:
                 return SetParametersResult(successful=False, reason=str(err))
