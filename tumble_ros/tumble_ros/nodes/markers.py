@@ -170,3 +170,18 @@ class MarkerScene:
     def encode(self, stamp_ns, t, quaternion, omega) -> np.ndarray:
         """Return n scenes (see :meth:`columns`) as CDR messages, one (n, size) uint8 row each."""
         return self.encoder.encode(len(stamp_ns), self.columns(stamp_ns, t, quaternion, omega))
+
+    def encode_samples(self, grid, every: int, k0: int, n: int, arrays: dict) -> np.ndarray:
+        """
+        Return the scenes of the grid samples k0 .. k0 + n - 1 that get one, as CDR rows.
+
+        ``arrays``: the propagator's ``omega`` and ``quaternion`` of those n samples; a sample
+        gets a scene every ``every``-th one and the last of the grid (:func:`marker_samples`).
+        The live simulator and the offline writer both take their scenes from here.
+        """
+        k = marker_samples(k0, k0 + n, every, grid.count)
+        if not len(k):
+            return np.empty((0, 0), dtype=np.uint8)
+        j = k - k0
+        return self.encode(k * grid.interval_ns, grid.times(k0, k0 + n)[j],
+                           arrays['quaternion'][j], arrays['omega'][j])

@@ -38,7 +38,7 @@ from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.columns import encode_rows, FlatLayout
 from tumble_ros.io.msgdefs import message_definition
 from tumble_ros.nodes.comparator import anchor_model, GridModelValues
-from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
+from tumble_ros.nodes.markers import marker_every, MarkerScene
 from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
                                        scenario_description, sim_status)
 from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
@@ -257,13 +257,10 @@ class _Scene:
 
     def write(self, channels: _Channels, k0: int, n: int, arrays: dict) -> None:
         """Write the scenes of the samples k0 .. k0 + n - 1 that get one."""
-        k = marker_samples(k0, k0 + n, self.every, self.grid.count)
-        if not len(k):
+        rows = self.scene.encode_samples(self.grid, self.every, k0, n, arrays)
+        if not len(rows):
             return
-        j = k - k0
-        rows = self.scene.encode(k * self.grid.interval_ns, self.grid.times(k0, k0 + n)[j],
-                                 arrays['quaternion'][j], arrays['omega'][j])
-        log = time.time_ns() + np.arange(len(k), dtype=np.int64)
+        log = time.time_ns() + np.arange(len(rows), dtype=np.int64)
         channels.writer.write_rows([channels.ids[topics.MARKERS]], [rows], log)
 
 

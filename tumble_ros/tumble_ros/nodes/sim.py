@@ -51,7 +51,7 @@ from tumble_ros.core import (
 from tumble_ros.core.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
-from tumble_ros.nodes.markers import marker_every, MARKER_FRAMES, marker_samples, MarkerScene
+from tumble_ros.nodes.markers import marker_every, MARKER_FRAMES, MarkerScene
 from tumble_ros.nodes.messages import (FRAMES, impact_event, scenario_description, sim_status,
                                        stamp)
 from tumble_ros.nodes.parameters import (
@@ -339,12 +339,7 @@ class SimNode(GuardedNode):
         """Publish the 3D scene of the samples k0 .. k0 + n - 1 that get one (decimation)."""
         if self._scene is None or n == 0:
             return
-        k = marker_samples(k0, k0 + n, self._marker_every, self._grid.count)
-        if not len(k):
-            return
-        j = k - k0
-        rows = self._scene.encode(k * self._grid.interval_ns, self._grid.times(k0, k0 + n)[j],
-                                  arrays['quaternion'][j], arrays['omega'][j])
+        rows = self._scene.encode_samples(self._grid, self._marker_every, k0, n, arrays)
         for row in rows:
             self._pub_markers.publish(row.tobytes())
 
