@@ -59,18 +59,21 @@ def test_the_ros_check_catches_ros_imports():
                        ['numpy', 'mcap_ros2.decoder', 'tumble_ros.core', 'rosbags.highlevel']))
 
 
-def test_importing_core_loads_no_rclpy():
-    code = ('import sys, tumble_ros.core; from tumble_ros.core import Scenario, simulate; '
-            "bad = [m for m in sys.modules if m.startswith(('rclpy', 'rosidl'))]; print(bad); "
+def _assert_loads_none(imports: str, prefixes: tuple[str, ...]) -> None:
+    """Run ``imports`` in a fresh interpreter; fail if a module named ``prefix...`` is loaded."""
+    code = (f'import sys; {imports}; '
+            f'bad = [m for m in sys.modules if m.startswith({prefixes!r})]; print(bad); '
             'sys.exit(1 if bad else 0)')
     done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stdout + done.stderr
 
 
+def test_importing_core_loads_no_rclpy():
+    _assert_loads_none('import tumble_ros.core; from tumble_ros.core import Scenario, simulate',
+                       ('rclpy', 'rosidl'))
+
+
 def test_importing_core_loads_no_dask_xarray_or_zarr():
     """Dask, xarray and Zarr are imported by the runs that use them, not by every core user."""
-    code = ('import sys, tumble_ros.core, tumble_ros.io; '
-            "bad = [m for m in sys.modules if m.split('.')[0] in "
-            "('dask', 'distributed', 'xarray', 'zarr')]; print(bad); sys.exit(1 if bad else 0)")
-    done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=60)
-    assert done.returncode == 0, done.stdout + done.stderr
+    _assert_loads_none('import tumble_ros.core, tumble_ros.io',
+                       ('dask', 'distributed', 'xarray', 'zarr'))

@@ -50,13 +50,21 @@ def test_topics_have_their_documented_types(ros):
         return {n: t[0] for n, t in ros.probe.get_topic_names_and_types()}
 
     assert ros.spin_until(lambda: expected.items() <= listed().items(), 10.0), listed()
-    assert ros.start(SimNode, **SHORT).get_parameter('markers').value is False
     services = dict(ros.probe.get_service_names_and_types())
     assert services['/' + topics.APPLY_IMPACT] == ['tumble_ros_interfaces/srv/ApplyImpact']
     for name in (topics.PAUSE, topics.RESUME, topics.STEP):
         assert services['/' + name] == ['std_srvs/srv/Trigger']
     # service introspection: calls can be recorded
     assert ros.spin_until(lambda: f'/{topics.APPLY_IMPACT}/_service_event' in listed(), 5.0)
+
+
+def test_a_bare_node_publishes_no_scene(ros):
+    """The 3D scene costs ~30 % of the standalone throughput: off unless asked (bringup asks)."""
+    sim = ros.start(SimNode, **SHORT)
+    assert sim.get_parameter('markers').value is False
+    assert ros.spin_until(lambda: sim.published_samples > 0, 10.0)
+    names = [n for n, _ in ros.probe.get_topic_names_and_types()]
+    assert '/' + topics.ANGULAR_VELOCITY in names and '/' + topics.MARKERS not in names
 
 
 def test_published_state_equals_simulate_at_the_stamped_times(ros):

@@ -283,12 +283,13 @@ def _ecliptic(pole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def encounter_figure(result: EncounterResult, path: str | Path, title: str = '') -> Path:
     """Draw the distributions after the encounter (periods, spin rate, pole) to ``path`` (PNG)."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
     h = HOURS_PER_YEAR
-    fig, axes = plt.subplots(2, 2, figsize=(11, 8))
+    fig = Figure(figsize=(11, 8))          # no pyplot: no global backend, nothing to close
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(2, 2)
     sam = result.mode_after == 'SAM'
     for ax, after, before, name in (
             (axes[0, 0], result.precession_after, result.precession_before,
@@ -334,5 +335,4 @@ def encounter_figure(result: EncounterResult, path: str | Path, title: str = '')
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path

@@ -81,8 +81,8 @@ def jacobi_drift(rec: Recording) -> tuple[InvariantDrift | None, str | None]:
             why = f'{rec.topic(SCENARIO)} could not be parsed: {rec.scenario_error}'
         return None, why
     if rec.scenario.orbit is not None:
-        return None, ('not conserved on a Kepler orbit (orbit.kind kepler: the tidal potential '
-                      'changes with the distance); see docs/physics.md')
+        return None, ('not conserved on a Kepler orbit (orbit.kind kepler or flyby: the tidal '
+                      'potential changes with the distance); see docs/physics.md')
     found = _attitude_matrices(rec)
     if found is None:
         return None, (f'no attitude at the stamps of {rec.topic(ANGULAR_VELOCITY)} '

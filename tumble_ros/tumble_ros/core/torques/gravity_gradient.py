@@ -55,9 +55,14 @@ def tidal_coefficients(inertia, orbit_rate: float) -> tuple[float, float, float]
     return k * (iz - iy), k * (ix - iz), k * (iy - ix)
 
 
-def sun_direction_orbital(t: float, orbit_rate: float) -> np.ndarray:
-    """Return the unit vector from the asteroid to the Sun in the orbital frame, R0(t)/R0."""
-    return np.array([math.sin(orbit_rate * t), math.cos(orbit_rate * t), 0.0])
+def sun_direction_orbital(t, orbit_rate: float) -> np.ndarray:
+    """
+    Return the unit vector from the asteroid to the Sun in the orbital frame, R0(t)/R0.
+
+    ``t`` [yr]: a number, (3,) out, or an array of n times, (n, 3) out.
+    """
+    angle = orbit_rate * np.asarray(t, dtype=float)
+    return np.stack([np.sin(angle), np.cos(angle), np.zeros_like(angle)], axis=-1)
 
 
 def gravity_gradient_torque(u_body, inertia, orbit_rate: float) -> np.ndarray:

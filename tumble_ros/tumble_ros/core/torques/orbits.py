@@ -264,14 +264,17 @@ class KeplerOrbit:
 
     def direction(self, t) -> np.ndarray:
         """Return the unit direction to the perturber in the orbital frame: (n, 3)."""
-        _, angle = self.state(t)
-        s = python_source(plane_to_orbital)(np.sin(angle), np.cos(angle), *self._plane())
-        return np.stack(s, axis=-1)
+        return self._direction(self.state(t)[1])
 
     def position(self, t) -> np.ndarray:
         """Return where the perturber is in the orbital frame: (n, 3) coordinates [km]."""
-        distance, _ = self.state(t)
-        return distance[:, None] * self.direction(t)
+        distance, angle = self.state(t)
+        return distance[:, None] * self._direction(angle)
+
+    def _direction(self, angle: np.ndarray) -> np.ndarray:
+        """Return the orbital-frame unit vectors of in-plane angles lambda [rad]: (n, 3)."""
+        s = python_source(plane_to_orbital)(np.sin(angle), np.cos(angle), *self._plane())
+        return np.stack(s, axis=-1)
 
     def torque_component(self, inertia) -> TorqueComponent:
         """Return this orbit's tidal torque on a body of principal moments ``inertia``."""
@@ -313,4 +316,4 @@ def perturber_position(orbit_rate: float, orbit: KeplerOrbit | None, t) -> np.nd
         return np.tile([0.0, math.inf, 0.0], (t.size, 1))
     ws = orbit_rate / SECONDS_PER_YEAR
     distance = (GM_SUN / (ws * ws)) ** (1.0 / 3.0)
-    return distance * np.array([sun_direction_orbital(x, orbit_rate) for x in t])
+    return distance * sun_direction_orbital(t, orbit_rate)
