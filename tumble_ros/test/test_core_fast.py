@@ -231,3 +231,57 @@ def test_an_edit_to_any_kernel_file_invalidates_the_cache(tmp_path, monkeypatch)
     rk4_copy = next(c for c in copies if c.name.endswith('_rk4.py'))
     rk4_copy.write_text(rk4_copy.read_text() + '\n# an edit\n')
     assert jit.compiled_sources_hash() != before
+
+
+def _kernel_shaped_loop(options):
+    """Compile a loop shaped like a kernel's: an inlined step hands a slice to a called check."""
+    import numba
+
+    @numba.njit(**options)
+    def squared_norm(y):
+        acc = 0.0
+        for i in range(y.shape[0]):
+            acc += y[i] * y[i]
+        return acc
+
+    @numba.njit(inline='always', **options)
+    def step(st, i):
+        st[i] += 1.0
+        return squared_norm(st[i:i + 3]) < 10.0
+
+    @numba.njit(**options)
+    def loop(st, n):
+        k = 0
+        while k < n:
+            if not step(st, k % 4):
+                break
+            k += 1
+        return k
+
+    st = np.zeros(8)
+    steps = loop(st, 5)
+    (ir,) = loop.inspect_llvm().values()
+    return (steps, st.tolist()), ir
+
+
+@needs_numba
+def test_kernels_are_compiled_without_reference_counting():
+    """
+    The kernels run without numba's atomic reference counts (jit.JIT_OPTIONS, _nrt=False).
+
+    Those counts took two thirds of an ensemble's splitting step (docs/performance.md). A
+    kernel-shaped loop compiled with the kernels' options holds no NRT_incref; compiled with
+    numba's defaults it does (so this test would see them come back). The same value either way.
+    """
+    from tumble_ros.core import jit
+    from tumble_ros.core.kernels import ensemble, splitting, stepping
+
+    for function in (stepping.advance, ensemble.ensemble_advance, splitting.flow):
+        assert function.targetoptions['_nrt'] is False
+        assert function.targetoptions['nogil'] is True
+    uncached = {k: v for k, v in jit.JIT_OPTIONS.items() if k != 'cache'}  # (cached IR: none)
+    value_plain, ir_plain = _kernel_shaped_loop(uncached)
+    value_counted, ir_counted = _kernel_shaped_loop({'nogil': True})
+    assert 'NRT_incref' not in ir_plain and 'NRT_decref' not in ir_plain
+    assert 'NRT_incref' in ir_counted
+    assert value_plain == value_counted

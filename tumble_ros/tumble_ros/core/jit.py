@@ -17,6 +17,18 @@ stepping.py's cache. :class:`_CompiledSourcesLocator` gives every function of th
 recompiles them all. It plugs into numba's documented locator list
 (``numba.core.caching.CacheImpl._locator_classes``, a private attribute: checked by
 tests/test_core_fast.py::test_an_edit_to_any_kernel_file_invalidates_the_cache).
+
+No reference counting in the kernels
+------------------------------------
+numba counts references to every array with atomic (``lock``-prefixed) increments and
+decrements, and an array handed to an inlined function or sliced inside a loop gets a pair
+of them on every pass that its pruning pass cannot remove in branchy code (numba issue 2350).
+Profiled on a Fig 9 ensemble (perf, 2026-12-02) they took ~65 % of a splitting step: two
+thirds of 187 ns a body-step went to ``NRT_incref``/``NRT_decref``. The kernels allocate
+nothing and return no array (they write into arrays their Python caller owns and keeps alive
+for the call), so they are compiled without numba's runtime (:data:`JIT_OPTIONS`,
+``_nrt=False``: numba's option, underscored, the one its maintainers use in that issue):
+68 ns a body-step. tests/test_core_fast.py checks the compiled code holds no reference count.
 """
 from __future__ import annotations
 
@@ -25,8 +37,8 @@ import hashlib
 import os
 from pathlib import Path
 
-__all__ = ['COMPILED', 'NUMBA_VERSION', 'jit', 'jit_inline', 'called', 'python_source',
-           'COMPILED_SOURCES', 'compiled_sources_hash']
+__all__ = ['COMPILED', 'NUMBA_VERSION', 'JIT_OPTIONS', 'jit', 'jit_inline', 'called',
+           'python_source', 'COMPILED_SOURCES', 'compiled_sources_hash']
 
 try:  # pragma: no cover - exercised by the environment, not by a test
     import numba as _numba
@@ -37,6 +49,10 @@ NUMBA_VERSION = getattr(_numba, '__version__', None)
 #: True when the kernels are compiled (numba present and not disabled).
 COMPILED = bool(_numba is not None and not _numba.config.DISABLE_JIT
                 and os.environ.get('TUMBLE_ROS_NO_JIT', '') in ('', '0'))
+
+#: numba options of every kernel: cached, numpy's error model (1/0 is inf, not an exception), no
+#: GIL (threads), no runtime (no allocation, no reference counting: see the module's docstring).
+JIT_OPTIONS = {'cache': True, 'error_model': 'numpy', 'nogil': True, '_nrt': False}
 
 _CORE = Path(__file__).resolve().parent
 #: The files whose compiled functions inline each other: one cache stamp for all.
@@ -91,7 +107,7 @@ if COMPILED:
 
     def jit(f):
         """Compile ``f`` (nogil: ensembles run blocks of bodies in several threads at once)."""
-        return _numba.njit(cache=True, error_model='numpy', nogil=True)(f)
+        return _numba.njit(**JIT_OPTIONS)(f)
 
     def jit_inline(f):
         """
@@ -101,7 +117,7 @@ if COMPILED:
         arithmetic of a small step). Only for the per-step hot path: inlining multiplies
         compile time.
         """
-        return _numba.njit(cache=True, error_model='numpy', nogil=True, inline='always')(f)
+        return _numba.njit(**JIT_OPTIONS, inline='always')(f)
 
     def called(f):
         """Compile a :func:`jit_inline` function separately (not inlined), for cold paths."""
