@@ -6,9 +6,10 @@ nothing live needs the ROS graph. The simulator's samples (the same ``Propagator
 on the same output grid), its impact events, scenario descriptions and states, and the
 comparator's model, error and error norm (the same model anchoring, :func:`~.comparator.
 anchor_model`, the same grid look-ahead and arithmetic, :mod:`.messages`) go to the MCAP file
-without DDS: the per-sample messages encoded as numpy columns (:func:`tumble_ros.io.columns.
-encode_rows`), the others serialised by rclpy. Channels, schemas and the offered QoS metadata
-are those the live recorder writes (:func:`~.qos.as_discovered` of each publisher's profile).
+without DDS: the per-sample messages encoded as numpy columns by the encoder the live simulator
+publishes with (:class:`~.messages.SampleEncoder`), the others serialised by rclpy. Channels,
+schemas and the offered QoS metadata are those the live recorder writes
+(:func:`~.qos.as_discovered` of each publisher's profile).
 
 What differs from a live recording (tests/test_offline.py compares the two message by message):
 log and publish times are the wall-clock times of writing (the live recorder's are receipt
@@ -35,12 +36,10 @@ from tumble_ros.core import (DEPARTURE, departure_text, dump_scenario, Propagato
                              TimeBase)
 from tumble_ros.core.scenario import ScenarioError
 from tumble_ros.io import McapWriter, offered_qos_yaml
-from tumble_ros.io.columns import encode_rows, FlatLayout
-from tumble_ros.io.msgdefs import message_definition
 from tumble_ros.nodes.comparator import anchor_model, GridModelValues
 from tumble_ros.nodes.markers import marker_every, MarkerScene
 from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
-                                       scenario_description, sim_status)
+                                       SampleEncoder, scenario_description, sim_status)
 from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
 from tumble_ros.nodes.recorder import qos_dict
 from tumble_ros_interfaces.msg import SimStatus
@@ -73,7 +72,7 @@ class _Channels:
     def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool, markers: bool):
         self.writer = writer
         self.ids: dict[str, int] = {}
-        self.layouts: dict[str, FlatLayout] = {}
+        self.encoder = SampleEncoder()
         for topic in topics.RECORDED:
             if (topic == topics.CLOCK and not publish_clock
                     or topic == topics.PERTURBER and not perturber
@@ -83,27 +82,11 @@ class _Channels:
             type_name = topics.TYPES[topic]
             offered = offered_qos_yaml(qos_dict(as_discovered(PUBLISHER_QOS[topic])))
             self.ids[topic] = writer.add_channel(name, type_name, offered)
-            self.layouts[topic] = FlatLayout.from_schema(type_name,
-                                                         message_definition(type_name))
 
     def one(self, topic: str, msg) -> None:
         """Write one message (serialised by rclpy), logged now."""
         now = time.time_ns()
         self.writer.write(self.ids[topic], serialize_message(msg), now, now)
-
-    def rows(self, topic: str, n: int, values: dict, frame: str | None = None,
-             strings: dict | None = None) -> np.ndarray:
-        """Encode n messages of a flat per-sample topic."""
-        strings = dict(strings or {})
-        if frame is not None:
-            strings['header.frame_id'] = frame
-        return encode_rows(self.layouts[topic], n, values, strings)
-
-
-def _stamped(sec, nanosec, names, columns) -> dict:
-    values = {'header.stamp.sec': sec, 'header.stamp.nanosec': nanosec}
-    values.update(zip(names, columns))
-    return values
 
 
 def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = None,
@@ -270,43 +253,21 @@ def _write_samples(channels: _Channels, comparator: _Comparator, grid, k0: int, 
     Write n samples from grid index k0: the simulator's topics, the comparator's three.
 
     The simulator's: /clock (if published), ω, attitude, Euler angles, and the perturber's
-    position when the scenario has a Kepler orbit (as the live simulator).
+    position when the scenario has a Kepler orbit (as the live simulator), encoded as the live
+    simulator encodes them (:class:`~.messages.SampleEncoder`).
     """
     if n == 0:
         return
     ns = np.arange(k0, k0 + n, dtype=np.int64) * grid.interval_ns
-    sec, nanosec = ns // 1_000_000_000, ns % 1_000_000_000
-    omega, quaternion, euler = arrays['omega'][:n], arrays['quaternion'][:n], arrays['euler'][:n]
-    xyz = ('vector.x', 'vector.y', 'vector.z')
-    sim = []
-    if publish_clock:
-        sim.append((topics.CLOCK, channels.rows(
-            topics.CLOCK, n, {'clock.sec': sec, 'clock.nanosec': nanosec})))
-    sim += [
-        (topics.ANGULAR_VELOCITY, channels.rows(topics.ANGULAR_VELOCITY, n, _stamped(
-            sec, nanosec, xyz, omega.T), topics.FRAME_BODY)),
-        (topics.ATTITUDE, channels.rows(topics.ATTITUDE, n, _stamped(
-            sec, nanosec, ('quaternion.w', 'quaternion.x', 'quaternion.y', 'quaternion.z'),
-            quaternion.T), topics.FRAME_ORBITAL)),
-        (topics.EULER_ANGLES, channels.rows(topics.EULER_ANGLES, n, _stamped(
-            sec, nanosec, xyz, euler.T), topics.FRAME_EULER)),
-    ]
-    if topics.PERTURBER in channels.ids:
-        position = scenario.perturber_in_body(grid.times(k0, k0 + n), quaternion)
-        sim.append((topics.PERTURBER, channels.rows(topics.PERTURBER, n, _stamped(
-            sec, nanosec, xyz, position.T), topics.FRAME_BODY)))
+    omega, quaternion = arrays['omega'][:n], arrays['quaternion'][:n]
+    perturber = (scenario.perturber_in_body(grid.times(k0, k0 + n), quaternion)
+                 if topics.PERTURBER in channels.ids else None)
+    sim = channels.encoder.simulator(ns, omega, quaternion, arrays['euler'][:n],
+                                     clock=publish_clock, perturber=perturber)
     compared, model, error, norm, relative = comparator.compare(k0, grid.times(k0, k0 + n),
                                                                 omega)
-    comparison = [
-        (topics.MODEL_ANGULAR_VELOCITY, channels.rows(
-            topics.MODEL_ANGULAR_VELOCITY, n, _stamped(sec, nanosec, xyz, model.T),
-            topics.FRAME_BODY)),
-        (topics.ERROR, channels.rows(topics.ERROR, n, _stamped(sec, nanosec, xyz, error.T),
-                                     topics.FRAME_BODY)),
-        (topics.ERROR_NORM, channels.rows(
-            topics.ERROR_NORM, n, _stamped(sec, nanosec, ('norm', 'relative'), (norm, relative)),
-            topics.FRAME_BODY, {'model': comparator.model_name})),
-    ]
+    comparison = channels.encoder.comparator(ns, model, error, norm, relative,
+                                             comparator.model_name)
     now = time.time_ns()
     log = now + np.arange(n, dtype=np.int64)
     # runs of samples with and without comparison, in order

@@ -31,7 +31,8 @@ from collections import deque
 import math
 import time
 
-from geometry_msgs.msg import Quaternion, QuaternionStamped, Vector3, Vector3Stamped
+from geometry_msgs.msg import QuaternionStamped, Vector3Stamped
+import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.qos import QoSProfile
 from rclpy.service_introspection import ServiceIntrospectionState
@@ -52,8 +53,8 @@ from tumble_ros.core.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.markers import marker_every, MARKER_FRAMES, MarkerScene
-from tumble_ros.nodes.messages import (FRAMES, impact_event, scenario_description, sim_status,
-                                       stamp)
+from tumble_ros.nodes.messages import (FRAMES, impact_event, SampleEncoder,
+                                       scenario_description, sim_status)
 from tumble_ros.nodes.parameters import (
     declare_node_parameters,
     declare_scenario_parameters,
@@ -143,14 +144,19 @@ class SimNode(GuardedNode):
         self._consumers = ConsumerTracker(self, on_drop=self._publish_status)
         publish = self.create_publisher
         qos = PUBLISHER_QOS
-        self._pub_omega = publish(Vector3Stamped, topics.ANGULAR_VELOCITY,
-                                  qos[topics.ANGULAR_VELOCITY])
-        self._pub_attitude = publish(QuaternionStamped, topics.ATTITUDE, qos[topics.ATTITUDE])
-        self._pub_euler = publish(Vector3Stamped, topics.EULER_ANGLES, qos[topics.EULER_ANGLES])
         self._pub_perturber = (publish(Vector3Stamped, topics.PERTURBER, qos[topics.PERTURBER])
                                if self.scenario.orbit is not None else None)
         self._pub_clock = (publish(Clock, topics.CLOCK, qos[topics.CLOCK])
                            if params['publish_clock'] else None)
+        # the per-sample topics, published as CDR bytes of the encoder's rows
+        self._encoder = SampleEncoder()
+        self._sample_publishers = {
+            topics.ANGULAR_VELOCITY: publish(Vector3Stamped, topics.ANGULAR_VELOCITY,
+                                             qos[topics.ANGULAR_VELOCITY]),
+            topics.ATTITUDE: publish(QuaternionStamped, topics.ATTITUDE, qos[topics.ATTITUDE]),
+            topics.EULER_ANGLES: publish(Vector3Stamped, topics.EULER_ANGLES,
+                                         qos[topics.EULER_ANGLES]),
+            topics.PERTURBER: self._pub_perturber, topics.CLOCK: self._pub_clock}
         self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, qos[topics.IMPACT_EVENTS])
         self._pub_status = publish(SimStatus, topics.STATUS, qos[topics.STATUS])
         self._pub_scenario = publish(ScenarioDescription, topics.SCENARIO, qos[topics.SCENARIO])
@@ -278,13 +284,7 @@ class SimNode(GuardedNode):
             # before its samples (the comparator keeps the previous segment's model for the
             # samples that trail a description).
             self._publish_impact_events()
-            perturber = (self.scenario.perturber_in_body(times[:done], arrays['quaternion'][:done])
-                         if self._pub_perturber is not None and done else None)
-            for j in range(done):
-                self._publish_sample(stamps[j], arrays['omega'][j], arrays['quaternion'][j],
-                                     arrays['euler'][j])
-                if perturber is not None:
-                    self._publish_perturber(stamps[j], perturber[j])
+            self._publish_samples(stamps[:done], times[:done], arrays)
             self._publish_markers(self._next_k, done, arrays)
             self._next_k += done
             if failure:
@@ -301,39 +301,28 @@ class SimNode(GuardedNode):
             self._propagator.schedule(impact)
             self._impact_ids[id(impact)] = impact_id
 
-    def _publish_sample(self, ns: int, omega, quaternion, euler) -> None:
+    def _publish_samples(self, stamps: list[int], times: np.ndarray, arrays: dict) -> None:
         """
-        Publish one sample and /clock.
+        Publish n samples, each with its /clock, as CDR bytes (:class:`~.messages.SampleEncoder`).
 
-        The sample: ω [rad/yr] (body axes), the attitude quaternion (scalar first,
-        body -> orbital), the continuous Euler angles (φ, ψ, θ) [rad].
+        Per sample: /clock, ω [rad/yr] (body axes), the attitude quaternion (scalar first,
+        body -> orbital), the continuous Euler angles (φ, ψ, θ) [rad], and with a Kepler orbit
+        where the torquing body is [km] (body axes).
         """
-        header_stamp = stamp(ns)
-        wx, wy, wz = omega.tolist()
-        q0, q1, q2, q3 = quaternion.tolist()
-        phi, psi, theta = euler.tolist()
-        msg = Vector3Stamped()
-        msg.header.stamp, msg.header.frame_id = header_stamp, topics.FRAME_BODY
-        msg.vector = Vector3(x=wx, y=wy, z=wz)
-        attitude = QuaternionStamped()
-        attitude.header.stamp, attitude.header.frame_id = header_stamp, topics.FRAME_ORBITAL
-        attitude.quaternion = Quaternion(w=q0, x=q1, y=q2, z=q3)
-        angles = Vector3Stamped()
-        angles.header.stamp, angles.header.frame_id = header_stamp, topics.FRAME_EULER
-        angles.vector = Vector3(x=phi, y=psi, z=theta)
-        if self._pub_clock is not None:
-            self._pub_clock.publish(Clock(clock=header_stamp))
-        self._pub_omega.publish(msg)
-        self._pub_attitude.publish(attitude)
-        self._pub_euler.publish(angles)
-
-    def _publish_perturber(self, ns: int, position) -> None:
-        """Publish where the torquing body is [km], body axes (a Kepler orbit or flyby)."""
-        msg = Vector3Stamped()
-        msg.header.stamp, msg.header.frame_id = stamp(ns), topics.FRAME_BODY
-        x, y, z = position.tolist()
-        msg.vector = Vector3(x=x, y=y, z=z)
-        self._pub_perturber.publish(msg)
+        n = len(stamps)
+        if n == 0:
+            return
+        quaternion = arrays['quaternion'][:n]
+        perturber = (self.scenario.perturber_in_body(times, quaternion)
+                     if self._pub_perturber is not None else None)
+        blocks = self._encoder.simulator(np.array(stamps, dtype=np.int64), arrays['omega'][:n],
+                                         quaternion, arrays['euler'][:n],
+                                         clock=self._pub_clock is not None, perturber=perturber)
+        publishers = [self._sample_publishers[topic].publish for topic, _ in blocks]
+        rows = [block for _, block in blocks]
+        for j in range(n):
+            for publish, block in zip(publishers, rows):
+                publish(block[j].tobytes())
 
     def _publish_markers(self, k0: int, n: int, arrays: dict) -> None:
         """Publish the 3D scene of the samples k0 .. k0 + n - 1 that get one (decimation)."""
