@@ -70,6 +70,23 @@ def test_a_sample_off_the_simulators_grid_is_compared_at_its_own_time(ros):
     np.testing.assert_allclose(vec(model), expected, rtol=0, atol=1e-12)
 
 
+def test_an_unreadable_sample_is_skipped_and_the_next_one_compared(ros):
+    """Bytes on angular_velocity that are no Vector3Stamped: skipped, the node goes on."""
+    model = ros.collect(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY)
+    node = ros.start(ComparatorNode)
+    ros.start(SimNode, start_paused=True, **RUN)
+    pub = ros.probe.create_publisher(Vector3Stamped, topics.ANGULAR_VELOCITY, STATE_QOS)
+    assert ros.spin_until(lambda: pub.get_subscription_count() > 0, 5.0)
+    ros.spin_for(0.3)  # the latched scenario description reaches the comparator
+    pub.publish(b'\x00\x01\x00\x00\x05')      # little-endian CDR, ends inside the stamp
+    pub.publish(b'garbage')
+    msg = Vector3Stamped()
+    msg.header.stamp.nanosec = 2_000_000
+    pub.publish(msg)
+    assert ros.spin_until(lambda: len(model) == 1, 5.0), len(model)
+    assert stamp_ns(model[0]) == 2_000_000 and node.consumed == 1
+
+
 def test_decimation_compares_every_kth_sample(ros):
     norm = ros.collect(ErrorNorm, topics.ERROR_NORM)
     omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)

@@ -14,7 +14,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 
 from tumble_ros import topics
-from tumble_ros.nodes.messages import SampleEncoder
+from tumble_ros.nodes.messages import SampleEncoder, Vector3StampedReader
 from tumble_ros_interfaces.msg import ErrorNorm
 
 #: Awkward values: signed zero, a subnormal, extremes, infinities.
@@ -110,3 +110,45 @@ def test_comparator_rows_are_the_messages_rclpy_builds(model_name):
         _same(rows[topics.ERROR_NORM][j], ErrorNorm(header=header, model=model_name,
                                                     norm=float(norms[j, 0]),
                                                     relative=float(norms[j, 1])))
+
+
+def test_one_sample_of_the_comparator_is_its_row():
+    """SampleEncoder.comparison (one sample, struct) gives the bytes of comparator() (numpy)."""
+    n = 12
+    ns = _stamps(n)
+    model, error, norms = _columns(n, 3, 8), _columns(n, 3, 9), _columns(n, 2, 10)
+    encoder = SampleEncoder()
+    rows = [block for _, block in encoder.comparator(ns, model, error, norms[:, 0],
+                                                     norms[:, 1], 'paper')]
+    for j in range(n):
+        one = encoder.comparison(int(ns[j]), model[j].tolist(), error[j].tolist(),
+                                 float(norms[j, 0]), float(norms[j, 1]), 'paper')
+        assert list(one) == [block[j].tobytes() for block in rows]
+    # another model name: another string in the message
+    other = encoder.comparison(int(ns[0]), model[0].tolist(), error[0].tolist(), 1.0, 2.0,
+                               'torque_free_exact')[2]
+    assert deserialize_message(other, ErrorNorm).model == 'torque_free_exact'
+
+
+def test_the_reader_reads_what_rclpy_writes_in_both_byte_orders():
+    read = Vector3StampedReader()
+    ns = _stamps(20)
+    values = _columns(20, 3, 11)
+    for j in range(20):
+        msg = Vector3Stamped(header=_header(ns[j], 'any frame ' * (j % 4)),
+                             vector=_vector(values[j]))
+        stamp, vector = read(serialize_message(msg))
+        assert stamp == ns[j]
+        assert [repr(v) for v in vector] == [repr(v) for v in values[j].tolist()]
+    # big-endian CDR (another DDS may send it): through rclpy's deserialisation
+    big = (b'\x00\x00\x00\x00' + (7).to_bytes(4, 'big') + (9).to_bytes(4, 'big')
+           + (1).to_bytes(4, 'big') + b'\x00' + b'\x00' * 3
+           + np.array([1.5, -2.0, 3.25], dtype='>f8').tobytes())
+    assert read(big) == (7_000_000_009, (1.5, -2.0, 3.25))
+
+
+@pytest.mark.parametrize('data', [b'', b'\x00\x01\x00\x00\x05', b'garbage',
+                                  b'\x00\x01\x00\x00' + b'\x00' * 8 + b'\xff\xff\xff\x7f'])
+def test_the_reader_refuses_what_is_not_a_vector3_stamped(data):
+    with pytest.raises(ValueError, match='not a geometry_msgs/Vector3Stamped'):
+        Vector3StampedReader()(data)

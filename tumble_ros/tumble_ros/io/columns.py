@@ -38,7 +38,8 @@ from .mcap_reader import (
 )
 from .msgdefs import MessageDefinitionError, parse_msg
 
-__all__ = ['FlatLayout', 'MessageTemplate', 'TopicColumns', 'read_columns', 'encode_rows']
+__all__ = ['FlatLayout', 'FlatEncoder', 'MessageTemplate', 'TopicColumns', 'read_columns',
+           'encode_rows']
 
 #: numpy types of the primitive types a flat layout may hold (strings apart), little-endian.
 _DTYPES = {'bool': '<u1', 'byte': '<u1', 'char': '<u1', 'int8': '<i1', 'uint8': '<u1',
@@ -463,34 +464,81 @@ def encode_rows(layout: FlatLayout, count: int, values: dict[str, np.ndarray],
 
     The inverse of the columnar read: ``values`` holds every numeric field (dotted name ->
     (count,) array, cast to the field's type), ``strings`` every string field (one value for
-    all rows). Little-endian CDR as ROS 2 serializes it (tests/test_io_columns.py compares with
-    rclpy's serialize_message).
+    all rows). Little-endian CDR as ROS 2 serializes it (tests/test_node_messages.py compares
+    with rclpy's messages). :class:`FlatEncoder` does the same and keeps the template.
     """
-    template = bytearray(b'\x00\x01\x00\x00')
-    at, offsets = 0, {}
-    for name, kind in layout.fields:
-        width = 4 if kind == 'string' else _SIZES[kind]
-        pad = -at % width
-        template += b'\x00' * pad
-        at += pad
-        if kind == 'string':
-            text = strings[name].encode() + b'\x00'
-            template += len(text).to_bytes(4, 'little') + text
-            at += 4 + len(text)
-        else:
-            offsets[name] = _ENCAPSULATION + at
-            template += b'\x00' * width
-            at += width
-    rows = np.empty((count, len(template)), dtype=np.uint8)
-    rows[:] = np.frombuffer(bytes(template), dtype=np.uint8)
-    for name, kind in layout.fields:
-        if kind != 'string':
+    return FlatEncoder(layout, strings).rows(count, values)
+
+
+#: struct codes of the primitive types (little-endian, no alignment: offsets are explicit).
+_STRUCT_CODES = {'bool': '?', 'byte': 'B', 'char': 'B', 'int8': 'b', 'uint8': 'B', 'int16': 'h',
+                 'uint16': 'H', 'int32': 'i', 'uint32': 'I', 'int64': 'q', 'uint64': 'Q',
+                 'float32': 'f', 'float64': 'd'}
+
+
+class FlatEncoder:
+    """
+    Messages of a flat type whose strings are fixed: their CDR bytes, n rows or one at a time.
+
+    The template (encapsulation header, strings, zero padding) and the offset of every numeric
+    field are worked out once; :meth:`rows` writes columns into n copies of it (numpy), and
+    :meth:`one` packs one message's numbers into one copy (``struct``, ~1 us: what a node that
+    receives samples one at a time publishes).
+    """
+
+    def __init__(self, layout: FlatLayout, strings: dict[str, str]):
+        template = bytearray(b'\x00\x01\x00\x00')
+        at, self.offsets = 0, {}
+        for name, kind in layout.fields:
+            width = 4 if kind == 'string' else _SIZES[kind]
+            pad = -at % width
+            template += b'\x00' * pad
+            at += pad
+            if kind == 'string':
+                text = strings[name].encode() + b'\x00'
+                template += len(text).to_bytes(4, 'little') + text
+                at += 4 + len(text)
+            else:
+                self.offsets[name] = _ENCAPSULATION + at
+                template += b'\x00' * width
+                at += width
+        self.template = bytes(template)
+        #: the numeric fields, in CDR order (the order :meth:`one` takes their values in)
+        self.numeric = tuple((name, kind) for name, kind in layout.fields if kind != 'string')
+        self._runs = self._packing_runs()
+
+    def _packing_runs(self) -> list[tuple[int, struct.Struct, int]]:
+        """Group adjacent numeric fields: [(offset, Struct of the run, number of fields)]."""
+        runs: list[list] = []
+        end = -1
+        for name, kind in self.numeric:
+            offset = self.offsets[name]
+            if offset != end:
+                runs.append([offset, '<', 0])
+            runs[-1][1] += _STRUCT_CODES[kind]
+            runs[-1][2] += 1
+            end = offset + _SIZES[kind]
+        return [(offset, struct.Struct(codes), n) for offset, codes, n in runs]
+
+    def rows(self, count: int, values: dict[str, np.ndarray]) -> np.ndarray:
+        """Encode ``count`` messages, one per row of a uint8 array (``values``: name -> column)."""
+        rows = np.empty((count, len(self.template)), dtype=np.uint8)
+        rows[:] = np.frombuffer(self.template, dtype=np.uint8)
+        for name, kind in self.numeric:
             column = np.ascontiguousarray(np.broadcast_to(values[name], (count,)),
                                           dtype=_DTYPES[kind])
-            width = _SIZES[kind]
-            rows[:, offsets[name]:offsets[name] + width] = column.view(np.uint8).reshape(
-                count, width)
-    return rows
+            offset, width = self.offsets[name], _SIZES[kind]
+            rows[:, offset:offset + width] = column.view(np.uint8).reshape(count, width)
+        return rows
+
+    def one(self, *numbers) -> bytes:
+        """Return one message whose numeric fields hold ``numbers`` (in :attr:`numeric` order)."""
+        data = bytearray(self.template)
+        k = 0
+        for offset, packer, n in self._runs:
+            packer.pack_into(data, offset, *numbers[k:k + n])
+            k += n
+        return bytes(data)
 
 
 class MessageTemplate:

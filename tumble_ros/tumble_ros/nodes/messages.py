@@ -8,22 +8,24 @@ attitude quaternion body -> orbital (scalar first), stamps [ns] of ROS time.
 from __future__ import annotations
 
 import math
+import struct
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Quaternion, Vector3, Vector3Stamped
 import numpy as np
+from rclpy.serialization import deserialize_message
 
 from tumble_ros import topics
-from tumble_ros.core import Impact
-from tumble_ros.io.columns import encode_rows, FlatLayout
+from tumble_ros.core import Impact, TimeBase
+from tumble_ros.io.columns import FlatEncoder, FlatLayout
 from tumble_ros.io.msgdefs import message_definition
-from tumble_ros_interfaces.msg import ErrorNorm, ImpactEvent, ScenarioDescription, SimStatus
+from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 
 __all__ = ['stamp', 'FRAMES', 'FRAME_CODES', 'scenario_description', 'impact_event',
            'sim_status', 'comparison_status', 'comparison_values', 'error_norms',
-           'comparison_messages', 'SampleEncoder']
+           'SampleEncoder', 'Vector3StampedReader']
 
 #: ApplyImpact / ImpactEvent frame codes <-> Impact frames.
 FRAMES = {ApplyImpact.Request.FRAME_BODY: topics.FRAME_BODY,
@@ -97,49 +99,49 @@ def error_norms(numeric, error) -> tuple[float, float]:
     return norm, norm / magnitude if magnitude > 0 else math.inf
 
 
-def comparison_messages(header, numeric, model, model_name: str
-                        ) -> tuple[Vector3Stamped, Vector3Stamped, ErrorNorm]:
-    """Return the comparator's three messages for one sample: model, error, error norm."""
-    error, norm, relative = comparison_values(numeric, model)
-    return (Vector3Stamped(header=header, vector=_vector(model)),
-            Vector3Stamped(header=header, vector=_vector(error)),
-            ErrorNorm(header=header, model=model_name, norm=norm, relative=relative))
-
-
 _XYZ = ('vector.x', 'vector.y', 'vector.z')
 _WXYZ = ('quaternion.w', 'quaternion.x', 'quaternion.y', 'quaternion.z')
+_STAMP = ('header.stamp.sec', 'header.stamp.nanosec')
+
+
+def _layout(topic: str) -> FlatLayout:
+    type_name = topics.TYPES[topic]
+    return FlatLayout.from_schema(type_name, message_definition(type_name))
 
 
 class SampleEncoder:
     """
-    The per-sample messages as CDR bytes, n samples at a time (numpy columns, no objects).
+    The per-sample messages as CDR bytes, built from numbers (no message objects).
 
     What the simulator publishes for each sample (``/clock``, ω, attitude, Euler angles, and the
     perturber's position with a Kepler orbit) and what the comparator publishes for it (model,
-    error, error norm), encoded by :func:`tumble_ros.io.columns.encode_rows`: the bytes rclpy
+    error, error norm), encoded by :class:`tumble_ros.io.columns.FlatEncoder`: the bytes rclpy
     would serialise from the message objects (tests/test_node_messages.py compares them), at
-    ~1 µs a message instead of ~12 µs for building and converting one. The live simulator
-    publishes these rows (``Publisher.publish`` of bytes), the offline recording writes them.
-    Stamps ``ns`` are integer nanoseconds of ROS time; units as on the topics.
+    ~1 µs a message instead of ~12 µs for building and converting one. n samples at a time as
+    numpy rows (the live simulator publishes their bytes, the offline recording writes them),
+    or one sample's bytes (the live comparator, which receives samples one by one). Stamps
+    ``ns`` are integer nanoseconds of ROS time; units as on the topics.
     """
 
     def __init__(self) -> None:
-        self._layouts: dict[str, FlatLayout] = {}
+        self._encoders: dict[tuple, FlatEncoder] = {}
+
+    def _encoder(self, topic: str, frame: str, extra: tuple = ()) -> FlatEncoder:
+        key = (topic, frame, extra)
+        encoder = self._encoders.get(key)
+        if encoder is None:
+            strings = {} if topic == topics.CLOCK else {'header.frame_id': frame, **dict(extra)}
+            encoder = self._encoders[key] = FlatEncoder(_layout(topic), strings)
+        return encoder
 
     def _rows(self, topic: str, ns: np.ndarray, names, columns, frame: str,
-              strings: dict | None = None) -> np.ndarray:
-        layout = self._layouts.get(topic)
-        if layout is None:
-            type_name = topics.TYPES[topic]
-            layout = FlatLayout.from_schema(type_name, message_definition(type_name))
-            self._layouts[topic] = layout
+              extra: tuple = ()) -> np.ndarray:
         ns = np.asarray(ns, dtype=np.int64)
         sec, nanosec = ns // 1_000_000_000, ns % 1_000_000_000
-        if topic == topics.CLOCK:
-            return encode_rows(layout, len(ns), {'clock.sec': sec, 'clock.nanosec': nanosec}, {})
-        values = {'header.stamp.sec': sec, 'header.stamp.nanosec': nanosec}
+        stamp_names = ('clock.sec', 'clock.nanosec') if topic == topics.CLOCK else _STAMP
+        values = dict(zip(stamp_names, (sec, nanosec)))
         values.update(zip(names, columns))
-        return encode_rows(layout, len(ns), values, {'header.frame_id': frame, **(strings or {})})
+        return self._encoder(topic, frame, extra).rows(len(ns), values)
 
     def simulator(self, ns: np.ndarray, omega: np.ndarray, quaternion: np.ndarray,
                   euler: np.ndarray, *, clock: bool = True, perturber: np.ndarray | None = None
@@ -169,11 +171,51 @@ class SampleEncoder:
                    norm: np.ndarray, relative: np.ndarray, model_name: str
                    ) -> list[tuple[str, np.ndarray]]:
         """Return the comparator's messages of n samples (model, error, norms), in order."""
+        name = (('model', model_name),)
         return [
             (topics.MODEL_ANGULAR_VELOCITY, self._rows(topics.MODEL_ANGULAR_VELOCITY, ns, _XYZ,
                                                        model.T, topics.FRAME_BODY)),
             (topics.ERROR, self._rows(topics.ERROR, ns, _XYZ, error.T, topics.FRAME_BODY)),
             (topics.ERROR_NORM, self._rows(topics.ERROR_NORM, ns, ('norm', 'relative'),
-                                           (norm, relative), topics.FRAME_BODY,
-                                           {'model': model_name})),
+                                           (norm, relative), topics.FRAME_BODY, name)),
         ]
+
+    def comparison(self, ns: int, model, error, norm: float, relative: float,
+                   model_name: str) -> tuple[bytes, bytes, bytes]:
+        """Return one sample's comparator messages (model, error, norms) as bytes."""
+        sec, nanosec = divmod(ns, 1_000_000_000)
+        body = topics.FRAME_BODY
+        return (self._encoder(topics.MODEL_ANGULAR_VELOCITY, body).one(sec, nanosec, *model),
+                self._encoder(topics.ERROR, body).one(sec, nanosec, *error),
+                self._encoder(topics.ERROR_NORM, body, (('model', model_name),)).one(
+                    sec, nanosec, norm, relative))
+
+
+class Vector3StampedReader:
+    """
+    Read a serialised geometry_msgs/Vector3Stamped: (stamp [ns], (x, y, z)).
+
+    Little-endian CDR is read in place (the layout's walk and ``struct``); anything else goes
+    through rclpy's deserialisation.
+    """
+
+    def __init__(self) -> None:
+        self._layout = _layout(topics.ANGULAR_VELOCITY)
+        self._stamp = struct.Struct('<iI')
+        self._vector = struct.Struct('<ddd')
+
+    def __call__(self, data: bytes) -> tuple[int, tuple[float, float, float]]:
+        """Return (stamp [ns], vector) of one message; ValueError if it is not one."""
+        found = self._layout.offsets(data)
+        if found is None:
+            try:
+                msg = deserialize_message(data, Vector3Stamped)
+            except Exception as err:  # (rclpy raises its own error types)
+                raise ValueError(f'not a geometry_msgs/Vector3Stamped: {err}') from err
+            s = msg.header.stamp
+            return (TimeBase.stamp_ns(s.sec, s.nanosec),
+                    (msg.vector.x, msg.vector.y, msg.vector.z))
+        offsets, _ = found
+        sec, nanosec = self._stamp.unpack_from(data, offsets['header.stamp.sec'])
+        return (TimeBase.stamp_ns(sec, nanosec),
+                self._vector.unpack_from(data, offsets['vector.x']))
