@@ -208,7 +208,7 @@ def advance(p, extra, cfg, st, track, t_target, t_out, y_out, e_out, k, budget):
             break
         steps += 1
         work += 1 + track_euler(p, extra, cfg, st, track)
-        if k < n_out and t_out[k] <= st[ST.T]:  # (no call, no array reference counting, otherwise)
+        if k < n_out and t_out[k] <= st[ST.T]:  # (no call otherwise)
             k = emit(p, extra, cfg, st, track, t_out, y_out, e_out, k)
     refresh_track(st, track)
     return k, steps, work
