@@ -152,6 +152,13 @@ def test_the_encounter_command_writes_its_figure_and_refuses_a_scenario_without_
     no_flyby = Path(__file__).resolve().parents[1] / 'config' / 'fig3.yaml'
     assert encounter_main([str(no_flyby), '-q']) == 2
     assert 'needs an orbit.kind: flyby' in capsys.readouterr().err
+    # the simulator's own parameters in the file are skipped (it is a ros2 run params file)
+    with_node = tmp_path / 'with_node_parameters.yaml'
+    with_node.write_text(CONFIG.read_text().replace(
+        '    time_unit: h\n',
+        '    time_unit: h\n    seconds_per_year: 8766.0\n    markers: true\n'))
+    assert encounter_main([str(with_node), '--bodies', '2', '--inertia-draws', '1', '--out',
+                           str(tmp_path / 'enc2'), '-q']) == 0, capsys.readouterr().err
 
 
 def _coarse(tmp_path) -> Path:

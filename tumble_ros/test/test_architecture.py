@@ -4,7 +4,7 @@ The import map: no circle, and every arrow points down the layers.
 Layers, bottom up: ``errors`` and ``topics`` (facts, no imports), ``core`` (numerics), ``io``
 (recordings, ensemble stores), ``ensembles`` (core's chunked runs into io's stores),
 ``analysis`` (offline tools over core and io), ``cli`` (command lines over core, ensembles and
-analysis), ``nodes`` (ROS).
+analysis; the simulator's parameter names from topics), ``nodes`` (ROS).
 A module may import its own package and the layers below, never above.
 """
 import ast
@@ -19,7 +19,7 @@ ALLOWED = {
     'io': {'errors', 'topics'},
     'ensembles': {'errors', 'core', 'io'},
     'analysis': {'errors', 'topics', 'core', 'io'},
-    'cli': {'errors', 'core', 'ensembles', 'analysis'},
+    'cli': {'errors', 'topics', 'core', 'ensembles', 'analysis'},
     'nodes': {'errors', 'topics', 'core', 'io'},
     '__main__': {'nodes', 'analysis', 'cli'},
     '__init__': set(),

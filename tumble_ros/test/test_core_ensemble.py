@@ -132,3 +132,24 @@ def test_command_line(tmp_path, capsys):
     data = np.load(out)
     assert data['omega'].shape == (4, 6, 3) and data['success'].all()
     assert main(['--bodies', '0', '--quiet']) == 2
+
+
+def test_a_simulators_params_file_with_its_node_parameters_is_read(tmp_path, capsys):
+    """
+    The params file given to ``ros2 run tumble_ros sim`` also runs as an ensemble.
+
+    The simulator's own parameters (real_time_factor, seconds_per_year, ...) are not the
+    scenario's: they are skipped; an unknown name is still refused, with its name.
+    """
+    from tumble_ros.topics import SIM_NODE_PARAMETERS
+
+    params = tmp_path / 'sim.yaml'
+    node = ''.join(f'    {name}: {default!r}\n'.replace("'", '') for name, (default, *_)
+                   in SIM_NODE_PARAMETERS.items())
+    params.write_text('sim:\n  ros__parameters:\n    duration: 0.2\n    output_interval: 0.1\n'
+                      + node.replace('True', 'true').replace('False', 'false'))
+    assert main([str(params), '--bodies', '2', '--quiet']) == 0, capsys.readouterr().err
+    assert 'bodies: 2 (2 succeeded)' in capsys.readouterr().out
+    params.write_text(params.read_text() + '    real_time_factr: 1.0\n')
+    assert main([str(params), '--bodies', '2', '--quiet']) == 2
+    assert 'real_time_factr: unknown scenario parameter' in capsys.readouterr().err

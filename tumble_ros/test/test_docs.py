@@ -5,7 +5,7 @@ import re
 from tumble_ros.core import Scenario
 from tumble_ros.nodes.comparator import PARAMETERS as COMPARATOR_PARAMETERS
 from tumble_ros.nodes.recorder import PARAMETERS as RECORDER_PARAMETERS
-from tumble_ros.nodes.sim import NODE_PARAMETERS
+from tumble_ros.topics import SIM_NODE_PARAMETERS as NODE_PARAMETERS
 
 README = (Path(__file__).resolve().parents[2] / 'README.md').read_text()
 

@@ -1,6 +1,8 @@
 """
 The tumble topics and services: names, types, frames, in one place, without ROS.
 
+And the simulator's own parameters (:data:`SIM_NODE_PARAMETERS`), the rest of its interface.
+
 Names are relative (they resolve in a node's namespace, so two asteroids run side by side in
 ``/ast1`` and ``/ast2``), except ``/clock``, which is global by ROS convention. The nodes, the
 recorder's defaults, the offline analysis and the tests all take them from here.
@@ -8,6 +10,7 @@ recorder's defaults, the offline analysis and the tests all take them from here.
 from __future__ import annotations
 
 __all__ = [
+    'SIM_NODE_PARAMETERS', 'MARKER_FRAMES',
     'ANGULAR_VELOCITY', 'ATTITUDE', 'EULER_ANGLES', 'CLOCK', 'IMPACT_EVENTS', 'STATUS', 'SCENARIO',
     'CONSUMER_PROGRESS', 'PERTURBER', 'MARKERS', 'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM',
     'COMPARISON_STATUS',
@@ -110,3 +113,32 @@ def in_namespace(namespace: str, topic: str) -> str:
         return topic
     namespace = namespace.strip('/')
     return f'/{namespace}/{topic}' if namespace else f'/{topic}'
+
+
+#: Auto decimation (``marker_decimation`` 0): at most about this many scenes per run.
+MARKER_FRAMES = 10_000
+
+#: The simulator's own parameters, not the scenario's: name -> (default, unit, description,
+#: (min, max) or None, read_only). Here, without ROS, so that the tools reading a simulator's
+#: params file for its scenario (``cli.ensemble``, ``cli.encounter``) skip them.
+SIM_NODE_PARAMETERS = {
+    'seconds_per_year': (0.0, 's/yr', 'ROS seconds per simulated year in every stamp and /clock; '
+                         '0 = one ROS second per time_unit (1 for yr, 8766 for h)',
+                         (0.0, 1e6), True),
+    'real_time_factor': (0.1, 'yr/s', 'simulated years per wall-clock second; 0 = as fast as the '
+                         'subscribers take it', (0.0, 1e6), False),
+    'start_paused': (False, '', 'start paused (resume or step with the services)', None, True),
+    'min_consumers': (0, '', 'wait until this many consumers report progress before publishing',
+                      None, True),
+    'publish_clock': (True, '', 'publish /clock (one simulator per ROS domain should)', None,
+                      True),
+    'max_impact_duration': (1e-3, 'yr', 'longest impact pulse the service accepts', (1e-15, 1e6),
+                            False),
+    'max_impact_impulse': (1e3, 'I rad/yr', 'largest |M| * duration the service accepts',
+                           (1e-12, 1e15), False),
+    'markers': (False, '', 'publish the 3D scene (body, axes, L, Sun) on markers (bringup, '
+                'make run and the launch files turn it on)', None, True),
+    'marker_decimation': (0, '', 'a scene every k-th sample (and the last); 0 = auto: every '
+                          f'sample up to {MARKER_FRAMES} samples, at most ~{MARKER_FRAMES} '
+                          'scenes', (0, 1_000_000), True),
+}

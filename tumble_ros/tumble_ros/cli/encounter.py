@@ -26,6 +26,7 @@ from tumble_ros.analysis.encounter import (encounter_ensemble, encounter_figure,
 from tumble_ros.cli.engine import add_engine_arguments, engine
 from tumble_ros.core import load_scenario, ScenarioError
 from tumble_ros.ensembles import EnsembleRunError
+from tumble_ros.topics import SIM_NODE_PARAMETERS
 
 __all__ = ['main']
 
@@ -64,7 +65,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                   f'{time.perf_counter() - start:.1f} s', file=sys.stderr)
 
     try:
-        sc = load_scenario(args.config)
+        sc = load_scenario(args.config, ignore=frozenset(SIM_NODE_PARAMETERS))
         if sc.orbit is None or sc.orbit.e <= 1.0:
             raise ScenarioError(f'{args.config}: needs an orbit.kind: flyby (a hyperbolic '
                                 'orbit); this scenario has none')

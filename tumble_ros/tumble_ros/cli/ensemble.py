@@ -30,6 +30,7 @@ from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, 
                              Scenario, ScenarioError, simulate_ensemble)
 from tumble_ros.ensembles import open_ensemble, run_ensemble_to_store
 from tumble_ros.errors import TumbleRosError
+from tumble_ros.topics import SIM_NODE_PARAMETERS
 
 __all__ = ['main']
 
@@ -105,7 +106,8 @@ def _to_store(args, sc, inputs, client) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
-        sc = load_scenario(args.config) if args.config else Scenario()
+        sc = (load_scenario(args.config, ignore=frozenset(SIM_NODE_PARAMETERS)) if args.config
+              else Scenario())
         changes = {k: v for k, v in (('duration', args.duration),
                                      ('output_interval', args.output_interval))
                    if v is not None}

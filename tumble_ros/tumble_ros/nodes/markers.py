@@ -45,11 +45,11 @@ from visualization_msgs.msg import Marker, MarkerArray
 __all__ = ['MarkerScene', 'marker_every', 'marker_samples', 'MARKER_FRAMES', 'AXIS_ROTATIONS',
            'NS_BODY', 'NS_AXES', 'NS_MOMENTUM', 'NS_SUN', 'NS_PERTURBER']
 
+#: Auto decimation (``marker_decimation`` 0): at most about this many scenes per run.
+MARKER_FRAMES = topics.MARKER_FRAMES
 #: Namespaces of the markers (:mod:`tumble_ros.topics`).
 NS_BODY, NS_AXES, NS_MOMENTUM = topics.MARKER_BODY, topics.MARKER_AXES, topics.MARKER_MOMENTUM
 NS_SUN, NS_PERTURBER = topics.MARKER_SUN, topics.MARKER_PERTURBER
-#: Auto decimation (``marker_decimation`` 0): at most about this many scenes per run.
-MARKER_FRAMES = 10_000
 _H = math.sqrt(0.5)
 #: Quaternions (w, x, y, z) turning an arrow along +x onto the body's x, y and z axes.
 AXIS_ROTATIONS = ((1.0, 0.0, 0.0, 0.0), (_H, 0.0, 0.0, _H), (_H, 0.0, -_H, 0.0))

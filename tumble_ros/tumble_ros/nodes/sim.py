@@ -52,7 +52,7 @@ from tumble_ros.core import (
 from tumble_ros.core.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
-from tumble_ros.nodes.markers import marker_every, MARKER_FRAMES, MarkerScene
+from tumble_ros.nodes.markers import marker_every, MarkerScene
 from tumble_ros.nodes.messages import (FRAMES, impact_event, SampleEncoder,
                                        scenario_description, sim_status)
 from tumble_ros.nodes.parameters import (
@@ -82,30 +82,6 @@ MAX_PENDING_IMPACTS = 500
 #: Wall-clock seconds between two status messages while running (a heartbeat with a fresh t).
 STATUS_PERIOD = 1.0
 
-#: The simulator's own parameters (not part of the scenario): name -> (default, unit, description,
-#: (min, max) or None, read_only).
-NODE_PARAMETERS = {
-    'seconds_per_year': (0.0, 's/yr', 'ROS seconds per simulated year in every stamp and /clock; '
-                         '0 = one ROS second per time_unit (1 for yr, 8766 for h)',
-                         (0.0, 1e6), True),
-    'real_time_factor': (0.1, 'yr/s', 'simulated years per wall-clock second; 0 = as fast as the '
-                         'subscribers take it', (0.0, 1e6), False),
-    'start_paused': (False, '', 'start paused (resume or step with the services)', None, True),
-    'min_consumers': (0, '', 'wait until this many consumers report progress before publishing',
-                      None, True),
-    'publish_clock': (True, '', 'publish /clock (one simulator per ROS domain should)', None,
-                      True),
-    'max_impact_duration': (1e-3, 'yr', 'longest impact pulse the service accepts', (1e-15, 1e6),
-                            False),
-    'max_impact_impulse': (1e3, 'I rad/yr', 'largest |M| * duration the service accepts',
-                           (1e-12, 1e15), False),
-    'markers': (False, '', 'publish the 3D scene (body, axes, L, Sun) on markers (bringup, '
-                'make run and the launch files turn it on)', None, True),
-    'marker_decimation': (0, '', 'a scene every k-th sample (and the last); 0 = auto: every '
-                          f'sample up to {MARKER_FRAMES} samples, at most ~{MARKER_FRAMES} '
-                          'scenes', (0, 1_000_000), True),
-}
-
 
 class SimNode(GuardedNode):
     """Simulator node; see the module docstring for its interface."""
@@ -117,7 +93,7 @@ class SimNode(GuardedNode):
         # Registered before declaring, so start-up values are validated too (rclpy docs).
         self.add_on_set_parameters_callback(self._on_set_parameters)
         declare_scenario_parameters(self)
-        params = declare_node_parameters(self, NODE_PARAMETERS)
+        params = declare_node_parameters(self, topics.SIM_NODE_PARAMETERS)
         # ScenarioError: refused
         scenario_parameters = read_scenario_parameters(self)
         self.scenario = Scenario.from_parameters(scenario_parameters)
