@@ -13,6 +13,7 @@ import math
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import QuaternionStamped, Vector3Stamped
 import numpy as np
+import pytest
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from tumble_ros import topics
@@ -188,3 +189,64 @@ def test_write_recording_round_trips_through_the_io_reader(tmp_path):
                        omega)
     norms = [m.message.norm for m in read_messages(path, '/' + topics.ERROR_NORM)]
     assert np.allclose(norms, np.linalg.norm(omega * 0.5, axis=1))
+
+
+@pytest.mark.parametrize('span, unit', [
+    (2000.0, 'yr'), (1.0, 'yr'), (0.2, 'd'), (144 / 8766, 'h'), (10 / 8766, 'h'),
+    (9 / 8766, 'min'), (0.5 / 8766, 'min'), (10 / (8766 * 3600), 's'), (0.0, 's')])
+def test_a_short_run_is_shown_in_hours_or_days(span, unit):
+    from tumble_ros.analysis.timeaxis import display_unit
+    from tumble_ros.core.units import TIME_UNITS
+
+    name, years = display_unit(span)
+    assert (name, years) == (unit, TIME_UNITS[unit])
+
+
+def test_the_time_axis_of_a_flyby_reads_in_round_hours():
+    """The Apophis flyby (144 h = 0.016 yr): ticks at round hours, labelled in hours."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from tumble_ros.analysis.figures import _time_axis
+    from tumble_ros.analysis.timeaxis import display_unit
+
+    t = np.linspace(0.0, 144 / 8766, 145)           # [yr]
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(2, 1, sharex=True)
+    for ax in axes:
+        ax.plot(t, np.sin(t))
+    _time_axis(axes, display_unit(t[-1]))
+    fig.canvas.draw()
+    hours = [tick * 8766 for tick in axes[-1].get_xticks() if 0 <= tick <= t[-1]]
+    assert len(hours) >= 3
+    assert all(abs(h - round(h)) < 1e-6 and round(h) % 5 == 0 for h in hours), hours
+    labels = [label.get_text() for label in axes[-1].get_xticklabels()]
+    assert any(text == f'{round(hours[1]):d}' for text in labels), labels
+    assert axes[-1].get_xlabel() == 't [h]'
+
+
+def test_a_series_with_a_gap_is_drawn_broken_not_bridged():
+    """No straight line across an encounter window where the model published nothing."""
+    from tumble_ros.analysis.figures import envelope, ENVELOPE_BINS, gapped_envelope
+    from tumble_ros.analysis.timeaxis import runs
+
+    t = np.concatenate([np.arange(0, 10), np.arange(20, 30)]) * 0.1
+    y = np.cos(t)
+    assert runs(t) == [(0, 10), (10, 20)]
+    gt, gy = gapped_envelope(t, y)
+    assert np.isnan(gy).sum() == 1 and np.isnan(gy[10])
+    np.testing.assert_array_equal(np.delete(gt, 10), t)
+    np.testing.assert_array_equal(np.delete(gy, 10), y)
+    assert runs(np.arange(30.0)) == [(0, 30)]
+    # long runs keep their envelope (every extreme), one break between them
+    n = 20 * ENVELOPE_BINS
+    t = np.concatenate([np.arange(n), np.arange(2 * n, 3 * n)]) * 1e-3
+    y = np.sin(t * 37.0)
+    gt, gy = gapped_envelope(t, y)
+    assert np.isnan(gy).sum() == 1
+    first, second = envelope(t[:n], y[:n]), envelope(t[n:], y[n:])
+    k = len(first[0])
+    np.testing.assert_array_equal(gt[:k], first[0])
+    np.testing.assert_array_equal(gy[k + 1:], second[1])
+    assert gy[:k].max() == y[:n].max() and gy[k + 1:].min() == y[n:].min()

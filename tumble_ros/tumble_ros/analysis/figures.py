@@ -47,6 +47,7 @@ import stat
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, MaxNLocator
 import numpy as np
 from tumble_ros.errors import AnalysisError
 
@@ -56,6 +57,7 @@ from .recording import Recording, ROOT_NAMESPACE
 from .spectrum import spectrum
 from .summary import AnalysisSummary, analyze
 from .theory import theory_lines
+from .timeaxis import display_unit, runs
 
 __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
            'plot_impacts', 'plot_omega_windows', 'plot_spectrum', 'plot_wy_vs_wx',
@@ -82,6 +84,44 @@ def _new(rows: int = 1, height: float = 3.0, width: float = 9.0):
     FigureCanvasAgg(fig)
     axes = fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
     return fig, axes
+
+
+class _UnitTicks(MaxNLocator):
+    """Ticks at round values of a display unit on an axis whose data are in years."""
+
+    def __init__(self, years_per_unit: float):
+        super().__init__(nbins='auto', steps=[1, 2, 2.5, 5, 10])
+        self.years_per_unit = years_per_unit
+
+    def tick_values(self, vmin, vmax):
+        scale = self.years_per_unit
+        return super().tick_values(vmin / scale, vmax / scale) * scale
+
+
+def _unit(rec: Recording) -> tuple[str, float]:
+    """Return the display unit of the recording's time axis (:func:`.timeaxis.display_unit`)."""
+    return display_unit(float(rec.t[-1] - rec.t[0]) if rec.n else 0.0)
+
+
+def _time_axis(axes, unit: tuple[str, float]) -> None:
+    """
+    Label the time axis of ``axes`` (the last one gets the label) in ``unit``.
+
+    The data stay in years; below a year the ticks fall on round hours (days, ...) and read
+    in them.
+    """
+    name, scale = unit
+    for ax in axes:
+        if name != 'yr':
+            ax.xaxis.set_major_locator(_UnitTicks(scale))
+            ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f'{x / scale:.6g}'))
+    axes[-1].set_xlabel(f't [{name}]')
+
+
+def _t(value: float, unit: tuple[str, float], digits: int = 4) -> str:
+    """Write a time [yr] in ``unit``, with its name."""
+    name, scale = unit
+    return f'{value / scale:.{digits}g} {name}'
 
 
 #: A drawn figure: (file name, PNG bytes).
@@ -203,6 +243,14 @@ def _title(rec: Recording) -> str:
     return text
 
 
+def _mark_gaps(ax, t: np.ndarray, label: bool) -> None:
+    """Shade where a comparison series has no samples (the model did not apply there)."""
+    pieces = runs(t)
+    for k, ((_, stop), (start, _)) in enumerate(zip(pieces[:-1], pieces[1:])):
+        ax.axvspan(t[stop - 1], t[start], color='0.92', zorder=0,
+                   label='no comparison (model not applicable)' if label and k == 0 else None)
+
+
 def _mark_impacts(ax, rec: Recording) -> None:
     for k, (start, end) in enumerate(impact_intervals(rec)):
         ax.axvline(start, color='tab:red', lw=0.8, ls='--',
@@ -236,8 +284,8 @@ def _draw_model(ax, t: np.ndarray, y: np.ndarray, limits: tuple[float, float], l
     lo, hi = limits
     inside = (y >= lo) & (y <= hi)
     ax.plot(t, np.where(inside, y, np.nan), lw=2.0, color='black', alpha=0.6, label=label)
-    if not inside.all():
-        off = ~inside & np.isfinite(y)
+    off = ~inside & np.isfinite(y)      # (NaN: a gap in the series, not off scale)
+    if off.any():
         ax.plot(t[off], np.clip(y[off], lo, hi), ls='', marker='|', ms=4, color='tab:gray',
                 alpha=0.5, label='model off scale' if off_label else None)
     ax.set_ylim(lo, hi)
@@ -250,18 +298,19 @@ def _draw_angular_velocity(rec: Recording, departure: float | None = None) -> li
         ax.plot(*envelope(rec.t, rec.omega[:, i]), lw=0.6, color='tab:blue', label='numeric')
         limits = numeric_limits(rec.omega[:, i])
         if has_model:
-            _draw_model(ax, *envelope(rec.model_t, rec.model_omega[:, i]), limits,
+            _mark_gaps(ax, rec.model_t, i == 0)
+            _draw_model(ax, *gapped_envelope(rec.model_t, rec.model_omega[:, i]), limits,
                         'analytic model' + (f' ({", ".join(rec.error_models)})'
                                             if rec.error_models else ''), i == 0)
         ax.set_ylim(*limits)
         if departure is not None:
             ax.axvline(departure, color='tab:orange', lw=1.0, ls='-.',
-                       label=f'model left the solution (t = {departure:.4g} yr)'
+                       label=f'model left the solution (t = {_t(departure, _unit(rec))})'
                        if i == 0 else None)
         _mark_impacts(ax, rec)
         ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
         ax.grid(True, lw=0.3)
-    axes[-1].set_xlabel('t [yr]')
+    _time_axis(axes, _unit(rec))
     if has_model or rec.impacts:
         axes[0].legend(loc='upper right', fontsize='small')
     axes[0].set_title(_title(rec), fontsize='small')
@@ -299,8 +348,8 @@ def _draw_omega_windows(rec: Recording) -> list[Drawing]:
             ax.plot(rec.t[sel], rec.omega[sel, i], lw=0.7, color='tab:blue', label='numeric')
             limits = numeric_limits(rec.omega[sel, i])
             if msel.any():
-                _draw_model(ax, rec.model_t[msel], rec.model_omega[msel, i], limits,
-                            'analytic model', i == 0)
+                _draw_model(ax, *gapped_envelope(rec.model_t[msel], rec.model_omega[msel, i]),
+                            limits, 'analytic model', i == 0)
             ax.set_ylim(*limits)
             for start, end in impact_intervals(rec):
                 if end >= t0 and start <= t1:
@@ -311,8 +360,10 @@ def _draw_omega_windows(rec: Recording) -> list[Drawing]:
             ax.tick_params(labelsize='x-small')
             if col == 0:
                 ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
-        axes[0, col].set_title(f'{name}: t = {t0:.6g} .. {t1:.6g} yr', fontsize='small')
-        axes[-1, col].set_xlabel('t [yr]')
+        unit = _unit(rec)
+        axes[0, col].set_title(f'{name}: t = {t0 / unit[1]:.6g} .. {_t(t1, unit, 6)}',
+                               fontsize='small')
+        _time_axis(axes[:, col], unit)
     axes[0, 0].legend(loc='upper right', fontsize='x-small')
     fig.suptitle(f'{_label(rec)}: $\\omega$ at full resolution ({WINDOW_SAMPLES} samples a '
                  'window; omega.png: the whole run)', fontsize='small')
@@ -338,8 +389,9 @@ def _draw_wy_vs_wx(rec: Recording) -> list[Drawing]:
     ax.set_ylabel(f'{_LABELS[1]} [rad/yr]')
     ax.grid(True, lw=0.3)
     ax.legend(loc='upper right', fontsize='small')
-    ax.set_title(f'{_label(rec)}: $\\omega_y$ vs $\\omega_x$, t = {rec.t[0]:.4g} .. '
-                 f'{rec.t[-1]:.4g} yr', fontsize='small')
+    unit = _unit(rec)
+    ax.set_title(f'{_label(rec)}: $\\omega_y$ vs $\\omega_x$, t = {rec.t[0] / unit[1]:.4g} .. '
+                 f'{_t(rec.t[-1], unit)}', fontsize='small')
     return [_png(fig, 'wy_vs_wx.png')]
 
 
@@ -365,6 +417,25 @@ def envelope(t: np.ndarray, y: np.ndarray, bins: int = ENVELOPE_BINS
                            np.arange(full, n), [n - 1]])
     keep = np.unique(keep)
     return t[keep], y[keep]
+
+
+def gapped_envelope(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return :func:`envelope` of each run of samples without a gap, joined by NaN.
+
+    A line plot then breaks where the series has no samples (:func:`.timeaxis.runs`) instead
+    of drawing a straight line across: the analytic model and its error are not published
+    where the model does not apply (an encounter window).
+    """
+    pieces = runs(t)
+    if len(pieces) == 1:
+        return envelope(t, y)
+    ts, ys = [], []
+    for a, b in pieces:
+        et, ey = envelope(t[a:b], y[a:b])
+        ts += [et, et[-1:]]
+        ys += [ey, [np.nan]]
+    return np.concatenate(ts[:-1]), np.concatenate(ys[:-1])
 
 
 def _draw_path_density(ax, x: np.ndarray, y: np.ndarray) -> None:
@@ -406,16 +477,18 @@ def _draw_error(rec: Recording) -> list[Drawing]:
     fig, (ax1, ax2) = _new(2, 2.8)
     if len(t_vec):
         for i in range(3):
-            ax1.plot(*envelope(t_vec, vec[:, i]), lw=0.7,
+            ax1.plot(*gapped_envelope(t_vec, vec[:, i]), lw=0.7,
                      label=_LABELS[i].replace('omega', 'Delta\\omega'))
-        ax1.legend(loc='upper left', fontsize='small')
     ax1.set_ylabel('$\\omega - \\omega_{model}$ [rad/yr]')
-    ax2.plot(*envelope(t_norm, norm), lw=0.8, color='black')
+    ax2.plot(*gapped_envelope(t_norm, norm), lw=0.8, color='black')
     ax2.set_ylabel('|error| [rad/yr]')
-    ax2.set_xlabel('t [yr]')
+    _time_axis((ax1, ax2), _unit(rec))
     for ax in (ax1, ax2):
+        _mark_gaps(ax, t_norm, ax is ax1)
         _mark_impacts(ax, rec)
         ax.grid(True, lw=0.3)
+    if ax1.get_legend_handles_labels()[0]:
+        ax1.legend(loc='upper left', fontsize='small')
     models = ', '.join(rec.error_models) or (rec.comparator_status.values.get('model', '')
                                              if rec.comparator_status else '')
     ax1.set_title(f'{_label(rec)}: numeric - analytic model {models}', fontsize='small')
@@ -451,14 +524,15 @@ def _draw_impacts(rec: Recording, samples: int = 25) -> list[Drawing]:
                 ax.plot(rec.model_t[msel], rec.model_omega[msel, i], lw=2.0, color='black',
                         alpha=0.5, label='analytic model')
             ax.axvspan(event.start, event.end, color='tab:red', alpha=0.3,
-                       label=f'pulse [{event.start:.9g}, {event.end:.9g}] yr')
+                       label=f'pulse [{event.start / _unit(rec)[1]:.9g}, '
+                             f'{_t(event.end, _unit(rec), 9)}]')
             ax.axvline(event.start, color='tab:red', lw=0.8, ls='--')
             ax.axvline(event.end, color='tab:red', lw=0.8, ls=':')
             ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
             ax.grid(True, lw=0.3)
             ax.set_xlim(lo, hi)
         axes[0].legend(loc='upper left', fontsize='x-small')
-        axes[-1].set_xlabel('t [yr]')
+        _time_axis(axes, _unit(rec))
         d = event.delta_omega
         axes[0].set_title(
             f'{_label(rec)}: impact {event.id}, {event.frame} torque '
