@@ -89,3 +89,66 @@ def test_the_pole_is_the_angular_momentum_direction():
 def test_bad_input_is_refused(omega, inertia):
     with pytest.raises(ValueError, match='spin_state'):
         spin_state(omega, inertia)
+
+
+def _precession_by_quadrature(inertia, omega, state) -> float:
+    """
+    2 pi / <phi'> over one rotation period, phi' integrated along the Euler-Poinsot motion.
+
+    The independent check of the elliptic-integral closed form: phi' = L (Ia wa^2 + Ib wb^2) /
+    (Ia^2 wa^2 + Ib^2 wb^2), a and b the axes other than the reference (I3 for a SAM, I1 for a
+    LAM), integrated with scipy's DOP853 at rtol 1e-12.
+    """
+    from scipy.integrate import solve_ivp
+
+    order = np.argsort(inertia)
+    i = np.asarray(inertia, dtype=float)[order]
+    w0 = np.asarray(omega, dtype=float)[order]
+    a, b = (0, 1) if state.mode == 'SAM' else (1, 2)
+
+    def rhs(t, y):
+        w = y[:3]
+        dw = [(i[1] - i[2]) * w[1] * w[2] / i[0], (i[2] - i[0]) * w[2] * w[0] / i[1],
+              (i[0] - i[1]) * w[0] * w[1] / i[2]]
+        rate = (state.momentum * (i[a] * w[a] ** 2 + i[b] * w[b] ** 2)
+                / (i[a] ** 2 * w[a] ** 2 + i[b] ** 2 * w[b] ** 2))
+        return [*dw, rate]
+
+    sol = solve_ivp(rhs, (0.0, state.rotation_period), [*w0, 0.0], method='DOP853', rtol=1e-12,
+                    atol=1e-14 * max(1.0, float(np.max(np.abs(w0)))))
+    return 2 * math.pi * state.rotation_period / abs(sol.y[3, -1])
+
+
+def _polhode_point(inertia, d: float) -> np.ndarray:
+    """Return a w with 2E = 1, L^2 = D, no intermediate component (SAM for D > I2, LAM below)."""
+    i1, _, i3 = inertia
+    return np.array([math.sqrt((i3 - d) / (i1 * (i3 - i1))), 0.0,
+                     math.sqrt((d - i1) / (i3 * (i3 - i1)))])
+
+
+@pytest.mark.parametrize('seed', range(12))
+def test_the_precession_period_closed_form_is_the_quadrature(seed):
+    """Pi(n, k) by Carlson's R_F, R_J against the quadrature: SAMs, LAMs, near the separatrix."""
+    rng = np.random.default_rng(seed)
+    inertia = np.sort(rng.uniform(0.3, 1.0, 3))
+    i1, i2, i3 = inertia
+    cases = [rng.normal(size=3) * rng.uniform(1.0, 50.0) for _ in range(6)]
+    # D within 1e-6 I2 of the separatrix on both sides (closer, the periods themselves are
+    # ill-conditioned: the rounding of L^2 / 2E moves D - I2 and with it K(k) and the
+    # quadrature's end time), and near the pure spins
+    near = 1e-6 * i2
+    cases += [_polhode_point(inertia, d) * 20.0 for d in (
+        i2 + min(near, (i3 - i2) / 2), i2 - min(near, (i2 - i1) / 2),
+        i3 - 1e-3 * (i3 - i2), i1 + 1e-3 * (i2 - i1))]
+    modes = []
+    for omega in cases:
+        state = spin_state(omega, inertia)
+        modes.append(state.mode)
+        assert state.precession_period == pytest.approx(
+            _precession_by_quadrature(inertia, omega, state), rel=1e-9), (inertia, omega)
+    assert {'SAM', 'LAM'} <= set(modes)
+
+
+def test_a_sphere_spins_about_a_principal_axis():
+    s = spin_state([1.0, 2.0, 2.0], [0.5, 0.5, 0.5])
+    assert s.mode == 'principal' and s.rotation_period == pytest.approx(2 * math.pi / 3.0)

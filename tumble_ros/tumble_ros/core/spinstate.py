@@ -12,9 +12,15 @@ I3: the short axis), the rotational energy E = 1/2 w.Iw and the angular momentum
   modulus k), P_psi = 4 K(k) sqrt(I1 I2 I3 / ((I3 - I2)(L^2 - 2E I1))) with
   k^2 = (I2 - I1)(2E I3 - L^2) / ((I3 - I2)(L^2 - 2E I1)) for a SAM, and the same with
   (I1 <-> I3) for a LAM (Landau & Lifshitz, Mechanics, sec. 37);
-* the **precession period** P_phi: the mean period of the reference axis (I3 in a SAM, I1 in a
-  LAM) about L, from the rate phi' = L (Ia wa^2 + Ib wb^2) / (Ia^2 wa^2 + Ib^2 wb^2) (a, b the two
-  other axes) averaged over one P_psi by quadrature of the Euler-Poinsot motion;
+* the **precession period** P_phi: the mean period of the reference axis r (I3 in a SAM, I1 in
+  a LAM) about L, 2 pi / <phi'>. The rate phi' = L (Ia wa^2 + Ib wb^2) / (Ia^2 wa^2 + Ib^2 wb^2)
+  (a, b the two other axes) is, with Ia wa^2 + Ib wb^2 = 2E - Lr^2/Ir and
+  Ia^2 wa^2 + Ib^2 wb^2 = L^2 - Lr^2, phi' = L/Ir + L (2E - L^2/Ir) / (L^2 - Lr^2); along the
+  polhode Lr^2 = Ir^2 wr0^2 dn^2(u, k) (wr0: wr where the intermediate component is 0), so
+  L^2 - Lr^2 = A + B sn^2(u, k) with A = L^2 - Ir^2 wr0^2, B = k^2 Ir^2 wr0^2, and its mean over a
+  period of u is Pi(-B/A, k) / (A K(k)): the complete elliptic integral of the third kind,
+  Pi(n, k) = R_F(0, 1 - k^2, 1) + n/3 R_J(0, 1 - k^2, 1, 1 - n) (Carlson; DLMF 19.25.2). The
+  same mean by quadrature of the Euler-Poinsot motion checks it (tests/test_core_spinstate.py);
 * the **pole**: L's direction in the orbital frame (longitude from +X' towards +Y', latitude
   from the orbit plane).
 
@@ -28,9 +34,8 @@ from dataclasses import dataclass
 import math
 
 import numpy as np
-from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
-from scipy.special import ellipk
+from scipy.special import ellipkm1, elliprf, elliprj
 
 from .rotation import quaternion_to_matrix
 
@@ -97,44 +102,53 @@ def spin_state(omega, inertia, quaternion=None) -> SpinState:
         lon = math.atan2(direction[1], direction[0])
         lat = math.asin(max(-1.0, min(1.0, direction[2])))
     principal = sum(abs(v) > 1e-12 * np.linalg.norm(w) for v in (w1, w2, w3)) == 1
-    if principal:
+    if principal or i1 == i3:   # (a sphere: every rotation is about a principal axis)
         period = 2.0 * math.pi / float(np.linalg.norm(w))
         return SpinState('principal', energy, momentum, d, period, period, pole, lon, lat)
     if abs(d - i2) <= _SEPARATRIX * i2 and i1 < i2 < i3:
         return SpinState('separatrix', energy, momentum, d, math.inf, math.inf, pole, lon, lat)
     l2, e2 = momentum * momentum, 2.0 * energy
+    # k^2 and m1 = 1 - k^2, each from its own product: near the separatrix k^2 -> 1, and
+    # 1 - k^2 by subtraction would lose the digits K(k) and the periods depend on
     if d > i2 or i2 == i1:            # SAM (I3 the reference axis); also I1 = I2 symmetric
         mode = 'SAM'
         scale = (i3 - i2) * (l2 - e2 * i1)
         k2 = (i2 - i1) * (e2 * i3 - l2) / scale if i2 > i1 else 0.0
-        axes = (0, 1)                  # phi' from the I1, I2 components
+        m1 = (i3 - i1) * (l2 - e2 * i2) / scale if i2 > i1 else 1.0
     else:                              # LAM (I1 the reference axis); also I2 = I3 symmetric
         mode = 'LAM'
         scale = (i2 - i1) * (e2 * i3 - l2)
         k2 = (i3 - i2) * (l2 - e2 * i1) / scale if i3 > i2 else 0.0
-        axes = (1, 2)
-    rotation = 4.0 * float(ellipk(k2)) * math.sqrt(i1 * i2 * i3 / scale)
-    precession = _precession_period((i1, i2, i3), (w1, w2, w3), momentum, axes, rotation)
+        m1 = (i3 - i1) * (e2 * i2 - l2) / scale if i3 > i2 else 1.0
+    rotation = 4.0 * float(ellipkm1(m1)) * math.sqrt(i1 * i2 * i3 / scale)
+    reference = i3 if mode == 'SAM' else i1
+    precession = _precession_period(reference, (i1, i3), l2, e2, (k2, m1))
     return SpinState(mode, energy, momentum, d, rotation, precession, pole, lon, lat)
 
 
-def _precession_period(moments, w0, momentum, axes, rotation) -> float:
-    """2 pi / <phi'> over one rotation period, by quadrature of the torque-free motion."""
-    i = np.asarray(moments, dtype=float)
-    a, b = axes
+def _precession_period(reference: float, extremes: tuple[float, float], l2: float, e2: float,
+                       modulus: tuple[float, float]) -> float:
+    """
+    Return 2 pi / <phi'>: the mean precession of the reference axis about L [yr].
 
-    def rhs(t, y):
-        w = y[:3]
-        dw = np.array([(i[1] - i[2]) * w[1] * w[2] / i[0], (i[2] - i[0]) * w[2] * w[0] / i[1],
-                       (i[0] - i[1]) * w[0] * w[1] / i[2]])
-        num = i[a] * w[a] ** 2 + i[b] * w[b] ** 2
-        den = i[a] ** 2 * w[a] ** 2 + i[b] ** 2 * w[b] ** 2
-        return np.concatenate([dw, [momentum * num / den]])
-
-    sol = solve_ivp(rhs, (0.0, rotation), [*w0, 0.0], method='DOP853', rtol=1e-12,
-                    atol=1e-14 * max(1.0, float(np.max(np.abs(w0)))))
-    mean_rate = sol.y[3, -1] / rotation
-    return 2.0 * math.pi / abs(mean_rate)
+    ``reference`` is its moment (I3 for a SAM, I1 for a LAM), ``extremes`` (I1, I3), ``l2`` =
+    L^2, ``e2`` = 2E, ``modulus`` (k^2, 1 - k^2) of the polhode (see the module docstring).
+    """
+    k2, m1 = modulus
+    i1, i3 = extremes
+    other = i1 if reference == i3 else i3
+    # wr0^2: the reference axis' w where the intermediate component is 0 (both energy and
+    # momentum then shared between the reference and the other extreme axis)
+    wr0_2 = (l2 - e2 * other) / (reference * (reference - other))
+    a = l2 - reference * reference * wr0_2
+    b = k2 * reference * reference * wr0_2
+    n = -b / a
+    complete_k = float(elliprf(0.0, m1, 1.0))                  # K(k)
+    pi_n = complete_k + n / 3.0 * float(elliprj(0.0, m1, 1.0, 1.0 - n))
+    mean_inverse = pi_n / (a * complete_k)                      # <1 / (L^2 - Lr^2)>
+    momentum = math.sqrt(l2)
+    rate = momentum / reference + momentum * (e2 - l2 / reference) * mean_inverse
+    return 2.0 * math.pi / abs(rate)
 
 
 def omega_for_periods(inertia, precession_period: float, rotation_period: float) -> np.ndarray:
