@@ -14,6 +14,7 @@ anything imports rclpy (the RMW reads these variables when a context is initiali
   multicast traffic to the network and see no other host's nodes.
 """
 import os
+import time
 
 import pytest
 
@@ -39,6 +40,22 @@ def ros():
         yield harness
     finally:
         harness.close()
+
+
+@pytest.fixture(scope='session', autouse=True)
+def dead_dds_segments_removed():
+    """
+    After the session, remove the DDS shared memory of the processes it killed.
+
+    A SIGKILLed node cannot close its Fast DDS participant, whose segment in /dev/shm would
+    stay forever (processes.remove_dead_dds_segments: only those of dead processes, made
+    during this session).
+    """
+    since = time.time()
+    yield
+    from processes import remove_dead_dds_segments
+
+    remove_dead_dds_segments(since)
 
 
 @pytest.fixture

@@ -8,11 +8,17 @@ group it started when the test ends. The processes inherit the test process's DD
 """
 from __future__ import annotations
 
+import fcntl
 import os
 from pathlib import Path
 import signal
 import subprocess
 import time
+
+#: Where Fast DDS keeps its shared-memory transport's segments.
+SHM = Path('/dev/shm')
+#: A segment younger than this [s] is never removed (its process may be taking its lock now).
+SHM_MIN_AGE = 2.0
 
 
 def executable(name: str) -> str:
@@ -81,3 +87,43 @@ class Process:
                 pass
         self.popen.wait(timeout=10)
         self._out.close()
+
+
+def remove_dead_dds_segments(since: float) -> int:
+    """
+    Remove the shared-memory segments of DDS participants whose process died; return how many.
+
+    A process killed with SIGKILL (the tests kill some on purpose, and the ``spawn`` fixture
+    kills what is left) cannot close its Fast DDS participant, whose segment
+    ``/dev/shm/fastrtps_<id>`` and lock file ``<id>_el`` then stay forever (Fast DDS removes
+    them on a clean exit; its ``fastdds shm clean`` tool is what removes such leftovers). A
+    live participant holds an flock on its ``_el`` file: only segments whose lock can be taken,
+    modified since ``since`` (time.time()) and older than :data:`SHM_MIN_AGE` are removed. The
+    port segments (``fastrtps_port*``), shared by the participants of a domain, are left to
+    Fast DDS.
+    """
+    removed = 0
+    now = time.time()
+    for lock in SHM.glob('fastrtps_*_el'):
+        segment = lock.with_name(lock.name[:-len('_el')])
+        if segment.name.startswith('fastrtps_port'):
+            continue
+        try:
+            modified = lock.stat().st_mtime
+            if not since <= modified <= now - SHM_MIN_AGE:
+                continue
+            fd = os.open(lock, os.O_RDWR)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:   # its participant is alive
+            os.close(fd)
+            continue
+        try:
+            segment.unlink(missing_ok=True)
+            lock.unlink(missing_ok=True)
+            removed += 1
+        finally:
+            os.close(fd)
+    return removed

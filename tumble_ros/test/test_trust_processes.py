@@ -175,3 +175,40 @@ def test_sim_refuses_a_binary_params_file_in_one_line(spawn, tmp_path):
     assert sim.wait(SLOW) == 1, sim.output
     (line,) = sim.output.strip().splitlines()
     assert line.startswith(f'sim: params file {path}: cannot read it as text (UnicodeDecodeError')
+
+
+def test_only_the_dds_memory_of_dead_processes_of_this_session_is_removed():
+    """processes.remove_dead_dds_segments, on fake Fast DDS segments in /dev/shm."""
+    import fcntl
+    import os
+    import uuid
+
+    from processes import remove_dead_dds_segments, SHM, SHM_MIN_AGE
+
+    tag = uuid.uuid4().hex[:12]
+    now = time.time()
+    since = now - 100.0
+    made = {}
+    for name, age in (('dead', 10.0), ('alive', 10.0), ('young', 0.0), ('before', 200.0)):
+        segment = SHM / f'fastrtps_{tag}{name}'
+        lock = SHM / f'fastrtps_{tag}{name}_el'
+        for path in (segment, lock):
+            path.write_bytes(b'')
+            os.utime(path, (now - age, now - age))
+        made[name] = (segment, lock)
+    port = (SHM / f'fastrtps_port{tag}', SHM / f'fastrtps_port{tag}_el')
+    for path in port:
+        path.write_bytes(b'')
+        os.utime(path, (now - 10.0, now - 10.0))
+    held = os.open(made['alive'][1], os.O_RDWR)
+    fcntl.flock(held, fcntl.LOCK_SH)     # what a live participant holds
+    try:
+        assert SHM_MIN_AGE < 10.0
+        remove_dead_dds_segments(since)
+        left = {name for name, (segment, lock) in made.items() if segment.exists()}
+        assert left == {'alive', 'young', 'before'}
+        assert not made['dead'][1].exists() and all(p.exists() for p in port)
+    finally:
+        os.close(held)
+        for path in [*[p for pair in made.values() for p in pair], *port]:
+            path.unlink(missing_ok=True)
