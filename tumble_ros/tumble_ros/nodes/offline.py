@@ -16,8 +16,9 @@ log and publish times are the wall-clock times of writing (the live recorder's a
 times), the simulator's 1-Hz status heartbeats are absent (a live run has one per wall second
 while running; the state changes are the same), the first messages of the depth-1 latched topics
 (``status``, ``comparison/status``) are always there (a live recorder that subscribes after them
-gets only the latest), padding bytes inside CDR messages are zero (rclpy leaves whatever memory
-held), and messages of different topics may be interleaved differently.
+gets only the latest), and messages of different topics may be interleaved differently. The CDR
+padding bytes no longer differ: the per-sample messages are the same encoder's bytes in both
+(zero padding), the others are serialised by rclpy in both.
 """
 from __future__ import annotations
 
