@@ -70,6 +70,7 @@ def test_a_bare_node_publishes_no_scene(ros):
 def test_published_state_equals_simulate_at_the_stamped_times(ros):
     omega = ros.collect(Vector3Stamped, topics.ANGULAR_VELOCITY)
     attitude = ros.collect(QuaternionStamped, topics.ATTITUDE)
+    euler = ros.collect(Vector3Stamped, topics.EULER_ANGLES)
     clock = ros.collect(Clock, topics.CLOCK, qos=CLOCK_READER_QOS)
     status = ros.collect(SimStatus, topics.STATUS, latched=True)
     ros.start(SimNode, seconds_per_year=3.0, **SHORT)
@@ -85,6 +86,10 @@ def test_published_state_equals_simulate_at_the_stamped_times(ros):
     q = np.array([[m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z]
                   for m in attitude])
     np.testing.assert_array_equal(q, ref.quaternion)
+    ros.spin_until(lambda: len(euler) == 101, 5.0)
+    np.testing.assert_array_equal(omega_array(euler), ref.euler)   # (phi, psi, theta) as x, y, z
+    assert [m.header.frame_id for m in (omega[0], attitude[0], euler[0])] == [
+        topics.FRAME_BODY, topics.FRAME_ORBITAL, topics.FRAME_EULER]
     assert [c.clock for c in clock] == [m.header.stamp for m in omega]
 
 
