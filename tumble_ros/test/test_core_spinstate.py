@@ -139,7 +139,8 @@ def test_the_precession_period_closed_form_is_the_quadrature(seed):
     near = 1e-6 * i2
     cases += [_polhode_point(inertia, d) * 20.0 for d in (
         i2 + min(near, (i3 - i2) / 2), i2 - min(near, (i2 - i1) / 2),
-        i3 - 1e-3 * (i3 - i2), i1 + 1e-3 * (i2 - i1))]
+        i3 - 1e-3 * (i3 - i2), i1 + 1e-3 * (i2 - i1),
+        i3 - 1e-12 * (i3 - i2), i1 + 1e-12 * (i2 - i1))]      # a wobble of ~1e-6 rad
     modes = []
     for omega in cases:
         state = spin_state(omega, inertia)
@@ -152,3 +153,15 @@ def test_the_precession_period_closed_form_is_the_quadrature(seed):
 def test_a_sphere_spins_about_a_principal_axis():
     s = spin_state([1.0, 2.0, 2.0], [0.5, 0.5, 0.5])
     assert s.mode == 'principal' and s.rotation_period == pytest.approx(2 * math.pi / 3.0)
+
+
+@pytest.mark.parametrize('omega', [(1e-9, 1e-9, 30.0), (1e-7, 0.0, 30.0), (30.0, 1e-9, 0.0),
+                                   (30.0, 0.0, 1e-10)])
+def test_a_nearly_pure_spin_has_finite_periods(omega):
+    """Close to a principal rotation the precession tends to a finite limit, not 0/0."""
+    inertia = (0.64, 0.97, 1.0)
+    state = spin_state(omega, inertia)
+    assert state.mode in ('SAM', 'LAM')
+    assert math.isfinite(state.precession_period) and math.isfinite(state.rotation_period)
+    assert state.precession_period == pytest.approx(
+        _precession_by_quadrature(np.array(inertia), np.array(omega), state), rel=1e-9)

@@ -15,12 +15,18 @@ I3: the short axis), the rotational energy E = 1/2 w.Iw and the angular momentum
 * the **precession period** P_phi: the mean period of the reference axis r (I3 in a SAM, I1 in
   a LAM) about L, 2 pi / <phi'>. The rate phi' = L (Ia wa^2 + Ib wb^2) / (Ia^2 wa^2 + Ib^2 wb^2)
   (a, b the two other axes) is, with Ia wa^2 + Ib wb^2 = 2E - Lr^2/Ir and
-  Ia^2 wa^2 + Ib^2 wb^2 = L^2 - Lr^2, phi' = L/Ir + L (2E - L^2/Ir) / (L^2 - Lr^2); along the
+  Ia^2 wa^2 + Ib^2 wb^2 = L^2 - Lr^2, phi' = L/Ir + L (2E - L^2/Ir) / (L^2 - Lr^2). Along the
   polhode Lr^2 = Ir^2 wr0^2 dn^2(u, k) (wr0: wr where the intermediate component is 0), so
-  L^2 - Lr^2 = A + B sn^2(u, k) with A = L^2 - Ir^2 wr0^2, B = k^2 Ir^2 wr0^2, and its mean over a
-  period of u is Pi(-B/A, k) / (A K(k)): the complete elliptic integral of the third kind,
-  Pi(n, k) = R_F(0, 1 - k^2, 1) + n/3 R_J(0, 1 - k^2, 1, 1 - n) (Carlson; DLMF 19.25.2). The
-  same mean by quadrature of the Euler-Poinsot motion checks it (tests/test_core_spinstate.py);
+  L^2 - Lr^2 = A + B sn^2(u, k) with A = L^2 - Ir^2 wr0^2, B = k^2 Ir^2 wr0^2, whose inverse
+  averages over a period of u to Pi(-B/A, k) / (A K(k)), Pi the complete elliptic integral of
+  the third kind. Worked out, the state drops out of the characteristic n = -B/A and of
+  (2E - L^2/Ir) / A:
+  SAM: <phi'> = L/I3 + L (1/I1 - 1/I3) Pi(n, k) / K(k), n = -I3 (I2 - I1) / (I1 (I3 - I2));
+  LAM: <phi'> = L/I1 - L (1/I1 - 1/I3) Pi(n, k) / K(k), n = -I1 (I3 - I2) / (I3 (I2 - I1))
+  (nothing vanishes near a pure spin, where A and B both do), with
+  Pi(n, k) / K(k) = 1 + n/3 R_J(0, 1 - k^2, 1, 1 - n) / R_F(0, 1 - k^2, 1) (Carlson; DLMF
+  19.25.2). The same mean by quadrature of the Euler-Poinsot motion checks it
+  (tests/test_core_spinstate.py);
 * the **pole**: L's direction in the orbital frame (longitude from +X' towards +Y', latitude
   from the orbit plane).
 
@@ -108,46 +114,38 @@ def spin_state(omega, inertia, quaternion=None) -> SpinState:
     if abs(d - i2) <= _SEPARATRIX * i2 and i1 < i2 < i3:
         return SpinState('separatrix', energy, momentum, d, math.inf, math.inf, pole, lon, lat)
     l2, e2 = momentum * momentum, 2.0 * energy
-    # k^2 and m1 = 1 - k^2, each from its own product: near the separatrix k^2 -> 1, and
-    # 1 - k^2 by subtraction would lose the digits K(k) and the periods depend on
+    # m1 = 1 - k^2 as its own product: near the separatrix k^2 -> 1, and 1 - k^2 by
+    # subtraction would lose the digits K(k) and the periods depend on
     if d > i2 or i2 == i1:            # SAM (I3 the reference axis); also I1 = I2 symmetric
         mode = 'SAM'
         scale = (i3 - i2) * (l2 - e2 * i1)
-        k2 = (i2 - i1) * (e2 * i3 - l2) / scale if i2 > i1 else 0.0
         m1 = (i3 - i1) * (l2 - e2 * i2) / scale if i2 > i1 else 1.0
     else:                              # LAM (I1 the reference axis); also I2 = I3 symmetric
         mode = 'LAM'
         scale = (i2 - i1) * (e2 * i3 - l2)
-        k2 = (i3 - i2) * (l2 - e2 * i1) / scale if i3 > i2 else 0.0
         m1 = (i3 - i1) * (e2 * i2 - l2) / scale if i3 > i2 else 1.0
     rotation = 4.0 * float(ellipkm1(m1)) * math.sqrt(i1 * i2 * i3 / scale)
-    reference = i3 if mode == 'SAM' else i1
-    precession = _precession_period(reference, (i1, i3), l2, e2, (k2, m1))
+    precession = _precession_period(mode, (i1, i2, i3), momentum, m1)
     return SpinState(mode, energy, momentum, d, rotation, precession, pole, lon, lat)
 
 
-def _precession_period(reference: float, extremes: tuple[float, float], l2: float, e2: float,
-                       modulus: tuple[float, float]) -> float:
+def _precession_period(mode: str, moments: tuple[float, float, float], momentum: float,
+                       m1: float) -> float:
     """
     Return 2 pi / <phi'>: the mean precession of the reference axis about L [yr].
 
-    ``reference`` is its moment (I3 for a SAM, I1 for a LAM), ``extremes`` (I1, I3), ``l2`` =
-    L^2, ``e2`` = 2E, ``modulus`` (k^2, 1 - k^2) of the polhode (see the module docstring).
+    ``mode`` 'SAM' or 'LAM', ``moments`` (I1, I2, I3) sorted, ``momentum`` |L|, ``m1`` = 1 - k^2
+    of the polhode (the closed form of the module docstring).
     """
-    k2, m1 = modulus
-    i1, i3 = extremes
-    other = i1 if reference == i3 else i3
-    # wr0^2: the reference axis' w where the intermediate component is 0 (both energy and
-    # momentum then shared between the reference and the other extreme axis)
-    wr0_2 = (l2 - e2 * other) / (reference * (reference - other))
-    a = l2 - reference * reference * wr0_2
-    b = k2 * reference * reference * wr0_2
-    n = -b / a
-    complete_k = float(elliprf(0.0, m1, 1.0))                  # K(k)
-    pi_n = complete_k + n / 3.0 * float(elliprj(0.0, m1, 1.0, 1.0 - n))
-    mean_inverse = pi_n / (a * complete_k)                      # <1 / (L^2 - Lr^2)>
-    momentum = math.sqrt(l2)
-    rate = momentum / reference + momentum * (e2 - l2 / reference) * mean_inverse
+    i1, i2, i3 = moments
+    if mode == 'SAM':
+        n = -i3 * (i2 - i1) / (i1 * (i3 - i2)) if i2 > i1 else 0.0
+    else:
+        n = -i1 * (i3 - i2) / (i3 * (i2 - i1)) if i3 > i2 else 0.0
+    pi_over_k = 1.0 + n / 3.0 * (float(elliprj(0.0, m1, 1.0, 1.0 - n))
+                                 / float(elliprf(0.0, m1, 1.0)))
+    spread = momentum * (1.0 / i1 - 1.0 / i3) * pi_over_k
+    rate = momentum / i3 + spread if mode == 'SAM' else momentum / i1 - spread
     return 2.0 * math.pi / abs(rate)
 
 
