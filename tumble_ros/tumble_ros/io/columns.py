@@ -470,6 +470,24 @@ def encode_rows(layout: FlatLayout, count: int, values: dict[str, np.ndarray],
     return FlatEncoder(layout, strings).rows(count, values)
 
 
+def _template_rows(template: np.ndarray, fields: dict[str, tuple[int, str]], count: int,
+                   values: dict[str, np.ndarray]) -> np.ndarray:
+    """
+    Return ``count`` copies of the message ``template`` (uint8), ``values`` written into them.
+
+    ``fields``: path -> (offset, primitive type); ``values``: path -> (count,) column or a number
+    (cast to the field's type). KeyError for a path not in ``fields``.
+    """
+    rows = np.empty((count, template.size), dtype=np.uint8)
+    rows[:] = template
+    for name, column in values.items():
+        offset, kind = fields[name]
+        width = _SIZES[kind]
+        data = np.ascontiguousarray(np.broadcast_to(column, (count,)), dtype=_DTYPES[kind])
+        rows[:, offset:offset + width] = data.view(np.uint8).reshape(count, width)
+    return rows
+
+
 #: struct codes of the primitive types (little-endian, no alignment: offsets are explicit).
 _STRUCT_CODES = {'bool': '?', 'byte': 'B', 'char': 'B', 'int8': 'b', 'uint8': 'B', 'int16': 'h',
                  'uint16': 'H', 'int32': 'i', 'uint32': 'I', 'int64': 'q', 'uint64': 'Q',
@@ -488,7 +506,9 @@ class FlatEncoder:
 
     def __init__(self, layout: FlatLayout, strings: dict[str, str]):
         template = bytearray(b'\x00\x01\x00\x00')
-        at, self.offsets = 0, {}
+        #: numeric field path -> (offset, primitive type), in CDR order
+        self.fields: dict[str, tuple[int, str]] = {}
+        at = 0
         for name, kind in layout.fields:
             width = 4 if kind == 'string' else _SIZES[kind]
             pad = -at % width
@@ -499,20 +519,18 @@ class FlatEncoder:
                 template += len(text).to_bytes(4, 'little') + text
                 at += 4 + len(text)
             else:
-                self.offsets[name] = _ENCAPSULATION + at
+                self.fields[name] = (_ENCAPSULATION + at, kind)
                 template += b'\x00' * width
                 at += width
         self.template = bytes(template)
-        #: the numeric fields, in CDR order (the order :meth:`one` takes their values in)
-        self.numeric = tuple((name, kind) for name, kind in layout.fields if kind != 'string')
+        self._rows_template = np.frombuffer(self.template, dtype=np.uint8)
         self._runs = self._packing_runs()
 
     def _packing_runs(self) -> list[tuple[int, struct.Struct, int]]:
         """Group adjacent numeric fields: [(offset, Struct of the run, number of fields)]."""
         runs: list[list] = []
         end = -1
-        for name, kind in self.numeric:
-            offset = self.offsets[name]
+        for offset, kind in self.fields.values():
             if offset != end:
                 runs.append([offset, '<', 0])
             runs[-1][1] += _STRUCT_CODES[kind]
@@ -522,17 +540,13 @@ class FlatEncoder:
 
     def rows(self, count: int, values: dict[str, np.ndarray]) -> np.ndarray:
         """Encode ``count`` messages, one per row of a uint8 array (``values``: name -> column)."""
-        rows = np.empty((count, len(self.template)), dtype=np.uint8)
-        rows[:] = np.frombuffer(self.template, dtype=np.uint8)
-        for name, kind in self.numeric:
-            column = np.ascontiguousarray(np.broadcast_to(values[name], (count,)),
-                                          dtype=_DTYPES[kind])
-            offset, width = self.offsets[name], _SIZES[kind]
-            rows[:, offset:offset + width] = column.view(np.uint8).reshape(count, width)
-        return rows
+        missing = [name for name in self.fields if name not in values]
+        if missing:
+            raise KeyError(f'{missing[0]}: no values for this field')
+        return _template_rows(self._rows_template, self.fields, count, values)
 
     def one(self, *numbers) -> bytes:
-        """Return one message whose numeric fields hold ``numbers`` (in :attr:`numeric` order)."""
+        """Return one message whose numeric fields hold ``numbers`` (in :attr:`fields` order)."""
         data = bytearray(self.template)
         k = 0
         for offset, packer, n in self._runs:
@@ -619,11 +633,4 @@ class MessageTemplate:
         ``values``: field path -> (count,) array or a number (cast to the field's type); the
         fields not given keep the template's values. KeyError for a path the type lacks.
         """
-        rows = np.empty((count, self.size), dtype=np.uint8)
-        rows[:] = self.template
-        for name, column in values.items():
-            offset, kind = self.fields[name]
-            width = _SIZES[kind]
-            data = np.ascontiguousarray(np.broadcast_to(column, (count,)), dtype=_DTYPES[kind])
-            rows[:, offset:offset + width] = data.view(np.uint8).reshape(count, width)
-        return rows
+        return _template_rows(self.template, self.fields, count, values)

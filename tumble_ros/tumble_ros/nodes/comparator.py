@@ -139,7 +139,6 @@ class ComparatorNode(GuardedNode):
         self._pending: deque[tuple[int, tuple]] = deque(maxlen=MAX_PENDING)
         self._read_sample = Vector3StampedReader()
         self._encoder = SampleEncoder()
-        self._unreadable = 0
         self._settle_timer = None
         qos = PUBLISHER_QOS
         self._pub_model = self.create_publisher(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY,
@@ -241,7 +240,6 @@ class ComparatorNode(GuardedNode):
         try:
             sample = self._read_sample(data)
         except ValueError as err:
-            self._unreadable += 1
             self.get_logger().warning(f'angular_velocity: sample skipped ({err})',
                                       throttle_duration_sec=5.0)
             return

@@ -104,6 +104,12 @@ _WXYZ = ('quaternion.w', 'quaternion.x', 'quaternion.y', 'quaternion.z')
 _STAMP = ('header.stamp.sec', 'header.stamp.nanosec')
 
 
+def _split(ns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the (sec, nanosec) columns of integer nanosecond stamps."""
+    ns = np.asarray(ns, dtype=np.int64)
+    return ns // 1_000_000_000, ns % 1_000_000_000
+
+
 def _layout(topic: str) -> FlatLayout:
     type_name = topics.TYPES[topic]
     return FlatLayout.from_schema(type_name, message_definition(type_name))
@@ -134,14 +140,13 @@ class SampleEncoder:
             encoder = self._encoders[key] = FlatEncoder(_layout(topic), strings)
         return encoder
 
-    def _rows(self, topic: str, ns: np.ndarray, names, columns, frame: str,
+    def _rows(self, topic: str, stamp: tuple, names, columns, frame: str,
               extra: tuple = ()) -> np.ndarray:
-        ns = np.asarray(ns, dtype=np.int64)
-        sec, nanosec = ns // 1_000_000_000, ns % 1_000_000_000
+        """Encode one topic's rows; ``stamp``: the (sec, nanosec) columns of :func:`_split`."""
         stamp_names = ('clock.sec', 'clock.nanosec') if topic == topics.CLOCK else _STAMP
-        values = dict(zip(stamp_names, (sec, nanosec)))
+        values = dict(zip(stamp_names, stamp))
         values.update(zip(names, columns))
-        return self._encoder(topic, frame, extra).rows(len(ns), values)
+        return self._encoder(topic, frame, extra).rows(len(stamp[0]), values)
 
     def simulator(self, ns: np.ndarray, omega: np.ndarray, quaternion: np.ndarray,
                   euler: np.ndarray, *, clock: bool = True, perturber: np.ndarray | None = None
@@ -153,17 +158,18 @@ class SampleEncoder:
         first), ``euler`` (n, 3) the continuous (φ, ψ, θ) [rad], ``perturber`` (n, 3) [km] body
         axes or None; ``clock``: whether ``/clock`` goes out (first, as the node publishes it).
         """
-        out = [(topics.CLOCK, self._rows(topics.CLOCK, ns, (), (), ''))] if clock else []
+        stamp = _split(ns)
+        out = [(topics.CLOCK, self._rows(topics.CLOCK, stamp, (), (), ''))] if clock else []
         out += [
-            (topics.ANGULAR_VELOCITY, self._rows(topics.ANGULAR_VELOCITY, ns, _XYZ, omega.T,
+            (topics.ANGULAR_VELOCITY, self._rows(topics.ANGULAR_VELOCITY, stamp, _XYZ, omega.T,
                                                  topics.FRAME_BODY)),
-            (topics.ATTITUDE, self._rows(topics.ATTITUDE, ns, _WXYZ, quaternion.T,
+            (topics.ATTITUDE, self._rows(topics.ATTITUDE, stamp, _WXYZ, quaternion.T,
                                          topics.FRAME_ORBITAL)),
-            (topics.EULER_ANGLES, self._rows(topics.EULER_ANGLES, ns, _XYZ, euler.T,
+            (topics.EULER_ANGLES, self._rows(topics.EULER_ANGLES, stamp, _XYZ, euler.T,
                                              topics.FRAME_EULER)),
         ]
         if perturber is not None:
-            out.append((topics.PERTURBER, self._rows(topics.PERTURBER, ns, _XYZ, perturber.T,
+            out.append((topics.PERTURBER, self._rows(topics.PERTURBER, stamp, _XYZ, perturber.T,
                                                      topics.FRAME_BODY)))
         return out
 
@@ -172,11 +178,12 @@ class SampleEncoder:
                    ) -> list[tuple[str, np.ndarray]]:
         """Return the comparator's messages of n samples (model, error, norms), in order."""
         name = (('model', model_name),)
+        stamp = _split(ns)
         return [
-            (topics.MODEL_ANGULAR_VELOCITY, self._rows(topics.MODEL_ANGULAR_VELOCITY, ns, _XYZ,
-                                                       model.T, topics.FRAME_BODY)),
-            (topics.ERROR, self._rows(topics.ERROR, ns, _XYZ, error.T, topics.FRAME_BODY)),
-            (topics.ERROR_NORM, self._rows(topics.ERROR_NORM, ns, ('norm', 'relative'),
+            (topics.MODEL_ANGULAR_VELOCITY, self._rows(topics.MODEL_ANGULAR_VELOCITY, stamp,
+                                                       _XYZ, model.T, topics.FRAME_BODY)),
+            (topics.ERROR, self._rows(topics.ERROR, stamp, _XYZ, error.T, topics.FRAME_BODY)),
+            (topics.ERROR_NORM, self._rows(topics.ERROR_NORM, stamp, ('norm', 'relative'),
                                            (norm, relative), topics.FRAME_BODY, name)),
         ]
 
