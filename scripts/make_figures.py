@@ -51,7 +51,7 @@ TITLES["apophis_2029"] = "Apophis 2029 encounter"
 NOTES = {
     "fig8": "Sampled every 0.02 yr (n = 1000 over 20 yr, as printed).",
     "fig9": "Sampled every 0.01 yr, not the paper's 2 yr (n = 1000 over 2000 yr), which aliases the "
-            "~0.07-yr oscillation of ω⊥ (ERRATA.md, last section).",
+            "~0.07-yr oscillation of ω⊥ (docs/paper.md, conventions).",
     "apophis_2029": "Above: the nominal tumbler (phase 0 of its cycle). Below: 1000 tumblers with the "
                     "same observed periods and pole, drawn over the phase of the tumbling cycle, the "
                     "turn about L and the moments of inertia (docs/physics.md, \"Apophis 2029\"; "

@@ -247,7 +247,7 @@ def _nutation(t, w_e=90.0):
 
 def test_paper_sampling_of_fig9_aliases_the_nutation(tmp_path):
     """
-    Check the aliasing of the nutation by the paper's sampling (ERRATA.md).
+    Check the aliasing of the nutation by the paper's sampling (docs/paper.md, conventions).
 
     n = 1000 over 2000 yr (dt = 2 yr) undersamples the 2 pi/wE ~ 0.07-yr oscillation
     (wE = a w0 = 3 * 30 = 90 rad/yr); pi/dt = 1.57 rad/yr.
@@ -269,7 +269,7 @@ def test_paper_sampling_of_fig9_aliases_the_nutation(tmp_path):
     text = format_summary(s)
     warning_lines = [line for line in text.splitlines() if line.startswith('WARNING:')]
     assert len(warning_lines) == 1 and 'aliases wE = 90 rad/yr' in warning_lines[0]
-    assert 'ERRATA' in warning_lines[0]
+    assert '(docs/paper.md, conventions)' in warning_lines[0]
 
 
 def test_fine_sampling_does_not_alias(tmp_path):

@@ -29,7 +29,7 @@ TIGHT = IntegratorSettings(method='dop853', rtol=1e-13, atol=1e-13)
 # Reference for the torqued cases: its error (~1e-9) is far below the models' (>= 1e-3).
 REFERENCE = IntegratorSettings(method='dop853', rtol=1e-11, atol=1e-12)
 
-# The paper's figures: ws = 1, wz0 = 30, phi0 = 0.5, psi0 = 0 (ERRATA: the paper gives none),
+# The paper's figures: ws = 1, wz0 = 30, phi0 = 0.5, psi0 = 0 (the paper gives none),
 # (wx0, wy0) = (0, 1), inertia (1, 1, 1 + a).
 FIGS = {'fig3': (2.0, 0.1), 'fig4': (0.5, 0.1), 'fig5': (0.5, 0.5), 'fig6': (3.0, 0.5)}
 LONG = 20.0  # years
@@ -86,7 +86,7 @@ def test_registry_names_and_labels():
     for name, cls in MODELS.items():
         assert cls.name == name
         assert cls.label
-    assert 'ERRATA 1-10' in MODELS['paper'].label
+    assert 'corrections 1-10 (docs/paper.md)' in MODELS['paper'].label
     for name in ('fast_spin', 'fast_spin_precessing', 'fast_spin_adiabatic'):
         assert MODELS[name].label.startswith('beyond the paper')
 
@@ -183,27 +183,36 @@ def test_separatrix_is_refused_with_a_reason():
 
 
 # -- the paper's model -----------------------------------------------------------------
-def corrected_eq18(t, a, ws, omega0, euler0):
-    """Paper eqs 18-19 as printed, with ERRATA 4-10 applied (an independent implementation)."""
+def corrected_eq18(t, a, ws, omega0, euler0, printed_eq19=False):
+    """
+    Paper eqs 18-19 as printed, with corrections 4-10 applied (an independent implementation).
+
+    printed_eq19: use eq 19's A and alpha as printed instead (correction 10 undone).
+    """
     wx0, wy0, w0 = omega0
     phi0, psi0, th = euler0
     w_e = a * w0
     b = 3 * a * ws**2
-    w_a = 2 * (ws + (w0 + w_e) / math.cos(th))  # ERRATA 6
+    w_a = 2 * (ws + (w0 + w_e) / math.cos(th))  # correction 6
     c = b * math.sin(th) * (math.cos(th) * math.sin(2 * phi0) * math.cos(psi0)
                             + math.cos(2 * phi0) * math.sin(psi0)) / (2 * w_a)
     d = b * math.sin(th) * (math.cos(th) * math.sin(2 * phi0) * math.sin(psi0)
                             - math.cos(2 * phi0) * math.cos(psi0)) / (2 * w_a)
-    amp = math.hypot(wx0 + c, wy0 - d)  # ERRATA 10
-    alpha = math.atan2(-(wx0 + c), wy0 - d)
-    psi = psi0 - w_e * t  # ERRATA 4, 7
+    if printed_eq19:
+        amp = math.hypot(wx0 + c, wy0 + d)
+        alpha = math.atan((wx0 + c) / (wy0 + d))
+    else:
+        amp = math.hypot(wx0 + c, wy0 - d)  # correction 10
+        alpha = math.atan2(-(wx0 + c), wy0 - d)
+    psi = psi0 - w_e * t  # correction 4, 7
     g = w_a * t + 2 * phi0
     s2 = math.sin(2 * th)
-    bx = (s2 / (4 * w_a) * np.sin(g) * np.cos(psi) + s2 / 4 * t * np.cos(psi)  # ERRATA 9: no "-1"
+    # correction 9: no "-1" in bx
+    bx = (s2 / (4 * w_a) * np.sin(g) * np.cos(psi) + s2 / 4 * t * np.cos(psi)
           + math.sin(th) / (2 * w_a) * np.cos(g) * np.sin(psi))
     by = (s2 / (4 * w_a) * np.sin(g) * np.sin(psi) + s2 / 4 * t * np.sin(psi)
           - math.sin(th) / (2 * w_a) * np.cos(g) * np.cos(psi))
-    wx = -amp * np.sin(w_e * t + alpha) - b * bx  # ERRATA 8: -b[...] for wx, +b[...] for wy
+    wx = -amp * np.sin(w_e * t + alpha) - b * bx  # correction 8: -b[...] for wx, +b[...] for wy
     wy = amp * np.cos(w_e * t + alpha) + b * by
     return np.stack([wx, wy, np.full_like(t, w0)], -1)
 
@@ -221,6 +230,42 @@ def test_paper_model_is_the_corrected_eq18(a, theta0, omega0, euler0):
     assert m.w_a == pytest.approx(2 * (1.0 + (1 + a) * omega0[2] / math.cos(theta0)), rel=1e-15)
 
 
+@pytest.mark.parametrize('omega0', [(0.6, -0.8, 25.0), (0.6, 0.8, 25.0)])
+def test_corrected_eq19_meets_the_initial_state(omega0):
+    """
+    Correction 10: with eq 19's A and alpha corrected eq 18 starts at omega0, as printed not.
+
+    Printed, wx(0) comes out as -wx0 for wy0 > 0, and arctan puts alpha in the wrong quadrant
+    (wy(0) = -wy0) for wy0 < 0. Invisible in Figs 3-6, where wx0 = 0.
+    """
+    args = (np.array([0.0]), 0.7, 1.0, omega0, (1.1, 0.9, 0.4))
+    np.testing.assert_allclose(corrected_eq18(*args)[0], omega0, rtol=0, atol=1e-12)
+    printed = corrected_eq18(*args, printed_eq19=True)[0]
+    assert np.abs(printed - np.array(omega0)).max() > 1.0
+
+
+@pytest.mark.parametrize('fig', sorted(FIGS))
+def test_figure_data_spin_about_a_nearly_fixed_axis(fig):
+    """
+    Correction 11: the figures' initial data are a fast spin, not the paper's regular precession.
+
+    The regular precession the paper linearises about (theta constant, phi' = (w0 + wE)/cos theta)
+    needs |w_perp0| = (1 + a) w0 tan(theta0), which is 4.5 to 66 times the figures' |w_perp0| = 1.
+    With their data the figure axis stays nearly fixed in space: over 20 years theta stays
+    within 0.06 of theta0, and phi drifts at |phi'| < 0.05 rad/yr instead of turning at
+    (w0 + wE)/cos theta0 >= 45 rad/yr.
+    """
+    sc, t, _, euler = fig_run(fig)
+    a, theta0 = FIGS[fig]
+    w0 = sc.omega0[2]
+    assumed_w_perp = (1 + a) * w0 * math.tan(theta0)
+    assert assumed_w_perp >= 4.0 * math.hypot(*sc.omega0[:2])
+    assert np.abs(euler[:, 2] - theta0).max() <= 0.06
+    assumed_phi_dot = (1 + a) * w0 / math.cos(theta0)
+    assert assumed_phi_dot >= 45.0
+    assert abs(slope(t, np.unwrap(euler[:, 0]))) < 0.05
+
+
 @pytest.mark.parametrize('fig', sorted(FIGS))
 def test_paper_model_error_grows_at_the_secular_rate(fig):
     """
@@ -230,7 +275,7 @@ def test_paper_model_error_grows_at_the_secular_rate(fig):
     absent from the true motion, whose free term turns faster than wE by the nutation shift
     d = S (3 cos^2 theta0 - 1)/2 (docs/analytic.md). So the error vector is
     (b C0 - i d w_perp0) t e^{i wE t} plus bounded terms, and |d| <= Op, the precession rate
-    of ERRATA 11: |slope - b sin(2 theta0)/4| <= Op |w_perp0|. The bounded terms (forced
+    of correction 11: |slope - b sin(2 theta0)/4| <= Op |w_perp0|. The bounded terms (forced
     oscillations, amplitude <= b sin(theta0) / (2 |W - wE|) < 0.04 here) move a slope fitted
     over 2 years by a few per cent: allowed 5 %.
     """
@@ -272,7 +317,7 @@ def test_paper_model_on_its_own_kinematics_has_no_linear_error_growth():
     On its own kinematics, the paper model's error grows quadratically, not linearly.
 
     Started in the regular precession the paper assumes (L along the orbit normal:
-    w_perp0 = (1 + a) w0 tan(theta0), ERRATA 11), the secular term is the first-order expansion
+    w_perp0 = (1 + a) w0 tan(theta0), correction 11), the secular term is the first-order expansion
     of a slow phase drift of the free term, so the error grows quadratically (x100 from 2 to
     20 years), not linearly (x10) as for the figures' data.
     """
@@ -309,7 +354,7 @@ def test_fast_spin_error_grows_at_the_nutation_frequency_shift(fig):
 
     fast_spin's free term turns at a w0; the true one at a w0 + d, d = S (3 cos^2 theta0 - 1)/2:
     over 20 years its error grows at |d| |w_perp0| (within 10 %: the other terms are bounded).
-    For theta0 = 0.5 this differs from ERRATA 11's Op |w_perp0| by 25 %.
+    For theta0 = 0.5 this differs from correction 11's Op |w_perp0| by 25 %.
     """
     sc, t, omega, _ = fig_run(fig)
     adiabatic = make_model('fast_spin_adiabatic', sc)
@@ -333,10 +378,10 @@ def test_adiabatic_model_is_an_order_of_magnitude_closer_than_fast_spin_over_2_t
 
 def test_errata_precession_overshoots_at_the_magic_angle():
     """
-    At the magic angle, ERRATA 11's precession makes fast_spin worse, the adiabatic model not.
+    At the magic angle, correction 11's precession makes fast_spin worse, the adiabatic model not.
 
     At cos^2 theta0 = 1/3 the mean nutation shift vanishes: adding Op to the free term
-    (fast_spin_precessing, ERRATA 11) makes fast_spin worse over 20 years; the adiabatic
+    (fast_spin_precessing, correction 11) makes fast_spin worse over 20 years; the adiabatic
     model, whose shift has the theta dependence, still improves on it.
     """
     theta0 = math.acos(1.0 / math.sqrt(3.0))
@@ -482,7 +527,7 @@ def test_linear_model_frequencies_are_the_documented_formulas():
     sc = scenario_for('paper')
     a, w0, ws, th = 0.5, 30.0, 1.0, 0.1
     w_e = a * w0
-    w_a = 2 * (ws + (w0 + w_e) / math.cos(th))  # ERRATA 6
+    w_a = 2 * (ws + (w0 + w_e) / math.cos(th))  # correction 6
     paper = {f.name: f.omega for f in make_model('paper', sc).frequencies()}
     assert paper == pytest.approx({'wE': w_e, '|wA+wE|': w_a + w_e, '|wA-wE|': w_a - w_e},
                                   rel=1e-14)
@@ -637,7 +682,7 @@ def report():
 
 
 def report_variants():
-    """Report the interpretations of ERRATA 11's precession that were tried (docs/analytic.md)."""
+    """Report the interpretations of correction 11's precession tried (docs/analytic.md)."""
     from tumble_ros.core.analytic import FastSpinModel
 
     def variant(shift_sign, phi_sign):
@@ -652,7 +697,7 @@ def report_variants():
     variants = {"phi' = -Op only": variant(0, -1), "phi' = +Op only": variant(0, +1),
                 'lam = a w0 - Op': variant(-1, 0), 'lam = a w0 + Op': variant(+1, 0),
                 "lam = a w0 + Op, phi' = -Op": variant(+1, -1)}
-    print('\nERRATA 11 interpretations, max error over 2 yr / 20 yr')
+    print('\ncorrection 11 interpretations, max error over 2 yr / 20 yr')
     print(f"{'':28}" + ''.join(f'{fig:>22}' for fig in FIGS))
     runs = {fig: fig_run(fig) for fig in FIGS}
     for label, cls in [('fast_spin', MODELS['fast_spin'])] + list(variants.items()):

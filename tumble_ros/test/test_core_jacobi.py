@@ -1,4 +1,4 @@
-"""The Jacobi integral of the circular-orbit problem (ERRATA.md 'Conventions')."""
+"""The Jacobi integral of the circular-orbit problem (docs/paper.md, conventions)."""
 import numpy as np
 
 from tumble_ros.core import IntegratorSettings, jacobi_integral, Scenario, simulate

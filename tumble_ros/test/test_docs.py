@@ -1,13 +1,20 @@
-"""The README documents every parameter, topic and service that the code declares."""
+"""The docs: every declared parameter, topic and service has a README row; no outside paths."""
+import os
 from pathlib import Path
 import re
+import subprocess
 
 from tumble_ros.core import Scenario
 from tumble_ros.nodes.comparator import PARAMETERS as COMPARATOR_PARAMETERS
 from tumble_ros.nodes.recorder import PARAMETERS as RECORDER_PARAMETERS
 from tumble_ros.topics import SIM_NODE_PARAMETERS as NODE_PARAMETERS
 
-README = (Path(__file__).resolve().parents[2] / 'README.md').read_text()
+ROOT = Path(__file__).resolve().parents[2]
+README = (ROOT / 'README.md').read_text()
+# A path into a directory named "shared" (relative, or beside or above the repository): a clone
+# does not have it. Spelt in pieces so that this file does not match itself.
+SHARED_PATH = re.compile(rb'(?<![\w.-])' + b'shared' + rb'/')
+NOT_TRACKED = {'.git', '.venv', 'build', 'install', 'log', 'recordings', '__pycache__'}
 
 
 def table_rows(text):
@@ -47,3 +54,35 @@ def test_readme_starts_with_the_two_commands():
     first_block = README.split('```')[1]
     assert first_block.split() == ['bash', 'make', 'run', '#', 'runs', 'the', 'main', 'job',
                                    'make', 'test', '#', 'runs', 'the', 'tests']
+
+
+def tracked_files():
+    """Return the tracked files, relative to ROOT: git ls-files, or without git the tree."""
+    try:
+        out = subprocess.run(['git', 'ls-files', '-z'], cwd=ROOT, capture_output=True, check=True)
+        return [Path(name) for name in out.stdout.decode().split('\0') if name]
+    except (OSError, subprocess.CalledProcessError):
+        found = []
+        for directory, dirs, files in os.walk(ROOT):
+            dirs[:] = [d for d in dirs if d not in NOT_TRACKED]
+            found += [Path(directory, f).relative_to(ROOT) for f in files]
+        return found
+
+
+def test_no_tracked_file_refers_to_a_shared_directory():
+    """
+    Nothing in the repository points into a "shared" directory, which a clone does not have.
+
+    The paper is cited, and its corrections are listed, in docs/paper.md.
+    """
+    files = tracked_files()
+    assert Path('README.md') in files and Path('docs/paper.md') in files
+    hits = []
+    for name in files:
+        path = ROOT / name
+        if not path.is_file():
+            continue
+        for number, line in enumerate(path.read_bytes().splitlines(), 1):
+            if SHARED_PATH.search(line):
+                hits.append(f'{name}:{number}: {line.decode(errors="replace").strip()[:120]}')
+    assert not hits, 'references to a "shared" directory:\n' + '\n'.join(hits)

@@ -11,10 +11,10 @@ scenario's initial state (``t0 = 0``, ``omega0``, ``euler0``) is used.
 =========================  ==================================================================
 name                       where it comes from
 =========================  ==================================================================
-``paper``                  paper eqs 16-19 with ERRATA 1-10 (symmetric body, Ix = Iy)
-``fast_spin``              beyond the paper (ERRATA 11): same linear equation, kinematics of
+``paper``                  paper eqs 16-19 with corrections 1-10 (symmetric body, Ix = Iy)
+``fast_spin``              beyond the paper (correction 11): same linear equation, kinematics of
                            a fast spin about a fixed figure axis
-``fast_spin_precessing``   beyond the paper (ERRATA 11): ``fast_spin`` plus the
+``fast_spin_precessing``   beyond the paper (correction 11): ``fast_spin`` plus the
                            gravity-gradient precession Op of the figure axis, also added to
                            the frequency of the free (nutation) term
 ``fast_spin_adiabatic``    beyond the paper: ``fast_spin_precessing`` with the first-order
@@ -26,7 +26,8 @@ name                       where it comes from
 =========================  ==================================================================
 
 The derivations, the differences from the print and the measured accuracy of each model
-are in ``docs/analytic.md``.
+are in ``docs/analytic.md``; the paper, and the corrections 1-11 to its print named here, in
+``docs/paper.md``.
 
 The four linearised models share one closed form. With a = (Iz - Ix)/Ix, b = 3 a ws^2 and
 w = wx + i wy, Euler's equations of the symmetric body under the gravity-gradient torque
@@ -387,7 +388,7 @@ class _LinearSymmetric(AnalyticModel):
 
 class PaperModel(_LinearSymmetric):
     """
-    The paper's approximate solution (eqs 16-19) with ERRATA 1-10 applied.
+    The paper's approximate solution (eqs 16-19) with corrections 1-10 (docs/paper.md) applied.
 
     Regular precession of the figure axis about the orbit normal: theta constant,
     psi = psi0 - wE tau, phi = phi0 + (w0 + wE) tau / cos(theta), wE = a w0. The constant
@@ -396,7 +397,7 @@ class PaperModel(_LinearSymmetric):
     """
 
     name = 'paper'
-    label = 'paper eqs 16-19 with ERRATA 1-10'
+    label = 'paper eqs 16-19 with corrections 1-10 (docs/paper.md)'
 
     @classmethod
     def _reason(cls, scenario, state):
@@ -413,7 +414,7 @@ class PaperModel(_LinearSymmetric):
 
     @property
     def w_a(self) -> float:
-        """Return the paper's wA = 2 (ws + (w0 + wE)/cos theta) (ERRATA 6) [rad/yr]."""
+        """Return the paper's wA = 2 (ws + (w0 + wE)/cos theta) (correction 6) [rad/yr]."""
         return 2.0 * self.beta_dot
 
     def _frequency_names(self):
@@ -429,14 +430,15 @@ class PaperModel(_LinearSymmetric):
 
 class FastSpinModel(_LinearSymmetric):
     """
-    Fast spin about a figure axis fixed in space (ERRATA 11, beyond the paper).
+    Fast spin about a figure axis fixed in space (correction 11, beyond the paper).
 
     theta and phi constant, psi = psi0 + w0 tau. Forcing frequencies -w0, -w0 +- 2 ws:
     no resonance with lam = a w0 (unless (1 + a) w0 = 0 or +-2 ws), no secular term.
     """
 
     name = 'fast_spin'
-    label = 'beyond the paper (ERRATA 11): linearised, fast spin about a fixed figure axis'
+    label = ('beyond the paper (docs/paper.md, correction 11): linearised, fast spin about a '
+             'fixed figure axis')
 
     def _rates(self):
         return self.a * self.w0, self.w0, 0.0
@@ -484,17 +486,18 @@ class _Precessing(_LinearSymmetric):
 
 class FastSpinPrecessingModel(_Precessing):
     """
-    ``fast_spin`` with the gravity-gradient precession (ERRATA 11, beyond the paper).
+    ``fast_spin`` with the gravity-gradient precession (correction 11, beyond the paper).
 
     The figure axis precesses about the orbit normal at -Op, Op = (3/2) ws^2 a cos(theta0)
     / ((1 + a) w0): phi = phi0 - Op tau, psi = psi0 + (w0 + Op cos theta0) tau; and, as
-    ERRATA 11 prescribes, Op is added to the frequency of the free term: lam = a w0 + Op.
+    correction 11 prescribes, Op is added to the frequency of the free term: lam = a w0 + Op.
     The sign was measured (docs/analytic.md). Op is the small-theta limit of the shift;
     ``fast_spin_adiabatic`` has the theta dependence.
     """
 
     name = 'fast_spin_precessing'
-    label = ('beyond the paper (ERRATA 11): fast_spin with the gravity-gradient precession '
+    label = ('beyond the paper (docs/paper.md, correction 11): fast_spin with the '
+             'gravity-gradient precession '
              'Op = (3/2) ws^2 a cos(theta0)/((1+a) w0) of the figure axis and of the free '
              "term's phase")
 

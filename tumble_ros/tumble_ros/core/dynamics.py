@@ -11,7 +11,8 @@ State vector ``y`` (all in body principal axes, time in years):
   - ``"euler"``: the paper's Euler angles (phi, psi, theta) with the kinematic equations
     of the paper (eq 15), singular at theta = 0, pi.
 
-Dynamics (Euler's equations, paper eq 14 with the third line corrected, ERRATA 1)::
+Dynamics (Euler's equations, paper eq 14 with the third line corrected,
+docs/paper.md correction 1)::
 
     Ix dwx/dt = (Iy - Iz) wy wz + Mx
     Iy dwy/dt = (Iz - Ix) wz wx + My

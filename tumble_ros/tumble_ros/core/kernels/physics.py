@@ -50,9 +50,9 @@ def rhs(p, extra, t, st, yo, oo):
     """
     Write f(t, y) for y = st[yo:yo+7] to st[oo:oo+7]: the quaternion-attitude equations.
 
-    Euler's equations (paper eq 14, third line corrected, ERRATA 1) with the total torque M:
-    I dw/dt = (I w) x w + M, i.e. dwx/dt = (Iy - Iz)/Ix wy wz + Mx/Ix, ...; and the kinematics
-    dq/dt = 1/2 q * (0, w).
+    Euler's equations (paper eq 14, third line corrected: docs/paper.md, correction 1) with the
+    total torque M: I dw/dt = (I w) x w + M, i.e. dwx/dt = (Iy - Iz)/Ix wy wz + Mx/Ix, ...; and
+    the kinematics dq/dt = 1/2 q * (0, w).
     """
     wx = st[yo]
     wy = st[yo + 1]
