@@ -29,6 +29,7 @@ in :attr:`RecorderNode.warnings`.
 from __future__ import annotations
 
 from datetime import datetime, timezone
+import os
 from pathlib import Path
 import re
 import struct
@@ -260,17 +261,25 @@ class RecorderNode(GuardedNode):
 
 def default_output(stem: str = 'tumble') -> Path:
     """
-    Return a new recording's path: recordings/<stem>_<UTC time>.mcap.
+    Claim a new recording's path: recordings/<stem>_<UTC time>.mcap, created empty.
 
-    A file of that name already there (a run started in the same second) gets _2, _3, ...
-    appended instead of a refusal to start (the writer still never overwrites a file).
+    The name is claimed atomically (created with ``O_EXCL``, the directory too if needed): a
+    run started in the same second as another gets _2, _3, ... appended, never a refusal to
+    start. The writer then takes the empty file (:func:`tumble_ros.io.mcap_writer.open_new`);
+    a file with content is still never overwritten.
     """
     base = f'recordings/{stem}_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}'
-    path, k = Path(base + '.mcap'), 1
-    while path.exists():
-        k += 1
-        path = Path(f'{base}_{k}.mcap')
-    return path
+    Path(base).parent.mkdir(parents=True, exist_ok=True)
+    k = 1
+    while True:
+        path = Path(base + ('.mcap' if k == 1 else f'_{k}.mcap'))
+        try:
+            os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL
+                             | getattr(os, 'O_CLOEXEC', 0), 0o666))
+        except FileExistsError:
+            k += 1
+            continue
+        return path
 
 
 def _import_type(type_name: str):
