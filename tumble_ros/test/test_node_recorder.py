@@ -162,3 +162,34 @@ def test_sigkill_loses_at_most_the_last_chunk(ros, tmp_path):
     assert not summary.finalised
     stamps = [stamp_ns(m.message) for m in read_messages(path, topics=[OMEGA_TOPIC])]
     assert stamps == [k * 1_000_000 for k in range(sim.published_samples)]
+
+
+def test_a_stopped_comparator_no_longer_holds_the_recorders_progress(ros, tmp_path, monkeypatch):
+    """
+    A comparator that stops mid-run does not stall the simulator through the recorder.
+
+    The recorder's progress is the oldest latest stamp of its per-sample topics, the
+    comparator's included: once the comparator's publishers are gone its topics no longer
+    count. STALE_TOPIC (the rescue for a topic that just goes silent) is made endless here, so
+    the simulator goes on only if the recorder saw that they left. Before: it stalled until
+    STALE_TOPIC (2.0 s on a loaded machine, /clock paused as long), here for good.
+    """
+    from tumble_ros.nodes import recorder as recorder_module
+    from tumble_ros.nodes.comparator import ComparatorNode
+    from tumble_ros.nodes.runner import close_node
+
+    monkeypatch.setattr(recorder_module, 'STALE_TOPIC', 1e9)
+    sim = ros.start(SimNode, duration=20.0, output_interval=1e-3, real_time_factor=0.0,
+                    min_consumers=2)
+    comparator = ros.start(ComparatorNode)
+    recorder = ros.start(RecorderNode, output=str(tmp_path / 'left.mcap'))
+    error_topic = '/' + topics.ERROR
+    assert ros.spin_until(lambda: recorder.counts.get(error_topic, 0) > 300, 60.0), \
+        (sim.published_samples, recorder.counts)
+    ros.executor.remove_node(comparator)
+    ros.nodes.remove(comparator)
+    close_node(comparator)              # goodbye, then its publishers go (nodes.runner)
+    at_stop = sim.published_samples
+    assert ros.spin_until(lambda: sim.published_samples > at_stop + 2000, 60.0), \
+        f'the simulator stalled at {sim.published_samples} samples ({at_stop} at the stop)'
+    recorder.close()

@@ -29,6 +29,7 @@ in :attr:`RecorderNode.warnings`.
 from __future__ import annotations
 
 from datetime import datetime, timezone
+import math
 import os
 from pathlib import Path
 import re
@@ -62,6 +63,9 @@ DEFAULT_TOPICS = topics.RECORDED
 PER_SAMPLE_TYPES = {topics.TYPES[t] for t in topics.PER_SAMPLE}
 #: A per-sample topic silent for this long [s] no longer holds the recorder's progress back.
 STALE_TOPIC = 2.0
+#: A per-sample topic silent for this long [s] is checked for publishers (at most this often):
+#: one whose publishers all left (a comparator stopped) no longer holds the progress back.
+QUIET_TOPIC = 0.05
 
 PARAMETERS = {
     'output': ('', '', 'MCAP file to write; empty = recordings/tumble_<UTC time>.mcap', None,
@@ -121,6 +125,8 @@ class RecorderNode(GuardedNode):
         self._sim_time = bool(self.get_parameter('use_sim_time').value)
         # per-sample topic -> (stamp ns, wall time)
         self._last_stamp: dict[str, tuple[int, float]] = {}
+        # (monotonic time of the last look, the quiet per-sample topics without publishers)
+        self._gone_checked: tuple[float, set[str]] = (-math.inf, set())
         self._progress = ProgressReporter(self, source=self._slowest_live_stamp)
         self._discover()
         steady_timer(self, p['discovery_period'], self._discover)
@@ -221,10 +227,30 @@ class RecorderNode(GuardedNode):
         self.get_logger().info(f'recording {topic} ({type_name})')
 
     def _slowest_live_stamp(self) -> int | None:
-        """Return the progress [ns]: the latest stamp every live per-sample topic has reached."""
+        """
+        Return the progress [ns]: the latest stamp every live per-sample topic has reached.
+
+        Live: heard from within STALE_TOPIC, and still published (:meth:`_gone_topics`).
+        """
         now = time.monotonic()
-        live = [ns for ns, seen in self._last_stamp.values() if now - seen < STALE_TOPIC]
+        gone = self._gone_topics(now)
+        live = [ns for topic, (ns, seen) in self._last_stamp.items()
+                if now - seen < STALE_TOPIC and topic not in gone]
         return min(live) if live else None
+
+    def _gone_topics(self, now: float) -> set[str]:
+        """
+        Return the per-sample topics silent for QUIET_TOPIC [s] that have no publisher left.
+
+        A consumer that stops (a comparator's Ctrl-C) says goodbye to the simulator, then its
+        publishers go; without this its topics held the recorder's progress, so the simulator,
+        until STALE_TOPIC. The graph is asked at most every QUIET_TOPIC, only about quiet topics.
+        """
+        if now - self._gone_checked[0] >= QUIET_TOPIC:
+            gone = {topic for topic, (_, seen) in self._last_stamp.items()
+                    if now - seen >= QUIET_TOPIC and self.count_publishers(topic) == 0}
+            self._gone_checked = (now, gone)
+        return self._gone_checked[1]
 
     def _poll(self) -> None:
         if self.error is None:
