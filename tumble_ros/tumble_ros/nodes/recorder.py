@@ -195,6 +195,10 @@ class RecorderNode(GuardedNode):
             msg_class = _import_type(type_name)
             offered = offered_qos_yaml(*[qos_dict(p.qos_profile) for p in publishers])
             channel = self._writer.add_channel(topic, type_name, offered)
+        except NotAnInterface as err:
+            self.get_logger().warning(f'not recording {topic} ({type_name}): {err}')
+            self._channels[topic] = -1
+            return
         except (LookupError, ImportError, ValueError) as err:
             self.get_logger().error(f'cannot record {topic} ({type_name}): {err}')
             self._channels[topic] = -1
@@ -308,11 +312,48 @@ def default_output(stem: str = 'tumble') -> Path:
         return path
 
 
+#: The interface kinds a recorded type may be of (rosidl's namespaces in a package).
+INTERFACE_KINDS = ('msg', 'srv', 'action')
+
+
+class NotAnInterface(LookupError):
+    """An advertised type that is not one of an installed ROS interface package: not imported."""
+
+
+def _interface_files(package: str) -> set[str]:
+    """Return the interface files ('msg/Foo.msg', ...) the ament index lists for ``package``."""
+    from ament_index_python.packages import get_resource, PackageNotFoundError
+
+    try:
+        content, _ = get_resource('rosidl_interfaces', package)
+    except (LookupError, PackageNotFoundError, ValueError):
+        return set()
+    return {line.strip() for line in content.splitlines() if line.strip()}
+
+
 def _import_type(type_name: str):
-    """Import the Python class of 'pkg/msg/Type' (also 'pkg/srv/Name_Event')."""
+    """
+    Import the Python class of 'pkg/msg/Type' (also 'pkg/srv/Name_Event', 'pkg/action/...').
+
+    Only from an installed ament interface package (the ``rosidl_interfaces`` resource of the
+    ament index lists ``kind/Name``): the type name comes from any participant on the domain,
+    and importing ``pkg.kind`` runs ``pkg``'s top-level code. Anything else raises
+    :class:`NotAnInterface` before any import (the topic is not recorded, with a warning).
+    """
     import importlib
 
-    package, kind, name = type_name.split('/')
+    parts = type_name.split('/')
+    if (len(parts) != 3 or parts[1] not in INTERFACE_KINDS
+            or not all(p.isidentifier() and p.isascii() for p in parts)):
+        raise NotAnInterface(f'not an interface type name (pkg/msg/Type, pkg/srv/Type, '
+                             f'pkg/action/Type): {type_name!r}')
+    package, kind, name = parts
+    names = {Path(f).stem for f in _interface_files(package)
+             if f.startswith(kind + '/') and f.endswith(('.msg', '.srv', '.action', '.idl'))}
+    # msg/Type exactly; a service's or an action's topics are named Type_Event, Type_Feedback...
+    if name not in names and (kind == 'msg' or not any(name.startswith(n + '_') for n in names)):
+        raise NotAnInterface(f'{kind}/{name} is no interface of an installed ROS interface '
+                             f'package {package!r} (ament index: rosidl_interfaces): not imported')
     return getattr(importlib.import_module(f'{package}.{kind}'), name)
 
 
