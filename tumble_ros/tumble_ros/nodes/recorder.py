@@ -127,6 +127,7 @@ class RecorderNode(GuardedNode):
         self._last_stamp: dict[str, tuple[int, float]] = {}
         # (monotonic time of the last look, the quiet per-sample topics without publishers)
         self._gone_checked: tuple[float, set[str]] = (-math.inf, set())
+        self._per_sample_discovered_at = -math.inf  # monotonic time of the last look
         self._progress = ProgressReporter(self, source=self._slowest_live_stamp)
         self._discover()
         steady_timer(self, p['discovery_period'], self._discover)
@@ -177,9 +178,12 @@ class RecorderNode(GuardedNode):
         return topic in self._explicit or (self._pattern is not None
                                            and self._pattern.search(topic) is not None)
 
-    def _discover(self) -> None:
+    def _discover(self, per_sample_only: bool = False) -> None:
+        """Subscribe to the wanted topics not recorded yet (``per_sample_only``: of them)."""
         for topic, types in self.get_topic_names_and_types():
             if topic in self._channels or not self._wanted(topic):
+                continue
+            if per_sample_only and not (len(types) == 1 and types[0] in PER_SAMPLE_TYPES):
                 continue
             if len(types) != 1:
                 self.get_logger().warning(f'not recording {topic}: it has several types {types}')
@@ -235,8 +239,15 @@ class RecorderNode(GuardedNode):
         Return the progress [ns]: the latest stamp every live per-sample topic has reached.
 
         Live: heard from within STALE_TOPIC, and still published (:meth:`_gone_topics`).
+        Wanted per-sample topics are looked for here too, every QUIET_TOPIC whatever
+        ``discovery_period``: one that appears mid-run (a comparator started after the
+        simulator) is subscribed before the simulator, paced on this progress, has published
+        more samples than its transient-local history (STATE_QOS depth) replays.
         """
         now = time.monotonic()
+        if now - self._per_sample_discovered_at >= QUIET_TOPIC:
+            self._per_sample_discovered_at = now
+            self._discover(per_sample_only=True)
         gone = self._gone_topics(now)
         live = [ns for topic, (ns, seen) in self._last_stamp.items()
                 if now - seen < STALE_TOPIC and topic not in gone]
@@ -286,7 +297,34 @@ class RecorderNode(GuardedNode):
             else:
                 self.get_logger().info(f'wrote {self.path}: {sum(self.counts.values())} '
                                        f'messages on {len(self.counts)} topics')
+                self._say_clock_missed()
         self._progress.close()
+
+    @property
+    def clock_missed(self) -> tuple[int, int] | None:
+        """
+        Return (``/clock`` messages missed, samples recorded); None without both topics.
+
+        ``/clock`` is best effort (CLOCK_QOS) and volatile: it may drop under load, and what was
+        published before the subscription is never replayed. The simulator publishes one per
+        sample, with the sample's stamp: missed = the samples recorded on ``angular_velocity``
+        (the namespace with the most) minus the ``/clock`` messages recorded.
+        """
+        counts = self.counts
+        samples = [n for topic, n in counts.items()
+                   if topic.rsplit('/', 1)[-1] == topics.ANGULAR_VELOCITY]
+        if topics.CLOCK not in counts or not samples:
+            return None
+        return max(0, max(samples) - counts[topics.CLOCK]), max(samples)
+
+    def _say_clock_missed(self) -> None:
+        """Log how many /clock messages the recording misses (a warning when some)."""
+        missed = self.clock_missed
+        if missed is None:
+            return
+        text = (f'{topics.CLOCK}: {missed[0]} of {missed[1]} samples missed '
+                '(best effort, recorded as received)')
+        (self.get_logger().warning if missed[0] else self.get_logger().info)(text)
 
 
 def default_output(stem: str = 'tumble') -> Path:
