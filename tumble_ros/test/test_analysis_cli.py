@@ -112,11 +112,19 @@ def test_file_truncated_after_complete_chunks_is_analysed_with_a_warning(tmp_pat
     full = write_recording(tmp_path / 'full.mcap', t, omega, scenario=Scenario(), chunk_bytes=4096)
     cut = tmp_path / 'cut.mcap'
     cut.write_bytes(full.read_bytes()[: full.stat().st_size * 2 // 3])
-    assert command([str(cut)]) == 0
+    assert command([str(cut)]) == 2     # the summary is there, the exit status says partial
     out, err = capsys.readouterr()
     assert 'file: TRUNCATED' in out and 'WARNING: the file is truncated' in out
     n = load_recording(cut).n
     assert 50 < n < 400 and f'{n} samples of {OMEGA_TOPIC}' in out
+    (line,) = err.splitlines()
+    assert line.startswith(f'WARNING: {cut} is truncated (') and 'exit status 2' in line
+    assert command([str(cut), '--json', '--quiet']) == 2
+    assert json.loads(capsys.readouterr().out)['finalised'] is False
+    assert command([str(full)]) == 0     # the whole file: success
+    process = _run('-m', 'tumble_ros', 'analyze', str(cut), '--quiet')   # the process's status
+    assert process.returncode == 2, process.stderr
+    assert 'file: TRUNCATED' in process.stdout and 'Traceback' not in process.stderr
 
 
 # -- success ------------------------------------------------------------------------------------

@@ -86,3 +86,25 @@ def test_no_tracked_file_refers_to_a_shared_directory():
             if SHARED_PATH.search(line):
                 hits.append(f'{name}:{number}: {line.decode(errors="replace").strip()[:120]}')
     assert not hits, 'references to a "shared" directory:\n' + '\n'.join(hits)
+
+
+def test_scenario_description_documents_parameters_yaml_as_the_scenario_as_started():
+    """
+    The .msg says what the simulator sends (test_trust_nodes: the same text in every segment).
+
+    The field's comment (its line and the comment lines under it) must say the scenario as
+    started, as README does, not the impacts scheduled so far (what the simulator used to send).
+    """
+    msg = (Path(__file__).resolve().parents[2] / 'tumble_ros_interfaces' / 'msg'
+           / 'ScenarioDescription.msg').read_text()
+    lines = msg.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith('string parameters_yaml'))
+    comment = [lines[start].split('#', 1)[1]]
+    for line in lines[start + 1:]:   # the continuation lines: indented comments
+        if not (line.startswith(' ') and line.lstrip().startswith('#')):
+            break
+        comment.append(line.lstrip()[1:])
+    text = ' '.join(' '.join(comment).split())
+    assert 'the scenario as started' in text
+    assert 'scheduled so far' not in text
+    assert 'the scenario as started' in README

@@ -238,6 +238,24 @@ def test_existing_file_is_not_overwritten(tmp_path):
     assert path.read_bytes() == b'precious'
 
 
+def test_a_claimed_empty_name_is_taken_by_one_writer_only(tmp_path):
+    """An empty file (a name default_output claimed) is written; a second writer is refused."""
+    path = tmp_path / 'claimed.mcap'
+    path.write_bytes(b'')
+    with McapWriter(path) as first:
+        with pytest.raises(FileExistsError):
+            McapWriter(path)      # locked by the first, and no longer empty
+        first.add_channel('/w', 'geometry_msgs/msg/Vector3Stamped')
+    assert summarize(path).finalised
+    empty = tmp_path / 'empty.mcap'
+    empty.write_bytes(b'')
+    link = tmp_path / 'link.mcap'
+    link.symlink_to(empty)
+    with pytest.raises(FileExistsError):
+        McapWriter(link)          # never through a symbolic link
+    assert empty.read_bytes() == b''
+
+
 def test_channel_and_write_arguments_are_checked(tmp_path):
     data = vector_payloads(1)[0]
     with McapWriter(tmp_path / 'args.mcap') as writer:

@@ -63,9 +63,78 @@ def test_runs_started_in_the_same_second_get_their_own_files(tmp_path, monkeypat
     monkeypatch.chdir(tmp_path)
     first = recorder.default_output('same')
     assert str(first) == 'recordings/same_20290413T214600.mcap'
-    first.parent.mkdir()
-    first.write_bytes(b'')
+    assert first.read_bytes() == b''   # claimed: created empty, the directory too
     second = recorder.default_output('same')
     assert str(second) == 'recordings/same_20290413T214600_2.mcap'
-    second.write_bytes(b'')
     assert str(recorder.default_output('same')) == 'recordings/same_20290413T214600_3.mcap'
+
+
+#: One main job in its own process, its clock frozen on a second (both runs of the test name
+#: their recording in the same second), started when the test creates the file ``go``: the two
+#: processes have imported everything by then, so they race on the name.
+SAME_SECOND_RUN = """
+import sys, time
+from datetime import datetime
+from pathlib import Path
+from tumble_ros.nodes import recorder
+from tumble_ros.__main__ import main
+import tumble_ros.nodes.bringup  # noqa: F401  (imported before the start line)
+
+
+class Frozen(datetime):
+    @classmethod
+    def now(cls, tz=None):
+        return datetime(2029, 4, 13, 21, 46, 0, tzinfo=tz)
+
+
+recorder.datetime = Frozen
+Path(sys.argv[2]).touch()
+while not Path('go').exists():
+    time.sleep(0.001)
+sys.exit(main([sys.argv[1]]))
+"""
+
+
+def test_two_main_jobs_in_the_same_second_both_record(tmp_path):
+    """
+    Two ``make run`` of one config started in the same second both record (process level).
+
+    Each is ``python -m tumble_ros``'s main() in its own process, only the clock frozen.
+    Before: one of them failed with ``ERROR: cannot record: [Errno 17] File exists`` (the name
+    was checked with exists(), then created by the writer).
+    """
+    import os
+    import subprocess
+    import sys
+    import time
+
+    scenario = short_scenario(tmp_path)
+    runs = []
+    try:
+        for k in (1, 2):
+            log = open(tmp_path / f'run{k}.log', 'w')
+            runs.append((subprocess.Popen(
+                [sys.executable, '-c', SAME_SECOND_RUN, str(scenario), f'ready{k}'],
+                cwd=tmp_path, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                start_new_session=True), log))
+        deadline = time.monotonic() + 120
+        while not all((tmp_path / f'ready{k}').exists() for k in (1, 2)):
+            assert time.monotonic() < deadline and all(p.poll() is None for p, _ in runs), \
+                [(tmp_path / f'run{k}.log').read_text() for k in (1, 2)]
+            time.sleep(0.01)
+        (tmp_path / 'go').touch()
+        codes = [p.wait(timeout=300) for p, _ in runs]
+    finally:
+        for p, log in runs:
+            if p.poll() is None:
+                os.killpg(p.pid, 9)
+                p.wait()
+            log.close()
+    outputs = [(tmp_path / f'run{k}.log').read_text() for k in (1, 2)]
+    assert codes == [0, 0], outputs
+    names = sorted(p.name for p in (tmp_path / 'recordings').glob('*.mcap'))
+    assert names == ['short_20290413T214600.mcap', 'short_20290413T214600_2.mcap']
+    for name in names:
+        summary = summarize(tmp_path / 'recordings' / name)
+        assert summary.finalised
+        assert summary.topics['/' + topics.ANGULAR_VELOCITY].message_count == 101

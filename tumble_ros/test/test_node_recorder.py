@@ -3,6 +3,7 @@ import os
 from pathlib import Path
 import signal
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -162,3 +163,67 @@ def test_sigkill_loses_at_most_the_last_chunk(ros, tmp_path):
     assert not summary.finalised
     stamps = [stamp_ns(m.message) for m in read_messages(path, topics=[OMEGA_TOPIC])]
     assert stamps == [k * 1_000_000 for k in range(sim.published_samples)]
+
+
+def test_a_stopped_comparator_no_longer_holds_the_recorders_progress(ros, tmp_path, monkeypatch):
+    """
+    A comparator that stops mid-run does not stall the simulator through the recorder.
+
+    The recorder's progress is the oldest latest stamp of its per-sample topics, the
+    comparator's included: once the comparator's publishers are gone its topics no longer
+    count. STALE_TOPIC (the rescue for a topic that just goes silent) is made endless here, so
+    the simulator goes on only if the recorder saw that they left. Before: it stalled until
+    STALE_TOPIC (2.0 s on a loaded machine, /clock paused as long), here for good.
+    """
+    from tumble_ros.nodes import recorder as recorder_module
+    from tumble_ros.nodes.comparator import ComparatorNode
+    from tumble_ros.nodes.runner import close_node
+
+    monkeypatch.setattr(recorder_module, 'STALE_TOPIC', 1e9)
+    sim = ros.start(SimNode, duration=20.0, output_interval=1e-3, real_time_factor=0.0,
+                    min_consumers=2)
+    comparator = ros.start(ComparatorNode)
+    recorder = ros.start(RecorderNode, output=str(tmp_path / 'left.mcap'))
+    error_topic = '/' + topics.ERROR
+    assert ros.spin_until(lambda: recorder.counts.get(error_topic, 0) > 300, 60.0), \
+        (sim.published_samples, recorder.counts)
+    ros.executor.remove_node(comparator)
+    ros.nodes.remove(comparator)
+    close_node(comparator)              # goodbye, then its publishers go (nodes.runner)
+    at_stop = sim.published_samples
+    assert ros.spin_until(lambda: sim.published_samples > at_stop + 2000, 60.0), \
+        f'the simulator stalled at {sim.published_samples} samples ({at_stop} at the stop)'
+    recorder.close()
+
+
+@pytest.mark.parametrize('kind', ['msg', 'srv'])
+def test_an_advertised_type_of_a_module_that_is_no_interface_package_is_not_imported(
+        tmp_path, monkeypatch, kind):
+    """
+    A foreign participant's type name cannot make the recorder import an arbitrary module.
+
+    ``probe_pkg`` is an importable top-level package (its import leaves a mark) with a
+    ``msg``/``srv`` submodule, but no interface package of the ament index: it is refused
+    before any import. Before, ``_import_type`` imported ``probe_pkg.msg`` (and so
+    ``probe_pkg``) for any advertised type ``probe_pkg/msg/X`` on a recorded topic.
+    """
+    from tumble_ros.nodes import recorder
+
+    package = tmp_path / 'probe_pkg'
+    (package / kind).mkdir(parents=True)
+    (package / '__init__.py').write_text("import os\nos.environ['PROBE_PKG_IMPORTED'] = '1'\n")
+    (package / kind / '__init__.py').write_text('X = object\n')
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delenv('PROBE_PKG_IMPORTED', raising=False)
+    with pytest.raises(recorder.NotAnInterface, match='probe_pkg'):
+        recorder._import_type(f'probe_pkg/{kind}/X')
+    assert 'probe_pkg' not in sys.modules
+    assert 'PROBE_PKG_IMPORTED' not in os.environ
+    for bad in ('os/msg/path', 'probe_pkg/__init__/X', 'a/b/c/d', '../x/msg/Y'):
+        with pytest.raises(recorder.NotAnInterface):
+            recorder._import_type(bad)
+    # interface packages still import: messages, service events
+    assert recorder._import_type('geometry_msgs/msg/Vector3Stamped').__name__ == 'Vector3Stamped'
+    assert recorder._import_type('std_srvs/srv/Trigger_Event').__name__ == 'Trigger_Event'
+    with pytest.raises(recorder.NotAnInterface):
+        recorder._import_type('geometry_msgs/msg/NoSuchType')

@@ -277,6 +277,40 @@ def test_as_fast_as_the_consumers_take_it_loses_nothing(ros):
     assert ns == [k * 100_000 for k in range(5001)]
 
 
+def test_min_consumers_counts_only_the_consumers_present(ros):
+    """
+    A consumer that registered and died before the first sample is not counted.
+
+    With min_consumers 2: a ghost registers (one report, then silence, as a consumer killed
+    before the first sample), and once it has been silent for longer than CONSUMER_TIMEOUT a
+    live consumer registers. One consumer is present: nothing is published, however many ticks
+    the simulator gets. Before, the ghost still counted and the simulator started with one.
+    """
+    from builtin_interfaces.msg import Time
+    import rclpy
+
+    from tumble_ros.nodes.progress import (CONSUMER_TIMEOUT, PROGRESS_QOS, PROGRESS_TOPIC,
+                                           ProgressReporter)
+    from tumble_ros_interfaces.msg import ConsumerProgress
+
+    sim = ros.start(SimNode, real_time_factor=0.0, min_consumers=2,
+                    **{k: v for k, v in SHORT.items() if k != 'real_time_factor'})
+    ghost = ros.probe.create_publisher(ConsumerProgress, PROGRESS_TOPIC, PROGRESS_QOS)
+    assert ros.spin_until(lambda: ghost.get_subscription_count() >= 1, 10.0)
+    ghost.publish(ConsumerProgress(consumer='/ghost', active=True, last_stamp=Time(sec=-1)))
+    assert ros.spin_until(lambda: sim._consumers.count == 1, 10.0)
+    ros.spin_for(CONSUMER_TIMEOUT + 0.5)   # the ghost is silent past the timeout
+    live = [ProgressReporter(ros.probe)]   # reports (heartbeats), has processed nothing
+    assert ros.spin_until(lambda: sim._consumers.count >= 1, 10.0)
+    assert ros.spin_ticks(sim._timer, 100)
+    assert sim.published_samples == 0, 'started with one consumer present of the two expected'
+    assert sim._consumers.count == 1
+    # a second live consumer: the two expected are present, publication starts
+    second = ros.add(rclpy.create_node('second', context=ros.context))
+    live.append(ProgressReporter(second))
+    assert ros.spin_until(lambda: sim.published_samples > 0, 10.0)
+
+
 def test_min_consumers_holds_publication_until_they_report(ros):
     from tumble_ros.nodes.progress import ProgressReporter
     from tumble_ros.nodes.sim import WINDOW

@@ -4,6 +4,7 @@ Real use, process by process: concurrent runs, signals, consumers that leave, di
 Every process runs in the test's DDS domain (conftest.py) and its process group is killed when
 the test ends (the ``spawn`` fixture).
 """
+import os
 from pathlib import Path
 import resource
 import signal
@@ -212,3 +213,59 @@ def test_only_the_dds_memory_of_dead_processes_of_this_session_is_removed():
         os.close(held)
         for path in [*[p for pair in made.values() for p in pair], *port]:
             path.unlink(missing_ok=True)
+
+
+def test_the_three_nodes_beside_a_cpu_hog_lose_nothing_on_the_reliable_topics(ros, spawn,
+                                                                              tmp_path):
+    """
+    sim, recorder and comparator as processes, two CPU hogs beside them: nothing lost.
+
+    Every reliable per-sample topic (the simulator's and the comparator's) holds each of the
+    N samples once; ``/clock`` (best effort) may miss some, and the recorder says how many
+    (what the file shows). The comparator starts after the recorder has subscribed to the
+    simulator's topics, and the recorder looks for new topics only every 15 s
+    (``discovery_period``): before, the comparator's topics were subscribed up to 15 s into
+    the run and their first samples, beyond the 1000 their history replays, were lost.
+    """
+    import subprocess
+    import sys
+
+    from tumble_ros.io import read_columns
+
+    n = 10_000
+    interval = 1e-3
+    output = tmp_path / 'loaded.mcap'
+    hogs = [subprocess.Popen([sys.executable, '-c', 'while True: pass'],
+                             start_new_session=True) for _ in range(2)]
+    status = ros.collect(SimStatus, topics.STATUS, latched=True)
+    try:
+        sim = spawn('sim', '--ros-args', '-p', f'duration:={(n - 1) * interval!r}', '-p',
+                    f'output_interval:={interval!r}', '-p', 'real_time_factor:=0.0',
+                    '-p', 'min_consumers:=2')
+        recorder = spawn('recorder', '--ros-args', '-p', f'output:={output}',
+                         '-p', 'discovery_period:=15.0')
+        assert recorder.wait_for(f'recording /{topics.EULER_ANGLES}', SLOW), recorder.output
+        spawn('comparator')
+        assert ros.spin_until(lambda: status and status[-1].state == SimStatus.FINISHED,
+                              SLOW), sim.output
+        ros.spin_for(2.0)   # the last samples reach the recorder (it is paced: few are left)
+        recorder.signal(signal.SIGINT)
+        assert recorder.wait(30) == 0, recorder.output
+    finally:
+        for hog in hogs:
+            os.killpg(hog.pid, signal.SIGKILL)
+            hog.wait()
+    reliable = ['/' + t for t in topics.PER_SAMPLE]
+    columns, _ = read_columns(output, reliable + [topics.CLOCK])
+    expected = [k * 1_000_000 for k in range(n)]
+    lost = {}
+    for topic in reliable:
+        c = columns[topic].columns if topic in columns else None
+        got = ([] if c is None else
+               (c['header.stamp.sec'].astype('int64') * 1_000_000_000
+                + c['header.stamp.nanosec'].astype('int64')).tolist())
+        if got != expected:
+            lost[topic] = len(set(expected) - set(got))
+    assert not lost, f'samples lost per reliable topic: {lost}'
+    clock = len(columns[topics.CLOCK]) if topics.CLOCK in columns else 0
+    assert f'{topics.CLOCK}: {n - clock} of {n} samples missed' in recorder.output

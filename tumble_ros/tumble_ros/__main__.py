@@ -43,9 +43,19 @@ def main_job(argv: list[str]) -> int:
     output = default_output(Path(argv[0]).stem if argv else 'default')
     mode = [] if live else ['--offline']
     code = run_executable('bringup', [*argv, *mode, '--output', str(output)])
-    if code != 0 or not output.exists():
+    if code != 0 or not output.exists() or output.stat().st_size == 0:
+        _release(output)
         return code or 1
     return analyse(output)
+
+
+def _release(claimed: Path) -> None:
+    """Remove the name default_output claimed if the run left it empty (it recorded nothing)."""
+    try:
+        if claimed.stat().st_size == 0:
+            claimed.unlink()
+    except OSError:
+        pass
 
 
 def analyse(recording: Path) -> int:

@@ -8,7 +8,10 @@ The ``analyze`` command: summarise a tumble_ros MCAP recording, optionally write
     python -m tumble_ros.analysis RUN.mcap --animate run.gif   # the body tumbling (GIF / MP4)
     python -m tumble_ros.analysis RUN.mcap --still scene.png   # the recorded 3D scene, one frame
 
-Exit status: 0 on success (warnings included), 1 on a user error (a missing, empty,
+Exit status: 0 on success (warnings included), :data:`EXIT_TRUNCATED` (2) when the file is
+truncated or damaged after some complete chunks (a recorder killed mid-run: the summary, figures
+and pictures of what it holds are written, with one ``WARNING: ...`` line on stderr: the result
+is partial), 1 on a user error (a missing, empty,
 truncated-before-any-chunk or non-MCAP file, a path that is not a regular file, a damaged
 chunk, a recording without /angular_velocity, the tumble topics in several namespaces and no
 --namespace, a figure that exists (without --overwrite) or a symbolic link in the way, a
@@ -30,9 +33,12 @@ from .recording import load_recording, normalize_namespace, stderr_progress
 from .report import format_summary, summary_to_dict
 from .summary import analyze
 
-__all__ = ['command', 'main']
+__all__ = ['command', 'main', 'EXIT_TRUNCATED']
 
 PROG = 'analyze'
+#: Exit status of an analysis of a file truncated (or damaged) after complete chunks: the output
+#: is complete for what the file holds, but the file is not the whole run.
+EXIT_TRUNCATED = 2
 
 
 class _UsageError(Exception):
@@ -162,7 +168,16 @@ def command(argv=None) -> int:
                 print(f'  {path}')
         for key, (path, what) in extra.items():
             print(f'{key}: {path} ({what})')
-    return 0
+    return _partial(summary)
+
+
+def _partial(summary) -> int:
+    """0 for a finalised file; for a truncated one, say so on stderr and return EXIT_TRUNCATED."""
+    if summary.finalised:
+        return 0
+    print(f'WARNING: {summary.path} is truncated ({" ".join(str(summary.problem).split())}): '
+          f'analysed its complete chunks only (exit status {EXIT_TRUNCATED})', file=sys.stderr)
+    return EXIT_TRUNCATED
 
 
 def _pictures(rec, args) -> dict[str, tuple]:

@@ -417,7 +417,7 @@ def load_recording(path, *, namespace: str | None = None,
         rec.segments.append(SegmentStart(
             revision=int(msg.revision), segment_start=float(msg.segment_start),
             omega=_vec(msg.omega), quaternion=(float(q.w), float(q.x), float(q.y), float(q.z))))
-    # The last description holds every impact scheduled so far; all describe the same body.
+    # Every description holds the scenario as started (the same text); the last one readable.
     for _, msg in reversed(scenarios):
         try:
             rec.scenario = parse_scenario(msg.parameters_yaml)

@@ -40,10 +40,12 @@ from a timer in a multi-threaded executor.
 from __future__ import annotations
 
 from collections.abc import Mapping
+import fcntl
 import math
 import operator
 import os
 from pathlib import Path
+import stat
 import threading
 import time
 
@@ -142,11 +144,48 @@ def _check_qos(text: str) -> None:
                              f'(rosbag2 writes all of {list(QOS_KEYS)}; see offered_qos_yaml)')
 
 
+def open_new(path: Path):
+    """
+    Open ``path`` for a new recording (binary, write-only): created here, or claimed empty.
+
+    A file that does not exist is created exclusively (``O_EXCL``). One that exists is taken
+    only if it is an empty regular file (not a symbolic link): a name claimed atomically by
+    :func:`tumble_ros.nodes.recorder.default_output` for this run. Either way the file is
+    locked (``flock``, held until it is closed) and must still be empty once locked, so of two
+    writers on one name exactly one gets it; the other gets FileExistsError, as for any file
+    with content (a recording is never overwritten).
+    """
+    flags = os.O_WRONLY | getattr(os, 'O_CLOEXEC', 0)
+    try:
+        fd = os.open(path, flags | os.O_CREAT | os.O_EXCL, 0o666)
+    except FileExistsError:
+        try:
+            fd = os.open(path, flags | os.O_NOFOLLOW | getattr(os, 'O_NONBLOCK', 0))
+        except OSError:
+            raise FileExistsError(17, 'File exists', str(path)) from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        info = os.fstat(fd)
+        if not (stat.S_ISREG(info.st_mode) and info.st_size == 0):
+            raise BlockingIOError
+    except BlockingIOError:   # another writer holds it, or it has content or is no file
+        os.close(fd)
+        raise FileExistsError(17, 'File exists', str(path)) from None
+    except BaseException:
+        os.close(fd)
+        raise
+    if hasattr(os, 'O_NONBLOCK'):
+        os.set_blocking(fd, True)
+    return os.fdopen(fd, 'wb')
+
+
 class McapWriter:
     """
     A rosbag2-compatible MCAP file being written (see the module docstring).
 
-    ``path``: the file to create; it must not exist yet (a recording is never overwritten).
+    ``path``: the file to create; it must not exist yet, or be an empty file (a name claimed by
+    :func:`tumble_ros.nodes.recorder.default_output`; see :func:`open_new`): a recording is
+    never overwritten.
     ``chunk_bytes`` (> 0): finalise and flush the chunk in progress once it holds that many bytes
     of message data. ``chunk_seconds`` (> 0, may be ``math.inf``): ... once its first message is
     that old. ``compression``: ``'zstd'`` (default), ``'lz4'`` or ``'none'``.
@@ -182,8 +221,8 @@ class McapWriter:
         self._pending_since: float | None = None
         self._chunks_written = 0
         self._messages_flushed = 0
-        # 'xb': refuse to overwrite an existing recording.
-        self._stream = open(self._path, 'xb')
+        # refuse to overwrite an existing recording (a claimed empty name is taken: open_new)
+        self._stream = open_new(self._path)
         try:
             self._writer = Writer(self._stream, chunk_size=_NEVER,
                                   compression=COMPRESSIONS[compression])

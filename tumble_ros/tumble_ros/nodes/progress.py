@@ -134,7 +134,14 @@ class ConsumerTracker:
 
     @property
     def count(self) -> int:
-        """Return the number of active consumers."""
+        """
+        Return the number of consumers present (what ``min_consumers`` waits for).
+
+        Present: heard from within the timeout and not gone (goodbye). A consumer that
+        registered and then died before the first sample (no goodbye: killed, crashed) is
+        dropped once silent for longer than the timeout, so it is not counted.
+        """
+        self._drop_silent(lambda ns: True)
         return len(self._progress)
 
     def slowest_ns(self, published_ns: int) -> int | None:
@@ -144,15 +151,19 @@ class ConsumerTracker:
         ``published_ns`` is the stamp of the last published sample: a consumer that is
         behind it and silent for longer than the timeout is dropped.
         """
+        self._drop_silent(lambda ns: ns < published_ns)
+        if not self._progress:
+            return None
+        return min(ns for ns, _ in self._progress.values())
+
+    def _drop_silent(self, behind: Callable[[int], bool]) -> None:
+        """Drop, with a warning, the consumers ``behind`` and silent longer than the timeout."""
         now = time.monotonic()
         for name, (ns, seen) in list(self._progress.items()):
-            if ns < published_ns and now - seen > self._timeout:
+            if behind(ns) and now - seen > self._timeout:
                 message = (f'consumer {name} silent for {now - seen:.1f} s: '
                            'no longer waiting for it')
                 self._node.get_logger().warning(message)
                 del self._progress[name]
                 if self._on_drop is not None:
                     self._on_drop(message)
-        if not self._progress:
-            return None
-        return min(ns for ns, _ in self._progress.values())

@@ -29,6 +29,8 @@ in :attr:`RecorderNode.warnings`.
 from __future__ import annotations
 
 from datetime import datetime, timezone
+import math
+import os
 from pathlib import Path
 import re
 import struct
@@ -61,6 +63,9 @@ DEFAULT_TOPICS = topics.RECORDED
 PER_SAMPLE_TYPES = {topics.TYPES[t] for t in topics.PER_SAMPLE}
 #: A per-sample topic silent for this long [s] no longer holds the recorder's progress back.
 STALE_TOPIC = 2.0
+#: A per-sample topic silent for this long [s] is checked for publishers (at most this often):
+#: one whose publishers all left (a comparator stopped) no longer holds the progress back.
+QUIET_TOPIC = 0.05
 
 PARAMETERS = {
     'output': ('', '', 'MCAP file to write; empty = recordings/tumble_<UTC time>.mcap', None,
@@ -120,6 +125,9 @@ class RecorderNode(GuardedNode):
         self._sim_time = bool(self.get_parameter('use_sim_time').value)
         # per-sample topic -> (stamp ns, wall time)
         self._last_stamp: dict[str, tuple[int, float]] = {}
+        # (monotonic time of the last look, the quiet per-sample topics without publishers)
+        self._gone_checked: tuple[float, set[str]] = (-math.inf, set())
+        self._per_sample_discovered_at = -math.inf  # monotonic time of the last look
         self._progress = ProgressReporter(self, source=self._slowest_live_stamp)
         self._discover()
         steady_timer(self, p['discovery_period'], self._discover)
@@ -170,9 +178,12 @@ class RecorderNode(GuardedNode):
         return topic in self._explicit or (self._pattern is not None
                                            and self._pattern.search(topic) is not None)
 
-    def _discover(self) -> None:
+    def _discover(self, per_sample_only: bool = False) -> None:
+        """Subscribe to the wanted topics not recorded yet (``per_sample_only``: of them)."""
         for topic, types in self.get_topic_names_and_types():
             if topic in self._channels or not self._wanted(topic):
+                continue
+            if per_sample_only and not (len(types) == 1 and types[0] in PER_SAMPLE_TYPES):
                 continue
             if len(types) != 1:
                 self.get_logger().warning(f'not recording {topic}: it has several types {types}')
@@ -188,6 +199,10 @@ class RecorderNode(GuardedNode):
             msg_class = _import_type(type_name)
             offered = offered_qos_yaml(*[qos_dict(p.qos_profile) for p in publishers])
             channel = self._writer.add_channel(topic, type_name, offered)
+        except NotAnInterface as err:
+            self.get_logger().warning(f'not recording {topic} ({type_name}): {err}')
+            self._channels[topic] = -1
+            return
         except (LookupError, ImportError, ValueError) as err:
             self.get_logger().error(f'cannot record {topic} ({type_name}): {err}')
             self._channels[topic] = -1
@@ -220,10 +235,37 @@ class RecorderNode(GuardedNode):
         self.get_logger().info(f'recording {topic} ({type_name})')
 
     def _slowest_live_stamp(self) -> int | None:
-        """Return the progress [ns]: the latest stamp every live per-sample topic has reached."""
+        """
+        Return the progress [ns]: the latest stamp every live per-sample topic has reached.
+
+        Live: heard from within STALE_TOPIC, and still published (:meth:`_gone_topics`).
+        Wanted per-sample topics are looked for here too, every QUIET_TOPIC whatever
+        ``discovery_period``: one that appears mid-run (a comparator started after the
+        simulator) is subscribed before the simulator, paced on this progress, has published
+        more samples than its transient-local history (STATE_QOS depth) replays.
+        """
         now = time.monotonic()
-        live = [ns for ns, seen in self._last_stamp.values() if now - seen < STALE_TOPIC]
+        if now - self._per_sample_discovered_at >= QUIET_TOPIC:
+            self._per_sample_discovered_at = now
+            self._discover(per_sample_only=True)
+        gone = self._gone_topics(now)
+        live = [ns for topic, (ns, seen) in self._last_stamp.items()
+                if now - seen < STALE_TOPIC and topic not in gone]
         return min(live) if live else None
+
+    def _gone_topics(self, now: float) -> set[str]:
+        """
+        Return the per-sample topics silent for QUIET_TOPIC [s] that have no publisher left.
+
+        A consumer that stops (a comparator's Ctrl-C) says goodbye to the simulator, then its
+        publishers go; without this its topics held the recorder's progress, so the simulator,
+        until STALE_TOPIC. The graph is asked at most every QUIET_TOPIC, only about quiet topics.
+        """
+        if now - self._gone_checked[0] >= QUIET_TOPIC:
+            gone = {topic for topic, (_, seen) in self._last_stamp.items()
+                    if now - seen >= QUIET_TOPIC and self.count_publishers(topic) == 0}
+            self._gone_checked = (now, gone)
+        return self._gone_checked[1]
 
     def _poll(self) -> None:
         if self.error is None:
@@ -255,29 +297,101 @@ class RecorderNode(GuardedNode):
             else:
                 self.get_logger().info(f'wrote {self.path}: {sum(self.counts.values())} '
                                        f'messages on {len(self.counts)} topics')
+                self._say_clock_missed()
         self._progress.close()
+
+    @property
+    def clock_missed(self) -> tuple[int, int] | None:
+        """
+        Return (``/clock`` messages missed, samples recorded); None without both topics.
+
+        ``/clock`` is best effort (CLOCK_QOS) and volatile: it may drop under load, and what was
+        published before the subscription is never replayed. The simulator publishes one per
+        sample, with the sample's stamp: missed = the samples recorded on ``angular_velocity``
+        (the namespace with the most) minus the ``/clock`` messages recorded.
+        """
+        counts = self.counts
+        samples = [n for topic, n in counts.items()
+                   if topic.rsplit('/', 1)[-1] == topics.ANGULAR_VELOCITY]
+        if topics.CLOCK not in counts or not samples:
+            return None
+        return max(0, max(samples) - counts[topics.CLOCK]), max(samples)
+
+    def _say_clock_missed(self) -> None:
+        """Log how many /clock messages the recording misses (a warning when some)."""
+        missed = self.clock_missed
+        if missed is None:
+            return
+        text = (f'{topics.CLOCK}: {missed[0]} of {missed[1]} samples missed '
+                '(best effort, recorded as received)')
+        (self.get_logger().warning if missed[0] else self.get_logger().info)(text)
 
 
 def default_output(stem: str = 'tumble') -> Path:
     """
-    Return a new recording's path: recordings/<stem>_<UTC time>.mcap.
+    Claim a new recording's path: recordings/<stem>_<UTC time>.mcap, created empty.
 
-    A file of that name already there (a run started in the same second) gets _2, _3, ...
-    appended instead of a refusal to start (the writer still never overwrites a file).
+    The name is claimed atomically (created with ``O_EXCL``, the directory too if needed): a
+    run started in the same second as another gets _2, _3, ... appended, never a refusal to
+    start. The writer then takes the empty file (:func:`tumble_ros.io.mcap_writer.open_new`);
+    a file with content is still never overwritten.
     """
     base = f'recordings/{stem}_{datetime.now(timezone.utc):%Y%m%dT%H%M%S}'
-    path, k = Path(base + '.mcap'), 1
-    while path.exists():
-        k += 1
-        path = Path(f'{base}_{k}.mcap')
-    return path
+    Path(base).parent.mkdir(parents=True, exist_ok=True)
+    k = 1
+    while True:
+        path = Path(base + ('.mcap' if k == 1 else f'_{k}.mcap'))
+        try:
+            os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL
+                             | getattr(os, 'O_CLOEXEC', 0), 0o666))
+        except FileExistsError:
+            k += 1
+            continue
+        return path
+
+
+#: The interface kinds a recorded type may be of (rosidl's namespaces in a package).
+INTERFACE_KINDS = ('msg', 'srv', 'action')
+
+
+class NotAnInterface(LookupError):
+    """An advertised type that is not one of an installed ROS interface package: not imported."""
+
+
+def _interface_files(package: str) -> set[str]:
+    """Return the interface files ('msg/Foo.msg', ...) the ament index lists for ``package``."""
+    from ament_index_python.packages import get_resource, PackageNotFoundError
+
+    try:
+        content, _ = get_resource('rosidl_interfaces', package)
+    except (LookupError, PackageNotFoundError, ValueError):
+        return set()
+    return {line.strip() for line in content.splitlines() if line.strip()}
 
 
 def _import_type(type_name: str):
-    """Import the Python class of 'pkg/msg/Type' (also 'pkg/srv/Name_Event')."""
+    """
+    Import the Python class of 'pkg/msg/Type' (also 'pkg/srv/Name_Event', 'pkg/action/...').
+
+    Only from an installed ament interface package (the ``rosidl_interfaces`` resource of the
+    ament index lists ``kind/Name``): the type name comes from any participant on the domain,
+    and importing ``pkg.kind`` runs ``pkg``'s top-level code. Anything else raises
+    :class:`NotAnInterface` before any import (the topic is not recorded, with a warning).
+    """
     import importlib
 
-    package, kind, name = type_name.split('/')
+    parts = type_name.split('/')
+    if (len(parts) != 3 or parts[1] not in INTERFACE_KINDS
+            or not all(p.isidentifier() and p.isascii() for p in parts)):
+        raise NotAnInterface(f'not an interface type name (pkg/msg/Type, pkg/srv/Type, '
+                             f'pkg/action/Type): {type_name!r}')
+    package, kind, name = parts
+    names = {Path(f).stem for f in _interface_files(package)
+             if f.startswith(kind + '/') and f.endswith(('.msg', '.srv', '.action', '.idl'))}
+    # msg/Type exactly; a service's or an action's topics are named Type_Event, Type_Feedback...
+    if name not in names and (kind == 'msg' or not any(name.startswith(n + '_') for n in names)):
+        raise NotAnInterface(f'{kind}/{name} is no interface of an installed ROS interface '
+                             f'package {package!r} (ament index: rosidl_interfaces): not imported')
     return getattr(importlib.import_module(f'{package}.{kind}'), name)
 
 
