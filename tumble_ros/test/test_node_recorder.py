@@ -4,6 +4,7 @@ from pathlib import Path
 import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from tumble_ros.io import McapError, read_messages, summarize
 from tumble_ros.nodes.bringup import run_bringup
 from tumble_ros.nodes.recorder import RecorderNode
 from tumble_ros.nodes.sim import SimNode
+from viewer_checks import check_timeline
 
 PER_SAMPLE = [topics.in_namespace('/', name) for name in (
     topics.ANGULAR_VELOCITY, topics.ATTITUDE, topics.EULER_ANGLES, topics.CLOCK,
@@ -37,6 +39,7 @@ def stamp_ns(msg):
 
 @pytest.mark.parametrize('executor', ['events', 'single'])
 def test_bringup_round_trip_counts_and_values(tmp_path, executor):
+    started = time.time_ns()
     params = write_params(tmp_path)
     result = run_bringup(params, output=tmp_path / 'run.mcap', progress=None,
                          executor_name=executor)
@@ -64,12 +67,44 @@ def test_bringup_round_trip_counts_and_values(tmp_path, executor):
             counts[connection.topic] = counts.get(connection.topic, 0) + 1
     assert counts == {t: n for t, n in result.counts.items() if n}
 
-    # publish time: the publisher's source timestamp ('single'), the receive time ('events'
-    # cannot pass MessageInfo); never after the receive time
+    # log time: the sample's stamp (simulated time on the ROS clock); publish time: the wall
+    # clock, the publisher's source timestamp ('single') or the receive time ('events' cannot
+    # pass MessageInfo), within the run
     records = list(read_messages(result.output, topics=[OMEGA_TOPIC]))
-    gaps = np.array([m.log_time_ns - m.publish_time_ns for m in records])
-    assert np.all(gaps >= 0)
-    assert np.all(gaps == 0) if executor == 'events' else np.any(gaps > 0)
+    assert [m.log_time_ns for m in records] == [stamp_ns(m.message) for m in records]
+    sent = np.array([m.publish_time_ns for m in records])
+    assert np.all((sent >= started) & (sent <= time.time_ns())) and np.all(np.diff(sent) >= 0)
+
+
+def test_a_live_run_plays_in_simulated_time_at_its_seconds_per_year(tmp_path):
+    """10 ROS seconds a year: the 0.3-yr run is a 3-s timeline, whatever the wall clock says."""
+    result = run_bringup(write_params(tmp_path, '    seconds_per_year: 10.0\n'),
+                         output=tmp_path / 'run.mcap', progress=None)
+    assert result.ok and result.samples == 301
+    t = check_timeline(result.output, 0.3, 0.001, 10.0)
+    assert t.end - t.start == 3_000_000_000
+    assert t.rate(OMEGA_TOPIC) == pytest.approx(301 / 3.0)
+    (impact,) = t.log_times['/' + topics.IMPACT_EVENTS]
+    assert impact == 1_000_003_000          # its end, 0.1 + 3e-7 yr, at 10 s a year
+
+
+def test_log_time_receive_logs_the_wall_clock(tmp_path):
+    started = time.time_ns()
+    params = write_params(tmp_path, 'recorder:\n  ros__parameters:\n    log_time: receive\n')
+    result = run_bringup(params, output=tmp_path / 'run.mcap', progress=None)
+    assert result.ok
+    records = list(read_messages(result.output, topics=[OMEGA_TOPIC]))
+    logged = np.array([m.log_time_ns for m in records])
+    assert np.all((logged >= started) & (logged <= time.time_ns()))
+    assert np.all(np.diff(logged) >= 0)
+
+
+def test_an_unknown_log_time_is_refused_in_one_line(spawn, tmp_path):
+    recorder = spawn('recorder', '--ros-args', '-p', 'log_time:=wall', '-p',
+                     f'output:={tmp_path / "x.mcap"}')
+    assert recorder.wait(60) == 1, recorder.output
+    assert "log_time: must be one of sim, receive, got 'wall'" in recorder.output
+    assert 'Traceback' not in recorder.output and not (tmp_path / 'x.mcap').exists()
 
 
 def test_bringup_refuses_an_unknown_executor(tmp_path):

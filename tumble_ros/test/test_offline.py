@@ -3,8 +3,9 @@ The offline recording (bringup --offline, the main job) against a live one, mess
 
 The same scenario with impacts (config/fig10.yaml) recorded both ways: the same channels,
 schemas and offered-QoS metadata, and on every topic the same messages in the same order (all
-their fields), apart from what nodes/offline.py says differs (log times, the simulator's
-wall-clock heartbeats on /status).
+their fields) at the same log times (simulated time on the ROS clock), apart from what
+nodes/offline.py says differs (publish times, the simulator's wall-clock heartbeats on /status).
+Both read as a viewer reads them (viewer_checks.py): they play in the run's own time.
 """
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from tumble_ros.io import read_messages, summarize
 from tumble_ros.nodes.bringup import run_bringup
 from tumble_ros.nodes.offline import record_offline
 from tumble_ros_interfaces.msg import SimStatus
+from viewer_checks import check_timeline, timeline
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 
@@ -89,6 +91,31 @@ def test_every_topic_holds_the_same_messages(both):
     assert changes == offline_states[len(offline_states) - len(changes):]
     assert offline_states[0] == (SimStatus.RUNNING, 'started')
     assert b[status][-1]['state'] == SimStatus.FINISHED
+
+
+def test_both_play_in_simulated_time_as_a_viewer_reads_them(both):
+    scenario = load_scenario(CONFIG / 'fig10.yaml')
+    for result in both:
+        t = check_timeline(result.output, scenario.duration, scenario.output_interval)
+        (impact,) = t.log_times['/' + topics.IMPACT_EVENTS]
+        assert impact == 1_000_000_300      # its end: 1 + 3e-7 yr, on the ROS clock
+        assert list(t.log_times['/' + topics.SCENARIO]) == [0, impact]
+
+
+def test_every_message_is_logged_at_the_live_time(both):
+    """Per topic, the same log times live and offline (the per-sample ones: their stamps)."""
+    live, offline = both
+    a, b = timeline(live.output).log_times, timeline(offline.output).log_times
+    status, latched = '/' + topics.STATUS, '/' + topics.COMPARISON_STATUS
+    for topic in sorted(set(a) - {status, latched}):
+        np.testing.assert_array_equal(a[topic], b[topic], err_msg=topic)
+    # comparison/status has no stamp: live, the latest stamp the recorder had received, at or
+    # after the sample it is about (offline; the simulator runs ahead of the comparator); the
+    # depth-1 latched topic lost its first
+    ahead = a[latched] - b[latched][len(b[latched]) - len(a[latched]):]
+    assert np.all(ahead >= 0) and a[latched][-1] <= a[topics.CLOCK][-1], ahead
+    # /status: every state change at the time of its sample (the last before it)
+    assert b[status][0] == 0 and b[status][-1] == a[status][-1] == a[topics.CLOCK][-1]
 
 
 def test_the_counts_are_the_live_counts(both):

@@ -10,7 +10,10 @@ info``, the ``rosbags`` library and mcap's own readers open them:
 - one channel per topic, message encoding ``cdr``, metadata ``offered_qos_profiles`` (the YAML
   text rosbag2 writes, given by the caller, may be empty; :func:`offered_qos_yaml` makes it) and
   ``topic_type_hash`` (the RIHS01 hash rosidl generated for the type, empty if unknown);
-- messages are the raw CDR bytes as given (never re-serialised), log time = receive time;
+- messages are the raw CDR bytes as given (never re-serialised), with the log and publish times
+  the caller gives: the recorder and the offline writer log each message at the simulated time
+  of its sample (ROS time, as ``ros2 bag record --use-sim-time``), publish time = send time
+  (wall clock); a viewer's timeline is the log times';
 - chunked and compressed (``zstd`` by default, ``lz4`` or ``none``), with message indexes, chunk
   indexes, statistics and summary offsets written by :meth:`McapWriter.close`.
 
@@ -304,9 +307,10 @@ class McapWriter:
         """
         Append one message (raw CDR bytes, stored as given) to the chunk in progress.
 
-        ``log_time_ns``: receive time [ns] (rosbag2's recv_timestamp); ``publish_time_ns``:
-        send time [ns], defaults to ``log_time_ns``. Finalises and flushes the chunk when the
-        durability policy says so.
+        ``log_time_ns``: log time [ns] (rosbag2's recv_timestamp: the receive time on the
+        recorder's clock, which is ROS time on the simulated clock for the tumble recordings);
+        ``publish_time_ns``: send time [ns], defaults to ``log_time_ns``. Finalises and
+        flushes the chunk when the durability policy says so.
         """
         if not isinstance(data, (bytes, bytearray, memoryview)):
             raise ValueError(f'data must be bytes (serialized CDR), got {type(data).__name__}')

@@ -11,14 +11,24 @@ publishes with (:class:`~.messages.SampleEncoder`), the others serialised by rcl
 schemas and the offered QoS metadata are those the live recorder writes
 (:func:`~.qos.as_discovered` of each publisher's profile).
 
-What differs from a live recording (tests/test_offline.py compares the two message by message):
-log and publish times are the wall-clock times of writing (the live recorder's are receipt
-times), the simulator's 1-Hz status heartbeats are absent (a live run has one per wall second
-while running; the state changes are the same), the first messages of the depth-1 latched topics
-(``status``, ``comparison/status``) are always there (a live recorder that subscribes after them
-gets only the latest), and messages of different topics may be interleaved differently. The CDR
-padding bytes no longer differ: the per-sample messages are the same encoder's bytes in both
-(zero padding), the others are serialised by rclpy in both.
+Log times are simulated time on the ROS clock, as the live recorder's (its default ``log_time``
+``sim``): a message's log time is the stamp of the sample it belongs to (``seconds_per_year``
+mapping, :class:`~tumble_ros.core.TimeBase`): the per-sample topics and ``/clock`` their stamp,
+``markers`` the stamp of their sample, ``scenario`` its segment start, ``impact_events`` the
+impact's end, ``status`` the last sample written, ``comparison/status`` the sample it is about
+(0 before the first, a segment's start for its anchoring, the first departing sample for a
+departure). A viewer then plays, seeks and shows rates in the run's own time. Publish times are
+the wall-clock times of writing (the live recorder's: the publishers' send times).
+
+What differs from a live recording (tests/test_offline.py compares the two message by message, log
+times included): the publish times; ``comparison/status``'s log times (a live recorder logs them at
+the latest stamp it received, later by as much as the simulator runs ahead of the comparator); the
+simulator's 1-Hz status heartbeats are absent (a live run has one per wall second while running;
+the state changes are the same), the first messages of the depth-1 latched topics (``status``,
+``comparison/status``) are always there (a live recorder that subscribes after them gets only the
+latest), and messages of different topics may be interleaved differently. The CDR padding bytes no
+longer differ: the per-sample messages are the same encoder's bytes in both (zero padding), the
+others are serialised by rclpy in both.
 """
 from __future__ import annotations
 
@@ -38,7 +48,7 @@ from tumble_ros.core import (DEPARTURE, departure_text, dump_scenario, Propagato
 from tumble_ros.core.scenario import ScenarioError
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.nodes.comparator import anchor_model, GridModelValues
-from tumble_ros.nodes.markers import marker_every, MarkerScene
+from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
                                        SampleEncoder, scenario_description, sim_status)
 from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
@@ -73,6 +83,7 @@ class _Channels:
     def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool, markers: bool):
         self.writer = writer
         self.ids: dict[str, int] = {}
+        self._pending: list[tuple[int, str, bytes]] = []
         self.encoder = SampleEncoder()
         for topic in topics.RECORDED:
             if (topic == topics.CLOCK and not publish_clock
@@ -84,10 +95,21 @@ class _Channels:
             offered = offered_qos_yaml(qos_dict(as_discovered(PUBLISHER_QOS[topic])))
             self.ids[topic] = writer.add_channel(name, type_name, offered)
 
-    def one(self, topic: str, msg) -> None:
-        """Write one message (serialised by rclpy), logged now."""
+    def one(self, topic: str, msg, stamp_ns: int) -> None:
+        """
+        Queue one message (serialised by rclpy) logged at ``stamp_ns`` [ns, ROS time].
+
+        Queued messages are written by :meth:`flush` in the order of their log times, so each
+        channel's log times never decrease (a batch's departures may precede its anchorings).
+        """
+        self._pending.append((stamp_ns, topic, serialize_message(msg)))
+
+    def flush(self) -> None:
+        """Write the queued messages, by log time (stable); publish time = now (wall clock)."""
         now = time.time_ns()
-        self.writer.write(self.ids[topic], serialize_message(msg), now, now)
+        for stamp_ns, topic, data in sorted(self._pending, key=lambda m: m[0]):
+            self.writer.write(self.ids[topic], data, stamp_ns, now)
+        self._pending.clear()
 
 
 def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = None,
@@ -121,17 +143,18 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
         comparator = _Comparator(channels, model_name)
         channels.one(topics.COMPARISON_STATUS, comparison_status(
             DiagnosticStatus.WARN, COMPARATOR_NAME,
-            "waiting for the simulator's scenario description", model_name))
+            "waiting for the simulator's scenario description", model_name), 0)
         revision = _describe(channels, comparator, scenario_yaml, timebase, 0, 0.0,
                              propagator.y, propagator)
-        channels.one(topics.STATUS, sim_status(state, 0.0, 'started', 0))
+        channels.one(topics.STATUS, sim_status(state, 0.0, 'started', 0), 0)
         while k < grid.count and not stop():
             k1 = min(grid.count, k + BATCH)
             done, arrays, failure = propagator.sample_many(grid.times(k, k1))
             segment_starts = dict(propagator.pop_window_edges())
             for impact, y_start, y_end in propagator.pop_completed_impacts():
+                end_ns = timebase.to_ns(impact.end)
                 channels.one(topics.IMPACT_EVENTS, impact_event(
-                    impact, 0, timebase.to_ns(impact.end), y_end[:3] - y_start[:3]))
+                    impact, 0, end_ns, y_end[:3] - y_start[:3]), end_ns)
                 segment_starts[impact.end] = y_end
             for t0 in sorted(segment_starts):
                 revision = _describe(channels, comparator, scenario_yaml, timebase, revision, t0,
@@ -139,6 +162,7 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
             _write_samples(channels, comparator, grid, k, done, arrays, publish_clock, scenario)
             if scene is not None:
                 scene.write(channels, k, done, arrays)
+            channels.flush()
             k += done
             if progress is not None:
                 progress(grid.time(max(0, k - 1)), k)
@@ -148,8 +172,10 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
         if state == SimStatus.RUNNING and k >= grid.count:
             state, message = SimStatus.FINISHED, f'finished at t = {grid.time(k - 1):g} yr'
         if state != SimStatus.RUNNING:
+            last = grid.stamp(max(0, k - 1))
             channels.one(topics.STATUS, sim_status(state, grid.time(max(0, k - 1)), message,
-                                                   grid.stamp(max(0, k - 1))))
+                                                   last), last)
+        channels.flush()
         counts = dict(writer.counts)
     return OfflineResult(output=output, state=state, message=message or 'stopped', samples=k,
                          t=grid.time(max(0, k - 1)), counts=counts,
@@ -161,8 +187,8 @@ def _describe(channels, comparator, scenario_yaml, timebase, revision, t0, y0, p
     description = scenario_description(scenario_yaml, timebase.seconds_per_year, revision,
                                        timebase.to_ns(t0), t0, y0[:3],
                                        propagator.quaternion_of(y0))
-    channels.one(topics.SCENARIO, description)
-    comparator.anchor(description)
+    channels.one(topics.SCENARIO, description, timebase.to_ns(t0))
+    comparator.anchor(description, timebase.to_ns(t0))
     return revision + 1
 
 
@@ -177,7 +203,8 @@ class _Comparator:
         self.values = GridModelValues()
         self.departed: set[int] = set()    # segments whose model left the numeric solution
 
-    def anchor(self, description) -> None:
+    def anchor(self, description, stamp_ns: int) -> None:
+        """Anchor a model on a segment's description (stamped ``stamp_ns``); say so."""
         try:
             model, self.grid, text = anchor_model(self.model_name, description)
             level = DiagnosticStatus.OK
@@ -185,11 +212,13 @@ class _Comparator:
             model, level, text = None, DiagnosticStatus.WARN, str(err)
         self.segments.append((description.segment_start, model))
         self.channels.one(topics.COMPARISON_STATUS, comparison_status(
-            level, COMPARATOR_NAME, text, self.model_name))
+            level, COMPARATOR_NAME, text, self.model_name), stamp_ns)
 
-    def compare(self, k0: int, times: np.ndarray, omega: np.ndarray):
+    def compare(self, k0: int, times: np.ndarray, stamps: np.ndarray, omega: np.ndarray):
         """
         Return (mask of the samples compared, model, error, norm, relative) of a batch.
+
+        ``times`` [yr] and ``stamps`` [ns] are the batch's samples (grid indices from ``k0``).
 
         Each sample takes the model of the segment its time falls in (the latest description
         starting at or before it), evaluated on the grid's look-ahead blocks as the node does;
@@ -215,10 +244,10 @@ class _Comparator:
         for j in np.flatnonzero(compared).tolist():
             norm[j], relative[j] = error_norms(numeric[j], errors[j])
         model[~compared] = 0.0
-        self._report_departures(times, which, edges, compared & (relative > DEPARTURE))
+        self._report_departures(times, stamps, which, edges, compared & (relative > DEPARTURE))
         return compared, model, error, norm, relative
 
-    def _report_departures(self, times, which, edges, beyond) -> None:
+    def _report_departures(self, times, stamps, which, edges, beyond) -> None:
         """Say on the status when a segment's model first leaves the numeric solution."""
         for a, b in zip(edges[:-1], edges[1:]):
             segment = int(which[a])
@@ -228,7 +257,8 @@ class _Comparator:
             self.departed.add(segment)
             self.channels.one(topics.COMPARISON_STATUS, comparison_status(
                 DiagnosticStatus.WARN, COMPARATOR_NAME,
-                departure_text(self.model_name, float(times[a + hits[0]])), self.model_name))
+                departure_text(self.model_name, float(times[a + hits[0]])), self.model_name),
+                int(stamps[a + hits[0]]))
 
 
 @dataclass
@@ -244,8 +274,10 @@ class _Scene:
         rows = self.scene.encode_samples(self.grid, self.every, k0, n, arrays)
         if not len(rows):
             return
-        log = time.time_ns() + np.arange(len(rows), dtype=np.int64)
-        channels.writer.write_rows([channels.ids[topics.MARKERS]], [rows], log)
+        # logged at their samples' stamps (the samples encode_samples picks)
+        stamps = marker_samples(k0, k0 + n, self.every, self.grid.count) * self.grid.interval_ns
+        channels.writer.write_rows([channels.ids[topics.MARKERS]], [rows], stamps,
+                                   np.full(len(rows), time.time_ns(), dtype=np.int64))
 
 
 def _write_samples(channels: _Channels, comparator: _Comparator, grid, k0: int, n: int,
@@ -266,14 +298,14 @@ def _write_samples(channels: _Channels, comparator: _Comparator, grid, k0: int, 
     sim = channels.encoder.simulator(ns, omega, quaternion, arrays['euler'][:n],
                                      clock=publish_clock, perturber=perturber)
     compared, model, error, norm, relative = comparator.compare(k0, grid.times(k0, k0 + n),
-                                                                omega)
+                                                                ns, omega)
     comparison = channels.encoder.comparator(ns, model, error, norm, relative,
                                              comparator.model_name)
-    now = time.time_ns()
-    log = now + np.arange(n, dtype=np.int64)
+    # log time = the sample's stamp (ROS time); publish time = now (wall clock)
+    sent = np.full(n, time.time_ns(), dtype=np.int64)
     # runs of samples with and without comparison, in order
     edges = np.flatnonzero(np.diff(compared.astype(np.int8))) + 1
     for a, b in zip([0, *edges.tolist()], [*edges.tolist(), n]):
         parts = sim + (comparison if compared[a] else [])
         channels.writer.write_rows([channels.ids[t] for t, _ in parts],
-                                   [rows[a:b] for _, rows in parts], log[a:b])
+                                   [rows[a:b] for _, rows in parts], ns[a:b], sent[a:b])

@@ -21,8 +21,15 @@ back by a non-seeking reader. The recorder reports its progress on ``consumer_pr
 simulator never outruns it: at the default settings nothing is dropped (``/clock`` is best effort,
 as time sources expect, and recorded as received).
 
-With ``use_sim_time:=true`` the log time of each record is the node's ROS time (``/clock``), as
-``ros2 bag record --use-sim-time`` does; otherwise it is the wall-clock receive time. A second
+Log times (``log_time``): ``sim`` (default) records on the simulated clock, as ``ros2 bag record
+--use-sim-time`` does, but exactly: a message of a tumble topic is logged at the ROS time of the
+sample it belongs to, its stamp (``header.stamp``, ``/clock``'s ``clock``, a MarkerArray's first
+marker's stamp; the ``seconds_per_year`` mapping of :class:`~tumble_ros.core.TimeBase`), and
+a message without a stamp (``comparison/status``, a topic matched by ``topic_pattern``) at the
+latest stamp received so far (0 before any), so a viewer plays, seeks and shows rates in the
+run's own time. ``receive`` logs the receive time on the node's clock instead: the wall clock,
+or ``/clock`` with ``use_sim_time:=true``. The publish time is the publisher's send time
+(wall clock; the receive time where the executor cannot tell it). A second
 publisher on a recorded tumble topic (another run on the same topics) is reported in the log and
 in :attr:`RecorderNode.warnings`.
 """
@@ -35,6 +42,7 @@ from pathlib import Path
 import re
 import struct
 import time
+from typing import Callable
 
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidTopicNameException
@@ -45,6 +53,7 @@ from tumble_ros import topics
 from tumble_ros.errors import NodeError
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.io.mcap_writer import COMPRESSIONS
+from tumble_ros.io.msgdefs import message_spec, normalize_type_name
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import declare_node_parameters
@@ -79,14 +88,52 @@ PARAMETERS = {
     'compression': ('zstd', '', 'chunk compression: ' + ', '.join(COMPRESSIONS), None, True),
     'discovery_period': (0.5, 's', 'how often to look for new matching topics', (0.01, 60.0),
                          True),
+    'log_time': ('sim', '', "log time of a record: 'sim' = the simulated time of the sample it "
+                 "belongs to (its stamp); 'receive' = the receive time on the node's clock",
+                 None, True),
 }
+#: Accepted values of ``log_time``.
+LOG_TIMES = ('sim', 'receive')
 
 
-def _header_stamp_ns(data: bytes) -> int:
-    """Read the stamp of a CDR message that starts with builtin_interfaces/Time (after 4 bytes)."""
+def _header_stamp_ns(data: bytes, offset: int = 4) -> int:
+    """Read the builtin_interfaces/Time at ``offset`` of a CDR message (default: its start)."""
     little = data[1] == 1  # encapsulation CDR_LE = 0x0001
-    sec, nanosec = struct.unpack_from('<iI' if little else '>iI', data, 4)
+    sec, nanosec = struct.unpack_from('<iI' if little else '>iI', data, offset)
     return sec * 1_000_000_000 + nanosec
+
+
+def stamp_reader(type_name: str) -> Callable[[bytes], int | None] | None:
+    """
+    Return a reader of the stamp [ns] in a CDR message of ``type_name``, or None if it has none.
+
+    A stamp is the first field when it is a ``std_msgs/Header`` or a ``builtin_interfaces/Time``
+    (at byte 4, after the encapsulation), or the first element's when the first field is a
+    sequence of such messages (``visualization_msgs/MarkerArray``: at byte 8, after the length;
+    the reader returns None for an empty sequence).
+    """
+    def first_stamp(name: str) -> bool:
+        try:
+            spec = message_spec(normalize_type_name(name))
+        except (LookupError, ValueError):
+            return False
+        return bool(spec.fields) and spec.fields[0].array is None and (
+            spec.fields[0].type in ('std_msgs/Header', 'builtin_interfaces/Time'))
+
+    if first_stamp(type_name):
+        return _header_stamp_ns
+    try:
+        fields = message_spec(normalize_type_name(type_name)).fields
+    except (LookupError, ValueError):
+        return None
+    if fields and fields[0].array == '' and not fields[0].is_primitive and first_stamp(
+            fields[0].type):
+        def element_stamp(data: bytes) -> int | None:
+            little = data[1] == 1
+            (count,) = struct.unpack_from('<I' if little else '>I', data, 4)
+            return _header_stamp_ns(data, 8) if count else None
+        return element_stamp
+    return None
 
 
 def _policy_name(policy) -> str:
@@ -110,6 +157,9 @@ class RecorderNode(GuardedNode):
         self._message_info = message_info
         self.add_on_set_parameters_callback(self._on_set_parameters)
         p = declare_node_parameters(self, PARAMETERS)
+        if p['log_time'] not in LOG_TIMES:
+            raise NodeError(f"log_time: must be one of {', '.join(LOG_TIMES)}, "
+                            f"got {p['log_time']!r}")
         topics = [t for t in p['topics'] if t]
         self._explicit = {self._resolve('topics', t)
                           for t in (topics or ([] if p['topic_pattern'] else DEFAULT_TOPICS))}
@@ -123,6 +173,8 @@ class RecorderNode(GuardedNode):
         self.error: str | None = None  # why recording stopped early (None: it did not)
         self.warnings: list[str] = []  # second sources seen on the recorded tumble topics
         self._sim_time = bool(self.get_parameter('use_sim_time').value)
+        self._log_sim = p['log_time'] == 'sim'
+        self._sim_now = 0  # latest stamp of a tumble topic received [ns] (log_time sim)
         # per-sample topic -> (stamp ns, wall time)
         self._last_stamp: dict[str, tuple[int, float]] = {}
         # (monotonic time of the last look, the quiet per-sample topics without publishers)
@@ -216,14 +268,25 @@ class RecorderNode(GuardedNode):
             reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
             durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
         per_sample = type_name in PER_SAMPLE_TYPES
+        # the tumble topics' stamps are simulated time; a foreign topic's may be anything
+        stamp_of = (stamp_reader(type_name)
+                    if topic in {self.resolve_topic_name(t) for t in DEFAULT_TOPICS} else None)
 
         def on_message(data: bytes, info) -> None:
             if self.error is not None:
                 return
-            received = self.get_clock().now().nanoseconds if self._sim_time else time.time_ns()
-            sent = (info.get('source_timestamp') or received) if info else received
+            wall = time.time_ns()
+            stamp = stamp_of(data) if stamp_of is not None else None
+            if not self._log_sim:
+                logged = self.get_clock().now().nanoseconds if self._sim_time else wall
+            elif stamp is not None:
+                logged = stamp
+                self._sim_now = max(self._sim_now, stamp)
+            else:
+                logged = self._sim_now
+            sent = (info.get('source_timestamp') or wall) if info else wall
             try:
-                self._writer.write(channel, data, received, sent)
+                self._writer.write(channel, data, logged, sent)
             except OSError as err:
                 self._stop_recording(err)
                 return
