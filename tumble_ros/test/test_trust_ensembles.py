@@ -235,6 +235,7 @@ def test_the_lock_is_held_for_the_run_and_released_after(tmp_path):
 def _store(tmp_path) -> Path:
     from tumble_ros.core import RandomImpacts
 
+    tmp_path.mkdir(exist_ok=True)
     out = tmp_path / 'ok.zarr'
     run_ensemble_to_store(small_scenario(), out, n_bodies=4, chunk_size=2,
                           impacts=RandomImpacts(rate=1.0, torque=1e6, seed=3))
@@ -296,6 +297,15 @@ def test_a_foreign_or_damaged_store_is_refused_in_one_line_as_output_and_as_inpu
         assert line.startswith(f'ERROR: {store}: ') and expected in line, (kind, err)
         with pytest.raises(EnsembleStoreError):
             open_ensemble(store)
+    corrupt = _store(tmp_path / 'corrupt')
+    for chunk in (corrupt / 'omega').glob('[0-9]*'):
+        chunk.write_bytes(b'garbage' * 10)
+    assert analyse_main([str(corrupt)]) == 1
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith(f'ERROR: {corrupt}: damaged ensemble store: cannot read its data')
+    assert ensemble_main(args[:-1] + [str(corrupt)]) == 2     # resumed: nothing to run, then read
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith(f'error: {corrupt}: damaged ensemble store: cannot read its data')
     a_file = tmp_path / 'file.zarr'
     a_file.write_text('not a store')
     assert analyse_main([str(a_file)]) == 1

@@ -30,7 +30,7 @@ from tumble_ros.cli.engine import add_engine_arguments, engine, Interrupted, int
 from tumble_ros.cli.progress import ProgressBar
 from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
                              Scenario, ScenarioError, simulate_ensemble)
-from tumble_ros.ensembles import open_ensemble, run_ensemble_to_store
+from tumble_ros.ensembles import EnsembleStoreError, open_ensemble, run_ensemble_to_store
 from tumble_ros.errors import TumbleRosError
 from tumble_ros.topics import SIM_NODE_PARAMETERS
 
@@ -98,9 +98,13 @@ def _to_store(args, sc, inputs, client) -> int:
     print('\n'.join(summary.lines()))
     if summary.succeeded:
         ds = open_ensemble(args.out)
-        good = (ds.status == 1).values
-        w_end = ds.omega.isel(time=-1).values[good]
-        jac = ds.jacobi.isel(time=[0, -1]).values[good]
+        try:
+            good = (ds.status == 1).values
+            w_end = ds.omega.isel(time=-1).values[good]
+            jac = ds.jacobi.isel(time=[0, -1]).values[good]
+        except RuntimeError as err:       # numcodecs: a chunk that does not decompress
+            raise EnsembleStoreError(f'{args.out}: damaged ensemble store: cannot read its '
+                                     f"data ({' '.join(str(err).split())})") from None
         print('\n'.join(_final_spin_lines(w_end, jac[:, 0], jac[:, 1])))
     return 0 if summary.succeeded == summary.n_bodies else 1
 

@@ -283,7 +283,11 @@ class EnsembleStore:
 
     def done(self) -> np.ndarray:
         """Return (n_chunks,) bool: which chunks are written completely."""
-        return np.asarray(self._group['chunk_done'][:], dtype=bool)
+        try:
+            return np.asarray(self._group['chunk_done'][:], dtype=bool)
+        except (RuntimeError, ValueError, OSError) as err:   # a chunk that does not decode
+            raise EnsembleStoreError(f'{self.path}: damaged ensemble store: cannot read '
+                                     f"chunk_done ({' '.join(str(err).split())})") from None
 
     def read(self, name: str, bodies=slice(None)) -> np.ndarray:
         """Return the stored values of variable ``name`` for ``bodies`` (an index or slice)."""
