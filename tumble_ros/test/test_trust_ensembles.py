@@ -1,6 +1,8 @@
 """
-The ensemble and encounter commands at their edges, as processes: their params files, the
-listeners of an embedded cluster, Ctrl-C, one writer per store, foreign and damaged stores.
+The ensemble and encounter commands at their edges.
+
+As processes: their params files, the listeners of an embedded cluster, Ctrl-C, one writer per
+store, foreign and damaged stores.
 
 Each process is started with the real entry point (``ensemble``, as ``ros2 run`` finds it) in
 its own process group, killed with it after the test (conftest ``spawn``).
@@ -59,7 +61,7 @@ def test_ensemble_and_encounter_refuse_a_fifo_and_a_binary_file_in_one_line(
 
 
 def test_every_reader_gives_the_same_refusal(tmp_path):
-    """sim and bringup (params_file_problem) and ensemble/encounter (load_scenario): one check."""
+    """One check: sim and bringup (params_file_problem), ensemble and encounter (load_scenario)."""
     from tumble_ros.nodes.parameters import params_file_problem
 
     for kind, (path, expected) in _bad_files(tmp_path).items():
@@ -196,7 +198,7 @@ def test_a_second_run_into_a_store_is_refused_and_a_dead_owner_s_lock_is_taken_o
         assert (owner['pid'], owner['host']) == (first.pid, socket.gethostname())
         sc = small_scenario()
         from tumble_ros.core import RandomImpacts
-        inputs = dict(n_bodies=6, impacts=RandomImpacts(rate=1.0, torque=1e6, seed=3))
+        inputs = {'n_bodies': 6, 'impacts': RandomImpacts(rate=1.0, torque=1e6, seed=3)}
         with pytest.raises(EnsembleStoreLocked) as refused:
             run_ensemble_to_store(sc, out, **inputs)
         assert str(refused.value) == (
@@ -260,7 +262,7 @@ def _damaged(tmp_path) -> dict:
     newer = tmp_path / 'newer.zarr'
     shutil.copytree(ok, newer)
     _set_attr(newer, 'format_version', 2)
-    stores['newer'] = (newer, "ensemble store format version 2; this tumble_ros reads and "
+    stores['newer'] = (newer, 'ensemble store format version 2; this tumble_ros reads and '
                               'resumes version 1 only')
     renamed = tmp_path / 'renamed.zarr'
     shutil.copytree(ok, renamed)

@@ -151,7 +151,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"ERROR: {' '.join(str(err).split())}", file=sys.stderr)
         return 1
     except RuntimeError as err:       # numcodecs: a chunk that does not decompress
-        print(f"ERROR: {args.store}: damaged ensemble store: cannot read its data "
+        print(f'ERROR: {args.store}: damaged ensemble store: cannot read its data '
               f"({' '.join(str(err).split())})", file=sys.stderr)
         return 1
     return 0
