@@ -66,7 +66,7 @@ def test_mp4_without_ffmpeg_is_refused_in_one_line(tmp_path, capsys):
 @pytest.mark.parametrize('argv, phrase', [
     (['--animate', 'x.avi'], '.gif (Pillow) or an .mp4'),
     (['--frames', '3'], '--frames and --fps need --animate'),
-    (['--animate', 'x.gif', '--frames', '0'], '--frames must be >= 1'),
+    (['--animate', 'x.gif', '--frames', '0'], '--frames must be an integer in [1, 10,000]'),
     (['--at', '1.0'], '--at needs --still FILE.png or --animate FILE.png'),
 ])
 def test_bad_options_give_one_error_line(tmp_path, capsys, argv, phrase):
@@ -106,3 +106,47 @@ def test_one_frame_of_the_animation_as_a_png(tmp_path, capsys):
     assert f'animation: {out} (one frame)' in capsys.readouterr().out
     with Image.open(out) as png:
         assert png.size == _pixels(SIZE, DPI)
+
+
+@pytest.mark.parametrize('argv, phrase', [
+    (['--animate', 'x.gif', '--fps', '1e-9'], '--fps must be in [0.1, 100], got 1e-09'),
+    (['--animate', 'x.gif', '--fps', 'nan'], '--fps must be in [0.1, 100], got nan'),
+    (['--animate', 'x.gif', '--frames', '1000000000'],
+     '--frames must be an integer in [1, 10,000] (MAX_FRAMES), got 1000000000'),
+    (['--animate', 'x.png', '--at', 'nan'], '--at must be a finite time [yr], got nan'),
+    (['--animate', 'x.png', '--at', 'inf'], '--at must be a finite time [yr], got inf'),
+    (['--still', 'x.png', '--at=-inf'], '--at must be a finite time [yr], got -inf'),
+    (['--animate', 'x.png', '--at', '99'], '--at 99 yr: outside the attitude samples, [0, '),
+    (['--still', 'x.png', '--at=-5'], '--at -5 yr: outside the run, [0, '),
+])
+def test_frames_fps_and_times_out_of_bounds_are_refused_in_one_line(
+        tmp_path, capsys, argv, phrase):
+    """--fps 1e-9 ended in OverflowError; --at nan / inf / beyond the run drew t = 0 silently."""
+    argv = [str(tmp_path / a) if a.endswith(('.gif', '.png')) else a for a in argv]
+    assert command([str(GOLDEN), '--quiet', *argv]) == 1
+    assert phrase in one_error_line(capsys)
+    assert not list(tmp_path.iterdir())
+
+
+def test_the_gif_is_written_frame_by_frame(tmp_path, monkeypatch):
+    """
+    The GIF is written as it is drawn (PillowWriter kept every frame, 0.92 MB each, to the end).
+
+    While the animation is written, the frames already drawn are on disk, not in memory: the
+    number of PIL images alive does not grow with the frames written.
+    """
+    import gc
+
+    from tumble_ros.analysis import animation
+
+    alive = []
+
+    def count(done, total):
+        gc.collect()
+        alive.append(sum(isinstance(o, Image.Image) for o in gc.get_objects()))
+
+    out = tmp_path / 'a.gif'
+    animation.write_animation(load_recording(GOLDEN), out, frames=20, progress=count)
+    assert len(alive) == 20 and max(alive) <= alive[0] + 1, alive
+    with Image.open(out) as gif:
+        assert gif.n_frames == 20 and gif.info['loop'] == 0

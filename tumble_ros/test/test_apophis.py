@@ -161,6 +161,55 @@ def test_the_encounter_command_writes_its_figure_and_refuses_a_scenario_without_
                            str(tmp_path / 'enc2'), '-q']) == 0, capsys.readouterr().err
 
 
+def _one_error(capsys) -> str:
+    out, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith('error: ') and 'Traceback' not in err, err
+    assert 'inertia draw' not in err and out == ''      # refused before any work
+    return lines[0]
+
+
+def test_the_encounter_command_checks_its_outputs_before_the_run(tmp_path, capsys):
+    """A bad --out failed after the whole run; existing files and links were written over."""
+    small = ['--bodies', '2', '--inertia-draws', '1', '-q']
+    a_file = tmp_path / 'file'
+    a_file.write_text('')
+    assert encounter_main([str(CONFIG), *small, '--out', str(a_file)]) == 2
+    assert _one_error(capsys) == f'error: {a_file}: exists and is not a directory'
+    out = tmp_path / 'enc'
+    assert encounter_main([str(CONFIG), *small, '--out', str(out)]) == 0
+    first = (out / 'summary.txt').read_text()
+    capsys.readouterr()
+    assert encounter_main([str(CONFIG), *small, '--out', str(out)]) == 2
+    assert _one_error(capsys).startswith(f'error: {out / "encounter.png"}, ')
+    assert (out / 'summary.txt').read_text() == first
+    assert encounter_main([str(CONFIG), *small, '--out', str(out), '--overwrite']) == 0
+    capsys.readouterr()
+    target = tmp_path / 'elsewhere.npz'
+    target.write_bytes(b'keep')
+    (out / 'encounter.npz').unlink()
+    (out / 'encounter.npz').symlink_to(target)
+    assert encounter_main([str(CONFIG), *small, '--out', str(out), '--overwrite']) == 2
+    assert _one_error(capsys) == (f'error: {out / "encounter.npz"}: is a symbolic link: '
+                                  'figures are not written through links')
+    assert target.read_bytes() == b'keep'
+
+
+@pytest.mark.parametrize('args, expected', [
+    (['--bodies', '1000000000000'], 'bodies: 1,000,000,000,000 bodies would need about '
+                                    '4,000,000.0 GB of memory (4,000 bytes a body)'),
+    (['--inertia-spread', 'nan', '0.01'], 'inertia spread of I_a/I_c: must be a finite number '
+                                          'in [0, 0.5], got nan'),
+    (['--inertia-spread', '0.01', 'inf'], 'inertia spread of I_b/I_c: must be a finite number '
+                                          'in [0, 0.5], got inf'),
+    (['--inertia-spread', '-0.1', '0'], 'inertia spread of I_a/I_c: must be a finite number'),
+])
+def test_the_encounter_command_refuses_what_it_cannot_run_up_front(capsys, args, expected):
+    """10**12 bodies ended in MemoryError, a NaN spread in OverflowError (tracebacks)."""
+    assert encounter_main([str(CONFIG), '-q', *args]) == 2
+    assert _one_error(capsys).startswith(f'error: {expected}')
+
+
 def _coarse(tmp_path) -> Path:
     """Write the Apophis file sampled every hour (145 samples: the whole flyby, quickly)."""
     path = tmp_path / 'apophis_hourly.yaml'

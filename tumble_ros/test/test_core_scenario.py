@@ -116,7 +116,7 @@ def test_load_scenario_from_ros_params_yaml(tmp_path):
     ('sim: [1, 2]', 'ros__parameters'),
     ('a: {ros__parameters: {}}\nb: {ros__parameters: {}}', 'no section'),
     ('sim:\n  ros__parameters:\n    duration: -1\n', 'duration'),
-    ('sim: {ros__parameters: {inertia: [1, 1}}', 'cannot read'),
+    ('sim: {ros__parameters: {inertia: [1, 1}}', 'not valid YAML'),
 ])
 def test_load_scenario_errors(tmp_path, text, why):
     path = tmp_path / 'bad.yaml'
@@ -169,3 +169,45 @@ def test_dump_parse_round_trip():
 
     sc = Scenario(impacts=(Impact(0.5, 3e-7, (1.0, 2.0, 3.0), 'orbital'),), attitude='euler')
     assert parse_scenario(dump_scenario(sc)) == sc
+
+
+def test_a_params_file_over_the_size_limit_is_refused_before_it_is_read(tmp_path):
+    """A 60-MB omega0 list was parsed (1.2 GB held); now its size alone refuses it."""
+    from tumble_ros.core.limits import MAX_PARAMS_FILE_BYTES
+
+    path = tmp_path / 'huge.yaml'
+    head = 'sim:\n  ros__parameters:\n    omega0: ['
+    path.write_text(head + '1.0, ' * ((MAX_PARAMS_FILE_BYTES - len(head)) // 5 + 1) + '1.0]\n')
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(path)
+    assert str(err.value) == (f'params file {path}: {path.stat().st_size:,} bytes, above the '
+                              f'limit of {MAX_PARAMS_FILE_BYTES:,} (MAX_PARAMS_FILE_BYTES, '
+                              'README "Limits")')
+
+
+def test_a_long_wrong_list_is_named_in_a_short_line(tmp_path):
+    path = tmp_path / 'long.yaml'
+    path.write_text('sim:\n  ros__parameters:\n    omega0: [' + ', '.join(['1.0'] * 50_000)
+                    + ']\n')
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(path)
+    assert str(err.value).startswith(f'{path}: omega0: ')
+    assert 'list of 50,000 entries [1.0, 1.0, 1.0, ...]' in str(err.value)
+    assert len(str(err.value)) < 300
+
+
+def test_more_scheduled_impacts_than_the_limit_are_refused_before_the_run():
+    """10**6 scheduled impacts took 3.9 GB and produced nothing."""
+    from tumble_ros.core.limits import MAX_IMPACTS
+
+    n = MAX_IMPACTS + 1
+    params = {'duration': 2.0, 'impacts.start': [1.0 * k / n for k in range(n)],
+              'impacts.duration': [1e-7] * n, 'impacts.torque': [0.0, 0.0, 1.0] * n}
+    with pytest.raises(ScenarioError, match=f'impacts.start: at most {MAX_IMPACTS:,} scheduled '
+                                            'impacts per run') as err:
+        Scenario.from_parameters(params)
+    assert len(str(err.value)) < 300
+    impacts = tuple(Impact(1.0 * k / n, 1e-7, (0.0, 0.0, 1.0)) for k in range(n))
+    with pytest.raises(ScenarioError, match=f'impacts: at most {MAX_IMPACTS:,}'):
+        Scenario(duration=2.0, impacts=impacts)
+    assert len(Scenario(duration=2.0, impacts=impacts[:MAX_IMPACTS]).impacts) == MAX_IMPACTS

@@ -13,7 +13,9 @@ model as in ``omega.png``) and the comparator's |error|, a cursor at the frame's
 are spread evenly over the recorded samples (``frames``, default :data:`FRAMES`): a 2-yr run of
 1,001 samples shows every 8th sample (the body turns by ~30 degrees a frame at w = 30 rad/yr),
 a 2,000-yr run one sample every ~17 yr (a stroboscope: the title says which samples). GIF
-through Pillow (``matplotlib.animation.PillowWriter``), MP4 through ffmpeg where it is installed.
+through Pillow, written frame by frame (memory does not grow with the number of frames), MP4
+through ffmpeg where it is installed. Bounds: :data:`MAX_FRAMES` frames, :data:`MIN_FPS` to
+:data:`MAX_FPS` frames per second, ``at`` a finite time within the run.
 
 :func:`write_still` draws one recorded ``markers`` scene (``visualization_msgs/MarkerArray``,
 what RViz and Foxglove show) with matplotlib's 3D axes: the SPHERE, CUBE and ARROW markers as
@@ -25,9 +27,12 @@ existing one only with ``overwrite`` (the file is written beside it, then rename
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
+import io
 import os
 from pathlib import Path
+import struct
 import sys
 from typing import Callable
 
@@ -51,11 +56,18 @@ from .recording import Recording
 
 __all__ = ['Solid', 'Arrow', 'FRAMES', 'FPS', 'SIZE', 'DPI', 'STILL_SIZE', 'STILL_DPI',
            'frame_indices', 'recorded_scene',
-           'marker_scene', 'write_animation', 'write_still', 'stderr_bar']
+           'marker_scene', 'write_animation', 'write_still', 'stderr_bar', 'MAX_FRAMES',
+           'MIN_FPS', 'MAX_FPS', 'check_frames_fps', 'check_time']
 
 #: Default number of frames and frames per second (10 s).
 FRAMES = 120
 FPS = 12
+#: Most frames of an animation (a frame takes ~0.1 s to draw: ~20 min at the bound; the file
+#: is written frame by frame, so memory does not grow with it).
+MAX_FRAMES = 10_000
+#: Frames per second allowed: a GIF holds a frame's delay in hundredths of a second up to
+#: 655.35 s; 0.1 fps (10 s a frame) to 100 fps (the GIF's shortest delay, 0.01 s).
+MIN_FPS, MAX_FPS = 0.1, 100.0
 #: Figure size [inch] and resolution [dpi] of the animation: 720 x 324 pixels; of the still:
 #: 600 x 550 pixels.
 SIZE = (10.0, 4.5)
@@ -312,10 +324,69 @@ def stderr_bar(name: str, stream=None) -> Callable[[int, int], None]:
     return report
 
 
+def check_frames_fps(frames: int, fps: float) -> None:
+    """Refuse a frame count outside [1, MAX_FRAMES] or a rate outside [MIN_FPS, MAX_FPS]."""
+    if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) \
+            or not 1 <= frames <= MAX_FRAMES:
+        raise AnalysisError(f'--frames must be an integer in [1, {MAX_FRAMES:,}] (MAX_FRAMES), '
+                            f'got {frames!r}')
+    if not (isinstance(fps, (int, float, np.floating)) and MIN_FPS <= fps <= MAX_FPS):
+        raise AnalysisError(f'--fps must be in [{MIN_FPS:g}, {MAX_FPS:g}], got {fps!r}')
+
+
+def check_time(at: float | None, t: np.ndarray, what: str = 'the attitude samples') -> None:
+    """Refuse a time ``at`` [yr] that is not finite or outside [t[0], t[-1]] (None passes)."""
+    if at is None:
+        return
+    if not np.isfinite(at):
+        raise AnalysisError(f'--at must be a finite time [yr], got {at!r}')
+    if not t[0] <= at <= t[-1]:
+        raise AnalysisError(f'--at {at:g} yr: outside {what}, [{t[0]:g}, {t[-1]:g}] yr')
+
+
+class _GifStream:
+    """
+    A GIF written frame by frame: each frame is quantised and appended at once.
+
+    matplotlib's PillowWriter keeps every frame (0.92 MB each at 720 x 324) until the end;
+    this writer holds one, whatever the number of frames. Each frame has its own palette (a
+    local colour table of up to 256 colours) and a delay of 1/fps s, and the file loops.
+    """
+
+    def __init__(self, fps: float) -> None:
+        self.delay = max(1, min(65535, round(100.0 / fps)))   # hundredths of a second
+        self.fig = None
+        self.stream = None
+
+    @contextmanager
+    def saving(self, fig, outfile: str, dpi: float):
+        """Open ``outfile``, yield, then end the GIF (matplotlib's MovieWriter interface)."""
+        self.fig, self.dpi = fig, dpi
+        with open(outfile, 'wb') as self.stream:
+            width, height = (int(round(v)) for v in fig.get_size_inches() * dpi)
+            self.size = (width, height)
+            self.stream.write(b'GIF89a' + struct.pack('<HHBBB', width, height, 0, 0, 0)
+                              + b'!\xff\x0bNETSCAPE2.0\x03\x01' + struct.pack('<H', 0) + b'\x00')
+            yield self
+            self.stream.write(b';')
+
+    def grab_frame(self) -> None:
+        """Draw the figure and append it as the next frame."""
+        from PIL import GifImagePlugin, Image
+
+        buffer = io.BytesIO()
+        self.fig.savefig(buffer, format='rgba', dpi=self.dpi)
+        frame = Image.frombuffer('RGBA', self.size, buffer.getbuffer(), 'raw', 'RGBA', 0, 1)
+        frame = frame.convert('RGB').quantize(256)
+        for part in GifImagePlugin.getdata(frame, include_color_table=True,
+                                           duration=self.delay * 10):
+            self.stream.write(part)
+
+
 def _writer(path: Path, fps: float):
     suffix = path.suffix.lower()
     if suffix == '.gif':
-        return animation.PillowWriter(fps=fps)
+        return _GifStream(fps)
     if suffix == '.mp4':
         if not animation.writers.is_available('ffmpeg'):
             raise AnalysisError(f'{path}: MP4 needs ffmpeg, which is not installed here; '
@@ -336,12 +407,12 @@ def write_animation(rec: Recording, path, *, frames: int = FRAMES, fps: float = 
     sample nearest ``at`` [yr] (default: the middle of the run). AnalysisError for a
     recording without attitude samples, a refused path or format, bad options.
     """
-    if frames < 1 or not fps > 0:
-        raise AnalysisError(f'--frames must be >= 1 and --fps > 0, got {frames} and {fps}')
+    check_frames_fps(frames, fps)
     path = _target(path, overwrite)
     single = path.suffix.lower() == '.png'
     writer = None if single else _writer(path, fps)
     t, quaternion, omega = _attitude_samples(rec)
+    check_time(at, t)
     if single:
         target = (t[0] + t[-1]) / 2 if at is None else at
         chosen = np.array([int(np.argmin(np.abs(t - target)))])
@@ -399,6 +470,7 @@ def write_still(rec: Recording, path, *, at: float | None = None,
     Returns (path, the scene's time [yr]). AnalysisError when the recording has no scene.
     """
     path = _target(path, overwrite)
+    check_time(at, rec.t if rec.n else np.zeros(1), 'the run')
     topic = rec.topic(MARKERS)
     if topic not in rec.topics or rec.topics[topic][1] == 0:
         raise AnalysisError(f'{rec.path}: no {topic} scenes (recorded before the 3D scene '

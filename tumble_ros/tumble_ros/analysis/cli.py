@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 
 from tumble_ros.errors import AnalysisError
@@ -117,14 +118,20 @@ def _check_options(args) -> str | None:
         return f'--peaks must be >= 1, got {args.peaks}'
     if args.overwrite and args.figures is None and args.animate is None and args.still is None:
         return '--overwrite needs --figures DIR, --animate FILE or --still FILE'
-    if args.frames is not None and args.frames < 1:
-        return f'--frames must be >= 1, got {args.frames}'
-    if args.fps is not None and not 0 < args.fps <= 100:
-        return f'--fps must be in (0, 100], got {args.fps:g}'
     if (args.frames is not None or args.fps is not None) and args.animate is None:
         return '--frames and --fps need --animate FILE'
     if args.at is not None and args.still is None and not str(args.animate).endswith('.png'):
         return '--at needs --still FILE.png or --animate FILE.png'
+    if args.at is not None and not math.isfinite(args.at):
+        return f'--at must be a finite time [yr], got {args.at}'
+    if args.animate is not None:
+        from . import animation   # matplotlib only when asked for
+        try:
+            animation.check_frames_fps(
+                animation.FRAMES if args.frames is None else args.frames,
+                animation.FPS if args.fps is None else args.fps)
+        except AnalysisError as err:
+            return str(err)
     if args.namespace is not None:
         try:
             args.namespace = normalize_namespace(args.namespace)

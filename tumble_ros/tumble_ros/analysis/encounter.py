@@ -23,18 +23,61 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+import os
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
-from tumble_ros.core import IntegratorSettings, Scenario, simulate, simulate_ensemble
+from tumble_ros.core import (IntegratorSettings, Scenario, ScenarioError, simulate,
+                             simulate_ensemble)
 from tumble_ros.core.rotation import euler_to_quaternion, matrix_to_euler, quaternion_to_matrix
 from tumble_ros.core.spinstate import omega_for_periods, spin_state
 from tumble_ros.core.units import HOURS_PER_YEAR
 
 __all__ = ['EncounterResult', 'encounter_ensemble', 'tumbler_states', 'format_encounter',
-           'encounter_figure']
+           'encounter_figure', 'draw_encounter', 'encounter_memory', 'MAX_INERTIA_SPREAD',
+           'BYTES_PER_BODY']
+
+#: Memory one body of an encounter ensemble holds while it runs and is reported [bytes]: its
+#: inputs, its two samples, its spin states before and after and the saved arrays (measured
+#: 3.2 kB: peak RSS 234 MB with 2,000 bodies, 290 MB with 20,000; rounded up: README "Limits").
+BYTES_PER_BODY = 4_000
+#: Largest half-width of the spread of I_a/I_c and I_b/I_c (both ratios lie in (0, 1]).
+MAX_INERTIA_SPREAD = 0.5
+
+
+def _available_memory() -> int:
+    """Return the memory this machine can give a process now [bytes] (MemAvailable)."""
+    try:
+        with open('/proc/meminfo', encoding='ascii') as meminfo:
+            for line in meminfo:
+                if line.startswith('MemAvailable:'):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return os.sysconf('SC_PAGE_SIZE') * os.sysconf('SC_PHYS_PAGES')
+
+
+def encounter_memory(n_bodies: int) -> int:
+    """Return the memory an encounter ensemble of ``n_bodies`` needs [bytes] (an estimate)."""
+    return int(n_bodies) * BYTES_PER_BODY
+
+
+def _check_size(n_bodies: int, n_inertia: int, inertia_spread) -> None:
+    """Refuse, before any work, an ensemble that cannot fit in memory or bad spreads."""
+    if n_bodies < 1 or n_inertia < 1 or n_inertia > n_bodies:
+        raise ScenarioError(f'encounter_ensemble: needs 1 <= n_inertia <= n_bodies, got '
+                            f'{n_inertia}, {n_bodies}')
+    for name, value in zip(('I_a/I_c', 'I_b/I_c'), inertia_spread):
+        if not (math.isfinite(value) and 0.0 <= value <= MAX_INERTIA_SPREAD):
+            raise ScenarioError(f'inertia spread of {name}: must be a finite number in '
+                                f'[0, {MAX_INERTIA_SPREAD:g}], got {value!r}')
+    need, have = encounter_memory(n_bodies), _available_memory()
+    if need > have:
+        raise ScenarioError(f'bodies: {n_bodies:,} bodies would need about {need / 1e9:,.1f} GB '
+                            f'of memory ({BYTES_PER_BODY:,} bytes a body), {have / 1e9:.3g} GB '
+                            'are available here; use fewer bodies')
 
 
 @dataclass(frozen=True)
@@ -177,14 +220,15 @@ def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
     the smallest and middle moments are drawn uniformly within +- dA and +- dB of the nominal
     ones, keeping the draws that can have the observed periods (:func:`_draw_inertia`);
     ``n_inertia`` draws, the first the nominal moments, the bodies split evenly between them.
-    The phase and the turn about L are uniform. Reproducible from ``seed``.
+    The phase and the turn about L are uniform. Reproducible from ``seed``. Refused before any
+    work (ScenarioError, one line): a spread that is not finite or above
+    :data:`MAX_INERTIA_SPREAD`, more bodies than the memory available holds
+    (:func:`encounter_memory`).
     ``progress(done, total)`` after each inertia draw. ``client``: a Dask client
     (``tumble_ros.ensembles.dask_client``): each draw's bodies run as chunks on its workers,
     with the same results bit for bit.
     """
-    if n_bodies < 1 or n_inertia < 1 or n_inertia > n_bodies:
-        raise ValueError(f'encounter_ensemble: needs 1 <= n_inertia <= n_bodies, got '
-                         f'{n_inertia}, {n_bodies}')
+    _check_size(n_bodies, n_inertia, inertia_spread)
     nominal = np.asarray(scenario.inertia, dtype=float)
     q0 = euler_to_quaternion(*scenario.euler0)
     observed = spin_state(scenario.omega0, nominal, q0)
@@ -283,6 +327,16 @@ def _ecliptic(pole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def encounter_figure(result: EncounterResult, path: str | Path, title: str = '') -> Path:
     """Draw the distributions after the encounter (periods, spin rate, pole) to ``path`` (PNG)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(draw_encounter(result, title))
+    return path
+
+
+def draw_encounter(result: EncounterResult, title: str = '') -> bytes:
+    """Return the PNG of :func:`encounter_figure` (the distributions after the encounter)."""
+    import io
+
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -332,7 +386,6 @@ def encounter_figure(result: EncounterResult, path: str | Path, title: str = '')
     ax.legend(loc='lower left', fontsize=8)
     fig.suptitle(title or f'{result.success.size} tumblers through the encounter')
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    return path
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format='png', dpi=110)
+    return buffer.getvalue()

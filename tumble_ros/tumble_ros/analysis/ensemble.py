@@ -148,7 +148,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.figures:
             print(f'wrote {plot_ensemble(ds, args.figures, args.time, args.spin_states)}')
     except (TumbleRosError, OSError, ValueError) as err:
-        print(f'ERROR: {err}', file=sys.stderr)
+        print(f"ERROR: {' '.join(str(err).split())}", file=sys.stderr)
+        return 1
+    except RuntimeError as err:       # numcodecs: a chunk that does not decompress
+        print(f'ERROR: {args.store}: damaged ensemble store: cannot read its data '
+              f"({' '.join(str(err).split())})", file=sys.stderr)
         return 1
     return 0
 

@@ -61,7 +61,7 @@ from .timeaxis import display_unit, runs
 
 __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
            'plot_impacts', 'plot_omega_windows', 'plot_spectrum', 'plot_wy_vs_wx',
-           'write_figures', 'numeric_limits']
+           'write_figures', 'numeric_limits', 'check_outputs', 'write_files']
 
 DPI = 110
 #: Above this many samples the wy-vs-wx path is drawn as a density image (_draw_path_density).
@@ -223,6 +223,46 @@ def _write(drawings: list[Drawing], out_dir, overwrite: bool) -> list[Path]:
         return [_write_one(out_dir, dir_fd, name, data, overwrite) for name, data in drawings]
     finally:
         os.close(dir_fd)
+
+
+def check_outputs(out_dir, names: list[str], overwrite: bool) -> None:
+    """
+    Refuse before any work what :func:`write_files` would refuse at the end (FigurePathError).
+
+    ``out_dir`` a symbolic link or not a directory, a name that is a link or not a regular
+    file, an existing name without ``overwrite`` (FigureExistsError), or a directory that
+    cannot be written or created.
+    """
+    out_dir = Path(out_dir)
+    if out_dir.is_symlink():
+        raise _link_refused(out_dir)
+    if out_dir.exists():
+        if not out_dir.is_dir():
+            raise FigurePathError(f'{out_dir}: exists and is not a directory')
+        dir_fd = os.open(out_dir, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        try:
+            _check_names(out_dir, dir_fd, names, overwrite)
+        finally:
+            os.close(dir_fd)
+        if not os.access(out_dir, os.W_OK | os.X_OK):
+            raise FigurePathError(f'{out_dir}: cannot write into it (permission denied)')
+        return
+    parent = out_dir.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise FigurePathError(f'{out_dir}: cannot be created ({parent} is not a writable '
+                              'directory)')
+
+
+def write_files(files: list[Drawing], out_dir, overwrite: bool) -> list[Path]:
+    """
+    Write ``files`` ((name, bytes) pairs) into ``out_dir``, created if needed.
+
+    Never through a symbolic link, never over an existing file unless ``overwrite`` (then
+    each is replaced atomically); nothing is written if any path is refused.
+    """
+    return _write(files, out_dir, overwrite)
 
 
 def _label(rec: Recording) -> str:

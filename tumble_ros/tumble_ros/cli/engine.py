@@ -1,19 +1,28 @@
 """
 Where an ensemble command runs its bodies: threads here, a local Dask cluster, or a cluster.
 
-One set of options for every ensemble command (``--workers N``, ``--scheduler ADDRESS``,
-``--scheduler-timeout S``) and the client they ask for
-(:func:`tumble_ros.ensembles.dask_client`).
+One set of options for every ensemble command (``--workers N``, ``--dashboard``,
+``--scheduler ADDRESS``, ``--scheduler-timeout S``) and the client they ask for
+(:func:`tumble_ros.ensembles.dask_client`). An embedded cluster listens on 127.0.0.1 only;
+its dashboard is off unless ``--dashboard`` asks for it (then on 127.0.0.1 too, its address
+on stderr).
 """
 from __future__ import annotations
 
 import argparse
-from contextlib import nullcontext
+from contextlib import contextmanager, nullcontext
+import math
+import signal
+import sys
+from typing import Iterator
 
 from tumble_ros.core import ScenarioError
 from tumble_ros.ensembles import dask_client
 
-__all__ = ['add_engine_arguments', 'engine']
+__all__ = ['add_engine_arguments', 'engine', 'Interrupted', 'interrupts', 'MAX_SCHEDULER_TIMEOUT']
+
+#: Longest --scheduler-timeout [s]: an hour.
+MAX_SCHEDULER_TIMEOUT = 3600.0
 
 
 def add_engine_arguments(parser: argparse.ArgumentParser) -> None:
@@ -28,18 +37,92 @@ def add_engine_arguments(parser: argparse.ArgumentParser) -> None:
                             '`dask worker`)')
     parser.add_argument('--scheduler-timeout', type=float, default=30.0,
                         help='seconds to wait for --scheduler (default 30)')
+    parser.add_argument('--dashboard', action='store_true',
+                        help="with --workers: serve Dask's dashboard (needs bokeh) on "
+                             '127.0.0.1, its address printed on stderr (default: off)')
 
 
 def engine(args: argparse.Namespace):
     """
     Return a context manager yielding the Dask client the options ask for, or None.
 
-    None: the bodies run on threads in this process. Raises ScenarioError for --workers < 1.
+    None: the bodies run on threads in this process. Raises ScenarioError for --workers < 1,
+    a --scheduler-timeout that is not a finite number > 0, or --dashboard without --workers.
     """
+    dashboard = getattr(args, 'dashboard', False)
+    if dashboard and args.workers is None:
+        raise ScenarioError('--dashboard: needs --workers N (the dashboard of a running '
+                            "cluster is its scheduler's)")
     if args.workers is not None:
         if args.workers < 1:
             raise ScenarioError(f'--workers: must be >= 1, got {args.workers}')
-        return dask_client(workers=args.workers)
+        return _announced(dask_client(workers=args.workers, dashboard=dashboard), dashboard)
     if args.scheduler:
-        return dask_client(scheduler=args.scheduler, timeout=args.scheduler_timeout)
+        timeout = args.scheduler_timeout
+        if not (math.isfinite(timeout) and 0 < timeout <= MAX_SCHEDULER_TIMEOUT):
+            raise ScenarioError(f'--scheduler-timeout: must be in (0, {MAX_SCHEDULER_TIMEOUT:g}] '
+                                f's, got {timeout:g}')
+        return dask_client(scheduler=args.scheduler, timeout=timeout)
     return nullcontext()
+
+
+@contextmanager
+def _announced(clients, dashboard: bool):
+    """Enter ``clients``; with ``dashboard``, print where the dashboard is (stderr)."""
+    with clients as client:
+        if dashboard:
+            print(f'dask dashboard: {client.dashboard_link}', file=sys.stderr, flush=True)
+        yield client
+
+
+class Interrupted(BaseException):
+    """
+    A stop asked by a signal (SIGINT, SIGTERM, SIGHUP), raised where the program is.
+
+    A BaseException, as KeyboardInterrupt is: no ``except Exception`` (Dask's included) on the
+    way up swallows it. ``exit_code`` is 128 + the signal's number (130, 143, 129).
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
+        self.name = signal.Signals(self.signum).name
+        self.exit_code = 128 + self.signum
+
+
+#: The signals that stop an ensemble command, alike.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+@contextmanager
+def interrupts() -> Iterator[None]:
+    """
+    Turn SIGINT, SIGTERM and SIGHUP into :class:`Interrupted` while the block runs.
+
+    The first signal raises; any later one is ignored while the program cleans up (a local
+    cluster stopping, a store's lock released). A KeyboardInterrupt raised by someone else's
+    handler becomes Interrupted(SIGINT) too. The previous handlers are restored on exit.
+    """
+    previous = {sig: signal.getsignal(sig) for sig in STOP_SIGNALS}
+
+    def stop(signum, frame) -> None:
+        for sig in STOP_SIGNALS:
+            signal.signal(sig, signal.SIG_IGN)
+        raise Interrupted(signum)
+
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, stop)
+    try:
+        yield
+    except KeyboardInterrupt:
+        for sig in STOP_SIGNALS:
+            signal.signal(sig, signal.SIG_IGN)
+        raise Interrupted(signal.SIGINT) from None
+    except Interrupted:
+        raise
+    except BaseException:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        raise
+    for sig, handler in previous.items():
+        signal.signal(sig, handler)

@@ -19,16 +19,18 @@ chunking).
 from __future__ import annotations
 
 import argparse
+import os
+from pathlib import Path
 import sys
 from typing import Sequence
 
 import numpy as np
 
-from tumble_ros.cli.engine import add_engine_arguments, engine
+from tumble_ros.cli.engine import add_engine_arguments, engine, Interrupted, interrupts
 from tumble_ros.cli.progress import ProgressBar
 from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
                              Scenario, ScenarioError, simulate_ensemble)
-from tumble_ros.ensembles import open_ensemble, run_ensemble_to_store
+from tumble_ros.ensembles import EnsembleStoreError, open_ensemble, run_ensemble_to_store
 from tumble_ros.errors import TumbleRosError
 from tumble_ros.topics import SIM_NODE_PARAMETERS
 
@@ -96,15 +98,40 @@ def _to_store(args, sc, inputs, client) -> int:
     print('\n'.join(summary.lines()))
     if summary.succeeded:
         ds = open_ensemble(args.out)
-        good = (ds.status == 1).values
-        w_end = ds.omega.isel(time=-1).values[good]
-        jac = ds.jacobi.isel(time=[0, -1]).values[good]
+        try:
+            good = (ds.status == 1).values
+            w_end = ds.omega.isel(time=-1).values[good]
+            jac = ds.jacobi.isel(time=[0, -1]).values[good]
+        except RuntimeError as err:       # numcodecs: a chunk that does not decompress
+            raise EnsembleStoreError(f'{args.out}: damaged ensemble store: cannot read its '
+                                     f"data ({' '.join(str(err).split())})") from None
         print('\n'.join(_final_spin_lines(w_end, jac[:, 0], jac[:, 1])))
     return 0 if summary.succeeded == summary.n_bodies else 1
 
 
+def _save_npz(path: Path, **arrays) -> None:
+    """Write ``arrays`` to ``path`` (.npz) whole or not at all: a temporary file, then a rename."""
+    temporary = path.with_name(f'.{path.name}.{os.getpid()}.tmp')
+    try:
+        with open(temporary, 'xb') as stream:
+            np.savez_compressed(stream, **arrays)
+        os.replace(temporary, path)
+    finally:
+        if temporary.exists():
+            temporary.unlink()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """
+    Run the command on ``argv``; return the exit status.
+
+    0 every body succeeded, 1 some failed, 2 refused input (one ``error:`` line: a params
+    file, an option, a store that is foreign, damaged, of another format version or being
+    written by another run, a scheduler that does not answer), 130 / 143 / 129 stopped by
+    SIGINT / SIGTERM / SIGHUP (a store keeps its complete chunks; nothing else is written).
+    """
     args = _parser().parse_args(argv)
+    to_store = False
     try:
         sc = (load_scenario(args.config, ignore=frozenset(SIM_NODE_PARAMETERS)) if args.config
               else Scenario())
@@ -132,7 +159,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             omega0 = GaussianSpread(sc.omega0, args.omega_spread, seed=args.seed)
         inputs = {'impacts': impacts, 'omega0': omega0}
         to_store = bool(args.out) and args.out.rstrip('/').endswith('.zarr')
-        with engine(args) as client:
+        with interrupts(), engine(args) as client:
             if to_store:
                 return _to_store(args, sc, inputs, client)
             result = simulate_ensemble(
@@ -144,6 +171,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (TumbleRosError, ValueError) as err:
         print(f'error: {err}', file=sys.stderr)
         return 2
+    except Interrupted as stop:
+        kept = (f'; the chunks written to {args.out} are kept: run the same command to resume'
+                if to_store else '; nothing written')
+        print(f'\nensemble: stopped by {stop.name}{kept}', file=sys.stderr)
+        return stop.exit_code
     n_impacts = (len(sc.impacts) * args.bodies if impacts is None else
                  f'random, {args.impact_rate:g}/yr per body, seed {args.seed}')
     ok = int(result.success.sum())
@@ -162,10 +194,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         if msg:
             print(f'body {b} failed: {msg}')
     if args.out:
-        np.savez_compressed(args.out, t=result.t, omega=result.omega, euler=result.euler,
-                            quaternion=result.quaternion, jacobi=result.jacobi,
-                            success=result.success,
-                            n_steps=result.n_steps)
+        try:
+            _save_npz(Path(args.out), t=result.t, omega=result.omega, euler=result.euler,
+                      quaternion=result.quaternion, jacobi=result.jacobi,
+                      success=result.success, n_steps=result.n_steps)
+        except OSError as err:
+            print(f'error: cannot write {args.out}: {err.strerror or err}', file=sys.stderr)
+            return 2
         print(f'wrote {args.out}')
     return 0 if ok == result.n_bodies else 1
 

@@ -27,6 +27,7 @@ from .ensemble import (body_rng, ChunkResult, concatenate_results, ensemble_scen
                        EnsembleResult, GaussianSpread, iter_chunks, random_impacts,
                        RandomImpacts, simulate_ensemble)
 from .integrators import INTEGRATORS, METHODS, SegmentProblem, SPLITTING_METHODS
+from .params_file import check_params_file
 from .propagator import IntegrationError, Propagator, Sample
 from .scenario import (
     dump_scenario,
@@ -87,6 +88,7 @@ __all__ = [
     'kinetic_energy',
     'dump_scenario',
     'load_scenario',
+    'check_params_file',
     'parse_scenario',
     'simulate',
 ]

@@ -29,6 +29,8 @@ Results bigger than memory go to a labelled store chunk by chunk instead of bein
 from __future__ import annotations
 
 from contextlib import contextmanager
+import logging
+from pathlib import Path
 from typing import Callable, Iterator, Sequence
 import uuid
 
@@ -95,18 +97,26 @@ def map_as_completed(client, fn: Callable, calls: Sequence[tuple], *,
             client.cancel(pending)
 
 
+#: Where every listener of an embedded cluster binds: the loopback interface only (the
+#: scheduler, the nannies, the workers and their HTTP servers), never all interfaces.
+LOOPBACK = '127.0.0.1'
+
+
 @contextmanager
 def dask_client(workers: int | None = None, scheduler: str | None = None, *,
-                timeout: float = 30.0):
+                timeout: float = 30.0, dashboard: bool = False):
     """
     Yield a Dask ``distributed.Client``; close it (and its local cluster) on exit.
 
-    ``workers=N``: an embedded ``LocalCluster`` of N worker processes with one thread each
-    (its HTTP server, and the dashboard if bokeh is installed, on a free port: two runs at
-    once do not collide). ``scheduler='tcp://host:8786'``: the cluster of that scheduler,
-    started with ``dask scheduler`` and ``dask worker`` (its workers must run in this
-    workspace's environment: ``scripts/env.sh dask worker ADDRESS``). Raises
-    :class:`EnsembleRunError` when the scheduler cannot be reached within ``timeout`` seconds.
+    ``workers=N``: an embedded ``LocalCluster`` of N worker processes with one thread each,
+    every one of its listeners (scheduler, nannies, workers, the scheduler's HTTP server) on
+    :data:`LOOPBACK` and a free port (two runs at once do not collide; nothing is reachable
+    from the network). ``dashboard``: also serve Dask's dashboard (it needs bokeh) on that
+    HTTP server, still on 127.0.0.1; off by default. ``scheduler='tcp://host:8786'``: the
+    cluster of that scheduler, started with ``dask scheduler`` and ``dask worker`` (its workers
+    must run in this workspace's environment: ``scripts/env.sh dask worker ADDRESS``). Raises
+    :class:`EnsembleRunError` when the scheduler cannot be reached within ``timeout`` seconds,
+    or a local cluster does not start (a worker that dies while it starts).
     """
     if (workers is None) == (scheduler is None):
         raise ScenarioError('dask_client: give workers (a local cluster) or scheduler '
@@ -126,10 +136,49 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, *,
         return
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise ScenarioError(f'workers: must be an integer >= 1, got {workers!r}')
-    cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                           dashboard_address=':0')
-    try:
-        with Client(cluster) as client:
-            yield client
-    finally:
-        cluster.close()
+    with _workers_ignore_sigint():
+        try:
+            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1,
+                                   processes=True, host=LOOPBACK,
+                                   dashboard_address=f'{LOOPBACK}:0',
+                                   worker_dashboard_address=None,
+                                   silence_logs=logging.CRITICAL,
+                                   scheduler_kwargs={'dashboard': bool(dashboard)})
+        except (RuntimeError, OSError, TimeoutError, ValueError) as err:
+            raise EnsembleRunError(f'cannot start a local Dask cluster of {workers} workers: '
+                                   f'{type(err).__name__}: {err}') from None
+        try:
+            with Client(cluster) as client:
+                yield client
+        finally:
+            cluster.close()
+
+
+@contextmanager
+def _workers_ignore_sigint() -> Iterator[None]:
+    """
+    Start the processes multiprocessing spawns meanwhile with SIGINT ignored.
+
+    A Ctrl-C at a terminal goes to the whole process group: the worker processes of a local
+    cluster died of it, each with its KeyboardInterrupt traceback (or 'Nanny failed to start'
+    when they were starting). Spawned through a shell that ignores SIGINT (an ignored signal
+    stays ignored across exec, and Python then installs no handler for it), they leave the
+    interrupt to this process, which stops the cluster in order (the nannies end their
+    workers with SIGTERM). Restarts of killed workers during the run are covered too.
+    """
+    import multiprocessing.spawn as mp_spawn
+    import shlex
+    import sys
+    import tempfile
+
+    previous = mp_spawn.get_executable()
+    with tempfile.TemporaryDirectory(prefix='tumble-dask-') as folder:
+        wrapper = Path(folder) / 'python'
+        wrapper.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(sys.executable)} "
+                           '"$@"\n')
+        wrapper.chmod(0o700)
+        mp_spawn.set_executable(str(wrapper))
+        try:
+            yield
+        finally:
+            mp_spawn.set_executable(previous)

@@ -12,7 +12,7 @@ from .kernels.checks import MIN_STEP_ULPS
 
 __all__ = ['ScenarioError', 'MIN_RTOL', 'MAX_RTOL', 'MIN_ORBIT_RATE', 'MAX_ORBIT_RATE',
            'MAX_OMEGA', 'MAX_ATOL', 'MAX_DURATION', 'MAX_STEPS', 'MAX_SAMPLES', 'MAX_ROTATION',
-           'RESOLUTION_ULPS']
+           'RESOLUTION_ULPS', 'MAX_PARAMS_FILE_BYTES', 'MAX_IMPACTS']
 
 
 class ScenarioError(CoreError, ValueError):
@@ -56,3 +56,10 @@ MAX_ROTATION = 1e10
 #: of the time it ends at: shorter ones are what the integrators' step-collapse test refuses
 #: (kernels.checks), and t + dt rounds to t for dt < 1/2 ulp.
 RESOLUTION_ULPS = int(MIN_STEP_ULPS)
+#: Largest params file [bytes] (a scenario file, a ``--params-file``): the paper's scenarios are
+#: under 2 kB and 10,000 scheduled impacts under 1 MB; YAML holds ~20x a file's size while it
+#: parses (a 60-MB ``omega0`` list took 1.2 GB), so a bigger file is refused before it is read.
+MAX_PARAMS_FILE_BYTES = 4 * 1024 * 1024
+#: Most scheduled impacts in a scenario (``impacts.start``): each is a segment of the run, and
+#: 10**6 of them took 3.9 GB before the first step; the paper uses a handful.
+MAX_IMPACTS = 10_000

@@ -31,6 +31,7 @@ from .jit import python_source
 from .limits import (
     MAX_ATOL,
     MAX_DURATION,
+    MAX_IMPACTS,
     MAX_OMEGA,
     MAX_ORBIT_RATE,
     MAX_ROTATION,
@@ -42,6 +43,7 @@ from .limits import (
     RESOLUTION_ULPS,
     ScenarioError,
 )
+from .params_file import check_params_file, parse_params_text
 from .timebase import SampleGrid, TimeBase
 from .torques import orbital_to_body, TorqueComponent
 from .torques.orbits import KeplerOrbit, perturber_position
@@ -68,8 +70,21 @@ IMPACT_FRAMES = ('body', 'orbital')
 ENCOUNTER_TORQUE_FRACTION = 1e-4
 
 
+#: Longest value quoted whole in an error message [characters]; a longer one is summarised.
+_MAX_QUOTED = 120
+
+
+def _quoted(value: Any) -> str:
+    """Return ``repr(value)``, or for a long one its start and its length (one short line)."""
+    if isinstance(value, (list, tuple)) and len(value) > 16:
+        head = ', '.join(repr(v) for v in value[:3])
+        return f'{type(value).__name__} of {len(value):,} entries [{head}, ...]'
+    text = repr(value)
+    return text if len(text) <= _MAX_QUOTED else text[:_MAX_QUOTED - 3] + '...'
+
+
 def _fail(name: str, why: str, value: Any) -> None:
-    raise ScenarioError(f'{name}: {why}, got {value!r}')
+    raise ScenarioError(f'{name}: {why}, got {_quoted(value)}')
 
 
 def _finite(name: str, value: Any) -> float:
@@ -420,6 +435,9 @@ class Scenario:
         else:
             _check_step('integrator.step', self.integrator.step, duration)
         impacts = tuple(self.impacts)
+        if len(impacts) > MAX_IMPACTS:
+            _fail('impacts', f'at most {MAX_IMPACTS:,} scheduled impacts per run (MAX_IMPACTS, '
+                  'README "Limits")', impacts)
         for k, impact in enumerate(impacts):
             if not isinstance(impact, Impact):
                 _fail(f'impacts[{k}]', 'must be an Impact', impact)
@@ -675,6 +693,9 @@ def _impacts_from_parameters(params: Mapping[str, Any]) -> tuple[Impact, ...]:
     torque = list(params.get('impacts.torque', []) or [])
     frame = list(params.get('impacts.frame', []) or [])
     n = len(start)
+    if n > MAX_IMPACTS:
+        _fail('impacts.start', f'at most {MAX_IMPACTS:,} scheduled impacts per run (MAX_IMPACTS, '
+              'README "Limits")', start)
     if len(duration) != n:
         _fail('impacts.duration', f'must have one entry per impacts.start ({n})', duration)
     if len(torque) != 3 * n:
@@ -715,51 +736,24 @@ def load_scenario(path: str | Path, node: str = 'sim',
     with dots as ROS does (``integrator: {rtol: 1e-10}`` is ``integrator.rtol``). Keys in
     ``ignore`` (a node's own, non-scenario parameters) are skipped.
 
-    Raises ScenarioError for an unreadable file, a missing section or invalid values.
+    Raises ScenarioError for a file :func:`~.params_file.check_params_file` refuses (missing,
+    not a regular file, too big, not UTF-8 YAML, no ``ros__parameters``), a missing section or
+    invalid values.
     """
-    path = Path(path)
+    document = check_params_file(path)
     try:
-        text = path.read_text()
-    except OSError as err:
-        raise ScenarioError(f'{path}: cannot read scenario file: {err}') from None
-    try:
-        return parse_scenario(text, node, ignore)
+        return _scenario_from_document(document, node, ignore)
     except ScenarioError as err:
         raise ScenarioError(f'{path}: {err}') from None
 
 
-def _params_loader():
-    """
-    Return a YAML SafeLoader that reads numbers as ROS 2 does.
-
-    PyYAML follows YAML 1.1, where ``1.3271244e11`` (no sign in the exponent) or ``4e5`` is a
-    string; ROS 2's own params-file parser (rcl_yaml_param_parser) reads them as doubles, and so
-    does YAML 1.2. The scenario must mean the same in ``ros2 run --params-file`` and here.
-    """
-    import re
-
-    import yaml
-
-    class ParamsLoader(yaml.SafeLoader):
-        pass
-
-    ParamsLoader.add_implicit_resolver(
-        'tag:yaml.org,2002:float',
-        re.compile(r'^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$'),
-        list('-+0123456789.'))
-    return ParamsLoader
-
-
 def parse_scenario(text: str, node: str = 'sim', ignore: frozenset[str] = frozenset()) -> Scenario:
     """:func:`load_scenario` on the text of a parameters file."""
-    import yaml
+    return _scenario_from_document(parse_params_text(text), node, ignore)
 
-    try:
-        document = yaml.load(text, Loader=_params_loader())   # noqa: S506 (a SafeLoader)
-    except yaml.YAMLError as err:
-        raise ScenarioError(f'cannot read scenario file: {err}') from None
-    if not isinstance(document, Mapping) or not document:
-        raise ScenarioError('expected a ROS 2 parameters file ({node: {ros__parameters: ...}})')
+
+def _scenario_from_document(document: Mapping, node: str, ignore: frozenset[str]) -> Scenario:
+    """Return the scenario of the ``node`` section of a params file's checked document."""
     for key in (f'/**/{node}', node, f'/{node}', '/**'):
         if key in document:
             section = document[key]

@@ -24,7 +24,7 @@ from tumble_ros.core import dump_scenario, Scenario
 from tumble_ros.core.ensemble import default_chunk_size, iter_chunks, prepare_inputs
 from tumble_ros.core.simulate import _check_times
 from tumble_ros.io.ensemble_store import (EnsembleStore, SCENARIO_ATTR, STATUS_FAILED,
-                                          STATUS_PENDING, STATUS_SUCCEEDED)
+                                          STATUS_PENDING, STATUS_SUCCEEDED, store_lock)
 
 __all__ = ['EnsembleRunSummary', 'run_ensemble_to_store', 'run_fingerprint']
 
@@ -163,6 +163,15 @@ def run_ensemble_to_store(scenario: Scenario, store, *, n_bodies: int | None = N
     times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
     n, inputs = prepare_inputs(scenario, impacts, omega0, euler0, n_bodies)
     path = Path(store)
+    with store_lock(path):
+        return _run_locked(scenario, path, times, n, inputs, chunk_size, client, fast, threads,
+                           overwrite, progress, start)
+
+
+def _run_locked(scenario: Scenario, path: Path, times: np.ndarray, n: int, inputs: dict,
+                chunk_size: int | None, client, fast: bool | None, threads: int | None,
+                overwrite: bool, progress, start: float) -> EnsembleRunSummary:
+    """:func:`run_ensemble_to_store` once it holds the store's lock."""
     resuming = path.exists() and not overwrite
     if resuming:
         existing = EnsembleStore(path)

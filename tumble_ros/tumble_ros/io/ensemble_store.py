@@ -30,15 +30,24 @@ stores the arrays it is given (``tumble_ros.io`` does not import ``tumble_ros.co
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
+import errno
+import fcntl
+import json
+import os
 from pathlib import Path
 import shutil
+import socket
+import time
+from typing import Iterator
 
 import numpy as np
 
 from tumble_ros.errors import IoError
 
-__all__ = ['EnsembleStore', 'EnsembleStoreError', 'open_ensemble', 'STATUS_FAILED',
-           'STATUS_PENDING', 'STATUS_SUCCEEDED', 'REASON_WIDTH', 'SCENARIO_ATTR']
+__all__ = ['EnsembleStore', 'EnsembleStoreError', 'EnsembleStoreLocked', 'lock_path',
+           'open_ensemble', 'store_lock', 'STATUS_FAILED', 'STATUS_PENDING', 'STATUS_SUCCEEDED',
+           'REASON_WIDTH', 'SCENARIO_ATTR']
 
 FORMAT = 'tumble_ros ensemble'
 FORMAT_VERSION = 1
@@ -82,6 +91,91 @@ class EnsembleStoreError(IoError):
     """An ensemble store that cannot be created, opened or resumed."""
 
 
+class EnsembleStoreLocked(EnsembleStoreError):
+    """An ensemble store that another live run is writing (its lock file names it)."""
+
+
+def lock_path(path) -> Path:
+    """Return the lock file of the store at ``path``: ``X.zarr.lock`` beside ``X.zarr``."""
+    path = Path(path)
+    return path.with_name(path.name + '.lock')
+
+
+def _owner(lock: Path) -> str:
+    """Describe who holds ``lock`` from what it says (pid, host, start time)."""
+    try:
+        info = json.loads(lock.read_text())
+        return (f"pid {info['pid']} on {info['host']} since {info['since']}")
+    except (OSError, ValueError, KeyError, TypeError):
+        return 'another process'
+
+
+@contextmanager
+def store_lock(path) -> Iterator[Path]:
+    """
+    Hold the one-writer lock of the store at ``path`` while the block runs.
+
+    The lock is an exclusive ``flock`` on ``X.zarr.lock`` (beside the store), which holds the
+    owner's pid, host and start time. A second writer is refused at once with
+    :class:`EnsembleStoreLocked` naming the owner. The kernel releases a ``flock`` when its
+    process dies however it dies (SIGKILL included), so the lock file a dead run leaves behind
+    is stale by construction: the next run takes it over. The file is removed on release.
+    """
+    lock = lock_path(path)
+    while True:
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, 'O_CLOEXEC', 0), 0o644)
+        except OSError as err:
+            raise EnsembleStoreError(f'{path}: cannot create the lock file {lock}: '
+                                     f'{err.strerror or err}') from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as err:
+            os.close(fd)
+            if err.errno in (errno.EAGAIN, errno.EACCES):
+                raise EnsembleStoreLocked(
+                    f'{path}: being written by {_owner(lock)} (lock file {lock}); one writer '
+                    'per store: wait for it to end, or write to another path') from None
+            raise EnsembleStoreError(f'{path}: cannot lock {lock}: {err.strerror or err}') \
+                from None
+        try:                                  # the file locked must still be the one named
+            same = os.stat(lock).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)                          # removed by its last owner meanwhile: again
+    try:
+        info = {'pid': os.getpid(), 'host': socket.gethostname(),
+                'since': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}
+        os.ftruncate(fd, 0)
+        os.write(fd, (json.dumps(info) + '\n').encode())
+        yield lock
+    finally:
+        try:
+            os.unlink(lock)
+        except OSError:
+            pass
+        os.close(fd)
+
+
+def _check_layout(path: Path, attrs: dict, names) -> None:
+    """Refuse a store that is not a tumble_ros ensemble of this format, or lacks a variable."""
+    if attrs.get('format') != FORMAT:
+        raise EnsembleStoreError(f'{path}: not a tumble_ros ensemble store')
+    version = attrs.get('format_version')
+    if version != FORMAT_VERSION:
+        raise EnsembleStoreError(f'{path}: ensemble store format version {version!r}; this '
+                                 f'tumble_ros reads and resumes version {FORMAT_VERSION} only')
+    missing = [name for name in (*VARIABLES, 'chunk_done') if name not in names]
+    if missing:
+        raise EnsembleStoreError(f'{path}: damaged ensemble store: no variable '
+                                 f"{', '.join(missing)}")
+    for key in ('n_bodies', 'chunk_size', SCENARIO_ATTR):
+        if key not in attrs:
+            raise EnsembleStoreError(f'{path}: damaged ensemble store: no attribute {key!r}')
+
+
 def _fit_reasons(reasons) -> np.ndarray:
     out = []
     for text in reasons:
@@ -105,13 +199,22 @@ class EnsembleStore:
         try:
             self._group = zarr.open_group(str(self.path), mode='r+', zarr_format=2)
         except Exception as err:  # zarr raises several types for a missing or foreign store
-            raise EnsembleStoreError(f'{self.path}: not an ensemble store ({err})') from None
+            raise EnsembleStoreError(f'{self.path}: not an ensemble store '
+                                     f"({' '.join(str(err).split())})") from None
         self.attrs = dict(self._group.attrs)
-        if self.attrs.get('format') != FORMAT:
-            raise EnsembleStoreError(f'{self.path}: not a tumble_ros ensemble store')
-        self.n_bodies = int(self.attrs['n_bodies'])
-        self.chunk_size = int(self.attrs['chunk_size'])
-        self.n_chunks = -(-self.n_bodies // self.chunk_size)
+        _check_layout(self.path, self.attrs, set(self._group.array_keys()))
+        try:
+            self.n_bodies = int(self.attrs['n_bodies'])
+            self.chunk_size = int(self.attrs['chunk_size'])
+            self.n_chunks = -(-self.n_bodies // self.chunk_size)
+            shapes = {name: self._group[name].shape for name in (*VARIABLES, 'chunk_done')}
+        except (TypeError, ValueError, ZeroDivisionError, KeyError) as err:
+            raise EnsembleStoreError(f'{self.path}: damaged ensemble store ({err})') from None
+        wrong = [name for name, shape in shapes.items()
+                 if shape[:1] != ((self.n_chunks,) if name == 'chunk_done' else (self.n_bodies,))]
+        if wrong:
+            raise EnsembleStoreError(f"{self.path}: damaged ensemble store: {', '.join(wrong)} "
+                                     f'not of {self.n_bodies} bodies in {self.n_chunks} chunks')
 
     @classmethod
     def create(cls, path, *, n_bodies: int, times, chunk_size: int, attrs: dict,
@@ -180,7 +283,11 @@ class EnsembleStore:
 
     def done(self) -> np.ndarray:
         """Return (n_chunks,) bool: which chunks are written completely."""
-        return np.asarray(self._group['chunk_done'][:], dtype=bool)
+        try:
+            return np.asarray(self._group['chunk_done'][:], dtype=bool)
+        except (RuntimeError, ValueError, OSError) as err:   # a chunk that does not decode
+            raise EnsembleStoreError(f'{self.path}: damaged ensemble store: cannot read '
+                                     f"chunk_done ({' '.join(str(err).split())})") from None
 
     def read(self, name: str, bodies=slice(None)) -> np.ndarray:
         """Return the stored values of variable ``name`` for ``bodies`` (an index or slice)."""
@@ -226,7 +333,7 @@ def open_ensemble(path) -> 'xarray.Dataset':  # noqa: F821 (xarray is imported l
     try:
         ds = xr.open_zarr(str(path), consolidated=True)
     except Exception as err:  # zarr/xarray raise several types for a damaged store
-        raise EnsembleStoreError(f'{path}: cannot open the ensemble store ({err})') from None
-    if ds.attrs.get('format') != FORMAT:
-        raise EnsembleStoreError(f'{path}: not a tumble_ros ensemble store')
+        raise EnsembleStoreError(f'{path}: cannot open the ensemble store '
+                                 f"({' '.join(str(err).split())})") from None
+    _check_layout(path, ds.attrs, set(ds.variables))
     return ds

@@ -8,16 +8,14 @@ They are read-only: a scenario is fixed for the life of a run.
 from __future__ import annotations
 
 import difflib
-from pathlib import Path
-import re
 from typing import Any, Iterable
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
-from tumble_ros.core import PARAMETER_DOCS, Scenario
+from tumble_ros.core import check_params_file, PARAMETER_DOCS, Scenario, ScenarioError
+from tumble_ros.core.params_file import section_applies
 from tumble_ros.errors import NodeError
-import yaml
 
 __all__ = ['declare_node_parameters', 'declare_scenario_parameters', 'node_parameter',
            'read_parameters', 'read_scenario_parameters', 'describe', 'params_file_problem',
@@ -133,55 +131,20 @@ def _params_files(args: list[str] | None) -> list[str]:
     return files
 
 
-def _node_sections(tree: Any, path: tuple[str, ...] = ()) -> list[str]:
-    """List a params file's node keys (``sim``, ``/ns/sim``, ``/**``): where ros__parameters is."""
-    if not isinstance(tree, dict):
-        return []
-    if 'ros__parameters' in tree:
-        return ['/'.join(path)]
-    return [key for k, v in tree.items() for key in _node_sections(v, (*path, str(k)))]
-
-
-def section_applies(key: str, node_fqn: str) -> bool:
-    """
-    Tell whether a params-file node key applies to the node ``node_fqn``, by rcl's rules.
-
-    Keys look like ``sim``, ``/ast1/sim``, ``/**`` or ``/**/sim``, nodes like ``/ast1/sim``. A key
-    without a leading slash is in the root namespace (``sim`` is ``/sim`` only), ``*`` matches
-    one name, ``/**`` any namespaces.
-    """
-    key = key if key.startswith('/') else '/' + key
-    pattern = ''.join('(/[^/]+)*' if part == '**' else '/[^/]+' if part == '*'
-                      else '/' + re.escape(part) for part in key.split('/')[1:])
-    return re.fullmatch(pattern, node_fqn) is not None
-
-
 def params_file_problem(args: list[str] | None, node_fqn: str | None = None) -> str | None:
     """
     Say what is wrong with the ``--params-file`` files of ``args`` (None: nothing).
 
-    rcl stops with a traceback on a missing, binary or malformed file; this says which file and
-    why, in one line. With ``node_fqn`` (``/sim``, ``/ast1/sim``), a file must also have a section
-    that applies to that node: an empty file, one written for another node, or a ``sim:`` section
-    given to a namespaced simulator would otherwise run silently with the defaults.
+    rcl stops with a traceback on a missing, binary or malformed file (and blocks on a FIFO);
+    this says which file and why, in one line: :func:`tumble_ros.core.check_params_file`, the
+    check every command reading a params file makes. With ``node_fqn`` (``/sim``,
+    ``/ast1/sim``), a file must also have a section that applies to that node: an empty file,
+    one written for another node, or a ``sim:`` section given to a namespaced simulator would
+    otherwise run silently with the defaults.
     """
     for name in _params_files(args):
-        path = Path(name)
-        if not path.is_file():
-            what = 'not a regular file' if path.exists() else 'no such file'
-            return f'params file {name}: {what}'
         try:
-            tree = yaml.safe_load(path.read_text(encoding='utf-8'))
-        except (OSError, UnicodeDecodeError) as err:
-            return f'params file {name}: cannot read it as text ({err.__class__.__name__}: {err})'
-        except yaml.YAMLError as err:
-            return f"params file {name}: not valid YAML: {' '.join(str(err).split())}"
-        sections = _node_sections(tree)
-        if not sections:
-            return (f'params file {name}: no parameters (a ROS 2 params file maps node names to '
-                    "'ros__parameters:' sections)")
-        if node_fqn and not any(section_applies(s, node_fqn) for s in sections):
-            return (f'params file {name}: no section applies to node {node_fqn} '
-                    f"(sections: {', '.join(sections)}; "
-                    f"'/**/{node_fqn.rsplit('/', 1)[-1]}:' applies in any namespace)")
+            check_params_file(name, node_fqn)
+        except ScenarioError as err:
+            return str(err)
     return None
