@@ -130,8 +130,9 @@ def main(argv: list[str]) -> int:
             if key is not None:
                 existing[key] = "## " + part.rstrip() + "\n"
     existing.update(sections)
-    header = ("# The paper's figures, reproduced, and the Apophis study\n\nMade by `make figures` "
-              "(scripts/make_figures.py) from `tumble_ros/config/fig*.yaml` and `apophis_2029.yaml`: bringup (simulator, comparator with the paper's corrected "
+    header = ("# The paper's figures, reproduced, and the Apophis study\n\nMade by `make figures "
+              "FIGURES_OUT=docs/figures` (scripts/make_figures.py; plain `make figures` writes "
+              "build/figures/) from `tumble_ros/config/fig*.yaml` and `apophis_2029.yaml`: bringup (simulator, comparator with the paper's corrected "
               "analytic solution, recorder), then the offline analysis. Where the analytic model is drawn, "
               "it is the paper's eqs 16–19 with the errata applied (docs/analytic.md).\n\n")
     body = "\n".join(existing[k] for k in CAPTIONS if k in existing)

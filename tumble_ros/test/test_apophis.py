@@ -245,7 +245,7 @@ def test_the_encounter_ensemble_on_a_dask_cluster_is_the_same_bit_for_bit(apophi
 
 
 def test_the_flyby_summary_speaks_hours_degrees_and_names_the_frame(recorded):
-    """The flyby's text: h, rad/h and degrees (ecliptic J2000), a before -> after line, no noise."""
+    """The flyby's text: h, rad/h, degrees (ecliptic J2000), a before -> after line, no noise."""
     _, runs = recorded
     text = format_summary(analyze(load_recording(runs['offline'].output)))
     lines = text.splitlines()

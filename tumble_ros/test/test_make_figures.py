@@ -22,7 +22,7 @@ def _git(*args: str) -> str:
 
 
 def _state() -> tuple[str, str]:
-    """The status (tracked changes, untracked files not ignored) and a hash of the diff."""
+    """Return the status (tracked changes, untracked files not ignored) and the diff's hash."""
     status = _git('status', '--porcelain=v1', '--untracked-files=all')
     diff = hashlib.sha256(_git('diff', '--binary', 'HEAD').encode()).hexdigest()
     return status, diff

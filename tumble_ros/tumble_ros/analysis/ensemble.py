@@ -133,16 +133,16 @@ def format_statistics(stats: dict, units: DisplayUnits) -> str:
         f"bodies: {stats['bodies']} ({stats['succeeded']} succeeded, {stats['failed']} failed, "
         f"{stats['pending']} pending)",
         f"|omega| [{units.rate}]: {_stats_text(stats['omega_norm'], units.years_per_time)}",
-        f"omega_z [{units.rate}, body z]: "
+        f'omega_z [{units.rate}, body z]: '
         f"{_stats_text(stats['omega_z'], units.years_per_time)}",
-        f"omega_perp = |(omega_x, omega_y)| [{units.rate}]: "
+        f'omega_perp = |(omega_x, omega_y)| [{units.rate}]: '
         f"{_stats_text(stats['omega_perp'], units.years_per_time)}",
         f"spin states (torque-free, of {stats['spin_states']} bodies): modes {modes}",
-        f"  rotation period P_psi [{units.time}]: "
+        f'  rotation period P_psi [{units.time}]: '
         f"{_stats_text(stats['rotation_period'], period)}",
-        f"  precession period P_phi [{units.time}]: "
+        f'  precession period P_phi [{units.time}]: '
         f"{_stats_text(stats['precession_period'], period)}",
-        f"  pole latitude [deg, {units.frame}]: "
+        f'  pole latitude [deg, {units.frame}]: '
         f"{_stats_text(stats['pole_latitude'], math.degrees(1.0))}",
     ])
 
