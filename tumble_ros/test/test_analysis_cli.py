@@ -125,8 +125,9 @@ def test_text_summary_of_golden(capsys):
     assert command([str(GOLDEN)]) == 0
     out, err = capsys.readouterr()
     assert err == ''
-    assert f'simulated time: 200 samples of {OMEGA_TOPIC}, t = 0 .. 0.398 yr' in out
-    assert 'delta_omega (0, 0.3, 0) rad/yr' in out
+    # a 0.4-yr run reads in days, as its figures do
+    assert f'simulated time: 200 samples of {OMEGA_TOPIC}, t = 0 .. {0.398 * 365.25:.6g} d' in out
+    assert f'delta_omega (0, {0.3 / 365.25:.6g}, 0) rad/d' in out
     assert 'figures' not in out.splitlines()[-1]
 
 
