@@ -275,3 +275,5 @@ def test_every_theory_line_of_the_spectrum_has_its_own_look(tmp_path, monkeypatc
     looks = [(line.get_color(), line.get_linestyle()) for line in ax.get_lines()
              if line.get_label().startswith('line ')]
     assert len(looks) == 10 and len(set(looks)) == 10, looks
+    # brown and grey read as red and black in a thin dashed line
+    assert not {color for color, _ in looks} & {'C5', 'C7', 'tab:brown', 'tab:gray'}, looks

@@ -624,15 +624,17 @@ def _draw_spectrum(rec: Recording, summary: AnalysisSummary | None) -> list[Draw
     return [_png(fig, f'spectrum_{spec.component}.png')]
 
 
-#: The theory lines' colours (C0, the spectrum's, left out) and, once they are used up, styles.
-_LINE_COLORS = tuple(f'C{k}' for k in range(1, 10))
-_LINE_STYLES = ('--', '-.', ':', (0, (5, 1, 1, 1, 1, 1)))
+#: The theory lines' colours: the spectrum's blue left out, and brown and grey, which read as
+#: red and black in a thin dashed line (the default run's |wA+wE| and |w0-2ws| looked alike).
+_LINE_COLORS = ('tab:orange', 'tab:green', 'tab:red', 'tab:purple', 'tab:cyan', 'tab:olive',
+                'tab:pink', 'black')
+#: Their dashes, cycled at the same time: 8 colours x 3 styles give 24 different lines.
+_LINE_STYLES = ('--', ':', '-.')
 
 
-def _line_style(k: int) -> tuple[str, object]:
-    """Return the (colour, line style) of the k-th theory line: no two lines alike."""
-    return (_LINE_COLORS[k % len(_LINE_COLORS)],
-            _LINE_STYLES[(k // len(_LINE_COLORS)) % len(_LINE_STYLES)])
+def _line_style(k: int) -> tuple[str, str]:
+    """Return the (colour, line style) of the k-th theory line: no two of 24 lines alike."""
+    return _LINE_COLORS[k % len(_LINE_COLORS)], _LINE_STYLES[k % len(_LINE_STYLES)]
 
 
 def write_figures(rec: Recording, out_dir, summary: AnalysisSummary | None = None, *,
