@@ -37,16 +37,18 @@ BUILD_INPUTS := \
 # Rebuild anyway if build/ or install/ was deleted behind make's back.
 BUILD_PRESENT := $(and $(wildcard install/setup.bash),$(wildcard build/tumble_ros))
 
-.PHONY: help setup test run figures lock clean distclean FORCE
+.PHONY: help setup test run figures lock clean clean-recordings distclean FORCE
 
 help:
 	@echo 'make run    [CONFIG=...]       run the main job (python -m tumble_ros $$CONFIG)'
 	@echo 'make test   [PYTEST_ARGS=...]  run the tests'
-	@echo 'make figures [FIGS="fig3 fig9"] reproduce the paper figures into docs/figures/'
+	@echo 'make figures [FIGS="fig3 fig9"] reproduce the paper figures into build/figures/'
+	@echo '             [FIGURES_OUT=docs/figures]  ... or refresh the published ones (then commit)'
 	@echo 'make bench  [BENCH_ARGS=...]   benchmarks: Fig 9 over 2000 yr vs scipy, ensembles (docs/performance.md)'
 	@echo 'make setup                     venv + pinned requirements + colcon build (idempotent)'
 	@echo 'make lock                      re-pin requirements.txt from requirements.in'
 	@echo 'make clean                     remove build/ install/ log/ and stamps (keeps .venv)'
+	@echo 'make clean-recordings          remove recordings/ (figure runs, walks: tens to hundreds of MB)'
 	@echo 'make distclean                 clean, and remove .venv'
 
 setup: $(BUILD_STAMP)
@@ -74,8 +76,10 @@ test: setup
 run: setup
 	$(ENV) python -m tumble_ros $(CONFIG)
 
+# Untracked by default: a figure run leaves a clean clone clean (docs/figures is the published copy).
+FIGURES_OUT ?= build/figures
 figures: setup
-	$(ENV) python scripts/make_figures.py $(FIGS)
+	$(ENV) python scripts/make_figures.py --out $(FIGURES_OUT) $(FIGS)
 
 # Benchmarks (a few minutes; --quick: seconds): every section in benchmarks/, see docs/performance.md.
 .PHONY: bench
@@ -88,6 +92,10 @@ lock:
 
 clean:
 	rm -rf build install log $(STAMPS)
+
+# What the runs recorded (make figures: recordings/figures/, one MCAP a figure, Fig 9's ~60 MB).
+clean-recordings:
+	rm -rf recordings
 
 distclean: clean
 	rm -rf $(VENV)

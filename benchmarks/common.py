@@ -53,6 +53,12 @@ class Context:
     def print(self, *args) -> None:
         print(*args, file=self.out, flush=True)
 
+    def verdict(self, met: bool, missed: str = "MISSED") -> str:
+        """Return "MET" or ``missed``; a quick run judges nothing (its workloads are reduced)."""
+        if self.quick:
+            return "not judged (quick run: reduced workload)"
+        return "MET" if met else missed
+
     def note(self, text: str) -> None:
         for line in text.strip().splitlines():
             self.print(f"  {line}")

@@ -26,7 +26,7 @@ def main_job_section(ctx):
     config = CONFIG
     if ctx.quick:
         config = Path(tempfile.mkdtemp()) / "fig9_short.yaml"
-        config.write_text(CONFIG.read_text().replace("duration: 2000.0", "duration: 200.0"))
+        config.write_text(CONFIG.read_text().replace("duration: 2000.0", "duration: 20.0"))
     rows, walls = [], []
     with tempfile.TemporaryDirectory() as tmp:
         for _ in range(1 if ctx.quick else 2):

@@ -78,7 +78,7 @@ def _bench_section():
 
     @section("End-to-end ROS throughput (bringup: sim + comparator + recorder)", order=30)
     def ros_throughput(ctx):
-        samples = 2_000 if ctx.quick else 20_000
+        samples = 500 if ctx.quick else 20_000
         figures = [measure(samples, name) for name in ("events", "single")]
         ctx.table(HEADERS, [_row(f) for f in figures])
         ctx.note(f"""

@@ -1,18 +1,25 @@
-"""Reproduce the paper's figures and the Apophis study into docs/figures/ (make figures).
+"""Reproduce the paper's figures and the Apophis study (make figures).
 
 For each figure's scenario (tumble_ros/config/fig*.yaml, apophis_2029.yaml): run bringup
 (simulate, compare with the paper's analytic solution, record to
-recordings/figures/<name>.mcap), analyse the recording, write its PNGs to docs/figures/<name>/
-and its summary to docs/figures/<name>/summary.txt; for apophis_2029 also the encounter
-ensemble (tumble_ros.cli.encounter, 1000 bodies) into docs/figures/apophis_2029/encounter/;
-finally the index docs/figures/README.md that sets each figure beside the paper's caption.
+recordings/figures/<name>.mcap), analyse the recording, write its PNGs to OUT/<name>/
+and its summary to OUT/<name>/summary.txt; for apophis_2029 also the encounter
+ensemble (tumble_ros.cli.encounter, 1000 bodies) into OUT/apophis_2029/encounter/;
+finally the index OUT/README.md that sets each figure beside the paper's caption.
 
-    scripts/env.sh python scripts/make_figures.py [fig3 fig9 apophis_2029 ...]   (default: all)
+OUT is build/figures/ (untracked: a figure run leaves the clone's tracked files as they were;
+``make clean`` removes it). The figures in the repository, docs/figures/, are refreshed on
+purpose with ``--out docs/figures`` (``make figures FIGURES_OUT=docs/figures``), then committed:
+message counts and the last digits of some numbers differ from run to run and machine to machine.
+
+    scripts/env.sh python scripts/make_figures.py [--out DIR] [fig3 fig9 apophis_2029 ...]
+    (default: all, into build/figures/)
 """
 from __future__ import annotations
 
-import sys
+import argparse
 from pathlib import Path
+import sys
 
 from tumble_ros.analysis import analyze, format_summary, load_recording, write_figures
 from tumble_ros.analysis.recording import stderr_progress
@@ -21,7 +28,8 @@ from tumble_ros.nodes.bringup import format_result, run_bringup
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "tumble_ros" / "config"
-OUT = ROOT / "docs" / "figures"
+#: Where a figure run writes (untracked); docs/figures/ is the published copy.
+OUT = ROOT / "build" / "figures"
 RECORDINGS = ROOT / "recordings" / "figures"
 
 #: The paper's captions (its Fig 8 is printed as a second "Figure 6").
@@ -63,8 +71,8 @@ NOTES = {
 }
 
 
-def make(name: str) -> str:
-    """Record, analyse and draw one figure; return its section of the index."""
+def make(name: str, root: Path = OUT) -> str:
+    """Record, analyse and draw one figure into root/<name>/; return its section of the index."""
     RECORDINGS.mkdir(parents=True, exist_ok=True)
     recording = RECORDINGS / f"{name}.mcap"
     recording.unlink(missing_ok=True)
@@ -73,7 +81,7 @@ def make(name: str) -> str:
     print(format_result(result), file=sys.stderr)
     rec = load_recording(recording, progress=stderr_progress())
     summary = analyze(rec)
-    out = OUT / name
+    out = root / name
     out.mkdir(parents=True, exist_ok=True)
     for old in out.glob("*.png"):
         old.unlink()
@@ -90,6 +98,9 @@ def make(name: str) -> str:
                             str(out / "encounter"), "--no-arrays"])
         if status != 0:
             raise SystemExit(f"the encounter ensemble failed ({status})")
+        report = out / "encounter" / "summary.txt"   # no wall time in a published summary
+        report.write_text("".join(line for line in report.read_text().splitlines(keepends=True)
+                                  if not line.startswith("wall time:")))
         lines += [f"![{name} encounter]({name}/encounter/encounter.png)", "",
                   f"Ensemble summary: [{name}/encounter/summary.txt]({name}/encounter/summary.txt)",
                   ""]
@@ -97,13 +108,20 @@ def make(name: str) -> str:
 
 
 def main(argv: list[str]) -> int:
-    names = argv or list(CAPTIONS)
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--out", type=Path, default=OUT,
+                   help=f"output folder (default {OUT.relative_to(ROOT)}/; docs/figures to refresh "
+                        "the published figures)")
+    p.add_argument("names", nargs="*", metavar="NAME", help=f"figures (default all: {', '.join(CAPTIONS)})")
+    args = p.parse_args(argv)
+    names = args.names or list(CAPTIONS)
     unknown = [n for n in names if n not in CAPTIONS]
     if unknown:
         print(f"ERROR: unknown figure(s) {unknown}; known: {', '.join(CAPTIONS)}", file=sys.stderr)
         return 1
-    sections = {n: make(n) for n in names}
-    index = OUT / "README.md"
+    out = args.out if args.out.is_absolute() else Path.cwd() / args.out
+    sections = {n: make(n, out) for n in names}
+    index = out / "README.md"
     existing = {}
     if index.exists():  # keep sections of figures not redone this time
         by_title = {title: name for name, title in TITLES.items()}
@@ -112,8 +130,9 @@ def main(argv: list[str]) -> int:
             if key is not None:
                 existing[key] = "## " + part.rstrip() + "\n"
     existing.update(sections)
-    header = ("# The paper's figures, reproduced, and the Apophis study\n\nMade by `make figures` "
-              "(scripts/make_figures.py) from `tumble_ros/config/fig*.yaml` and `apophis_2029.yaml`: bringup (simulator, comparator with the paper's corrected "
+    header = ("# The paper's figures, reproduced, and the Apophis study\n\nMade by `make figures "
+              "FIGURES_OUT=docs/figures` (scripts/make_figures.py; plain `make figures` writes "
+              "build/figures/) from `tumble_ros/config/fig*.yaml` and `apophis_2029.yaml`: bringup (simulator, comparator with the paper's corrected "
               "analytic solution, recorder), then the offline analysis. Where the analytic model is drawn, "
               "it is the paper's eqs 16–19 with the errata applied (docs/analytic.md).\n\n")
     body = "\n".join(existing[k] for k in CAPTIONS if k in existing)

@@ -133,8 +133,9 @@ def test_text_summary_of_golden(capsys):
     assert command([str(GOLDEN)]) == 0
     out, err = capsys.readouterr()
     assert err == ''
-    assert f'simulated time: 200 samples of {OMEGA_TOPIC}, t = 0 .. 0.398 yr' in out
-    assert 'delta_omega (0, 0.3, 0) rad/yr' in out
+    # a 0.4-yr run reads in days, as its figures do
+    assert f'simulated time: 200 samples of {OMEGA_TOPIC}, t = 0 .. {0.398 * 365.25:.6g} d' in out
+    assert f'delta_omega (0, {0.3 / 365.25:.6g}, 0) rad/d' in out
     assert 'figures' not in out.splitlines()[-1]
 
 
@@ -285,3 +286,32 @@ def test_the_display_envelope_keeps_every_extreme_and_few_points():
     assert set(ye.tolist()) <= set(y.tolist())        # and nothing is invented
     short = np.arange(100.0)
     assert envelope(short, short)[0] is short          # short series: drawn whole
+
+
+def test_the_ensemble_statistics_print_with_units_and_the_pole_in_degrees(tmp_path):
+    """``python -m tumble_ros.analysis.ensemble``: every number with its unit, no raw dict."""
+    from tumble_ros.core.ensemble import GaussianSpread
+    from tumble_ros.ensembles import run_ensemble_to_store
+
+    sc = Scenario(inertia=(1.0, 1.5, 2.0), orbit_rate=0.0, omega0=(2.0, 1.0, 10.0),
+                  euler0=(0.3, 0.2, 0.4), duration=0.2, output_interval=0.05)
+    store = tmp_path / 'ens.zarr'
+    run_ensemble_to_store(sc, store, n_bodies=4, omega0=GaussianSpread(sc.omega0, 0.01, seed=1))
+    done = subprocess.run([sys.executable, '-m', 'tumble_ros.analysis.ensemble', str(store)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    out = done.stdout
+    assert '{' not in out, out                        # no raw dict
+    lines = dict(line.split(': ', 1) for line in out.splitlines() if ': ' in line)
+    # a 0.2-yr run reads in days (73 d), as the figures' time axes do
+    assert lines['time'] == f'{0.2 * 365.25:.6g} d'
+    assert 'rad/d' in out and 'rad/yr' not in out
+    latitude = next(v for k, v in lines.items() if k.strip().startswith('pole latitude'))
+    key = next(k for k in lines if k.strip().startswith('pole latitude'))
+    assert key.strip() == 'pole latitude [deg, orbital frame]'
+    median = float(latitude.split('median ')[1].split(',')[0])
+    from tumble_ros.core import simulate
+    from tumble_ros.core.spinstate import spin_state
+    r = simulate(sc)            # the nominal body (the spread is 0.01 rad/yr of 10)
+    nominal = math.degrees(spin_state(r.omega[-1], sc.inertia, r.quaternion[-1]).pole_latitude)
+    assert abs(nominal) > 5.0 and median == pytest.approx(nominal, abs=0.5), (median, nominal)

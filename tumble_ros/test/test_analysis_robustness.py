@@ -329,8 +329,12 @@ def runs(tmp_path_factory):
 
 
 def _dominant(out: str) -> float:
+    """Return the first peak of the text summary [rad/yr] (printed in rad/<display unit>)."""
+    from tumble_ros.core.units import TIME_UNITS
+
     line = next(x for x in out.splitlines() if x.strip().startswith('1. '))
-    return float(line.split()[1])
+    value, unit = line.split()[1:3]
+    return float(value) / TIME_UNITS[unit.split('/')[1]]
 
 
 def test_recording_in_a_namespace_is_found_and_analysed_like_without(tmp_path, capsys, runs):

@@ -60,7 +60,8 @@ def test_golden_scenario_status_and_impact(golden):
     rec, s = golden
     assert rec.scenario is not None
     assert rec.scenario.omega0 == (1.0, 0.0, 30.0) and rec.scenario.duration == 0.4
-    assert s.final_status == 'FINISHED at t = 0.398 yr: reached duration'
+    # a 0.4-yr run is shown in days, as its figures are (display.display_units)
+    assert s.final_status == f'FINISHED at t = {0.398 * 365.25:.6g} d: reached duration'
     (imp,) = s.impacts
     e = imp.event
     assert (e.id, e.start, e.end, e.frame) == (1, 0.1, 0.1000003, topics.FRAME_BODY)
@@ -221,7 +222,10 @@ def test_impact_delta_omega_and_jacobi_per_segment(tmp_path, impact_run):
     jump = abs(inv.segments[1].j0 - inv.segments[0].j0)
     assert jump > 1e6 * max(seg.max_drift for seg in inv.segments)
     text = format_summary(s)
-    assert '#7: body torque (0, 1e+06, 0)' in text and 'delta_omega (0.001, 0.3, -0.002)' in text
+    # a 0.2-yr run reads in days: torque [I rad/d^2], delta_omega [rad/d]
+    d = 1 / 365.25
+    assert f'#7: body torque (0, {1e6 * d * d:.6g}, 0) I rad/d^2' in text, text
+    assert f'delta_omega ({0.001 * d:.6g}, {0.3 * d:.6g}, {-0.002 * d:.6g}) rad/d' in text
 
 
 def test_jacobi_from_euler_angles_without_attitude(tmp_path, impact_run):

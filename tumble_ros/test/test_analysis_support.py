@@ -207,8 +207,8 @@ def test_the_time_axis_of_a_flyby_reads_in_round_hours():
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from tumble_ros.analysis.display import display_units
     from tumble_ros.analysis.figures import _time_axis
-    from tumble_ros.analysis.timeaxis import display_unit
 
     t = np.linspace(0.0, 144 / 8766, 145)           # [yr]
     fig = Figure()
@@ -216,7 +216,7 @@ def test_the_time_axis_of_a_flyby_reads_in_round_hours():
     axes = fig.subplots(2, 1, sharex=True)
     for ax in axes:
         ax.plot(t, np.sin(t))
-    _time_axis(axes, display_unit(t[-1]))
+    _time_axis(axes, display_units(t[-1]))
     fig.canvas.draw()
     hours = [tick * 8766 for tick in axes[-1].get_xticks() if 0 <= tick <= t[-1]]
     assert len(hours) >= 3
@@ -250,3 +250,30 @@ def test_a_series_with_a_gap_is_drawn_broken_not_bridged():
     np.testing.assert_array_equal(gt[:k], first[0])
     np.testing.assert_array_equal(gy[k + 1:], second[1])
     assert gy[:k].max() == y[:n].max() and gy[k + 1:].min() == y[n:].min()
+
+
+def test_every_theory_line_of_the_spectrum_has_its_own_look(tmp_path, monkeypatch):
+    """Ten theory lines (more than the colour cycle has): no two drawn alike."""
+    import dataclasses
+
+    from tumble_ros.analysis import analyze, load_recording
+    from tumble_ros.analysis import figures
+    from tumble_ros.analysis.theory import TheoryLine
+
+    t = np.arange(2000) * 0.001
+    omega = np.stack([np.cos(40 * t), np.sin(40 * t), np.full_like(t, 30.0)], -1)
+    rec = load_recording(write_recording(tmp_path / 'lines.mcap', t, omega,
+                                         scenario=Scenario(duration=2.0, output_interval=0.001)))
+    lines = tuple(TheoryLine(f'line {k}', 10.0 * (k + 1), 'test') for k in range(10))
+    summary = dataclasses.replace(analyze(rec), theory=lines)
+    drawn = {}
+    real_png = figures._png
+    monkeypatch.setattr(figures, '_png', lambda fig, name: (drawn.setdefault(name, fig),
+                                                            real_png(fig, name))[1])
+    figures._draw_spectrum(rec, summary)
+    ax = drawn['spectrum_wx.png'].axes[0]
+    looks = [(line.get_color(), line.get_linestyle()) for line in ax.get_lines()
+             if line.get_label().startswith('line ')]
+    assert len(looks) == 10 and len(set(looks)) == 10, looks
+    # brown and grey read as red and black in a thin dashed line
+    assert not {color for color, _ in looks} & {'C5', 'C7', 'tab:brown', 'tab:gray'}, looks

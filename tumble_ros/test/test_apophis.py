@@ -291,3 +291,81 @@ def test_the_encounter_ensemble_on_a_dask_cluster_is_the_same_bit_for_bit(apophi
                  'inertia', 'phase', 'turn'):
         np.testing.assert_array_equal(getattr(on_cluster, name), getattr(ensemble, name), name)
     assert list(on_cluster.mode_after) == list(ensemble.mode_after)
+
+
+def test_the_flyby_summary_speaks_hours_degrees_and_names_the_frame(recorded):
+    """The flyby's text: h, rad/h, degrees (ecliptic J2000), a before -> after line, no noise."""
+    _, runs = recorded
+    text = format_summary(analyze(load_recording(runs['offline'].output)))
+    lines = text.splitlines()
+    start = next(line for line in lines if line.lstrip().startswith('start (t = 0 h)'))
+    # the cited periods and pole, in the literature's units, the frame named
+    assert f'rotation {ROTATION_H:.4g} h' in start and f'precession {PRECESSION_H:.4g} h' in start
+    assert (f'pole lon {POLE_DEG[0]:.2f} deg, lat {POLE_DEG[1]:.2f} deg (ecliptic J2000)'
+            in start), start
+    assert ' yr' not in text and 'rad/yr' not in text, text
+    assert 'duration 144 h' in text and 'rad/h' in text
+    assert 'omega0 (0.0455169, 0, 0.202242) rad/h' in text          # the file's, in rad/h
+    assert 'closest approach of the torquing body: 38326 km at t = 72 h' in text
+    before_after = [line for line in lines if 'encounter, before -> after' in line]
+    assert len(before_after) == 1 and f'rotation {ROTATION_H:.4g} h -> ' in before_after[0]
+    # one passage: no Jacobi integral, spectrum or aliasing check to report
+    for noise in ('invariant drift', 'dominant frequencies', 'aliasing', 'expected frequencies'):
+        assert noise not in text, noise
+
+
+def test_the_flyby_figures_mark_perigee_in_hours_and_leave_out_the_spectrum(recorded,
+                                                                            monkeypatch):
+    from tumble_ros.analysis import figures
+
+    _, runs = recorded
+    rec = load_recording(runs['offline'].output)
+    drawn = {}
+    real_png = figures._png
+
+    def keep(fig, name):
+        drawn[name] = fig
+        return real_png(fig, name)
+
+    monkeypatch.setattr(figures, '_png', keep)
+    figures.write_figures(rec, Path(runs['offline'].output).parent / 'figs', overwrite=True)
+    assert set(drawn) == {'omega.png', 'wy_vs_wx.png', 'error.png'}       # no spectrum_wx.png
+    for name in ('omega.png', 'error.png'):
+        top = drawn[name].axes[0]
+        labels = top.get_legend_handles_labels()[1]
+        assert any('closest approach' in label and 't = 72 h' in label for label in labels), \
+            (name, labels)
+        assert [ax.get_ylabel().endswith('[rad/h]') for ax in drawn[name].axes] == \
+            [True] * len(drawn[name].axes)
+    omega = drawn['omega.png']
+    title = omega.axes[0].get_title()
+    assert 'rad/h' in title and '0.04551694407805519' not in title     # 4 digits, not 17
+    omega.canvas.draw()                                      # the title fits in the figure
+    box = omega.axes[0].title.get_window_extent()
+    assert box.x0 >= 0 and box.x1 <= omega.bbox.width, (box, omega.bbox)
+
+
+def test_the_encounter_figure_names_its_lines_ticks_and_frame(ensemble, tmp_path, monkeypatch):
+    """Halve/double lines in the legend, ticks in plain numbers, the pole's frame named."""
+    import re
+
+    from matplotlib.figure import Figure
+
+    from tumble_ros.analysis.encounter import encounter_figure
+
+    saved = []
+    real_savefig = Figure.savefig
+    monkeypatch.setattr(Figure, 'savefig',
+                        lambda self, *a, **k: (saved.append(self), real_savefig(self, *a, **k))[1])
+    encounter_figure(ensemble, tmp_path / 'encounter.png')
+    fig = saved[0]
+    fig.canvas.draw()
+    by_label = {ax.get_xlabel(): ax for ax in fig.axes}
+    rate = by_label['spin rate $|\\omega|$ after / before']
+    assert any('halved' in label and 'doubled' in label
+               for label in rate.get_legend_handles_labels()[1])
+    for name in ('precession period $P_\\phi$ [h]', 'rotation period $P_\\psi$ [h]'):
+        ticks = [t.get_text() for t in by_label[name].get_xticklabels() if t.get_text()]
+        assert ticks and all(re.fullmatch(r'[0-9.]+', t) for t in ticks), ticks
+    polar = next(ax for ax in fig.axes if ax.name == 'polar')
+    assert 'ecliptic J2000' in polar.get_title()

@@ -339,6 +339,15 @@ def draw_encounter(result: EncounterResult, title: str = '') -> bytes:
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    from .display import frame_name
+
+    def plain_log(axis) -> None:
+        # log ticks read 20, 50, 100 (hours, ratios), not 2x10^1
+        axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FuncFormatter(lambda x, _: f'{x:g}'))
+        axis.set_minor_formatter(NullFormatter())
 
     h = HOURS_PER_YEAR
     fig = Figure(figsize=(11, 8))          # no pyplot: no global backend, nothing to close
@@ -356,6 +365,7 @@ def draw_encounter(result: EncounterResult, title: str = '') -> bytes:
                 label=['SAM after', 'LAM after'], color=['tab:blue', 'tab:orange'])
         ax.axvline(np.nanmedian(before) * h, color='k', ls='--', label='before')
         ax.set_xscale('log')
+        plain_log(ax.xaxis)
         ax.set_xlabel(name)
         ax.set_ylabel('bodies')
         ax.legend()
@@ -363,9 +373,12 @@ def draw_encounter(result: EncounterResult, title: str = '') -> bytes:
     ax = axes[1, 0]
     ax.hist(rate[np.isfinite(rate)], bins=np.geomspace(max(np.nanmin(rate), 1e-3),
                                                        np.nanmax(rate), 40), color='tab:green')
-    for x in (0.5, 1.0, 2.0):
-        ax.axvline(x, color='k', ls=':' if x != 1.0 else '--')
+    ax.axvline(1.0, color='k', ls='--', label='unchanged')
+    ax.axvline(0.5, color='k', ls=':', label='halved, doubled')
+    ax.axvline(2.0, color='k', ls=':')
     ax.set_xscale('log')
+    plain_log(ax.xaxis)
+    ax.legend(fontsize=8)
     ax.set_xlabel('spin rate $|\\omega|$ after / before')
     ax.set_ylabel('bodies')
     axes[1, 1].remove()
@@ -380,8 +393,8 @@ def draw_encounter(result: EncounterResult, title: str = '') -> bytes:
                         cmap='viridis')
     ax.plot(np.radians(lon0), [radius0], 'r*', ms=14, label='before')
     fig.colorbar(points, ax=ax, label='pole shift [deg]', pad=0.1)
-    ax.set_title('pole after: longitude (angle), degrees from the '
-                 f"{'north' if hemisphere > 0 else 'south'} pole of the frame (radius)",
+    ax.set_title(f'pole of L after, {frame_name(result.scenario)}: longitude (angle), '
+                 f"degrees from the {'north' if hemisphere > 0 else 'south'} pole (radius)",
                  fontsize=9)
     ax.legend(loc='lower left', fontsize=8)
     fig.suptitle(title or f'{result.success.size} tumblers through the encounter')

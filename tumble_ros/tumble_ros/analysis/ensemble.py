@@ -8,11 +8,14 @@ Works on what :func:`tumble_ros.io.open_ensemble` returns (any run written by
 chunk by chunk: the final angular velocity of every succeeded body, and the torque-free spin
 state (:func:`tumble_ros.core.spinstate.spin_state`: SAM/LAM mode, rotation and precession
 periods [yr], pole of L in the orbital frame) of up to ``max_spin_states`` bodies spread evenly
-over the ensemble (the spin state costs ~1 ms per body).
+over the ensemble (the spin state costs ~1 ms per body). The dicts are in those units; the
+printout and the figure in the store's display units (``display``: rates and periods in the
+unit of its time span, the pole in degrees, its frame named).
 """
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 import sys
 from typing import Sequence
@@ -26,7 +29,10 @@ from tumble_ros.errors import AnalysisError, TumbleRosError
 from tumble_ros.io import open_ensemble
 from tumble_ros.io.ensemble_store import SCENARIO_ATTR
 
-__all__ = ['ensemble_statistics', 'final_spin', 'plot_ensemble', 'main']
+from .display import display_units, DisplayUnits
+
+__all__ = ['ensemble_statistics', 'final_spin', 'plot_ensemble', 'format_statistics',
+           'ensemble_units', 'main']
 
 #: Bodies whose spin state is computed by default (evenly spread over the ensemble).
 MAX_SPIN_STATES = 2000
@@ -98,29 +104,74 @@ def ensemble_statistics(ds, time: float | None = None,
             'pole_latitude': _stats(spin['pole_latitude'])}
 
 
+def ensemble_units(ds) -> DisplayUnits:
+    """Return the units a store is shown in: its time span's, its scenario's frame."""
+    t = ds.time.values
+    span = float(t[-1] - t[0]) if t.size else 0.0
+    return display_units(span, parse_scenario(ds.attrs[SCENARIO_ATTR]))
+
+
+def _stats_text(st: dict, scale: float = 1.0) -> str:
+    if not st.get('n'):
+        return 'none'
+    return (f"n {st['n']}, mean {st['mean'] * scale:.6g}, std {st['std'] * scale:.4g}, "
+            f"5% {st['p5'] * scale:.6g}, median {st['median'] * scale:.6g}, "
+            f"95% {st['p95'] * scale:.6g}")
+
+
+def format_statistics(stats: dict, units: DisplayUnits) -> str:
+    """
+    Return :func:`ensemble_statistics` as text, each quantity with its unit.
+
+    Rates and periods in ``units`` (rad/yr and yr for the paper's runs, rad/h and h for a
+    flyby), the pole latitude in degrees, its frame named.
+    """
+    modes = ', '.join(f'{m} {c}' for m, c in stats['modes'].items()) or 'none'
+    period = 1.0 / units.years_per_time
+    return '\n'.join([
+        f"time: {units.time_text(stats['time'])}",
+        f"bodies: {stats['bodies']} ({stats['succeeded']} succeeded, {stats['failed']} failed, "
+        f"{stats['pending']} pending)",
+        f"|omega| [{units.rate}]: {_stats_text(stats['omega_norm'], units.years_per_time)}",
+        f'omega_z [{units.rate}, body z]: '
+        f"{_stats_text(stats['omega_z'], units.years_per_time)}",
+        f'omega_perp = |(omega_x, omega_y)| [{units.rate}]: '
+        f"{_stats_text(stats['omega_perp'], units.years_per_time)}",
+        f"spin states (torque-free, of {stats['spin_states']} bodies): modes {modes}",
+        f'  rotation period P_psi [{units.time}]: '
+        f"{_stats_text(stats['rotation_period'], period)}",
+        f'  precession period P_phi [{units.time}]: '
+        f"{_stats_text(stats['precession_period'], period)}",
+        f'  pole latitude [deg, {units.frame}]: '
+        f"{_stats_text(stats['pole_latitude'], math.degrees(1.0))}",
+    ])
+
+
 def plot_ensemble(ds, out_dir, time: float | None = None,
                   max_spin_states: int = MAX_SPIN_STATES) -> Path:
     """Draw the distributions of :func:`ensemble_statistics` into ``out_dir/ensemble.png``."""
     spin = final_spin(ds, time, max_spin_states)
-    w = spin['omega']
+    u = ensemble_units(ds)
+    w = u.w(spin['omega'])
     fig = Figure(figsize=(10, 7), dpi=100, layout='constrained')
     FigureCanvasAgg(fig)
     axes = fig.subplots(2, 2)
     axes[0, 0].hist(w[:, 2], bins=50)
-    axes[0, 0].set_xlabel(r'final $\omega_z$ [rad/yr]')
+    axes[0, 0].set_xlabel(f'final $\\omega_z$ [{u.rate}]')
     axes[0, 1].hist(np.hypot(w[:, 0], w[:, 1]), bins=50)
-    axes[0, 1].set_xlabel(r'final $|\omega_\perp|$ [rad/yr]')
-    periods = spin['rotation_period'][np.isfinite(spin['rotation_period'])]
+    axes[0, 1].set_xlabel(f'final $|\\omega_\\perp|$ [{u.rate}]')
+    periods = u.t(spin['rotation_period'][np.isfinite(spin['rotation_period'])])
     axes[1, 0].hist(periods, bins=50)
-    axes[1, 0].set_xlabel(r'rotation period $P_\psi$ [yr] (torque-free, from the final state)')
+    axes[1, 0].set_xlabel(f'rotation period $P_\\psi$ [{u.time}] (torque-free, from the final '
+                          'state)')
     axes[1, 1].scatter(np.degrees(spin['pole_longitude']), np.degrees(spin['pole_latitude']),
                        s=4)
-    axes[1, 1].set_xlabel('pole longitude [deg] (orbital frame)')
-    axes[1, 1].set_ylabel('pole latitude [deg]')
+    axes[1, 1].set_xlabel(f'pole longitude [deg] ({u.frame})')
+    axes[1, 1].set_ylabel(f'pole latitude [deg] ({u.frame})')
     for ax in axes.flat[:3]:
         ax.set_ylabel('bodies')
     fig.suptitle(f"{int(np.sum(ds.status.values == 1))} of {ds.sizes['body']} bodies at "
-                 f"t = {spin['time']:g} yr ({spin['spin_body'].size} spin states)")
+                 f"t = {u.time_text(spin['time'], 4)} ({spin['spin_body'].size} spin states)")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / 'ensemble.png'
@@ -143,8 +194,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         stats = ensemble_statistics(ds, args.time, args.spin_states)
         if stats['succeeded'] == 0:
             raise AnalysisError(f'{args.store}: no succeeded body to analyse')
-        for key, value in stats.items():
-            print(f'{key}: {value}')
+        print(format_statistics(stats, ensemble_units(ds)))
         if args.figures:
             print(f'wrote {plot_ensemble(ds, args.figures, args.time, args.spin_states)}')
     except (TumbleRosError, OSError, ValueError) as err:

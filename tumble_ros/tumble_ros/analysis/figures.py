@@ -52,12 +52,14 @@ import numpy as np
 from tumble_ros.errors import AnalysisError
 
 from .comparator import comparator_errors
+from .display import DisplayUnits, is_flyby, recording_units
 from .impacts import impact_intervals
 from .recording import Recording, ROOT_NAMESPACE
 from .spectrum import spectrum
+from .spin import closest_approach
 from .summary import AnalysisSummary, analyze
 from .theory import theory_lines
-from .timeaxis import display_unit, runs
+from .timeaxis import runs
 
 __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
            'plot_impacts', 'plot_omega_windows', 'plot_spectrum', 'plot_wy_vs_wx',
@@ -98,30 +100,40 @@ class _UnitTicks(MaxNLocator):
         return super().tick_values(vmin / scale, vmax / scale) * scale
 
 
-def _unit(rec: Recording) -> tuple[str, float]:
-    """Return the display unit of the recording's time axis (:func:`.timeaxis.display_unit`)."""
-    return display_unit(float(rec.t[-1] - rec.t[0]) if rec.n else 0.0)
+def _unit(rec: Recording) -> DisplayUnits:
+    """Return the units the recording is shown in (:func:`.display.recording_units`)."""
+    return recording_units(rec)
 
 
-def _time_axis(axes, unit: tuple[str, float]) -> None:
+def _scaled_axis(axis, years_per_unit: float) -> None:
+    """Tick an axis whose data are in years (or per year) at round values of another unit."""
+    axis.set_major_locator(_UnitTicks(years_per_unit))
+    axis.set_major_formatter(FuncFormatter(lambda x, _: f'{x / years_per_unit:.6g}'))
+
+
+def _time_axis(axes, unit: DisplayUnits) -> None:
     """
     Label the time axis of ``axes`` (the last one gets the label) in ``unit``.
 
     The data stay in years; below a year the ticks fall on round hours (days, ...) and read
     in them.
     """
-    name, scale = unit
     for ax in axes:
-        if name != 'yr':
-            ax.xaxis.set_major_locator(_UnitTicks(scale))
-            ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f'{x / scale:.6g}'))
-    axes[-1].set_xlabel(f't [{name}]')
+        if unit.time != 'yr':
+            _scaled_axis(ax.xaxis, unit.years_per_time)
+    axes[-1].set_xlabel(f't [{unit.time}]')
 
 
-def _t(value: float, unit: tuple[str, float], digits: int = 4) -> str:
+def _rate_axis(axis, unit: DisplayUnits, label: str) -> None:
+    """Label an axis whose data are rates [rad/yr] in ``unit.rate`` (round ticks in it)."""
+    if unit.time != 'yr':
+        _scaled_axis(axis, 1.0 / unit.years_per_time)
+    axis.set_label_text(f'{label} [{unit.rate}]')
+
+
+def _t(value: float, unit: DisplayUnits, digits: int = 4) -> str:
     """Write a time [yr] in ``unit``, with its name."""
-    name, scale = unit
-    return f'{value / scale:.{digits}g} {name}'
+    return unit.time_text(value, digits)
 
 
 #: A drawn figure: (file name, PNG bytes).
@@ -273,14 +285,31 @@ def _label(rec: Recording) -> str:
 
 
 def _title(rec: Recording) -> str:
+    """Name the file; below it the scenario's parameters, in display units, 4 digits."""
     text = _label(rec)
     sc = rec.scenario
     if sc is not None:
+        u = _unit(rec)
         ix, _, iz = sc.inertia
-        text += (f'   I = {tuple(sc.inertia)}, a = {(iz - ix) / ix:.3g}, '
-                 f'$\\theta_0$ = {sc.euler0[2]:.3g}, $\\omega_0$ = {tuple(sc.omega0)}, '
-                 f'$\\omega_s$ = {sc.orbit_rate:.3g}')
+        w0 = ', '.join(f'{u.w(w):.4g}' for w in sc.omega0)
+        text += (f'\nI = ({", ".join(f"{i:.4g}" for i in sc.inertia)}), a = {(iz - ix) / ix:.3g}, '
+                 f'$\\theta_0$ = {sc.euler0[2]:.3g} rad, $\\omega_0$ = ({w0}) {u.rate}')
+        if sc.orbit is None:
+            text += f', $\\omega_s$ = {u.w(sc.orbit_rate):.3g} {u.rate}'
     return text
+
+
+def _mark_closest_approach(ax, rec: Recording, label: bool) -> None:
+    """Mark a flyby's closest approach (perigee for the Earth) with its time."""
+    if not is_flyby(rec.scenario):
+        return
+    nearest = closest_approach(rec)
+    if nearest is None:
+        return
+    t, km = nearest
+    ax.axvline(t, color='tab:purple', lw=1.0, ls=':',
+               label=f'closest approach, {km:,.0f} km at t = {_t(t, _unit(rec))}'
+               if label else None)
 
 
 def _mark_gaps(ax, t: np.ndarray, label: bool) -> None:
@@ -348,10 +377,11 @@ def _draw_angular_velocity(rec: Recording, departure: float | None = None) -> li
                        label=f'model left the solution (t = {_t(departure, _unit(rec))})'
                        if i == 0 else None)
         _mark_impacts(ax, rec)
-        ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
+        _mark_closest_approach(ax, rec, i == 0)
+        _rate_axis(ax.yaxis, _unit(rec), _LABELS[i])
         ax.grid(True, lw=0.3)
     _time_axis(axes, _unit(rec))
-    if has_model or rec.impacts:
+    if has_model or rec.impacts or is_flyby(rec.scenario):
         axes[0].legend(loc='upper right', fontsize='small')
     axes[0].set_title(_title(rec), fontsize='small')
     return [_png(fig, 'omega.png')]
@@ -398,10 +428,11 @@ def _draw_omega_windows(rec: Recording) -> list[Drawing]:
             ax.set_xlim(t0, t1)
             ax.grid(True, lw=0.3)
             ax.tick_params(labelsize='x-small')
-            if col == 0:
-                ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
+            _rate_axis(ax.yaxis, _unit(rec), _LABELS[i] if col == 0 else '')
+            if col:
+                ax.set_ylabel('')
         unit = _unit(rec)
-        axes[0, col].set_title(f'{name}: t = {t0 / unit[1]:.6g} .. {_t(t1, unit, 6)}',
+        axes[0, col].set_title(f'{name}: t = {unit.t(t0):.6g} .. {_t(t1, unit, 6)}',
                                fontsize='small')
         _time_axis(axes[:, col], unit)
     axes[0, 0].legend(loc='upper right', fontsize='x-small')
@@ -425,12 +456,12 @@ def _draw_wy_vs_wx(rec: Recording) -> list[Drawing]:
     ax.plot(rec.omega[:1, 0], rec.omega[:1, 1], 'o', color='tab:green', label='start')
     ax.plot(rec.omega[-1:, 0], rec.omega[-1:, 1], 's', color='tab:red', label='end')
     ax.set_aspect('equal', adjustable='datalim')
-    ax.set_xlabel(f'{_LABELS[0]} [rad/yr]')
-    ax.set_ylabel(f'{_LABELS[1]} [rad/yr]')
+    _rate_axis(ax.xaxis, _unit(rec), _LABELS[0])
+    _rate_axis(ax.yaxis, _unit(rec), _LABELS[1])
     ax.grid(True, lw=0.3)
     ax.legend(loc='upper right', fontsize='small')
     unit = _unit(rec)
-    ax.set_title(f'{_label(rec)}: $\\omega_y$ vs $\\omega_x$, t = {rec.t[0] / unit[1]:.4g} .. '
+    ax.set_title(f'{_label(rec)}: $\\omega_y$ vs $\\omega_x$, t = {unit.t(rec.t[0]):.4g} .. '
                  f'{_t(rec.t[-1], unit)}', fontsize='small')
     return [_png(fig, 'wy_vs_wx.png')]
 
@@ -519,13 +550,14 @@ def _draw_error(rec: Recording) -> list[Drawing]:
         for i in range(3):
             ax1.plot(*gapped_envelope(t_vec, vec[:, i]), lw=0.7,
                      label=_LABELS[i].replace('omega', 'Delta\\omega'))
-    ax1.set_ylabel('$\\omega - \\omega_{model}$ [rad/yr]')
+    _rate_axis(ax1.yaxis, _unit(rec), '$\\omega - \\omega_{model}$')
     ax2.plot(*gapped_envelope(t_norm, norm), lw=0.8, color='black')
-    ax2.set_ylabel('|error| [rad/yr]')
+    _rate_axis(ax2.yaxis, _unit(rec), '|error|')
     _time_axis((ax1, ax2), _unit(rec))
     for ax in (ax1, ax2):
         _mark_gaps(ax, t_norm, ax is ax1)
         _mark_impacts(ax, rec)
+        _mark_closest_approach(ax, rec, ax is ax1)
         ax.grid(True, lw=0.3)
     if ax1.get_legend_handles_labels()[0]:
         ax1.legend(loc='upper left', fontsize='small')
@@ -564,21 +596,23 @@ def _draw_impacts(rec: Recording, samples: int = 25) -> list[Drawing]:
                 ax.plot(rec.model_t[msel], rec.model_omega[msel, i], lw=2.0, color='black',
                         alpha=0.5, label='analytic model')
             ax.axvspan(event.start, event.end, color='tab:red', alpha=0.3,
-                       label=f'pulse [{event.start / _unit(rec)[1]:.9g}, '
+                       label=f'pulse [{_unit(rec).t(event.start):.9g}, '
                              f'{_t(event.end, _unit(rec), 9)}]')
             ax.axvline(event.start, color='tab:red', lw=0.8, ls='--')
             ax.axvline(event.end, color='tab:red', lw=0.8, ls=':')
-            ax.set_ylabel(f'{_LABELS[i]} [rad/yr]')
+            _rate_axis(ax.yaxis, _unit(rec), _LABELS[i])
             ax.grid(True, lw=0.3)
             ax.set_xlim(lo, hi)
         axes[0].legend(loc='upper left', fontsize='x-small')
         _time_axis(axes, _unit(rec))
-        d = event.delta_omega
+        u = _unit(rec)
+        d = u.w(np.asarray(event.delta_omega))
         axes[0].set_title(
             f'{_label(rec)}: impact {event.id}, {event.frame} torque '
-            f'({event.torque[0]:.3g}, {event.torque[1]:.3g}, {event.torque[2]:.3g}) for '
-            f'{event.duration:.3g} yr; $\\Delta\\omega$ = ({d[0]:.4g}, {d[1]:.4g}, {d[2]:.4g}) '
-            f'rad/yr', fontsize='small')
+            f'({", ".join(f"{c:.3g}" for c in u.torque(np.asarray(event.torque)))}) '
+            f'{u.torque_unit} for '
+            f'{_t(event.duration, u, 3)}; $\\Delta\\omega$ = ({d[0]:.4g}, {d[1]:.4g}, '
+            f'{d[2]:.4g}) {u.rate}', fontsize='small')
         drawings.append(_png(fig, f'impact_{k}_id{event.id}.png'))
     return drawings
 
@@ -600,32 +634,47 @@ def _draw_spectrum(rec: Recording, summary: AnalysisSummary | None) -> list[Draw
     else:
         lines, _ = theory_lines(rec.scenario, rec.omega)
         spec = spectrum(rec.t, rec.omega[:, 0], lines)
-    if spec is None:
-        return []
+    if spec is None or is_flyby(rec.scenario):
+        return []           # a flyby is one passage: no line to resolve in 144 h
+    u = _unit(rec)
     fig, (ax,) = _new(1, 3.5)
-    positive = spec.amplitude > 0
-    ax.semilogy(spec.omega_axis[positive], spec.amplitude[positive], lw=0.8, color='tab:blue',
-                label=f'|FFT| of {spec.component} ({spec.window} window)')
+    positive = spec.amplitude > 0       # (drawn in display units: rad/yr, rad/d, ...)
+    ax.semilogy(u.w(spec.omega_axis[positive]), u.w(spec.amplitude[positive]), lw=0.8,
+                color='tab:blue', label=f'|FFT| of {spec.component} ({spec.window} window)')
     for k, line in enumerate(lines):
         if line.omega <= spec.nyquist:
-            ax.axvline(line.omega, color=f'C{(k % 8) + 1}', lw=0.8, ls='--',
-                       label=f'{line.name} = {line.omega:.4g}')
+            color, style = _line_style(k)
+            ax.axvline(u.w(line.omega), color=color, lw=0.8, ls=style,
+                       label=f'{line.name} = {u.w(line.omega):.4g} {u.rate}')
     for peak in spec.peaks:
-        ax.plot(peak.omega, peak.amplitude, 'v', color='black', ms=5)
+        ax.plot(u.w(peak.omega), u.w(peak.amplitude), 'v', color='black', ms=5)
     # Zoom on the interesting part: the lines and peaks, unless they fill the band anyway.
     interesting = [line.omega for line in lines if line.omega <= spec.nyquist]
     interesting += [peak.omega for peak in spec.peaks]
     right = spec.nyquist
     if interesting and 1.3 * max(interesting) < spec.nyquist:
         right = max(1.3 * max(interesting), 20 * spec.resolution, 1.0)
-    ax.set_xlim(0, min(right, spec.nyquist))
-    ax.set_xlabel(f'$\\omega$ [rad/yr]  (Nyquist $\\pi/dt$ = {spec.nyquist:.4g} rad/yr)')
-    ax.set_ylabel('amplitude [rad/yr]')
+    ax.set_xlim(0, u.w(min(right, spec.nyquist)))
+    ax.set_xlabel(f'$\\omega$ [{u.rate}]  (Nyquist $\\pi/dt$ = {u.rate_text(spec.nyquist, 4)})')
+    ax.set_ylabel(f'amplitude [{u.rate}]')
     ax.grid(True, lw=0.3)
     ax.legend(loc='upper right', fontsize='x-small')
     ax.set_title(f'{_label(rec)}: spectrum of {spec.component}, resolution '
-                 f'{spec.resolution:.3g} rad/yr', fontsize='small')
+                 f'{u.rate_text(spec.resolution, 3)}', fontsize='small')
     return [_png(fig, f'spectrum_{spec.component}.png')]
+
+
+#: The theory lines' colours: the spectrum's blue left out, and brown and grey, which read as
+#: red and black in a thin dashed line (the default run's |wA+wE| and |w0-2ws| looked alike).
+_LINE_COLORS = ('tab:orange', 'tab:green', 'tab:red', 'tab:purple', 'tab:cyan', 'tab:olive',
+                'tab:pink', 'black')
+#: Their dashes, cycled at the same time: 8 colours x 3 styles give 24 different lines.
+_LINE_STYLES = ('--', ':', '-.')
+
+
+def _line_style(k: int) -> tuple[str, str]:
+    """Return the (colour, line style) of the k-th theory line: no two of 24 lines alike."""
+    return _LINE_COLORS[k % len(_LINE_COLORS)], _LINE_STYLES[k % len(_LINE_STYLES)]
 
 
 def write_figures(rec: Recording, out_dir, summary: AnalysisSummary | None = None, *,

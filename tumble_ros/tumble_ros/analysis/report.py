@@ -4,7 +4,10 @@ The summary as text and as JSON.
 The text: one section per concern (file and topics, time axis, scenario, comparator error,
 invariant drift, impacts, expected frequencies, spectrum, aliasing), then the notes and one
 ``WARNING:`` line per warning. The JSON: the same fields as plain types, NaN and inf as null.
-Units as computed: years [yr], rad/yr (body axes), J in normalised inertia times (rad/yr)^2.
+The text is in the summary's display units (``display``: yr and rad/yr for the paper's runs,
+h and rad/h for a flyby; directions in degrees, frame named); the JSON in the units as computed:
+years [yr], rad/yr (body axes), J in normalised inertia times (rad/yr)^2, and ``units`` names
+the display units.
 """
 from __future__ import annotations
 
@@ -17,8 +20,8 @@ import numpy as np
 from tumble_ros.core import DEPARTURE
 from tumble_ros.topics import ANGULAR_VELOCITY, in_namespace, SCENARIO
 
+from .display import display_units, DisplayUnits
 from .recording import ROOT_NAMESPACE
-from .spin import HOURS_PER_YEAR, period_text
 
 if TYPE_CHECKING:
     from .summary import AnalysisSummary
@@ -54,24 +57,32 @@ def _file(s: AnalysisSummary) -> list[str]:
     return out
 
 
+def _units(s: AnalysisSummary) -> DisplayUnits:
+    """Return the units the summary is shown in (years for a summary built without them)."""
+    return s.units if s.units is not None else display_units(math.inf)
+
+
 def _time_and_scenario(s: AnalysisSummary) -> list[str]:
     out = []
+    u = _units(s)
     p = s.sampling
-    dt = (f'dt = {_g(p.dt)} yr' + (' (uniform)' if p.uniform else
-                                   f' (median; {_g(p.dt_min)} .. {_g(p.dt_max)})')
+    dt = (f'dt = {u.time_text(p.dt)}' + (' (uniform)' if p.uniform else
+                                         f' (median; {_g(u.t(p.dt_min))} .. '
+                                         f'{u.time_text(p.dt_max)})')
           if p.dt is not None else 'one sample')
     out.append(f'simulated time: {p.n} samples of {in_namespace(s.namespace, ANGULAR_VELOCITY)}, '
-               f't = {_g(p.t_first)} .. '
-               f'{_g(p.t_last)} yr, duration {_g(p.duration)} yr, {dt}')
+               f't = {_g(u.t(p.t_first))} .. '
+               f'{u.time_text(p.t_last)}, duration {u.time_text(p.duration)}, {dt}')
     source = s.seconds_per_year_source
     out.append(f'time base: seconds_per_year = {_g(s.seconds_per_year)} '
                f'({"default" if source == "default" else f"from {source}"})')
     if s.scenario is not None:
         sc = s.scenario
-        out.append(f"scenario: inertia {_v(sc['inertia'])}, orbit_rate {_g(sc['orbit_rate'])} "
-                   f"rad/yr, omega0 {_v(sc['omega0'])} rad/yr, euler0 {_v(sc['euler0'])} rad, "
-                   f"duration {_g(sc['duration'])} yr, output_interval "
-                   f"{_g(sc['output_interval'])} yr, {sc['integrator.method']}, "
+        out.append(f"scenario: inertia {_v(sc['inertia'])}, orbit_rate "
+                   f"{u.rate_text(sc['orbit_rate'])}, omega0 {_v(u.w(np.asarray(sc['omega0'])))} "
+                   f"{u.rate}, euler0 {_v(sc['euler0'])} rad, duration "
+                   f"{u.time_text(sc['duration'])}, output_interval "
+                   f"{u.time_text(sc['output_interval'])}, {sc['integrator.method']}, "
                    f"{len(sc['impacts.start'])} scheduled impact(s)")
     else:
         out.append('scenario: none' + (f' ({s.scenario_error})' if s.scenario_error else
@@ -84,33 +95,39 @@ def _time_and_scenario(s: AnalysisSummary) -> list[str]:
 def _comparator(s: AnalysisSummary) -> list[str]:
     if s.comparator is None:
         return [f'comparator error: none ({s.comparator_note})']
+    u = _units(s)
     c = s.comparator
     models = ', '.join(repr(m) for m in c.models) or 'unknown'
     out = [f'comparator error (model {models}; {c.n} samples from {c.source}):']
-    out.append(f'  |w - w_model|: max {_g(c.max_abs)} rad/yr at t = {_g(c.t_max_abs)} yr, '
-               f'RMS {_g(c.rms_abs)} rad/yr')
+    out.append(f'  |w - w_model|: max {u.rate_text(c.max_abs)} at t = {u.time_text(c.t_max_abs)}, '
+               f'RMS {u.rate_text(c.rms_abs)}')
     if c.max_rel is not None:
         out.append(f'  relative |w - w_model|/|w|: max {_g(c.max_rel)} at t = '
-                   f'{_g(c.t_max_rel)} yr, RMS {_g(c.rms_rel)}'
+                   f'{u.time_text(c.t_max_rel)}, RMS {_g(c.rms_rel)}'
                    + (f' ({c.infinite_rel} samples with |w| = 0 left out)'
                       if c.infinite_rel else ''))
     if c.max_component is not None:
-        out.append(f'  max |error| per component (x, y, z): {_v(c.max_component)} rad/yr')
+        out.append(f'  max |error| per component (x, y, z): '
+                   f'{_v(u.w(np.asarray(c.max_component)))} {u.rate}')
     if c.t_departure is not None:
-        out.append(f'  the model left the numeric solution at t = {_g(c.t_departure)} yr '
+        out.append(f'  the model left the numeric solution at t = {u.time_text(c.t_departure)} '
                    f'(|w - w_model| > {DEPARTURE:g} |w|; {c.departed} of {c.n} samples beyond): '
                    'the w figure is scaled on the numeric solution, the model clipped')
     return out
 
 
 def _invariant(s: AnalysisSummary) -> list[str]:
+    if s.flyby:
+        return []           # not conserved on a hyperbola: nothing to report
     if s.invariant is None:
         return [f'invariant drift: not computed ({s.invariant_note})']
+    u = _units(s)
     inv = s.invariant
     out = [f"invariant drift: {inv.name} J = 1/2 w.Iw + 3/2 ws^2 u.Iu + ws (Iw).z' "
            f'(attitude from {inv.attitude_source}), per segment between impacts:']
     for seg in inv.segments:
-        out.append(f'  segment {seg.index}: t = {_g(seg.t_start)} .. {_g(seg.t_end)} yr, '
+        out.append(f'  segment {seg.index}: t = {_g(u.t(seg.t_start))} .. '
+                   f'{u.time_text(seg.t_end)}, '
                    f'{seg.n} samples, J0 = {_g(seg.j0, 10)}, max |J - J0| = '
                    f'{_g(seg.max_drift, 3)} (relative {_g(seg.rel_drift, 3)})')
     if inv.excluded:
@@ -121,73 +138,101 @@ def _invariant(s: AnalysisSummary) -> list[str]:
 def _impacts(s: AnalysisSummary) -> list[str]:
     if not s.impacts:
         return ['impacts: none recorded']
+    u = _units(s)
     out = [f'impacts: {len(s.impacts)}']
     for imp in s.impacts:
         e = imp.event
-        out.append(f'  #{e.id}: {e.frame} torque {_v(e.torque)} on [{_g(e.start, 10)}, '
-                   f'{_g(e.end, 10)}] yr ({_g(e.duration, 3)} yr): delta_omega '
-                   f'{_v(e.delta_omega)} rad/yr, |delta_omega| = '
-                   f'{_g(math.hypot(*e.delta_omega))}')
+        out.append(f'  #{e.id}: {e.frame} torque {_v(u.torque(np.asarray(e.torque)))} '
+                   f'{u.torque_unit} on [{_g(u.t(e.start), 10)}, '
+                   f'{_g(u.t(e.end), 10)}] {u.time} ({u.time_text(e.duration, 3)}): delta_omega '
+                   f'{_v(u.w(np.asarray(e.delta_omega)))} {u.rate}, |delta_omega| = '
+                   f'{_g(u.w(math.hypot(*e.delta_omega)))}')
         if imp.sampled_jump is not None:
             out.append(f'      recorded w jump between the samples at t = '
-                       f'{_g(imp.t_before)} and {_g(imp.t_after)} yr: '
-                       f'{_v(imp.sampled_jump)} rad/yr (includes the free motion between)')
+                       f'{_g(u.t(imp.t_before))} and {u.time_text(imp.t_after)}: '
+                       f'{_v(u.w(np.asarray(imp.sampled_jump)))} {u.rate} '
+                       '(includes the free motion between)')
     return out
 
 
 def _frequencies(s: AnalysisSummary) -> list[str]:
+    if s.flyby:
+        # one passage: no line a spectrum could resolve, no sampling to alias
+        return []
+    u = _units(s)
     out = [f'expected frequencies: {s.theory_basis}']
     for line in s.theory:
-        out.append(f'  {line.name:<20} {line.omega:12.6g} rad/yr  (period '
-                   f'{_g(2 * math.pi / line.omega if line.omega else math.inf, 4)} yr)  '
+        out.append(f'  {line.name:<20} {u.w(line.omega):12.6g} {u.rate}  (period '
+                   f'{u.time_text(2 * math.pi / line.omega if line.omega else math.inf, 4)})  '
                    f'{line.meaning}')
     sp = s.spectrum
     if sp is not None:
         out.append(f'dominant frequencies of {sp.component}: {sp.window} window, {sp.n} samples'
-                   f'{" (resampled)" if sp.resampled else ""}, dt = {_g(sp.dt)} yr, resolution '
-                   f'{_g(sp.resolution, 4)} rad/yr, Nyquist pi/dt = {_g(sp.nyquist, 6)} rad/yr')
+                   f'{" (resampled)" if sp.resampled else ""}, dt = {u.time_text(sp.dt)}, '
+                   f'resolution {u.rate_text(sp.resolution, 4)}, Nyquist pi/dt = '
+                   f'{u.rate_text(sp.nyquist)}')
         for k, peak in enumerate(sp.peaks, 1):
             match = ''
             if peak.nearest:
-                alias = (f' aliased to {_g(peak.omega - peak.offset)}' if peak.nearest_aliased
-                         else '')
-                match = (f', nearest line {peak.nearest} = {_g(peak.nearest_omega)}{alias} '
-                         f'(offset {peak.offset:+.3g})')
-            out.append(f'  {k}. {peak.omega:12.6g} rad/yr (period {_g(peak.period, 4)} yr), '
-                       f'amplitude {_g(peak.amplitude, 4)} rad/yr{match}')
+                alias = (f' aliased to {_g(u.w(peak.omega - peak.offset))}'
+                         if peak.nearest_aliased else '')
+                match = (f', nearest line {peak.nearest} = {_g(u.w(peak.nearest_omega))}{alias} '
+                         f'(offset {u.w(peak.offset):+.3g})')
+            out.append(f'  {k}. {u.w(peak.omega):12.6g} {u.rate} (period '
+                       f'{u.time_text(peak.period, 4)}), amplitude '
+                       f'{u.rate_text(peak.amplitude, 4)}{match}')
         if not sp.peaks:
             out.append('  no peak (constant signal)')
     else:
         out.append('dominant frequencies: fewer than 8 samples, no spectrum')
     al = s.aliasing
     if al.nyquist is not None and al.fastest is not None and not al.aliased:
-        out.append(f'aliasing: none expected: Nyquist pi/dt = {_g(al.nyquist)} rad/yr > fastest '
-                   f'expected line {al.fastest.name} = {_g(al.fastest.omega)} rad/yr')
+        out.append(f'aliasing: none expected: Nyquist pi/dt = {u.rate_text(al.nyquist)} > '
+                   f'fastest expected line {al.fastest.name} = {u.rate_text(al.fastest.omega)}')
     elif al.nyquist is None or al.fastest is None:
         out.append('aliasing: not checked (no expected frequencies or a single sample)')
     return out
 
 
+def _pole(u: DisplayUnits, state) -> str:
+    if state.pole_longitude is None:
+        return ''
+    return f', pole {u.direction_text(state.pole_longitude, state.pole_latitude)}'
+
+
 def _spin(s: AnalysisSummary) -> list[str]:
     if s.spin is None:
         return [f'spin state: not computed ({s.spin_note})']
+    u = _units(s)
     out = ['spin state (torque-free through the sample; docs/analysis.md):']
     for label, t, state in (('start', s.spin.t_start, s.spin.start),
                             ('end', s.spin.t_end, s.spin.end)):
-        pole = ''
-        if state.pole_longitude is not None:
-            pole = (f', pole lon {math.degrees(state.pole_longitude) % 360.0:.2f} deg, '
-                    f'lat {math.degrees(state.pole_latitude):.2f} deg')
-        out.append(f'  {label} (t = {_g(t, 10)} yr): {state.mode}, rotation '
-                   f'{period_text(state.rotation_period)}, precession '
-                   f'{period_text(state.precession_period)}{pole}')
+        out.append(f'  {label} (t = {u.time_text(t, 10)}): {state.mode}, rotation '
+                   f'{u.period_text(state.rotation_period)}, precession '
+                   f'{u.period_text(state.precession_period)}{_pole(u, state)}')
     if s.spin.pole_shift is not None:
         out.append(f'  pole shift: {math.degrees(s.spin.pole_shift):.3g} deg')
     if s.closest_approach is not None:
         t, km = s.closest_approach
-        out.append(f'  closest approach of the torquing body: {km:.6g} km at t = {_g(t, 10)} yr '
-                   f'({t * HOURS_PER_YEAR:.6g} h)')
+        out.append(f'  closest approach of the torquing body: {km:.6g} km at t = '
+                   f'{u.time_text(t, 6)}')
+    if s.flyby:
+        out.append(_before_after(s, u))
     return out
+
+
+def _before_after(s: AnalysisSummary, u: DisplayUnits) -> str:
+    """One line: what the encounter did (start -> end of the recording)."""
+    a, b = s.spin.start, s.spin.end
+    w0, w1 = s.spin.rate_start, s.spin.rate_end
+    rate = (f'|w| {u.rate_text(w0, 4)} -> {u.rate_text(w1, 4)} (x {w1 / w0:.4g})'
+            if w0 else '|w| 0')
+    shift = (f', pole shift {math.degrees(s.spin.pole_shift):.3g} deg'
+             if s.spin.pole_shift is not None else '')
+    return (f'  encounter, before -> after: {a.mode} -> {b.mode}, rotation '
+            f'{u.period_text(a.rotation_period)} -> {u.period_text(b.rotation_period)}, '
+            f'precession {u.period_text(a.precession_period)} -> '
+            f'{u.period_text(b.precession_period)}, {rate}{shift}')
 
 
 def format_summary(s: AnalysisSummary) -> str:

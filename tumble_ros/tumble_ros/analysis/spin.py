@@ -4,8 +4,8 @@ The tumbling state at the start and at the end of a recording (``core.spinstate`
 The torque-free spin state through the first and the last sample that has both w and the
 attitude: mode (SAM / LAM), rotation and precession periods, the pole (L's direction in the
 orbital frame), and how far the pole moved between them: what an impact sequence or an
-encounter did to the tumbler. Periods are shown in years and in hours or days (a simulated
-year is 365.25 days).
+encounter did to the tumbler. Computed in years, rad/yr and radians; shown in the recording's
+display units (``display``).
 """
 from __future__ import annotations
 
@@ -15,12 +15,11 @@ import math
 import numpy as np
 
 from tumble_ros.core.spinstate import spin_state, SpinState
-from tumble_ros.core.units import HOURS_PER_YEAR
 
 from .recording import Recording
 from .timeaxis import same_stamps
 
-__all__ = ['SpinChange', 'spin_change', 'closest_approach', 'period_text', 'HOURS_PER_YEAR']
+__all__ = ['SpinChange', 'spin_change', 'closest_approach']
 
 
 @dataclass(frozen=True)
@@ -32,6 +31,8 @@ class SpinChange:
     t_end: float
     end: SpinState
     pole_shift: float | None      # [rad]
+    rate_start: float = 0.0       # |w| at t_start [rad/yr]
+    rate_end: float = 0.0         # |w| at t_end [rad/yr]
 
 
 def spin_change(rec: Recording) -> tuple[SpinChange | None, str | None]:
@@ -51,7 +52,9 @@ def spin_change(rec: Recording) -> tuple[SpinChange | None, str | None]:
     shift = None
     if first.pole is not None and last.pole is not None:
         shift = math.acos(max(-1.0, min(1.0, float(np.dot(first.pole, last.pole)))))
-    return SpinChange(float(rec.t[ia[0]]), first, float(rec.t[ia[-1]]), last, shift), None
+    return SpinChange(float(rec.t[ia[0]]), first, float(rec.t[ia[-1]]), last, shift,
+                      float(np.linalg.norm(rec.omega[ia[0]])),
+                      float(np.linalg.norm(rec.omega[ia[-1]]))), None
 
 
 def closest_approach(rec: Recording) -> tuple[float, float] | None:
@@ -61,12 +64,3 @@ def closest_approach(rec: Recording) -> tuple[float, float] | None:
     distance = np.linalg.norm(rec.perturber, axis=1)
     k = int(np.argmin(distance))
     return float(rec.perturber_t[k]), float(distance[k])
-
-
-def period_text(years: float) -> str:
-    """Return a period in years and in hours (below 48 h) or days."""
-    if not math.isfinite(years):
-        return 'inf'
-    hours = years * HOURS_PER_YEAR
-    other = f'{hours:.4g} h' if hours < 48 else f'{hours / 24:.4g} d'
-    return f'{years:.6g} yr ({other})'

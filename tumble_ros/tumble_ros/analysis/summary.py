@@ -11,7 +11,8 @@ comparator's error (``comparator``), the Jacobi-integral drift per segment (``in
 the impacts (``impacts``), the theory's frequency lines and the aliasing check (``theory``),
 the dominant frequencies of wx (``spectrum``), and the text and JSON (``report``). Their
 names are re-exported here. How each number is computed is documented in docs/analysis.md.
-Units: simulated years [yr], rad/yr (w in body axes), inertia normalised.
+Units: simulated years [yr], rad/yr (w in body axes), inertia normalised; the text and the
+figures show them in :attr:`AnalysisSummary.units` (``display``: hours and rad/h for a flyby).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from dataclasses import dataclass
 from tumble_ros.topics import ANGULAR_VELOCITY, SCENARIO
 
 from .comparator import comparator_errors, ErrorStats
+from .display import DisplayUnits, is_flyby, recording_units
 from .impacts import impact_intervals, impact_summaries, ImpactSummary
 from .invariants import InvariantDrift, jacobi_drift, JacobiSegment
 from .recording import Recording, ROOT_NAMESPACE
@@ -66,6 +68,8 @@ class AnalysisSummary:
     spin: SpinChange | None = None           # the tumbling state at the start and the end
     spin_note: str | None = None
     closest_approach: tuple[float, float] | None = None   # (t [yr], km) of /perturber
+    units: DisplayUnits | None = None        # what the text and the figures show it in
+    flyby: bool = False                      # the torquing body passes on a hyperbola
 
 
 def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
@@ -88,14 +92,16 @@ def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
     if rec.scenario_error:
         warnings.append(f'{rec.topic(SCENARIO)} could not be parsed: {rec.scenario_error}')
 
+    units = recording_units(rec)
     final_status = None
     if rec.status:
         last = rec.status[-1]
-        final_status = f'{last.state} at t = {last.t:.6g} yr' + (f': {last.message}'
-                                                                 if last.message else '')
+        final_status = f'{last.state} at t = {units.time_text(last.t)}' + (
+            f': {units.retime(last.message)}' if last.message else '')
         for s in rec.status:
             if s.state == 'DIVERGED':
-                warnings.append(f'the simulation DIVERGED at t = {s.t:.6g} yr: {s.message}')
+                warnings.append(f'the simulation DIVERGED at t = {units.time_text(s.t)}: '
+                                f'{units.retime(s.message)}')
         if last.state in ('RUNNING', 'PAUSED'):
             notes.append(f'the recording ends before the simulator finished (last status '
                          f'{last.state})')
@@ -121,4 +127,5 @@ def analyze(rec: Recording, *, n_peaks: int = 5) -> AnalysisSummary:
         invariant=invariant, invariant_note=invariant_note, impacts=tuple(impact_summaries(rec)),
         theory_basis=basis, theory=tuple(lines), spectrum=spec, aliasing=aliasing,
         warnings=tuple(warnings), notes=tuple(notes), namespace=rec.namespace, spin=spin,
-        spin_note=spin_note, closest_approach=closest_approach(rec))
+        spin_note=spin_note, closest_approach=closest_approach(rec), units=units,
+        flyby=is_flyby(rec.scenario))
