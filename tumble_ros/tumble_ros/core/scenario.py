@@ -41,6 +41,7 @@ from .limits import (
     MIN_RTOL,
     RESOLUTION_ULPS,
     ScenarioError,
+    step_budget,
 )
 from .timebase import SampleGrid, TimeBase
 from .torques import orbital_to_body, TorqueComponent
@@ -467,6 +468,23 @@ class Scenario:
         if window is None:
             return ()
         return tuple(t for t in window if 0.0 < t < self.duration)
+
+    @property
+    def own_rate(self) -> float:
+        """Return the scenario's own rate [rad/yr]: max(|omega0|, orbit_rate, orbit's n)."""
+        return max(math.hypot(*self.omega0), self.orbit_rate,
+                   self.orbit.mean_motion if self.orbit is not None else 0.0)
+
+    @property
+    def step_budget(self) -> tuple[float, float]:
+        """
+        Return the work budget of an adaptive method: (window [yr], most steps within it).
+
+        :func:`~.limits.step_budget` of the output interval, :attr:`own_rate` and the max_step:
+        an adaptive run that takes more steps within less than one output_interval of simulated
+        time stops (FAILED, the node's DIVERGED) saying so.
+        """
+        return step_budget(self.output_interval, self.own_rate, self.integrator.max_step)
 
     @property
     def extra_torques(self) -> tuple[TorqueComponent, ...]:
