@@ -468,7 +468,7 @@ def test_a_flyby_perigee_inside_the_earth_is_refused_naming_it_and_the_radius():
     with pytest.raises(ScenarioError, match=r'^orbit\.perigee: must lie outside the perturber, '
                                             r'radius 6378\.137 km \(the Earth.*got 1\.0 km$'):
         Scenario.from_parameters({**EARTH_FLYBY, 'orbit.perigee': 1.0})
-    with pytest.raises(ScenarioError, match=r'^orbit\.perigee: .*radius 1737\.4 km .*Moon'):
+    with pytest.raises(ValueError, match=r'^orbit\.perigee: .*radius 1737\.4 km .*Moon'):
         KeplerOrbit.flyby(4902.800066, 1000.0, v_inf=1.0)
 
 
@@ -530,13 +530,12 @@ def test_every_kepler_field_is_checked_where_it_is_read(changes, match):
         Scenario.from_parameters({**SUN_ORBIT, 'orbit.e': 0.5, **changes})
 
 
-def test_the_python_api_refuses_a_bad_flyby_with_a_scenario_error_too():
-    from tumble_ros.core import ScenarioError
-
+def test_the_python_api_refuses_a_bad_flyby_naming_the_field():
+    """Refused with a ValueError naming the field (was ZeroDivisionError or TypeError)."""
     bad = (((0.0, 38000.0), {'v_inf': 5.8}), ((398600.4418, 38000.0), {'v_inf': 1e-300}),
            (('398600', 38000.0), {'v_inf': 5.8}))
     for args, kwargs in bad:
-        with pytest.raises(ScenarioError, match=r'^orbit\.(gm|v_inf): '):
+        with pytest.raises(ValueError, match=r'^orbit\.(gm|v_inf): '):
             KeplerOrbit.flyby(*args, **kwargs)
 
 

@@ -39,7 +39,6 @@ from .component import torque_function, TorqueComponent
 from .frames import orbital_to_body
 from .gravity_gradient import sun_direction_orbital, tidal_torque
 from ..jit import jit, jit_inline, python_source
-from ..limits import ScenarioError
 from ..units import GM_SUN, PERTURBER_RADII, SECONDS_PER_YEAR
 
 __all__ = ['KeplerOrbit', 'eccentric_anomaly', 'hyperbolic_anomaly', 'orbit_state',
@@ -81,9 +80,9 @@ def perturber_radius(gm: float) -> tuple[float, str]:
 
 
 def _number(name: str, value, unit: str) -> float:
-    """Return ``value`` as a float; ScenarioError naming ``name`` unless a finite number."""
+    """Return ``value`` as a float; ValueError naming ``name`` unless a finite number."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ScenarioError(f'orbit.{name}: must be a finite number{unit}, got {value!r}')
+        raise ValueError(f'orbit.{name}: must be a finite number{unit}, got {value!r}')
     return float(value)
 
 
@@ -91,8 +90,8 @@ def _check_gm(gm) -> float:
     """Return the validated GM [km^3/s^2] (``orbit.gm``)."""
     gm = _number('gm', gm, ' [km^3/s^2]')
     if not 0.0 < gm <= MAX_GM:
-        raise ScenarioError(f'orbit.gm: must be in (0, {MAX_GM:g}] km^3/s^2 (the Sun: '
-                            f'{GM_SUN:g}; {MAX_GM:g} is ~7.5e9 solar masses), got {gm!r}')
+        raise ValueError(f'orbit.gm: must be in (0, {MAX_GM:g}] km^3/s^2 (the Sun: '
+                         f'{GM_SUN:g}; {MAX_GM:g} is ~7.5e9 solar masses), got {gm!r}')
     return gm
 
 
@@ -105,8 +104,8 @@ def _resolve_radius(gm: float, radius) -> tuple[float, str]:
     """
     radius = _number('radius', radius, ' [km]')
     if radius < 0.0:
-        raise ScenarioError(f"orbit.radius: must be >= 0 km (0: the Sun's, the Earth's or the "
-                            f"Moon's by orbit.gm, else a point mass), got {radius!r}")
+        raise ValueError(f"orbit.radius: must be >= 0 km (0: the Sun's, the Earth's or the "
+                         f"Moon's by orbit.gm, else a point mass), got {radius!r}")
     if radius > 0.0:
         return radius, 'orbit.radius'
     radius, name = perturber_radius(gm)
@@ -237,8 +236,8 @@ class KeplerOrbit:
         Sun's, the Earth's or the Moon's when ``gm`` is theirs (:func:`perturber_radius`), else
         0 (a point mass); the resolved value is kept.
 
-    Every field is checked where it is read; ScenarioError names it (``orbit.<field>``), its
-    value and the range.
+    Every field is checked where it is read; the ValueError names it (``orbit.<field>``), its
+    value and the range (the Scenario passes it on as a ScenarioError).
 
     """
 
@@ -258,16 +257,16 @@ class KeplerOrbit:
             object.__setattr__(self, name, _number(name, getattr(self, name), unit))
         _check_gm(self.gm)
         if not 0.0 < self.a <= MAX_SEMI_MAJOR_AXIS:
-            raise ScenarioError(f'orbit.a: must be in (0, {MAX_SEMI_MAJOR_AXIS:g}] km (|a| for a '
-                                f'hyperbola), got {self.a!r}')
+            raise ValueError(f'orbit.a: must be in (0, {MAX_SEMI_MAJOR_AXIS:g}] km (|a| for a '
+                             f'hyperbola), got {self.a!r}')
         if not (0.0 <= self.e <= MAX_ECCENTRICITY or self.e >= 1.0 + _NEAR_PARABOLIC):
-            raise ScenarioError(f'orbit.e: must be in [0, {MAX_ECCENTRICITY}] (ellipse) or '
-                                f'>= {1.0 + _NEAR_PARABOLIC} (hyperbola); parabolic orbits are '
-                                f'not modelled, got {self.e!r}')
+            raise ValueError(f'orbit.e: must be in [0, {MAX_ECCENTRICITY}] (ellipse) or '
+                             f'>= {1.0 + _NEAR_PARABOLIC} (hyperbola); parabolic orbits are '
+                             f'not modelled, got {self.e!r}')
         radius, source = _resolve_radius(self.gm, self.radius)
         object.__setattr__(self, 'radius', radius)
         if not self.pericentre > radius:
-            raise ScenarioError(
+            raise ValueError(
                 f'orbit.e: the pericentre a |1 - e| = {self.pericentre:.6g} km (orbit.a = '
                 f'{self.a!r} km) must lie outside the perturber, radius {radius!r} km '
                 f'({source}), got {self.e!r}')
@@ -293,37 +292,37 @@ class KeplerOrbit:
         v_inf = _number('v_inf', v_inf, ' [km/s]')
         v_perigee = _number('v_perigee', v_perigee, ' [km/s]')
         if not perigee > 0.0:
-            raise ScenarioError(f'orbit.perigee: must be > 0 km, got {perigee!r}')
+            raise ValueError(f'orbit.perigee: must be > 0 km, got {perigee!r}')
         body, source = _resolve_radius(gm, radius)
         if not perigee > body:
-            raise ScenarioError(f'orbit.perigee: must lie outside the perturber, radius '
-                                f'{body!r} km ({source}), got {perigee!r} km')
+            raise ValueError(f'orbit.perigee: must lie outside the perturber, radius '
+                             f'{body!r} km ({source}), got {perigee!r} km')
         for name, value in (('v_inf', v_inf), ('v_perigee', v_perigee)):
             if not value < SPEED_OF_LIGHT:
-                raise ScenarioError(f'orbit.{name}: must be below the speed of light, '
-                                    f'{SPEED_OF_LIGHT} km/s (the model is Newtonian), got '
-                                    f'{value!r}')
+                raise ValueError(f'orbit.{name}: must be below the speed of light, '
+                                 f'{SPEED_OF_LIGHT} km/s (the model is Newtonian), got '
+                                 f'{value!r}')
         if v_inf < 0.0 or v_perigee < 0.0 or (v_inf > 0.0) == (v_perigee > 0.0):
-            raise ScenarioError('orbit.v_inf, orbit.v_perigee: give exactly one of them (> 0 '
-                                f'km/s), got {v_inf!r} and {v_perigee!r}')
+            raise ValueError('orbit.v_inf, orbit.v_perigee: give exactly one of them (> 0 '
+                             f'km/s), got {v_inf!r} and {v_perigee!r}')
         speed = 'v_inf'
         if v_perigee > 0.0:
             speed = 'v_perigee'
             escape = 2.0 * gm / perigee
             if not v_perigee * v_perigee > escape:
-                raise ScenarioError(f'orbit.v_perigee: must exceed the escape speed '
-                                    f'{math.sqrt(escape):.6g} km/s at perigee (a flyby is a '
-                                    f'hyperbola), got {v_perigee!r}')
+                raise ValueError(f'orbit.v_perigee: must exceed the escape speed '
+                                 f'{math.sqrt(escape):.6g} km/s at perigee (a flyby is a '
+                                 f'hyperbola), got {v_perigee!r}')
             v_inf = math.sqrt(v_perigee * v_perigee - escape)
         v2 = v_inf * v_inf
         given = v_perigee if speed == 'v_perigee' else v_inf
         if not (v2 > 0.0 and gm / v2 <= MAX_SEMI_MAJOR_AXIS):
-            raise ScenarioError(
+            raise ValueError(
                 f'orbit.{speed}: gives v_inf = {v_inf:.6g} km/s, below '
                 f'{math.sqrt(gm / MAX_SEMI_MAJOR_AXIS):.6g} km/s at this gm (a = gm / v_inf^2 '
                 f'must be <= {MAX_SEMI_MAJOR_AXIS:g} km), got {given!r}')
         if not perigee * v2 / gm >= _NEAR_PARABOLIC:
-            raise ScenarioError(
+            raise ValueError(
                 f'orbit.perigee, orbit.{speed}: e - 1 = perigee v_inf^2 / gm = '
                 f'{perigee * v2 / gm:.3g} must be >= {_NEAR_PARABOLIC:g} (near-parabolic orbits '
                 f'are not modelled), got perigee = {perigee!r} km, {speed} = {given!r} km/s')
