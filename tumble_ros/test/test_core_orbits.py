@@ -440,3 +440,121 @@ def test_an_ellipse_returns_after_its_period_with_its_energy_and_momentum(e):
     momentum = np.linalg.norm(np.cross(r, v), axis=1)
     np.testing.assert_allclose(momentum, math.sqrt(GM_SUN * KM_PER_AU * (1 - e * e)),
                                rtol=1e-6, atol=1e-9 * math.sqrt(GM_SUN * KM_PER_AU))
+
+
+# -- trust: impossible geometry refused, every field named, the distance without cancellation --
+SUN_ORBIT = {'orbit_rate': 0.0, 'orbit.kind': 'kepler', 'orbit.gm': 1.3271244e11,
+             'orbit.a': 1.496e8}
+EARTH_FLYBY = {'orbit_rate': 0.0, 'orbit.kind': 'flyby', 'orbit.gm': 398600.4418,
+               'orbit.perigee': 38000.0, 'orbit.v_inf': 5.8}
+
+
+@pytest.mark.parametrize('e', [1.000001, 1.00001])
+def test_a_pericentre_inside_the_sun_is_refused_naming_it_and_the_radius(e):
+    """At a = 1.496e8 km, e = 1 + 1e-6 about the Sun (a pericentre of 150 km) ran for minutes."""
+    from tumble_ros.core import ScenarioError
+
+    with pytest.raises(ScenarioError) as err:
+        Scenario.from_parameters({**SUN_ORBIT, 'orbit.e': e})
+    message = str(err.value)
+    assert message.startswith('orbit.e: ') and message.endswith(f'got {e!r}')
+    assert f'{1.496e8 * (e - 1.0):.6g} km' in message          # the pericentre
+    assert '695700.0 km' in message and 'Sun' in message        # the radius and whose
+
+
+def test_a_flyby_perigee_inside_the_earth_is_refused_naming_it_and_the_radius():
+    from tumble_ros.core import ScenarioError
+
+    with pytest.raises(ScenarioError, match=r'^orbit\.perigee: must lie outside the perturber, '
+                                            r'radius 6378\.137 km \(the Earth.*got 1\.0 km$'):
+        Scenario.from_parameters({**EARTH_FLYBY, 'orbit.perigee': 1.0})
+    with pytest.raises(ValueError, match=r'^orbit\.perigee: .*radius 1737\.4 km .*Moon'):
+        KeplerOrbit.flyby(4902.800066, 1000.0, v_inf=1.0)
+
+
+def test_the_perturbers_radius_is_the_known_bodys_or_the_parameter():
+    from tumble_ros.core import ScenarioError
+
+    assert Scenario.from_parameters({**EARTH_FLYBY}).orbit.radius == 6378.137
+    assert Scenario.from_parameters({**SUN_ORBIT, 'orbit.e': 0.5}).orbit.radius == 695700.0
+    assert KeplerOrbit(gm=1.32712440018e11, a=1.5e8).radius == 695700.0   # GM to 1e-3
+    assert KeplerOrbit(gm=1.0, a=1.0).radius == 0.0                        # unknown: a point
+    # another body: its radius as a parameter; the pericentre must clear it too
+    jupiter = {**EARTH_FLYBY, 'orbit.gm': 1.26686534e8, 'orbit.perigee': 80000.0,
+               'orbit.radius': 71492.0}
+    sc = Scenario.from_parameters(jupiter)
+    assert sc.orbit.radius == 71492.0
+    assert Scenario.from_parameters(sc.to_parameters()) == sc
+    with pytest.raises(ScenarioError, match=r'^orbit\.perigee: .*radius 71492\.0 km '
+                                            r'\(orbit\.radius\), got 70000\.0 km$'):
+        Scenario.from_parameters({**jupiter, 'orbit.perigee': 70000.0})
+    with pytest.raises(ScenarioError, match=r'^orbit\.radius: must be >= 0 km'):
+        Scenario.from_parameters({**jupiter, 'orbit.radius': -1.0})
+    with pytest.raises(ScenarioError, match=r'^orbit\.radius: is used only with orbit\.kind'):
+        Scenario.from_parameters({'orbit.radius': 5.0})
+
+
+@pytest.mark.parametrize('changes, match', [
+    # were ZeroDivisionError, TypeError, a torque parameter, and orbit.e (which nobody wrote)
+    ({'orbit.gm': 0.0}, r'^orbit\.gm: must be in \(0, 1e\+21\] km\^3/s\^2 .*got 0\.0$'),
+    ({'orbit.v_inf': 1e-300}, r'^orbit\.v_inf: .*a = gm / v_inf\^2 must be <= 1e\+16 km\), '
+                              r'got 1e-300$'),
+    ({'orbit.gm': 'x'}, r"^orbit\.gm: must be a finite number \[km\^3/s\^2\], got 'x'$"),
+    ({'orbit.gm': 1e300}, r'^orbit\.gm: must be in \(0, 1e\+21\] .*got 1e\+300$'),
+    ({'orbit.perigee': 1e-300}, r'^orbit\.perigee: must lie outside the perturber, radius '
+                                r'6378\.137 km .*got 1e-300 km$'),
+    ({'orbit.gm': 1.0, 'orbit.perigee': 1e-300},
+     r'^orbit\.perigee, orbit\.v_inf: e - 1 = perigee v_inf\^2 / gm = .* must be >= 1e-06 '
+     r'.*got perigee = 1e-300 km, v_inf = 5\.8 km/s$'),
+    ({'orbit.v_inf': 0.0, 'orbit.v_perigee': 1e300},
+     r'^orbit\.v_perigee: must be below the speed of light, 299792\.458 km/s .*got 1e\+300$'),
+    ({'orbit.v_inf': 'fast'}, r"^orbit\.v_inf: must be a finite number \[km/s\], got 'fast'$"),
+    ({'orbit.perigee': [1.0]}, r'^orbit\.perigee: must be a finite number \[km\], got \[1\.0\]$'),
+])
+def test_every_flyby_field_is_checked_where_it_is_read(changes, match):
+    from tumble_ros.core import ScenarioError
+
+    with pytest.raises(ScenarioError, match=match):
+        Scenario.from_parameters({**EARTH_FLYBY, **changes})
+
+
+@pytest.mark.parametrize('changes, match', [
+    ({'orbit.a': 1e300}, r'^orbit\.a: must be in \(0, 1e\+16\] km .*got 1e\+300$'),
+    ({'orbit.gm': True}, r'^orbit\.gm: must be a finite number .*got True$'),
+    ({'orbit.gm': 1e300}, r'^orbit\.gm: must be in \(0, 1e\+21\] .*got 1e\+300$'),
+])
+def test_every_kepler_field_is_checked_where_it_is_read(changes, match):
+    from tumble_ros.core import ScenarioError
+
+    with pytest.raises(ScenarioError, match=match):
+        Scenario.from_parameters({**SUN_ORBIT, 'orbit.e': 0.5, **changes})
+
+
+def test_the_python_api_refuses_a_bad_flyby_naming_the_field():
+    """Refused with a ValueError naming the field (was ZeroDivisionError or TypeError)."""
+    bad = (((0.0, 38000.0), {'v_inf': 5.8}), ((398600.4418, 38000.0), {'v_inf': 1e-300}),
+           (('398600', 38000.0), {'v_inf': 5.8}))
+    for args, kwargs in bad:
+        with pytest.raises(ValueError, match=r'^orbit\.(gm|v_inf): '):
+            KeplerOrbit.flyby(*args, **kwargs)
+
+
+def test_the_flyby_distance_has_no_cancellation_near_a_parabola():
+    """
+    R = a (e cosh H - 1) near perigee at e = 1 + 1e-6: e cosh H is ~1 + 1e-6.
+
+    The expected value is that expression in 40-digit decimal arithmetic, at the anomaly H the
+    solver returns (a cancelling form was ~1e-11 off there).
+    """
+    from decimal import Decimal, getcontext
+
+    getcontext().prec = 40
+    gm, a, e = 1.0, 1.0, 1.0 + 1e-6
+    worst = 0.0
+    for t in np.linspace(-3e-8, 3e-8, 61):
+        distance, _ = orbit_state(float(t), gm, a, e, 0.0, 0.0)
+        h = Decimal(hyperbolic_anomaly(float(t) * math.sqrt(gm / a ** 3), e))
+        cosh = (h.exp() + (-h).exp()) / 2
+        exact = Decimal(a) * (Decimal(e) * cosh - 1)
+        worst = max(worst, abs(float((Decimal(distance) - exact) / exact)))
+    assert worst <= 4 * 2.2e-16, worst

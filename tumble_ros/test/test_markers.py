@@ -139,8 +139,7 @@ def test_an_unphysical_body_is_a_box_and_a_flyby_body_is_drawn(tmp_path):
     body = scene.markers[0]
     assert body.type == CUBE and body.scale.z == 2 * MIN_THICKNESS   # a plate: Iz > Ix + Iy
     from tumble_ros.core.torques.orbits import KeplerOrbit
-    from tumble_ros.core.units import SECONDS_PER_YEAR
-    sun = 1.3271244e11 * SECONDS_PER_YEAR ** 2          # GM [km^3/yr^2]
+    sun = 1.3271244e11                                  # GM [km^3/s^2], the orbit's unit
     flyby = Scenario(orbit_rate=0.0, orbit=KeplerOrbit(gm=sun, a=1.5e8, e=1.5, t_p=0.05),
                      duration=0.1, output_interval=0.01)
     scenes = _scenes(record_offline(flyby, tmp_path / 'flyby.mcap').output)

@@ -269,3 +269,59 @@ def test_the_three_nodes_beside_a_cpu_hog_lose_nothing_on_the_reliable_topics(ro
     assert not lost, f'samples lost per reliable topic: {lost}'
     clock = len(columns[topics.CLOCK]) if topics.CLOCK in columns else 0
     assert f'{topics.CLOCK}: {n - clock} of {n} samples missed' in recorder.output
+# -- orbits: impossible geometry refused at start-up, a runaway stopped as DIVERGED -----------
+def params_file(path, params: dict):
+    """Write ``params`` (dotted names) as the ros__parameters of a sim params file."""
+    import yaml
+
+    nested: dict = {}
+    for name, value in params.items():
+        *parents, leaf = name.split('.')
+        node = nested
+        for parent in parents:
+            node = node.setdefault(parent, {})
+        node[leaf] = value
+    path.write_text(yaml.safe_dump({'/**/sim': {'ros__parameters': nested}}))
+    return path
+
+
+SUN_KEPLER = {'orbit_rate': 0.0, 'orbit.kind': 'kepler', 'orbit.gm': 1.3271244e11,
+              'orbit.a': 1.496e8}
+EARTH_FLYBY = {'orbit_rate': 0.0, 'orbit.kind': 'flyby', 'orbit.gm': 398600.4418,
+               'orbit.perigee': 38000.0, 'orbit.v_inf': 5.8}
+
+
+@pytest.mark.parametrize('params, expected', [
+    # a pericentre of 150 km from the Sun's centre: accepted, it ran for minutes
+    ({**SUN_KEPLER, 'orbit.e': 1.000001}, ['orbit.e: the pericentre a |1 - e| = 149.6 km',
+                                           'radius 695700.0 km', 'got 1.000001']),
+    ({**EARTH_FLYBY, 'orbit.perigee': 1.0}, ['orbit.perigee: must lie outside the perturber, '
+                                             'radius 6378.137 km', 'got 1.0 km']),
+    # were tracebacks (ZeroDivisionError) or a derived field nobody wrote
+    ({**EARTH_FLYBY, 'orbit.gm': 0.0}, ['orbit.gm: must be in (0, 1e+21]', 'got 0.0']),
+    ({**EARTH_FLYBY, 'orbit.v_inf': 1e-300}, ['orbit.v_inf: ', 'got 1e-300']),
+    ({**EARTH_FLYBY, 'orbit.gm': 1e300}, ['orbit.gm: must be in (0, 1e+21]', 'got 1e+300']),
+    ({**EARTH_FLYBY, 'orbit.gm': 1.0, 'orbit.perigee': 1e-300},
+     ['orbit.perigee, orbit.v_inf: e - 1 = perigee v_inf^2 / gm', 'got perigee = 1e-300 km']),
+], ids=['e-1e-6-inside-the-sun', 'perigee-inside-the-earth', 'gm-0', 'v_inf-1e-300', 'gm-1e300',
+        'perigee-1e-300'])
+def test_sim_refuses_an_impossible_orbit_in_one_line(spawn, tmp_path, params, expected):
+    sim = spawn('sim', '--ros-args', '--params-file', params_file(tmp_path / 'orbit.yaml', params))
+    assert sim.wait(SLOW) == 1, sim.output
+    (line,) = sim.output.strip().splitlines()
+    assert all(text in line for text in expected), line
+
+
+def test_sim_reports_a_runaway_spin_up_as_diverged_with_the_work_budget(ros, spawn, tmp_path):
+    """A pericentre of 150 km from a solar mass of radius 1 km: stopped, not running for ever."""
+    status = ros.collect(SimStatus, topics.STATUS, latched=True)
+    params = {**SUN_KEPLER, 'orbit.e': 1.000001, 'orbit.radius': 1.0, 'orbit.t_p': 1.0,
+              'real_time_factor': 0.0}
+    sim = spawn('sim', '--ros-args', '--params-file', params_file(tmp_path / 'runaway.yaml',
+                                                                  params))
+    assert ros.spin_until(lambda: status and status[-1].state == SimStatus.DIVERGED, 2 * SLOW), (
+        [(s.state, s.message) for s in status], sim.output[-3000:])
+    message = status[-1].message
+    assert message.startswith('work budget exceeded at t = 1.0'), message
+    assert 'output_interval' in message and 1.0 - 0.002 <= status[-1].t <= 1.0
+    assert 'Traceback' not in sim.output

@@ -39,6 +39,7 @@ from . import kernels as K
 from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import INTEGRATORS
 from .integrators.compiled import failure_message, why_no_fast_path
+from .limits import step_budget
 from .rotation import continuous_quaternions, quaternions_to_matrices
 from .scenario import Impact, IMPACT_FRAMES, MAX_OMEGA, MAX_ROTATION, Scenario, ScenarioError
 from .segments import split_at_impacts
@@ -426,7 +427,12 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
                        threads):
     settings = scenario.integrator
     gammas = method.composition() if hasattr(method, 'composition') else ()
-    cfg = K.config_array(method.kernel, settings, gammas, method.order or 0)
+    # the work budget at the fastest body's rate (limits.step_budget; adaptive methods only)
+    spin = 0.0 if omega0 is None else float(
+        np.max(np.linalg.norm(np.atleast_2d(omega0), axis=-1)))
+    budget = (step_budget(scenario.output_interval, max(scenario.own_rate, spin),
+                          settings.max_step) if method.adaptive else (math.inf, math.inf))
+    cfg = K.config_array(method.kernel, settings, gammas, method.order or 0, budget)
     # segment tables
     if impacts is None:
         per_body = [split_at_impacts(scenario.duration, scenario.impacts,

@@ -6,13 +6,16 @@ against them, ``timebase`` its output grids, ``ensemble`` its per-body values.
 """
 from __future__ import annotations
 
+import math
+
 from tumble_ros.errors import CoreError
 
 from .kernels.checks import MIN_STEP_ULPS
 
 __all__ = ['ScenarioError', 'MIN_RTOL', 'MAX_RTOL', 'MIN_ORBIT_RATE', 'MAX_ORBIT_RATE',
            'MAX_OMEGA', 'MAX_ATOL', 'MAX_DURATION', 'MAX_STEPS', 'MAX_SAMPLES', 'MAX_ROTATION',
-           'RESOLUTION_ULPS', 'MAX_PARAMS_FILE_BYTES', 'MAX_IMPACTS']
+           'RESOLUTION_ULPS', 'MAX_PARAMS_FILE_BYTES', 'MAX_IMPACTS', 'MIN_WINDOW_STEPS',
+           'STEPS_PER_RADIAN', 'step_budget', 'budget_message']
 
 
 class ScenarioError(CoreError, ValueError):
@@ -63,3 +66,48 @@ MAX_PARAMS_FILE_BYTES = 4 * 1024 * 1024
 #: Most scheduled impacts in a scenario (``impacts.start``): each is a segment of the run, and
 #: 10**6 of them took 3.9 GB before the first step; the paper uses a handful.
 MAX_IMPACTS = 10_000
+
+# -- The work budget of the adaptive methods (docs/physics.md, "Work budget"). A fixed-step run
+# takes duration / step steps, checked above (MAX_STEPS); an adaptive method chooses its steps,
+# and a motion that becomes far faster than the scenario's own rates (a spin-up next to a
+# point-mass perturber, a near-singular torque, a diverging solution) makes it take ever more:
+# e = 1.000001 at a = 1.496e8 km about a solar mass of radius 1 km spins the paper's body up to
+# ~1e8 rad/yr, and every output_interval then takes ~3e5 steps. So no adaptive run may take
+# more than the budget below within one output_interval of simulated time; it only counts steps
+# (no step of a run it does not stop changes) and stops the run as FAILED (the node: DIVERGED)
+# with the reason.
+
+#: Fewest steps the budget allows per output_interval. Accepted runs take ~1-100 (the output grid
+#: resolves the motion: a sample every radian or so), a perigee passage a few hundred, a run
+#: chasing rounding noise at the tightest tolerances near a parabola ~3e4 (rtol 1e-13); 1e5
+#: dop853 steps turn a body by ~1e5 rad between two samples, and take ~0.1-0.3 s compiled,
+#: ~10-50 s on the reference path.
+MIN_WINDOW_STEPS = 100_000
+#: Steps per radian of the scenario's own rotation in one output_interval the budget allows on
+#: top (the methods take ~0.1-10 per radian: dop853 at rtol 1e-10 ~0.3, rk45 at 1e-13 ~10).
+STEPS_PER_RADIAN = 1000.0
+
+
+def step_budget(output_interval: float, rate: float, max_step: float) -> tuple[float, float]:
+    """
+    Return (window [yr], most steps within it): the work budget of an adaptive method.
+
+    The window is one ``output_interval`` [yr]; the steps are the most of
+    :data:`MIN_WINDOW_STEPS`, :data:`STEPS_PER_RADIAN` per radian the scenario turns by in a
+    window at its own ``rate`` [rad/yr] (:attr:`Scenario.step_budget`: max(|omega0|,
+    orbit_rate, the Kepler orbit's mean motion)), and 4 windows / ``max_step`` (when > 0: the
+    steps a user's max_step asks for).
+    """
+    steps = max(float(MIN_WINDOW_STEPS), STEPS_PER_RADIAN * rate * output_interval)
+    if max_step > 0.0:
+        steps = max(steps, 4.0 * output_interval / max_step)
+    return float(output_interval), float(math.ceil(steps))
+
+
+def budget_message(steps: float, span: float, t: float) -> str:
+    """Why a run stopped at its work budget: ``steps`` within ``span`` [yr] before ``t`` [yr]."""
+    return (f'work budget exceeded at t = {t:.10g} yr: {steps:.0f} steps within {span:.3g} yr, '
+            "less than one output_interval: the motion has become far faster than the scenario's "
+            'own rates (a runaway spin-up, e.g. a pericentre very close to a point-mass '
+            'perturber, or a diverging solution); if it is real, a shorter output_interval '
+            'resolves it (docs/physics.md, "Work budget")')

@@ -348,7 +348,8 @@ class Propagator:
             self._nfev_done += self._stepper.nfev
         sc = self.scenario
         problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
-                                 segment.torque_orbital, sc.attitude, sc.extra_torques)
+                                 segment.torque_orbital, sc.attitude, sc.extra_torques,
+                                 sc.step_budget)
         self._stepper = self._runner.new_stepper(segment, t0, y0, problem)
 
     def _switching_rhs(self):

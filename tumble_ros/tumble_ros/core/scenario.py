@@ -42,6 +42,7 @@ from .limits import (
     MIN_RTOL,
     RESOLUTION_ULPS,
     ScenarioError,
+    step_budget,
 )
 from .params_file import check_params_file, parse_params_text
 from .timebase import SampleGrid, TimeBase
@@ -487,6 +488,23 @@ class Scenario:
         return tuple(t for t in window if 0.0 < t < self.duration)
 
     @property
+    def own_rate(self) -> float:
+        """Return the scenario's own rate [rad/yr]: max(|omega0|, orbit_rate, orbit's n)."""
+        return max(math.hypot(*self.omega0), self.orbit_rate,
+                   self.orbit.mean_motion if self.orbit is not None else 0.0)
+
+    @property
+    def step_budget(self) -> tuple[float, float]:
+        """
+        Return the work budget of an adaptive method: (window [yr], most steps within it).
+
+        :func:`~.limits.step_budget` of the output interval, :attr:`own_rate` and the max_step:
+        an adaptive run that takes more steps within less than one output_interval of simulated
+        time stops (FAILED, the node's DIVERGED) saying so.
+        """
+        return step_budget(self.output_interval, self.own_rate, self.integrator.max_step)
+
+    @property
     def extra_torques(self) -> tuple[TorqueComponent, ...]:
         """Return the torques beyond the circular orbit's and the impacts': orbit, then torques."""
         orbit = (self.orbit.torque_component(self.inertia),) if self.orbit is not None else ()
@@ -591,7 +609,7 @@ _SCENARIO_PLAIN = (
 )
 _IMPACT_KEYS = ('impacts.start', 'impacts.duration', 'impacts.torque', 'impacts.frame')
 #: The fields of a Kepler orbit (orbit.kind kepler), and what a flyby states instead of a, e.
-_ORBIT_FIELDS = ('gm', 'a', 'e', 't_p', 'lambda_p', 'inclination', 'node')
+_ORBIT_FIELDS = ('gm', 'a', 'e', 't_p', 'lambda_p', 'inclination', 'node', 'radius')
 _FLYBY_FIELDS = ('perigee', 'v_inf', 'v_perigee')
 _ORBIT_KINDS = ('circular', 'kepler', 'flyby')
 #: The orbit.* values of a scenario without a Kepler orbit (orbit.kind circular).
@@ -629,9 +647,7 @@ def _orbit_from_parameters(params: Mapping[str, Any]) -> KeplerOrbit | None:
     try:
         if kind == 'kepler':
             return KeplerOrbit(**values)
-        for name in _FLYBY_FIELDS:
-            flyby[name] = _finite(f'orbit.{name}', flyby[name])
-        shared = {n: values[n] for n in ('t_p', 'lambda_p', 'inclination', 'node')}
+        shared = {n: values[n] for n in ('t_p', 'lambda_p', 'inclination', 'node', 'radius')}
         return KeplerOrbit.flyby(values['gm'], flyby['perigee'], v_inf=flyby['v_inf'],
                                  v_perigee=flyby['v_perigee'], **shared)
     except ValueError as err:
@@ -681,6 +697,9 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
                        "about Z' (kepler, flyby)"),
     'orbit.inclination': ('rad', "tilt of the orbit plane about X' (kepler, flyby)"),
     'orbit.node': ('rad', "turn of the tilted orbit plane about Z' (kepler, flyby)"),
+    'orbit.radius': ('km', "the perturber's radius, the pericentre must lie outside it; 0 = the "
+                     "Sun's 695700, the Earth's 6378.137 or the Moon's 1737.4 when gm is theirs, "
+                     'else a point mass (kepler, flyby)'),
     'orbit.perigee': ('km', 'closest distance of the flyby (flyby)'),
     'orbit.v_inf': ('km/s', 'hyperbolic excess speed; give it or v_perigee (flyby)'),
     'orbit.v_perigee': ('km/s', 'speed at perigee; give it or v_inf (flyby)'),

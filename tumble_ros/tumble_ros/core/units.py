@@ -11,7 +11,8 @@ in hours or days). A year is the Julian year, 365.25 days.
 
 The orbit of the torquing body (``orbit.*``) is stated in the astrodynamics units every table
 uses, whatever ``time_unit``: GM [km^3/s^2], distances [km], speeds [km/s]; only its time of
-pericentre follows ``time_unit``. :data:`GM_SUN` and :data:`GM_EARTH` are the standard values.
+pericentre follows ``time_unit``. :data:`GM_SUN`, :data:`GM_EARTH` and :data:`GM_MOON` are the
+standard values, :data:`PERTURBER_RADII` the radii a Kepler orbit's perturber takes by default.
 """
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ from typing import Any, Mapping
 
 __all__ = ['TIME_UNITS', 'HOURS_PER_YEAR', 'SECONDS_PER_YEAR', 'to_years', 'TIME_POWERS',
            'seconds_per_year_of',
-           'GM_SUN', 'GM_EARTH', 'KM_PER_AU']
+           'GM_SUN', 'GM_EARTH', 'GM_MOON', 'KM_PER_AU', 'PERTURBER_RADII']
 
 HOURS_PER_YEAR = 365.25 * 24.0
 SECONDS_PER_YEAR = HOURS_PER_YEAR * 3600.0
@@ -29,6 +30,18 @@ GM_SUN = 1.3271244e11
 #: The Earth's GM [km^3/s^2], including the atmosphere (IERS Conventions 2010, Petit & Luzum,
 #: IERS Technical Note 36, Table 1.1: 3.986004418e14 m^3/s^2).
 GM_EARTH = 398600.4418
+#: The Moon's GM [km^3/s^2] (JPL DE430, Folkner et al. 2014, IPN Progress Report 42-196).
+GM_MOON = 4902.800066
+#: The bodies whose radius [km] a Kepler orbit's perturber takes when its GM matches theirs
+#: (``torques.orbits.perturber_radius``): name -> (GM [km^3/s^2], radius [km]). The Sun: IAU 2015
+#: Resolution B3 nominal radius; the Earth: its equatorial radius (IERS Conventions 2010,
+#: 6,378.137 km: the larger one, so that no perigee below the equator's surface is accepted);
+#: the Moon: its mean radius (IAU WGCCRE 2015, 1,737.4 km).
+PERTURBER_RADII = {
+    'Sun': (GM_SUN, 695700.0),
+    'Earth': (GM_EARTH, 6378.137),
+    'Moon': (GM_MOON, 1737.4),
+}
 #: The astronomical unit [km] (IAU 2012 Resolution B2: 149,597,870,700 m exactly).
 KM_PER_AU = 149597870.7
 #: Years per unit of each accepted ``time_unit``.

@@ -41,11 +41,13 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+import math
 from typing import Callable, ClassVar
 
 import numpy as np
 
 from ..kernels.checks import collapsed, finite_norm
+from ..limits import budget_message
 
 __all__ = ['Stepper', 'SegmentProblem', 'RUNNING', 'FINISHED', 'FAILED']
 
@@ -74,6 +76,8 @@ class SegmentProblem:
         orbital-frame-fixed (zero outside pulses).
     extra_torques : the scenario's extra torques (``torques.TorqueComponent``), on every segment.
     attitude : the attitude representation of the state vector ("quaternion" or "euler").
+    step_budget : (window [yr], most steps within it): the work budget of adaptive methods
+        (``limits.step_budget``, :attr:`Scenario.step_budget`); (inf, inf): none.
 
     """
 
@@ -83,6 +87,7 @@ class SegmentProblem:
     torque_orbital: tuple[float, float, float] = (0.0, 0.0, 0.0)
     attitude: str = 'quaternion'
     extra_torques: tuple = ()
+    step_budget: tuple[float, float] = (math.inf, math.inf)
 
 
 class Stepper(ABC):
@@ -145,6 +150,10 @@ class Stepper(ABC):
         self.status = FINISHED if self.t >= self.t_bound else RUNNING
         self.message = ''
         self.n_steps = 0
+        # the work budget (adaptive methods; the compiled loop's ST.WIN_T, ST.WIN_STEPS)
+        self._budget = (problem.step_budget if problem is not None and self.adaptive
+                        else (math.inf, math.inf))
+        self._window_t, self._window_steps = self.t, 0
 
     @property
     def nfev(self) -> int:
@@ -163,6 +172,10 @@ class Stepper(ABC):
         """Take one step; returns the new status."""
         if self.status != RUNNING:
             raise RuntimeError(f'step() on a stepper whose status is {self.status!r}')
+        if self._window_steps >= self._budget[1]:
+            self.status = FAILED
+            self.message = budget_message(self._window_steps, self.t - self._window_t, self.t)
+            return self.status
         t_good, tau_good, tau_old_good, y_good = self.t, self.tau, self.tau_old, self.y
         ok, message = self._step_impl()
         # the compiled loop's checks (kernels.checks), the same functions
@@ -180,6 +193,9 @@ class Stepper(ABC):
             return self.status
         self.n_steps += 1
         self.t_old, self.t = t_good, self.absolute(self.tau)
+        self._window_steps += 1
+        if self.t - self._window_t >= self._budget[0]:
+            self._window_t, self._window_steps = self.t, 0
         if self.tau >= self.tau_bound:
             self.status = FINISHED
         return self.status

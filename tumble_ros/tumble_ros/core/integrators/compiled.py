@@ -15,6 +15,7 @@ import numpy as np
 
 from .base import FAILED, FINISHED, RUNNING, SegmentProblem, step_nan_message, Stepper
 from .. import kernels as K
+from ..limits import budget_message
 from ..torques import extra_torque_arrays
 
 __all__ = ['CompiledStepper', 'fast_path_available', 'why_no_fast_path', 'failure_message']
@@ -36,6 +37,8 @@ def failure_message(st: np.ndarray, method_name: str) -> str:
                 f't = {t_good:.10g} yr: the solution is singular or diverging there')
     if code == K.FAIL.STEP_NAN:
         return step_nan_message(method_name, t_good)
+    if code == K.FAIL.BUDGET:
+        return budget_message(st[K.ST.WIN_STEPS], float(st[K.ST.FAIL_DT]), t_good)
     if code == K.FAIL.REJECTED:
         return (f'{method_name} failed at t = {t_good:.10g} yr: '
                 f'{K.MAX_REJECTIONS} step sizes rejected in a row')
@@ -81,7 +84,9 @@ class CompiledStepper(Stepper):
         self.symplectic = method.symplectic
         self.order = method.order
         gammas = method.composition() if hasattr(method, 'composition') else ()
-        self._cfg = K.config_array(method.kernel, settings, gammas, method.order or 0)
+        self._cfg = K.config_array(method.kernel, settings, gammas, method.order or 0,
+                                   problem.step_budget if method.adaptive else
+                                   (math.inf, math.inf))
         self._p = K.problem_array(problem.inertia, problem.orbit_rate, problem.torque_body,
                                   problem.torque_orbital)
         self._extra = extra_torque_arrays(problem.extra_torques)

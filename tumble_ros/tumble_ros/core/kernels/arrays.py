@@ -56,9 +56,16 @@ def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0),
     return problem_arrays(inertia, orbit_rate, [*torque_body, *torque_orbital])[0]
 
 
-def config_array(kernel: str, settings, gammas=(), order: int = 0) -> np.ndarray:
-    """Return the config array (layout CF): method, step, tolerances, order, composition."""
+def config_array(kernel: str, settings, gammas=(), order: int = 0,
+                 step_budget=(np.inf, np.inf)) -> np.ndarray:
+    """
+    Return the config array (layout CF): method, step, tolerances, order, composition.
+
+    ``step_budget``: (window [yr], most steps within it), the work budget of an adaptive
+    method (``limits.step_budget``; (inf, inf): none).
+    """
     cfg = np.zeros(CF.SIZE)
+    cfg[CF.WINDOW], cfg[CF.WINDOW_STEPS] = (float(v) for v in step_budget)
     cfg[CF.METHOD] = KERNEL_IDS[kernel]
     cfg[CF.ORDER] = float(order)
     cfg[CF.STEP] = settings.step

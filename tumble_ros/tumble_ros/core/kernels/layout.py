@@ -69,6 +69,8 @@ ST = layout('State', [
     ('T0', 1, "the segment's start t0: local time tau = t - t0"),
     ('BUDGET', 1, 'Euler tracking: angle bound accumulated since the last update [rad]'),
     ('COLLAPSE', 1, "16 ulp of the segment's largest tau: no longer step collapses"),
+    ('WIN_T', 1, 'work budget: start of the current window [yr] (absolute time)'),
+    ('WIN_STEPS', 1, 'work budget: accepted steps since WIN_T'),
     ('TAU', 1, 'local time of the state [yr]'),
     ('TAU_OLD', 1, 'local time at the start of the last step'),
     ('TAU_BOUND', 1, "local time of the segment's end"),
@@ -113,13 +115,15 @@ CF = layout('Config', [
     ('GAMMA', MAX_STAGES, 'splitting: composition coefficients gamma_j'),
     ('CUM', MAX_STAGES, 'splitting: c_j = gamma_1 + ... + gamma_j (the last exactly 1)'),
     ('ORDER', 1, 'order of the method (splitting: the pulse sub-step rule)'),
+    ('WINDOW', 1, 'work budget: window of simulated time [yr] (inf: no budget)'),
+    ('WINDOW_STEPS', 1, 'work budget: most accepted steps within one window (inf: no budget)'),
 ])
 
 #: ST.STATUS values (floats: they live in the state array).
 STATUS = namedtuple('Status', 'RUNNING FINISHED FAILED')(0.0, 1.0, 2.0)
 #: ST.FAIL values: why a step failed.
-FAIL = namedtuple('Fail', 'NONE NONFINITE COLLAPSE TOO_SMALL STEP_NAN REJECTED')(
-    0.0, 1.0, 2.0, 3.0, 4.0, 5.0)
+FAIL = namedtuple('Fail', 'NONE NONFINITE COLLAPSE TOO_SMALL STEP_NAN REJECTED BUDGET')(
+    0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
 #: CF.METHOD values.
 METHOD = namedtuple('Method', 'RK4 DOP853 SPLITTING')(1, 2, 3)
 #: Registry key (``Stepper.kernel``) -> CF.METHOD value.

@@ -43,6 +43,8 @@ def seg_init(p, extra, cfg, st, t0, t_bound):
     st[ST.STATUS] = STATUS.FINISHED if t0 >= t_bound else STATUS.RUNNING
     big = abs(span)
     st[ST.COLLAPSE] = MIN_STEP_ULPS * (np.nextafter(big, np.inf) - big)
+    st[ST.WIN_T] = t0
+    st[ST.WIN_STEPS] = 0.0
     method = int(cfg[CF.METHOD])
     if method == METHOD.RK4:
         rk4.start(p, extra, cfg, st)
@@ -58,8 +60,16 @@ def step(p, extra, cfg, st):
     One step of the segment's method with the checks of ``integrators.base.Stepper.step``.
 
     Returns True on success; on failure the state is left at the last good step and
-    st[ST.FAIL] says why.
+    st[ST.FAIL] says why. The work budget (``limits.step_budget``): a step is refused
+    (FAIL.BUDGET) when cfg[CF.WINDOW_STEPS] steps were accepted within less than cfg[CF.WINDOW]
+    of simulated time; it only counts, so it changes no step of a run it does not stop.
     """
+    if st[ST.WIN_STEPS] >= cfg[CF.WINDOW_STEPS]:
+        st[ST.STATUS] = STATUS.FAILED
+        st[ST.FAIL] = FAIL.BUDGET
+        st[ST.FAIL_T] = st[ST.T]
+        st[ST.FAIL_DT] = st[ST.T] - st[ST.WIN_T]
+        return False
     t_good = st[ST.T]
     tau_good = st[ST.TAU]
     tau_old_good = st[ST.TAU_OLD]
@@ -93,6 +103,10 @@ def step(p, extra, cfg, st):
     st[ST.T_OLD] = t_good
     # the absolute time handed out (integrators.base.Stepper.absolute)
     st[ST.T] = st[ST.T_BOUND] if st[ST.TAU] >= st[ST.TAU_BOUND] else st[ST.T0] + st[ST.TAU]
+    st[ST.WIN_STEPS] += 1.0
+    if st[ST.T] - st[ST.WIN_T] >= cfg[CF.WINDOW]:   # a new window (Stepper.step: the same)
+        st[ST.WIN_T] = st[ST.T]
+        st[ST.WIN_STEPS] = 0.0
     if st[ST.TAU] >= st[ST.TAU_BOUND]:
         st[ST.STATUS] = STATUS.FINISHED
     return True

@@ -39,17 +39,78 @@ from .component import torque_function, TorqueComponent
 from .frames import orbital_to_body
 from .gravity_gradient import sun_direction_orbital, tidal_torque
 from ..jit import jit, jit_inline, python_source
-from ..units import GM_SUN, SECONDS_PER_YEAR
+from ..units import GM_SUN, PERTURBER_RADII, SECONDS_PER_YEAR
 
 __all__ = ['KeplerOrbit', 'eccentric_anomaly', 'hyperbolic_anomaly', 'orbit_state',
            'kepler_tidal_torque', 'perturber_position', 'orientation_from_elements',
-           'MAX_ECCENTRICITY']
+           'perturber_radius', 'MAX_ECCENTRICITY', 'MAX_GM', 'MAX_SEMI_MAJOR_AXIS',
+           'GM_MATCH']
 
 _TWO_PI = 2.0 * math.pi
 #: Largest eccentricity of an ellipse accepted (the solver is tested up to it), and the
 #: smallest of a hyperbola: 1 +- 1e-6 (parabolic orbits are not modelled).
 MAX_ECCENTRICITY = 0.99
 _NEAR_PARABOLIC = 1e-6
+#: Largest GM [km^3/s^2]: 1e21, ~7.5e9 solar masses (the heaviest black holes known). Above
+#: ~1e293 GM in km^3/yr^2 is no longer finite (gm: 1e300 failed deep inside as a non-finite
+#: torque parameter).
+MAX_GM = 1e21
+#: Largest semi-major axis |a| [km]: 1e16 km, about a light-year (the Oort cloud is within
+#: ~1e13 km); a^3 stays finite (a = 1e300 made the mean motion 0: a perturber that never moves).
+MAX_SEMI_MAJOR_AXIS = 1e16
+#: Relative agreement of ``gm`` with a known body's GM (``units.PERTURBER_RADII``) for the
+#: perturber to take that body's radius: 1e-3 accepts every published value of the Sun's, the
+#: Earth's and the Moon's GM, and no other body's.
+GM_MATCH = 1e-3
+#: The speed of light [km/s]: the bound of a flyby's speeds (a Newtonian model).
+SPEED_OF_LIGHT = 299792.458
+
+
+def perturber_radius(gm: float) -> tuple[float, str]:
+    """
+    Return (radius [km], name) of the known body whose GM [km^3/s^2] ``gm`` is.
+
+    The Sun, the Earth or the Moon (``units.PERTURBER_RADII``) when ``gm`` matches its GM to
+    :data:`GM_MATCH` relative; (0.0, '') otherwise (a point mass, unless ``orbit.radius`` says).
+    """
+    for name, (body_gm, radius) in PERTURBER_RADII.items():
+        if abs(gm - body_gm) <= GM_MATCH * body_gm:
+            return radius, name
+    return 0.0, ''
+
+
+def _number(name: str, value, unit: str) -> float:
+    """Return ``value`` as a float; ValueError naming ``name`` unless a finite number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f'orbit.{name}: must be a finite number{unit}, got {value!r}')
+    return float(value)
+
+
+def _check_gm(gm) -> float:
+    """Return the validated GM [km^3/s^2] (``orbit.gm``)."""
+    gm = _number('gm', gm, ' [km^3/s^2]')
+    if not 0.0 < gm <= MAX_GM:
+        raise ValueError(f'orbit.gm: must be in (0, {MAX_GM:g}] km^3/s^2 (the Sun: '
+                         f'{GM_SUN:g}; {MAX_GM:g} is ~7.5e9 solar masses), got {gm!r}')
+    return gm
+
+
+def _resolve_radius(gm: float, radius) -> tuple[float, str]:
+    """
+    Return (the perturber's radius [km], where it comes from) for ``orbit.radius``.
+
+    ``radius`` 0: the known body's whose GM ``gm`` is (:func:`perturber_radius`), else 0 (a
+    point mass); > 0: that radius.
+    """
+    radius = _number('radius', radius, ' [km]')
+    if radius < 0.0:
+        raise ValueError(f"orbit.radius: must be >= 0 km (0: the Sun's, the Earth's or the "
+                         f"Moon's by orbit.gm, else a point mass), got {radius!r}")
+    if radius > 0.0:
+        return radius, 'orbit.radius'
+    radius, name = perturber_radius(gm)
+    return radius, (f"the {name}'s, by orbit.gm; orbit.radius sets another" if name
+                    else 'a point mass')
 
 
 @jit
@@ -117,7 +178,10 @@ def orbit_state(t, gm, a, e, t_p, lambda_p):
     else:
         h = hyperbolic_anomaly(mean, e)
         nu = 2.0 * math.atan(math.sqrt((e + 1.0) / (e - 1.0)) * math.tanh(0.5 * h))
-        distance = a * (e * math.cosh(h) - 1.0)
+        # a (e cosh H - 1) without its cancellation near a parabola (e cosh H -> 1 at perigee):
+        # (e - 1) + 2 e sinh^2(H/2), with e - 1 exact (Sterbenz) for 1 < e <= 2
+        sh = math.sinh(0.5 * h)
+        distance = a * ((e - 1.0) + 2.0 * e * sh * sh)
     return distance, nu + lambda_p
 
 
@@ -167,6 +231,13 @@ class KeplerOrbit:
     inclination, node : float
         The orbit plane's orientation in the orbital frame [rad]: tilted by ``inclination``
         about X', then turned by ``node`` about Z' (0, 0: the plane X'Y' of the paper).
+    radius : float
+        The perturber's radius [km]: the pericentre must lie outside it. 0 (default): the
+        Sun's, the Earth's or the Moon's when ``gm`` is theirs (:func:`perturber_radius`), else
+        0 (a point mass); the resolved value is kept.
+
+    Every field is checked where it is read; the ValueError names it (``orbit.<field>``), its
+    value and the range (the Scenario passes it on as a ScenarioError).
 
     """
 
@@ -177,27 +248,33 @@ class KeplerOrbit:
     lambda_p: float = 0.0
     inclination: float = 0.0
     node: float = 0.0
+    radius: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ('gm', 'a', 'e', 't_p', 'lambda_p', 'inclination', 'node'):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(
-                    value):
-                raise ValueError(f'orbit.{name}: must be a finite number, got {value!r}')
-            object.__setattr__(self, name, float(value))
-        if self.gm <= 0.0:
-            raise ValueError(f'orbit.gm: must be > 0, got {self.gm!r}')
-        if self.a <= 0.0:
-            raise ValueError(f'orbit.a: must be > 0 (|a| for a hyperbola), got {self.a!r}')
+        units = {'gm': ' [km^3/s^2]', 'a': ' [km]', 'e': '', 't_p': ' [yr]', 'lambda_p': ' [rad]',
+                 'inclination': ' [rad]', 'node': ' [rad]'}
+        for name, unit in units.items():
+            object.__setattr__(self, name, _number(name, getattr(self, name), unit))
+        _check_gm(self.gm)
+        if not 0.0 < self.a <= MAX_SEMI_MAJOR_AXIS:
+            raise ValueError(f'orbit.a: must be in (0, {MAX_SEMI_MAJOR_AXIS:g}] km (|a| for a '
+                             f'hyperbola), got {self.a!r}')
         if not (0.0 <= self.e <= MAX_ECCENTRICITY or self.e >= 1.0 + _NEAR_PARABOLIC):
             raise ValueError(f'orbit.e: must be in [0, {MAX_ECCENTRICITY}] (ellipse) or '
-                             f'>= {1.0 + _NEAR_PARABOLIC} (hyperbola); parabolic orbits are not '
-                             f'modelled, got {self.e!r}')
+                             f'>= {1.0 + _NEAR_PARABOLIC} (hyperbola); parabolic orbits are '
+                             f'not modelled, got {self.e!r}')
+        radius, source = _resolve_radius(self.gm, self.radius)
+        object.__setattr__(self, 'radius', radius)
+        if not self.pericentre > radius:
+            raise ValueError(
+                f'orbit.e: the pericentre a |1 - e| = {self.pericentre:.6g} km (orbit.a = '
+                f'{self.a!r} km) must lie outside the perturber, radius {radius!r} km '
+                f'({source}), got {self.e!r}')
 
     @classmethod
     def flyby(cls, gm: float, perigee: float, *, v_inf: float = 0.0, v_perigee: float = 0.0,
               t_p: float = 0.0, lambda_p: float = 0.0, inclination: float = 0.0,
-              node: float = 0.0) -> 'KeplerOrbit':
+              node: float = 0.0, radius: float = 0.0) -> 'KeplerOrbit':
         """
         Return the hyperbola of a flyby.
 
@@ -205,21 +282,52 @@ class KeplerOrbit:
         ``v_inf`` or the speed at perigee ``v_perigee`` [km/s]:
 
         a = GM / v_inf^2, e = 1 + perigee v_inf^2 / GM (vis-viva: v_inf^2 = v_p^2 - 2 GM / r_p).
+
+        Each of them is checked here, before any is used, and a refusal names the field given
+        (``orbit.perigee``, ``orbit.v_inf``...), not the a or e derived from it. ``radius``:
+        as :attr:`radius`; the perigee must lie outside it.
         """
-        if (v_inf > 0.0) == (v_perigee > 0.0):
-            raise ValueError('orbit.v_inf, orbit.v_perigee: give exactly one of them (> 0), got '
-                             f'{v_inf!r} and {v_perigee!r}')
-        if not (math.isfinite(perigee) and perigee > 0.0):
-            raise ValueError(f'orbit.perigee: must be > 0, got {perigee!r}')
+        gm = _check_gm(gm)
+        perigee = _number('perigee', perigee, ' [km]')
+        v_inf = _number('v_inf', v_inf, ' [km/s]')
+        v_perigee = _number('v_perigee', v_perigee, ' [km/s]')
+        if not perigee > 0.0:
+            raise ValueError(f'orbit.perigee: must be > 0 km, got {perigee!r}')
+        body, source = _resolve_radius(gm, radius)
+        if not perigee > body:
+            raise ValueError(f'orbit.perigee: must lie outside the perturber, radius '
+                             f'{body!r} km ({source}), got {perigee!r} km')
+        for name, value in (('v_inf', v_inf), ('v_perigee', v_perigee)):
+            if not value < SPEED_OF_LIGHT:
+                raise ValueError(f'orbit.{name}: must be below the speed of light, '
+                                 f'{SPEED_OF_LIGHT} km/s (the model is Newtonian), got '
+                                 f'{value!r}')
+        if v_inf < 0.0 or v_perigee < 0.0 or (v_inf > 0.0) == (v_perigee > 0.0):
+            raise ValueError('orbit.v_inf, orbit.v_perigee: give exactly one of them (> 0 '
+                             f'km/s), got {v_inf!r} and {v_perigee!r}')
+        speed = 'v_inf'
         if v_perigee > 0.0:
+            speed = 'v_perigee'
             escape = 2.0 * gm / perigee
             if not v_perigee * v_perigee > escape:
                 raise ValueError(f'orbit.v_perigee: must exceed the escape speed '
                                  f'{math.sqrt(escape):.6g} km/s at perigee (a flyby is a '
                                  f'hyperbola), got {v_perigee!r}')
             v_inf = math.sqrt(v_perigee * v_perigee - escape)
-        return cls(gm=gm, a=gm / (v_inf * v_inf), e=1.0 + perigee * v_inf * v_inf / gm, t_p=t_p,
-                   lambda_p=lambda_p, inclination=inclination, node=node)
+        v2 = v_inf * v_inf
+        given = v_perigee if speed == 'v_perigee' else v_inf
+        if not (v2 > 0.0 and gm / v2 <= MAX_SEMI_MAJOR_AXIS):
+            raise ValueError(
+                f'orbit.{speed}: gives v_inf = {v_inf:.6g} km/s, below '
+                f'{math.sqrt(gm / MAX_SEMI_MAJOR_AXIS):.6g} km/s at this gm (a = gm / v_inf^2 '
+                f'must be <= {MAX_SEMI_MAJOR_AXIS:g} km), got {given!r}')
+        if not perigee * v2 / gm >= _NEAR_PARABOLIC:
+            raise ValueError(
+                f'orbit.perigee, orbit.{speed}: e - 1 = perigee v_inf^2 / gm = '
+                f'{perigee * v2 / gm:.3g} must be >= {_NEAR_PARABOLIC:g} (near-parabolic orbits '
+                f'are not modelled), got perigee = {perigee!r} km, {speed} = {given!r} km/s')
+        return cls(gm=gm, a=gm / v2, e=1.0 + perigee * v2 / gm, t_p=t_p, lambda_p=lambda_p,
+                   inclination=inclination, node=node, radius=body)
 
     @property
     def gm_per_yr2(self) -> float:
