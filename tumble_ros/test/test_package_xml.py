@@ -47,6 +47,7 @@ ROSDEP_KEYS = {
     'numba': 'python3-numba',
     'numpy': 'python3-numpy',
     'PIL': 'python3-pil',
+    'psutil': 'python3-psutil',
     'pytest': 'python3-pytest',
     'rosbags': 'python3-rosbags-pip',  # pip installer
     'scipy': 'python3-scipy',
@@ -93,9 +94,13 @@ def imported_modules(path):
 
 
 def _local_modules():
-    """Return the package itself and the test helpers imported by name (test/ is on sys.path)."""
+    """
+    Return the package itself and the helpers imported by name: the test helpers (test/ is on
+    sys.path) and the benchmark modules (test_bench_quick puts benchmarks/ on it).
+    """
     test_dir = PACKAGE_DIR / 'test'
     helpers = {p.stem for p in test_dir.glob('*.py')}
+    helpers |= {p.stem for p in (PACKAGE_DIR.parent / 'benchmarks').glob('*.py')}
     helpers |= {p.name for p in test_dir.iterdir() if (p / '__init__.py').is_file()}
     return {'tumble_ros'} | helpers
 

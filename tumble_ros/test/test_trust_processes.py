@@ -269,6 +269,8 @@ def test_the_three_nodes_beside_a_cpu_hog_lose_nothing_on_the_reliable_topics(ro
     assert not lost, f'samples lost per reliable topic: {lost}'
     clock = len(columns[topics.CLOCK]) if topics.CLOCK in columns else 0
     assert f'{topics.CLOCK}: {n - clock} of {n} samples missed' in recorder.output
+
+
 # -- orbits: impossible geometry refused at start-up, a runaway stopped as DIVERGED -----------
 def params_file(path, params: dict):
     """Write ``params`` (dotted names) as the ros__parameters of a sim params file."""
