@@ -262,3 +262,59 @@ def test_an_advertised_type_of_a_module_that_is_no_interface_package_is_not_impo
     assert recorder._import_type('std_srvs/srv/Trigger_Event').__name__ == 'Trigger_Event'
     with pytest.raises(recorder.NotAnInterface):
         recorder._import_type('geometry_msgs/msg/NoSuchType')
+
+
+@pytest.mark.parametrize('ghost', [False, True], ids=['appears', 'never-appears'])
+def test_a_consumers_announced_topics_hold_the_recorders_progress_until_subscribed(ros, tmp_path,
+                                                                                 ghost):
+    """
+    A comparator announces its per-sample outputs (``ConsumerProgress.produces``).
+
+    Until the recorder has subscribed them its progress does not advance, so the simulator
+    cannot run past their history while the recorder's graph does not show them yet (under CPU
+    contention the comparator's 3 outputs lost 1179 of 10,000 samples that way).
+    """
+    from builtin_interfaces.msg import Time
+    from geometry_msgs.msg import Vector3Stamped
+    from tumble_ros.nodes.progress import PROGRESS_QOS, PROGRESS_TOPIC
+    from tumble_ros.nodes.qos import STATE_QOS
+    from tumble_ros_interfaces.msg import ConsumerProgress
+
+    recorder = ros.start(RecorderNode, output=str(tmp_path / 'announced.mcap'),
+                         topics=[topics.ANGULAR_VELOCITY], topic_pattern='^/late',
+                         discovery_period=15.0)
+    reports = ros.collect(ConsumerProgress, PROGRESS_TOPIC, qos=PROGRESS_QOS)
+    omega = ros.probe.create_publisher(Vector3Stamped, OMEGA_TOPIC, STATE_QOS)
+    announce = ros.probe.create_publisher(ConsumerProgress, PROGRESS_TOPIC, PROGRESS_QOS)
+
+    def recorder_ns():
+        mine = [r for r in reports if r.consumer == '/recorder' and r.last_stamp.sec >= 0]
+        return mine[-1].last_stamp.sec * 10**9 + mine[-1].last_stamp.nanosec if mine else None
+
+    def publish_sample(k):
+        msg = Vector3Stamped()
+        msg.header.stamp = Time(sec=0, nanosec=k * 1_000_000)
+        omega.publish(msg)
+
+    for k in range(5):
+        publish_sample(k)
+    assert ros.spin_until(lambda: recorder_ns() == 4_000_000, 5.0), (recorder_ns(), recorder.counts)
+    for _ in range(3):     # a comparator announces its output, not on the graph yet
+        announce.publish(ConsumerProgress(consumer='/comparator', active=True,
+                                          last_stamp=Time(sec=0), produces=['/late/error']))
+        ros.spin_for(0.1)
+    for k in range(5, 10):
+        publish_sample(k)
+    ros.spin_for(1.0)
+    assert recorder_ns() == 4_000_000      # held: /late/error is announced, not subscribed
+    assert recorder.counts.get(OMEGA_TOPIC) == 10
+    if ghost:    # never published: the wait is bounded (3 s after it was first heard)
+        for k in range(10, 40):        # the samples go on meanwhile
+            publish_sample(k)
+            ros.spin_for(0.2)
+        assert recorder_ns() is not None and recorder_ns() > 9_000_000, recorder_ns()
+    else:
+        ros.probe.create_publisher(Vector3Stamped, '/late/error', STATE_QOS)
+        assert ros.spin_until(lambda: recorder.counts.get('/late/error') is not None, 5.0)
+        assert ros.spin_until(lambda: recorder_ns() == 9_000_000, 5.0), recorder_ns()
+    recorder.close()

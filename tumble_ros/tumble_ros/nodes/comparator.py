@@ -148,7 +148,9 @@ class ComparatorNode(GuardedNode):
                                                qos[topics.ERROR_NORM])
         self._pub_status = self.create_publisher(DiagnosticStatus, topics.COMPARISON_STATUS,
                                                  qos[topics.COMPARISON_STATUS])
-        self._progress = ProgressReporter(self)
+        # announced with the progress: a recorder of these holds until it has subscribed them
+        self._progress = ProgressReporter(self, produces=[
+            pub.topic_name for pub in (self._pub_model, self._pub_error, self._pub_norm)])
         self.create_subscription(ScenarioDescription, topics.SCENARIO, self._on_scenario,
                                  DESCRIPTION_QOS)
         # raw: the samples are read in place and the comparison published as bytes

@@ -12,7 +12,7 @@ depth of the state topics' queues, so nothing is ever overwritten.
 from __future__ import annotations
 
 import time
-from typing import Callable
+from typing import Callable, Iterable
 
 from builtin_interfaces.msg import Time
 from rclpy.duration import Duration
@@ -23,7 +23,8 @@ from tumble_ros import topics
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros_interfaces.msg import ConsumerProgress
 
-__all__ = ['ProgressReporter', 'ConsumerTracker', 'PROGRESS_TOPIC', 'CONSUMER_TIMEOUT']
+__all__ = ['ProgressReporter', 'ConsumerTracker', 'ProducedTopics', 'PROGRESS_TOPIC',
+           'CONSUMER_TIMEOUT']
 
 PROGRESS_TOPIC = topics.CONSUMER_PROGRESS
 PROGRESS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
@@ -47,11 +48,15 @@ class ProgressReporter:
 
     The consumer calls :meth:`mark` as it goes, or passes ``source``: a function returning its
     progress stamp [ns] (or None), asked once per report instead of once per message.
+    ``produces``: the per-sample topics the consumer publishes (resolved names), announced in
+    every report so that a recorder of them waits until it receives them.
     """
 
-    def __init__(self, node: Node, source: Callable[[], int | None] | None = None) -> None:
+    def __init__(self, node: Node, source: Callable[[], int | None] | None = None,
+                 produces: Iterable[str] = ()) -> None:
         self._node = node
         self._source = source
+        self._produces = list(produces)
         self._pub = node.create_publisher(ConsumerProgress, PROGRESS_TOPIC, PROGRESS_QOS)
         self._last_ns = _NOTHING_YET
         self._sent_ns: int | None = None
@@ -73,7 +78,8 @@ class ProgressReporter:
         self._publish(True)
 
     def _publish(self, active: bool) -> None:
-        msg = ConsumerProgress(consumer=self._node.get_fully_qualified_name(), active=active)
+        msg = ConsumerProgress(consumer=self._node.get_fully_qualified_name(), active=active,
+                               produces=self._produces)
         if self._last_ns == _NOTHING_YET:
             msg.last_stamp = Time(sec=-1, nanosec=0)
         else:
@@ -167,3 +173,60 @@ class ConsumerTracker:
                 del self._progress[name]
                 if self._on_drop is not None:
                     self._on_drop(message)
+
+
+class ProducedTopics:
+    """
+    The per-sample topics that consumers announce they publish (``ConsumerProgress.produces``).
+
+    A recorder holds its own progress while one it records is announced but not subscribed yet
+    (:meth:`awaited`): the simulator, paced on that progress, then cannot run past what the
+    topic's transient-local history replays once the subscription matches, however late the
+    recorder's graph shows the new publisher (seconds under CPU contention). An announcement
+    lapses when its consumer says goodbye or is silent for ``timeout``, and is waited for at
+    most ``timeout`` [s] after it was first heard (then ``on_late`` is told, once): no
+    announcement can hold the run for longer.
+    """
+
+    def __init__(self, node: Node, on_new: Callable[[], None] | None = None,
+                 on_late: Callable[[str], None] | None = None,
+                 timeout: float = CONSUMER_TIMEOUT) -> None:
+        self._timeout = timeout
+        self._on_new = on_new
+        self._on_late = on_late
+        self._heard: dict[str, tuple[tuple[str, ...], float]] = {}  # consumer -> (topics, when)
+        self._first: dict[str, float] = {}   # topic -> monotonic time first announced
+        self._late: set[str] = set()
+        node.create_subscription(ConsumerProgress, PROGRESS_TOPIC, self._on_progress, PROGRESS_QOS)
+
+    def _on_progress(self, msg: ConsumerProgress) -> None:
+        if not msg.active:
+            self._heard.pop(msg.consumer, None)
+            return
+        if not msg.produces:
+            return
+        now = time.monotonic()
+        topics = tuple(msg.produces)
+        new = [t for t in topics if t not in self._first]
+        for topic in new:
+            self._first[topic] = now
+        self._heard[msg.consumer] = (topics, now)
+        if new and self._on_new is not None:
+            self._on_new()
+
+    def awaited(self, has: Callable[[str], bool]) -> set[str]:
+        """Return the announced topics for which ``has(topic)`` is false, within the wait."""
+        now = time.monotonic()
+        for consumer in [c for c, (_, t) in self._heard.items() if now - t > self._timeout]:
+            del self._heard[consumer]
+        waiting = set()
+        for topic in {t for topics, _ in self._heard.values() for t in topics}:
+            if has(topic) or topic in self._late:
+                continue
+            if now - self._first[topic] > self._timeout:
+                self._late.add(topic)
+                if self._on_late is not None:
+                    self._on_late(topic)
+                continue
+            waiting.add(topic)
+        return waiting

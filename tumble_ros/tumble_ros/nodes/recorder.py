@@ -57,7 +57,7 @@ from tumble_ros.io.msgdefs import message_spec, normalize_type_name
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import declare_node_parameters
-from tumble_ros.nodes.progress import ProgressReporter
+from tumble_ros.nodes.progress import ProducedTopics, ProgressReporter
 from tumble_ros.nodes.qos import STATE_QOS
 from tumble_ros.nodes.runner import chosen_executor, run_node
 from tumble_ros.nodes.sources import SourceMonitor
@@ -181,6 +181,11 @@ class RecorderNode(GuardedNode):
         self._gone_checked: tuple[float, set[str]] = (-math.inf, set())
         self._per_sample_discovered_at = -math.inf  # monotonic time of the last look
         self._progress = ProgressReporter(self, source=self._slowest_live_stamp)
+        # per-sample topics other consumers announce (the comparator's): subscribed at once
+        self._produced = ProducedTopics(
+            self, on_new=lambda: self._discover(per_sample_only=True),
+            on_late=lambda topic: self.get_logger().warning(
+                f'{topic}: announced but not found on the graph within 3 s: not waiting for it'))
         self._discover()
         steady_timer(self, p['discovery_period'], self._discover)
         steady_timer(self, p['chunk_seconds'] / 4, self._poll)
@@ -305,12 +310,16 @@ class RecorderNode(GuardedNode):
         Wanted per-sample topics are looked for here too, every QUIET_TOPIC whatever
         ``discovery_period``: one that appears mid-run (a comparator started after the
         simulator) is subscribed before the simulator, paced on this progress, has published
-        more samples than its transient-local history (STATE_QOS depth) replays.
+        more samples than its transient-local history (STATE_QOS depth) replays; and while a
+        per-sample topic that a consumer announced (``ConsumerProgress.produces``) is not
+        subscribed yet, the progress holds (None: the last report stands).
         """
         now = time.monotonic()
         if now - self._per_sample_discovered_at >= QUIET_TOPIC:
             self._per_sample_discovered_at = now
             self._discover(per_sample_only=True)
+        if self._produced.awaited(lambda t: t in self._channels or not self._wanted(t)):
+            return None   # a consumer's announced topic is not subscribed yet: hold
         gone = self._gone_topics(now)
         live = [ns for topic, (ns, seen) in self._last_stamp.items()
                 if now - seen < STALE_TOPIC and topic not in gone]
