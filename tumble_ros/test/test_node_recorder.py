@@ -265,8 +265,8 @@ def test_an_advertised_type_of_a_module_that_is_no_interface_package_is_not_impo
 
 
 @pytest.mark.parametrize('ghost', [False, True], ids=['appears', 'never-appears'])
-def test_a_consumers_announced_topics_hold_the_recorders_progress_until_subscribed(ros, tmp_path,
-                                                                                 ghost):
+def test_a_consumers_announced_topics_hold_the_recorders_progress_until_subscribed(
+        ros, tmp_path, ghost):
     """
     A comparator announces its per-sample outputs (``ConsumerProgress.produces``).
 
@@ -298,7 +298,7 @@ def test_a_consumers_announced_topics_hold_the_recorders_progress_until_subscrib
 
     for k in range(5):
         publish_sample(k)
-    assert ros.spin_until(lambda: recorder_ns() == 4_000_000, 5.0), (recorder_ns(), recorder.counts)
+    assert ros.spin_until(lambda: recorder_ns() == 4_000_000, 5.0), recorder.counts
     for _ in range(3):     # a comparator announces its output, not on the graph yet
         announce.publish(ConsumerProgress(consumer='/comparator', active=True,
                                           last_stamp=Time(sec=0), produces=['/late/error']))

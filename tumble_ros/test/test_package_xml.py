@@ -95,8 +95,10 @@ def imported_modules(path):
 
 def _local_modules():
     """
-    Return the package itself and the helpers imported by name: the test helpers (test/ is on
-    sys.path) and the benchmark modules (test_bench_quick puts benchmarks/ on it).
+    Return the package itself and the helpers imported by name.
+
+    The test helpers (test/ is on sys.path) and the benchmark modules (test_bench_quick puts
+    benchmarks/ on it).
     """
     test_dir = PACKAGE_DIR / 'test'
     helpers = {p.stem for p in test_dir.glob('*.py')}
