@@ -20,7 +20,8 @@ from tumble_ros.core import PARAMETER_DOCS, Scenario
 from tumble_ros.errors import NodeError
 import yaml
 
-__all__ = ['EMPTY_ARRAY_TYPES', 'declare_node_parameters', 'declare_scenario_parameters', 'node_parameter',
+__all__ = ['EMPTY_ARRAY_TYPES', 'declare_node_parameters', 'declare_scenario_parameters',
+           'node_parameter',
            'read_parameters', 'read_scenario_parameters', 'describe', 'params_file_problem',
            'refuse_unknown_parameters', 'section_applies']
 
