@@ -287,6 +287,37 @@ def test_a_shipped_scenario_runs_by_its_name_and_an_unknown_name_lists_them(spaw
     assert len(events) == 1   # fig10's impact: the shipped file was run
 
 
+@pytest.mark.parametrize('delay', [0.0, 0.5, 1.5])
+def test_a_signal_stops_an_offline_run_at_any_moment(spawn, tmp_path, delay):
+    """SIGTERM at several moments of an offline Fig 9 run: served, the file finalised."""
+    output = tmp_path / 'fig9.mcap'
+    run = spawn('bringup', CONFIG / 'fig9.yaml', '--offline', '--output', output, module=True)
+    assert run.wait_for('samples/s', SLOW), run.output
+    time.sleep(delay)
+    run.signal(signal.SIGTERM)
+    assert run.wait(30) == 128 + signal.SIGTERM, run.output
+    assert 'stopped by SIGTERM' in run.output and 'Traceback' not in run.output
+    assert summarize(output).finalised
+
+
+def test_a_refused_parameter_is_not_announced_as_a_simulation(spawn):
+    """Validate first, then announce: no 'simulating 2 yr' line before the refusal."""
+    sim = spawn('sim', '--ros-args', '-p', 'durration:=3.0', module=True)
+    assert sim.wait(SLOW) == 1, sim.output
+    assert 'unknown parameter' in sim.output and 'simulating' not in sim.output, sim.output
+
+
+def test_the_bare_sim_says_when_it_finishes(spawn):
+    """One line at FINISHED: samples and wall time."""
+    sim = spawn('sim', '--ros-args', '-p', 'duration:=0.02', '-p', 'real_time_factor:=0.0',
+                module=True)
+    assert sim.wait_for('samples in', SLOW), sim.output
+    sim.signal(signal.SIGINT)
+    assert sim.wait(30) == 0, sim.output
+    assert 'finished at t = 0.02 yr: 11 samples in ' in sim.output, sim.output
+    assert sim.output.index('simulating 0.02 yr') < sim.output.index('finished at t')
+
+
 def test_only_the_dds_memory_of_dead_processes_of_this_session_is_removed():
     """processes.remove_dead_dds_segments, on fake Fast DDS segments in /dev/shm."""
     import fcntl
