@@ -465,7 +465,7 @@ def test_unrelated_angular_velocity_of_another_type_does_not_make_it_ambiguous(t
 # -- foreign and non-finite samples ---------------------------------------------------------------
 
 def test_non_finite_samples_are_counted_reported_and_left_out(tmp_path, capsys):
-    """A foreign publisher's NaN samples: one line says how many were left out; the rest analysed."""
+    """A foreign publisher's NaN samples: counted, said in one line, left out; the rest read."""
     t = np.arange(400) * 0.002
     omega = np.stack([np.cos(100.0 * t), np.sin(100.0 * t), np.full_like(t, 30.0)], -1)
     omega[[3, 50, 51, 200, 399]] = np.nan
