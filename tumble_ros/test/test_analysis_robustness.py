@@ -464,3 +464,21 @@ def test_unrelated_angular_velocity_of_another_type_does_not_make_it_ambiguous(t
     assert command([str(path)]) == 0
     omega_topic = topics.in_namespace('/ast1', topics.ANGULAR_VELOCITY)
     assert f'samples of {omega_topic}' in capsys.readouterr().out
+
+
+# -- foreign and non-finite samples ---------------------------------------------------------------
+
+def test_non_finite_samples_are_counted_reported_and_left_out(tmp_path, capsys):
+    """A foreign publisher's NaN samples: counted, said in one line, left out; the rest read."""
+    t = np.arange(400) * 0.002
+    omega = np.stack([np.cos(100.0 * t), np.sin(100.0 * t), np.full_like(t, 30.0)], -1)
+    omega[[3, 50, 51, 200, 399]] = np.nan
+    # an asymmetric body under torque: the theory's lines use max |w| of the samples
+    scenario = Scenario(duration=0.8, inertia=(1.0, 1.2, 1.5))
+    path = write_recording(tmp_path / 'nan.mcap', t, omega, scenario=scenario)
+    assert command([str(path)]) == 0
+    out, err = capsys.readouterr()
+    notes = [line for line in (out + err).splitlines() if 'left out' in line]
+    assert notes == [f'WARNING: /{topics.ANGULAR_VELOCITY}: left out 5 of 400 samples that are '
+                     'not finite (NaN or infinite: a foreign publisher?)'], (out, err)
+    assert f'395 samples of /{topics.ANGULAR_VELOCITY}' in out

@@ -155,6 +155,8 @@ def command(argv=None) -> int:
     try:
         progress = None if args.quiet else stderr_progress()
         rec = load_recording(args.file, namespace=args.namespace, progress=progress)
+        for line in rec.left_out:
+            print(f'WARNING: {line}', file=sys.stderr)
         summary = analyze(rec, n_peaks=args.peaks)
         figures = [] if args.figures is None else _figures(rec, summary, args)
         extra = _pictures(rec, args)

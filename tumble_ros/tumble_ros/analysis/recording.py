@@ -224,6 +224,8 @@ class Recording:
     skipped: dict[str, str] = field(default_factory=dict)
     #: The namespace whose topics were read ('/' for the root namespace).
     namespace: str = ROOT_NAMESPACE
+    #: One line per kind of sample left out of the arrays (non-finite samples, ...).
+    left_out: list[str] = field(default_factory=list)
 
     @property
     def n(self) -> int:
@@ -376,6 +378,13 @@ def load_recording(path, *, namespace: str | None = None,
         return ns.astype(np.float64) / timebase.ns_per_year
 
     stamps, omega = _sorted(*raw.get(ANGULAR_VELOCITY, ([], [])), 3)
+    finite = np.isfinite(omega).all(axis=1)
+    left_out = []
+    if not finite.all():   # a foreign publisher's NaN: the analysis takes the rest
+        left_out.append(f'{in_namespace(namespace, ANGULAR_VELOCITY)}: left out '
+                        f'{int((~finite).sum())} of {len(finite)} samples that are not finite '
+                        '(NaN or infinite: a foreign publisher?)')
+        stamps, omega = stamps[finite], omega[finite]
     if len(stamps) == 0:
         raise AnalysisError(f'{info.path}: {in_namespace(namespace, ANGULAR_VELOCITY)} has no '
                             f'messages'
@@ -383,7 +392,7 @@ def load_recording(path, *, namespace: str | None = None,
     rec = Recording(path=info.path, finalised=info.finalised, problem=info.problem,
                     topics=topics, seconds_per_year=spy, seconds_per_year_source=spy_source,
                     t=years(stamps), omega=omega, stamp_ns=stamps, skipped=skipped,
-                    namespace=namespace)
+                    namespace=namespace, left_out=left_out)
     if EULER_ANGLES in raw:
         ns, rec.euler = _sorted(*raw[EULER_ANGLES], 3)
         rec.euler_t = years(ns)

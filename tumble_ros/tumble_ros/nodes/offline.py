@@ -45,6 +45,7 @@ from rclpy.serialization import serialize_message
 from tumble_ros import topics
 from tumble_ros.core import (DEPARTURE, departure_text, dump_scenario, Propagator, Scenario,
                              TimeBase)
+from tumble_ros.core.propagator import FAST_WORK_BUDGET
 from tumble_ros.core.scenario import ScenarioError
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.nodes.comparator import anchor_model, GridModelValues
@@ -55,11 +56,46 @@ from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
 from tumble_ros.nodes.recorder import qos_dict
 from tumble_ros_interfaces.msg import SimStatus
 
-__all__ = ['record_offline', 'OfflineResult', 'BATCH']
+__all__ = ['record_offline', 'OfflineResult', 'BATCH', 'SLICE_SECONDS', 'Slicer']
 
-#: Samples simulated, compared and written per step of the loop (progress and SIGINT are served
-#: between steps).
+#: Most samples simulated, compared and written per step of the loop.
 BATCH = 8192
+#: Wall-clock seconds one step of the loop aims at: a stop request (SIGINT, SIGTERM, SIGHUP) and
+#: the progress are served between steps, so within about twice this at any point of a run.
+SLICE_SECONDS = 0.05
+#: Smallest work budget of a step [integration steps or dense evaluations]
+#: (``Propagator.sample_many``'s unit), and the first one; later steps' budgets follow the
+#: measured wall time. Below it, a call's fixed cost dominates (with 1,000 impacts: a budget of
+#: 64 takes 3 times as long as 256, and 16 does not finish).
+MIN_BUDGET = 256
+
+
+class Slicer:
+    """
+    The work budget of each integration slice, so that a slice takes about ``seconds`` of wall.
+
+    ``Propagator.sample_many`` stops after ``budget`` units of work with what it sampled, bit
+    for bit what one uninterrupted call gives; the budget follows the measured cost of a unit
+    (at most doubling per slice, within [:data:`MIN_BUDGET`, ``FAST_WORK_BUDGET``]), whatever
+    the scenario costs a step (a flyby, a thousand impacts, a fine fixed step).
+    """
+
+    def __init__(self, seconds: float = SLICE_SECONDS, budget: int = MIN_BUDGET) -> None:
+        self.seconds = seconds
+        self.budget = budget
+        self.calls = 0
+
+    def sample(self, propagator: Propagator, times: np.ndarray):
+        """``propagator.sample_many(times)`` within this slice's budget; adapt the next one."""
+        started = time.monotonic()
+        result = propagator.sample_many(times, budget=self.budget)
+        self.calls += 1
+        elapsed = time.monotonic() - started
+        scale = 2.0 if elapsed <= 0.0 else min(2.0, self.seconds / elapsed)
+        self.budget = int(min(FAST_WORK_BUDGET, max(MIN_BUDGET, self.budget * scale)))
+        return result
+
+
 #: The live nodes' names (the comparator's DiagnosticStatus carries its node's name).
 COMPARATOR_NAME = '/comparator'
 
@@ -122,7 +158,8 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
 
     ``timebase``: the simulator's (its ``seconds_per_year``; default one second per year);
     ``publish_clock``, ``markers``, ``marker_decimation``: the simulator's parameters.
-    ``stop()`` is checked between batches: a stopped run keeps what it wrote (the file is
+    ``stop()`` is checked between slices of the integration (:class:`Slicer`, about
+    :data:`SLICE_SECONDS` of wall each): a stopped run keeps what it wrote (the file is
     finalised). ``progress(t [yr], samples)`` is called after each batch. Raises OSError when
     the file cannot be created or written, ScenarioError for a grid ROS stamps cannot carry.
     """
@@ -137,6 +174,7 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
     state, message, k = SimStatus.RUNNING, '', 0
     scene = _Scene(MarkerScene(scenario), marker_every(marker_decimation, grid.count),
                    grid) if markers else None
+    slicer = Slicer()
     with McapWriter(output, chunk_seconds=math.inf) as writer:
         channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None,
                              markers=markers)
@@ -149,7 +187,7 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
         channels.one(topics.STATUS, sim_status(state, 0.0, 'started', 0), 0)
         while k < grid.count and not stop():
             k1 = min(grid.count, k + BATCH)
-            done, arrays, failure = propagator.sample_many(grid.times(k, k1))
+            done, arrays, failure = slicer.sample(propagator, grid.times(k, k1))
             segment_starts = dict(propagator.pop_window_edges())
             for impact, y_start, y_end in propagator.pop_completed_impacts():
                 end_ns = timebase.to_ns(impact.end)

@@ -159,10 +159,9 @@ class SimNode(GuardedNode):
         # Steady clock: the simulator is the clock source, use_sim_time or not.
         self._timer = steady_timer(self, TICK_PERIOD, self._on_tick)
         steady_timer(self, STATUS_PERIOD, self._on_status_period)
-        self.get_logger().info(
-            f'simulating {self.scenario.duration:g} yr with {self.scenario.integrator.method}, '
-            f'{self._grid.count} samples every {self.scenario.output_interval:g} yr, '
-            f'real_time_factor {self._rtf:g}')
+        # Announced at the first tick, once the command line was checked in full (an unknown
+        # parameter is refused after the node is built): nothing is announced that is refused.
+        self._started_wall: float | None = None
 
     # -- parameters ---------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
@@ -220,6 +219,12 @@ class SimNode(GuardedNode):
         return self._grid.time(max(0, self._next_k - 1))
 
     def _on_tick(self) -> None:
+        if self._started_wall is None:
+            self._started_wall = time.monotonic()
+            self.get_logger().info(
+                f'simulating {self.scenario.duration:g} yr with '
+                f'{self.scenario.integrator.method}, {self._grid.count} samples every '
+                f'{self.scenario.output_interval:g} yr, real_time_factor {self._rtf:g}')
         if self._state != SimStatus.RUNNING:
             return
         self._publish_up_to(self._target_index())
@@ -268,8 +273,12 @@ class SimNode(GuardedNode):
                 return
             # done < len(stamps) without a failure: the call used its work budget; the next tick
             # goes on.
-        if self._next_k >= self._grid.count:
+        if self._next_k >= self._grid.count and self._state != SimStatus.FINISHED:
             self._set_state(SimStatus.FINISHED, f'finished at t = {self.t:g} yr')
+            wall = time.monotonic() - (self._started_wall or time.monotonic())
+            self.get_logger().info(
+                f'finished at t = {self.t:g} yr: {self._next_k} samples in {wall:.1f} s wall '
+                '(the simulator records nothing: a recorder or bringup does)')
 
     def _schedule_pending(self) -> None:
         while self._pending:
