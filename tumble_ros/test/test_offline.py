@@ -73,6 +73,9 @@ def test_every_topic_holds_the_same_messages(both):
     a, b = _by_topic(live.output), _by_topic(offline.output)
     assert set(a) == set(b)
     status, latched = '/' + topics.STATUS, '/' + topics.COMPARISON_STATUS
+    # every description carries its run's id: one per recording, different between the two runs
+    runs = [{d.pop('run_id') for d in rec['/' + topics.SCENARIO]} for rec in (a, b)]
+    assert all(len(run) == 1 for run in runs) and runs[0] != runs[1], runs
     for topic in sorted(set(a) - {status, latched}):
         assert len(a[topic]) == len(b[topic]), topic
         for k, (x, y) in enumerate(zip(a[topic], b[topic])):

@@ -204,7 +204,8 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
             Parameter('real_time_factor', value=0.0), Parameter('min_consumers', value=2),
             Parameter('markers', value=markers)])
         nodes.append(sim)
-        comparator_overrides = [Parameter('model', value=model)] if model else []
+        comparator_overrides = [Parameter('run_id', value=sim.run_id),
+                                *([Parameter('model', value=model)] if model else [])]
         nodes.append(ComparatorNode(context=context, parameter_overrides=comparator_overrides))
         recorder_overrides = [Parameter('output', value=str(output))] if output else []
         recorder = RecorderNode(context=context, parameter_overrides=recorder_overrides,

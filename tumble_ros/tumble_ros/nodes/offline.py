@@ -51,7 +51,8 @@ from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.nodes.comparator import anchor_model, GridModelValues
 from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
-                                       SampleEncoder, scenario_description, sim_status)
+                                       new_run_id, SampleEncoder, scenario_description,
+                                       sim_status)
 from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
 from tumble_ros.nodes.recorder import qos_dict
 from tumble_ros_interfaces.msg import SimStatus
@@ -170,7 +171,8 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
     output = Path(output)
     output.parent.mkdir(parents=True, exist_ok=True)
     propagator = Propagator(scenario)
-    scenario_yaml = dump_scenario(scenario)
+    # the scenario as started and the recording's run id, in every description
+    described = (dump_scenario(scenario), new_run_id())
     state, message, k = SimStatus.RUNNING, '', 0
     scene = _Scene(MarkerScene(scenario), marker_every(marker_decimation, grid.count),
                    grid) if markers else None
@@ -182,7 +184,7 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
         channels.one(topics.COMPARISON_STATUS, comparison_status(
             DiagnosticStatus.WARN, COMPARATOR_NAME,
             "waiting for the simulator's scenario description", model_name), 0)
-        revision = _describe(channels, comparator, scenario_yaml, timebase, 0, 0.0,
+        revision = _describe(channels, comparator, described, timebase, 0, 0.0,
                              propagator.y, propagator)
         channels.one(topics.STATUS, sim_status(state, 0.0, 'started', 0), 0)
         while k < grid.count and not stop():
@@ -195,7 +197,7 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
                     impact, 0, end_ns, y_end[:3] - y_start[:3]), end_ns)
                 segment_starts[impact.end] = y_end
             for t0 in sorted(segment_starts):
-                revision = _describe(channels, comparator, scenario_yaml, timebase, revision, t0,
+                revision = _describe(channels, comparator, described, timebase, revision, t0,
                                      segment_starts[t0], propagator)
             _write_samples(channels, comparator, grid, k, done, arrays, publish_clock, scenario)
             if scene is not None:
@@ -220,11 +222,16 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
                          wall_seconds=time.monotonic() - started)
 
 
-def _describe(channels, comparator, scenario_yaml, timebase, revision, t0, y0, propagator):
-    """Write a segment's description, anchor the comparator on it; return the next revision."""
+def _describe(channels, comparator, described, timebase, revision, t0, y0, propagator):
+    """
+    Write a segment's description, anchor the comparator on it; return the next revision.
+
+    ``described``: (the scenario as started as YAML, the recording's run id).
+    """
+    scenario_yaml, run_id = described
     description = scenario_description(scenario_yaml, timebase.seconds_per_year, revision,
                                        timebase.to_ns(t0), t0, y0[:3],
-                                       propagator.quaternion_of(y0))
+                                       propagator.quaternion_of(y0), run_id)
     channels.one(topics.SCENARIO, description, timebase.to_ns(t0))
     comparator.anchor(description, timebase.to_ns(t0))
     return revision + 1

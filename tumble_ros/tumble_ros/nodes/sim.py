@@ -12,7 +12,8 @@ and publishes every ``output_interval`` of simulated time:
 * ``status`` (tumble_ros_interfaces/SimStatus, latched) on every state change, on ``step``, when
   a consumer is dropped or a second source appears, and once a second while running;
 * ``scenario`` (tumble_ros_interfaces/ScenarioDescription, latched) at the start and after each
-  impact (one per segment): the scenario as started and the initial state of the segment;
+  impact (one per segment): the scenario as started, the initial state of the segment and the
+  run's id (:attr:`SimNode.run_id`, drawn at start-up);
 * ``markers`` (visualization_msgs/MarkerArray, frame ``orbital``) when ``markers`` is true (off
   for a bare ``ros2 run``, where it would cost ~30 % of the throughput; on in bringup, make run
   and the launch files):
@@ -53,7 +54,7 @@ from tumble_ros.core.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.markers import marker_every, MarkerScene
-from tumble_ros.nodes.messages import (FRAMES, impact_event, SampleEncoder,
+from tumble_ros.nodes.messages import (FRAMES, impact_event, new_run_id, SampleEncoder,
                                        scenario_description, sim_status)
 from tumble_ros.nodes.parameters import (
     declare_node_parameters,
@@ -106,6 +107,8 @@ class SimNode(GuardedNode):
         self._rtf = params['real_time_factor']
         self._propagator = Propagator(self.scenario)
         self._scenario_yaml = dump_scenario(self.scenario)
+        #: This run's id, in every ``scenario`` description (a restart draws a new one).
+        self.run_id: str = new_run_id()
         self._next_k = 0  # index of the next sample to publish
         self._pending: deque[tuple[int, Impact]] = deque()
         self._impact_ids: dict[int, int] = {}  # id(Impact) -> service id
@@ -364,7 +367,8 @@ class SimNode(GuardedNode):
         revision, self._revision = self._revision, self._revision + 1
         self._pub_scenario.publish(scenario_description(
             self._scenario_yaml, self.timebase.seconds_per_year, revision,
-            self.timebase.to_ns(t0), t0, y0[:3], self._propagator.quaternion_of(y0)))
+            self.timebase.to_ns(t0), t0, y0[:3], self._propagator.quaternion_of(y0),
+            self.run_id))
 
     # -- services -----------------------------------------------------------------------
     def _on_apply_impact(self, request, response):
