@@ -410,6 +410,8 @@ def test_the_three_nodes_beside_a_cpu_hog_lose_nothing_on_the_reliable_topics(ro
     assert not lost, f'samples lost per reliable topic: {lost}'
     clock = len(columns[topics.CLOCK]) if topics.CLOCK in columns else 0
     assert f'{topics.CLOCK}: {n - clock} of {n} samples missed' in recorder.output
+
+
 # -- orbits: impossible geometry refused at start-up, a runaway stopped as DIVERGED -----------
 def params_file(path, params: dict):
     """Write ``params`` (dotted names) as the ros__parameters of a sim params file."""
@@ -466,3 +468,29 @@ def test_sim_reports_a_runaway_spin_up_as_diverged_with_the_work_budget(ros, spa
     assert message.startswith('work budget exceeded at t = 1.0'), message
     assert 'output_interval' in message and 1.0 - 0.002 <= status[-1].t <= 1.0
     assert 'Traceback' not in sim.output
+
+
+def test_two_visible_bringups_in_one_domain_exit_1_and_their_recordings_are_refused(spawn,
+                                                                                    tmp_path):
+    """
+    Two ``--visible`` runs of the same scenario in one domain: their messages mix.
+
+    Each sees the other's simulator on its topics ("second source"): it says so, exits 1 (not
+    0 with a mixed recording), and ``analyze`` refuses the recording in one line naming both
+    runs unless ``--run`` chooses one.
+    """
+    from tumble_ros.analysis.cli import command
+
+    outputs = [tmp_path / f'run{k}.mcap' for k in range(2)]
+    runs = [spawn('bringup', '--visible', '--quiet', '--no-markers', '--output', output,
+                  '--ros-args', '-p', 'duration:=10.0') for output in outputs]
+    for run in runs:
+        assert run.wait(SLOW) == 1, run.output
+        assert 'second source' in run.output and 'bringup: ERROR: the recording holds a second ' \
+            'source' in run.output, run.output
+    ids = [{m.message.run_id for m in read_messages(output, topics=['/' + topics.SCENARIO])}
+           for output in outputs]
+    assert ids[0] == ids[1] and len(ids[0]) == 2, ids   # both runs' descriptions in each
+    assert command([str(outputs[0]), '--quiet']) == 1
+    run_id = sorted(ids[0])[0]
+    assert command([str(outputs[0]), '--quiet', '--run', run_id]) == 0

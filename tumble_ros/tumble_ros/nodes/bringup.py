@@ -19,11 +19,13 @@ Isolation: the run is invisible to other ROS processes and sees none of them
 two runs at once, or a foreign ``/clock``, never mix into its recording. ``--visible`` keeps the
 environment's discovery settings instead (to watch the run with ``ros2 topic echo``); then give
 each visible run its own ``ROS_DOMAIN_ID``. A second publisher on the tumble topics is reported
-all the same (status, comparison/status, the summary).
+all the same (status, comparison/status, the summary), and the run then exits 1: its recording
+holds another run's messages.
 
-Exit codes: 0 finished; 1 diverged, refused input or a recording that failed (one ``ERROR:``
-line); 130 / 143 / 129 stopped by SIGINT / SIGTERM / SIGHUP (the file is finalised and the
-summary printed alike); 141 when stdout or stderr is a closed pipe (the file is finalised).
+Exit codes: 0 finished; 1 diverged, refused input, a recording that failed or that holds a
+second source (one ``ERROR:`` line); 130 / 143 / 129 stopped by SIGINT / SIGTERM / SIGHUP
+(the file is finalised and the summary printed alike); 141 when stdout or stderr is a closed
+pipe (the file is finalised).
 """
 from __future__ import annotations
 
@@ -78,11 +80,13 @@ class BringupResult:
 
     @property
     def ok(self) -> bool:
-        return self.state == SimStatus.FINISHED and self.error is None and self.signal is None
+        """Finished, recorded without failure and from a single source, not stopped."""
+        return (self.state == SimStatus.FINISHED and self.error is None and self.signal is None
+                and not self.warnings)
 
     @property
     def exit_code(self) -> int:
-        """0 finished, 128 + signal when stopped by one, 1 otherwise."""
+        """0 finished, 128 + signal when stopped by one, 1 otherwise (a second source too)."""
         if self.signal is not None:
             return 128 + self.signal
         return 0 if self.ok else 1
@@ -296,7 +300,10 @@ def format_result(result: BringupResult) -> str:
     else:
         state = 'finished' if result.state == SimStatus.FINISHED else 'DIVERGED'
         head = f'{state}: {result.message}'
-    lines = [f'bringup: {head}', *(f'bringup: WARNING: {w}' for w in result.warnings),
+    mixed = (['bringup: ERROR: the recording holds a second source (another run on the same '
+              'topics): analyze refuses it unless --run chooses one run'] if result.warnings
+             else [])
+    lines = [f'bringup: {head}', *(f'bringup: WARNING: {w}' for w in result.warnings), *mixed,
              f'  {result.samples} samples in {result.wall_seconds:.1f} s wall; '
              f'recorded {result.output} ({size / 1e6:.2f} MB)']
     lines += [f'  {topic:40s} {count:8d}' for topic, count in sorted(result.counts.items())]
