@@ -25,10 +25,10 @@ simulator on the same topics) is ignored, with one warning per foreign run; a ne
 taken as the simulator's restart only when ``scenario`` has a single publisher again and
 ``run_id`` was not given. Samples that arrive before any description are held (up to
 ``MAX_PENDING``) and compared ``SETTLE`` seconds after the first description arrives: on a late
-join, DDS replays the latched description history and the sample history on separate topics in no particular
-order, and the later descriptions (post-impact anchors) must be in before the held samples are
-compared. The comparator reports its progress on ``consumer_progress`` so the simulator never
-outruns it.
+join, DDS replays the latched description history and the sample history on separate topics in
+no particular order, and the later descriptions (post-impact anchors) must be in before the held
+samples are compared. The comparator reports its progress on ``consumer_progress`` so the
+simulator never outruns it.
 
 The samples are taken raw and read in place (:class:`~.messages.Vector3StampedReader`; bytes
 that are not a Vector3Stamped are skipped with a warning), and the three comparison messages are
