@@ -24,7 +24,7 @@ Content (seconds_per_year = 1, so a stamp of t yr is t s of ROS time; stamp ns =
   delta_omega (0, 0.3, 0);
 - ``/scenario`` tumble_ros_interfaces/msg/ScenarioDescription, one latched message (stamp 0,
   transient-local QoS): revision 0, a small params YAML, seconds_per_year 1, segment_start 0,
-  omega (1, 0, 30), attitude identity;
+  omega (1, 0, 30), attitude identity, run_id 0123456789ab;
 - ``/status`` tumble_ros_interfaces/msg/SimStatus (latched): RUNNING at t = 0 and FINISHED at
   t = 0.398 yr.
 
@@ -96,6 +96,7 @@ def events() -> list[tuple[str, int, dict]]:
         'segment_start': 0.0,
         'omega': {'x': 1.0, 'y': 0.0, 'z': 30.0},
         'attitude': {'x': 0.0, 'y': 0.0, 'z': 0.0, 'w': 1.0},
+        'run_id': '0123456789ab',
     }))
     out.append(('/status', 0, {
         'header': {'stamp': stamp(0), 'frame_id': ''},

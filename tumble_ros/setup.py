@@ -28,16 +28,13 @@ setup(
     description='Tumbling-asteroid rotation under solar gravity-gradient torque (ROS 2 Jazzy).',
     license='Apache-2.0',
     entry_points={
-        # One line per executable, installed to lib/tumble_ros/<name> (setup.cfg) for `ros2 run`:
-        #   'name = tumble_ros.nodes.module:main',
+        # One line per executable, installed to lib/tumble_ros/<name> (setup.cfg) for `ros2 run`.
+        # All go through tumble_ros.__main__:entry (the name is the script's), which installs the
+        # stop-signal handlers before importing the executable (tumble_ros.__main__.EXECUTABLES).
         'console_scripts': [
-            'sim = tumble_ros.nodes.sim:main',
-            'comparator = tumble_ros.nodes.comparator:main',
-            'recorder = tumble_ros.nodes.recorder:main',
-            'bringup = tumble_ros.nodes.bringup:main',
-            'analyze = tumble_ros.analysis.cli:main',
-            'ensemble = tumble_ros.cli.ensemble:main',
-            'encounter = tumble_ros.cli.encounter:main',
+            f'{name} = tumble_ros.__main__:entry'
+            for name in ('sim', 'comparator', 'recorder', 'bringup', 'analyze', 'ensemble',
+                         'encounter')
         ],
     },
 )

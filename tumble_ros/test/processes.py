@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 import signal
 import subprocess
+import sys
 import time
 
 #: Where Fast DDS keeps its shared-memory transport's segments.
@@ -33,10 +34,18 @@ def executable(name: str) -> str:
 class Process:
     """One started executable: its Popen, its output file."""
 
-    def __init__(self, name: str, args, log: Path, **kwargs) -> None:
+    def __init__(self, name: str, args, log: Path, module: bool = False, **kwargs) -> None:
+        """
+        Start ``name`` with ``args``: the installed executable (what `ros2 run` runs).
+
+        ``module``: through the project's own entry point instead, ``python -m tumble_ros
+        <name>`` (``name`` '' for the main job).
+        """
         self.name, self.log = name, log
         self._out = open(log, 'w')
-        self.popen = subprocess.Popen([executable(name), *map(str, args)], stdout=self._out,
+        command = ([sys.executable, '-m', 'tumble_ros', *([name] if name else [])] if module
+                   else [executable(name)])
+        self.popen = subprocess.Popen([*command, *map(str, args)], stdout=self._out,
                                       stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                       text=True,
                                       start_new_session=True, **kwargs)

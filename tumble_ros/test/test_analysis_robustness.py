@@ -21,12 +21,13 @@ import lz4.frame
 from mcap.reader import make_reader
 import numpy as np
 import pytest
-from test_analysis_support import write_recording
+from test_analysis_support import RUN_ID, write_recording
 from tumble_ros import topics
 from tumble_ros.analysis import analyze, load_recording, write_figures
 from tumble_ros.analysis.cli import command
-from tumble_ros.core import Scenario
+from tumble_ros.core import dump_scenario, Scenario
 from tumble_ros.io import McapError, McapWriter, read_messages, summarize
+from tumble_ros_interfaces.msg import ScenarioDescription
 import zstandard
 
 DATA = Path(__file__).resolve().parent / 'data'
@@ -464,3 +465,96 @@ def test_unrelated_angular_velocity_of_another_type_does_not_make_it_ambiguous(t
     assert command([str(path)]) == 0
     omega_topic = topics.in_namespace('/ast1', topics.ANGULAR_VELOCITY)
     assert f'samples of {omega_topic}' in capsys.readouterr().out
+
+
+# -- foreign and non-finite samples ---------------------------------------------------------------
+
+def test_non_finite_samples_are_counted_reported_and_left_out(tmp_path, capsys):
+    """A foreign publisher's NaN samples: counted, said in one line, left out; the rest read."""
+    t = np.arange(400) * 0.002
+    omega = np.stack([np.cos(100.0 * t), np.sin(100.0 * t), np.full_like(t, 30.0)], -1)
+    omega[[3, 50, 51, 200, 399]] = np.nan
+    # an asymmetric body under torque: the theory's lines use max |w| of the samples
+    scenario = Scenario(duration=0.8, inertia=(1.0, 1.2, 1.5))
+    path = write_recording(tmp_path / 'nan.mcap', t, omega, scenario=scenario)
+    assert command([str(path)]) == 0
+    out, err = capsys.readouterr()
+    notes = [line for line in (out + err).splitlines() if 'left out' in line]
+    assert notes == [f'WARNING: /{topics.ANGULAR_VELOCITY}: left out 5 of 400 samples that are '
+                     'not finite (NaN or infinite: a foreign publisher?)'], (out, err)
+    assert f'395 samples of /{topics.ANGULAR_VELOCITY}' in out
+
+
+def _description(scenario: Scenario, run_id: str, t0: float = 0.0) -> ScenarioDescription:
+    """Return a ScenarioDescription of ``scenario`` from t0 [yr] (1 s a year), run ``run_id``."""
+    d = ScenarioDescription(parameters_yaml=dump_scenario(scenario), seconds_per_year=1.0,
+                            segment_start=t0, run_id=run_id)
+    d.header.stamp.sec, d.header.stamp.nanosec = divmod(round(t0 * 1e9), 1_000_000_000)
+    d.omega.x, d.omega.y, d.omega.z = scenario.omega0
+    return d
+
+
+def _spinning(n: int = 400) -> tuple[np.ndarray, np.ndarray]:
+    t = np.arange(n) * 0.002
+    return t, np.stack([np.cos(100.0 * t), np.sin(100.0 * t), np.full_like(t, 30.0)], -1)
+
+
+#: The foreign publisher's scenario: another body, another spin.
+FOREIGN = Scenario(duration=5.0, inertia=(1.0, 1.2, 1.5), omega0=(3.0, 0.0, 7.0))
+
+
+def test_a_foreign_scenario_description_is_counted_reported_and_left_out(tmp_path, capsys):
+    """
+    A foreign publisher's NaN samples and its scenario (no run id) in the run's recording.
+
+    The foreign description, later in the file than the run's own, neither replaces the run's
+    scenario nor adds a segment: one line says it was left out, the analysis goes on.
+    """
+    t, omega = _spinning()
+    omega[[3, 50]] = np.nan
+    own = Scenario(duration=0.8)
+    path = write_recording(tmp_path / 'foreign.mcap', t, omega, scenario=own,
+                           foreign_descriptions=[_description(FOREIGN, '', t0=0.3)])
+    rec = load_recording(path)
+    assert rec.scenario == own and rec.run_id == RUN_ID
+    assert [s.segment_start for s in rec.segments] == [0.0]
+    assert command([str(path)]) == 0
+    out, err = capsys.readouterr()
+    notes = [line for line in (out + err).splitlines() if 'left out' in line]
+    assert notes == [
+        f'WARNING: /{topics.SCENARIO}: left out 1 of 2 descriptions that are not of run {RUN_ID} '
+        '(no run id: 1: a foreign publisher)',
+        f'WARNING: /{topics.ANGULAR_VELOCITY}: left out 2 of 400 samples that are not finite '
+        '(NaN or infinite: a foreign publisher?)'], (out, err)
+    assert '398 samples' in out
+
+
+def test_the_descriptions_of_two_runs_are_refused_unless_one_is_chosen(tmp_path, capsys):
+    """
+    Two simulators on the same topics: two run ids on /scenario, samples mixed.
+
+    Refused in one ERROR line naming both runs and --run (exit 1); with --run the chosen run's
+    descriptions are read, the other's left out, and a line says the samples are mixed.
+    """
+    t, omega = _spinning()
+    # the second simulator ran the same scenario: its samples repeat the first run's stamps
+    t2, omega2 = np.concatenate([t, t[:100]]), np.concatenate([omega, omega[:100]])
+    own = Scenario(duration=0.8)
+    other = 'ffffeeeedddd'
+    path = write_recording(tmp_path / 'two.mcap', t2, omega2, scenario=own,
+                           foreign_descriptions=[_description(FOREIGN, other, t0=0.1)])
+    assert command([str(path)]) == 1
+    out, err = capsys.readouterr()
+    assert out == '' and err.count('\n') == 1 and err.startswith('ERROR: '), err
+    assert f'{RUN_ID}: 1' in err and f'{other}: 1' in err and '--run' in err
+    assert command([str(path), '--run', RUN_ID]) == 0
+    out, err = capsys.readouterr()
+    notes = [line for line in err.splitlines() if line.startswith('WARNING')]
+    assert notes == [
+        f'WARNING: /{topics.SCENARIO}: left out 1 of 2 descriptions that are not of run {RUN_ID} '
+        f'({other}: 1: a foreign publisher)',
+        f'WARNING: /{topics.ANGULAR_VELOCITY}: the samples of the other runs cannot be told apart '
+        f"from run {RUN_ID}'s and are kept (100 samples share their stamp with another)"], err
+    assert load_recording(path, run=other).scenario == FOREIGN
+    assert command([str(path), '--run', 'nosuchrun']) == 1
+    assert 'no run' in capsys.readouterr().err

@@ -53,17 +53,24 @@ def _vector3(msg, ns, v, frame=topics.FRAME_BODY):
     return msg
 
 
+#: The run id of the descriptions :func:`write_recording` writes.
+RUN_ID = '0a1b2c3d4e5f'
+
+
 def write_recording(path, t, omega, *, quaternion=None, euler=None,
                     scenario: Scenario | None = None,
                     seconds_per_year: float = 1.0, impacts=(), model=None, model_name='paper',
                     error_norm=True, error_vectors=True, clock=True, status=True,
-                    segments=None, extra_topics=(), chunk_bytes=1_000_000):
+                    segments=None, extra_topics=(), chunk_bytes=1_000_000, run_id=RUN_ID,
+                    foreign_descriptions=()):
     """
     Write a recording; returns its path.
 
     ``t`` (n,) [yr], ``omega`` (n, 3); ``quaternion`` (n, 4) (w, x, y, z), ``euler`` (n, 3);
     ``scenario``: published on /scenario (revision 0 at t[0]) with ``seconds_per_year``;
     ``segments``: extra (revision, segment_start, omega, quaternion) descriptions;
+    ``run_id``: the run id of those descriptions; ``foreign_descriptions``: ScenarioDescription
+    messages of a second publisher, also on /scenario (at their header stamps);
     ``impacts``: dicts with id, start, end, frame, torque, delta_omega (published at end);
     ``model`` (n, 3): the comparator's model w at the same stamps; with it
     /comparison/error = omega - model and (if ``error_norm``) /comparison/error_norm.
@@ -80,6 +87,7 @@ def write_recording(path, t, omega, *, quaternion=None, euler=None,
         desc = ScenarioDescription()
         _stamp(desc.header, tb.to_ns(t[0]))
         desc.revision = 0
+        desc.run_id = run_id
         desc.parameters_yaml = dump_scenario(scenario)
         desc.seconds_per_year = float(seconds_per_year)
         desc.segment_start = float(t[0])
@@ -93,12 +101,16 @@ def write_recording(path, t, omega, *, quaternion=None, euler=None,
             d = ScenarioDescription()
             _stamp(d.header, tb.to_ns(start))
             d.revision = revision
+            d.run_id = run_id
             d.parameters_yaml = dump_scenario(scenario)
             d.seconds_per_year = float(seconds_per_year)
             d.segment_start = float(start)
             d.omega.x, d.omega.y, d.omega.z = (float(c) for c in w)
             d.attitude.w, d.attitude.x, d.attitude.y, d.attitude.z = (float(c) for c in q)
             add('/' + topics.SCENARIO, tb.to_ns(start), d, 1)
+    for d in foreign_descriptions:
+        add('/' + topics.SCENARIO,
+            TimeBase.stamp_ns(d.header.stamp.sec, d.header.stamp.nanosec), d, 1)
     if status:
         s = SimStatus()
         _stamp(s.header, tb.to_ns(t[0]))

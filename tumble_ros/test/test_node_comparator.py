@@ -229,3 +229,30 @@ def test_held_samples_wait_for_the_whole_description_history(ros):
     t = np.array([stamp_ns(m) * 1e-9 for m in norm])
     assert t.max() > 0.1 + 3e-7
     assert max(m.norm for m in norm) < 0.05  # each sample against its own segment's anchor
+
+
+def test_a_foreign_scenario_is_ignored_and_the_own_run_compared(ros):
+    """
+    A second simulator's ``scenario`` on the same topics: the comparator keeps its own run.
+
+    The comparator anchors on its simulator's description, then another simulator (another
+    scenario, paused: it publishes only its latched description) appears on the same topics.
+    The comparator ignores that description (once warned, counted) and every sample of its own
+    run is compared with its own scenario's model, not the foreign one's.
+    """
+    model = ros.collect(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY)
+    status = ros.collect(DiagnosticStatus, topics.COMPARISON_STATUS, latched=True)
+    descriptions = ros.collect(ScenarioDescription, topics.SCENARIO, qos=DESCRIPTION_QOS)
+    own = ros.start(SimNode, start_paused=True, **RUN)
+    comparator = ros.start(ComparatorNode)
+    assert ros.spin_until(lambda: status and status[-1].level == DiagnosticStatus.OK, 10.0)
+    foreign = ros.start(SimNode, start_paused=True, omega0=[0.5, 0.0, 20.0], **RUN)
+    assert foreign.run_id != own.run_id
+    assert ros.spin_until(lambda: len(descriptions) == 2, 5.0)
+    ros.spin_for(0.3)   # the foreign description reaches the comparator too
+    assert own._on_resume(Trigger.Request(), Trigger.Response()).success
+    assert ros.spin_until(lambda: len(model) == 101, 20.0), len(model)
+    t = np.array([stamp_ns(m) * 1e-9 for m in model])
+    expected = make_model('paper', Scenario(duration=0.2, output_interval=0.002)).omega(t)
+    np.testing.assert_allclose(vec(model), expected, rtol=0, atol=1e-12)
+    assert comparator.run_id == own.run_id and comparator.foreign_descriptions == 1

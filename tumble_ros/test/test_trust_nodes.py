@@ -1,11 +1,15 @@
 """Real use, in-process: floods, second sources, namespaces, use_sim_time, parameters, errors."""
+import signal
+
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Vector3
 import pytest
 from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import GetParameters, ListParameters
 import rclpy
-from rclpy.parameter import Parameter
+from rclpy.parameter import (Parameter, PARAMETER_SEPARATOR_STRING,
+                             parameter_value_to_python)
+from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_srvs.srv import Trigger
 from tumble_ros import topics
@@ -185,6 +189,69 @@ def test_every_parameter_has_a_value_and_a_dump_reproduces_the_run(ros, spawn, t
     spawn('sim', '--ros-args', '--params-file', path)
     assert ros.spin_until(lambda: descriptions, 60.0)
     assert descriptions[-1].parameters_yaml == original
+
+
+def ros2_param_dump(ros, node_name: str) -> str:
+    """
+    Print what ``ros2 param dump <node_name>`` prints, through rclpy's parameter client.
+
+    ros2param's verb/dump.py (ros2cli 0.36): the sorted names of ListParameters, their values
+    from GetParameters (rclpy's parameter_value_to_python), nested at the dots under
+    ``{node: {ros__parameters: ...}}``, yaml.dump with default_flow_style=False. Every value
+    must be typed (no byte array for an empty double array, nothing unset).
+    """
+    client = AsyncParameterClient(ros.probe, node_name)
+    assert client.wait_for_services(timeout_sec=120.0), f'{node_name}: no parameter services'
+    future = client.list_parameters()
+    assert ros.spin_until(future.done, 120.0)
+    names = sorted(future.result().result.names)
+    future = client.get_parameters(names)
+    assert ros.spin_until(future.done, 120.0)
+    values = future.result().values
+    untyped = [n for n, v in zip(names, values)
+               if v.type in (ParameterType.PARAMETER_NOT_SET, ParameterType.PARAMETER_BYTE_ARRAY)]
+    assert not untyped, f'{node_name}: unset or byte-array parameters {untyped}'
+    tree: dict = {}
+    for name, value in zip(names, values):
+        *parents, leaf = name.split(PARAMETER_SEPARATOR_STRING)
+        branch = tree
+        for part in parents:
+            branch = branch.setdefault(part, {})
+        branch[leaf] = parameter_value_to_python(value)
+    return yaml.dump({node_name: {'ros__parameters': tree}}, default_flow_style=False)
+
+
+def test_param_dump_load_dump_is_a_fixed_point_over_three_generations(ros, spawn, tmp_path):
+    """
+    ``ros2 param dump`` of every node, loaded as its params file into a fresh node, dumps the same.
+
+    Three generations of sim, comparator and recorder processes; the first with the empty
+    ``impacts.*`` arrays of the default scenario (they dumped as ``null`` in the second, and the
+    third was refused).
+    """
+    first = {'sim': ['-p', 'start_paused:=true'], 'comparator': [],
+             'recorder': ['-p', 'output:=rec.mcap']}
+    dumps: list[dict[str, str]] = []
+    for generation in range(3):
+        folder = tmp_path / f'g{generation}'
+        folder.mkdir()
+        args = {name: (first[name] if generation == 0 else
+                       ['--params-file', tmp_path / f'g{generation - 1}' / f'{name}.yaml'])
+                for name in first}
+        processes = {name: spawn(name, '--ros-args', *args[name], cwd=folder, module=True)
+                     for name in first}
+        dumps.append({})
+        for name, process in processes.items():
+            dumps[-1][name] = ros2_param_dump(ros, '/' + name)
+            (folder / f'{name}.yaml').write_text(dumps[-1][name])
+        for process in processes.values():
+            process.signal(signal.SIGINT)
+        for process in processes.values():
+            assert process.wait(60) == 0, process.output
+    assert 'impacts:' in dumps[0]['sim'] and 'null' not in dumps[0]['sim']
+    for name in first:
+        assert dumps[1][name] == dumps[0][name], name
+        assert dumps[2][name] == dumps[0][name], name
 
 
 @pytest.mark.parametrize('content, expected', [

@@ -57,7 +57,7 @@ def test_two_bringups_at_once_each_record_only_their_own_samples(ros, spawn, tmp
     assert list(read_messages(tmp_path / 'fig5.mcap', topics=[events_topic])) == []
 
 
-@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
 def test_a_signal_stops_bringup_with_a_finalised_file_and_a_summary(spawn, tmp_path, signum):
     output = tmp_path / 'long.mcap'
     run = spawn('bringup', '--output', output, '--ros-args', '-p', 'duration:=400.0')
@@ -176,6 +176,147 @@ def test_sim_refuses_a_binary_params_file_in_one_line(spawn, tmp_path):
     assert sim.wait(SLOW) == 1, sim.output
     (line,) = sim.output.strip().splitlines()
     assert line.startswith(f'sim: params file {path}: cannot read it as text (UnicodeDecodeError')
+
+
+# -- edges: help, signals at start-up, closed pipes, misplaced options, rcl's refusals ----------
+def test_sighup_stops_the_nodes_like_sigterm(spawn, tmp_path):
+    """A closed terminal (SIGHUP): exit 0, the recording finalised, no traceback."""
+    output = tmp_path / 'rec.mcap'
+    sim = spawn('sim', '--ros-args', '-p', 'duration:=100.0', '-p', 'real_time_factor:=1.0',
+                module=True)
+    recorder = spawn('recorder', '--ros-args', '-p', f'output:={output}', module=True)
+    assert recorder.wait_for(f'recording /{topics.ANGULAR_VELOCITY}', SLOW), recorder.output
+    for process in (sim, recorder):
+        process.signal(signal.SIGHUP)
+    for process in (sim, recorder):
+        assert process.wait(30) == 0, process.output
+        assert 'Traceback' not in process.output, process.output
+    assert summarize(output).finalised
+
+
+@pytest.mark.parametrize('module', [True, False], ids=['python -m tumble_ros', 'ros2 run'])
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_the_node_is_still_importing_exits_quietly(spawn, module, signum):
+    """Importing the simulator takes seconds (rclpy, numba): a signal then ends it with 0."""
+    sim = spawn('sim', module=module)
+    time.sleep(0.3)   # the interpreter is up, the import of rclpy/numba far from done
+    sim.signal(signum)
+    assert sim.wait(SLOW) == 0, sim.output
+    assert 'Traceback' not in sim.output and 'KeyboardInterrupt' not in sim.output, sim.output
+
+
+def test_help_on_every_executable_prints_its_usage_and_exits_0(spawn):
+    from tumble_ros.__main__ import EXECUTABLES
+
+    runs = {name: spawn(name, '--help', module=True) for name in EXECUTABLES}
+    main = spawn('', '--help', module=True)
+    for name, process in runs.items():
+        assert process.wait(SLOW) == 0, (name, process.output)
+        assert process.output.lower().startswith('usage:'), (name, process.output)
+        assert 'simulating' not in process.output, name     # nothing was started
+    assert main.wait(SLOW) == 0, main.output
+    assert all(name in main.output for name in EXECUTABLES), main.output
+
+
+def test_every_installed_executable_is_one_of_the_module_entry():
+    """setup.py's console scripts and ``python -m tumble_ros``'s executables are the same."""
+    from importlib.metadata import distribution
+
+    from tumble_ros.__main__ import EXECUTABLES
+
+    scripts = {ep.name: ep.value for ep in distribution('tumble_ros').entry_points
+               if ep.group == 'console_scripts'}
+    assert sorted(scripts) == sorted(EXECUTABLES)
+    assert set(scripts.values()) == {'tumble_ros.__main__:entry'}
+
+
+def test_a_closed_pipe_ends_bringup_quietly_with_the_recording_finalised(tmp_path):
+    """``bringup | head -1``: stdout's reader is gone; exit 141 (SIGPIPE), no traceback."""
+    import os
+    import subprocess
+    import sys
+
+    output = tmp_path / 'piped.mcap'
+    read, write = os.pipe()
+    os.close(read)          # the reader has gone before anything is written
+    with open(tmp_path / 'stderr.log', 'w') as err:
+        run = subprocess.run(
+            [sys.executable, '-m', 'tumble_ros', 'bringup', '--output', output, '--quiet',
+             '--ros-args', '-p', 'duration:=0.2'], stdout=write, stderr=err,
+            stdin=subprocess.DEVNULL, timeout=SLOW, start_new_session=True)
+    os.close(write)
+    stderr = (tmp_path / 'stderr.log').read_text()
+    assert run.returncode == 141, stderr
+    assert 'Traceback' not in stderr and 'BrokenPipeError' not in stderr, stderr
+    assert summarize(output).finalised
+
+
+@pytest.mark.parametrize('name', ['sim', 'bringup'])
+def test_an_option_after_ros_args_is_one_line_naming_it(spawn, name):
+    run = spawn(name, '--ros-args', '-p', 'duration:=0.1', '--output', 'x.mcap', module=True)
+    assert run.wait(SLOW) == 1, run.output
+    (line,) = run.output.strip().splitlines()
+    assert 'unknown option after --ros-args: --output x.mcap' in line, line
+
+
+@pytest.mark.parametrize('name', ['sim', 'bringup'])
+@pytest.mark.parametrize('content, reason', [
+    ('/**/sim:\n  ros__parameters: &p\n    duration: 1.0\nsim:\n  ros__parameters: *p\n',
+     'Will not support aliasing at line'),
+])
+def test_a_params_file_rcl_cannot_parse_is_one_line_with_its_reason(spawn, tmp_path, name,
+                                                                    content, reason):
+    """Valid YAML that rcl's parser refuses (an alias): rcl's reason, no RCLError traceback."""
+    path = tmp_path / 'aliased.yaml'
+    path.write_text(content)
+    run = spawn(name, '--ros-args', '--params-file', path, module=True)
+    assert run.wait(SLOW) == 1, run.output
+    (line,) = run.output.strip().splitlines()
+    assert f'params file {path}: rcl cannot parse it: {reason}' in line, line
+
+
+def test_a_shipped_scenario_runs_by_its_name_and_an_unknown_name_lists_them(spawn, tmp_path):
+    output = tmp_path / 'fig10.mcap'
+    known = spawn('bringup', 'fig10', '--offline', '--quiet', '--output', output, module=True)
+    unknown = spawn('bringup', 'fig11', module=True)
+    assert unknown.wait(SLOW) == 1, unknown.output
+    (line,) = unknown.output.strip().splitlines()
+    assert line.startswith('ERROR: no scenario file fig11 (shipped scenarios: ')
+    assert 'fig10' in line
+    assert known.wait(SLOW) == 0, known.output
+    events = list(read_messages(output, topics=['/' + topics.IMPACT_EVENTS]))
+    assert len(events) == 1   # fig10's impact: the shipped file was run
+
+
+@pytest.mark.parametrize('delay', [0.0, 0.5, 1.5])
+def test_a_signal_stops_an_offline_run_at_any_moment(spawn, tmp_path, delay):
+    """SIGTERM at several moments of an offline Fig 9 run: served, the file finalised."""
+    output = tmp_path / 'fig9.mcap'
+    run = spawn('bringup', CONFIG / 'fig9.yaml', '--offline', '--output', output, module=True)
+    assert run.wait_for('samples/s', SLOW), run.output
+    time.sleep(delay)
+    run.signal(signal.SIGTERM)
+    assert run.wait(30) == 128 + signal.SIGTERM, run.output
+    assert 'stopped by SIGTERM' in run.output and 'Traceback' not in run.output
+    assert summarize(output).finalised
+
+
+def test_a_refused_parameter_is_not_announced_as_a_simulation(spawn):
+    """Validate first, then announce: no 'simulating 2 yr' line before the refusal."""
+    sim = spawn('sim', '--ros-args', '-p', 'durration:=3.0', module=True)
+    assert sim.wait(SLOW) == 1, sim.output
+    assert 'unknown parameter' in sim.output and 'simulating' not in sim.output, sim.output
+
+
+def test_the_bare_sim_says_when_it_finishes(spawn):
+    """One line at FINISHED: samples and wall time."""
+    sim = spawn('sim', '--ros-args', '-p', 'duration:=0.02', '-p', 'real_time_factor:=0.0',
+                module=True)
+    assert sim.wait_for('samples in', SLOW), sim.output
+    sim.signal(signal.SIGINT)
+    assert sim.wait(30) == 0, sim.output
+    assert 'finished at t = 0.02 yr: 11 samples in ' in sim.output, sim.output
+    assert sim.output.index('simulating 0.02 yr') < sim.output.index('finished at t')
 
 
 def test_only_the_dds_memory_of_dead_processes_of_this_session_is_removed():
@@ -327,3 +468,29 @@ def test_sim_reports_a_runaway_spin_up_as_diverged_with_the_work_budget(ros, spa
     assert message.startswith('work budget exceeded at t = 1.0'), message
     assert 'output_interval' in message and 1.0 - 0.002 <= status[-1].t <= 1.0
     assert 'Traceback' not in sim.output
+
+
+def test_two_visible_bringups_in_one_domain_exit_1_and_their_recordings_are_refused(spawn,
+                                                                                    tmp_path):
+    """
+    Two ``--visible`` runs of the same scenario in one domain: their messages mix.
+
+    Each sees the other's simulator on its topics ("second source"): it says so, exits 1 (not
+    0 with a mixed recording), and ``analyze`` refuses the recording in one line naming both
+    runs unless ``--run`` chooses one.
+    """
+    from tumble_ros.analysis.cli import command
+
+    outputs = [tmp_path / f'run{k}.mcap' for k in range(2)]
+    runs = [spawn('bringup', '--visible', '--quiet', '--no-markers', '--output', output,
+                  '--ros-args', '-p', 'duration:=10.0') for output in outputs]
+    for run in runs:
+        assert run.wait(SLOW) == 1, run.output
+        assert 'second source' in run.output and 'bringup: ERROR: the recording holds a second ' \
+            'source' in run.output, run.output
+    ids = [{m.message.run_id for m in read_messages(output, topics=['/' + topics.SCENARIO])}
+           for output in outputs]
+    assert ids[0] == ids[1] and len(ids[0]) == 2, ids   # both runs' descriptions in each
+    assert command([str(outputs[0]), '--quiet']) == 1
+    run_id = sorted(ids[0])[0]
+    assert command([str(outputs[0]), '--quiet', '--run', run_id]) == 0

@@ -1,18 +1,31 @@
 """
 ``python -m tumble_ros``: the project's own entry point (the pip-only path has no ``ros2``).
 
-    python -m tumble_ros [SCENARIO.yaml] [--live]  the main job (default: the default scenario)
+    python -m tumble_ros [SCENARIO] [--live]       the main job (default: the default scenario)
     python -m tumble_ros <executable> [args ...]   run an executable, as `ros2 run tumble_ros` does
+    python -m tumble_ros --help                    this text; <executable> --help: its own
+
+Executables: sim, comparator, recorder, bringup, analyze, ensemble, encounter. SCENARIO is a
+params file or the name of a shipped one (``fig10``: config/fig10.yaml).
 
 The main job simulates the scenario, compares it with the paper's analytic solution and records
 everything to ``recordings/<scenario>_<UTC time>.mcap`` (``bringup --offline``: the recording is
 written straight from the simulation; ``--live`` runs the three nodes over the ROS graph
 instead, as ``bringup`` does), then analyses the file.
+
+Every executable, here and as installed for ``ros2 run`` (setup.py points them all to
+:func:`entry`), starts under :class:`~tumble_ros.nodes.shutdown.StopSignals`: a SIGINT, SIGTERM
+or SIGHUP while it is still importing (numba compiling) ends it quietly, with the exit code it
+gives when stopped later (0 for a node, 128 + the signal otherwise). A closed stdout or stderr
+(``bringup | head -1``) ends it quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the
+recording finalised.
 """
 from __future__ import annotations
 
 import importlib
+import os
 from pathlib import Path
+import signal
 import sys
 
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
@@ -22,13 +35,53 @@ EXECUTABLES = {
     'recorder': 'tumble_ros.nodes.recorder:main',
     'bringup': 'tumble_ros.nodes.bringup:main',
     'analyze': 'tumble_ros.analysis.cli:main',
+    'ensemble': 'tumble_ros.cli.ensemble:main',
+    'encounter': 'tumble_ros.cli.encounter:main',
 }
+#: The executables whose ``main`` takes the arguments without the program name.
+BARE_ARGV = frozenset({'ensemble', 'encounter'})
+#: The nodes: they exit 0 when a signal stops them.
+NODES = frozenset({'sim', 'comparator', 'recorder'})
+#: Exit code after a closed pipe, as a shell reports a process killed by SIGPIPE.
+BROKEN_PIPE_EXIT = 128 + signal.SIGPIPE
 
 
 def run_executable(name: str, args: list[str]) -> int:
     """Run an executable's ``main`` with ``args`` (its sys.argv without the program name)."""
-    module, function = EXECUTABLES[name].split(':')
-    return getattr(importlib.import_module(module), function)([name, *args]) or 0
+    try:
+        from tumble_ros.nodes.shutdown import StopSignals   # light: no rclpy, no numba
+    except KeyboardInterrupt:       # a SIGINT before the handler (Python's own start-up)
+        return 0 if name in NODES else 128 + signal.SIGINT
+    with StopSignals(name) as early:
+        try:
+            module, function = EXECUTABLES[name].split(':')
+            target = getattr(importlib.import_module(module), function)
+        except KeyboardInterrupt:   # a SIGINT before the handler (Python's own start-up)
+            return 0 if name in NODES else 128 + signal.SIGINT
+        if early.requested:         # stopped while importing: nothing was started
+            return 0 if name in NODES else early.exit_code
+        try:
+            code = target(args if name in BARE_ARGV else [name, *args]) or 0
+            sys.stdout.flush()    # a closed pipe is seen here, not in the interpreter's exit
+            return code
+        except BrokenPipeError:
+            return _quiet_broken_pipe()
+
+
+def _quiet_broken_pipe() -> int:
+    """After EPIPE: no more output (the interpreter's last flush would raise again)."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            os.dup2(devnull, stream.fileno())
+        except (OSError, ValueError):
+            pass
+    return BROKEN_PIPE_EXIT
+
+
+def entry() -> int:
+    """Console-script entry of every executable: the name is the installed script's."""
+    return run_executable(Path(sys.argv[0]).name, sys.argv[1:])
 
 
 def main_job(argv: list[str]) -> int:
@@ -36,13 +89,16 @@ def main_job(argv: list[str]) -> int:
     live = '--live' in argv
     argv = [a for a in argv if a != '--live']
     if len(argv) > 1 or (argv and argv[0].startswith('-')):
-        print(__doc__.strip(), file=sys.stderr)
+        print(f'python -m tumble_ros: unknown arguments {argv}; executables: '
+              f"{', '.join(EXECUTABLES)} (python -m tumble_ros --help)", file=sys.stderr)
         return 2
     from tumble_ros.nodes.recorder import default_output
 
     output = default_output(Path(argv[0]).stem if argv else 'default')
     mode = [] if live else ['--offline']
     code = run_executable('bringup', [*argv, *mode, '--output', str(output)])
+    if code == BROKEN_PIPE_EXIT:
+        return code
     if code != 0 or not output.exists() or output.stat().st_size == 0:
         _release(output)
         return code or 1
@@ -69,7 +125,11 @@ def analyse(recording: Path) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``python -m tumble_ros``: an executable, the main job, or this usage (--help)."""
     argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] in ('-h', '--help'):
+        print(__doc__.strip())
+        return 0
     if argv and argv[0] in EXECUTABLES:
         return run_executable(argv[0], argv[1:])
     return main_job(argv)

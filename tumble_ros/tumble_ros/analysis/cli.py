@@ -5,6 +5,7 @@ The ``analyze`` command: summarise a tumble_ros MCAP recording, optionally write
     python -m tumble_ros.analysis RUN.mcap --json              # the same as JSON
     python -m tumble_ros.analysis RUN.mcap --figures figs/     # and PNG figures into figs/
     python -m tumble_ros.analysis RUN.mcap --namespace /ast1   # the simulator of /ast1
+    python -m tumble_ros.analysis RUN.mcap --run 0a1b2c3d4e5f  # one run of several (run_id)
     python -m tumble_ros.analysis RUN.mcap --animate run.gif   # the body tumbling (GIF / MP4)
     python -m tumble_ros.analysis RUN.mcap --still scene.png   # the recorded 3D scene, one frame
 
@@ -14,8 +15,9 @@ and pictures of what it holds are written, with one ``WARNING: ...`` line on std
 is partial), 1 on a user error (a missing, empty,
 truncated-before-any-chunk or non-MCAP file, a path that is not a regular file, a damaged
 chunk, a recording without /angular_velocity, the tumble topics in several namespaces and no
---namespace, a figure that exists (without --overwrite) or a symbolic link in the way, a
-figure directory that cannot be written, bad options), reported as one ``ERROR: ...`` line on
+--namespace, the descriptions of several runs (two simulators on the same topics) and no
+--run, a figure that exists (without --overwrite) or a symbolic link in the way, a figure
+directory that cannot be written, bad options), reported as one ``ERROR: ...`` line on
 stderr, never a traceback. Progress for big files (>= 100,000 messages) goes to stderr
 (``--quiet`` turns it off).
 """
@@ -69,6 +71,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--namespace', metavar='NS', default=None,
                         help='the ROS namespace of the simulator to analyse, e.g. /ast1 '
                              '("/" for none); default: the only one in the file')
+    parser.add_argument('--run', metavar='ID', default=None,
+                        help='the run to analyse (the run_id of its /scenario descriptions), '
+                             'when the recording holds several; default: the only one')
     parser.add_argument('--json', action='store_true',
                         help='print the summary as JSON instead of text')
     parser.add_argument('--peaks', type=int, default=5, metavar='N',
@@ -154,7 +159,10 @@ def command(argv=None) -> int:
         return _error(problem)
     try:
         progress = None if args.quiet else stderr_progress()
-        rec = load_recording(args.file, namespace=args.namespace, progress=progress)
+        rec = load_recording(args.file, namespace=args.namespace, run=args.run,
+                             progress=progress)
+        for line in rec.left_out:
+            print(f'WARNING: {line}', file=sys.stderr)
         summary = analyze(rec, n_peaks=args.peaks)
         figures = [] if args.figures is None else _figures(rec, summary, args)
         extra = _pictures(rec, args)

@@ -28,9 +28,17 @@ __ns:=/ast1``) publishes ``/ast1/angular_velocity``, ..., and
 name (:meth:`Recording.topic`). ``load_recording`` reads one namespace: the one given, or the
 only one whose ``angular_velocity`` topic is in the file (:func:`find_namespaces`); with several
 it refuses and lists them.
+
+Runs: every ``/scenario`` description carries its run's ``run_id``
+(:func:`tumble_ros.nodes.messages.new_run_id`). ``load_recording`` reads one run: the one given
+(``run``), or the only one. Descriptions without a run id beside a run's (a foreign publisher's)
+are counted, reported in :attr:`Recording.left_out` and left out; descriptions of several runs
+(two simulators shared the topics, so their samples mix on the same topics) are refused unless
+``run`` chooses one. A recording whose descriptions carry no run id (older files) is read whole.
 """
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 import math
@@ -224,6 +232,10 @@ class Recording:
     skipped: dict[str, str] = field(default_factory=dict)
     #: The namespace whose topics were read ('/' for the root namespace).
     namespace: str = ROOT_NAMESPACE
+    #: One line per kind of sample left out of the arrays (non-finite samples, ...).
+    left_out: list[str] = field(default_factory=list)
+    #: The run read (the run_id of its /scenario descriptions; '' when they carry none).
+    run_id: str = ''
 
     @property
     def n(self) -> int:
@@ -308,13 +320,53 @@ def _select_topics(info, namespace: str | None
     return namespace, wanted, skipped
 
 
-def load_recording(path, *, namespace: str | None = None,
+def _runs_text(counts: dict[str, int]) -> str:
+    return ', '.join(f"{run or 'no run id'}: {n}" for run, n in counts.items())
+
+
+def _own_run(path: Path, topic: str, scenarios: list, run: str | None
+             ) -> tuple[str, list, list[str], bool]:
+    """
+    Return (the run read, its descriptions, lines on what was left out, other runs?).
+
+    ``scenarios``: the (stamp, message) of every description; other runs: descriptions of
+    another run id are among them (another simulator published its samples on the topics too).
+
+    ``run``: the run id chosen (None: the only run in the file). AnalysisError for a run that is
+    not in the file, or for several runs and none chosen.
+    """
+    ids = [getattr(msg, 'run_id', '') for _, msg in scenarios]   # older schemas have none
+    counts = dict(Counter(ids))             # in order of first appearance
+    named = [r for r in counts if r]
+    if run is not None:
+        if run not in named:
+            raise AnalysisError(f'{path}: no run {run!r} in {topic} (descriptions per run: '
+                                f'{_runs_text(counts) or "none"})')
+        own = run
+    elif len(named) > 1:
+        raise AnalysisError(f'{path}: {topic} holds the descriptions of {len(named)} runs '
+                            f'({_runs_text(counts)}): two simulators shared these topics and '
+                            'their samples are mixed; choose one with --run ID')
+    elif named:
+        own = named[0]
+    else:
+        return '', scenarios, [], False
+    others = {r: n for r, n in counts.items() if r != own}
+    lines = []
+    if others:
+        lines.append(f'{topic}: left out {sum(others.values())} of {len(ids)} descriptions '
+                     f'that are not of run {own} ({_runs_text(others)}: a foreign publisher)')
+    return own, [d for d, r in zip(scenarios, ids) if r == own], lines, any(others.keys() - {''})
+
+
+def load_recording(path, *, namespace: str | None = None, run: str | None = None,
                    progress: Progress | None = None) -> Recording:
     """
     Read ``path`` once and return its :class:`Recording`.
 
     ``namespace``: the ROS namespace of the topics to read (``'/ast1'``, ``'/'`` for the root);
-    None: the only namespace in the file that has an ``angular_velocity`` topic.
+    None: the only namespace in the file that has an ``angular_velocity`` topic. ``run``: the
+    run id whose descriptions to use (None: the only run; see the module docstring).
     Raises :class:`McapError` for an unreadable file and :class:`AnalysisError` when it has no
     ``angular_velocity`` messages in that namespace (or that topic has another type), or when
     ``namespace`` is None and several namespaces have them. ``progress`` is called as
@@ -362,6 +414,8 @@ def load_recording(path, *, namespace: str | None = None,
                 level=_level(msg.level), message=str(msg.message),
                 values={str(kv.key): str(kv.value) for kv in msg.values})
     report(total)
+    scenario_topic = in_namespace(namespace, SCENARIO)
+    run_id, scenarios, left_out, mixed = _own_run(info.path, scenario_topic, scenarios, run)
 
     # The time base: the first /scenario's seconds_per_year.
     spy, spy_source = 1.0, 'default'
@@ -376,6 +430,17 @@ def load_recording(path, *, namespace: str | None = None,
         return ns.astype(np.float64) / timebase.ns_per_year
 
     stamps, omega = _sorted(*raw.get(ANGULAR_VELOCITY, ([], [])), 3)
+    if mixed:   # another run chosen away: its samples are on the same topic, not separable
+        shared = len(stamps) - len(np.unique(stamps))
+        left_out.append(f'{in_namespace(namespace, ANGULAR_VELOCITY)}: the samples of the other '
+                        f"runs cannot be told apart from run {run_id}'s and are kept "
+                        f'({shared} samples share their stamp with another)')
+    finite = np.isfinite(omega).all(axis=1)
+    if not finite.all():   # a foreign publisher's NaN: the analysis takes the rest
+        left_out.append(f'{in_namespace(namespace, ANGULAR_VELOCITY)}: left out '
+                        f'{int((~finite).sum())} of {len(finite)} samples that are not finite '
+                        '(NaN or infinite: a foreign publisher?)')
+        stamps, omega = stamps[finite], omega[finite]
     if len(stamps) == 0:
         raise AnalysisError(f'{info.path}: {in_namespace(namespace, ANGULAR_VELOCITY)} has no '
                             f'messages'
@@ -383,7 +448,7 @@ def load_recording(path, *, namespace: str | None = None,
     rec = Recording(path=info.path, finalised=info.finalised, problem=info.problem,
                     topics=topics, seconds_per_year=spy, seconds_per_year_source=spy_source,
                     t=years(stamps), omega=omega, stamp_ns=stamps, skipped=skipped,
-                    namespace=namespace)
+                    namespace=namespace, left_out=left_out, run_id=run_id)
     if EULER_ANGLES in raw:
         ns, rec.euler = _sorted(*raw[EULER_ANGLES], 3)
         rec.euler_t = years(ns)

@@ -38,8 +38,10 @@ def theory_lines(scenario: Scenario | None, omega: np.ndarray | None = None
     """
     if scenario is None:
         return [], 'no scenario: the expected frequencies are unknown'
-    omega_max = (float(np.max(np.linalg.norm(omega, axis=1)))
-                 if omega is not None and len(omega) else None)
+    norms = (np.linalg.norm(omega, axis=1) if omega is not None and len(omega)
+             else np.empty(0))
+    norms = norms[np.isfinite(norms)]   # non-finite samples never set the expected lines
+    omega_max = float(np.max(norms)) if len(norms) else None
     lines, basis = characteristic_frequencies(scenario, omega_max)
     return list(lines), basis
 

@@ -1,15 +1,15 @@
 """
 ``bringup``: simulator + comparator + recorder in one process, for one scenario's duration.
 
-    bringup [SCENARIO.yaml] [--output FILE.mcap] [--model NAME] [--quiet] [--visible]
+    bringup [SCENARIO] [--output FILE.mcap] [--model NAME] [--quiet] [--visible]
             [--offline] [--ros-args ...]
 
 Runs the three nodes in one executor, the simulator as fast as the comparator and the recorder
 take it (``real_time_factor = 0``, ``min_consumers = 2``: nothing is lost), shows progress on
 stderr, and ends with a finalised MCAP file and a printed summary. The scenario file is a ROS 2
-params file (``config/*.yaml``); its ``sim`` section configures the simulator, and ``comparator``
-or ``recorder`` sections, if present, those nodes; ``--ros-args -p name:=value`` overrides the
-file. Without a file, the default scenario runs.
+params file (``config/*.yaml``, or a shipped one's name: ``fig10``); its ``sim`` section
+configures the simulator, and ``comparator`` or ``recorder`` sections, if present, those
+nodes; ``--ros-args -p name:=value`` overrides the file. Without a file, the default scenario runs.
 
 ``--offline`` writes the same recording straight from the simulation, without the ROS graph
 (:mod:`tumble_ros.nodes.offline`: what differs is said there): the main job uses it.
@@ -19,11 +19,13 @@ Isolation: the run is invisible to other ROS processes and sees none of them
 two runs at once, or a foreign ``/clock``, never mix into its recording. ``--visible`` keeps the
 environment's discovery settings instead (to watch the run with ``ros2 topic echo``); then give
 each visible run its own ``ROS_DOMAIN_ID``. A second publisher on the tumble topics is reported
-all the same (status, comparison/status, the summary).
+all the same (status, comparison/status, the summary), and the run then exits 1: its recording
+holds another run's messages.
 
-Exit codes: 0 finished; 1 diverged, refused input or a recording that failed (one ``ERROR:``
-line); 130 / 143 stopped by SIGINT / SIGTERM (the file is finalised and the summary printed
-alike).
+Exit codes: 0 finished; 1 diverged, refused input, a recording that failed or that holds a
+second source (one ``ERROR:`` line); 130 / 143 / 129 stopped by SIGINT / SIGTERM / SIGHUP
+(the file is finalised and the summary printed alike); 141 when stdout or stderr is a closed
+pipe (the file is finalised).
 """
 from __future__ import annotations
 
@@ -48,12 +50,12 @@ from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.offline import record_offline
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.recorder import default_output, RecorderNode
-from tumble_ros.nodes.runner import close_node, EXECUTORS
+from tumble_ros.nodes.runner import close_node, EXECUTORS, init_rclpy
 from tumble_ros.nodes.shutdown import StopSignals
 from tumble_ros.nodes.sim import SimNode
 from tumble_ros_interfaces.msg import SimStatus
 
-__all__ = ['run_bringup', 'BringupResult', 'main']
+__all__ = ['run_bringup', 'BringupResult', 'main', 'scenario_file', 'shipped_scenarios']
 
 
 #: Wall-clock seconds between progress lines.
@@ -78,11 +80,13 @@ class BringupResult:
 
     @property
     def ok(self) -> bool:
-        return self.state == SimStatus.FINISHED and self.error is None and self.signal is None
+        """Finished, recorded without failure and from a single source, not stopped."""
+        return (self.state == SimStatus.FINISHED and self.error is None and self.signal is None
+                and not self.warnings)
 
     @property
     def exit_code(self) -> int:
-        """0 finished, 128 + signal when stopped by one, 1 otherwise."""
+        """0 finished, 128 + signal when stopped by one, 1 otherwise (a second source too)."""
         if self.signal is not None:
             return 128 + self.signal
         return 0 if self.ok else 1
@@ -147,7 +151,7 @@ def _run_offline(args, output, model, progress, stop: StopSignals,
                  markers: bool) -> BringupResult:
     """Build the simulator and comparator for their parameters only; record offline."""
     context = Context()
-    rclpy.init(args=args, context=context, signal_handler_options=None)
+    init_rclpy(args, context)
     nodes = []
     try:
         sim = SimNode(context=context, parameter_overrides=[
@@ -196,7 +200,7 @@ def _run_offline(args, output, model, progress, stop: StopSignals,
 def _run(args, output, model, progress, executor_name, stop: StopSignals,
          markers: bool) -> BringupResult:
     context = Context()
-    rclpy.init(args=args, context=context, signal_handler_options=None)
+    init_rclpy(args, context)
     executor = EXECUTORS[executor_name](context=context)
     nodes = []
     try:
@@ -204,7 +208,8 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
             Parameter('real_time_factor', value=0.0), Parameter('min_consumers', value=2),
             Parameter('markers', value=markers)])
         nodes.append(sim)
-        comparator_overrides = [Parameter('model', value=model)] if model else []
+        comparator_overrides = [Parameter('run_id', value=sim.run_id),
+                                *([Parameter('model', value=model)] if model else [])]
         nodes.append(ComparatorNode(context=context, parameter_overrides=comparator_overrides))
         recorder_overrides = [Parameter('output', value=str(output))] if output else []
         recorder = RecorderNode(context=context, parameter_overrides=recorder_overrides,
@@ -258,6 +263,32 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
         rclpy.try_shutdown(context=context)
 
 
+def shipped_scenarios() -> dict[str, Path]:
+    """Return the scenario files installed with the package: {name: share/tumble_ros/config/..}."""
+    from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
+
+    try:
+        config = Path(get_package_share_directory('tumble_ros')) / 'config'
+    except PackageNotFoundError:
+        return {}
+    return {path.stem: path for path in sorted(config.glob('*.yaml'))}
+
+
+def scenario_file(name: str) -> Path:
+    """
+    Return the params file ``name`` names: a file, or a shipped scenario's name (``fig10``).
+
+    Raises NodeError naming the shipped scenarios when it is neither.
+    """
+    path = Path(name)
+    if path.is_file():
+        return path
+    shipped = shipped_scenarios()
+    if path.suffix in ('', '.yaml') and path.parent == Path('.') and path.stem in shipped:
+        return shipped[path.stem]
+    raise NodeError(f"no scenario file {name} (shipped scenarios: {', '.join(shipped)})")
+
+
 def format_result(result: BringupResult) -> str:
     """Return the printed summary of a run."""
     size = result.output.stat().st_size if result.output.exists() else 0
@@ -269,7 +300,10 @@ def format_result(result: BringupResult) -> str:
     else:
         state = 'finished' if result.state == SimStatus.FINISHED else 'DIVERGED'
         head = f'{state}: {result.message}'
-    lines = [f'bringup: {head}', *(f'bringup: WARNING: {w}' for w in result.warnings),
+    mixed = (['bringup: ERROR: the recording holds a second source (another run on the same '
+              'topics): analyze refuses it unless --run chooses one run'] if result.warnings
+             else [])
+    lines = [f'bringup: {head}', *(f'bringup: WARNING: {w}' for w in result.warnings), *mixed,
              f'  {result.samples} samples in {result.wall_seconds:.1f} s wall; '
              f'recorded {result.output} ({size / 1e6:.2f} MB)']
     lines += [f'  {topic:40s} {count:8d}' for topic, count in sorted(result.counts.items())]
@@ -285,7 +319,8 @@ def main(args: list[str] | None = None) -> int:
         argv, ros_args = argv[:k], argv[k + 1:]
     parser = argparse.ArgumentParser(prog='bringup', description=__doc__.split('\n\n')[0])
     parser.add_argument('scenario', nargs='?',
-                        help='ROS 2 params file (config/*.yaml); default scenario if omitted')
+                        help='ROS 2 params file, or the name of a shipped one (fig10: '
+                             'config/fig10.yaml); default scenario if omitted')
     parser.add_argument('--output',
                         help='MCAP file to write (default recordings/tumble_<time>.mcap)')
     parser.add_argument('--model', help="the comparator's analytic model")
@@ -301,11 +336,9 @@ def main(args: list[str] | None = None) -> int:
     parser.add_argument('--visible', action='store_true',
                         help='let other ROS processes see the run (default: isolated, see above)')
     options = parser.parse_args(argv)
-    if options.scenario and not Path(options.scenario).is_file():
-        print(f'ERROR: no scenario file {options.scenario}', file=sys.stderr)
-        return 1
     try:
-        result = run_bringup(options.scenario, options.output, options.model, ros_args,
+        scenario = scenario_file(options.scenario) if options.scenario else None
+        result = run_bringup(scenario, options.output, options.model, ros_args,
                              progress=None if options.quiet else sys.stderr,
                              executor_name=options.executor,
                              visible=options.visible, offline=options.offline,

@@ -19,12 +19,16 @@ description with the post-impact state), so the error measures the model, not th
 sample is compared with the model of the segment its time falls in: the simulator publishes a
 segment's description before the segment's first sample, and samples of the previous segment that
 are still queued keep the previous model. A late start or a restart of either node recovers from
-the latched topic. Samples that arrive before any description are held (up to ``MAX_PENDING``)
-and compared ``SETTLE`` seconds after the first description arrives: on a late join, DDS replays
-the latched description history and the sample history on separate topics in no particular
-order, and the later descriptions (post-impact anchors) must be in before the held samples are
-compared. The comparator reports its progress on ``consumer_progress`` so the simulator never
-outruns it.
+the latched topic. The comparator follows one run: the one ``run_id`` names (bringup passes its
+simulator's), or the first whose description arrives. A description of another run (a second
+simulator on the same topics) is ignored, with one warning per foreign run; a new run id is
+taken as the simulator's restart only when ``scenario`` has a single publisher again and
+``run_id`` was not given. Samples that arrive before any description are held (up to
+``MAX_PENDING``) and compared ``SETTLE`` seconds after the first description arrives: on a late
+join, DDS replays the latched description history and the sample history on separate topics in
+no particular order, and the later descriptions (post-impact anchors) must be in before the held
+samples are compared. The comparator reports its progress on ``consumer_progress`` so the
+simulator never outruns it.
 
 The samples are taken raw and read in place (:class:`~.messages.Vector3StampedReader`; bytes
 that are not a Vector3Stamped are skipped with a warning), and the three comparison messages are
@@ -69,6 +73,8 @@ LOOKAHEAD = 64
 PARAMETERS = {
     'model': ('paper', '', 'analytic model: ' + ', '.join(ANALYTIC_MODELS), None, False),
     'decimation': (1, '', 'compare every k-th sample', (1, 1_000_000), False),
+    'run_id': ('', '', "the simulator run to follow (its scenario descriptions' run_id); "
+               'empty: the first run heard', None, True),
 }
 
 
@@ -126,6 +132,10 @@ class ComparatorNode(GuardedNode):
         params = declare_node_parameters(self, PARAMETERS)
         self._model_name: str = params['model']
         self._decimation: int = params['decimation']
+        self._pinned = bool(params['run_id'])   # the run was given, never switched
+        self.run_id: str | None = params['run_id'] or None   # the run followed (None: none yet)
+        self._foreign: set[str] = set()   # the other runs' ids, warned about once each
+        self.foreign_descriptions = 0     # descriptions of other runs, ignored
         self._description: ScenarioDescription | None = None
         self._timebase = TimeBase()
         self._model = None  # anchored on the latest segment
@@ -179,7 +189,31 @@ class ComparatorNode(GuardedNode):
         return SetParametersResult(successful=True)
 
     # -- model anchoring ----------------------------------------------------------------
+    def _follows(self, msg: ScenarioDescription) -> bool:
+        """Return whether ``msg`` is a description of the run followed (taking it on if new)."""
+        run = msg.run_id
+        if self.run_id is None:
+            self.run_id = run
+            return True
+        if run == self.run_id:
+            return True
+        if not self._pinned and self.count_publishers(topics.SCENARIO) <= 1:
+            self.get_logger().info(f'following run {run!r}: the simulator of run '
+                                   f'{self.run_id!r} left (restarted)')
+            self.run_id = run
+            return True
+        self.foreign_descriptions += 1
+        if run not in self._foreign:
+            self._foreign.add(run)
+            self.get_logger().warning(
+                f'{self.resolve_topic_name(topics.SCENARIO)}: ignored the description of '
+                f'another run ({run!r}): this comparator follows run {self.run_id!r}; another '
+                'simulator publishes on these topics')
+        return False
+
     def _on_scenario(self, msg: ScenarioDescription) -> None:
+        if not self._follows(msg):
+            return
         old = self._description
         if (old is not None and msg.revision > old.revision
                 and msg.segment_start > old.segment_start):

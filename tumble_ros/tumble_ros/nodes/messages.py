@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import struct
+import uuid
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
@@ -23,7 +24,7 @@ from tumble_ros.io.msgdefs import message_definition
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 
-__all__ = ['stamp', 'FRAMES', 'FRAME_CODES', 'scenario_description', 'impact_event',
+__all__ = ['stamp', 'FRAMES', 'FRAME_CODES', 'new_run_id', 'scenario_description', 'impact_event',
            'sim_status', 'comparison_status', 'comparison_values', 'error_norms',
            'SampleEncoder', 'Vector3StampedReader']
 
@@ -43,10 +44,26 @@ def _vector(v) -> Vector3:
     return Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
 
 
+def new_run_id() -> str:
+    """
+    Draw a run id: 12 random hex digits, the ``run_id`` of every scenario description of a run.
+
+    It tells two runs on the same topics apart (the comparator follows its own, ``analyze``
+    separates them), also two runs of the same scenario.
+    """
+    return uuid.uuid4().hex[:12]
+
+
 def scenario_description(scenario_yaml: str, seconds_per_year: float, revision: int,
-                         stamp_ns: int, t0: float, omega, quaternion) -> ScenarioDescription:
-    """Describe the scenario and the state (omega, quaternion) its segment starts from at t0."""
+                         stamp_ns: int, t0: float, omega, quaternion,
+                         run_id: str) -> ScenarioDescription:
+    """
+    Describe the scenario and the state (omega, quaternion) its segment starts from at t0.
+
+    ``run_id``: the run's :func:`new_run_id`.
+    """
     msg = ScenarioDescription()
+    msg.run_id = run_id
     msg.header.stamp = stamp(stamp_ns)
     msg.parameters_yaml = scenario_yaml
     msg.seconds_per_year = seconds_per_year

@@ -45,21 +45,58 @@ from rclpy.serialization import serialize_message
 from tumble_ros import topics
 from tumble_ros.core import (DEPARTURE, departure_text, dump_scenario, Propagator, Scenario,
                              TimeBase)
+from tumble_ros.core.propagator import FAST_WORK_BUDGET
 from tumble_ros.core.scenario import ScenarioError
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.nodes.comparator import anchor_model, GridModelValues
 from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
-                                       SampleEncoder, scenario_description, sim_status)
+                                       new_run_id, SampleEncoder, scenario_description,
+                                       sim_status)
 from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
 from tumble_ros.nodes.recorder import qos_dict
 from tumble_ros_interfaces.msg import SimStatus
 
-__all__ = ['record_offline', 'OfflineResult', 'BATCH']
+__all__ = ['record_offline', 'OfflineResult', 'BATCH', 'SLICE_SECONDS', 'Slicer']
 
-#: Samples simulated, compared and written per step of the loop (progress and SIGINT are served
-#: between steps).
+#: Most samples simulated, compared and written per step of the loop.
 BATCH = 8192
+#: Wall-clock seconds one step of the loop aims at: a stop request (SIGINT, SIGTERM, SIGHUP) and
+#: the progress are served between steps, so within about twice this at any point of a run.
+SLICE_SECONDS = 0.05
+#: Smallest work budget of a step [integration steps or dense evaluations]
+#: (``Propagator.sample_many``'s unit), and the first one; later steps' budgets follow the
+#: measured wall time. Below it, a call's fixed cost dominates (with 1,000 impacts: a budget of
+#: 64 takes 3 times as long as 256, and 16 does not finish).
+MIN_BUDGET = 256
+
+
+class Slicer:
+    """
+    The work budget of each integration slice, so that a slice takes about ``seconds`` of wall.
+
+    ``Propagator.sample_many`` stops after ``budget`` units of work with what it sampled, bit
+    for bit what one uninterrupted call gives; the budget follows the measured cost of a unit
+    (at most doubling per slice, within [:data:`MIN_BUDGET`, ``FAST_WORK_BUDGET``]), whatever
+    the scenario costs a step (a flyby, a thousand impacts, a fine fixed step).
+    """
+
+    def __init__(self, seconds: float = SLICE_SECONDS, budget: int = MIN_BUDGET) -> None:
+        self.seconds = seconds
+        self.budget = budget
+        self.calls = 0
+
+    def sample(self, propagator: Propagator, times: np.ndarray):
+        """``propagator.sample_many(times)`` within this slice's budget; adapt the next one."""
+        started = time.monotonic()
+        result = propagator.sample_many(times, budget=self.budget)
+        self.calls += 1
+        elapsed = time.monotonic() - started
+        scale = 2.0 if elapsed <= 0.0 else min(2.0, self.seconds / elapsed)
+        self.budget = int(min(FAST_WORK_BUDGET, max(MIN_BUDGET, self.budget * scale)))
+        return result
+
+
 #: The live nodes' names (the comparator's DiagnosticStatus carries its node's name).
 COMPARATOR_NAME = '/comparator'
 
@@ -122,7 +159,8 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
 
     ``timebase``: the simulator's (its ``seconds_per_year``; default one second per year);
     ``publish_clock``, ``markers``, ``marker_decimation``: the simulator's parameters.
-    ``stop()`` is checked between batches: a stopped run keeps what it wrote (the file is
+    ``stop()`` is checked between slices of the integration (:class:`Slicer`, about
+    :data:`SLICE_SECONDS` of wall each): a stopped run keeps what it wrote (the file is
     finalised). ``progress(t [yr], samples)`` is called after each batch. Raises OSError when
     the file cannot be created or written, ScenarioError for a grid ROS stamps cannot carry.
     """
@@ -133,10 +171,12 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
     output = Path(output)
     output.parent.mkdir(parents=True, exist_ok=True)
     propagator = Propagator(scenario)
-    scenario_yaml = dump_scenario(scenario)
+    # the scenario as started and the recording's run id, in every description
+    described = (dump_scenario(scenario), new_run_id())
     state, message, k = SimStatus.RUNNING, '', 0
     scene = _Scene(MarkerScene(scenario), marker_every(marker_decimation, grid.count),
                    grid) if markers else None
+    slicer = Slicer()
     with McapWriter(output, chunk_seconds=math.inf) as writer:
         channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None,
                              markers=markers)
@@ -144,12 +184,12 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
         channels.one(topics.COMPARISON_STATUS, comparison_status(
             DiagnosticStatus.WARN, COMPARATOR_NAME,
             "waiting for the simulator's scenario description", model_name), 0)
-        revision = _describe(channels, comparator, scenario_yaml, timebase, 0, 0.0,
+        revision = _describe(channels, comparator, described, timebase, 0, 0.0,
                              propagator.y, propagator)
         channels.one(topics.STATUS, sim_status(state, 0.0, 'started', 0), 0)
         while k < grid.count and not stop():
             k1 = min(grid.count, k + BATCH)
-            done, arrays, failure = propagator.sample_many(grid.times(k, k1))
+            done, arrays, failure = slicer.sample(propagator, grid.times(k, k1))
             segment_starts = dict(propagator.pop_window_edges())
             for impact, y_start, y_end in propagator.pop_completed_impacts():
                 end_ns = timebase.to_ns(impact.end)
@@ -157,7 +197,7 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
                     impact, 0, end_ns, y_end[:3] - y_start[:3]), end_ns)
                 segment_starts[impact.end] = y_end
             for t0 in sorted(segment_starts):
-                revision = _describe(channels, comparator, scenario_yaml, timebase, revision, t0,
+                revision = _describe(channels, comparator, described, timebase, revision, t0,
                                      segment_starts[t0], propagator)
             _write_samples(channels, comparator, grid, k, done, arrays, publish_clock, scenario)
             if scene is not None:
@@ -182,11 +222,16 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
                          wall_seconds=time.monotonic() - started)
 
 
-def _describe(channels, comparator, scenario_yaml, timebase, revision, t0, y0, propagator):
-    """Write a segment's description, anchor the comparator on it; return the next revision."""
+def _describe(channels, comparator, described, timebase, revision, t0, y0, propagator):
+    """
+    Write a segment's description, anchor the comparator on it; return the next revision.
+
+    ``described``: (the scenario as started as YAML, the recording's run id).
+    """
+    scenario_yaml, run_id = described
     description = scenario_description(scenario_yaml, timebase.seconds_per_year, revision,
                                        timebase.to_ns(t0), t0, y0[:3],
-                                       propagator.quaternion_of(y0))
+                                       propagator.quaternion_of(y0), run_id)
     channels.one(topics.SCENARIO, description, timebase.to_ns(t0))
     comparator.anchor(description, timebase.to_ns(t0))
     return revision + 1

@@ -13,11 +13,13 @@ from typing import Any, Iterable
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from tumble_ros.core import check_params_file, PARAMETER_DOCS, Scenario, ScenarioError
 from tumble_ros.core.params_file import section_applies
 from tumble_ros.errors import NodeError
 
-__all__ = ['declare_node_parameters', 'declare_scenario_parameters', 'node_parameter',
+__all__ = ['EMPTY_ARRAY_TYPES', 'declare_node_parameters', 'declare_scenario_parameters',
+           'node_parameter',
            'read_parameters', 'read_scenario_parameters', 'describe', 'params_file_problem',
            'refuse_unknown_parameters', 'section_applies']
 
@@ -27,14 +29,28 @@ def describe(description: str, unit: str) -> str:
     return f'{description} [{unit}]' if unit else description
 
 
+#: The type of each scenario parameter whose default is an empty array. rclpy types ``[]`` as a
+#: byte array, and rcl reads ``[]`` in a params file as "not set": both made ``ros2 param dump``
+#: write ``null`` on the next generation (then the string ``'null'``), so these are declared with
+#: their element type whatever the file says, and dump -> load -> dump is a fixed point.
+EMPTY_ARRAY_TYPES = {
+    'impacts.start': Parameter.Type.DOUBLE_ARRAY,
+    'impacts.duration': Parameter.Type.DOUBLE_ARRAY,
+    'impacts.torque': Parameter.Type.DOUBLE_ARRAY,
+    'impacts.frame': Parameter.Type.STRING_ARRAY,
+}
+
+
 def declare_scenario_parameters(node: Node) -> None:
     """
     Declare every Scenario field as a read-only parameter, defaults from ``Scenario()``.
 
     Every parameter gets a value, empty arrays included (``impacts.*: []``): a parameter declared
     without a value makes GetParameters answer nothing for the whole request, so ``ros2 param
-    dump`` printed ``ros__parameters: {}``. Dynamic typing lets ``[]`` (which rclpy types as a
-    byte array) be overridden by numbers or names; Scenario converts and checks every value.
+    dump`` printed ``ros__parameters: {}``. Dynamic typing lets an override of any type through
+    (integers in YAML, ``duration: 2``); Scenario converts and checks every value. An empty
+    array, from the default or from a file (where rcl reads ``[]`` as not set), is given its
+    element type (:data:`EMPTY_ARRAY_TYPES`).
     """
     for name, default in Scenario().to_parameters().items():
         unit, description = PARAMETER_DOCS[name]
@@ -42,10 +58,21 @@ def declare_scenario_parameters(node: Node) -> None:
             description=describe(description, unit),
             additional_constraints='validated by tumble_ros.core.Scenario (docs/physics.md)',
             read_only=True,
-            # Integers in YAML (duration: 2) are accepted; Scenario converts and checks.
             dynamic_typing=True,
         )
-        node.declare_parameter(name, default, descriptor)
+        if name not in EMPTY_ARRAY_TYPES:
+            node.declare_parameter(name, default, descriptor)
+            continue
+        override = node._parameter_overrides.get(name)   # (no public getter)
+        unset = override is not None and override.type_ == Parameter.Type.NOT_SET
+        writable = ParameterDescriptor()
+        writable.dynamic_typing = True
+        node.declare_parameter(name, default, writable, ignore_override=unset)
+        value = node.get_parameter(name).value
+        if not len(value):
+            # Typed empty: through set_parameters, the one way rclpy keeps a given type for [].
+            node.set_parameters([Parameter(name, EMPTY_ARRAY_TYPES[name], [])])
+        node.set_descriptor(name, descriptor)
 
 
 def node_parameter(node: Node, name: str, default: Any, unit: str, description: str,

@@ -2,14 +2,17 @@
 from __future__ import annotations
 
 import os
+import re
 import sys
 from typing import Callable
 
 import rclpy
+from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
 from rclpy.context import Context
 from rclpy.exceptions import ParameterException
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
+from rclpy.logging import LoggingSeverity, set_logger_level
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
@@ -18,7 +21,8 @@ from tumble_ros.errors import NodeError
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.shutdown import spin_until_stopped, StopSignals
 
-__all__ = ['run_node', 'close_node', 'EXECUTORS', 'EXECUTOR_ENV', 'chosen_executor']
+__all__ = ['run_node', 'close_node', 'init_rclpy', 'wants_help', 'EXECUTORS', 'EXECUTOR_ENV',
+           'chosen_executor']
 
 
 def _events_executor(context: Context | None = None):
@@ -54,6 +58,44 @@ def chosen_executor() -> str:
     return name
 
 
+def wants_help(args: list[str]) -> bool:
+    """Tell whether ``args`` (program name first) ask for help before any ``--ros-args``."""
+    own = list(args[1:])
+    if '--ros-args' in own:
+        own = own[:own.index('--ros-args')]
+    return '-h' in own or '--help' in own
+
+
+def init_rclpy(args: list[str], context: Context | None = None) -> None:
+    """
+    ``rclpy.init`` without rclpy's signal handlers; rcl's refusals as one-line NodeErrors.
+
+    rcl refuses with a traceback a params file its parser cannot read although it is valid YAML
+    (anchors and aliases, a sequence as a key: :func:`params_file_problem` lets them through)
+    and an option it does not know after ``--ros-args``: the NodeError says which and why.
+    """
+    # rcl logs its own "Failed to parse global arguments" before raising: the NodeError says it
+    # better, in one line (rcl's level is set back at once: its later messages are shown).
+    set_logger_level('rcl', LoggingSeverity.FATAL)
+    try:
+        rclpy.init(args=args, context=context, signal_handler_options=SignalHandlerOptions.NO)
+    except UnknownROSArgsError as err:
+        unknown = ' '.join(re.findall(r"'([^']*)'", str(err))) or str(err)
+        raise NodeError(f'unknown option after --ros-args: {unknown} (ROS arguments only there: '
+                        '-p name:=value, --params-file FILE, -r from:=to, --log-level ...; '
+                        "the program's own options go before --ros-args)") from None
+    except RCLError as err:
+        text = ' '.join(str(err).split())
+        found = re.search(r"params file: '--params-file (.*?)'\. Error: (.*?)(?:, at \S+)*$",
+                          text)
+        if found:
+            reason = found[2].strip()
+            raise NodeError(f'params file {found[1]}: rcl cannot parse it: {reason}') from None
+        raise NodeError('cannot start ROS: ' + re.sub(r', at \S+', '', text)) from None
+    finally:
+        set_logger_level('rcl', LoggingSeverity.UNSET)
+
+
 def close_node(node: Node) -> None:
     """Run the node's ``close()`` if it has one (finalise a file, say goodbye), then destroy it."""
     close = getattr(node, 'close', None)
@@ -65,15 +107,21 @@ def close_node(node: Node) -> None:
 def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
              needs_params_section: bool = False) -> int:
     """
-    Init rclpy, build the node, spin until SIGINT/SIGTERM, close, clean up.
+    Init rclpy, build the node, spin until SIGINT/SIGTERM/SIGHUP, close, clean up.
 
-    Returns 0 on a stop by SIGINT or SIGTERM (both finalise alike: the node's ``close()`` runs
-    while its context is still valid; a second signal during the clean-up is absorbed), 1 when
-    the node refused its parameters or a params file (one line saying why, no traceback).
+    ``--help`` (before any ``--ros-args``) prints the usage and the node's module docstring.
+    Returns 0 on a stop by SIGINT, SIGTERM or SIGHUP (all finalise alike: the node's ``close()``
+    runs while its context is still valid; a second signal during the clean-up is absorbed), 1 when
+    the node refused its parameters, a params file or a ROS argument (one line saying why, no
+    traceback).
     ``needs_params_section``: every ``--params-file`` must have a section for this node (the
     simulator's scenario files).
     """
     args = sys.argv if args is None else args
+    if wants_help(args):
+        print(f'usage: {name} [--ros-args [-p NAME:=VALUE ...] [--params-file FILE]]\n\n'
+              f'{sys.modules[make_node.__module__].__doc__.strip()}')
+        return 0
     problem = params_file_problem(args)
     try:
         executor_name = chosen_executor()
@@ -84,7 +132,11 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
         return 1
     with StopSignals(name) as stop:
         # Our handlers, not rclpy's: rclpy's would shut the context down before close().
-        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        try:
+            init_rclpy(args)
+        except NodeError as err:
+            print(f'{name}: {err}', file=sys.stderr, flush=True)
+            return 1
         executor = EXECUTORS[executor_name]()
         node = None
         try:

@@ -12,7 +12,8 @@ and publishes every ``output_interval`` of simulated time:
 * ``status`` (tumble_ros_interfaces/SimStatus, latched) on every state change, on ``step``, when
   a consumer is dropped or a second source appears, and once a second while running;
 * ``scenario`` (tumble_ros_interfaces/ScenarioDescription, latched) at the start and after each
-  impact (one per segment): the scenario as started and the initial state of the segment;
+  impact (one per segment): the scenario as started, the initial state of the segment and the
+  run's id (:attr:`SimNode.run_id`, drawn at start-up);
 * ``markers`` (visualization_msgs/MarkerArray, frame ``orbital``) when ``markers`` is true (off
   for a bare ``ros2 run``, where it would cost ~30 % of the throughput; on in bringup, make run
   and the launch files):
@@ -53,7 +54,7 @@ from tumble_ros.core.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.markers import marker_every, MarkerScene
-from tumble_ros.nodes.messages import (FRAMES, impact_event, SampleEncoder,
+from tumble_ros.nodes.messages import (FRAMES, impact_event, new_run_id, SampleEncoder,
                                        scenario_description, sim_status)
 from tumble_ros.nodes.parameters import (
     declare_node_parameters,
@@ -106,6 +107,8 @@ class SimNode(GuardedNode):
         self._rtf = params['real_time_factor']
         self._propagator = Propagator(self.scenario)
         self._scenario_yaml = dump_scenario(self.scenario)
+        #: This run's id, in every ``scenario`` description (a restart draws a new one).
+        self.run_id: str = new_run_id()
         self._next_k = 0  # index of the next sample to publish
         self._pending: deque[tuple[int, Impact]] = deque()
         self._impact_ids: dict[int, int] = {}  # id(Impact) -> service id
@@ -159,10 +162,9 @@ class SimNode(GuardedNode):
         # Steady clock: the simulator is the clock source, use_sim_time or not.
         self._timer = steady_timer(self, TICK_PERIOD, self._on_tick)
         steady_timer(self, STATUS_PERIOD, self._on_status_period)
-        self.get_logger().info(
-            f'simulating {self.scenario.duration:g} yr with {self.scenario.integrator.method}, '
-            f'{self._grid.count} samples every {self.scenario.output_interval:g} yr, '
-            f'real_time_factor {self._rtf:g}')
+        # Announced at the first tick, once the command line was checked in full (an unknown
+        # parameter is refused after the node is built): nothing is announced that is refused.
+        self._started_wall: float | None = None
 
     # -- parameters ---------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
@@ -220,6 +222,12 @@ class SimNode(GuardedNode):
         return self._grid.time(max(0, self._next_k - 1))
 
     def _on_tick(self) -> None:
+        if self._started_wall is None:
+            self._started_wall = time.monotonic()
+            self.get_logger().info(
+                f'simulating {self.scenario.duration:g} yr with '
+                f'{self.scenario.integrator.method}, {self._grid.count} samples every '
+                f'{self.scenario.output_interval:g} yr, real_time_factor {self._rtf:g}')
         if self._state != SimStatus.RUNNING:
             return
         self._publish_up_to(self._target_index())
@@ -268,8 +276,12 @@ class SimNode(GuardedNode):
                 return
             # done < len(stamps) without a failure: the call used its work budget; the next tick
             # goes on.
-        if self._next_k >= self._grid.count:
+        if self._next_k >= self._grid.count and self._state != SimStatus.FINISHED:
             self._set_state(SimStatus.FINISHED, f'finished at t = {self.t:g} yr')
+            wall = time.monotonic() - (self._started_wall or time.monotonic())
+            self.get_logger().info(
+                f'finished at t = {self.t:g} yr: {self._next_k} samples in {wall:.1f} s wall '
+                '(the simulator records nothing: a recorder or bringup does)')
 
     def _schedule_pending(self) -> None:
         while self._pending:
@@ -355,7 +367,8 @@ class SimNode(GuardedNode):
         revision, self._revision = self._revision, self._revision + 1
         self._pub_scenario.publish(scenario_description(
             self._scenario_yaml, self.timebase.seconds_per_year, revision,
-            self.timebase.to_ns(t0), t0, y0[:3], self._propagator.quaternion_of(y0)))
+            self.timebase.to_ns(t0), t0, y0[:3], self._propagator.quaternion_of(y0),
+            self.run_id))
 
     # -- services -----------------------------------------------------------------------
     def _on_apply_impact(self, request, response):
