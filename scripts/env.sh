@@ -43,7 +43,7 @@ _tumble_ros_env() {
     # shellcheck disable=SC1091
     source "$root/install/setup.bash" || return 1
     ((nounset)) && set -u
-    # Discovery stays on this machine unless the caller chose otherwise (README "Isolation").
+    # Discovery stays on this machine unless the caller chose otherwise (docs/ros.md "Isolation").
     export ROS_AUTOMATIC_DISCOVERY_RANGE="${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}"
     case ":${AMENT_PREFIX_PATH:-}:" in
         *":$VIRTUAL_ENV:"*) ;;

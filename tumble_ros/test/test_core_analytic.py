@@ -415,6 +415,15 @@ def test_linearised_models_refuse_an_asymmetric_body(name):
     assert MODELS[name].applies(ASYMMETRIC) == err.value.reason
 
 
+def test_a_refusal_points_to_the_models_that_may_apply():
+    """A newcomer's asymmetric body: the refusal says how to choose another model, and where."""
+    with pytest.raises(ModelNotApplicable) as err:
+        make_model('paper', ASYMMETRIC)
+    assert "the comparator's `model` parameter chooses another" in str(err.value)
+    assert 'docs/analytic.md' in str(err.value)
+    assert (Path(__file__).resolve().parents[2] / 'docs' / 'analytic.md').is_file()
+
+
 @pytest.mark.parametrize('name', FREE)
 def test_torque_free_models_refuse_an_orbit(name):
     sc = fig_scenario(*FIGS['fig4'], duration=2.0)

@@ -182,7 +182,7 @@ def test_a_params_file_over_the_size_limit_is_refused_before_it_is_read(tmp_path
         load_scenario(path)
     assert str(err.value) == (f'params file {path}: {path.stat().st_size:,} bytes, above the '
                               f'limit of {MAX_PARAMS_FILE_BYTES:,} (MAX_PARAMS_FILE_BYTES, '
-                              'README "Limits")')
+                              'docs/ros.md "Limits of the inputs")')
 
 
 def test_a_long_wrong_list_is_named_in_a_short_line(tmp_path):

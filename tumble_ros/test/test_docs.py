@@ -1,4 +1,4 @@
-"""The docs: every declared parameter, topic and service has a README row; no outside paths."""
+"""The docs: every declared parameter, topic and service has a row in docs/ros.md; no outside paths."""
 import os
 from pathlib import Path
 import re
@@ -11,6 +11,8 @@ from tumble_ros.topics import SIM_NODE_PARAMETERS as NODE_PARAMETERS
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / 'README.md').read_text()
+#: The ROS reference: the tables of parameters, topics and services.
+REFERENCE = (ROOT / 'docs' / 'ros.md').read_text()
 # A path into a directory named "shared" (relative, or beside or above the repository): a clone
 # does not have it. Spelt in pieces so that this file does not match itself.
 SHARED_PATH = re.compile(rb'(?<![\w.-])' + b'shared' + rb'/')
@@ -21,15 +23,15 @@ def table_rows(text):
     return {m.group(1) for m in re.finditer(r'^\| `([^`]+)`', text, re.M)}
 
 
-def test_every_parameter_has_a_readme_row():
-    rows = table_rows(README)
+def test_every_parameter_has_a_reference_row():
+    rows = table_rows(REFERENCE)
     names = (list(Scenario().to_parameters()) + list(NODE_PARAMETERS) + list(COMPARATOR_PARAMETERS)
              + list(RECORDER_PARAMETERS))
     missing = [n for n in names if n not in rows]
     assert not missing
 
 
-def test_every_topic_and_service_has_a_readme_row(ros):
+def test_every_topic_and_service_has_a_reference_row(ros):
     from tumble_ros.nodes.comparator import ComparatorNode
     from tumble_ros.nodes.sim import SimNode
 
@@ -37,10 +39,10 @@ def test_every_topic_and_service_has_a_readme_row(ros):
     ros.start(ComparatorNode)
     assert ros.spin_until(lambda: len(ros.probe.get_topic_names_and_types()) >= 12, 10.0), \
         ros.probe.get_topic_names_and_types()
-    # The names as the README spells them, typed out on purpose (not from tumble_ros.topics):
+    # The names as docs/ros.md spells them, typed out on purpose (not from tumble_ros.topics):
     # they are the contract checked here. Its row `pause`, `resume`, `step` gives
     # table_rows only its first name; `/clock` keeps its slash there.
-    rows = table_rows(README) | {'pause', 'resume', 'step'}
+    rows = table_rows(REFERENCE) | {'pause', 'resume', 'step'}
     topics = {n.lstrip('/') if n != '/clock' else n
               for n, _ in ros.probe.get_topic_names_and_types()}
     ignored = {'rosout', 'parameter_events', 'apply_impact/_service_event'}
@@ -93,7 +95,7 @@ def test_scenario_description_documents_parameters_yaml_as_the_scenario_as_start
     The .msg says what the simulator sends (test_trust_nodes: the same text in every segment).
 
     The field's comment (its line and the comment lines under it) must say the scenario as
-    started, as README does, not the impacts scheduled so far (what the simulator used to send).
+    started, as docs/ros.md does, not the impacts scheduled so far (what the simulator used to send).
     """
     msg = (Path(__file__).resolve().parents[2] / 'tumble_ros_interfaces' / 'msg'
            / 'ScenarioDescription.msg').read_text()
@@ -107,4 +109,4 @@ def test_scenario_description_documents_parameters_yaml_as_the_scenario_as_start
     text = ' '.join(' '.join(comment).split())
     assert 'the scenario as started' in text
     assert 'scheduled so far' not in text
-    assert 'the scenario as started' in README
+    assert 'the scenario as started' in REFERENCE

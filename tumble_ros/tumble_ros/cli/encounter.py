@@ -4,7 +4,7 @@ The encounter command line: a tumbler's spin state through a flyby, over what is
     python -m tumble_ros.cli.encounter tumble_ros/config/apophis_2029.yaml --bodies 1000 \
         --inertia-draws 10 --inertia-spread 0.03 0.015 --seed 1 --out docs/figures/apophis
     ... --workers 2                 # the bodies as chunks on a local Dask cluster
-    ... --scheduler tcp://HEAD:8786 # or on a cluster (README: Running on a cluster)
+    ... --scheduler tcp://HEAD:8786 # or on a cluster (docs/python.md: Running on a cluster)
 
 (``ros2 run tumble_ros encounter ...`` on a ROS 2 install.) Writes ``encounter.png`` (the
 distributions after the encounter), ``summary.txt`` (the report printed on stdout) and

@@ -5,7 +5,7 @@ The Dask engine of ensembles: tasks on a ``distributed`` cluster, results as the
 ensemble into chunks; with a Dask client, each chunk is one task (:func:`~.ensemble.run_chunk`:
 the compiled loop runs inside it) on the workers of a ``distributed`` cluster: an embedded
 ``LocalCluster`` (the default way to use every core in separate processes) or a cluster started
-with Dask's own ``dask scheduler`` and ``dask worker`` commands (README, "Running on a
+with Dask's own ``dask scheduler`` and ``dask worker`` commands (docs/python.md, "Running on a
 cluster"). Dask does the scheduling, the transport and the fault tolerance (a task whose worker
 dies is run again elsewhere); this module only submits, hands results back as they finish and
 cancels what is left when the caller stops::

@@ -438,7 +438,7 @@ class Scenario:
         impacts = tuple(self.impacts)
         if len(impacts) > MAX_IMPACTS:
             _fail('impacts', f'at most {MAX_IMPACTS:,} scheduled impacts per run (MAX_IMPACTS, '
-                  'README "Limits")', impacts)
+                  'docs/ros.md "Limits of the inputs")', impacts)
         for k, impact in enumerate(impacts):
             if not isinstance(impact, Impact):
                 _fail(f'impacts[{k}]', 'must be an Impact', impact)
@@ -714,7 +714,7 @@ def _impacts_from_parameters(params: Mapping[str, Any]) -> tuple[Impact, ...]:
     n = len(start)
     if n > MAX_IMPACTS:
         _fail('impacts.start', f'at most {MAX_IMPACTS:,} scheduled impacts per run (MAX_IMPACTS, '
-              'README "Limits")', start)
+              'docs/ros.md "Limits of the inputs")', start)
     if len(duration) != n:
         _fail('impacts.duration', f'must have one entry per impacts.start ({n})', duration)
     if len(torque) != 3 * n:

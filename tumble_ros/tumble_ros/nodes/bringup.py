@@ -317,7 +317,13 @@ def main(args: list[str] | None = None) -> int:
     if '--ros-args' in argv:
         k = argv.index('--ros-args')
         argv, ros_args = argv[:k], argv[k + 1:]
-    parser = argparse.ArgumentParser(prog='bringup', description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(
+        prog='bringup', description=__doc__.split('\n\n')[0],
+        usage='%(prog)s [SCENARIO] [options] [--ros-args -p NAME:=VALUE ...]',
+        epilog='--ros-args ends the options: what follows goes to the three nodes, e.g. '
+               '--ros-args -p duration:=5.0 -p integrator.method:=rk4 (overrides the scenario '
+               'file). Exit codes: 0 finished; 1 diverged, refused input or a failed recording; '
+               '130 / 143 / 129 after SIGINT / SIGTERM / SIGHUP; 141 on a closed pipe.')
     parser.add_argument('scenario', nargs='?',
                         help='ROS 2 params file, or the name of a shipped one (fig10: '
                              'config/fig10.yaml); default scenario if omitted')
@@ -334,7 +340,9 @@ def main(args: list[str] | None = None) -> int:
     parser.add_argument('--no-markers', action='store_true',
                         help="do not publish and record the 3D scene ('markers')")
     parser.add_argument('--visible', action='store_true',
-                        help='let other ROS processes see the run (default: isolated, see above)')
+                        help='let other ROS processes see the run (default: isolated, '
+                             'ROS_AUTOMATIC_DISCOVERY_RANGE=OFF for its own context); give each '
+                             'visible run its own ROS_DOMAIN_ID')
     options = parser.parse_args(argv)
     try:
         scenario = scenario_file(options.scenario) if options.scenario else None

@@ -64,8 +64,8 @@ from tumble_ros.nodes.sources import SourceMonitor
 
 __all__ = ['RecorderNode', 'DEFAULT_TOPICS', 'main']
 
-#: Recorded when neither ``topics`` nor ``topic_pattern`` is given (relative names resolve
-#: in the recorder's namespace).
+#: Recorded when ``topics`` is not given (relative names resolve in the recorder's namespace);
+#: ``topic_pattern`` adds to them, as it adds to ``topics``.
 DEFAULT_TOPICS = topics.RECORDED
 #: Types whose CDR starts with a header stamp: one message per simulator sample. The recorder's
 #: progress is the oldest of their latest stamps. Not /clock: it is best effort (CLOCK_QOS).
@@ -162,7 +162,7 @@ class RecorderNode(GuardedNode):
                             f"got {p['log_time']!r}")
         topics = [t for t in p['topics'] if t]
         self._explicit = {self._resolve('topics', t)
-                          for t in (topics or ([] if p['topic_pattern'] else DEFAULT_TOPICS))}
+                          for t in (topics or DEFAULT_TOPICS)}
         self._pattern = re.compile(p['topic_pattern']) if p['topic_pattern'] else None
         path = Path(p['output'] or default_output())
         path.parent.mkdir(parents=True, exist_ok=True)
