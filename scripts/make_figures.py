@@ -94,8 +94,9 @@ def make(name: str, root: Path = OUT) -> str:
     lines += [f"![{name} {p.stem}]({name}/{p.name})" for p in figures]
     lines += ["", f"Summary: [{name}/summary.txt]({name}/summary.txt)", ""]
     if name == "apophis_2029":
+        # --overwrite: a figure run replaces its own outputs (as it does the PNGs above)
         status = encounter([str(CONFIG / f"{name}.yaml"), "--bodies", "1000", "--out",
-                            str(out / "encounter"), "--no-arrays"])
+                            str(out / "encounter"), "--no-arrays", "--overwrite"])
         if status != 0:
             raise SystemExit(f"the encounter ensemble failed ({status})")
         report = out / "encounter" / "summary.txt"   # no wall time in a published summary

@@ -1,4 +1,8 @@
-"""The docs hold together: every relative link of README.md and docs/*.md reaches a file, and its anchor a heading."""
+"""
+The docs hold together: every relative link of README.md and docs/ reaches its target.
+
+A link reaches a file, and its anchor a heading of that file.
+"""
 from pathlib import Path
 import re
 
@@ -13,7 +17,7 @@ README_MAX_LINES = 250
 
 
 def anchors(path: Path) -> set[str]:
-    """GitHub's anchors of a Markdown file's headings (lower case, punctuation dropped, - for space)."""
+    """Return the GitHub anchors of a Markdown file's headings (lower case, no punctuation)."""
     found = set()
     in_code = False
     for line in path.read_text().splitlines():

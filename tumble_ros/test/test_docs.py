@@ -1,4 +1,4 @@
-"""The docs: every declared parameter, topic and service has a row in docs/ros.md; no outside paths."""
+"""The docs: every parameter, topic and service has a row in docs/ros.md; no outside paths."""
 import os
 from pathlib import Path
 import re
@@ -95,7 +95,8 @@ def test_scenario_description_documents_parameters_yaml_as_the_scenario_as_start
     The .msg says what the simulator sends (test_trust_nodes: the same text in every segment).
 
     The field's comment (its line and the comment lines under it) must say the scenario as
-    started, as docs/ros.md does, not the impacts scheduled so far (what the simulator used to send).
+    started, as docs/ros.md does, not the impacts scheduled so far (what the simulator used to
+    send).
     """
     msg = (Path(__file__).resolve().parents[2] / 'tumble_ros_interfaces' / 'msg'
            / 'ScenarioDescription.msg').read_text()

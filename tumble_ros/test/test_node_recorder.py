@@ -135,13 +135,19 @@ def test_latched_and_late_topics_are_recorded(ros, tmp_path):
 
 
 def test_a_topic_pattern_adds_to_the_default_topics(ros, tmp_path):
-    """`-p topic_pattern:=...` records the tumble topics too (it replaced them: analyze refused the file)."""
-    ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002, real_time_factor=0.0)
+    """
+    `-p topic_pattern:=...` records the tumble topics too (it replaced them).
+
+    analyze refused such a file: it held only the matched topics.
+    """
+    ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002,
+              real_time_factor=0.0)
     recorder = ros.start(RecorderNode, output=str(tmp_path / 'pattern.mcap'),
                          topic_pattern='^/late', discovery_period=0.05)
     late = ros.probe.create_publisher(String, '/late/news', 10)
     assert ros.spin_until(lambda: recorder.counts.get('/late/news') is not None
-                          and recorder.counts.get('/' + topics.SCENARIO) == 1, 5.0), recorder.counts
+                          and recorder.counts.get('/' + topics.SCENARIO) == 1,
+                          5.0), recorder.counts
     assert OMEGA_TOPIC in recorder.counts and '/clock' in recorder.counts, recorder.counts
     late.publish(String(data='hello'))
     assert ros.spin_until(lambda: recorder.counts.get('/late/news') == 1, 5.0)

@@ -30,12 +30,12 @@ OVERRIDES = {
 
 
 def blocks(language: str) -> list[str]:
-    """The README's fenced code blocks of one language, in order."""
+    """Return the README's fenced code blocks of one language, in order."""
     return re.findall(rf'^```{language}\n(.*?)^```', README, re.M | re.S)
 
 
 def shell_commands() -> list[str]:
-    """Every command of the README's bash blocks that runs without a ros2 CLI, joined and overridden."""
+    """Return the README's bash commands that need no ros2 CLI, joined and overridden."""
     commands = []
     for block in blocks('bash')[1:]:            # the first block is `make run` / `make test`
         joined = re.sub(r'\\\n\s*', ' ', block)
@@ -98,4 +98,3 @@ def test_the_readme_python_runs_as_a_script(clone, index):
     script.unlink()
     assert done.returncode == 0, done.stderr[-3000:]
     assert 'Traceback' not in done.stderr
-

@@ -41,7 +41,8 @@ __all__ = ['EncounterResult', 'encounter_ensemble', 'tumbler_states', 'format_en
 
 #: Memory one body of an encounter ensemble holds while it runs and is reported [bytes]: its
 #: inputs, its two samples, its spin states before and after and the saved arrays (measured
-#: 3.2 kB: peak RSS 234 MB with 2,000 bodies, 290 MB with 20,000; rounded up: docs/ros.md "Limits of the inputs").
+#: 3.2 kB: peak RSS 234 MB with 2,000 bodies, 290 MB with 20,000; rounded up: docs/ros.md
+#: "Limits of the inputs").
 BYTES_PER_BODY = 4_000
 #: Largest half-width of the spread of I_a/I_c and I_b/I_c (both ratios lie in (0, 1]).
 MAX_INERTIA_SPREAD = 0.5

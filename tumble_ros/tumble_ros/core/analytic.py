@@ -110,9 +110,9 @@ class ModelNotApplicable(ScenarioError):
     """
 
     def __init__(self, model: str, reason: str) -> None:
-        super().__init__(f'{reason} (analytic model {model!r} does not apply; the comparator\'s '
-                         f'`model` parameter chooses another: docs/analytic.md lists them and '
-                         f'when each applies)')
+        super().__init__(f'{reason} (analytic model {model!r} does not apply; the '
+                         "comparator's `model` parameter chooses another: docs/analytic.md "
+                         'lists them and when each applies)')
         self.model = model
         self.reason = reason
 

@@ -69,8 +69,8 @@ def _read_bytes(path: Path) -> bytes:
                                 '(only regular files are read)')
         if info.st_size > MAX_PARAMS_FILE_BYTES:
             raise ScenarioError(f'params file {path}: {info.st_size:,} bytes, above the limit '
-                                f'of {MAX_PARAMS_FILE_BYTES:,} (MAX_PARAMS_FILE_BYTES, docs/ros.md '
-                                '"Limits of the inputs")')
+                                f'of {MAX_PARAMS_FILE_BYTES:,} (MAX_PARAMS_FILE_BYTES, '
+                                'docs/ros.md "Limits of the inputs")')
         os.set_blocking(fd, True)
         with os.fdopen(fd, 'rb', closefd=False) as stream:
             data = stream.read(MAX_PARAMS_FILE_BYTES + 1)
