@@ -191,6 +191,22 @@ def test_every_parameter_has_a_value_and_a_dump_reproduces_the_run(ros, spawn, t
     assert descriptions[-1].parameters_yaml == original
 
 
+def answer(ros, call, node_name: str, attempts: int = 6, timeout: float = 10.0):
+    """
+    Return the response of a parameter service ``call()``, asked again if it gets none.
+
+    A request sent just after the service was discovered can be lost while the server has not
+    matched the client's response reader yet (a DDS discovery race: one such call went
+    unanswered for 120 s in a full run); ``ros2 param`` users retry the same way.
+    """
+    for _ in range(attempts):
+        future = call()
+        if ros.spin_until(future.done, timeout):
+            return future.result()
+        future.cancel()
+    raise AssertionError(f'{node_name}: no answer to {attempts} parameter requests')
+
+
 def ros2_param_dump(ros, node_name: str) -> str:
     """
     Print what ``ros2 param dump <node_name>`` prints, through rclpy's parameter client.
@@ -202,12 +218,8 @@ def ros2_param_dump(ros, node_name: str) -> str:
     """
     client = AsyncParameterClient(ros.probe, node_name)
     assert client.wait_for_services(timeout_sec=120.0), f'{node_name}: no parameter services'
-    future = client.list_parameters()
-    assert ros.spin_until(future.done, 120.0)
-    names = sorted(future.result().result.names)
-    future = client.get_parameters(names)
-    assert ros.spin_until(future.done, 120.0)
-    values = future.result().values
+    names = sorted(answer(ros, client.list_parameters, node_name).result.names)
+    values = answer(ros, lambda: client.get_parameters(names), node_name).values
     untyped = [n for n, v in zip(names, values)
                if v.type in (ParameterType.PARAMETER_NOT_SET, ParameterType.PARAMETER_BYTE_ARRAY)]
     assert not untyped, f'{node_name}: unset or byte-array parameters {untyped}'
