@@ -122,7 +122,8 @@ def test_an_embedded_cluster_listens_on_loopback_only_and_ctrl_c_ends_it_in_one_
     while time.monotonic() < deadline and run.popen.poll() is None:
         seen = _listeners(run.popen.pid)
         workers = [key for key in seen if key[0] != run.popen.pid]
-        if len(workers) >= 2 and (out / 'chunk_done').exists():
+        # .zmetadata is written last when the store is created: the run is then under way
+        if len(workers) >= 2 and (out / '.zmetadata').exists():
             break
         time.sleep(0.2)
     assert run.popen.poll() is None, run.output
