@@ -284,7 +284,8 @@ def test_an_advertised_type_of_a_module_that_is_no_interface_package_is_not_impo
         recorder._import_type('geometry_msgs/msg/NoSuchType')
 
 
-@pytest.mark.parametrize('ghost', [False, True], ids=['appears', 'never-appears'])
+@pytest.mark.parametrize('ghost', [None, 'goes-silent', 'never-appears'],
+                         ids=['appears', 'consumer-goes-silent', 'never-appears'])
 def test_a_consumers_announced_topics_hold_the_recorders_progress_until_subscribed(
         ros, tmp_path, ghost):
     """
@@ -292,7 +293,9 @@ def test_a_consumers_announced_topics_hold_the_recorders_progress_until_subscrib
 
     Until the recorder has subscribed them its progress does not advance, so the simulator
     cannot run past their history while the recorder's graph does not show them yet (under CPU
-    contention the comparator's 3 outputs lost 1179 of 10,000 samples that way).
+    contention the comparator's 3 outputs lost 1179 of 10,000 samples that way). The hold
+    ends when the announcing consumer goes silent (CONSUMER_TIMEOUT), or, while it lives, once
+    the announced topic has not appeared for ``wait`` (30 s by default; 4 s here).
     """
     from builtin_interfaces.msg import Time
     from geometry_msgs.msg import Vector3Stamped
@@ -303,6 +306,7 @@ def test_a_consumers_announced_topics_hold_the_recorders_progress_until_subscrib
     recorder = ros.start(RecorderNode, output=str(tmp_path / 'announced.mcap'),
                          topics=[topics.ANGULAR_VELOCITY], topic_pattern='^/late',
                          discovery_period=15.0)
+    recorder._produced.wait = 4.0
     reports = ros.collect(ConsumerProgress, PROGRESS_TOPIC, qos=PROGRESS_QOS)
     omega = ros.probe.create_publisher(Vector3Stamped, OMEGA_TOPIC, STATE_QOS)
     announce = ros.probe.create_publisher(ConsumerProgress, PROGRESS_TOPIC, PROGRESS_QOS)
@@ -319,19 +323,27 @@ def test_a_consumers_announced_topics_hold_the_recorders_progress_until_subscrib
     for k in range(5):
         publish_sample(k)
     assert ros.spin_until(lambda: recorder_ns() == 4_000_000, 5.0), recorder.counts
-    for _ in range(3):     # a comparator announces its output, not on the graph yet
+
+    def announce_once():
         announce.publish(ConsumerProgress(consumer='/comparator', active=True,
                                           last_stamp=Time(sec=0), produces=['/late/error']))
+
+    for _ in range(3):     # a comparator announces its output, not on the graph yet
+        announce_once()
         ros.spin_for(0.1)
     for k in range(5, 10):
         publish_sample(k)
     ros.spin_for(1.0)
     assert recorder_ns() == 4_000_000      # held: /late/error is announced, not subscribed
     assert recorder.counts.get(OMEGA_TOPIC) == 10
-    if ghost:    # never published: the wait is bounded (3 s after it was first heard)
-        for k in range(10, 40):        # the samples go on meanwhile
+    if ghost:    # never published: the wait is bounded
+        for k in range(10, 40):        # the samples go on meanwhile (6 s)
             publish_sample(k)
+            if ghost == 'never-appears':   # the consumer lives on, announcing
+                announce_once()
             ros.spin_for(0.2)
+            if k == 11:                # 1.4 s after the last announcement: still held
+                assert recorder_ns() == 4_000_000
         assert recorder_ns() is not None and recorder_ns() > 9_000_000, recorder_ns()
     else:
         ros.probe.create_publisher(Vector3Stamped, '/late/error', STATE_QOS)

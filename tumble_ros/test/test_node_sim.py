@@ -311,6 +311,46 @@ def test_min_consumers_counts_only_the_consumers_present(ros):
     assert ros.spin_until(lambda: sim.published_samples > 0, 10.0)
 
 
+def test_nothing_more_is_published_while_a_recorder_has_not_heard_a_comparator(ros):
+    """
+    A recorder reports the producing consumers it has heard (``ConsumerProgress.heard``).
+
+    Beside two CPU hogs a recorder discovered a new comparator 1.7 s after the simulator did,
+    and the simulator, paced on progress the recorder could not yet hold back, ran about 2,600
+    samples ahead: 1,630 comparator samples beyond their history were lost. Now, while a
+    recorder has not heard a present producer, the simulator publishes nothing more; once it
+    has, publication goes on.
+    """
+    from builtin_interfaces.msg import Time
+
+    from tumble_ros.nodes.progress import PROGRESS_QOS, PROGRESS_TOPIC
+    from tumble_ros_interfaces.msg import ConsumerProgress
+
+    sim = ros.start(SimNode, real_time_factor=0.0, min_consumers=2,
+                    **{k: v for k, v in SHORT.items() if k != 'real_time_factor'})
+    report = ros.probe.create_publisher(ConsumerProgress, PROGRESS_TOPIC, PROGRESS_QOS)
+    assert ros.spin_until(lambda: report.get_subscription_count() >= 1, 10.0)
+
+    def both(recorder_heard):
+        far = Time(sec=10**6)     # both far ahead: only the gate can hold the simulator
+        report.publish(ConsumerProgress(consumer='/recorder', active=True, last_stamp=far,
+                                        records=True, heard=recorder_heard))
+        report.publish(ConsumerProgress(consumer='/comparator', active=True, last_stamp=far,
+                                        produces=['/comparison/error']))
+
+    for _ in range(20):
+        both([])
+        ros.spin_for(0.05)
+    assert sim._consumers.count == 2
+    assert sim.published_samples == 0, 'published while the recorder had not heard the comparator'
+    assert sim._consumers.recorders_behind() == [('/recorder', '/comparator')]
+    for _ in range(20):
+        both(['/comparator'])
+        ros.spin_for(0.05)
+    assert sim._consumers.recorders_behind() == []
+    assert ros.spin_until(lambda: sim.published_samples > 0, 10.0)
+
+
 def test_min_consumers_holds_publication_until_they_report(ros):
     from tumble_ros.nodes.progress import ProgressReporter
     from tumble_ros.nodes.sim import WINDOW

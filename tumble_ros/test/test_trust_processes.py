@@ -407,7 +407,8 @@ def test_the_three_nodes_beside_a_cpu_hog_lose_nothing_on_the_reliable_topics(ro
                 + c['header.stamp.nanosec'].astype('int64')).tolist())
         if got != expected:
             lost[topic] = len(set(expected) - set(got))
-    assert not lost, f'samples lost per reliable topic: {lost}'
+    assert not lost, (f'samples lost per reliable topic: {lost}\n'
+                      + recorder.output + sim.output)
     clock = len(columns[topics.CLOCK]) if topics.CLOCK in columns else 0
     assert f'{topics.CLOCK}: {n - clock} of {n} samples missed' in recorder.output
 

@@ -39,6 +39,12 @@ HEARTBEAT_PERIOD = 0.5
 CONSUMER_TIMEOUT = 3.0
 #: How long a leaving consumer waits for its goodbye to be acknowledged [s].
 GOODBYE_TIMEOUT = 0.5
+#: How long a recorder holds the run for a per-sample topic a live consumer announced but its
+#: graph does not show yet [s]. Discovery of a new publisher took over 3 s beside two CPU hogs
+#: and a test suite (1611 comparator samples lost with a 3 s wait): a generous bound, reached
+#: only if the announced publisher never appears; a consumer that dies lapses in
+#: CONSUMER_TIMEOUT.
+ANNOUNCED_TOPIC_WAIT = 30.0
 _NOTHING_YET = -1
 
 
@@ -49,14 +55,19 @@ class ProgressReporter:
     The consumer calls :meth:`mark` as it goes, or passes ``source``: a function returning its
     progress stamp [ns] (or None), asked once per report instead of once per message.
     ``produces``: the per-sample topics the consumer publishes (resolved names), announced in
-    every report so that a recorder of them waits until it receives them.
+    every report so that a recorder of them waits until it receives them. ``heard`` (recorders
+    only): returns the consumers whose announcements the recorder has taken in, reported so
+    that the simulator waits until every recorder has heard every producing consumer.
     """
 
     def __init__(self, node: Node, source: Callable[[], int | None] | None = None,
-                 produces: Iterable[str] = ()) -> None:
+                 produces: Iterable[str] = (),
+                 heard: Callable[[], Iterable[str]] | None = None) -> None:
         self._node = node
         self._source = source
         self._produces = list(produces)
+        self._heard = heard
+        self._sent_heard: list[str] = []
         self._pub = node.create_publisher(ConsumerProgress, PROGRESS_TOPIC, PROGRESS_QOS)
         self._last_ns = _NOTHING_YET
         self._sent_ns: int | None = None
@@ -73,13 +84,17 @@ class ProgressReporter:
             stamp_ns = self._source()
             if stamp_ns is not None:
                 self.mark(stamp_ns)
-        if self._last_ns == self._sent_ns and time.monotonic() - self._sent_at < HEARTBEAT_PERIOD:
+        heard = sorted(self._heard()) if self._heard is not None else []
+        if (self._last_ns == self._sent_ns and heard == self._sent_heard
+                and time.monotonic() - self._sent_at < HEARTBEAT_PERIOD):
             return
+        self._sent_heard = heard
         self._publish(True)
 
     def _publish(self, active: bool) -> None:
         msg = ConsumerProgress(consumer=self._node.get_fully_qualified_name(), active=active,
-                               produces=self._produces)
+                               produces=self._produces, records=self._heard is not None,
+                               heard=self._sent_heard)
         if self._last_ns == _NOTHING_YET:
             msg.last_stamp = Time(sec=-1, nanosec=0)
         else:
@@ -124,13 +139,21 @@ class ConsumerTracker:
         self._on_drop = on_drop
         # consumer -> (last ns, wall time of report)
         self._progress: dict[str, tuple[int, float]] = {}
+        self._producers: dict[str, float] = {}  # producing consumer -> when first heard
+        self._recorders: dict[str, frozenset[str]] = {}  # recorder -> the producers it heard
+        self._given_up: set[tuple[str, str]] = set()  # (recorder, producer) no longer awaited
         node.create_subscription(ConsumerProgress, PROGRESS_TOPIC, self._on_progress, PROGRESS_QOS)
 
     def _on_progress(self, msg: ConsumerProgress) -> None:
         if not msg.active:
             if self._progress.pop(msg.consumer, None) is not None:
                 self._node.get_logger().info(f'consumer {msg.consumer} left')
+            self._forget(msg.consumer)
             return
+        if msg.produces:
+            self._producers.setdefault(msg.consumer, time.monotonic())
+        if msg.records:
+            self._recorders[msg.consumer] = frozenset(msg.heard)
         ns = (_NOTHING_YET if msg.last_stamp.sec < 0
               else msg.last_stamp.sec * 1_000_000_000 + msg.last_stamp.nanosec)
         if msg.consumer not in self._progress:
@@ -162,6 +185,40 @@ class ConsumerTracker:
             return None
         return min(ns for ns, _ in self._progress.values())
 
+    def recorders_behind(self) -> list[tuple[str, str]]:
+        """
+        Return the (recorder, producer) pairs where the recorder has not heard the producer yet.
+
+        A producer is a present consumer that announces per-sample topics (the comparator); a
+        recorder reports the producers whose announcements it has taken in. While a pair is
+        listed the simulator publishes nothing more, so the recorder, whose discovery of the
+        producer can lag the simulator's by seconds, cannot miss its first samples. A pair is
+        waited for at most ANNOUNCED_TOPIC_WAIT after the producer was first heard (then a
+        warning, once).
+        """
+        now = time.monotonic()
+        behind = []
+        for producer, first in self._producers.items():
+            if producer not in self._progress:
+                continue
+            for recorder, heard in self._recorders.items():
+                pair = (recorder, producer)
+                if (recorder == producer or producer in heard or pair in self._given_up
+                        or recorder not in self._progress):
+                    continue
+                if now - first > ANNOUNCED_TOPIC_WAIT:
+                    self._given_up.add(pair)
+                    self._node.get_logger().warning(
+                        f'recorder {recorder} has not heard consumer {producer} within '
+                        f'{ANNOUNCED_TOPIC_WAIT:g} s: no longer waiting for it')
+                    continue
+                behind.append(pair)
+        return behind
+
+    def _forget(self, name: str) -> None:
+        self._producers.pop(name, None)
+        self._recorders.pop(name, None)
+
     def _drop_silent(self, behind: Callable[[int], bool]) -> None:
         """Drop, with a warning, the consumers ``behind`` and silent longer than the timeout."""
         now = time.monotonic()
@@ -171,6 +228,7 @@ class ConsumerTracker:
                            'no longer waiting for it')
                 self._node.get_logger().warning(message)
                 del self._progress[name]
+                self._forget(name)
                 if self._on_drop is not None:
                     self._on_drop(message)
 
@@ -183,15 +241,17 @@ class ProducedTopics:
     (:meth:`awaited`): the simulator, paced on that progress, then cannot run past what the
     topic's transient-local history replays once the subscription matches, however late the
     recorder's graph shows the new publisher (seconds under CPU contention). An announcement
-    lapses when its consumer says goodbye or is silent for ``timeout``, and is waited for at
-    most ``timeout`` [s] after it was first heard (then ``on_late`` is told, once): no
+    lapses when its consumer says goodbye or is silent for ``timeout`` [s], and is waited for
+    at most ``wait`` [s] after it was first heard (then ``on_late`` is told, once): no
     announcement can hold the run for longer.
     """
 
     def __init__(self, node: Node, on_new: Callable[[], None] | None = None,
                  on_late: Callable[[str], None] | None = None,
-                 timeout: float = CONSUMER_TIMEOUT) -> None:
+                 timeout: float = CONSUMER_TIMEOUT,
+                 wait: float = ANNOUNCED_TOPIC_WAIT) -> None:
         self._timeout = timeout
+        self.wait = wait
         self._on_new = on_new
         self._on_late = on_late
         self._heard: dict[str, tuple[tuple[str, ...], float]] = {}  # consumer -> (topics, when)
@@ -214,6 +274,10 @@ class ProducedTopics:
         if new and self._on_new is not None:
             self._on_new()
 
+    def heard(self) -> list[str]:
+        """Return the consumers whose announcement is current (a recorder reports them)."""
+        return list(self._heard)
+
     def awaited(self, has: Callable[[str], bool]) -> set[str]:
         """Return the announced topics for which ``has(topic)`` is false, within the wait."""
         now = time.monotonic()
@@ -223,7 +287,7 @@ class ProducedTopics:
         for topic in {t for topics, _ in self._heard.values() for t in topics}:
             if has(topic) or topic in self._late:
                 continue
-            if now - self._first[topic] > self._timeout:
+            if now - self._first[topic] > self.wait:
                 self._late.add(topic)
                 if self._on_late is not None:
                     self._on_late(topic)

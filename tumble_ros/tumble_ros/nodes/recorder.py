@@ -180,12 +180,14 @@ class RecorderNode(GuardedNode):
         # (monotonic time of the last look, the quiet per-sample topics without publishers)
         self._gone_checked: tuple[float, set[str]] = (-math.inf, set())
         self._per_sample_discovered_at = -math.inf  # monotonic time of the last look
-        self._progress = ProgressReporter(self, source=self._slowest_live_stamp)
+        self._progress = ProgressReporter(self, source=self._slowest_live_stamp,
+                                          heard=lambda: self._produced.heard())
         # per-sample topics other consumers announce (the comparator's): subscribed at once
         self._produced = ProducedTopics(
             self, on_new=lambda: self._discover(per_sample_only=True),
             on_late=lambda topic: self.get_logger().warning(
-                f'{topic}: announced but not found on the graph within 3 s: not waiting for it'))
+                f'{topic}: announced but not found on the graph within '
+                f'{self._produced.wait:g} s: not waiting for it'))
         self._discover()
         steady_timer(self, p['discovery_period'], self._discover)
         steady_timer(self, p['chunk_seconds'] / 4, self._poll)

@@ -242,6 +242,8 @@ class SimNode(GuardedNode):
                 return self._next_k - 1  # not all expected consumers are here yet
             # for good: a consumer that leaves later is not waited for
             self._consumers_gate_open = True
+        if self._consumers.recorders_behind():
+            return self._next_k - 1  # a recorder has not heard a comparator yet: wait for it
         slowest = self._consumers.slowest_ns(self._grid.stamp(max(0, self._next_k - 1)))
         if slowest is None:
             return self._grid.count
