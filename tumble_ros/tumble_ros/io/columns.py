@@ -25,6 +25,8 @@ from typing import Any
 
 from mcap.records import Message
 import numpy as np
+import numpy.typing as npt
+from tumble_ros.topics import SampleTopic
 
 from .mcap_reader import (
     _chunk_records,
@@ -39,7 +41,7 @@ from .mcap_reader import (
 from .msgdefs import MessageDefinitionError, parse_msg
 
 __all__ = ['FlatLayout', 'FlatEncoder', 'MessageTemplate', 'TopicColumns', 'read_columns',
-           'encode_rows']
+           'encode_rows', 'sample_values']
 
 #: numpy types of the primitive types a flat layout may hold (strings apart), little-endian.
 _DTYPES = {'bool': '<u1', 'byte': '<u1', 'char': '<u1', 'int8': '<i1', 'uint8': '<u1',
@@ -344,6 +346,23 @@ def read_columns(path, topics: Iterable[str], as_messages: Iterable[str] = (),
         reader = _ColumnReader(path, stream, wanted, set(as_messages), progress)
         reader.run()
     return reader.results()
+
+
+def sample_values(table: TopicColumns, topic: SampleTopic
+                  ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
+    """
+    Return (stamps [ns], values (n, len(topic.fields))) of a per-sample topic read as columns.
+
+    ``table``: the topic's :class:`TopicColumns` (:func:`read_columns`); ``topic``: its
+    description (:class:`tumble_ros.topics.SampleTopic`), whose ``fields`` give the values'
+    columns, in order, as floats. Rows in file order, stamps from ``header.stamp``.
+    """
+    c = table.columns
+    stamps = (c['header.stamp.sec'].astype(np.int64) * 1_000_000_000
+              + c['header.stamp.nanosec'].astype(np.int64))
+    values = np.column_stack([c[name].astype(np.float64) for name in topic.fields]).reshape(
+        len(stamps), len(topic.fields))
+    return stamps, values
 
 
 class _ColumnReader:

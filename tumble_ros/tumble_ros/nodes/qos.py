@@ -6,7 +6,7 @@ from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSPro
 from tumble_ros import topics
 
 __all__ = ['STATE_QOS', 'CLOCK_QOS', 'LATCHED_QOS', 'DESCRIPTION_QOS', 'SERVICE_QOS',
-           'PUBLISHER_QOS', 'as_discovered']
+           'PUBLISHER_QOS', 'publisher_qos', 'as_discovered']
 
 #: Sampled state (w, attitude, Euler angles, /clock, events, comparisons): reliable with a deep
 #: queue, and transient-local, so a subscriber whose subscription is matched a moment after the
@@ -79,6 +79,16 @@ PUBLISHER_QOS = {
     topics.ERROR_NORM: STATE_QOS,
     topics.COMPARISON_STATUS: LATCHED_QOS,
 }
+
+
+
+def publisher_qos(topic: str) -> QoSProfile:
+    """Return the QoS ``topic`` is published with; every per-sample topic's is STATE_QOS."""
+    if topic in PUBLISHER_QOS:
+        return PUBLISHER_QOS[topic]
+    topics.sample_topic(topic)   # KeyError for a topic that is neither
+    return STATE_QOS
+
 
 _INFINITE = Duration(nanoseconds=2**63 - 1)
 
