@@ -171,10 +171,10 @@ TYPES = {
 
 #: What the simulator publishes (``/clock`` unless ``publish_clock`` is false, ``perturber``
 #: with a Kepler orbit, ``markers`` unless ``markers`` is false).
-SIM_TOPICS = (ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, CLOCK, IMPACT_EVENTS, STATUS, SCENARIO,
-              PERTURBER, MARKERS)
+SIM_TOPICS = (*(t.name for t in sample_topics(SIM)), CLOCK, IMPACT_EVENTS, STATUS, SCENARIO,
+              MARKERS)
 #: What the comparator publishes.
-COMPARATOR_TOPICS = (MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS)
+COMPARATOR_TOPICS = (*(t.name for t in sample_topics(COMPARATOR)), COMPARISON_STATUS)
 #: What the recorder records by default.
 RECORDED = SIM_TOPICS + COMPARATOR_TOPICS
 #: One message per simulator sample, reliable: a complete recording has as many of each as the

@@ -28,17 +28,9 @@ import numpy as np
 import numpy.typing as npt
 from tumble_ros.topics import SampleTopic
 
-from .mcap_reader import (
-    _chunk_records,
-    _Decoders,
-    _open,
-    _Scan,
-    _SEPARATOR,
-    _split_sections,
-    McapError,
-    RecordedMessage,
-)
-from .msgdefs import MessageDefinitionError, parse_msg
+from .mcap_reader import (chunk_records, Decoders, McapError, open_recording, RecordedMessage,
+                          RecordScan, split_sections)
+from .msgdefs import MessageDefinitionError, parse_msg, SEPARATOR
 
 __all__ = ['FlatLayout', 'FlatEncoder', 'MessageTemplate', 'TopicColumns', 'read_columns',
            'encode_rows', 'sample_values']
@@ -115,7 +107,7 @@ def _specs(type_name: str, schema_text: str) -> dict[str, Any] | None:
     """Return {'pkg/Type': MsgSpec} of a ros2msg schema text (None if it does not parse)."""
     specs: dict[str, Any] = {}
     try:
-        for header, body in _split_sections(schema_text):
+        for header, body in split_sections(schema_text):
             name = type_name if not header else header.partition('MSG: ')[2].strip()
             if not name or header.startswith('SRV: '):
                 return None
@@ -341,7 +333,7 @@ def read_columns(path, topics: Iterable[str], as_messages: Iterable[str] = (),
     wanted = set(topics) | set(as_messages)
     if not all(isinstance(t, str) for t in wanted):
         raise McapError(f'topics must be topic names (str), got {sorted(map(repr, wanted))}')
-    path, stream = _open(path)
+    path, stream = open_recording(path)
     with stream:
         reader = _ColumnReader(path, stream, wanted, set(as_messages), progress)
         reader.run()
@@ -370,9 +362,9 @@ class _ColumnReader:
 
     def __init__(self, path, stream, wanted: set[str], as_messages: set[str], progress):
         self.progress = progress
-        self.scan = _Scan(path, stream)
+        self.scan = RecordScan(path, stream)
         self.as_messages = as_messages
-        self.decoders = _Decoders(path)
+        self.decoders = Decoders(path)
         self.wanted = wanted
         self.builders: dict[int, _Builder | None] = {}
         self.others: list[RecordedMessage] = []
@@ -396,7 +388,7 @@ class _ColumnReader:
         """Find the chunk's messages (parsing only); keep its schemas and channels."""
         located = _chunk_messages(data)
         if located[4]:
-            for record in _chunk_records(chunk, data):
+            for record in chunk_records(chunk, data):
                 if not isinstance(record, Message):
                     self.scan.add(record)
         yield (data, located)
@@ -409,7 +401,7 @@ class _ColumnReader:
             if (channel is not None and schema is not None and channel.topic in self.wanted
                     and channel.topic not in self.as_messages
                     and channel.message_encoding == 'cdr' and schema.encoding == 'ros2msg'
-                    and not schema.data.startswith(f'{_SEPARATOR}\n'.encode())):
+                    and not schema.data.startswith(f'{SEPARATOR}\n'.encode())):
                 layout = FlatLayout.from_schema(schema.name, schema.data.decode('utf-8',
                                                                                 'replace'))
             self.builders[channel_id] = (_Builder(channel.topic, schema.name, layout)

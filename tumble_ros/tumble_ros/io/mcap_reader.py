@@ -64,6 +64,8 @@ from mcap_ros2.decoder import DecoderFactory
 
 from tumble_ros.errors import IoError
 
+from .msgdefs import SEPARATOR
+
 try:                                # both come with mcap; a missing one only refuses its chunks
     import lz4.frame as lz4_frame
 except ImportError:  # pragma: no cover
@@ -74,10 +76,11 @@ except ImportError:  # pragma: no cover
     zstandard = None
 
 __all__ = ['MAX_CHUNK_BYTES', 'MAX_CHUNK_RATIO', 'McapError', 'McapSummary', 'RecordedMessage',
-           'TopicSummary', 'read_messages', 'summarize']
+           'TopicSummary', 'read_messages', 'summarize',
+           # for io.columns, which reads the same files by chunks
+           'chunk_records', 'Decoders', 'open_recording', 'RecordScan', 'split_sections']
 
 MAGIC = b'\x89MCAP0\r\n'
-_SEPARATOR = '=' * 80
 _RECORD_HEADER = 9            # opcode (1) + length (8)
 _OPCODES = frozenset(Opcode)  # the records the library reads; it skips others unseen
 #: Reads up to this size go to the file unchecked (all but a chunk's data, in practice).
@@ -196,7 +199,7 @@ def _open_regular(path: Path) -> io.BufferedReader:
         raise
 
 
-def _open(path) -> tuple[Path, io.BufferedReader]:
+def open_recording(path) -> tuple[Path, io.BufferedReader]:
     """Open ``path`` and check its magic (at once, with a message for each way it is wrong)."""
     try:
         path = Path(os.fspath(path))
@@ -365,14 +368,14 @@ def _chunk_data(chunk: Chunk) -> bytes:
     return data
 
 
-def _chunk_records(chunk: Chunk, data: bytes) -> list[Any]:
+def chunk_records(chunk: Chunk, data: bytes) -> list[Any]:
     """Return the schemas, channels and messages of a chunk (the library's breakup_chunk)."""
     return breakup_chunk(replace(chunk, compression='', data=data), validate_crc=False)
 
 
 # -- scanning -------------------------------------------------------------------------------------
 
-class _Scan:
+class RecordScan:
     """Walks a file's records; collects header, schemas, channels and chunks on the way."""
 
     def __init__(self, path: Path, file: io.BufferedReader):
@@ -400,7 +403,7 @@ class _Scan:
     def messages(self) -> Iterator[Message]:
         """Messages in file order (chunks expanded); stops cleanly where the file breaks."""
         def expand(chunk: Chunk, data: bytes) -> Iterator[Message]:
-            for item in _chunk_records(chunk, data):
+            for item in chunk_records(chunk, data):
                 if isinstance(item, Message):
                     yield item
                 else:
@@ -474,7 +477,7 @@ uint32 nanosec
 """
 
 
-def _split_sections(text: str) -> list[tuple[str, str]]:
+def split_sections(text: str) -> list[tuple[str, str]]:
     """[(header line or '', body)] of a concatenated ros2msg text."""
     sections: list[tuple[str, str]] = []
     current_header = ''
@@ -483,7 +486,7 @@ def _split_sections(text: str) -> list[tuple[str, str]]:
     index = 0
     while index < len(lines):
         line = lines[index]
-        if line.strip() == _SEPARATOR and index + 1 < len(lines):
+        if line.strip() == SEPARATOR and index + 1 < len(lines):
             sections.append((current_header, '\n'.join(current)))
             current_header, current = lines[index + 1].strip(), []
             index += 2
@@ -502,7 +505,7 @@ def _service_event_schema(schema: Schema) -> Schema:
     response types are renamed NameEvent, NameRequest, NameResponse (decoding only needs the
     layout; RecordedMessage.type_name keeps the recorded name).
     """
-    sections = _split_sections(schema.data.decode('utf-8'))
+    sections = split_sections(schema.data.decode('utf-8'))
     srv = [(h, b) for h, b in sections if h.startswith('SRV:')]
     if len(srv) != 1:
         return schema
@@ -522,18 +525,18 @@ def _service_event_schema(schema: Schema) -> Schema:
     if 'MSG: builtin_interfaces/Time' not in headers:
         extra.append(('MSG: builtin_interfaces/Time', _TIME))
     extra += [(h, b) for h, b in sections if h.startswith('MSG:')]
-    text = root + ''.join(f'{_SEPARATOR}\n{h}\n{b.strip()}\n' for h, b in extra)
+    text = root + ''.join(f'{SEPARATOR}\n{h}\n{b.strip()}\n' for h, b in extra)
     return Schema(id=schema.id, name=f'{package}/msg/{name}Event', encoding=schema.encoding,
                   data=text.encode('utf-8'))
 
 
-class _Decoders:
+class Decoders:
     def __init__(self, path: Path):
         self.path = path
         self.factory = DecoderFactory()
         self.by_channel: dict[int, Any] = {}
 
-    def decode(self, scan: _Scan, message: Message, index: int) -> RecordedMessage:
+    def decode(self, scan: RecordScan, message: Message, index: int) -> RecordedMessage:
         channel = scan.channels.get(message.channel_id)
         if channel is None:
             raise McapError(f'{self.path}: message {index} refers to unknown channel '
@@ -545,7 +548,7 @@ class _Decoders:
             if decoder is None:
                 if schema is None:
                     raise ValueError('the channel has no schema')
-                if schema.data.startswith(f'{_SEPARATOR}\nSRV: '.encode()):
+                if schema.data.startswith(f'{SEPARATOR}\nSRV: '.encode()):
                     schema = _service_event_schema(schema)
                 decoder = self.factory.decoder_for(channel.message_encoding, schema)
                 if decoder is None:
@@ -582,14 +585,14 @@ def read_messages(path, topics: Iterable[str] | str | None = None) -> Iterator[R
         wanted = set(topics)
         if not all(isinstance(t, str) for t in wanted):
             raise McapError(f'topics must be topic names (str), got {sorted(map(repr, wanted))}')
-    path, stream = _open(path)
+    path, stream = open_recording(path)
     return _read_messages(path, stream, wanted)
 
 
 def _read_messages(path: Path, stream, wanted: set[str] | None) -> Iterator[RecordedMessage]:
     with stream:
-        scan = _Scan(path, stream)
-        decoders = _Decoders(path)
+        scan = RecordScan(path, stream)
+        decoders = Decoders(path)
         count = 0
         for message in scan.messages():
             count += 1
@@ -608,13 +611,13 @@ def summarize(path) -> McapSummary:
     Raises McapError for a missing, empty or non-MCAP file and for a truncated file without a
     complete chunk.
     """
-    path, stream = _open(path)
+    path, stream = open_recording(path)
     with stream:
         finalised = _summary_from_footer(path, stream)
         if finalised is not None:
             return finalised
         stream.seek(len(MAGIC))
-        scan = _Scan(path, stream)
+        scan = RecordScan(path, stream)
         counts: dict[int, int] = {}
         start = end = None
         total = 0
@@ -627,7 +630,7 @@ def summarize(path) -> McapSummary:
         return _make_summary(path, scan, counts, total, start, end)
 
 
-def _make_summary(path, scan: _Scan, counts, total, start, end) -> McapSummary:
+def _make_summary(path, scan: RecordScan, counts, total, start, end) -> McapSummary:
     topics: dict[str, TopicSummary] = {}
     for channel in sorted(scan.channels.values(), key=lambda c: c.id):
         schema = scan.schemas.get(channel.schema_id)
@@ -662,7 +665,7 @@ def _summary_from_footer(path: Path, stream) -> McapSummary | None:
         if not isinstance(footer, Footer) or not footer.summary_start:
             return None
         stream.seek(len(MAGIC))
-        scan = _Scan(path, stream)
+        scan = RecordScan(path, stream)
         scan.header = next(_records(stream))
         if not isinstance(scan.header, Header):
             return None

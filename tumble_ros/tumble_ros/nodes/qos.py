@@ -65,21 +65,14 @@ SERVICE_QOS = QoSProfile(
 
 #: The QoS each of the simulator's and the comparator's topics is published with.
 PUBLISHER_QOS = {
-    topics.ANGULAR_VELOCITY: STATE_QOS,
-    topics.PERTURBER: STATE_QOS,
-    topics.ATTITUDE: STATE_QOS,
-    topics.EULER_ANGLES: STATE_QOS,
+    **{t.name: STATE_QOS for t in topics.SAMPLE_TOPICS},   # every per-sample topic
     topics.CLOCK: CLOCK_QOS,
     topics.IMPACT_EVENTS: STATE_QOS,
     topics.STATUS: LATCHED_QOS,
     topics.SCENARIO: DESCRIPTION_QOS,
     topics.MARKERS: STATE_QOS,
-    topics.MODEL_ANGULAR_VELOCITY: STATE_QOS,
-    topics.ERROR: STATE_QOS,
-    topics.ERROR_NORM: STATE_QOS,
     topics.COMPARISON_STATUS: LATCHED_QOS,
 }
-
 
 
 def publisher_qos(topic: str) -> QoSProfile:
