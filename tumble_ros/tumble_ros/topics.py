@@ -188,6 +188,7 @@ def recorded() -> tuple[str, ...]:
     """Return :data:`RECORDED` and every per-sample topic described since (in that order)."""
     return RECORDED + tuple(t.name for t in SAMPLE_TOPICS if t.name not in RECORDED)
 
+
 #: Namespaces (``ns``) of the ``markers`` scene: the body, its principal axes (ids 0, 1, 2: x, y,
 #: z), the angular momentum's direction, the Sun (circular orbit) or the perturber (Kepler orbit).
 MARKER_BODY = 'body'

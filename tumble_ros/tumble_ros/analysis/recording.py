@@ -53,8 +53,8 @@ from tumble_ros.errors import AnalysisError
 from tumble_ros.io import read_columns, sample_values, summarize
 from tumble_ros.topics import (ANGULAR_VELOCITY, ATTITUDE, COMPARISON_STATUS, ERROR, ERROR_NORM,
                                EULER_ANGLES, FRAME_BODY, FRAME_ORBITAL, IMPACT_EVENTS,
-                               in_namespace, MODEL_ANGULAR_VELOCITY, PERTURBER, SAMPLE_TOPICS,
-                               sample_topic, SCENARIO, STATUS, TYPES)
+                               in_namespace, MODEL_ANGULAR_VELOCITY, PERTURBER, sample_topic,
+                               SAMPLE_TOPICS, SCENARIO, STATUS, TYPES)
 
 __all__ = [
     'EXPECTED_TYPES', 'ROOT_NAMESPACE', 'AnalysisError', 'ImpactRecord', 'SegmentStart',

@@ -44,7 +44,7 @@ use; it is rewritten here into the event's real layout (``service_msgs/ServiceEv
 """
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field, replace
 import io
 import os
@@ -66,8 +66,11 @@ from tumble_ros.errors import IoError
 
 from .msgdefs import SEPARATOR
 
+lz4_frame: Any
+zstandard: Any
 try:                                # both come with mcap; a missing one only refuses its chunks
-    import lz4.frame as lz4_frame
+    import lz4.frame
+    lz4_frame = lz4.frame
 except ImportError:  # pragma: no cover
     lz4_frame = None
 try:
@@ -199,7 +202,7 @@ def _open_regular(path: Path) -> io.BufferedReader:
         raise
 
 
-def open_recording(path) -> tuple[Path, io.BufferedReader]:
+def open_recording(path: str | os.PathLike[str]) -> tuple[Path, io.BufferedReader]:
     """Open ``path`` and check its magic (at once, with a message for each way it is wrong)."""
     try:
         path = Path(os.fspath(path))
@@ -255,7 +258,7 @@ class _StreamReader(StreamReader):
     the library consumes a record it does not know (``_read_record`` returning None).
     """
 
-    def _read_record(self, opcode: int, length: int):
+    def _read_record(self, opcode: int, length: int) -> Any:
         if opcode == Opcode.MESSAGE_INDEX:
             return None
         return super()._read_record(opcode, length)
@@ -263,7 +266,8 @@ class _StreamReader(StreamReader):
 
 def _records(file: io.BufferedReader) -> Iterator[Any]:
     """Return the library's records from the file's position on, chunks still compressed."""
-    return _StreamReader(_BoundedFile(file), skip_magic=True, emit_chunks=True).records
+    bounded: Any = _BoundedFile(file)     # (a file to the library: read, seek, tell)
+    return _StreamReader(bounded, skip_magic=True, emit_chunks=True).records
 
 
 def _truncation(file: io.BufferedReader, position: int) -> str | None:
@@ -305,7 +309,7 @@ def _check_chunk_size(chunk: Chunk) -> None:
                        f'{compression} data, more than {MAX_CHUNK_RATIO} times: refused')
 
 
-def _read_exactly(reader, size: int) -> bytes:
+def _read_exactly(reader: Any, size: int) -> bytes:
     """Return the ``size`` bytes ``reader`` produces; _Damaged if it produces fewer or more."""
     buffer = bytearray(size + 1)           # one more: a stream that goes on is an error too
     view = memoryview(buffer)
@@ -330,7 +334,7 @@ class _Lz4Reader:
         self.decompressor = lz4_frame.LZ4FrameDecompressor()
         self.data = data
 
-    def readinto(self, view) -> int:
+    def readinto(self, view: memoryview) -> int:
         if self.decompressor.eof:
             return 0
         out = self.decompressor.decompress(self.data, max_length=len(view))
@@ -339,7 +343,7 @@ class _Lz4Reader:
         return len(out)
 
 
-def _decompressing_reader(chunk: Chunk):
+def _decompressing_reader(chunk: Chunk) -> Any:
     """Return a reader (readinto) of the chunk's decompressed records; None if uncompressed."""
     compression = chunk.compression or 'none'
     if compression == 'none':
@@ -391,7 +395,7 @@ class RecordScan:
         self._end = file.tell()           # the end of the last record read whole
         self._footer = False
 
-    def add(self, record) -> None:
+    def add(self, record: Any) -> None:
         """Keep a header, schema or channel record."""
         if isinstance(record, Schema):
             self.schemas[record.id] = record
@@ -411,7 +415,7 @@ class RecordScan:
 
         return self.items(expand)
 
-    def items(self, chunk_items) -> Iterator[Any]:
+    def items(self, chunk_items: Callable[[Chunk, bytes], Iterable[Any]]) -> Iterator[Any]:
         """
         Yield the file's Messages outside chunks, and the items ``chunk_items`` makes of chunks.
 
@@ -536,7 +540,8 @@ class Decoders:
         self.factory = DecoderFactory()
         self.by_channel: dict[int, Any] = {}
 
-    def decode(self, scan: RecordScan, message: Message, index: int) -> RecordedMessage:
+    def decode(self, scan: RecordScan, message: Any, index: int) -> RecordedMessage:
+        """Decode ``message`` (a record with channel_id, log_time, publish_time, data)."""
         channel = scan.channels.get(message.channel_id)
         if channel is None:
             raise McapError(f'{self.path}: message {index} refers to unknown channel '
@@ -568,7 +573,8 @@ class Decoders:
 
 # -- public API ---------------------------------------------------------------------------------
 
-def read_messages(path, topics: Iterable[str] | str | None = None) -> Iterator[RecordedMessage]:
+def read_messages(path: str | os.PathLike[str], topics: Iterable[str] | str | None = None
+                  ) -> Iterator[RecordedMessage]:
     """
     Yield the decoded messages of ``path`` in file order, optionally only those of ``topics``.
 
@@ -589,7 +595,8 @@ def read_messages(path, topics: Iterable[str] | str | None = None) -> Iterator[R
     return _read_messages(path, stream, wanted)
 
 
-def _read_messages(path: Path, stream, wanted: set[str] | None) -> Iterator[RecordedMessage]:
+def _read_messages(path: Path, stream: io.BufferedReader, wanted: set[str] | None
+                   ) -> Iterator[RecordedMessage]:
     with stream:
         scan = RecordScan(path, stream)
         decoders = Decoders(path)
@@ -604,7 +611,7 @@ def _read_messages(path: Path, stream, wanted: set[str] | None) -> Iterator[Reco
         scan.check_recoverable(count)
 
 
-def summarize(path) -> McapSummary:
+def summarize(path: str | os.PathLike[str]) -> McapSummary:
     """
     Summarise ``path`` (see McapSummary).
 
@@ -630,7 +637,8 @@ def summarize(path) -> McapSummary:
         return _make_summary(path, scan, counts, total, start, end)
 
 
-def _make_summary(path, scan: RecordScan, counts, total, start, end) -> McapSummary:
+def _make_summary(path: Path, scan: RecordScan, counts: dict[int, int], total: int,
+                  start: int | None, end: int | None) -> McapSummary:
     topics: dict[str, TopicSummary] = {}
     for channel in sorted(scan.channels.values(), key=lambda c: c.id):
         schema = scan.schemas.get(channel.schema_id)
@@ -650,7 +658,7 @@ def _make_summary(path, scan: RecordScan, counts, total, start, end) -> McapSumm
         compressions=tuple(sorted(scan.compressions)))
 
 
-def _summary_from_footer(path: Path, stream) -> McapSummary | None:
+def _summary_from_footer(path: Path, stream: io.BufferedReader) -> McapSummary | None:
     """
     Return the summary of a finalised file with statistics in its summary section, else None.
 

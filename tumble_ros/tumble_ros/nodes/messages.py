@@ -22,8 +22,10 @@ from tumble_ros import topics
 from tumble_ros.core import Impact, TimeBase
 from tumble_ros.io.columns import FlatEncoder, FlatLayout
 from tumble_ros.io.msgdefs import message_definition
-from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
-from tumble_ros_interfaces.srv import ApplyImpact
+# (the generated ROS message modules name their classes at run time: mypy sees none of them)
+from tumble_ros_interfaces.msg import (  # type: ignore[attr-defined]
+    ImpactEvent, ScenarioDescription, SimStatus)
+from tumble_ros_interfaces.srv import ApplyImpact  # type: ignore[attr-defined]
 
 __all__ = ['stamp', 'FRAMES', 'FRAME_CODES', 'new_run_id', 'scenario_description', 'impact_event',
            'sim_status', 'comparison_status', 'comparison_values', 'error_norms',
@@ -158,6 +160,7 @@ class SampleEncoder:
 
     def __init__(self) -> None:
         self._encoders: dict[tuple, FlatEncoder] = {}
+        self._comparison: dict[str, tuple[FlatEncoder, ...]] = {}
 
     def _encoder(self, topic: topics.SampleTopic, strings: tuple = ()) -> FlatEncoder:
         key = (topic, strings)
@@ -237,11 +240,16 @@ class SampleEncoder:
     def comparison(self, ns: int, model, error, norm: float, relative: float,
                    model_name: str) -> tuple[bytes, bytes, bytes]:
         """Return one sample's comparator messages (model, error, norms) as bytes."""
-        described = topics.sample_topic
-        return (self.one(described(topics.MODEL_ANGULAR_VELOCITY), ns, model),
-                self.one(described(topics.ERROR), ns, error),
-                self.one(described(topics.ERROR_NORM), ns, (norm, relative),
-                         {'model': model_name}))
+        encoders = self._comparison.get(model_name)
+        if encoders is None:   # (looked up once: ~1 us a message, as the comparator needs)
+            given = (('model', model_name),)
+            encoders = self._comparison[model_name] = tuple(
+                self._encoder(topics.sample_topic(name), strings)
+                for name, strings in ((topics.MODEL_ANGULAR_VELOCITY, ()), (topics.ERROR, ()),
+                                      (topics.ERROR_NORM, given)))
+        sec, nanosec = divmod(ns, 1_000_000_000)
+        return (encoders[0].one(sec, nanosec, *model), encoders[1].one(sec, nanosec, *error),
+                encoders[2].one(sec, nanosec, norm, relative))
 
 
 class Vector3StampedReader:

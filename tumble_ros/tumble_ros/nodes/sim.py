@@ -130,10 +130,9 @@ class SimNode(GuardedNode):
         # the per-sample topics, published as CDR bytes of the encoder's rows
         self._encoder = SampleEncoder()
         self._sample_publishers = {
-            t.name: publish(message_class(t.type_name), t.name, publisher_qos(t.name))
-            for t in topics.sample_topics(topics.SIM) if t.name != topics.PERTURBER}
-        self._sample_publishers.update({topics.PERTURBER: self._pub_perturber,
-                                        topics.CLOCK: self._pub_clock})
+            **{t.name: publish(message_class(t.type_name), t.name, publisher_qos(t.name))
+               for t in topics.sample_topics(topics.SIM) if t.name != topics.PERTURBER},
+            topics.PERTURBER: self._pub_perturber, topics.CLOCK: self._pub_clock}
         self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, qos[topics.IMPACT_EVENTS])
         self._pub_status = publish(SimStatus, topics.STATUS, qos[topics.STATUS])
         self._pub_scenario = publish(ScenarioDescription, topics.SCENARIO, qos[topics.SCENARIO])
