@@ -128,3 +128,16 @@ def test_the_compiled_physics_is_the_bottom_of_core():
                         wrong.append(f'{module} -> {target}')
     assert not wrong
     assert 'tumble_ros.core.kernels.physics' in edges  # (the check sees the new modules)
+
+
+def private_imports(path: Path) -> list[str]:
+    """Return the private names (``_x``) the file at ``path`` imports from other modules."""
+    return [f'{node.module}.{a.name}' for node in ast.walk(ast.parse(path.read_text()))
+            if isinstance(node, ast.ImportFrom) for a in node.names
+            if a.name.startswith('_') and not a.name.startswith('__')]
+
+
+def test_io_imports_no_private_name_of_another_module():
+    found = {name: private_imports(path) for name, path in modules().items()
+             if name.startswith('tumble_ros.io')}
+    assert not {name: names for name, names in found.items() if names}

@@ -145,6 +145,17 @@ def test_every_plotted_field_is_a_number_of_its_topics_type(path):
 
 
 @pytest.mark.parametrize('path', LAYOUTS, ids=lambda p: p.name)
+def test_every_plotted_per_sample_field_is_one_its_description_has(path):
+    """The layouts' per-sample topics and fields are those of topics.SAMPLE_TOPICS."""
+    described = {'/' + t.name: t for t in topics.SAMPLE_TOPICS}
+    shown = {topic: paths for topic, paths in _references(path).items()
+             if topic.lstrip('/') in topics.PER_SAMPLE or topic in described}
+    assert shown and set(shown) <= set(described), sorted(set(shown) - set(described))
+    for topic, paths in shown.items():
+        assert set(paths) <= set(described[topic].fields), (topic, paths)
+
+
+@pytest.mark.parametrize('path', LAYOUTS, ids=lambda p: p.name)
 def test_every_key_is_one_the_viewer_reads_and_every_panel_has_a_title(path):
     layout = _layout(path)
     assert set(layout) <= LAYOUT_KEYS and {'configById', 'layout'} <= set(layout)

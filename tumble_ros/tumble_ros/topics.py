@@ -9,7 +9,13 @@ recorder's defaults, the offline analysis and the tests all take them from here.
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
 __all__ = [
+    'SampleTopic', 'SAMPLE_TOPICS', 'SIM', 'COMPARATOR', 'sample_topics', 'sample_topic',
+    'recorded',
     'SIM_NODE_PARAMETERS', 'MARKER_FRAMES',
     'ANGULAR_VELOCITY', 'ATTITUDE', 'EULER_ANGLES', 'CLOCK', 'IMPACT_EVENTS', 'STATUS', 'SCENARIO',
     'CONSUMER_PROGRESS', 'PERTURBER', 'MARKERS', 'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM',
@@ -56,43 +62,132 @@ PAUSE = 'pause'
 RESUME = 'resume'
 STEP = 'step'
 
+#: ``header.frame_id`` of body-axis vectors, of the attitude (and the markers), of the Euler
+#: angles.
+FRAME_BODY = 'body'
+FRAME_ORBITAL = 'orbital'
+FRAME_EULER = 'euler_phi_psi_theta'
+
+#: Who publishes a per-sample topic (:attr:`SampleTopic.source`).
+SIM = 'sim'
+COMPARATOR = 'comparator'
+
+#: A sample block: name -> (n,) or (n, k) numpy array of n samples (what a
+#: :attr:`SampleTopic.columns` reads). The simulator's: ``omega`` (n, 3) [rad/yr] body axes,
+#: ``quaternion`` (n, 4) body -> orbital (scalar first), ``euler`` (n, 3) the continuous
+#: (phi, psi, theta) [rad], ``perturber`` (n, 3) [km] body axes or None (no orbit); the
+#: comparator's: ``model``, ``error`` (n, 3) [rad/yr] body axes, ``norm`` [rad/yr] and
+#: ``relative`` (n,).
+SampleBlock = Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class SampleTopic:
+    """
+    One per-sample topic, described once: what it is and how its columns come from a sample block.
+
+    The live encoder (``nodes.messages.SampleEncoder``: the simulator, the comparator, the
+    offline writer), the columnar decoder (``io.columns.sample_values``), the analysis and the
+    viewer layouts' check (tests/test_foxglove_layout.py) all read it.
+    ``name``: relative topic name; ``type_name``: its ROS type (flat: a header, numbers, maybe
+    strings); ``fields``: the dotted names of its numeric value fields, in the columns' order
+    (the header stamp apart); ``frame``: its ``header.frame_id``; ``source``: :data:`SIM` or
+    :data:`COMPARATOR`; ``columns(block)``: its value columns from a :data:`SampleBlock`, one
+    (n,) sequence per field, or None when the block does not have them (then it is not
+    published: ``perturber`` without an orbit); ``strings``: its other string fields, whose
+    values the publisher gives (``model``: the comparator's model name); ``always``: published
+    for every sample of every run (``perturber``: only with an orbit).
+    """
+
+    name: str
+    type_name: str
+    fields: tuple[str, ...]
+    frame: str
+    source: str
+    columns: Callable[[SampleBlock], Sequence[Any] | None]
+    strings: tuple[str, ...] = ()
+    always: bool = True
+
+
+def _rows_of(key: str) -> Callable[[SampleBlock], Sequence[Any] | None]:
+    """Return the columns of the block's (n, k) array ``key`` (None when it is absent)."""
+    def columns(block: SampleBlock) -> Sequence[Any] | None:
+        value = block.get(key)
+        return None if value is None else value.T
+    return columns
+
+
+def _each_of(*keys: str) -> Callable[[SampleBlock], Sequence[Any] | None]:
+    """Return the block's (n,) arrays ``keys`` as the columns."""
+    def columns(block: SampleBlock) -> Sequence[Any] | None:
+        return tuple(block[key] for key in keys)
+    return columns
+
+
+_XYZ = ('vector.x', 'vector.y', 'vector.z')
+_WXYZ = ('quaternion.w', 'quaternion.x', 'quaternion.y', 'quaternion.z')
+_VECTOR = 'geometry_msgs/msg/Vector3Stamped'
+
+#: The per-sample topics, in the order they are published for a sample (the one place a new
+#: per-sample topic is added: docs/ros.md, "Adding a per-sample topic").
+SAMPLE_TOPICS: tuple[SampleTopic, ...] = (
+    SampleTopic(ANGULAR_VELOCITY, _VECTOR, _XYZ, FRAME_BODY, SIM, _rows_of('omega')),
+    SampleTopic(ATTITUDE, 'geometry_msgs/msg/QuaternionStamped', _WXYZ, FRAME_ORBITAL, SIM,
+                _rows_of('quaternion')),
+    SampleTopic(EULER_ANGLES, _VECTOR, _XYZ, FRAME_EULER, SIM, _rows_of('euler')),
+    SampleTopic(PERTURBER, _VECTOR, _XYZ, FRAME_BODY, SIM, _rows_of('perturber'), always=False),
+    SampleTopic(MODEL_ANGULAR_VELOCITY, _VECTOR, _XYZ, FRAME_BODY, COMPARATOR,
+                _rows_of('model')),
+    SampleTopic(ERROR, _VECTOR, _XYZ, FRAME_BODY, COMPARATOR, _rows_of('error')),
+    SampleTopic(ERROR_NORM, 'tumble_ros_interfaces/msg/ErrorNorm', ('norm', 'relative'),
+                FRAME_BODY, COMPARATOR, _each_of('norm', 'relative'), strings=('model',)),
+)
+
+
+def sample_topics(source: str | None = None) -> tuple[SampleTopic, ...]:
+    """Return the per-sample topics (of ``source``: :data:`SIM`, :data:`COMPARATOR`), in order."""
+    return tuple(t for t in SAMPLE_TOPICS if source is None or t.source == source)
+
+
+def sample_topic(name: str) -> SampleTopic:
+    """Return the description of the per-sample topic ``name``; KeyError if it is not one."""
+    for topic in SAMPLE_TOPICS:
+        if topic.name == name:
+            return topic
+    raise KeyError(f'{name}: not a per-sample topic')
+
+
 #: ROS type of every topic.
 TYPES = {
-    ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
-    PERTURBER: 'geometry_msgs/msg/Vector3Stamped',
-    ATTITUDE: 'geometry_msgs/msg/QuaternionStamped',
-    EULER_ANGLES: 'geometry_msgs/msg/Vector3Stamped',
+    **{t.name: t.type_name for t in SAMPLE_TOPICS},
     CLOCK: 'rosgraph_msgs/msg/Clock',
     IMPACT_EVENTS: 'tumble_ros_interfaces/msg/ImpactEvent',
     STATUS: 'tumble_ros_interfaces/msg/SimStatus',
     SCENARIO: 'tumble_ros_interfaces/msg/ScenarioDescription',
     CONSUMER_PROGRESS: 'tumble_ros_interfaces/msg/ConsumerProgress',
     MARKERS: 'visualization_msgs/msg/MarkerArray',
-    MODEL_ANGULAR_VELOCITY: 'geometry_msgs/msg/Vector3Stamped',
-    ERROR: 'geometry_msgs/msg/Vector3Stamped',
-    ERROR_NORM: 'tumble_ros_interfaces/msg/ErrorNorm',
     COMPARISON_STATUS: 'diagnostic_msgs/msg/DiagnosticStatus',
 }
 
 #: What the simulator publishes (``/clock`` unless ``publish_clock`` is false, ``perturber``
 #: with a Kepler orbit, ``markers`` unless ``markers`` is false).
-SIM_TOPICS = (ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, CLOCK, IMPACT_EVENTS, STATUS, SCENARIO,
-              PERTURBER, MARKERS)
+SIM_TOPICS = (*(t.name for t in sample_topics(SIM)), CLOCK, IMPACT_EVENTS, STATUS, SCENARIO,
+              MARKERS)
 #: What the comparator publishes.
-COMPARATOR_TOPICS = (MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS)
+COMPARATOR_TOPICS = (*(t.name for t in sample_topics(COMPARATOR)), COMPARISON_STATUS)
 #: What the recorder records by default.
 RECORDED = SIM_TOPICS + COMPARATOR_TOPICS
 #: One message per simulator sample, reliable: a complete recording has as many of each as the
 #: simulator published samples (comparisons: one per compared sample). Not ``/clock``: best effort.
-SIM_PER_SAMPLE = (ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES)
-COMPARATOR_PER_SAMPLE = (MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM)
+SIM_PER_SAMPLE = tuple(t.name for t in sample_topics(SIM) if t.always)
+COMPARATOR_PER_SAMPLE = tuple(t.name for t in sample_topics(COMPARATOR) if t.always)
 PER_SAMPLE = SIM_PER_SAMPLE + COMPARATOR_PER_SAMPLE
 
-#: ``header.frame_id`` of body-axis vectors, of the attitude (and the markers), of the Euler
-#: angles.
-FRAME_BODY = 'body'
-FRAME_ORBITAL = 'orbital'
-FRAME_EULER = 'euler_phi_psi_theta'
+
+def recorded() -> tuple[str, ...]:
+    """Return :data:`RECORDED` and every per-sample topic described since (in that order)."""
+    return RECORDED + tuple(t.name for t in SAMPLE_TOPICS if t.name not in RECORDED)
+
 
 #: Namespaces (``ns``) of the ``markers`` scene: the body, its principal axes (ids 0, 1, 2: x, y,
 #: z), the angular momentum's direction, the Sun (circular orbit) or the perturber (Kepler orbit).

@@ -50,11 +50,11 @@ import numpy as np
 
 from tumble_ros.core import parse_scenario, Scenario, ScenarioError, TimeBase
 from tumble_ros.errors import AnalysisError
-from tumble_ros.io import read_columns, summarize
+from tumble_ros.io import read_columns, sample_values, summarize
 from tumble_ros.topics import (ANGULAR_VELOCITY, ATTITUDE, COMPARISON_STATUS, ERROR, ERROR_NORM,
                                EULER_ANGLES, FRAME_BODY, FRAME_ORBITAL, IMPACT_EVENTS,
-                               in_namespace, MODEL_ANGULAR_VELOCITY, PERTURBER, SCENARIO, STATUS,
-                               TYPES)
+                               in_namespace, MODEL_ANGULAR_VELOCITY, PERTURBER, sample_topic,
+                               SAMPLE_TOPICS, SCENARIO, STATUS, TYPES)
 
 __all__ = [
     'EXPECTED_TYPES', 'ROOT_NAMESPACE', 'AnalysisError', 'ImpactRecord', 'SegmentStart',
@@ -69,16 +69,9 @@ EXPECTED_TYPES = {topic: TYPES[topic] for topic in (
     ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, IMPACT_EVENTS, SCENARIO, STATUS, PERTURBER,
     MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS)}
 
-#: The per-sample topics read as columns: topic -> its value fields, in the columns' order.
-_COLUMNS = {
-    ANGULAR_VELOCITY: ('vector.x', 'vector.y', 'vector.z'),
-    EULER_ANGLES: ('vector.x', 'vector.y', 'vector.z'),
-    MODEL_ANGULAR_VELOCITY: ('vector.x', 'vector.y', 'vector.z'),
-    ERROR: ('vector.x', 'vector.y', 'vector.z'),
-    ATTITUDE: ('quaternion.w', 'quaternion.x', 'quaternion.y', 'quaternion.z'),
-    ERROR_NORM: ('norm', 'relative'),
-    PERTURBER: ('vector.x', 'vector.y', 'vector.z'),
-}
+#: The per-sample topics read as columns: topic -> its value fields, in the columns' order
+#: (their descriptions, :data:`tumble_ros.topics.SAMPLE_TOPICS`).
+_COLUMNS = {t.name: t.fields for t in SAMPLE_TOPICS}
 
 #: SimStatus states (tumble_ros_interfaces/msg/SimStatus.msg).
 SIM_STATES = {0: 'RUNNING', 1: 'PAUSED', 2: 'FINISHED', 3: 'DIVERGED'}
@@ -395,10 +388,7 @@ def load_recording(path, *, namespace: str | None = None, run: str | None = None
                                      as_messages=sorted(set(wanted) - per_sample), progress=report)
     for full, table in columns.items():
         topic = wanted[full]
-        c = table.columns
-        stamps = c['header.stamp.sec'].astype(np.int64) * 1_000_000_000 + c[
-            'header.stamp.nanosec'].astype(np.int64)
-        raw[topic] = (stamps, np.column_stack([c[name] for name in _COLUMNS[topic]]))
+        raw[topic] = sample_values(table, sample_topic(topic))
         if topic == ERROR_NORM:
             norm_models.extend(table.strings['model'])
     for record in messages:

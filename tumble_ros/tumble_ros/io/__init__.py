@@ -9,7 +9,7 @@ also under ``sys.prefix``. Ensemble results go to labelled xarray/Zarr stores
 reads them).
 """  # noqa: A005 (tumble_ros.io is a subpackage: absolute imports never confuse it with io)
 
-from .columns import FlatLayout, MessageTemplate, read_columns, TopicColumns
+from .columns import FlatLayout, MessageTemplate, read_columns, sample_values, TopicColumns
 from .ensemble_store import EnsembleStore, EnsembleStoreError, open_ensemble
 from .mcap_reader import (McapError, McapSummary, read_messages, RecordedMessage, summarize,
                           TopicSummary)
@@ -23,6 +23,7 @@ __all__ = [
     'FlatLayout',
     'MessageTemplate',
     'read_columns',
+    'sample_values',
     'TopicColumns',
     'McapError',
     'McapSummary',

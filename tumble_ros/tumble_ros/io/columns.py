@@ -18,28 +18,25 @@ a string is a uint32 length (including the terminating NUL) and its bytes.
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
+import io
+import os
+from pathlib import Path
 import struct
 from typing import Any
 
 from mcap.records import Message
 import numpy as np
+import numpy.typing as npt
+from tumble_ros.topics import SampleTopic
 
-from .mcap_reader import (
-    _chunk_records,
-    _Decoders,
-    _open,
-    _Scan,
-    _SEPARATOR,
-    _split_sections,
-    McapError,
-    RecordedMessage,
-)
-from .msgdefs import MessageDefinitionError, parse_msg
+from .mcap_reader import (chunk_records, Decoders, McapError, open_recording, RecordedMessage,
+                          RecordScan, split_sections)
+from .msgdefs import MessageDefinitionError, parse_msg, SEPARATOR
 
 __all__ = ['FlatLayout', 'FlatEncoder', 'MessageTemplate', 'TopicColumns', 'read_columns',
-           'encode_rows']
+           'encode_rows', 'sample_values']
 
 #: numpy types of the primitive types a flat layout may hold (strings apart), little-endian.
 _DTYPES = {'bool': '<u1', 'byte': '<u1', 'char': '<u1', 'int8': '<i1', 'uint8': '<u1',
@@ -54,6 +51,9 @@ _MESSAGE = struct.Struct('<HIQQ')              # channel id, sequence, log time,
 _RECORD_AND_MESSAGE = struct.Struct('<BQHIQQ')
 _MESSAGE_OPCODE = 0x05
 _MESSAGE_HEAD = _RECORD.size + _MESSAGE.size   # 31 bytes before a message's data
+#: A chunk's messages located: (channel ids, log times, data starts, data lengths), and whether
+#: the chunk holds other records too.
+_Located = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]
 
 
 @dataclass(frozen=True)
@@ -113,7 +113,7 @@ def _specs(type_name: str, schema_text: str) -> dict[str, Any] | None:
     """Return {'pkg/Type': MsgSpec} of a ros2msg schema text (None if it does not parse)."""
     specs: dict[str, Any] = {}
     try:
-        for header, body in _split_sections(schema_text):
+        for header, body in split_sections(schema_text):
             name = type_name if not header else header.partition('MSG: ')[2].strip()
             if not name or header.startswith('SRV: '):
                 return None
@@ -130,7 +130,8 @@ def _short(type_name: str) -> str:
     return f'{parts[0]}/{parts[-1]}'
 
 
-def _flatten(specs, type_name: str, prefix: str, out: list, depth: int) -> bool:
+def _flatten(specs: dict[str, Any], type_name: str, prefix: str, out: list[tuple[str, str]],
+             depth: int) -> bool:
     spec = specs.get(type_name)
     if spec is None or depth > 16:
         return False
@@ -184,7 +185,7 @@ class _Builder:
             name: {} for name, kind in layout.fields if kind == 'string'}
 
     def add_block(self, buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
-                  times: np.ndarray, decode_one) -> None:
+                  times: np.ndarray, decode_one: Callable[[bytes], Any]) -> None:
         """
         Add the messages whose data (``lengths`` bytes) start at ``starts`` in the chunk ``buf``.
 
@@ -229,7 +230,7 @@ class _Builder:
         self.result.columnar += len(good)
         self.result.generic += n - len(good)
 
-    def _set(self, message, k: int) -> None:
+    def _set(self, message: Any, k: int) -> None:
         """Write a generically decoded message's values at row k of the last block."""
         for name, kind in self.result.layout.fields:
             value = _attribute(message, name)
@@ -238,7 +239,7 @@ class _Builder:
             else:
                 self.parts[name][-1][k] = value
 
-    def add_generic(self, message, log_time: int) -> None:
+    def add_generic(self, message: Any, log_time: int) -> None:
         """Add one generically decoded message (outside chunks)."""
         for name, kind in self.result.layout.fields:
             if kind != 'string':
@@ -286,20 +287,23 @@ def _gather(buf: np.ndarray, starts: np.ndarray, at: int, dtype: str) -> np.ndar
     return np.ascontiguousarray(buf[index]).view(dtype).reshape(-1)
 
 
-def _attribute(message, dotted: str):
+def _attribute(message: Any, dotted: str) -> Any:
     for part in dotted.split('.'):
         message = getattr(message, part)
     return message
 
 
-def _chunk_messages(raw: bytes):
+def _chunk_messages(raw: bytes) -> _Located:
     """
     Locate the message records of a decompressed chunk.
 
     Returns (channel ids, log times, data starts, data lengths) as arrays, and whether the
     chunk also holds other records (schemas, channels).
     """
-    channels, times, starts, lengths = [], [], [], []
+    channels: list[int] = []
+    times: list[int] = []
+    starts: list[int] = []
+    lengths: list[int] = []
     others = False
     position, end = 0, len(raw)
     record, message = _RECORD.unpack_from, _RECORD_AND_MESSAGE.unpack_from
@@ -317,14 +321,13 @@ def _chunk_messages(raw: bytes):
         else:
             others = True
         position += _RECORD.size + length
-    starts = np.array(starts, dtype=np.int64) + _MESSAGE_HEAD
-    lengths = np.array(lengths, dtype=np.int64) - _MESSAGE.size
-    return (np.array(channels, dtype=np.int64), np.array(times, dtype=np.int64), starts, lengths,
-            others)
+    return (np.array(channels, dtype=np.int64), np.array(times, dtype=np.int64),
+            np.array(starts, dtype=np.int64) + _MESSAGE_HEAD,
+            np.array(lengths, dtype=np.int64) - _MESSAGE.size, others)
 
 
-def read_columns(path, topics: Iterable[str], as_messages: Iterable[str] = (),
-                 progress: Callable[[int], None] | None = None
+def read_columns(path: str | os.PathLike[str], topics: Iterable[str],
+                 as_messages: Iterable[str] = (), progress: Callable[[int], None] | None = None
                  ) -> tuple[dict[str, TopicColumns], list[RecordedMessage]]:
     """
     Read ``topics`` of ``path`` in one pass: flat topics as columns, the others decoded.
@@ -339,21 +342,39 @@ def read_columns(path, topics: Iterable[str], as_messages: Iterable[str] = (),
     wanted = set(topics) | set(as_messages)
     if not all(isinstance(t, str) for t in wanted):
         raise McapError(f'topics must be topic names (str), got {sorted(map(repr, wanted))}')
-    path, stream = _open(path)
+    path, stream = open_recording(path)
     with stream:
         reader = _ColumnReader(path, stream, wanted, set(as_messages), progress)
         reader.run()
     return reader.results()
 
 
+def sample_values(table: TopicColumns, topic: SampleTopic
+                  ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
+    """
+    Return (stamps [ns], values (n, len(topic.fields))) of a per-sample topic read as columns.
+
+    ``table``: the topic's :class:`TopicColumns` (:func:`read_columns`); ``topic``: its
+    description (:class:`tumble_ros.topics.SampleTopic`), whose ``fields`` give the values'
+    columns, in order, as floats. Rows in file order, stamps from ``header.stamp``.
+    """
+    c = table.columns
+    stamps = (c['header.stamp.sec'].astype(np.int64) * 1_000_000_000
+              + c['header.stamp.nanosec'].astype(np.int64))
+    values = np.column_stack([c[name].astype(np.float64) for name in topic.fields]).reshape(
+        len(stamps), len(topic.fields))
+    return stamps, values
+
+
 class _ColumnReader:
     """One pass over a file: chunks located and gathered, other messages decoded."""
 
-    def __init__(self, path, stream, wanted: set[str], as_messages: set[str], progress):
+    def __init__(self, path: Path, stream: io.BufferedReader, wanted: set[str],
+                 as_messages: set[str], progress: Callable[[int], None] | None):
         self.progress = progress
-        self.scan = _Scan(path, stream)
+        self.scan = RecordScan(path, stream)
         self.as_messages = as_messages
-        self.decoders = _Decoders(path)
+        self.decoders = Decoders(path)
         self.wanted = wanted
         self.builders: dict[int, _Builder | None] = {}
         self.others: list[RecordedMessage] = []
@@ -373,11 +394,11 @@ class _ColumnReader:
         return ({b.result.topic: b.finish() for b in self.builders.values() if b is not None},
                 self.others)
 
-    def _locate(self, chunk, data: bytes):
+    def _locate(self, chunk: Any, data: bytes) -> Iterator[tuple[bytes, _Located]]:
         """Find the chunk's messages (parsing only); keep its schemas and channels."""
         located = _chunk_messages(data)
         if located[4]:
-            for record in _chunk_records(chunk, data):
+            for record in chunk_records(chunk, data):
                 if not isinstance(record, Message):
                     self.scan.add(record)
         yield (data, located)
@@ -390,14 +411,15 @@ class _ColumnReader:
             if (channel is not None and schema is not None and channel.topic in self.wanted
                     and channel.topic not in self.as_messages
                     and channel.message_encoding == 'cdr' and schema.encoding == 'ros2msg'
-                    and not schema.data.startswith(f'{_SEPARATOR}\n'.encode())):
+                    and not schema.data.startswith(f'{SEPARATOR}\n'.encode())):
                 layout = FlatLayout.from_schema(schema.name, schema.data.decode('utf-8',
                                                                                 'replace'))
-            self.builders[channel_id] = (_Builder(channel.topic, schema.name, layout)
-                                         if layout is not None else None)
+            self.builders[channel_id] = (
+                _Builder(channel.topic, schema.name, layout)
+                if layout is not None and channel is not None and schema is not None else None)
         return self.builders[channel_id]
 
-    def _chunk(self, data: bytes, located) -> None:
+    def _chunk(self, data: bytes, located: _Located) -> None:
         ids, times, starts, lengths, _ = located
         buf = np.frombuffer(data, dtype=np.uint8)
         first = self.count
@@ -422,7 +444,7 @@ class _ColumnReader:
                 continue
             index = first + int(picked[0])
 
-            def decode_one(raw, channel_id=channel_id, index=index):
+            def decode_one(raw: bytes, channel_id: int = channel_id, index: int = index) -> Any:
                 return self.decoders.decode(self.scan, _Record(channel_id, 0, 0, raw),
                                             index).message
 
@@ -431,7 +453,8 @@ class _ColumnReader:
         if pending:  # the other topics' messages of this chunk, in file order
             self.others.extend(m for _, m in sorted(pending, key=lambda item: item[0]))
 
-    def _one(self, channel_id, log_time, publish_time, data: bytes, index=None) -> None:
+    def _one(self, channel_id: int, log_time: int, publish_time: int, data: bytes,
+             index: int | None = None) -> None:
         """Decode one message generically: into its topic's builder, or onto ``others``."""
         if index is None:
             index = self.count
@@ -528,7 +551,7 @@ class FlatEncoder:
 
     def _packing_runs(self) -> list[tuple[int, struct.Struct, int]]:
         """Group adjacent numeric fields: [(offset, Struct of the run, number of fields)]."""
-        runs: list[list] = []
+        runs: list[list[Any]] = []
         end = -1
         for offset, kind in self.fields.values():
             if offset != end:
@@ -545,7 +568,7 @@ class FlatEncoder:
             raise KeyError(f'{missing[0]}: no values for this field')
         return _template_rows(self._rows_template, self.fields, count, values)
 
-    def one(self, *numbers) -> bytes:
+    def one(self, *numbers: float) -> bytes:
         """Return one message whose numeric fields hold ``numbers`` (in :attr:`fields` order)."""
         data = bytearray(self.template)
         k = 0
@@ -586,7 +609,8 @@ class MessageTemplate:
         self.template = np.concatenate([np.frombuffer(data[:_ENCAPSULATION], dtype=np.uint8),
                                         clean[:len(body)]])
 
-    def _walk(self, specs, type_name: str, body, clean, at: int, prefix: str) -> int:
+    def _walk(self, specs: dict[str, Any], type_name: str, body: np.ndarray, clean: np.ndarray,
+              at: int, prefix: str) -> int:
         for f in specs[type_name].fields:
             name = prefix + f.name
             if f.array is None:
@@ -603,7 +627,8 @@ class MessageTemplate:
                 at = self._one(specs, f, body, clean, at, f'{name}[{k}]')
         return at
 
-    def _one(self, specs, f, body, clean, at: int, name: str) -> int:
+    def _one(self, specs: dict[str, Any], f: Any, body: np.ndarray, clean: np.ndarray, at: int,
+             name: str) -> int:
         if f.type == 'string':
             at += -at % 4
             length = int.from_bytes(bytes(body[at:at + 4]), 'little')

@@ -44,7 +44,7 @@ use; it is rewritten here into the event's real layout (``service_msgs/ServiceEv
 """
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field, replace
 import io
 import os
@@ -64,8 +64,13 @@ from mcap_ros2.decoder import DecoderFactory
 
 from tumble_ros.errors import IoError
 
+from .msgdefs import SEPARATOR
+
+lz4_frame: Any
+zstandard: Any
 try:                                # both come with mcap; a missing one only refuses its chunks
-    import lz4.frame as lz4_frame
+    import lz4.frame
+    lz4_frame = lz4.frame
 except ImportError:  # pragma: no cover
     lz4_frame = None
 try:
@@ -74,10 +79,11 @@ except ImportError:  # pragma: no cover
     zstandard = None
 
 __all__ = ['MAX_CHUNK_BYTES', 'MAX_CHUNK_RATIO', 'McapError', 'McapSummary', 'RecordedMessage',
-           'TopicSummary', 'read_messages', 'summarize']
+           'TopicSummary', 'read_messages', 'summarize',
+           # for io.columns, which reads the same files by chunks
+           'chunk_records', 'Decoders', 'open_recording', 'RecordScan', 'split_sections']
 
 MAGIC = b'\x89MCAP0\r\n'
-_SEPARATOR = '=' * 80
 _RECORD_HEADER = 9            # opcode (1) + length (8)
 _OPCODES = frozenset(Opcode)  # the records the library reads; it skips others unseen
 #: Reads up to this size go to the file unchecked (all but a chunk's data, in practice).
@@ -196,7 +202,7 @@ def _open_regular(path: Path) -> io.BufferedReader:
         raise
 
 
-def _open(path) -> tuple[Path, io.BufferedReader]:
+def open_recording(path: str | os.PathLike[str]) -> tuple[Path, io.BufferedReader]:
     """Open ``path`` and check its magic (at once, with a message for each way it is wrong)."""
     try:
         path = Path(os.fspath(path))
@@ -252,7 +258,7 @@ class _StreamReader(StreamReader):
     the library consumes a record it does not know (``_read_record`` returning None).
     """
 
-    def _read_record(self, opcode: int, length: int):
+    def _read_record(self, opcode: int, length: int) -> Any:
         if opcode == Opcode.MESSAGE_INDEX:
             return None
         return super()._read_record(opcode, length)
@@ -260,7 +266,8 @@ class _StreamReader(StreamReader):
 
 def _records(file: io.BufferedReader) -> Iterator[Any]:
     """Return the library's records from the file's position on, chunks still compressed."""
-    return _StreamReader(_BoundedFile(file), skip_magic=True, emit_chunks=True).records
+    bounded: Any = _BoundedFile(file)     # (a file to the library: read, seek, tell)
+    return _StreamReader(bounded, skip_magic=True, emit_chunks=True).records
 
 
 def _truncation(file: io.BufferedReader, position: int) -> str | None:
@@ -302,7 +309,7 @@ def _check_chunk_size(chunk: Chunk) -> None:
                        f'{compression} data, more than {MAX_CHUNK_RATIO} times: refused')
 
 
-def _read_exactly(reader, size: int) -> bytes:
+def _read_exactly(reader: Any, size: int) -> bytes:
     """Return the ``size`` bytes ``reader`` produces; _Damaged if it produces fewer or more."""
     buffer = bytearray(size + 1)           # one more: a stream that goes on is an error too
     view = memoryview(buffer)
@@ -327,7 +334,7 @@ class _Lz4Reader:
         self.decompressor = lz4_frame.LZ4FrameDecompressor()
         self.data = data
 
-    def readinto(self, view) -> int:
+    def readinto(self, view: memoryview) -> int:
         if self.decompressor.eof:
             return 0
         out = self.decompressor.decompress(self.data, max_length=len(view))
@@ -336,7 +343,7 @@ class _Lz4Reader:
         return len(out)
 
 
-def _decompressing_reader(chunk: Chunk):
+def _decompressing_reader(chunk: Chunk) -> Any:
     """Return a reader (readinto) of the chunk's decompressed records; None if uncompressed."""
     compression = chunk.compression or 'none'
     if compression == 'none':
@@ -365,14 +372,14 @@ def _chunk_data(chunk: Chunk) -> bytes:
     return data
 
 
-def _chunk_records(chunk: Chunk, data: bytes) -> list[Any]:
+def chunk_records(chunk: Chunk, data: bytes) -> list[Any]:
     """Return the schemas, channels and messages of a chunk (the library's breakup_chunk)."""
     return breakup_chunk(replace(chunk, compression='', data=data), validate_crc=False)
 
 
 # -- scanning -------------------------------------------------------------------------------------
 
-class _Scan:
+class RecordScan:
     """Walks a file's records; collects header, schemas, channels and chunks on the way."""
 
     def __init__(self, path: Path, file: io.BufferedReader):
@@ -388,7 +395,7 @@ class _Scan:
         self._end = file.tell()           # the end of the last record read whole
         self._footer = False
 
-    def add(self, record) -> None:
+    def add(self, record: Any) -> None:
         """Keep a header, schema or channel record."""
         if isinstance(record, Schema):
             self.schemas[record.id] = record
@@ -400,7 +407,7 @@ class _Scan:
     def messages(self) -> Iterator[Message]:
         """Messages in file order (chunks expanded); stops cleanly where the file breaks."""
         def expand(chunk: Chunk, data: bytes) -> Iterator[Message]:
-            for item in _chunk_records(chunk, data):
+            for item in chunk_records(chunk, data):
                 if isinstance(item, Message):
                     yield item
                 else:
@@ -408,7 +415,7 @@ class _Scan:
 
         return self.items(expand)
 
-    def items(self, chunk_items) -> Iterator[Any]:
+    def items(self, chunk_items: Callable[[Chunk, bytes], Iterable[Any]]) -> Iterator[Any]:
         """
         Yield the file's Messages outside chunks, and the items ``chunk_items`` makes of chunks.
 
@@ -474,7 +481,7 @@ uint32 nanosec
 """
 
 
-def _split_sections(text: str) -> list[tuple[str, str]]:
+def split_sections(text: str) -> list[tuple[str, str]]:
     """[(header line or '', body)] of a concatenated ros2msg text."""
     sections: list[tuple[str, str]] = []
     current_header = ''
@@ -483,7 +490,7 @@ def _split_sections(text: str) -> list[tuple[str, str]]:
     index = 0
     while index < len(lines):
         line = lines[index]
-        if line.strip() == _SEPARATOR and index + 1 < len(lines):
+        if line.strip() == SEPARATOR and index + 1 < len(lines):
             sections.append((current_header, '\n'.join(current)))
             current_header, current = lines[index + 1].strip(), []
             index += 2
@@ -502,7 +509,7 @@ def _service_event_schema(schema: Schema) -> Schema:
     response types are renamed NameEvent, NameRequest, NameResponse (decoding only needs the
     layout; RecordedMessage.type_name keeps the recorded name).
     """
-    sections = _split_sections(schema.data.decode('utf-8'))
+    sections = split_sections(schema.data.decode('utf-8'))
     srv = [(h, b) for h, b in sections if h.startswith('SRV:')]
     if len(srv) != 1:
         return schema
@@ -522,18 +529,19 @@ def _service_event_schema(schema: Schema) -> Schema:
     if 'MSG: builtin_interfaces/Time' not in headers:
         extra.append(('MSG: builtin_interfaces/Time', _TIME))
     extra += [(h, b) for h, b in sections if h.startswith('MSG:')]
-    text = root + ''.join(f'{_SEPARATOR}\n{h}\n{b.strip()}\n' for h, b in extra)
+    text = root + ''.join(f'{SEPARATOR}\n{h}\n{b.strip()}\n' for h, b in extra)
     return Schema(id=schema.id, name=f'{package}/msg/{name}Event', encoding=schema.encoding,
                   data=text.encode('utf-8'))
 
 
-class _Decoders:
+class Decoders:
     def __init__(self, path: Path):
         self.path = path
         self.factory = DecoderFactory()
         self.by_channel: dict[int, Any] = {}
 
-    def decode(self, scan: _Scan, message: Message, index: int) -> RecordedMessage:
+    def decode(self, scan: RecordScan, message: Any, index: int) -> RecordedMessage:
+        """Decode ``message`` (a record with channel_id, log_time, publish_time, data)."""
         channel = scan.channels.get(message.channel_id)
         if channel is None:
             raise McapError(f'{self.path}: message {index} refers to unknown channel '
@@ -545,7 +553,7 @@ class _Decoders:
             if decoder is None:
                 if schema is None:
                     raise ValueError('the channel has no schema')
-                if schema.data.startswith(f'{_SEPARATOR}\nSRV: '.encode()):
+                if schema.data.startswith(f'{SEPARATOR}\nSRV: '.encode()):
                     schema = _service_event_schema(schema)
                 decoder = self.factory.decoder_for(channel.message_encoding, schema)
                 if decoder is None:
@@ -565,7 +573,8 @@ class _Decoders:
 
 # -- public API ---------------------------------------------------------------------------------
 
-def read_messages(path, topics: Iterable[str] | str | None = None) -> Iterator[RecordedMessage]:
+def read_messages(path: str | os.PathLike[str], topics: Iterable[str] | str | None = None
+                  ) -> Iterator[RecordedMessage]:
     """
     Yield the decoded messages of ``path`` in file order, optionally only those of ``topics``.
 
@@ -582,14 +591,15 @@ def read_messages(path, topics: Iterable[str] | str | None = None) -> Iterator[R
         wanted = set(topics)
         if not all(isinstance(t, str) for t in wanted):
             raise McapError(f'topics must be topic names (str), got {sorted(map(repr, wanted))}')
-    path, stream = _open(path)
+    path, stream = open_recording(path)
     return _read_messages(path, stream, wanted)
 
 
-def _read_messages(path: Path, stream, wanted: set[str] | None) -> Iterator[RecordedMessage]:
+def _read_messages(path: Path, stream: io.BufferedReader, wanted: set[str] | None
+                   ) -> Iterator[RecordedMessage]:
     with stream:
-        scan = _Scan(path, stream)
-        decoders = _Decoders(path)
+        scan = RecordScan(path, stream)
+        decoders = Decoders(path)
         count = 0
         for message in scan.messages():
             count += 1
@@ -601,20 +611,20 @@ def _read_messages(path: Path, stream, wanted: set[str] | None) -> Iterator[Reco
         scan.check_recoverable(count)
 
 
-def summarize(path) -> McapSummary:
+def summarize(path: str | os.PathLike[str]) -> McapSummary:
     """
     Summarise ``path`` (see McapSummary).
 
     Raises McapError for a missing, empty or non-MCAP file and for a truncated file without a
     complete chunk.
     """
-    path, stream = _open(path)
+    path, stream = open_recording(path)
     with stream:
         finalised = _summary_from_footer(path, stream)
         if finalised is not None:
             return finalised
         stream.seek(len(MAGIC))
-        scan = _Scan(path, stream)
+        scan = RecordScan(path, stream)
         counts: dict[int, int] = {}
         start = end = None
         total = 0
@@ -627,7 +637,8 @@ def summarize(path) -> McapSummary:
         return _make_summary(path, scan, counts, total, start, end)
 
 
-def _make_summary(path, scan: _Scan, counts, total, start, end) -> McapSummary:
+def _make_summary(path: Path, scan: RecordScan, counts: dict[int, int], total: int,
+                  start: int | None, end: int | None) -> McapSummary:
     topics: dict[str, TopicSummary] = {}
     for channel in sorted(scan.channels.values(), key=lambda c: c.id):
         schema = scan.schemas.get(channel.schema_id)
@@ -647,7 +658,7 @@ def _make_summary(path, scan: _Scan, counts, total, start, end) -> McapSummary:
         compressions=tuple(sorted(scan.compressions)))
 
 
-def _summary_from_footer(path: Path, stream) -> McapSummary | None:
+def _summary_from_footer(path: Path, stream: io.BufferedReader) -> McapSummary | None:
     """
     Return the summary of a finalised file with statistics in its summary section, else None.
 
@@ -662,7 +673,7 @@ def _summary_from_footer(path: Path, stream) -> McapSummary | None:
         if not isinstance(footer, Footer) or not footer.summary_start:
             return None
         stream.seek(len(MAGIC))
-        scan = _Scan(path, stream)
+        scan = RecordScan(path, stream)
         scan.header = next(_records(stream))
         if not isinstance(scan.header, Header):
             return None

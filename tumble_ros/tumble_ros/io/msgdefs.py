@@ -36,6 +36,7 @@ Nothing here imports rclpy.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 import functools
 import json
@@ -212,7 +213,7 @@ def _split_comment(line: str) -> str:
     return line
 
 
-def _resolve(base: str, package: str, has_own_type) -> str:
+def _resolve(base: str, package: str, has_own_type: Callable[[str], bool]) -> str:
     if base in _ROS1_BUILTINS:
         return _ROS1_BUILTINS[base]
     if '/' in base:
@@ -222,7 +223,8 @@ def _resolve(base: str, package: str, has_own_type) -> str:
     return f'{package}/{base}'
 
 
-def parse_msg(text: str, package: str, *, source: str = '<text>', has_own_type=None) -> MsgSpec:
+def parse_msg(text: str, package: str, *, source: str = '<text>',
+              has_own_type: Callable[[str], bool] | None = None) -> MsgSpec:
     """
     Parse .msg text of ``package``: fields, constants and the resolved dependencies.
 
@@ -234,7 +236,7 @@ def parse_msg(text: str, package: str, *, source: str = '<text>', has_own_type=N
     and the line for anything else.
     """
     if has_own_type is None:
-        def has_own_type(_name):
+        def has_own_type(_name: str) -> bool:
             return False
     fields: list[Field] = []
     constants: list[Constant] = []
@@ -271,8 +273,8 @@ def parse_msg(text: str, package: str, *, source: str = '<text>', has_own_type=N
                 raise MessageDefinitionError(f'{where}: bad constant {raw.strip()!r}')
             constants.append(Constant(resolved, name, value))
             continue
-        name, _, default = rest.partition(' ')
-        default = default.strip() or None
+        name, _, default_text = rest.partition(' ')
+        default = default_text.strip() or None
         if not _FIELD_NAME_RE.match(name):
             raise MessageDefinitionError(f'{where}: bad field name {name!r}')
         fields.append(Field(resolved, name, array, string_bound, default))
@@ -301,13 +303,14 @@ def message_spec(type_name: str) -> MsgSpec:
     return _load_spec(search_prefixes(), package, 'msg', name, '.msg', None)[1]
 
 
-def _has_own_type(prefixes, package):
-    def has(name):
+def _has_own_type(prefixes: tuple[Path, ...], package: str) -> Callable[[str], bool]:
+    def has(name: str) -> bool:
         return _find_file(prefixes, package, 'msg', name + '.msg') is not None
     return has
 
 
-def _load_spec(prefixes, package, namespace, name, extension, needed_by):
+def _load_spec(prefixes: tuple[Path, ...], package: str, namespace: str, name: str,
+               extension: str, needed_by: str | None) -> tuple[str, MsgSpec]:
     path = _locate(prefixes, package, namespace, name, extension, needed_by)
     text = _read_text(path)
     spec = parse_msg(text, package, source=str(path),

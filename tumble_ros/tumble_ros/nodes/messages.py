@@ -7,6 +7,7 @@ attitude quaternion body -> orbital (scalar first), stamps [ns] of ROS time.
 """
 from __future__ import annotations
 
+import importlib
 import math
 import struct
 import uuid
@@ -21,12 +22,14 @@ from tumble_ros import topics
 from tumble_ros.core import Impact, TimeBase
 from tumble_ros.io.columns import FlatEncoder, FlatLayout
 from tumble_ros.io.msgdefs import message_definition
-from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
-from tumble_ros_interfaces.srv import ApplyImpact
+# (the generated ROS message modules name their classes at run time: mypy sees none of them)
+from tumble_ros_interfaces.msg import (  # type: ignore[attr-defined]
+    ImpactEvent, ScenarioDescription, SimStatus)
+from tumble_ros_interfaces.srv import ApplyImpact  # type: ignore[attr-defined]
 
 __all__ = ['stamp', 'FRAMES', 'FRAME_CODES', 'new_run_id', 'scenario_description', 'impact_event',
            'sim_status', 'comparison_status', 'comparison_values', 'error_norms',
-           'SampleEncoder', 'Vector3StampedReader']
+           'SampleEncoder', 'Vector3StampedReader', 'message_class']
 
 #: ApplyImpact / ImpactEvent frame codes <-> Impact frames.
 FRAMES = {ApplyImpact.Request.FRAME_BODY: topics.FRAME_BODY,
@@ -116,8 +119,6 @@ def error_norms(numeric, error) -> tuple[float, float]:
     return norm, norm / magnitude if magnitude > 0 else math.inf
 
 
-_XYZ = ('vector.x', 'vector.y', 'vector.z')
-_WXYZ = ('quaternion.w', 'quaternion.x', 'quaternion.y', 'quaternion.z')
 _STAMP = ('header.stamp.sec', 'header.stamp.nanosec')
 
 
@@ -127,43 +128,76 @@ def _split(ns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ns // 1_000_000_000, ns % 1_000_000_000
 
 
-def _layout(topic: str) -> FlatLayout:
-    type_name = topics.TYPES[topic]
-    return FlatLayout.from_schema(type_name, message_definition(type_name))
+def _layout(type_name: str) -> FlatLayout:
+    layout = FlatLayout.from_schema(type_name, message_definition(type_name))
+    if layout is None:
+        raise ValueError(f'{type_name}: not a flat message type (a header, numbers, strings)')
+    return layout
+
+
+def message_class(type_name: str) -> type:
+    """Return the rclpy message class of a ROS type name (``geometry_msgs/msg/Vector3Stamped``)."""
+    package, kind, name = type_name.split('/')
+    return getattr(importlib.import_module(f'{package}.{kind}'), name)
 
 
 class SampleEncoder:
     """
     The per-sample messages as CDR bytes, built from numbers (no message objects).
 
-    What the simulator publishes for each sample (``/clock``, ω, attitude, Euler angles, and the
-    perturber's position with a Kepler orbit) and what the comparator publishes for it (model,
-    error, error norm), encoded by :class:`tumble_ros.io.columns.FlatEncoder`: the bytes rclpy
-    would serialise from the message objects (tests/test_node_messages.py compares them), at
-    ~1 µs a message instead of ~12 µs for building and converting one. n samples at a time as
-    numpy rows (the live simulator publishes their bytes, the offline recording writes them),
-    or one sample's bytes (the live comparator, which receives samples one by one). Stamps
-    ``ns`` are integer nanoseconds of ROS time; units as on the topics.
+    Every per-sample topic is encoded from its description (:class:`tumble_ros.topics.
+    SampleTopic`: type, fields, frame) and a sample block (:data:`tumble_ros.topics.
+    SampleBlock`): what the simulator publishes for each sample (``/clock``, ω, attitude, Euler
+    angles, the perturber's position with a Kepler orbit, and any simulator topic described
+    since) and what the comparator publishes for it (model, error, error norm), encoded by
+    :class:`tumble_ros.io.columns.FlatEncoder`: the bytes rclpy would serialise from the message
+    objects (tests/test_node_messages.py compares them), at ~1 µs a message instead of ~12 µs
+    for building and converting one. n samples at a time as numpy rows (the live simulator
+    publishes their bytes, the offline recording writes them), or one sample's bytes (the live
+    comparator, which receives samples one by one). Stamps ``ns`` are integer nanoseconds of
+    ROS time; units as on the topics.
     """
 
     def __init__(self) -> None:
         self._encoders: dict[tuple, FlatEncoder] = {}
+        self._comparison: dict[str, tuple[FlatEncoder, ...]] = {}
 
-    def _encoder(self, topic: str, frame: str, extra: tuple = ()) -> FlatEncoder:
-        key = (topic, frame, extra)
+    def _encoder(self, topic: topics.SampleTopic, strings: tuple = ()) -> FlatEncoder:
+        key = (topic, strings)
         encoder = self._encoders.get(key)
         if encoder is None:
-            strings = {} if topic == topics.CLOCK else {'header.frame_id': frame, **dict(extra)}
-            encoder = self._encoders[key] = FlatEncoder(_layout(topic), strings)
+            encoder = self._encoders[key] = FlatEncoder(
+                _layout(topic.type_name), {'header.frame_id': topic.frame, **dict(strings)})
         return encoder
 
-    def _rows(self, topic: str, stamp: tuple, names, columns, frame: str,
-              extra: tuple = ()) -> np.ndarray:
-        """Encode one topic's rows; ``stamp``: the (sec, nanosec) columns of :func:`_split`."""
-        stamp_names = ('clock.sec', 'clock.nanosec') if topic == topics.CLOCK else _STAMP
-        values = dict(zip(stamp_names, stamp))
-        values.update(zip(names, columns))
-        return self._encoder(topic, frame, extra).rows(len(stamp[0]), values)
+    def encode(self, topic: topics.SampleTopic, ns: np.ndarray, columns,
+               strings: dict[str, str] | None = None) -> np.ndarray:
+        """
+        Return n messages of ``topic`` as (n, size) uint8 rows.
+
+        ``ns`` (n,) integer stamps [ns]; ``columns``: one (n,) column per field of
+        ``topic.fields``, in order; ``strings``: the values of ``topic.strings``.
+        """
+        sec, nanosec = _split(ns)
+        values = dict(zip(_STAMP, (sec, nanosec)))
+        values.update(zip(topic.fields, columns))
+        given = tuple(sorted((strings or {}).items()))
+        return self._encoder(topic, given).rows(len(sec), values)
+
+    def samples(self, source: str, ns: np.ndarray, block: topics.SampleBlock,
+                strings: dict[str, str] | None = None) -> list[tuple[str, np.ndarray]]:
+        """
+        Return [(topic, rows)] of every per-sample topic of ``source`` the block has, in order.
+
+        ``source``: :data:`tumble_ros.topics.SIM` or :data:`~tumble_ros.topics.COMPARATOR`; a
+        topic whose ``columns(block)`` is None is left out (the perturber without an orbit).
+        """
+        out = []
+        for topic in topics.sample_topics(source):
+            columns = topic.columns(block)
+            if columns is not None:
+                out.append((topic.name, self.encode(topic, ns, columns, strings)))
+        return out
 
     def simulator(self, ns: np.ndarray, omega: np.ndarray, quaternion: np.ndarray,
                   euler: np.ndarray, *, clock: bool = True, perturber: np.ndarray | None = None
@@ -174,45 +208,48 @@ class SampleEncoder:
         ``omega`` (n, 3) [rad/yr] body axes, ``quaternion`` (n, 4) body -> orbital (scalar
         first), ``euler`` (n, 3) the continuous (φ, ψ, θ) [rad], ``perturber`` (n, 3) [km] body
         axes or None; ``clock``: whether ``/clock`` goes out (first, as the node publishes it).
+        Then every simulator topic of :data:`tumble_ros.topics.SAMPLE_TOPICS` from that block.
         """
-        stamp = _split(ns)
-        out = [(topics.CLOCK, self._rows(topics.CLOCK, stamp, (), (), ''))] if clock else []
-        out += [
-            (topics.ANGULAR_VELOCITY, self._rows(topics.ANGULAR_VELOCITY, stamp, _XYZ, omega.T,
-                                                 topics.FRAME_BODY)),
-            (topics.ATTITUDE, self._rows(topics.ATTITUDE, stamp, _WXYZ, quaternion.T,
-                                         topics.FRAME_ORBITAL)),
-            (topics.EULER_ANGLES, self._rows(topics.EULER_ANGLES, stamp, _XYZ, euler.T,
-                                             topics.FRAME_EULER)),
-        ]
-        if perturber is not None:
-            out.append((topics.PERTURBER, self._rows(topics.PERTURBER, stamp, _XYZ, perturber.T,
-                                                     topics.FRAME_BODY)))
-        return out
+        out = [(topics.CLOCK, self._clock(ns))] if clock else []
+        block = {'omega': omega, 'quaternion': quaternion, 'euler': euler,
+                 'perturber': perturber}
+        return out + self.samples(topics.SIM, ns, block)
+
+    def _clock(self, ns: np.ndarray) -> np.ndarray:
+        encoder = self._encoders.get((topics.CLOCK,))
+        if encoder is None:
+            encoder = self._encoders[(topics.CLOCK,)] = FlatEncoder(
+                _layout(topics.TYPES[topics.CLOCK]), {})
+        sec, nanosec = _split(ns)
+        return encoder.rows(len(sec), {'clock.sec': sec, 'clock.nanosec': nanosec})
 
     def comparator(self, ns: np.ndarray, model: np.ndarray, error: np.ndarray,
                    norm: np.ndarray, relative: np.ndarray, model_name: str
                    ) -> list[tuple[str, np.ndarray]]:
         """Return the comparator's messages of n samples (model, error, norms), in order."""
-        name = (('model', model_name),)
-        stamp = _split(ns)
-        return [
-            (topics.MODEL_ANGULAR_VELOCITY, self._rows(topics.MODEL_ANGULAR_VELOCITY, stamp,
-                                                       _XYZ, model.T, topics.FRAME_BODY)),
-            (topics.ERROR, self._rows(topics.ERROR, stamp, _XYZ, error.T, topics.FRAME_BODY)),
-            (topics.ERROR_NORM, self._rows(topics.ERROR_NORM, stamp, ('norm', 'relative'),
-                                           (norm, relative), topics.FRAME_BODY, name)),
-        ]
+        block = {'model': model, 'error': error, 'norm': norm, 'relative': relative}
+        return self.samples(topics.COMPARATOR, ns, block, {'model': model_name})
+
+    def one(self, topic: topics.SampleTopic, ns: int, numbers,
+            strings: dict[str, str] | None = None) -> bytes:
+        """Return one message of ``topic`` (``numbers``: its fields' values, in order) as bytes."""
+        sec, nanosec = divmod(ns, 1_000_000_000)
+        given = tuple(sorted((strings or {}).items()))
+        return self._encoder(topic, given).one(sec, nanosec, *numbers)
 
     def comparison(self, ns: int, model, error, norm: float, relative: float,
                    model_name: str) -> tuple[bytes, bytes, bytes]:
         """Return one sample's comparator messages (model, error, norms) as bytes."""
+        encoders = self._comparison.get(model_name)
+        if encoders is None:   # (looked up once: ~1 us a message, as the comparator needs)
+            given = (('model', model_name),)
+            encoders = self._comparison[model_name] = tuple(
+                self._encoder(topics.sample_topic(name), strings)
+                for name, strings in ((topics.MODEL_ANGULAR_VELOCITY, ()), (topics.ERROR, ()),
+                                      (topics.ERROR_NORM, given)))
         sec, nanosec = divmod(ns, 1_000_000_000)
-        body = topics.FRAME_BODY
-        return (self._encoder(topics.MODEL_ANGULAR_VELOCITY, body).one(sec, nanosec, *model),
-                self._encoder(topics.ERROR, body).one(sec, nanosec, *error),
-                self._encoder(topics.ERROR_NORM, body, (('model', model_name),)).one(
-                    sec, nanosec, norm, relative))
+        return (encoders[0].one(sec, nanosec, *model), encoders[1].one(sec, nanosec, *error),
+                encoders[2].one(sec, nanosec, norm, relative))
 
 
 class Vector3StampedReader:
@@ -224,7 +261,7 @@ class Vector3StampedReader:
     """
 
     def __init__(self) -> None:
-        self._layout = _layout(topics.ANGULAR_VELOCITY)
+        self._layout = _layout(topics.TYPES[topics.ANGULAR_VELOCITY])
         self._stamp = struct.Struct('<iI')
         self._vector = struct.Struct('<ddd')
 

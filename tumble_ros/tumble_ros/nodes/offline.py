@@ -53,7 +53,7 @@ from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
                                        new_run_id, SampleEncoder, scenario_description,
                                        sim_status)
-from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
+from tumble_ros.nodes.qos import as_discovered, publisher_qos
 from tumble_ros.nodes.recorder import qos_dict
 from tumble_ros_interfaces.msg import SimStatus
 
@@ -122,14 +122,14 @@ class _Channels:
         self.ids: dict[str, int] = {}
         self._pending: list[tuple[int, str, bytes]] = []
         self.encoder = SampleEncoder()
-        for topic in topics.RECORDED:
+        for topic in topics.recorded():
             if (topic == topics.CLOCK and not publish_clock
                     or topic == topics.PERTURBER and not perturber
                     or topic == topics.MARKERS and not markers):
                 continue
             name = topic if topic.startswith('/') else '/' + topic
-            type_name = topics.TYPES[topic]
-            offered = offered_qos_yaml(qos_dict(as_discovered(PUBLISHER_QOS[topic])))
+            type_name = topics.TYPES.get(topic) or topics.sample_topic(topic).type_name
+            offered = offered_qos_yaml(qos_dict(as_discovered(publisher_qos(topic))))
             self.ids[topic] = writer.add_channel(name, type_name, offered)
 
     def one(self, topic: str, msg, stamp_ns: int) -> None:

@@ -6,7 +6,7 @@ from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSPro
 from tumble_ros import topics
 
 __all__ = ['STATE_QOS', 'CLOCK_QOS', 'LATCHED_QOS', 'DESCRIPTION_QOS', 'SERVICE_QOS',
-           'PUBLISHER_QOS', 'as_discovered']
+           'PUBLISHER_QOS', 'publisher_qos', 'as_discovered']
 
 #: Sampled state (w, attitude, Euler angles, /clock, events, comparisons): reliable with a deep
 #: queue, and transient-local, so a subscriber whose subscription is matched a moment after the
@@ -65,20 +65,23 @@ SERVICE_QOS = QoSProfile(
 
 #: The QoS each of the simulator's and the comparator's topics is published with.
 PUBLISHER_QOS = {
-    topics.ANGULAR_VELOCITY: STATE_QOS,
-    topics.PERTURBER: STATE_QOS,
-    topics.ATTITUDE: STATE_QOS,
-    topics.EULER_ANGLES: STATE_QOS,
+    **{t.name: STATE_QOS for t in topics.SAMPLE_TOPICS},   # every per-sample topic
     topics.CLOCK: CLOCK_QOS,
     topics.IMPACT_EVENTS: STATE_QOS,
     topics.STATUS: LATCHED_QOS,
     topics.SCENARIO: DESCRIPTION_QOS,
     topics.MARKERS: STATE_QOS,
-    topics.MODEL_ANGULAR_VELOCITY: STATE_QOS,
-    topics.ERROR: STATE_QOS,
-    topics.ERROR_NORM: STATE_QOS,
     topics.COMPARISON_STATUS: LATCHED_QOS,
 }
+
+
+def publisher_qos(topic: str) -> QoSProfile:
+    """Return the QoS ``topic`` is published with; every per-sample topic's is STATE_QOS."""
+    if topic in PUBLISHER_QOS:
+        return PUBLISHER_QOS[topic]
+    topics.sample_topic(topic)   # KeyError for a topic that is neither
+    return STATE_QOS
+
 
 _INFINITE = Duration(nanoseconds=2**63 - 1)
 

@@ -32,7 +32,7 @@ from collections import deque
 import math
 import time
 
-from geometry_msgs.msg import QuaternionStamped, Vector3Stamped
+from geometry_msgs.msg import Vector3Stamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.qos import QoSProfile
@@ -54,15 +54,15 @@ from tumble_ros.core.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.markers import marker_every, MarkerScene
-from tumble_ros.nodes.messages import (FRAMES, impact_event, new_run_id, SampleEncoder,
-                                       scenario_description, sim_status)
+from tumble_ros.nodes.messages import (FRAMES, impact_event, message_class, new_run_id,
+                                       SampleEncoder, scenario_description, sim_status)
 from tumble_ros.nodes.parameters import (
     declare_node_parameters,
     declare_scenario_parameters,
     read_scenario_parameters,
 )
 from tumble_ros.nodes.progress import ConsumerTracker
-from tumble_ros.nodes.qos import PUBLISHER_QOS, SERVICE_QOS
+from tumble_ros.nodes.qos import PUBLISHER_QOS, publisher_qos, SERVICE_QOS
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
@@ -130,11 +130,8 @@ class SimNode(GuardedNode):
         # the per-sample topics, published as CDR bytes of the encoder's rows
         self._encoder = SampleEncoder()
         self._sample_publishers = {
-            topics.ANGULAR_VELOCITY: publish(Vector3Stamped, topics.ANGULAR_VELOCITY,
-                                             qos[topics.ANGULAR_VELOCITY]),
-            topics.ATTITUDE: publish(QuaternionStamped, topics.ATTITUDE, qos[topics.ATTITUDE]),
-            topics.EULER_ANGLES: publish(Vector3Stamped, topics.EULER_ANGLES,
-                                         qos[topics.EULER_ANGLES]),
+            **{t.name: publish(message_class(t.type_name), t.name, publisher_qos(t.name))
+               for t in topics.sample_topics(topics.SIM) if t.name != topics.PERTURBER},
             topics.PERTURBER: self._pub_perturber, topics.CLOCK: self._pub_clock}
         self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, qos[topics.IMPACT_EVENTS])
         self._pub_status = publish(SimStatus, topics.STATUS, qos[topics.STATUS])
@@ -209,7 +206,8 @@ class SimNode(GuardedNode):
     @property
     def per_sample_topics(self) -> tuple[str, ...]:
         """Return the topics with one message per published sample (not /clock)."""
-        return topics.SIM_PER_SAMPLE + ((topics.PERTURBER,) if self._pub_perturber else ())
+        return tuple(name for name, publisher in self._sample_publishers.items()
+                     if name != topics.CLOCK and publisher is not None)
 
     @property
     def published_samples(self) -> int:
