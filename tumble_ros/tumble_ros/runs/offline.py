@@ -2,14 +2,15 @@
 Offline recording: the file the live pipeline records, written straight from the simulation.
 
 ``bringup --offline`` and the main job (``python -m tumble_ros``, ``make run``) use it when
-nothing live needs the ROS graph. The simulator's samples (the same ``Propagator.sample_many``
-on the same output grid), its impact events, scenario descriptions and states, and the
-comparator's model, error and error norm (the same model anchoring, :func:`~.comparator.
-anchor_model`, the same grid look-ahead and arithmetic, :mod:`.messages`) go to the MCAP file
-without DDS: the per-sample messages encoded as numpy columns by the encoder the live simulator
-publishes with (:class:`~.messages.SampleEncoder`), the others serialised by rclpy. Channels,
-schemas and the offered QoS metadata are those the live recorder writes
-(:func:`~.qos.as_discovered` of each publisher's profile).
+nothing live needs the ROS graph. The records of the run (:mod:`.records`) the live nodes
+publish, from the same run layer: the simulator's samples, impact events, segment starts and
+states (:class:`~.session.SimulationSession`, the live simulator's session) and the
+comparator's model, error and error norm (:class:`~.comparison.Comparison`, the live
+comparator's) go to the MCAP file without DDS: the per-sample messages encoded as numpy columns
+by the encoder the live simulator publishes with (:class:`~tumble_ros.nodes.messages.
+SampleEncoder`), the others built by :mod:`tumble_ros.nodes.record_messages` and serialised by
+rclpy. Channels, schemas and the offered QoS metadata are those the live recorder writes
+(:func:`~tumble_ros.nodes.qos.as_discovered` of each publisher's profile).
 
 Log times are simulated time on the ROS clock, as the live recorder's (its default ``log_time``
 ``sim``): a message's log time is the stamp of the sample it belongs to (``seconds_per_year``
@@ -36,26 +37,27 @@ from dataclasses import dataclass, field
 import math
 from pathlib import Path
 import time
-from typing import Callable
+from typing import Any, Callable
 
-from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
 from rclpy.serialization import serialize_message
 
 from tumble_ros import topics
-from tumble_ros.core import (DEPARTURE, departure_text, dump_scenario, Propagator, Scenario,
-                             TimeBase)
+from tumble_ros.core import Scenario, TimeBase
 from tumble_ros.core.propagator import FAST_WORK_BUDGET
-from tumble_ros.core.scenario import ScenarioError
+from tumble_ros.core.timebase import SampleGrid
 from tumble_ros.io import McapWriter, offered_qos_yaml
-from tumble_ros.nodes.comparator import anchor_model, GridModelValues
 from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
-from tumble_ros.nodes.messages import (comparison_status, error_norms, impact_event,
-                                       new_run_id, SampleEncoder, scenario_description,
-                                       sim_status)
+from tumble_ros.nodes.messages import new_run_id, SampleEncoder
 from tumble_ros.nodes.qos import as_discovered, PUBLISHER_QOS
+from tumble_ros.nodes.record_messages import (comparison_status_message, description_message,
+                                              impact_message, status_message)
 from tumble_ros.nodes.recorder import qos_dict
-from tumble_ros_interfaces.msg import SimStatus
+
+from .comparison import Comparison
+from .records import (ComparisonStatus, DIVERGED, ImpactEnded, RUNNING, SampleBlock,
+                      SegmentStart, SessionRecord, StatusChange)
+from .session import output_grid, SimulationSession
 
 __all__ = ['record_offline', 'OfflineResult', 'BATCH', 'SLICE_SECONDS', 'Slicer']
 
@@ -75,10 +77,11 @@ class Slicer:
     """
     The work budget of each integration slice, so that a slice takes about ``seconds`` of wall.
 
-    ``Propagator.sample_many`` stops after ``budget`` units of work with what it sampled, bit
-    for bit what one uninterrupted call gives; the budget follows the measured cost of a unit
-    (at most doubling per slice, within [:data:`MIN_BUDGET`, ``FAST_WORK_BUDGET``]), whatever
-    the scenario costs a step (a flyby, a thousand impacts, a fine fixed step).
+    ``Propagator.sample_many`` (through :meth:`SimulationSession.advance`) stops after
+    ``budget`` units of work with what it sampled, bit for bit what one uninterrupted call
+    gives; the budget follows the measured cost of a unit (at most doubling per slice, within
+    [:data:`MIN_BUDGET`, ``FAST_WORK_BUDGET``]), whatever the scenario costs a step (a flyby,
+    a thousand impacts, a fine fixed step).
     """
 
     def __init__(self, seconds: float = SLICE_SECONDS, budget: int = MIN_BUDGET) -> None:
@@ -86,15 +89,15 @@ class Slicer:
         self.budget = budget
         self.calls = 0
 
-    def sample(self, propagator: Propagator, times: np.ndarray):
-        """``propagator.sample_many(times)`` within this slice's budget; adapt the next one."""
+    def advance(self, session: SimulationSession, k_last: int) -> list[SessionRecord]:
+        """Advance ``session`` to ``k_last`` within this slice's budget; adapt the next one."""
         started = time.monotonic()
-        result = propagator.sample_many(times, budget=self.budget)
+        records = session.advance(k_last, budget=self.budget)
         self.calls += 1
         elapsed = time.monotonic() - started
         scale = 2.0 if elapsed <= 0.0 else min(2.0, self.seconds / elapsed)
         self.budget = int(min(FAST_WORK_BUDGET, max(MIN_BUDGET, self.budget * scale)))
-        return result
+        return records
 
 
 #: The live nodes' names (the comparator's DiagnosticStatus carries its node's name).
@@ -117,7 +120,8 @@ class OfflineResult:
 class _Channels:
     """The recording's channels, as the live recorder makes them, and their encoders."""
 
-    def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool, markers: bool):
+    def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool,
+                 markers: bool) -> None:
         self.writer = writer
         self.ids: dict[str, int] = {}
         self._pending: list[tuple[int, str, bytes]] = []
@@ -132,7 +136,7 @@ class _Channels:
             offered = offered_qos_yaml(qos_dict(as_discovered(PUBLISHER_QOS[topic])))
             self.ids[topic] = writer.add_channel(name, type_name, offered)
 
-    def one(self, topic: str, msg, stamp_ns: int) -> None:
+    def one(self, topic: str, msg: Any, stamp_ns: int) -> None:
         """
         Queue one message (serialised by rclpy) logged at ``stamp_ns`` [ns, ROS time].
 
@@ -140,6 +144,11 @@ class _Channels:
         channel's log times never decrease (a batch's departures may precede its anchorings).
         """
         self._pending.append((stamp_ns, topic, serialize_message(msg)))
+
+    def comparison_status(self, status: ComparisonStatus, model_name: str) -> None:
+        """Queue a ``comparison/status`` of the comparator, logged at its stamp."""
+        self.one(topics.COMPARISON_STATUS,
+                 comparison_status_message(status, COMPARATOR_NAME, model_name), status.stamp_ns)
 
     def flush(self) -> None:
         """Write the queued messages, by log time (stable); publish time = now (wall clock)."""
@@ -149,7 +158,7 @@ class _Channels:
         self._pending.clear()
 
 
-def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = None,
+def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase | None = None,
                    model_name: str = 'paper', publish_clock: bool = True,
                    markers: bool = True, marker_decimation: int = 0,
                    stop: Callable[[], bool] = lambda: False,
@@ -165,145 +174,98 @@ def record_offline(scenario: Scenario, output, *, timebase: TimeBase | None = No
     the file cannot be created or written, ScenarioError for a grid ROS stamps cannot carry.
     """
     started = time.monotonic()
-    timebase = timebase or TimeBase()
-    timebase.check_span(scenario.duration)
-    grid = timebase.grid(scenario.output_interval, scenario.duration)
+    grid = output_grid(scenario, timebase or TimeBase())
     output = Path(output)
     output.parent.mkdir(parents=True, exist_ok=True)
-    propagator = Propagator(scenario)
-    # the scenario as started and the recording's run id, in every description
-    described = (dump_scenario(scenario), new_run_id())
-    state, message, k = SimStatus.RUNNING, '', 0
+    # the recording's run id, in every description
+    session = SimulationSession(scenario, grid, run_id=new_run_id())
+    comparison = Comparison(model_name)
     scene = _Scene(MarkerScene(scenario), marker_every(marker_decimation, grid.count),
                    grid) if markers else None
     slicer = Slicer()
+    ended: StatusChange | None = None   # the run's end (finished or diverged)
     with McapWriter(output, chunk_seconds=math.inf) as writer:
         channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None,
                              markers=markers)
-        comparator = _Comparator(channels, model_name)
-        channels.one(topics.COMPARISON_STATUS, comparison_status(
-            DiagnosticStatus.WARN, COMPARATOR_NAME,
-            "waiting for the simulator's scenario description", model_name), 0)
-        revision = _describe(channels, comparator, described, timebase, 0, 0.0,
-                             propagator.y, propagator)
-        channels.one(topics.STATUS, sim_status(state, 0.0, 'started', 0), 0)
-        while k < grid.count and not stop():
-            k1 = min(grid.count, k + BATCH)
-            done, arrays, failure = slicer.sample(propagator, grid.times(k, k1))
-            segment_starts = dict(propagator.pop_window_edges())
-            for impact, y_start, y_end in propagator.pop_completed_impacts():
-                end_ns = timebase.to_ns(impact.end)
-                channels.one(topics.IMPACT_EVENTS, impact_event(
-                    impact, 0, end_ns, y_end[:3] - y_start[:3]), end_ns)
-                segment_starts[impact.end] = y_end
-            for t0 in sorted(segment_starts):
-                revision = _describe(channels, comparator, described, timebase, revision, t0,
-                                     segment_starts[t0], propagator)
-            _write_samples(channels, comparator, grid, k, done, arrays, publish_clock, scenario)
-            if scene is not None:
-                scene.write(channels, k, done, arrays)
+        writer_of = _Writer(channels, comparison, scene, publish_clock)
+        channels.comparison_status(comparison.waiting(), model_name)
+        writer_of.records(session.start())
+        while session.samples < grid.count and not stop():
+            k = session.samples
+            ended = writer_of.records(
+                slicer.advance(session, min(grid.count, k + BATCH) - 1)) or ended
             channels.flush()
-            k += done
             if progress is not None:
-                progress(grid.time(max(0, k - 1)), k)
-            if failure:
-                state, message = SimStatus.DIVERGED, failure
+                progress(session.t, session.samples)
+            if session.state == DIVERGED:
                 break
-        if state == SimStatus.RUNNING and k >= grid.count:
-            state, message = SimStatus.FINISHED, f'finished at t = {grid.time(k - 1):g} yr'
-        if state != SimStatus.RUNNING:
-            last = grid.stamp(max(0, k - 1))
-            channels.one(topics.STATUS, sim_status(state, grid.time(max(0, k - 1)), message,
-                                                   last), last)
         channels.flush()
         counts = dict(writer.counts)
-    return OfflineResult(output=output, state=state, message=message or 'stopped', samples=k,
-                         t=grid.time(max(0, k - 1)), counts=counts,
+    return OfflineResult(output=output, state=session.state,
+                         message=ended.message if ended is not None else 'stopped',
+                         samples=session.samples, t=session.t, counts=counts,
                          wall_seconds=time.monotonic() - started)
 
 
-def _describe(channels, comparator, described, timebase, revision, t0, y0, propagator):
-    """
-    Write a segment's description, anchor the comparator on it; return the next revision.
+@dataclass
+class _Writer:
+    """The records of a run into the recording's channels: the simulator's and comparator's."""
 
-    ``described``: (the scenario as started as YAML, the recording's run id).
-    """
-    scenario_yaml, run_id = described
-    description = scenario_description(scenario_yaml, timebase.seconds_per_year, revision,
-                                       timebase.to_ns(t0), t0, y0[:3],
-                                       propagator.quaternion_of(y0), run_id)
-    channels.one(topics.SCENARIO, description, timebase.to_ns(t0))
-    comparator.anchor(description, timebase.to_ns(t0))
-    return revision + 1
+    channels: _Channels
+    comparison: Comparison
+    scene: _Scene | None
+    publish_clock: bool
 
-
-class _Comparator:
-    """The comparator node's work on the samples, without its node."""
-
-    def __init__(self, channels: _Channels, model_name: str):
-        self.channels = channels
-        self.model_name = model_name
-        self.segments: list[tuple[float, object]] = []   # (segment start, model or None)
-        self.grid = None
-        self.values = GridModelValues()
-        self.departed: set[int] = set()    # segments whose model left the numeric solution
-
-    def anchor(self, description, stamp_ns: int) -> None:
-        """Anchor a model on a segment's description (stamped ``stamp_ns``); say so."""
-        try:
-            model, self.grid, text = anchor_model(self.model_name, description)
-            level = DiagnosticStatus.OK
-        except (ScenarioError, ValueError) as err:
-            model, level, text = None, DiagnosticStatus.WARN, str(err)
-        self.segments.append((description.segment_start, model))
-        self.channels.one(topics.COMPARISON_STATUS, comparison_status(
-            level, COMPARATOR_NAME, text, self.model_name), stamp_ns)
-
-    def compare(self, k0: int, times: np.ndarray, stamps: np.ndarray, omega: np.ndarray):
+    def records(self, records: list[SessionRecord]) -> StatusChange | None:
         """
-        Return (mask of the samples compared, model, error, norm, relative) of a batch.
+        Write (or queue) a batch's records; return its change to a final state, if any.
 
-        ``times`` [yr] and ``stamps`` [ns] are the batch's samples (grid indices from ``k0``).
-
-        Each sample takes the model of the segment its time falls in (the latest description
-        starting at or before it), evaluated on the grid's look-ahead blocks as the node does;
-        the arithmetic is the node's (messages.comparison_values), vectorised where it is
-        elementwise, per sample where it is not (math.hypot).
+        A segment start anchors the comparison (its status queued too); samples are written
+        with their comparison and markers.
         """
-        n = len(times)
-        model = np.zeros((n, 3))
-        has = np.zeros(n, dtype=bool)
-        starts = np.array([start for start, _ in self.segments])
-        which = np.searchsorted(starts, times, side='right') - 1
-        edges = [0, *(np.flatnonzero(np.diff(which)) + 1).tolist(), n]
-        for a, b in zip(edges[:-1], edges[1:]):
-            m = self.segments[which[a]][1] if which[a] >= 0 else None
-            if m is not None:
-                model[a:b] = self.values.span(m, self.grid, k0 + a, k0 + b)
-                has[a:b] = True
-        compared = has & np.isfinite(model).all(axis=1)
-        error = np.where(compared[:, None], omega - model, 0.0)
-        norm = np.zeros(n)
-        relative = np.zeros(n)
-        numeric, errors = omega.tolist(), error.tolist()   # (numeric - model: elementwise)
-        for j in np.flatnonzero(compared).tolist():
-            norm[j], relative[j] = error_norms(numeric[j], errors[j])
-        model[~compared] = 0.0
-        self._report_departures(times, stamps, which, edges, compared & (relative > DEPARTURE))
-        return compared, model, error, norm, relative
+        final = None
+        for record in records:
+            if isinstance(record, SampleBlock):
+                self.samples(record)
+            elif isinstance(record, SegmentStart):
+                self.channels.one(topics.SCENARIO, description_message(record), record.stamp_ns)
+                self.channels.comparison_status(self.comparison.anchor(record),
+                                                self.comparison.model_name)
+            elif isinstance(record, ImpactEnded):
+                self.channels.one(topics.IMPACT_EVENTS, impact_message(record), record.stamp_ns)
+            else:
+                self.channels.one(topics.STATUS, status_message(record), record.stamp_ns)
+                final = record if record.state != RUNNING else None
+        return final
 
-    def _report_departures(self, times, stamps, which, edges, beyond) -> None:
-        """Say on the status when a segment's model first leaves the numeric solution."""
-        for a, b in zip(edges[:-1], edges[1:]):
-            segment = int(which[a])
-            hits = np.flatnonzero(beyond[a:b])
-            if segment < 0 or not len(hits) or segment in self.departed:
-                continue
-            self.departed.add(segment)
-            self.channels.one(topics.COMPARISON_STATUS, comparison_status(
-                DiagnosticStatus.WARN, COMPARATOR_NAME,
-                departure_text(self.model_name, float(times[a + hits[0]])), self.model_name),
-                int(stamps[a + hits[0]]))
+    def samples(self, block: SampleBlock) -> None:
+        """
+        Write a block of samples: the simulator's topics, the comparator's three, the markers.
+
+        The simulator's: /clock (if published), ω, attitude, Euler angles, and the perturber's
+        position when the scenario has a Kepler orbit (as the live simulator), encoded as the
+        live simulator encodes them (:class:`~tumble_ros.nodes.messages.SampleEncoder`).
+        """
+        channels, n, ns = self.channels, len(block), block.stamps
+        sim = channels.encoder.simulator(ns, block.omega, block.quaternion, block.euler,
+                                         clock=self.publish_clock, perturber=block.perturber)
+        compared = self.comparison.compare(block)
+        for departure in compared.departures:
+            channels.comparison_status(departure, self.comparison.model_name)
+        comparison = channels.encoder.comparator(ns, compared.model, compared.error,
+                                                 compared.norm, compared.relative,
+                                                 self.comparison.model_name)
+        # log time = the sample's stamp (ROS time); publish time = now (wall clock)
+        sent = np.full(n, time.time_ns(), dtype=np.int64)
+        # runs of samples with and without comparison, in order
+        mask = compared.compared
+        edges = np.flatnonzero(np.diff(mask.astype(np.int8))) + 1
+        for a, b in zip([0, *edges.tolist()], [*edges.tolist(), n]):
+            parts = sim + (comparison if mask[a] else [])
+            channels.writer.write_rows([channels.ids[t] for t, _ in parts],
+                                       [rows[a:b] for _, rows in parts], ns[a:b], sent[a:b])
+        if self.scene is not None:
+            self.scene.write(channels, block)
 
 
 @dataclass
@@ -312,45 +274,16 @@ class _Scene:
 
     scene: MarkerScene
     every: int
-    grid: object
+    grid: SampleGrid
 
-    def write(self, channels: _Channels, k0: int, n: int, arrays: dict) -> None:
-        """Write the scenes of the samples k0 .. k0 + n - 1 that get one."""
-        rows = self.scene.encode_samples(self.grid, self.every, k0, n, arrays)
+    def write(self, channels: _Channels, block: SampleBlock) -> None:
+        """Write the scenes of the block's samples that get one."""
+        k0, n = block.start, len(block)
+        rows = self.scene.encode_samples(self.grid, self.every, k0, n,
+                                         {'omega': block.omega, 'quaternion': block.quaternion})
         if not len(rows):
             return
         # logged at their samples' stamps (the samples encode_samples picks)
         stamps = marker_samples(k0, k0 + n, self.every, self.grid.count) * self.grid.interval_ns
         channels.writer.write_rows([channels.ids[topics.MARKERS]], [rows], stamps,
                                    np.full(len(rows), time.time_ns(), dtype=np.int64))
-
-
-def _write_samples(channels: _Channels, comparator: _Comparator, grid, k0: int, n: int,
-                   arrays: dict, publish_clock: bool, scenario: Scenario) -> None:
-    """
-    Write n samples from grid index k0: the simulator's topics, the comparator's three.
-
-    The simulator's: /clock (if published), ω, attitude, Euler angles, and the perturber's
-    position when the scenario has a Kepler orbit (as the live simulator), encoded as the live
-    simulator encodes them (:class:`~.messages.SampleEncoder`).
-    """
-    if n == 0:
-        return
-    ns = np.arange(k0, k0 + n, dtype=np.int64) * grid.interval_ns
-    omega, quaternion = arrays['omega'][:n], arrays['quaternion'][:n]
-    perturber = (scenario.perturber_in_body(grid.times(k0, k0 + n), quaternion)
-                 if topics.PERTURBER in channels.ids else None)
-    sim = channels.encoder.simulator(ns, omega, quaternion, arrays['euler'][:n],
-                                     clock=publish_clock, perturber=perturber)
-    compared, model, error, norm, relative = comparator.compare(k0, grid.times(k0, k0 + n),
-                                                                ns, omega)
-    comparison = channels.encoder.comparator(ns, model, error, norm, relative,
-                                             comparator.model_name)
-    # log time = the sample's stamp (ROS time); publish time = now (wall clock)
-    sent = np.full(n, time.time_ns(), dtype=np.int64)
-    # runs of samples with and without comparison, in order
-    edges = np.flatnonzero(np.diff(compared.astype(np.int8))) + 1
-    for a, b in zip([0, *edges.tolist()], [*edges.tolist(), n]):
-        parts = sim + (comparison if compared[a] else [])
-        channels.writer.write_rows([channels.ids[t] for t, _ in parts],
-                                   [rows[a:b] for _, rows in parts], ns[a:b], sent[a:b])
