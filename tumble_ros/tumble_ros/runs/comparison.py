@@ -168,6 +168,8 @@ class Comparison:
     # -- comparing ----------------------------------------------------------------------------
     def _segment_at(self, t: float) -> _Segment | None:
         """Return the segment ``t`` [yr] falls in (None before the first kept)."""
+        if self._segments and t >= self._segments[-1].start:
+            return self._segments[-1]   # (the latest: nearly every sample)
         i = bisect.bisect_right([s.start for s in self._segments], t) - 1
         return self._segments[i] if i >= 0 else None
 
@@ -196,10 +198,10 @@ class Comparison:
             model = self._values.at(segment.model, self.grid, k)
         if not all(map(math.isfinite, model)):
             return None
-        error = tuple(n - m for n, m in zip(numeric, model))
+        error = [n - m for n, m in zip(numeric, model)]
         norm, relative = error_norms(numeric, error)
         departure = (self._departure(segment, t, stamp_ns) if relative > DEPARTURE else None)
-        return ComparedSample(stamp_ns, tuple(model), error, norm, relative, departure)
+        return ComparedSample(stamp_ns, model, error, norm, relative, departure)
 
     def compare(self, block: SampleBlock) -> ComparisonBlock:
         """
