@@ -167,7 +167,8 @@ def test_one_sample_at_a_time_gives_the_blocks_bits():
                                                    record.omega.tolist())):
                 one = by_sample.compare_one(stamp, omega)
                 assert one is not None and one.stamp_ns == stamp
-                assert one.model == block.model[j].tolist() and one.error == block.error[j].tolist()
+                assert one.model == block.model[j].tolist()
+                assert one.error == block.error[j].tolist()
                 assert (one.norm, one.relative) == (block.norm[j], block.relative[j])
 
 
