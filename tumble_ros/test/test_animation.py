@@ -88,7 +88,7 @@ def test_an_existing_file_is_kept_without_overwrite(tmp_path, capsys):
 
 
 def test_the_still_draws_a_recorded_scene(tmp_path, capsys):
-    from tumble_ros.nodes.offline import record_offline
+    from tumble_ros.runs.offline import record_offline
     result = record_offline(Scenario(duration=0.2, output_interval=0.01), tmp_path / 'r.mcap')
     out = tmp_path / 'scene.png'
     assert command([str(result.output), '--still', str(out), '--at', '0.1', '--quiet']) == 0

@@ -176,7 +176,7 @@ def test_the_plots_count_time_as_the_log_times_and_no_legend_hides_data(path):
     """
     Plot x = a path's time minus the timeline's start (the first log time) [s of ROS time].
 
-    The recordings log each message at the simulated time of its sample (nodes/offline.py,
+    The recordings log each message at the simulated time of its sample (runs/offline.py,
     nodes/recorder.py), so the log time ("receiveTime") is the time base whatever a message
     carries; a header stamp would be off the axis in a recording logged on the wall clock.
     """

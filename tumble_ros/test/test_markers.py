@@ -17,7 +17,7 @@ from tumble_ros.core import Impact, load_scenario, Scenario, TimeBase
 from tumble_ros.core.shape import body_shape, BOX, ELLIPSOID, MIN_THICKNESS
 from tumble_ros.io import message_definition, MessageTemplate, read_messages
 from tumble_ros.nodes.markers import marker_every, MARKER_FRAMES
-from tumble_ros.nodes.offline import record_offline
+from tumble_ros.runs.offline import record_offline
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 MARKERS = '/' + topics.MARKERS

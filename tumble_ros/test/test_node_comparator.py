@@ -120,7 +120,7 @@ def test_late_join_recovers_from_the_latched_scenario(ros):
     ros.start(ComparatorNode, model='fast_spin')
     assert ros.spin_until(lambda: status and status[-1].level == DiagnosticStatus.OK, 10.0)
     assert ros.call(Trigger, topics.RESUME, Trigger.Request()).success
-    assert ros.spin_until(lambda: sim._next_k == 101, 20.0)
+    assert ros.spin_until(lambda: sim.published_samples == 101, 20.0)
     # the 5 samples published before it started come from the topics' transient-local history
     assert ros.spin_until(lambda: len(model) == 101, 10.0), len(model)
     t = np.array([stamp_ns(m) * 1e-9 for m in model])
@@ -223,7 +223,7 @@ def test_held_samples_wait_for_the_whole_description_history(ros):
     assert norm == []  # held: no description yet
     pub_description.publish(descriptions[0])
     # the first anchor is in
-    assert ros.spin_until(lambda: comparator._description is not None, 5.0)
+    assert ros.spin_until(lambda: comparator.described, 5.0)
     pub_description.publish(descriptions[1])
     assert ros.spin_until(lambda: len(norm) == 60, 5.0), len(norm)
     t = np.array([stamp_ns(m) * 1e-9 for m in norm])

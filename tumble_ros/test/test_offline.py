@@ -4,7 +4,7 @@ The offline recording (bringup --offline, the main job) against a live one, mess
 The same scenario with impacts (config/fig10.yaml) recorded both ways: the same channels,
 schemas and offered-QoS metadata, and on every topic the same messages in the same order (all
 their fields) at the same log times (simulated time on the ROS clock), apart from what
-nodes/offline.py says differs (publish times, the simulator's wall-clock heartbeats on /status).
+runs/offline.py says differs (publish times, the simulator's wall-clock heartbeats on /status).
 Both read as a viewer reads them (viewer_checks.py): they play in the run's own time.
 """
 from pathlib import Path
@@ -17,7 +17,7 @@ from tumble_ros import topics
 from tumble_ros.core import Impact, IntegratorSettings, load_scenario, Scenario
 from tumble_ros.io import read_messages, summarize
 from tumble_ros.nodes.bringup import run_bringup
-from tumble_ros.nodes.offline import record_offline
+from tumble_ros.runs.offline import record_offline
 from tumble_ros_interfaces.msg import SimStatus
 from viewer_checks import check_timeline, timeline
 

@@ -15,8 +15,8 @@ from tumble_ros import topics
 from tumble_ros.core import Scenario
 from tumble_ros.io import read_columns, sample_values
 from tumble_ros.nodes.messages import SampleEncoder
-from tumble_ros.nodes.offline import record_offline
 from tumble_ros.nodes.sim import SimNode
+from tumble_ros.runs.offline import record_offline
 from tumble_ros_interfaces.msg import SimStatus
 
 INERTIA = (1.0, 1.6, 2.2)

@@ -4,7 +4,7 @@ A recording read as a viewer reads it: its timeline, each channel's log times, t
 A viewer (Foxglove, Lichtblick, ``ros2 bag play``) places, plays and seeks messages by their
 log time and shows a topic's rate as its count over the timeline, which runs from the first log
 time to the last (the summary's statistics). :func:`check_timeline` asserts what the
-recordings promise (nodes/offline.py, nodes/recorder.py): the timeline is the simulated span on
+recordings promise (runs/offline.py, nodes/recorder.py): the timeline is the simulated span on
 the ROS clock (the ``seconds_per_year`` mapping of the recording's own ``scenario``), every
 channel's log times are non-decreasing, each message is logged at the stamp of the sample it
 belongs to, and the scenes (``markers``) are spread over the whole timeline.

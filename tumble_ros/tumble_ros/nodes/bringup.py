@@ -12,7 +12,7 @@ configures the simulator, and ``comparator`` or ``recorder`` sections, if presen
 nodes; ``--ros-args -p name:=value`` overrides the file. Without a file, the default scenario runs.
 
 ``--offline`` writes the same recording straight from the simulation, without the ROS graph
-(:mod:`tumble_ros.nodes.offline`: what differs is said there): the main job uses it.
+(:mod:`tumble_ros.runs.offline`: what differs is said there): the main job uses it.
 
 Isolation: the run is invisible to other ROS processes and sees none of them
 (``ROS_AUTOMATIC_DISCOVERY_RANGE=OFF`` for its own context, whatever the environment says), so
@@ -47,12 +47,12 @@ from tumble_ros import topics
 from tumble_ros.core import ScenarioError
 from tumble_ros.errors import NodeError
 from tumble_ros.nodes.comparator import ComparatorNode
-from tumble_ros.nodes.offline import record_offline
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.recorder import default_output, RecorderNode
 from tumble_ros.nodes.runner import close_node, EXECUTORS, init_rclpy
 from tumble_ros.nodes.shutdown import StopSignals
 from tumble_ros.nodes.sim import SimNode
+from tumble_ros.runs.offline import record_offline
 from tumble_ros_interfaces.msg import SimStatus
 
 __all__ = ['run_bringup', 'BringupResult', 'main', 'scenario_file', 'shipped_scenarios']
@@ -125,7 +125,8 @@ def run_bringup(params_file: str | None = None, output: str | None = None,
 
     ``executor_name`` is a key of :data:`EXECUTORS`; ``visible``: see the module docstring
     (isolation); ``offline``: write the recording straight from the simulation
-    (:mod:`.offline`), no ROS graph (the nodes are only built to read their parameters);
+    (:mod:`tumble_ros.runs.offline`), no ROS graph (the nodes are only built to read their
+    parameters);
     ``markers``: the simulator's 3D scene on ``markers`` (on unless False; it sets the sim's
     ``markers`` parameter, whatever the params file says).
     SIGINT and SIGTERM stop the run early with the file finalised (``BringupResult.signal``).
@@ -335,7 +336,7 @@ def main(args: list[str] | None = None) -> int:
                              '(default: events, the faster)')
     parser.add_argument('--offline', action='store_true',
                         help='write the recording straight from the simulation, without the '
-                             'ROS graph (the same file, see tumble_ros.nodes.offline)')
+                             'ROS graph (the same file, see tumble_ros.runs.offline)')
     parser.add_argument('--quiet', action='store_true', help='no progress display')
     parser.add_argument('--no-markers', action='store_true',
                         help="do not publish and record the 3D scene ('markers')")

@@ -33,31 +33,35 @@ simulator never outruns it.
 The samples are taken raw and read in place (:class:`~.messages.Vector3StampedReader`; bytes
 that are not a Vector3Stamped are skipped with a warning), and the three comparison messages are
 published as the CDR bytes of :class:`~.messages.SampleEncoder`, the encoder the offline
-recording writes them with: ~40 us a sample less than through message objects.
+recording writes them with: ~40 us a sample less than through message objects. The anchoring
+and the arithmetic are :class:`~tumble_ros.runs.comparison.Comparison`'s (the offline
+recording's too); the node follows its run, holds the early samples and publishes the records.
 """
 from __future__ import annotations
 
 from collections import deque
-import math
+from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Vector3Stamped
-import numpy as np
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.timer import Timer
 
 from tumble_ros import topics
-from tumble_ros.core import (ANALYTIC_MODELS, DEPARTURE, departure_text, make_model,
-                             parse_scenario, ScenarioError, TimeBase)
+from tumble_ros.core import ANALYTIC_MODELS
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
-from tumble_ros.nodes.messages import (comparison_status, comparison_values, SampleEncoder,
-                                       Vector3StampedReader)
+from tumble_ros.nodes.messages import SampleEncoder, Vector3StampedReader
 from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.progress import ProgressReporter
 from tumble_ros.nodes.qos import DESCRIPTION_QOS, PUBLISHER_QOS, STATE_QOS
+from tumble_ros.nodes.record_messages import comparison_status_message, segment_start_of
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
-from tumble_ros_interfaces.msg import ErrorNorm, ScenarioDescription
+from tumble_ros.runs.comparison import Comparison
+from tumble_ros.runs.records import ComparedSample, ComparisonStatus, ERROR, OK
+from tumble_ros_interfaces.msg import (  # type: ignore[attr-defined]  # rosidl-generated
+    ErrorNorm, ScenarioDescription)
 
 __all__ = ['ComparatorNode', 'main']
 
@@ -66,9 +70,6 @@ MAX_PENDING = 10_000
 #: Wall-clock seconds between the first description and comparing the held samples (the rest
 #: of the latched description history arrives meanwhile).
 SETTLE = 0.2
-#: Grid samples whose model value is computed in one vectorised call: the model's fixed numpy
-#: cost (~50 us a call) is then shared by this many samples.
-LOOKAHEAD = 64
 
 PARAMETERS = {
     'model': ('paper', '', 'analytic model: ' + ', '.join(ANALYTIC_MODELS), None, False),
@@ -78,78 +79,31 @@ PARAMETERS = {
 }
 
 
-def anchor_model(model_name: str, description: ScenarioDescription):
-    """
-    Return (model, the simulator's output grid, a line saying so) for a scenario description.
-
-    The model is anchored on the state the description's segment starts from. Raises
-    ScenarioError or ValueError (ModelNotApplicable) when the model cannot be built.
-    """
-    msg = description
-    scenario = parse_scenario(msg.parameters_yaml)
-    grid = TimeBase(msg.seconds_per_year).grid(scenario.output_interval, scenario.duration)
-    q = msg.attitude
-    model = make_model(model_name, scenario, t0=msg.segment_start,
-                       omega=(msg.omega.x, msg.omega.y, msg.omega.z),
-                       quaternion=(q.w, q.x, q.y, q.z))
-    text = (f'model {model_name!r} ({model.label}) anchored at t = '
-            f'{msg.segment_start:.9g} yr (segment {msg.revision})')
-    return model, grid, text
-
-
-class GridModelValues:
-    """A model's omega on the output grid, LOOKAHEAD samples computed at once."""
-
-    def __init__(self) -> None:
-        self._model, self._first, self._values = None, 0, []
-
-    def at(self, model, grid, k: int) -> list[float]:
-        """Return ``model``'s omega [rad/yr] at grid sample k."""
-        if model is not self._model or not 0 <= k - self._first < len(self._values):
-            times = grid.times(k, min(k + LOOKAHEAD, grid.count))
-            self._model, self._first, self._values = model, k, model.omega(times).tolist()
-        return self._values[k - self._first]
-
-    def span(self, model, grid, k: int, stop: int) -> list[list[float]]:
-        """Return ``model``'s omega at grid samples k .. stop - 1: what :meth:`at` gives each."""
-        out: list[list[float]] = []
-        while k < stop:
-            self.at(model, grid, k)       # (re)fills the look-ahead from k if needed
-            end = min(stop, self._first + len(self._values))
-            out += self._values[k - self._first:end - self._first]
-            k = end
-        return out
-
-
 class ComparatorNode(GuardedNode):
     """Comparator node; see the module docstring."""
 
-    def __init__(self, **kwargs) -> None:
+    def __init__(self, **kwargs: Any) -> None:
         super().__init__('comparator', **kwargs)
 
     def _set_up(self) -> None:
         self.add_on_set_parameters_callback(self._on_set_parameters)
         params = declare_node_parameters(self, PARAMETERS)
-        self._model_name: str = params['model']
+        # the anchoring, the model values and the arithmetic; the segments kept for samples
+        # that trail a description: as many as the description subscription holds
+        self._comparison = Comparison(params['model'], history=DESCRIPTION_QOS.depth)
         self._decimation: int = params['decimation']
         self._pinned = bool(params['run_id'])   # the run was given, never switched
         self.run_id: str | None = params['run_id'] or None   # the run followed (None: none yet)
         self._foreign: set[str] = set()   # the other runs' ids, warned about once each
         self.foreign_descriptions = 0     # descriptions of other runs, ignored
-        self._description: ScenarioDescription | None = None
-        self._timebase = TimeBase()
-        self._model = None  # anchored on the latest segment
-        self._previous: list = []  # earlier segments' models, newest last: (segment_start, model)
-        self._grid = None  # the simulator's output grid (None: unknown)
-        self._ahead = GridModelValues()
-        self._departed: list = []   # the models that left the numeric solution (said once each)
         self._received = 0
         self.compared = 0  # comparisons published (each on the three comparison topics)
         # samples held before the first description: (stamp [ns], omega [rad/yr])
-        self._pending: deque[tuple[int, tuple]] = deque(maxlen=MAX_PENDING)
+        self._pending: deque[tuple[int, tuple[float, float, float]]] = deque(
+            maxlen=MAX_PENDING)
         self._read_sample = Vector3StampedReader()
         self._encoder = SampleEncoder()
-        self._settle_timer = None
+        self._settle_timer: Timer | None = None
         qos = PUBLISHER_QOS
         self._pub_model = self.create_publisher(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY,
                                                 qos[topics.MODEL_ANGULAR_VELOCITY])
@@ -167,13 +121,13 @@ class ComparatorNode(GuardedNode):
         # (messages.SampleEncoder), ~40 us a sample less than through message objects
         self.create_subscription(Vector3Stamped, topics.ANGULAR_VELOCITY, self._on_omega,
                                  STATE_QOS, raw=True)
-        self._status = (DiagnosticStatus.WARN, "waiting for the simulator's scenario description")
-        self._report(*self._status)
+        self._status = self._comparison.waiting()
+        self._report(self._status)
         self._sources = SourceMonitor(self, lambda: (topics.ANGULAR_VELOCITY, topics.SCENARIO),
                                       self._on_sources)
 
     # -- parameters ---------------------------------------------------------------------
-    def _on_set_parameters(self, parameters) -> SetParametersResult:
+    def _on_set_parameters(self, parameters: list[Any]) -> SetParametersResult:
         for p in parameters:
             if p.name == 'model' and p.value not in ANALYTIC_MODELS:
                 known = ', '.join(ANALYTIC_MODELS)
@@ -182,8 +136,9 @@ class ComparatorNode(GuardedNode):
         if hasattr(self, '_pub_status'):  # after start-up
             for p in parameters:
                 if p.name == 'model':
-                    self._model_name = p.value
-                    self._anchor()
+                    status = self._comparison.set_model(p.value)
+                    if status is not None:
+                        self._anchored(status)
                 elif p.name == 'decimation':
                     self._decimation = p.value
         return SetParametersResult(successful=True)
@@ -214,62 +169,46 @@ class ComparatorNode(GuardedNode):
     def _on_scenario(self, msg: ScenarioDescription) -> None:
         if not self._follows(msg):
             return
-        old = self._description
-        if (old is not None and msg.revision > old.revision
-                and msg.segment_start > old.segment_start):
-            # Samples of the previous segment may still be queued: keep its model for them.
-            self._previous = [*self._previous[-(DESCRIPTION_QOS.depth - 1):],
-                              (old.segment_start, self._model)]
-        elif old is None or msg.revision <= old.revision:
-            self._previous = []  # a new run (the simulator restarted)
-        first = self._description is None
-        self._description = msg
-        self._timebase = TimeBase(msg.seconds_per_year)
-        self._anchor()
+        first = self._comparison.latest is None
+        self._anchored(self._comparison.anchor(segment_start_of(msg)))
         if first and self._pending:
             self._settle_timer = steady_timer(self, SETTLE, self._compare_pending)
 
     def _compare_pending(self) -> None:
         """Compare the samples held before the description history came in (once)."""
-        self.destroy_timer(self._settle_timer)
+        if self._settle_timer is not None:
+            self.destroy_timer(self._settle_timer)
         self._settle_timer = None
         while self._pending:
             self._compare(self._pending.popleft())
 
-    def _anchor(self) -> None:
-        """(Re)build the model from the latest description; report whether it applies."""
-        msg = self._description
-        if msg is None:
-            return
-        try:
-            self._model, self._grid, text = anchor_model(self._model_name, msg)
-        except (ScenarioError, ValueError) as err:
-            self._model = None
-            self.get_logger().warning(f'no comparison: {err}')
-            self._report(DiagnosticStatus.WARN, str(err))
-            return
-        self.get_logger().info(text)
-        self._report(DiagnosticStatus.OK, text)
+    def _anchored(self, status: ComparisonStatus) -> None:
+        """Log and report whether the model (re)built from the latest description applies."""
+        if status.level == OK:
+            self.get_logger().info(status.message)
+        else:
+            self.get_logger().warning(f'no comparison: {status.message}')
+        self._report(status)
 
     def _on_sources(self, problem: str | None) -> None:
         """Report a second simulator on our inputs (ERROR), or restore the model's status."""
         if problem:
-            self._report(DiagnosticStatus.ERROR, problem, keep=False)
+            self._report(ComparisonStatus(ERROR, problem, 0), keep=False)
         else:
-            self._report(*self._status)
+            self._report(self._status)
 
-    def _report(self, level: bytes, message: str, keep: bool = True) -> None:
+    def _report(self, status: ComparisonStatus, keep: bool = True) -> None:
         """
         Publish ``comparison/status``.
 
         ``keep``: it is the model's status (restored after a second-source error clears).
         """
         if keep:
-            self._status = (level, message)
+            self._status = status
             if getattr(self, '_sources', None) is not None and self._sources.current:
                 return  # the second-source error stays on until it clears
-        self._pub_status.publish(comparison_status(level, self.get_fully_qualified_name(),
-                                                   message, self._model_name))
+        self._pub_status.publish(comparison_status_message(
+            status, self.get_fully_qualified_name(), self._comparison.model_name))
 
     # -- comparison ---------------------------------------------------------------------
     def _on_omega(self, data: bytes) -> None:
@@ -279,70 +218,52 @@ class ComparatorNode(GuardedNode):
             self.get_logger().warning(f'angular_velocity: sample skipped ({err})',
                                       throttle_duration_sec=5.0)
             return
-        if self._description is None or self._pending:  # held samples first, in order
+        if self._comparison.latest is None or self._pending:  # held samples first, in order
             self._pending.append(sample)
             return
         self._compare(sample)
 
-    def _compare(self, sample: tuple[int, tuple]) -> None:
+    def _compare(self, sample: tuple[int, tuple[float, float, float]]) -> None:
         stamp_ns, numeric = sample
         k, self._received = self._received, self._received + 1
-        t = self._timebase.to_years(stamp_ns)
-        model_at = self._model_for(t)
-        if model_at is not None and k % self._decimation == 0:
-            model = self._model_omega(model_at, stamp_ns, t)
-            if all(map(math.isfinite, model)):
-                relative = self._publish(stamp_ns, numeric, model)
-                if relative > DEPARTURE and not any(m is model_at for m in self._departed):
-                    self._departed.append(model_at)
-                    del self._departed[:-DESCRIPTION_QOS.depth]
-                    self._report(DiagnosticStatus.WARN, departure_text(self._model_name, t))
+        if k % self._decimation == 0:
+            compared = self._comparison.compare_one(stamp_ns, numeric)
+            if compared is not None:
+                self._publish(compared)
+                if compared.departure is not None:
+                    self._report(compared.departure)
         self._progress.mark(stamp_ns)
 
-    def _model_omega(self, model, stamp_ns: int, t: float) -> list[float]:
-        """Evaluate ``model`` at ``t`` [yr] (on the simulator's grid: LOOKAHEAD at once)."""
-        grid = self._grid
-        k = grid.index_of(stamp_ns) if grid is not None else None
-        if k is None:
-            return model.omega(np.array([t]))[0].tolist()
-        return self._ahead.at(model, grid, k)
-
-    def _model_for(self, t: float):
-        """Return the model of the segment containing ``t`` (samples can trail the description)."""
-        if self._description is None or t >= self._description.segment_start:
-            return self._model
-        for start, model in reversed(self._previous):
-            if t >= start:
-                return model
-        return None
+    @property
+    def described(self) -> bool:
+        """Return whether a description of the run followed has come in."""
+        return self._comparison.latest is not None
 
     @property
     def consumed(self) -> int:
         """Count the samples taken from angular_velocity and processed (compared or not)."""
         return self._received
 
-    def _publish(self, stamp_ns: int, numeric, model) -> float:
+    def _publish(self, compared: ComparedSample) -> None:
         """
         Publish the model, numeric - model and its norms (3-sequences of floats, rad/yr).
 
-        Stamped with the sample's stamp, frame ``body``. Return the relative error
-        |numeric - model| / |numeric|.
+        Stamped with the sample's stamp, frame ``body``.
         """
         self.compared += 1
-        error, norm, relative = comparison_values(numeric, model)
         model_cdr, error_cdr, norm_cdr = self._encoder.comparison(
-            stamp_ns, model, error, norm, relative, self._model_name)
+            compared.stamp_ns, compared.model, compared.error, compared.norm, compared.relative,
+            self._comparison.model_name)
         self._pub_model.publish(model_cdr)
         self._pub_error.publish(error_cdr)
         self._pub_norm.publish(norm_cdr)
-        return relative
 
     def close(self) -> None:
         """Tell the simulator this consumer leaves."""
         self._progress.close()
 
 
-def main(args=None) -> int:
+def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run tumble_ros comparator``."""
     return run_node(ComparatorNode, args, 'comparator')
 

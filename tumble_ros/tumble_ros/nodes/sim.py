@@ -24,13 +24,15 @@ published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year) (``core.timebase
 is the clock source: it paces on the steady clock whatever ``use_sim_time`` says. Services:
 ``apply_impact`` (tumble_ros_interfaces/ApplyImpact, every request answered), ``pause``,
 ``resume``, ``step`` (std_srvs/Trigger). Impacts are queued by the service and applied at the
-next step boundary, never inside the callback. The node holds no physics.
+next step boundary, never inside the callback. The node holds no physics and no run logic:
+what a batch does is :class:`~tumble_ros.runs.session.SimulationSession`'s (the offline recording's
+too); the node publishes its records (:mod:`tumble_ros.nodes.record_messages`).
 """
 from __future__ import annotations
 
-from collections import deque
 import math
 import time
+from typing import Any
 
 from geometry_msgs.msg import Vector3Stamped
 import numpy as np
@@ -41,21 +43,12 @@ from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 
 from tumble_ros import topics
-from tumble_ros.core import (
-    dump_scenario,
-    Impact,
-    ImpactLimits,
-    Propagator,
-    Scenario,
-    ScenarioError,
-    TimeBase,
-)
+from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeBase
 from tumble_ros.core.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.markers import marker_every, MarkerScene
-from tumble_ros.nodes.messages import (FRAMES, impact_event, message_class, new_run_id,
-                                       SampleEncoder, scenario_description, sim_status)
+from tumble_ros.nodes.messages import FRAMES, message_class, new_run_id, SampleEncoder
 from tumble_ros.nodes.parameters import (
     declare_node_parameters,
     declare_scenario_parameters,
@@ -63,10 +56,15 @@ from tumble_ros.nodes.parameters import (
 )
 from tumble_ros.nodes.progress import ConsumerTracker
 from tumble_ros.nodes.qos import PUBLISHER_QOS, publisher_qos, SERVICE_QOS
+from tumble_ros.nodes.record_messages import description_message, impact_message, status_message
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
-from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
-from tumble_ros_interfaces.srv import ApplyImpact
+from tumble_ros.runs.records import (DIVERGED, FINISHED, ImpactEnded, PAUSED, RUNNING,
+                                     SampleBlock, SegmentStart, SessionRecord, StatusChange)
+from tumble_ros.runs.session import output_grid, SimulationSession
+from tumble_ros_interfaces.msg import (  # type: ignore[attr-defined]  # rosidl-generated
+    ImpactEvent, ScenarioDescription, SimStatus)
+from tumble_ros_interfaces.srv import ApplyImpact  # type: ignore[attr-defined]  # rosidl-generated
 from visualization_msgs.msg import MarkerArray
 
 __all__ = ['SimNode', 'main']
@@ -87,7 +85,7 @@ STATUS_PERIOD = 1.0
 class SimNode(GuardedNode):
     """Simulator node; see the module docstring for its interface."""
 
-    def __init__(self, **kwargs) -> None:
+    def __init__(self, **kwargs: Any) -> None:
         super().__init__('sim', **kwargs)
 
     def _set_up(self) -> None:
@@ -100,21 +98,16 @@ class SimNode(GuardedNode):
         self.scenario = Scenario.from_parameters(scenario_parameters)
         self.timebase = TimeBase(params['seconds_per_year'] or seconds_per_year_of(
             scenario_parameters.get('time_unit', 'yr')))
-        self.timebase.check_span(self.scenario.duration)
         # the output grid (the one of Scenario.output_times, at this node's seconds_per_year)
-        self._grid = self.timebase.grid(self.scenario.output_interval, self.scenario.duration)
+        self._grid = output_grid(self.scenario, self.timebase)
         self._limits = ImpactLimits(params['max_impact_duration'], params['max_impact_impulse'])
         self._rtf = params['real_time_factor']
-        self._propagator = Propagator(self.scenario)
-        self._scenario_yaml = dump_scenario(self.scenario)
         #: This run's id, in every ``scenario`` description (a restart draws a new one).
         self.run_id: str = new_run_id()
-        self._next_k = 0  # index of the next sample to publish
-        self._pending: deque[tuple[int, Impact]] = deque()
-        self._impact_ids: dict[int, int] = {}  # id(Impact) -> service id
-        self._next_id = 1
-        self._revision = 0
-        self._state = SimStatus.PAUSED if params['start_paused'] else SimStatus.RUNNING
+        self._session = SimulationSession(self.scenario, self._grid, run_id=self.run_id,
+                                          paused=params['start_paused'])
+        self._next_id = 1   # the id of the next impact requested through the service
+        self._status_message = ''
         # (wall time, sample index) when pacing began
         self._pace_origin: tuple[float, int] | None = None
 
@@ -129,10 +122,11 @@ class SimNode(GuardedNode):
                            if params['publish_clock'] else None)
         # the per-sample topics, published as CDR bytes of the encoder's rows
         self._encoder = SampleEncoder()
-        self._sample_publishers = {
+        sample_publishers = {
             **{t.name: publish(message_class(t.type_name), t.name, publisher_qos(t.name))
                for t in topics.sample_topics(topics.SIM) if t.name != topics.PERTURBER},
             topics.PERTURBER: self._pub_perturber, topics.CLOCK: self._pub_clock}
+        self._sample_publishers = {t: p for t, p in sample_publishers.items() if p is not None}
         self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, qos[topics.IMPACT_EVENTS])
         self._pub_status = publish(SimStatus, topics.STATUS, qos[topics.STATUS])
         self._pub_scenario = publish(ScenarioDescription, topics.SCENARIO, qos[topics.SCENARIO])
@@ -154,8 +148,7 @@ class SimNode(GuardedNode):
             self, lambda: own,
             lambda problem: self._publish_status(
                 problem or "single source again on the simulator's topics"))
-        self._publish_scenario(0.0, self._propagator.y)
-        self._publish_status('started')
+        self._publish_records(self._session.start())   # the first segment, 'started'
         # Steady clock: the simulator is the clock source, use_sim_time or not.
         self._timer = steady_timer(self, TICK_PERIOD, self._on_tick)
         steady_timer(self, STATUS_PERIOD, self._on_status_period)
@@ -164,7 +157,7 @@ class SimNode(GuardedNode):
         self._started_wall: float | None = None
 
     # -- parameters ---------------------------------------------------------------------
-    def _on_set_parameters(self, parameters) -> SetParametersResult:
+    def _on_set_parameters(self, parameters: list[Any]) -> SetParametersResult:
         """Refuse invalid values of the run-time parameters with a reason."""
         for p in parameters:
             try:
@@ -178,11 +171,11 @@ class SimNode(GuardedNode):
                     TimeBase(p.value)
             except (ScenarioError, ValueError) as err:
                 return SetParametersResult(successful=False, reason=str(err))
-        if hasattr(self, '_propagator'):  # after start-up: apply the accepted run-time changes
+        if hasattr(self, '_session'):  # after start-up: apply the accepted run-time changes
             self._apply_runtime_parameters(parameters)
         return SetParametersResult(successful=True)
 
-    def _apply_runtime_parameters(self, parameters) -> None:
+    def _apply_runtime_parameters(self, parameters: list[Any]) -> None:
         for p in parameters:
             if p.name == 'max_impact_duration':
                 self._limits = ImpactLimits(p.value, self._limits.max_impulse)
@@ -196,7 +189,7 @@ class SimNode(GuardedNode):
     @property
     def state(self) -> int:
         """Return the SimStatus state: RUNNING, PAUSED, FINISHED or DIVERGED."""
-        return self._state
+        return self._session.state
 
     @property
     def status_message(self) -> str:
@@ -212,12 +205,12 @@ class SimNode(GuardedNode):
     @property
     def published_samples(self) -> int:
         """Count the samples published so far."""
-        return self._next_k
+        return self._session.samples
 
     @property
     def t(self) -> float:
         """Return the simulated time [yr] of the last published sample (0 before the first)."""
-        return self._grid.time(max(0, self._next_k - 1))
+        return self._session.t
 
     def _on_tick(self) -> None:
         if self._started_wall is None:
@@ -226,7 +219,7 @@ class SimNode(GuardedNode):
                 f'simulating {self.scenario.duration:g} yr with '
                 f'{self.scenario.integrator.method}, {self._grid.count} samples every '
                 f'{self.scenario.output_interval:g} yr, real_time_factor {self._rtf:g}')
-        if self._state != SimStatus.RUNNING:
+        if self.state != RUNNING:
             return
         self._publish_up_to(self._target_index())
 
@@ -235,61 +228,53 @@ class SimNode(GuardedNode):
         return min(self._paced_index(), self._consumer_limit())
 
     def _consumer_limit(self) -> int:
+        next_k = self._session.samples
         if not self._consumers_gate_open:
             if self._consumers.count < self._min_consumers:
-                return self._next_k - 1  # not all expected consumers are here yet
+                return next_k - 1  # not all expected consumers are here yet
             # for good: a consumer that leaves later is not waited for
             self._consumers_gate_open = True
         if self._consumers.recorders_behind():
-            return self._next_k - 1  # a recorder has not heard a comparator yet: wait for it
-        slowest = self._consumers.slowest_ns(self._grid.stamp(max(0, self._next_k - 1)))
+            return next_k - 1  # a recorder has not heard a comparator yet: wait for it
+        slowest = self._consumers.slowest_ns(self._session.stamp_ns)
         if slowest is None:
             return self._grid.count
         return (slowest // self._grid.interval_ns if slowest >= 0 else -1) + WINDOW
 
     def _paced_index(self) -> int:
         if self._rtf == 0.0:
-            return self._next_k + BATCH - 1
+            return self._session.samples + BATCH - 1
         now = time.monotonic()
         if self._pace_origin is None:
-            self._pace_origin = (now, self._next_k)
+            self._pace_origin = (now, self._session.samples)
         wall0, k0 = self._pace_origin
         t_target = self._grid.time(k0) + self._rtf * (now - wall0)
         return int(self.timebase.to_ns(t_target) // self._grid.interval_ns)
 
     def _publish_up_to(self, k_last: int) -> None:
-        k_last = min(k_last, self._grid.count - 1)
-        if self._next_k <= k_last:
-            self._schedule_pending()
-            stamps = [self._grid.stamp(k) for k in range(self._next_k, k_last + 1)]
-            times = self._grid.times(self._next_k, k_last + 1)
-            done, arrays, failure = self._propagator.sample_many(times)
-            # Impacts that ended within the batch: their events and new descriptions go out
-            # before its samples (the comparator keeps the previous segment's model for the
-            # samples that trail a description).
-            self._publish_impact_events()
-            self._publish_samples(stamps[:done], times[:done], arrays)
-            self._publish_markers(self._next_k, done, arrays)
-            self._next_k += done
-            if failure:
-                self._diverged(failure)
-                return
-            # done < len(stamps) without a failure: the call used its work budget; the next tick
-            # goes on.
-        if self._next_k >= self._grid.count and self._state != SimStatus.FINISHED:
-            self._set_state(SimStatus.FINISHED, f'finished at t = {self.t:g} yr')
-            wall = time.monotonic() - (self._started_wall or time.monotonic())
-            self.get_logger().info(
-                f'finished at t = {self.t:g} yr: {self._next_k} samples in {wall:.1f} s wall '
-                '(the simulator records nothing: a recorder or bringup does)')
+        """Run the session up to sample ``k_last`` and publish the batch's records."""
+        self._publish_records(self._session.advance(k_last))
 
-    def _schedule_pending(self) -> None:
-        while self._pending:
-            impact_id, impact = self._pending.popleft()
-            self._propagator.schedule(impact)
-            self._impact_ids[id(impact)] = impact_id
+    def _publish_records(self, records: list[SessionRecord]) -> None:
+        """
+        Publish a batch's records in their order.
 
-    def _publish_samples(self, stamps: list[int], times: np.ndarray, arrays: dict) -> None:
+        Impacts that ended within the batch: their events and new descriptions go out before
+        its samples (the comparator keeps the previous segment's model for the samples that
+        trail a description).
+        """
+        for record in records:
+            if isinstance(record, SampleBlock):
+                self._publish_samples(record)
+                self._publish_markers(record)
+            elif isinstance(record, SegmentStart):
+                self._pub_scenario.publish(description_message(record))
+            elif isinstance(record, ImpactEnded):
+                self._publish_impact_event(record)
+            else:
+                self._publish_change(record)
+
+    def _publish_samples(self, block: SampleBlock) -> None:
         """
         Publish n samples, each with its /clock, as CDR bytes (:class:`~.messages.SampleEncoder`).
 
@@ -297,91 +282,67 @@ class SimNode(GuardedNode):
         body -> orbital), the continuous Euler angles (φ, ψ, θ) [rad], and with a Kepler orbit
         where the torquing body is [km] (body axes).
         """
-        n = len(stamps)
-        if n == 0:
-            return
-        quaternion = arrays['quaternion'][:n]
-        perturber = (self.scenario.perturber_in_body(times, quaternion)
-                     if self._pub_perturber is not None else None)
-        blocks = self._encoder.simulator(np.array(stamps, dtype=np.int64), arrays['omega'][:n],
-                                         quaternion, arrays['euler'][:n],
-                                         clock=self._pub_clock is not None, perturber=perturber)
+        blocks = self._encoder.simulator(block.stamps, block.omega, block.quaternion,
+                                         block.euler, clock=self._pub_clock is not None,
+                                         perturber=block.perturber)
         publishers = [self._sample_publishers[topic].publish for topic, _ in blocks]
-        rows = [block for _, block in blocks]
-        for j in range(n):
-            for publish, block in zip(publishers, rows):
-                publish(block[j].tobytes())
+        rows = [rows for _, rows in blocks]
+        for j in range(len(block)):
+            for publish, block_rows in zip(publishers, rows):
+                publish(block_rows[j].tobytes())
 
-    def _publish_markers(self, k0: int, n: int, arrays: dict) -> None:
-        """Publish the 3D scene of the samples k0 .. k0 + n - 1 that get one (decimation)."""
-        if self._scene is None or n == 0:
+    def _publish_markers(self, block: SampleBlock) -> None:
+        """Publish the 3D scene of the block's samples that get one (decimation)."""
+        if self._scene is None or self._pub_markers is None:
             return
-        rows = self._scene.encode_samples(self._grid, self._marker_every, k0, n, arrays)
+        rows = self._scene.encode_samples(self._grid, self._marker_every, block.start,
+                                          len(block),
+                                          {'omega': block.omega, 'quaternion': block.quaternion})
         for row in rows:
             self._pub_markers.publish(row.tobytes())
 
-    def _publish_impact_events(self) -> None:
-        """
-        Publish one event per impact that ended and one description per new segment.
-
-        Segments start at an impact's end and at a flyby's encounter window edges.
-        """
-        segment_starts = dict(self._propagator.pop_window_edges())
-        for impact, y_start, y_end in self._propagator.pop_completed_impacts():
-            dw = y_end[:3] - y_start[:3]
-            event = impact_event(impact, self._impact_ids.get(id(impact), 0),
-                                 self.timebase.to_ns(impact.end), dw)
-            self._pub_events.publish(event)
-            self.get_logger().info(f'impact {event.id} applied on '
-                                   f'[{impact.start:.9g}, {impact.end:.9g}] yr: '
-                                   f'delta w = {dw.round(9).tolist()} rad/yr')
-            self._impact_ids.pop(id(impact), None)
-            segment_starts[impact.end] = y_end
-        for t0 in sorted(segment_starts):
-            self._publish_scenario(t0, segment_starts[t0])
-
-    def _diverged(self, reason: str) -> None:
-        self.get_logger().error(f'integration stopped: {reason}')
-        self._set_state(SimStatus.DIVERGED, reason)
+    def _publish_impact_event(self, ended: ImpactEnded) -> None:
+        """Publish the event of an impact that ended; say so in the log."""
+        event = impact_message(ended)
+        self._pub_events.publish(event)
+        impact = ended.impact
+        self.get_logger().info(f'impact {event.id} applied on '
+                               f'[{impact.start:.9g}, {impact.end:.9g}] yr: '
+                               f'delta w = {np.round(ended.delta_omega, 9).tolist()} rad/yr')
 
     # -- latched topics -----------------------------------------------------------------
-    def _set_state(self, state: int, message: str) -> None:
-        if state != self._state:
-            self._state = state
-            self._publish_status(message)
+    def _publish_change(self, change: StatusChange) -> None:
+        """Publish a status (the session's state changes: log the run's end)."""
+        if change.state == DIVERGED:
+            self.get_logger().error(f'integration stopped: {change.message}')
+        self._status_message = change.message
+        self._pub_status.publish(status_message(change))
+        if change.state == FINISHED:
+            wall = time.monotonic() - (self._started_wall or time.monotonic())
+            self.get_logger().info(
+                f'finished at t = {self.t:g} yr: {self.published_samples} samples in {wall:.1f} '
+                's wall (the simulator records nothing: a recorder or bringup does)')
 
     def _publish_status(self, message: str) -> None:
         """Publish the state, t and ``message``, stamped with simulated time like every sample."""
-        self._status_message = message
-        self._pub_status.publish(sim_status(self._state, self.t, message,
-                                            self._grid.stamp(max(0, self._next_k - 1))))
+        self._publish_change(self._session.status(message))
 
     def _on_status_period(self) -> None:
-        if self._state == SimStatus.RUNNING:
+        if self.state == RUNNING:
             self._publish_status(self._status_message)
 
-    def _publish_scenario(self, t0: float, y0) -> None:
-        """Describe the scenario and the state the current segment starts from (latched)."""
-        # The scenario as started (constant size: the impacts applied through the service are on
-        # impact_events, not repeated in every later description).
-        revision, self._revision = self._revision, self._revision + 1
-        self._pub_scenario.publish(scenario_description(
-            self._scenario_yaml, self.timebase.seconds_per_year, revision,
-            self.timebase.to_ns(t0), t0, y0[:3], self._propagator.quaternion_of(y0),
-            self.run_id))
-
     # -- services -----------------------------------------------------------------------
-    def _on_apply_impact(self, request, response):
+    def _on_apply_impact(self, request: Any, response: Any) -> Any:
         response.accepted = False
         frame = FRAMES.get(request.frame)
         if frame is None:
             response.message = (f'frame: unknown frame {request.frame} '
                                 '(FRAME_BODY=0, FRAME_ORBITAL=1)')
             return response
-        if self._state in (SimStatus.FINISHED, SimStatus.DIVERGED):
+        if self.state in (FINISHED, DIVERGED):
             response.message = 'the simulation has ended: no impact can be applied'
             return response
-        if len(self._pending) + len(self._impact_ids) >= MAX_PENDING_IMPACTS:
+        if self._session.impacts_in_progress >= MAX_PENDING_IMPACTS:
             response.message = (f'too many impacts in progress ({MAX_PENDING_IMPACTS} accepted '
                                 'and not yet ended): retry after some have ended')
             return response
@@ -394,7 +355,7 @@ class SimNode(GuardedNode):
             response.message = str(err)
             return response
         impact_id, self._next_id = self._next_id, self._next_id + 1
-        self._pending.append((impact_id, impact))
+        self._session.request_impact(impact, impact_id)
         response.accepted, response.id = True, impact_id
         response.scheduled_start, response.scheduled_end = impact.start, impact.end
         response.message = (
@@ -402,37 +363,40 @@ class SimNode(GuardedNode):
         self.get_logger().info(response.message)
         return response
 
-    def _on_pause(self, request, response):
-        if self._state != SimStatus.RUNNING:
-            response.success, response.message = False, f'not running (state {self._state})'
+    def _on_pause(self, request: Any, response: Any) -> Any:
+        change = self._session.pause()
+        if change is None:
+            response.success, response.message = False, f'not running (state {self.state})'
             return response
-        self._set_state(SimStatus.PAUSED, f'paused at t = {self.t:g} yr')
+        self._publish_change(change)
         response.success, response.message = True, f'paused at t = {self.t!r} yr'
         return response
 
-    def _on_resume(self, request, response):
-        if self._state != SimStatus.PAUSED:
-            response.success, response.message = False, f'not paused (state {self._state})'
+    def _on_resume(self, request: Any, response: Any) -> Any:
+        if self.state != PAUSED:
+            response.success, response.message = False, f'not paused (state {self.state})'
             return response
         self._pace_origin = None
-        self._set_state(SimStatus.RUNNING, f'resumed at t = {self.t:g} yr')
+        change = self._session.resume()
+        if change is not None:
+            self._publish_change(change)
         response.success, response.message = True, f'resumed at t = {self.t!r} yr'
         return response
 
-    def _on_step(self, request, response):
-        if self._state != SimStatus.PAUSED:
+    def _on_step(self, request: Any, response: Any) -> Any:
+        if self.state != PAUSED:
             response.success, response.message = (
-                False, f'step needs the simulation paused (state {self._state})')
+                False, f'step needs the simulation paused (state {self.state})')
             return response
-        self._publish_up_to(self._next_k)
-        if self._state == SimStatus.PAUSED:
+        self._publish_up_to(self._session.samples)
+        if self.state == PAUSED:
             self._publish_status(f'stepped to t = {self.t:g} yr')
-        response.success = self._state != SimStatus.DIVERGED
+        response.success = self.state != DIVERGED
         response.message = f'stepped to t = {self.t!r} yr'
         return response
 
 
-def main(args=None) -> int:
+def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run tumble_ros sim``."""
     return run_node(SimNode, args, 'sim', needs_params_section=True)
 

@@ -1,0 +1,259 @@
+"""
+The run layer without ROS: the simulation session's and the comparison's records.
+
+The session's samples are simulate()'s (bit for bit, batch by batch), an impact gives its event
+and a new segment before the samples after it, a failure a status change; the comparison block
+is the analytic model, anchored on each segment's start, minus the numeric solution, and the
+per-sample path (the live comparator's) gives the block's bits (the offline recording's).
+"""
+import math
+
+import numpy as np
+import pytest
+from test_no_ros import _assert_loads_none
+
+from tumble_ros.core import (departure_text, Impact, IntegratorSettings, make_model, Scenario,
+                             simulate, TimeBase)
+from tumble_ros.runs.comparison import Comparison, WAITING
+from tumble_ros.runs.records import (ComparisonBlock, DIVERGED, FINISHED, ImpactEnded, OK,
+                                     RUNNING, SampleBlock, SegmentStart, StatusChange, WARN)
+from tumble_ros.runs.session import output_grid, SimulationSession
+
+SHORT = Scenario(duration=0.2, output_interval=0.002)
+#: A pulse about z in the middle of SHORT (Mz dt / Iz = 0.2 rad/yr).
+IMPACT = Impact(0.1, 3e-7, (0.0, 0.0, 1.0e6))
+
+
+def run(scenario, batch=7, budget=None):
+    """All the records of a session advanced ``batch`` samples at a time."""
+    session = SimulationSession(scenario, output_grid(scenario, TimeBase()), run_id='r1')
+    records = session.start()
+    while session.state == RUNNING:
+        records += session.advance(session.samples + batch - 1, budget=budget)
+    return session, records
+
+
+def blocks(records):
+    found = [r for r in records if isinstance(r, SampleBlock)]
+    return {name: np.concatenate([getattr(b, name) for b in found])
+            for name in ('times', 'stamps', 'omega', 'quaternion', 'euler')}
+
+
+def test_the_sessions_samples_are_simulates_bit_for_bit():
+    session, records = run(SHORT)
+    ref = simulate(SHORT)
+    got = blocks(records)
+    assert len(got['times']) == len(ref.t) == 101 == session.samples
+    for name in ('omega', 'quaternion', 'euler'):
+        assert np.array_equal(got[name], getattr(ref, name)), name
+    assert np.array_equal(got['times'], ref.t)
+    assert np.array_equal(got['stamps'], np.arange(101) * 2_000_000)   # 0.002 yr at 1 s/yr
+    # each block is the grid indices it says
+    starts = [r.start for r in records if isinstance(r, SampleBlock)]
+    assert starts == list(range(0, 101, 7))
+
+
+def test_a_run_starts_with_its_first_segment_and_ends_finished():
+    session, records = run(SHORT)
+    first, started = records[:2]
+    assert isinstance(first, SegmentStart) and (first.revision, first.t0, first.stamp_ns) == (
+        0, 0.0, 0)
+    assert first.omega == tuple(SHORT.omega0) and first.run_id == 'r1'
+    assert 'duration: 0.2' in first.parameters_yaml and first.seconds_per_year == 1.0
+    assert started == StatusChange(RUNNING, 0.0, 0, 'started')
+    assert records[-1] == StatusChange(FINISHED, 0.2, 200_000_000, 'finished at t = 0.2 yr')
+    assert sum(isinstance(r, StatusChange) for r in records) == 2
+    assert session.advance(200) == []   # nothing more, said once
+
+
+def test_an_impact_ends_with_its_event_then_a_new_segment_before_the_samples_after_it():
+    session = SimulationSession(SHORT, output_grid(SHORT, TimeBase()))
+    session.start()
+    session.advance(10)
+    session.request_impact(IMPACT, impact_id=7)
+    assert session.impacts_in_progress == 1
+    records = session.advance(100)
+    kinds = [type(r) for r in records]
+    assert kinds == [ImpactEnded, SegmentStart, SampleBlock, StatusChange]
+    ended, segment = records[0], records[1]
+    assert ended.impact is IMPACT and ended.impact_id == 7 and session.impacts_in_progress == 0
+    assert ended.stamp_ns == TimeBase().to_ns(IMPACT.end)
+    # the jump of w over the pulse, from simulate at the pulse's edges
+    ref = simulate(SHORT.replace(impacts=(IMPACT,)), t_eval=[IMPACT.start, IMPACT.end])
+    np.testing.assert_allclose(ended.delta_omega, ref.omega[1] - ref.omega[0], rtol=0,
+                               atol=1e-12)
+    assert ended.delta_omega[2] == pytest.approx(1.0e6 * 3e-7 / 1.5, rel=1e-9)
+    assert (segment.revision, segment.t0) == (1, IMPACT.end)
+    # (scheduled at t = 0.02, not from the start: another step sequence, the same motion)
+    np.testing.assert_allclose(segment.omega, ref.omega[1], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(segment.quaternion, ref.quaternion[1], rtol=0, atol=1e-10)
+    with_impact = simulate(SHORT.replace(impacts=(IMPACT,)))
+    np.testing.assert_allclose(records[2].omega, with_impact.omega[11:], rtol=0, atol=1e-9)
+
+
+def test_a_failed_integration_is_a_status_change_after_the_good_samples():
+    sc = Scenario(inertia=(1.0, 1.6, 2.2), duration=1.0, output_interval=0.1,
+                  impacts=(Impact(0.0, 0.5, (1e300, 1e300, 1e300)),),
+                  integrator=IntegratorSettings(method='rk4', step=0.1))
+    session, records = run(sc, batch=100)
+    change = records[-1]
+    assert isinstance(change, StatusChange) and change.state == DIVERGED == session.state
+    assert 'non-finite' in change.message
+    got = [r for r in records if isinstance(r, SampleBlock)]
+    assert session.samples < 11 and sum(map(len, got)) == session.samples
+    assert all(np.isfinite(b.omega).all() for b in got)
+    assert change.stamp_ns == max(0, session.samples - 1) * 100_000_000
+
+
+def test_pause_and_resume_are_status_changes_once():
+    session = SimulationSession(SHORT, output_grid(SHORT, TimeBase()), paused=True)
+    assert session.start()[1].state == 1 and session.pause() is None
+    assert session.resume() == StatusChange(RUNNING, 0.0, 0, 'resumed at t = 0 yr')
+    assert session.resume() is None
+
+
+def model_minus_numeric(scenario, start, times, omega):
+    """Return omega - the paper's model anchored at ``start``'s state (evaluated here)."""
+    model = make_model('paper', scenario, t0=start.t0, omega=start.omega,
+                       quaternion=start.quaternion)
+    return omega - model.omega(times)
+
+
+def test_the_comparison_block_is_the_model_anchored_on_each_segment_minus_the_numeric_one():
+    sc = SHORT.replace(impacts=(IMPACT,))
+    _, records = run(sc, batch=30)
+    comparison = Comparison('paper')
+    assert comparison.waiting().message == WAITING
+    starts, errors, compared = [], [], []
+    for record in records:
+        if isinstance(record, SegmentStart):
+            status = comparison.anchor(record)
+            assert status.level == OK and f'(segment {record.revision})' in status.message
+            starts.append(record)
+        elif isinstance(record, SampleBlock):
+            block = comparison.compare(record)
+            assert isinstance(block, ComparisonBlock) and block.departures == ()
+            assert np.array_equal(block.stamps, record.stamps)
+            errors.append(block)
+            compared.append(block.compared)
+    assert len(starts) == 2 and all(np.concatenate(compared))
+    got = blocks(records)
+    error = np.concatenate([b.error for b in errors])
+    after = got['times'] >= IMPACT.end
+    expected = np.where(after[:, None],
+                        model_minus_numeric(sc, starts[1], got['times'], got['omega']),
+                        model_minus_numeric(sc, starts[0], got['times'], got['omega']))
+    np.testing.assert_allclose(error, expected, rtol=0, atol=1e-12)
+    assert np.abs(error).max() > 1e-6   # (the model is not the numeric solution)
+    norm = np.concatenate([b.norm for b in errors])
+    relative = np.concatenate([b.relative for b in errors])
+    np.testing.assert_allclose(norm, np.linalg.norm(expected, axis=1), rtol=1e-12)
+    np.testing.assert_allclose(relative, norm / np.linalg.norm(got['omega'], axis=1),
+                               rtol=1e-15)
+
+
+def test_one_sample_at_a_time_gives_the_blocks_bits():
+    """The live comparator's path (compare_one) and the offline one (compare) agree exactly."""
+    sc = SHORT.replace(impacts=(IMPACT,))
+    _, records = run(sc, batch=30)
+    by_block, by_sample = Comparison('paper'), Comparison('paper')
+    for record in records:
+        if isinstance(record, SegmentStart):
+            by_block.anchor(record)
+            by_sample.anchor(record)
+        elif isinstance(record, SampleBlock):
+            block = by_block.compare(record)
+            for j, (stamp, omega) in enumerate(zip(record.stamps.tolist(),
+                                                   record.omega.tolist())):
+                one = by_sample.compare_one(stamp, omega)
+                assert one is not None and one.stamp_ns == stamp
+                assert one.model == block.model[j].tolist()
+                assert one.error == block.error[j].tolist()
+                assert (one.norm, one.relative) == (block.norm[j], block.relative[j])
+
+
+def synthetic_block(comparison, start, k0, n, scale):
+    """Grid samples k0 .. k0 + n - 1 whose omega is ``scale`` times the anchored model's."""
+    grid = comparison.grid
+    times = grid.times(k0, k0 + n)
+    model = make_model('paper', SHORT, t0=start.t0, omega=start.omega,
+                       quaternion=start.quaternion).omega(times)
+    zeros = np.zeros((n, 3))
+    return SampleBlock(k0, times, np.arange(k0, k0 + n, dtype=np.int64) * grid.interval_ns,
+                       model * scale[:, None], np.tile([1.0, 0, 0, 0], (n, 1)), zeros)
+
+
+def test_a_departure_is_said_once_per_segment_at_its_first_sample():
+    _, records = run(SHORT)
+    start = records[0]
+    comparison = Comparison('paper')
+    comparison.anchor(start)
+    # |0.4 w_model - w_model| / |0.4 w_model| = 1.5 > DEPARTURE (1) from sample 25 on
+    scale = np.where(np.arange(50) < 25, 1.0, 0.4)
+    first = comparison.compare(synthetic_block(comparison, start, 0, 50, scale))
+    (said,) = first.departures
+    t = comparison.grid.time(25)
+    assert said.level == WARN and said.message == departure_text('paper', t)
+    assert said.stamp_ns == 25 * comparison.grid.interval_ns
+    assert first.relative[25] == pytest.approx(1.5) and first.relative[:25].max() < 1e-12
+    again = comparison.compare(synthetic_block(comparison, start, 50, 10, np.full(10, 0.4)))
+    assert again.departures == () and again.compared.all()
+    # the live path says it once too
+    one = Comparison('paper')
+    one.anchor(start)
+    block = synthetic_block(one, start, 0, 50, scale)
+    said_live = [c.departure for c in (one.compare_one(s, w) for s, w in
+                                       zip(block.stamps.tolist(), block.omega.tolist()))
+                 if c is not None and c.departure is not None]
+    assert said_live == [said]
+
+
+def test_samples_before_a_segment_or_without_a_model_are_not_compared():
+    _, records = run(SHORT)
+    start, block = records[0], next(r for r in records if isinstance(r, SampleBlock))
+    comparison = Comparison('paper')
+    assert comparison.compare_one(0, (1.0, 2.0, 3.0)) is None
+    # anchored later than the block's first samples: those are not compared
+    late = SegmentStart(start.run_id, start.parameters_yaml, 1.0, 0, 0.006, 6_000_000,
+                        start.omega, start.quaternion)
+    comparison.anchor(late)
+    result = comparison.compare(block)
+    assert result.compared.tolist() == [False] * 3 + [True] * 4
+    assert not result.model[:3].any() and not result.error[:3].any()
+    # a model that does not apply: a WARN status, nothing compared
+    status = comparison.set_model('no such model')
+    assert status is not None and status.level == WARN
+    assert not comparison.compare(block).compared.any()
+    assert math.isfinite(block.omega.sum())
+
+
+def test_a_restart_forgets_the_previous_runs_segments():
+    _, records = run(SHORT)
+    start = records[0]
+    comparison = Comparison('paper')
+    comparison.anchor(start)
+    later = SegmentStart('r1', start.parameters_yaml, 1.0, 1, 0.1, 100_000_000, start.omega,
+                         start.quaternion)
+    comparison.anchor(later)
+    assert comparison.compare_one(2_000_000, start.omega) is not None   # first segment kept
+    comparison.anchor(SegmentStart('r2', start.parameters_yaml, 1.0, 0, 0.1, 100_000_000,
+                                   start.omega, start.quaternion))
+    assert comparison.compare_one(2_000_000, start.omega) is None       # a new run: forgotten
+
+
+def test_the_session_and_the_comparison_load_no_ros():
+    _assert_loads_none('import tumble_ros.runs.session, tumble_ros.runs.comparison, '
+                       'tumble_ros.runs.records',
+                       ('rclpy', 'rosidl', 'tumble_ros_interfaces', 'geometry_msgs',
+                        'diagnostic_msgs', 'tumble_ros.nodes'))
+
+
+def test_the_records_states_and_levels_are_the_messages_values():
+    from diagnostic_msgs.msg import DiagnosticStatus
+    from tumble_ros.runs import records
+    from tumble_ros_interfaces.msg import SimStatus
+
+    assert (records.RUNNING, records.PAUSED, records.FINISHED, records.DIVERGED) == (
+        SimStatus.RUNNING, SimStatus.PAUSED, SimStatus.FINISHED, SimStatus.DIVERGED)
+    assert (records.OK, records.WARN, records.ERROR) == (
+        DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR)

@@ -1,0 +1,243 @@
+"""
+The comparison of a run with an analytic model, without ROS, in one place.
+
+A :class:`Comparison` anchors the model (:mod:`tumble_ros.core.analytic`) on each segment's
+start (:class:`~.records.SegmentStart`: at t = 0 and again after every impact and at a flyby's
+window edges, so the error measures the model, not the impact), evaluates it at the samples'
+times and returns numeric - model, its norm and the relative error, and says once per segment
+when the model leaves the numeric solution (relative error above
+:data:`tumble_ros.core.DEPARTURE`). Each sample takes the model of the segment its time falls in
+(the latest start at or before it): samples that trail a newer segment's start keep the
+previous model. The model is evaluated on the run's output grid :data:`LOOKAHEAD` samples at a
+time (:class:`GridModelValues`).
+
+Two entry points on the same state and arithmetic: :meth:`Comparison.compare_one` for one
+sample (the live comparator, which receives samples one by one) and
+:meth:`Comparison.compare` for a block (the offline recording), vectorised where the arithmetic
+is elementwise and per sample where it is not (``math.hypot``), so both give the same bits.
+It returns records (:mod:`.records`) and never publishes or writes.
+"""
+from __future__ import annotations
+
+import bisect
+from dataclasses import dataclass
+import math
+from typing import Sequence
+
+import numpy as np
+
+from tumble_ros.core import (AnalyticModel, DEPARTURE, departure_text, make_model,
+                             parse_scenario, ScenarioError, TimeBase)
+from tumble_ros.core.timebase import SampleGrid
+
+from .records import (ComparedSample, ComparisonBlock, ComparisonStatus, Floats, OK,
+                      SampleBlock, SegmentStart, WARN)
+
+__all__ = ['Comparison', 'anchor_model', 'GridModelValues', 'error_norms', 'LOOKAHEAD',
+           'WAITING']
+
+#: Grid samples whose model value is computed in one vectorised call: the model's fixed numpy
+#: cost (~50 us a call) is then shared by this many samples.
+LOOKAHEAD = 64
+#: The status before the first segment start.
+WAITING = "waiting for the simulator's scenario description"
+
+
+def anchor_model(model_name: str,
+                 start: SegmentStart) -> tuple[AnalyticModel, SampleGrid, str]:
+    """
+    Return (model, the run's output grid, a line saying so) for a segment's start.
+
+    The model is anchored on the state the segment starts from. Raises ScenarioError or
+    ValueError (ModelNotApplicable) when the model cannot be built.
+    """
+    scenario = parse_scenario(start.parameters_yaml)
+    grid = TimeBase(start.seconds_per_year).grid(scenario.output_interval, scenario.duration)
+    model = make_model(model_name, scenario, t0=start.t0, omega=start.omega,
+                       quaternion=start.quaternion)
+    text = (f'model {model_name!r} ({model.label}) anchored at t = '
+            f'{start.t0:.9g} yr (segment {start.revision})')
+    return model, grid, text
+
+
+def error_norms(numeric: Sequence[float], error: Sequence[float]) -> tuple[float, float]:
+    """Return (|error|, |error| / |numeric|) of two 3-vectors [rad/yr] (inf for numeric 0)."""
+    norm = math.hypot(*error)
+    magnitude = math.hypot(*numeric)
+    return norm, norm / magnitude if magnitude > 0 else math.inf
+
+
+class GridModelValues:
+    """A model's omega [rad/yr] on the output grid, :data:`LOOKAHEAD` samples computed at once."""
+
+    def __init__(self) -> None:
+        self._model: AnalyticModel | None = None
+        self._first = 0
+        self._values: list[list[float]] = []
+
+    def at(self, model: AnalyticModel, grid: SampleGrid, k: int) -> list[float]:
+        """Return ``model``'s omega [rad/yr] at grid sample k."""
+        if model is not self._model or not 0 <= k - self._first < len(self._values):
+            times = grid.times(k, min(k + LOOKAHEAD, grid.count))
+            self._model, self._first = model, k
+            self._values = model.omega(times).tolist()
+        return self._values[k - self._first]
+
+    def span(self, model: AnalyticModel, grid: SampleGrid, k: int,
+             stop: int) -> list[list[float]]:
+        """Return ``model``'s omega at grid samples k .. stop - 1: what :meth:`at` gives each."""
+        out: list[list[float]] = []
+        while k < stop:
+            self.at(model, grid, k)       # (re)fills the look-ahead from k if needed
+            end = min(stop, self._first + len(self._values))
+            out += self._values[k - self._first:end - self._first]
+            k = end
+        return out
+
+
+@dataclass
+class _Segment:
+    """A segment's start [yr], its model (None: the model does not apply), whether it left."""
+
+    start: float
+    model: AnalyticModel | None
+    departed: bool = False
+
+
+class Comparison:
+    """
+    The comparison of one run with the model ``model_name``; see the module docstring.
+
+    ``history``: the segments kept for trailing samples (the newest included; None: all). The
+    live comparator keeps as many as its description subscription holds.
+    """
+
+    def __init__(self, model_name: str, history: int | None = None) -> None:
+        self.model_name = model_name
+        self.history = history
+        self.grid: SampleGrid | None = None   # the run's output grid (None: not known yet)
+        self.timebase = TimeBase()            # the run's, from its latest segment start
+        self.latest: SegmentStart | None = None
+        self._segments: list[_Segment] = []   # by start, the latest's last
+        self._values = GridModelValues()
+
+    def waiting(self) -> ComparisonStatus:
+        """Return the status before the first segment start (WARN, logged at 0)."""
+        return ComparisonStatus(WARN, WAITING, 0)
+
+    # -- anchoring --------------------------------------------------------------------------
+    def anchor(self, start: SegmentStart) -> ComparisonStatus:
+        """
+        Anchor the model on a segment's start; return the status saying whether it applies.
+
+        A later segment (higher revision, later start) keeps the earlier ones for the samples
+        that trail it; a revision not above the latest's is a new run (the simulator restarted)
+        and forgets them.
+        """
+        old = self.latest
+        if old is None or start.revision <= old.revision:
+            self._segments = []
+        elif start.t0 > old.t0:
+            pass   # a new segment: the previous ones stay for samples that trail it
+        else:
+            self._segments.pop()   # the latest segment described again
+        self.latest = start
+        self.timebase = TimeBase(start.seconds_per_year)
+        self._segments.append(_Segment(start.t0, None))
+        if self.history is not None:
+            del self._segments[:-self.history]
+        return self._anchor_latest(start.stamp_ns)
+
+    def set_model(self, model_name: str) -> ComparisonStatus | None:
+        """Compare with ``model_name`` from now on (re-anchored on the latest segment start)."""
+        self.model_name = model_name
+        if self.latest is None:
+            return None
+        self._segments[-1] = _Segment(self.latest.t0, None)
+        return self._anchor_latest(self.latest.stamp_ns)
+
+    def _anchor_latest(self, stamp_ns: int) -> ComparisonStatus:
+        assert self.latest is not None
+        try:
+            model, self.grid, text = anchor_model(self.model_name, self.latest)
+        except (ScenarioError, ValueError) as err:
+            return ComparisonStatus(WARN, str(err), stamp_ns)
+        self._segments[-1].model = model
+        return ComparisonStatus(OK, text, stamp_ns)
+
+    # -- comparing ----------------------------------------------------------------------------
+    def _segment_at(self, t: float) -> _Segment | None:
+        """Return the segment ``t`` [yr] falls in (None before the first kept)."""
+        if self._segments and t >= self._segments[-1].start:
+            return self._segments[-1]   # (the latest: nearly every sample)
+        i = bisect.bisect_right([s.start for s in self._segments], t) - 1
+        return self._segments[i] if i >= 0 else None
+
+    def _departure(self, segment: _Segment, t: float, stamp_ns: int) -> ComparisonStatus | None:
+        """Say, once per segment, that its model left the numeric solution at ``t`` [yr]."""
+        if segment.departed:
+            return None
+        segment.departed = True
+        return ComparisonStatus(WARN, departure_text(self.model_name, t), stamp_ns)
+
+    def compare_one(self, stamp_ns: int, numeric: Sequence[float]) -> ComparedSample | None:
+        """
+        Compare one sample (stamp [ns], omega [rad/yr] body axes); None if it has no model value.
+
+        Its model value is the grid's look-ahead when the stamp is on the run's grid, else the
+        model evaluated at the sample's time alone.
+        """
+        t = self.timebase.to_years(stamp_ns)
+        segment = self._segment_at(t)
+        if segment is None or segment.model is None:
+            return None
+        k = self.grid.index_of(stamp_ns) if self.grid is not None else None
+        if k is None or self.grid is None:
+            model = segment.model.omega(np.array([t]))[0].tolist()
+        else:
+            model = self._values.at(segment.model, self.grid, k)
+        if not all(map(math.isfinite, model)):
+            return None
+        error = [n - m for n, m in zip(numeric, model)]
+        norm, relative = error_norms(numeric, error)
+        departure = (self._departure(segment, t, stamp_ns) if relative > DEPARTURE else None)
+        return ComparedSample(stamp_ns, model, error, norm, relative, departure)
+
+    def compare(self, block: SampleBlock) -> ComparisonBlock:
+        """
+        Compare a block of grid samples; the same numbers as :meth:`compare_one` on each.
+
+        The block's samples are on the run's grid (indices ``block.start`` ...).
+        """
+        n = len(block)
+        times, omega = block.times, block.omega
+        model: Floats = np.zeros((n, 3))
+        has = np.zeros(n, dtype=bool)
+        starts = np.array([s.start for s in self._segments])
+        which = np.searchsorted(starts, times, side='right') - 1
+        edges = [0, *(np.flatnonzero(np.diff(which)) + 1).tolist(), n]
+        runs = list(zip(edges[:-1], edges[1:]))
+        for a, b in runs:
+            m = self._segments[which[a]].model if which[a] >= 0 else None
+            if m is not None and self.grid is not None:
+                model[a:b] = self._values.span(m, self.grid, block.start + a, block.start + b)
+                has[a:b] = True
+        compared = has & np.isfinite(model).all(axis=1)
+        error: Floats = np.where(compared[:, None], omega - model, 0.0)
+        norm: Floats = np.zeros(n)
+        relative: Floats = np.zeros(n)
+        numeric, errors = omega.tolist(), error.tolist()   # (numeric - model: elementwise)
+        for j in np.flatnonzero(compared).tolist():
+            norm[j], relative[j] = error_norms(numeric[j], errors[j])
+        model[~compared] = 0.0
+        beyond = compared & (relative > DEPARTURE)
+        departures = []
+        for a, b in runs:
+            hits = np.flatnonzero(beyond[a:b])
+            if which[a] >= 0 and len(hits):
+                j = a + int(hits[0])
+                said = self._departure(self._segments[which[a]], float(times[j]),
+                                       int(block.stamps[j]))
+                departures += [said] if said else []
+        return ComparisonBlock(block.stamps, compared, model, error, norm, relative,
+                               tuple(departures))
