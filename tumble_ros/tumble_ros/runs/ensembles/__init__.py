@@ -1,0 +1,1 @@
+"""Ensemble runs: the engines (this process, Dask) and the runs into stores."""
