@@ -2,9 +2,10 @@
 The import map: no circle, and every arrow points down the layers.
 
 Layers, bottom up: ``errors`` and ``topics`` (facts, no imports), ``core`` (numerics), ``io``
-(recordings, ensemble stores), ``ensembles`` (core's chunked runs into io's stores),
-``analysis`` (offline tools over core and io), ``cli`` (command lines over core, ensembles and
-analysis; the simulator's parameter names from topics), ``nodes`` (ROS).
+(recordings, ensemble stores), ``runs`` (what a run does, without ROS: the ensembles' engines
+and runs into io's stores), ``ensembles`` (the run layer's ensemble names, re-exported),
+``analysis`` (offline tools over core and io), ``cli`` (command lines over core, runs,
+ensembles and analysis; the simulator's parameter names from topics), ``nodes`` (ROS).
 A module may import its own package and the layers below, never above.
 """
 import ast
@@ -17,11 +18,12 @@ ALLOWED = {
     'topics': set(),
     'core': {'errors'},
     'io': {'errors', 'topics'},
-    'ensembles': {'errors', 'core', 'io'},
+    'runs': {'errors', 'topics', 'core', 'io'},
+    'ensembles': {'errors', 'core', 'io', 'runs'},
     'analysis': {'errors', 'topics', 'core', 'io'},
-    'cli': {'errors', 'topics', 'core', 'ensembles', 'analysis'},
-    'nodes': {'errors', 'topics', 'core', 'io'},
-    '__main__': {'nodes', 'analysis', 'cli'},
+    'cli': {'errors', 'topics', 'core', 'runs', 'ensembles', 'analysis'},
+    'nodes': {'errors', 'topics', 'core', 'io', 'runs'},
+    '__main__': {'nodes', 'analysis', 'cli', 'runs'},
     '__init__': set(),
 }
 
