@@ -130,3 +130,51 @@ def test_the_compiled_physics_is_the_bottom_of_core():
                         wrong.append(f'{module} -> {target}')
     assert not wrong
     assert 'tumble_ros.core.kernels.physics' in edges  # (the check sees the new modules)
+
+
+#: Private attributes of third-party objects that some modules must reach (scipy's solvers,
+#: numba's dispatchers and cache, rclpy's node): (module, expression).
+THIRD_PARTY_PRIVATE = {
+    ('tumble_ros.core.integrators.adaptive', 'solver._integrator'),
+    ('tumble_ros.core.integrators.adaptive', 'solver._y'),
+    ('tumble_ros.core.integrators.adaptive', 'ode._integrator'),
+    ('tumble_ros.core.integrators.adaptive', 'ode._y'),
+    ('tumble_ros.core.jit', '_IMPL._locator_classes'),
+    ('tumble_ros.core.torques.component', 'f._sig'),
+    ('tumble_ros.nodes.parameters', 'node._parameters'),
+    ('tumble_ros.nodes.parameters', 'node._parameter_overrides'),
+}
+
+
+def test_no_module_reaches_into_private_attributes_of_another_object():
+    """``x._name`` only on ``self``, ``cls`` or ``super()``: friends use public names."""
+    reached = set()
+    for name, path in modules().items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not (isinstance(node, ast.Attribute) and node.attr.startswith('_')
+                    and not node.attr.startswith('__')):
+                continue
+            owner = node.value
+            if isinstance(owner, ast.Name) and owner.id in ('self', 'cls'):
+                continue
+            if isinstance(owner, ast.Call) and ast.unparse(owner.func) == 'super':
+                continue
+            reached.add((name, ast.unparse(node)))
+    assert reached <= THIRD_PARTY_PRIVATE, sorted(reached - THIRD_PARTY_PRIVATE)
+
+
+#: Private names still imported across modules, to be given public names (issue 26: io.columns
+#: and io.mcap_reader are another part of that issue's work).
+PRIVATE_IMPORTS_LEFT = {('tumble_ros.io.columns', name) for name in (
+    '_chunk_records', '_Decoders', '_open', '_Scan', '_SEPARATOR', '_split_sections')}
+
+
+def test_no_module_imports_a_private_name_of_another():
+    imported = set()
+    for name, path in modules().items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (
+                    node.level or (node.module or '').startswith('tumble_ros')):
+                imported |= {(name, a.name) for a in node.names
+                             if a.name.startswith('_') and not a.name.startswith('__')}
+    assert imported <= PRIVATE_IMPORTS_LEFT, sorted(imported - PRIVATE_IMPORTS_LEFT)
