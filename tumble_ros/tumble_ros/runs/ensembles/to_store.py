@@ -90,8 +90,8 @@ def _describe(value: object) -> object:
     """Return a JSON-able description of one per-body input (samplers by their fields)."""
     if value is None:
         return "the scenario's"
-    if is_dataclass(value):
-        return {'kind': type(value).__name__, **asdict(value)}  # type: ignore[arg-type]
+    if is_dataclass(value) and not isinstance(value, type):
+        return {'kind': type(value).__name__, **asdict(value)}
     return {'kind': 'explicit per-body values'}
 
 
