@@ -104,34 +104,6 @@ def test_the_check_sees_relative_and_nested_imports():
     assert 'tumble_ros.core' in imports(PACKAGE / 'cli' / 'warmup.py', known)
 
 
-#: Inside core, bottom up: the compiled physics may import only the numba switch, the units
-#: (constants), the torques, the limits/kernels below it; never the integrators, the
-#: propagator or the scenario.
-CORE_BOTTOM = {
-    'tumble_ros.core.jit': set(),
-    'tumble_ros.core.units': set(),
-    'tumble_ros.core.torques': {'tumble_ros.core.jit', 'tumble_ros.core.units'},
-    'tumble_ros.core.kernels': {'tumble_ros.core.jit', 'tumble_ros.core.torques'},
-    'tumble_ros.core.limits': {'tumble_ros.core.kernels', 'tumble_ros.core.jit',
-                               'tumble_ros.core.torques'},
-}
-
-
-def test_the_compiled_physics_is_the_bottom_of_core():
-    edges = graph()
-    wrong = []
-    for module, targets in edges.items():
-        for prefix, allowed in CORE_BOTTOM.items():
-            if module == prefix or module.startswith(prefix + '.'):
-                for target in targets:
-                    inside = target == prefix or target.startswith(prefix + '.')
-                    below = any(target == a or target.startswith(a + '.') for a in allowed)
-                    if target.startswith('tumble_ros.core') and not (inside or below):
-                        wrong.append(f'{module} -> {target}')
-    assert not wrong
-    assert 'tumble_ros.core.kernels.physics' in edges  # (the check sees the new modules)
-
-
 #: Private attributes of third-party objects that some modules must reach (scipy's solvers,
 #: numba's dispatchers and cache, rclpy's node): (module, expression).
 THIRD_PARTY_PRIVATE = {
@@ -178,3 +150,31 @@ def test_no_module_imports_a_private_name_of_another():
                 imported |= {(name, a.name) for a in node.names
                              if a.name.startswith('_') and not a.name.startswith('__')}
     assert imported <= PRIVATE_IMPORTS_LEFT, sorted(imported - PRIVATE_IMPORTS_LEFT)
+
+
+#: Inside core, bottom up: the compiled physics may import only the numba switch, the units
+#: (constants), the torques, the limits/kernels below it; never the integrators, the
+#: propagator or the scenario.
+CORE_BOTTOM = {
+    'tumble_ros.core.jit': set(),
+    'tumble_ros.core.units': set(),
+    'tumble_ros.core.torques': {'tumble_ros.core.jit', 'tumble_ros.core.units'},
+    'tumble_ros.core.kernels': {'tumble_ros.core.jit', 'tumble_ros.core.torques'},
+    'tumble_ros.core.limits': {'tumble_ros.core.kernels', 'tumble_ros.core.jit',
+                               'tumble_ros.core.torques'},
+}
+
+
+def test_the_compiled_physics_is_the_bottom_of_core():
+    edges = graph()
+    wrong = []
+    for module, targets in edges.items():
+        for prefix, allowed in CORE_BOTTOM.items():
+            if module == prefix or module.startswith(prefix + '.'):
+                for target in targets:
+                    inside = target == prefix or target.startswith(prefix + '.')
+                    below = any(target == a or target.startswith(a + '.') for a in allowed)
+                    if target.startswith('tumble_ros.core') and not (inside or below):
+                        wrong.append(f'{module} -> {target}')
+    assert not wrong
+    assert 'tumble_ros.core.kernels.physics' in edges  # (the check sees the new modules)
