@@ -88,7 +88,7 @@ def million(n: int, span: float, store: str) -> dict:
 
 @section("Ensembles on Dask: scaling, overhead, 1M bodies to Zarr (issue 14)", order=21)
 def dask_section(ctx):
-    from tumble_ros.ensembles import dask_client
+    from tumble_ros.ensembles import dask_client, run_ensemble
 
     if not kernels.COMPILED:
         ctx.note("numba not available: skipped")
@@ -109,10 +109,10 @@ def dask_section(ctx):
             cluster = dask_client(workers=workers)
             client = cluster.__enter__()
         try:
-            simulate_ensemble(sc.replace(duration=0.01, output_interval=0.01), n_bodies=4 * workers,
-                              client=client, chunk_size=1)   # every worker loads the compiled loop
+            run_ensemble(sc.replace(duration=0.01, output_interval=0.01), n_bodies=4 * workers,
+                         client=client, chunk_size=1)   # every worker loads the compiled loop
             with Timer() as tm:
-                r = simulate_ensemble(sc, **kw, client=client)
+                r = run_ensemble(sc, **kw, client=client)
         finally:
             cluster.__exit__(None, None, None)
         same = all(np.array_equal(getattr(r, f), getattr(threads, f), equal_nan=True)

@@ -282,11 +282,13 @@ def test_the_torque_free_model_is_anchored_on_each_side_of_the_encounter(recorde
 
 
 def test_the_encounter_ensemble_on_a_dask_cluster_is_the_same_bit_for_bit(apophis, ensemble):
-    from tumble_ros.ensembles import dask_client
+    from functools import partial
+
+    from tumble_ros.ensembles import dask_client, run_ensemble
 
     with dask_client(workers=2) as client:
         on_cluster = encounter_ensemble(apophis, 6, seed=3, inertia_spread=(0.03, 0.015),
-                                        n_inertia=2, client=client)
+                                        n_inertia=2, run=partial(run_ensemble, client=client))
     for name in ('precession_after', 'rotation_after', 'spin_rate_after', 'pole_after',
                  'inertia', 'phase', 'turn'):
         np.testing.assert_array_equal(getattr(on_cluster, name), getattr(ensemble, name), name)

@@ -16,7 +16,7 @@ from tumble_ros.core import (ensemble_scenarios, GaussianSpread, Impact, Integra
                              iter_chunks, load_scenario, parse_scenario, RandomImpacts,
                              ScenarioError, simulate_ensemble)
 from tumble_ros.ensembles import (dask_client, EnsembleRunError, EnsembleStoreError,
-                                  open_ensemble, run_ensemble_to_store)
+                                  open_ensemble, run_ensemble, run_ensemble_to_store)
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 FIELDS = ('omega', 'euler', 'quaternion', 'jacobi', 'success', 'n_steps', 'nfev')
@@ -108,8 +108,8 @@ def test_same_answer_whatever_the_engine_and_the_chunking(client):
     # a local cluster of 2 worker processes, with chunks of 1, 4 and all 13 bodies
     for size in (1, 4, 13):
         calls = []
-        on_cluster = simulate_ensemble(sc, **inputs, client=client, chunk_size=size,
-                                       progress=lambda f, t, s: calls.append(f))
+        on_cluster = run_ensemble(sc, **inputs, client=client, chunk_size=size,
+                                  progress=lambda f, t, s: calls.append(f))
         assert_same(on_cluster, reference)
         assert len(calls) == -(-13 // size) and calls[-1] == 1.0
 
@@ -208,8 +208,8 @@ def test_a_task_that_raises_stops_the_run_with_its_reason(client):
     sc = fig9()
     # |omega0| above the core's limit: a ScenarioError raised in the task, re-raised here
     with pytest.raises(ScenarioError, match='omega0'):
-        simulate_ensemble(sc, omega0=GaussianSpread((0.0, 0.0, 1e11), 1.0), n_bodies=4,
-                          client=client, chunk_size=2)
+        run_ensemble(sc, omega0=GaussianSpread((0.0, 0.0, 1e11), 1.0), n_bodies=4,
+                     client=client, chunk_size=2)
     with pytest.raises(EnsembleRunError, match='cannot reach'):
         with dask_client(scheduler='tcp://127.0.0.1:9', timeout=1.0):
             pass

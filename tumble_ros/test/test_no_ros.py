@@ -14,9 +14,10 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'tumble_ros'
 #: The ROS-free packages (a researcher uses them without a ROS install) and files each must have.
 ROS_FREE = {
     'core': {'scenario.py', 'propagator.py', 'kernels/stepping.py', 'ensemble.py',
-             'ensemble_dask.py', 'integrators/splitting.py'},
+             'integrators/splitting.py'},
     'io': {'msgdefs.py', 'mcap_reader.py', 'mcap_writer.py', 'ensemble_store.py'},
-    'ensembles': {'__init__.py', 'runner.py'},
+    'ensembles': {'__init__.py'},
+    'runs/ensembles': {'__init__.py', 'dask_engine.py', 'chunks.py', 'to_store.py'},
     'analysis': {'recording.py', 'summary.py', 'figures.py', 'cli.py', '__main__.py',
                  '__init__.py'},
 }
@@ -28,14 +29,19 @@ def _is_ros(module: str) -> bool:
             or top.endswith(('_msgs', '_interfaces', '_srvs')))
 
 
-def _ros_imports(path: Path) -> list[str]:
+def _imported_names(path: Path) -> list[str]:
+    """Return the modules the file at ``path`` imports, at any depth (``from . import x``: x)."""
     names = []
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             names += [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom) and node.module:
-            names.append(node.module)
-    return [n for n in names if _is_ros(n)]
+        elif isinstance(node, ast.ImportFrom):
+            names += [node.module] if node.module else [a.name for a in node.names]
+    return names
+
+
+def _ros_imports(path: Path) -> list[str]:
+    return [n for n in _imported_names(path) if _is_ros(n)]
 
 
 @pytest.mark.parametrize('package', sorted(ROS_FREE))
@@ -71,6 +77,20 @@ def _assert_loads_none(imports: str, prefixes: tuple[str, ...]) -> None:
 def test_importing_core_loads_no_rclpy():
     _assert_loads_none('import tumble_ros.core; from tumble_ros.core import Scenario, simulate',
                        ('rclpy', 'rosidl'))
+
+
+def test_importing_the_ensemble_runs_loads_no_rclpy():
+    _assert_loads_none('import tumble_ros.runs.ensembles, tumble_ros.ensembles',
+                       ('rclpy', 'rosidl'))
+
+
+def test_core_holds_no_dask_code():
+    """Dask is the run layer's (runs/ensembles): no core module imports it, at any depth."""
+    offenders = [f'{path.relative_to(PACKAGE)}: {name}'
+                 for path in (PACKAGE / 'core').rglob('*.py')
+                 for name in _imported_names(path) if name.split('.')[0] in {'dask', 'distributed'}
+                 or name.endswith('ensemble_dask')]
+    assert not offenders
 
 
 def test_importing_core_loads_no_dask_xarray_or_zarr():

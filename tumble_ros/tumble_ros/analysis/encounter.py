@@ -13,8 +13,9 @@ not pin down, and on its moments of inertia. This module runs that Monte Carlo:
   of the tumbling cycle (the polhode, a uniform fraction of P_psi) and the body's turn about its
   angular momentum (uniform in [0, 2 pi));
 * each body is integrated through the encounter by the compiled ensemble
-  (:func:`~tumble_ros.core.simulate_ensemble`, one call per inertia sample), and its spin state
-  at the start and the end is compared: mode, periods, spin rate |w|, pole shift.
+  (:func:`~tumble_ros.core.simulate_ensemble`, one call per inertia sample; or the run layer's
+  :func:`tumble_ros.ensembles.run_ensemble` on a Dask client, given as ``run``), and its spin
+  state at the start and the end is compared: mode, periods, spin rate |w|, pole shift.
 
 Units: times [yr] inside, periods shown in hours; angles [rad] inside, degrees in the report.
 Frames: the scenario's orbital frame (for Apophis, ecliptic J2000), body principal axes.
@@ -29,8 +30,8 @@ from typing import Callable
 
 import numpy as np
 
-from tumble_ros.core import (IntegratorSettings, Scenario, ScenarioError, simulate,
-                             simulate_ensemble)
+from tumble_ros.core import (EnsembleResult, IntegratorSettings, Scenario, ScenarioError,
+                             simulate, simulate_ensemble)
 from tumble_ros.core.rotation import euler_to_quaternion, matrix_to_euler, quaternion_to_matrix
 from tumble_ros.core.spinstate import omega_for_periods, spin_state
 from tumble_ros.core.units import HOURS_PER_YEAR
@@ -212,7 +213,8 @@ def _draw_inertia(nominal: np.ndarray, spread, observed, rng, tries: int = 1000)
 def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
                        inertia_spread: tuple[float, float] = (0.0, 0.0), n_inertia: int = 1,
                        progress: Callable[[int, int], None] | None = None,
-                       client=None) -> EncounterResult:
+                       run: Callable[..., EnsembleResult] = simulate_ensemble
+                       ) -> EncounterResult:
     """
     Run ``n_bodies`` tumblers of ``scenario``'s observed spin state through its encounter.
 
@@ -225,9 +227,10 @@ def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
     work (ScenarioError, one line): a spread that is not finite or above
     :data:`MAX_INERTIA_SPREAD`, more bodies than the memory available holds
     (:func:`encounter_memory`).
-    ``progress(done, total)`` after each inertia draw. ``client``: a Dask client
-    (``tumble_ros.ensembles.dask_client``): each draw's bodies run as chunks on its workers,
-    with the same results bit for bit.
+    ``progress(done, total)`` after each inertia draw. ``run``: what integrates each draw's
+    bodies, called as :func:`~tumble_ros.core.simulate_ensemble` (the default: in this
+    process); ``functools.partial(tumble_ros.ensembles.run_ensemble, client=client)`` runs them
+    as chunks on a Dask client's workers, with the same results bit for bit.
     """
     _check_size(n_bodies, n_inertia, inertia_spread)
     nominal = np.asarray(scenario.inertia, dtype=float)
@@ -251,9 +254,8 @@ def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
                                         observed.rotation_period, observed.pole, phase[body],
                                         turn[body])
         sc = scenario.replace(inertia=tuple(moments))
-        run = simulate_ensemble(sc, [0.0, sc.duration], omega0=omega0, euler0=euler0,
-                                client=client)
-        parts.append((np.tile(moments, (size, 1)), run))
+        parts.append((np.tile(moments, (size, 1)),
+                      run(sc, [0.0, sc.duration], omega0=omega0, euler0=euler0)))
         if progress is not None:
             progress(k + 1, n_inertia)
     return _collect(scenario, parts, phase, turn)

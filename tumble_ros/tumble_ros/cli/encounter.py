@@ -18,6 +18,7 @@ written). The work is
 from __future__ import annotations
 
 import argparse
+from functools import partial
 import io
 from pathlib import Path
 import sys
@@ -31,6 +32,7 @@ from tumble_ros.analysis.encounter import (draw_encounter, encounter_ensemble,
 from tumble_ros.analysis.figures import check_outputs, write_files
 from tumble_ros.cli.engine import add_engine_arguments, engine, Interrupted, interrupts
 from tumble_ros.core import load_scenario, ScenarioError
+from tumble_ros.ensembles import run_ensemble
 from tumble_ros.errors import TumbleRosError
 from tumble_ros.topics import SIM_NODE_PARAMETERS
 
@@ -87,7 +89,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 result = encounter_ensemble(sc, args.bodies, seed=args.seed,
                                             inertia_spread=tuple(args.inertia_spread),
                                             n_inertia=args.inertia_draws, progress=progress,
-                                            client=client)
+                                            run=partial(run_ensemble, client=client))
             report = (f'scenario: {Path(args.config).name}\n'
                       f'draws: {args.inertia_draws} inertia (+- {args.inertia_spread[0]:g} in '
                       f'I_a/I_c, +- {args.inertia_spread[1]:g} in I_b/I_c), phase and turn '

@@ -8,7 +8,7 @@ The ensemble command line: N copies of a scenario at once, progress on stderr, a
     python -m tumble_ros.cli.ensemble ... --scheduler tcp://head:8786 --out ens.zarr
 
 (``ros2 run tumble_ros ensemble ...`` on a ROS 2 install.) The work is
-:func:`tumble_ros.core.simulate_ensemble` (``--out X.npz``: in memory) or
+:func:`tumble_ros.ensembles.run_ensemble` (``--out X.npz``: in memory) or
 :func:`tumble_ros.ensembles.run_ensemble_to_store` (``--out X.zarr``: a labelled store written
 chunk by chunk, resumed when the same command runs again), in this process (threads), on an
 embedded Dask ``LocalCluster`` (``--workers N``) or on a running Dask cluster
@@ -29,8 +29,9 @@ import numpy as np
 from tumble_ros.cli.engine import add_engine_arguments, engine, Interrupted, interrupts
 from tumble_ros.cli.progress import ProgressBar
 from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
-                             Scenario, ScenarioError, simulate_ensemble)
-from tumble_ros.ensembles import EnsembleStoreError, open_ensemble, run_ensemble_to_store
+                             Scenario, ScenarioError)
+from tumble_ros.ensembles import (EnsembleStoreError, open_ensemble, run_ensemble,
+                                  run_ensemble_to_store)
 from tumble_ros.errors import TumbleRosError
 from tumble_ros.topics import SIM_NODE_PARAMETERS
 
@@ -162,12 +163,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         with interrupts(), engine(args) as client:
             if to_store:
                 return _to_store(args, sc, inputs, client)
-            result = simulate_ensemble(
+            result = run_ensemble(
                 sc, n_bodies=args.bodies, fast=False if args.reference else None,
                 client=client, chunk_size=args.chunk_size,
                 progress=None if args.quiet else ProgressBar(
                     sc.duration, args.bodies, by='time' if client is None else 'bodies'),
-                **inputs)
+                impacts=impacts, omega0=omega0)
     except (TumbleRosError, ValueError) as err:
         print(f'error: {err}', file=sys.stderr)
         return 2

@@ -14,7 +14,8 @@ interface, name registries, the Lie-Poisson splitting methods), ``jit`` (the num
 and ``kernels`` (the physics every path runs and the compiled loops), ``scenario``
 (validated inputs), ``propagator``
 (incremental integration split at impacts), ``simulate`` (batch runs), ``ensemble`` (N
-bodies at once), ``ensemble_dask`` (the same on a Dask cluster, chunk by chunk),
+bodies at once, and the chunks of bigger runs; where chunks run, Dask included, is the run
+layer's: ``tumble_ros.runs.ensembles``),
 ``analytic`` (the paper's approximate solution, better linearisations, exact torque-free
 motion), ``timebase`` (simulated years <-> ROS stamps).
 Performance and long runs: docs/performance.md.

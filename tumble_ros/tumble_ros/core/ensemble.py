@@ -22,33 +22,52 @@ Methods with a compiled loop (rk4, dop853, splitting*) and the quaternion attitu
 path when numba is available; otherwise the bodies are run one after the other with
 :func:`~.simulate.simulate` (same results, slower).
 
-The command line (progress on stderr, a summary on stdout) is :mod:`tumble_ros.cli.ensemble`.
+Bigger runs are cut into chunks of bodies (:func:`plan_chunks`, :func:`run_chunk`: the unit of
+work, the same numbers whatever the chunking); where the chunks run (this process, a Dask
+cluster) and where their results go (memory, a store) is the run layer's,
+:mod:`tumble_ros.runs.ensembles`. The command line (progress on stderr, a summary on stdout) is
+:mod:`tumble_ros.cli.ensemble`.
 """
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 import math
 import os
 import time
-from typing import Callable, Iterator
+from typing import (Any, Callable, Collection, Iterable, Iterator, Literal, Sequence,
+                    TypeAlias)
 
 import numpy as np
+import numpy.typing as npt
 
 from . import kernels as K
 from .dynamics import ATTITUDE_MODELS, jacobi_integral
 from .integrators import INTEGRATORS
+from .integrators.base import Stepper
 from .integrators.compiled import failure_message, why_no_fast_path
-from .limits import step_budget
+from .limits import MAX_OMEGA, MAX_ROTATION, step_budget
 from .rotation import continuous_quaternions, quaternions_to_matrices
-from .scenario import Impact, IMPACT_FRAMES, MAX_OMEGA, MAX_ROTATION, Scenario, ScenarioError
+from .scenario import Impact, IMPACT_FRAMES, Scenario, ScenarioError
 from .segments import split_at_impacts
-from .simulate import _check_times, simulate
+from .simulate import sample_times, simulate
 from .torques import extra_torque_arrays
 
 __all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts',
            'RandomImpacts', 'GaussianSpread', 'body_rng', 'concatenate_results', 'ChunkResult',
-           'chunk_ranges', 'default_chunk_size', 'iter_chunks', 'prepare_inputs', 'run_chunk']
+           'chunk_ranges', 'default_chunk_size', 'iter_chunks', 'prepare_inputs', 'run_chunk',
+           'ChunkTask', 'ChunkPlan', 'plan_chunks', 'Progress']
+
+FloatArray: TypeAlias = npt.NDArray[np.float64]
+#: Per-body impacts: a sampler, or one sequence of :class:`Impact` per body.
+ImpactsInput: TypeAlias = 'RandomImpacts | Sequence[Sequence[Impact]] | None'
+#: Per-body vectors (omega0 [rad/yr], euler0 [rad]): a sampler, or an (N, 3) array.
+VectorsInput: TypeAlias = 'GaussianSpread | npt.ArrayLike | None'
+#: ``progress(fraction done, t [yr], body-steps so far)``.
+Progress: TypeAlias = Callable[[float, float, int], None]
+#: An ensemble's inputs (``impacts``, ``omega0``, ``euler0``) once checked: None, a sampler, or
+#: the explicit per-body values (tuples of Impact, (N, 3) arrays).
+Inputs: TypeAlias = dict[str, Any]
 
 
 @dataclass(frozen=True)
@@ -71,20 +90,21 @@ class EnsembleResult:
 
     """
 
-    t: np.ndarray
-    omega: np.ndarray
-    euler: np.ndarray
-    quaternion: np.ndarray
-    jacobi: np.ndarray
-    success: np.ndarray
+    t: FloatArray
+    omega: FloatArray
+    euler: FloatArray
+    quaternion: FloatArray
+    jacobi: FloatArray
+    success: npt.NDArray[np.bool_]
     messages: tuple[str, ...]
-    n_steps: np.ndarray
-    nfev: np.ndarray
+    n_steps: npt.NDArray[np.int64]
+    nfev: npt.NDArray[np.int64]
     wall_time: float
     compiled: bool
 
     @property
     def n_bodies(self) -> int:
+        """Return the number of bodies N."""
         return int(self.success.size)
 
     @property
@@ -96,7 +116,9 @@ class EnsembleResult:
 # ---------------------------------------------------------------------------------------
 # Inputs
 # ---------------------------------------------------------------------------------------
-def _resolve(scenario, impacts, omega0, euler0, n_bodies, first_body):
+def _resolve(scenario: Scenario, impacts: ImpactsInput, omega0: VectorsInput,
+             euler0: VectorsInput, n_bodies: int | None, first_body: int
+             ) -> tuple[Any, Any, Any]:
     """Draw the per-body inputs given as samplers (bodies first_body ... of the ensemble)."""
     samplers = [v for v in (impacts, omega0, euler0) if _is_sampler(v)]
     if isinstance(first_body, bool) or not isinstance(first_body, (int, np.integer)) \
@@ -107,20 +129,25 @@ def _resolve(scenario, impacts, omega0, euler0, n_bodies, first_body):
     if n_bodies is None:
         raise ScenarioError('n_bodies: needed with RandomImpacts or GaussianSpread inputs '
                             '(they draw one entry per body)')
-    n = int(n_bodies)
+    n, first = int(n_bodies), int(first_body)
     if isinstance(impacts, RandomImpacts):
-        impacts = impacts.draw(first_body, n, scenario.duration)
+        impacts = impacts.draw(first, n, scenario.duration)
     if isinstance(omega0, GaussianSpread):
-        omega0 = omega0.draw(first_body, n, stream=OMEGA0_STREAM)
+        omega0 = omega0.draw(first, n, stream=OMEGA0_STREAM)
     if isinstance(euler0, GaussianSpread):
-        euler0 = euler0.draw(first_body, n, stream=EULER0_STREAM)
+        euler0 = euler0.draw(first, n, stream=EULER0_STREAM)
     return impacts, omega0, euler0
 
 
-def _bodies(scenario, impacts, omega0, euler0, n_bodies, first_body=0):
-    impacts, omega0, euler0 = _resolve(scenario, impacts, omega0, euler0, n_bodies, first_body)
-    sizes = {name: len(v) for name, v in (('impacts', impacts), ('omega0', omega0),
-                                          ('euler0', euler0))
+def _bodies(scenario: Scenario, impacts: ImpactsInput, omega0: VectorsInput,
+            euler0: VectorsInput, n_bodies: int | None, first_body: int = 0
+            ) -> tuple[int, list[tuple[Impact, ...]] | None, FloatArray | None,
+                       FloatArray | None]:
+    """Draw the samplers, check every per-body input; return N and the explicit inputs."""
+    drawn_impacts, drawn_omega0, drawn_euler0 = _resolve(scenario, impacts, omega0, euler0,
+                                                         n_bodies, first_body)
+    sizes = {name: len(v) for name, v in (('impacts', drawn_impacts), ('omega0', drawn_omega0),
+                                          ('euler0', drawn_euler0))
              if v is not None}
     if n_bodies is not None:
         sizes['n_bodies'] = int(n_bodies)
@@ -132,13 +159,16 @@ def _bodies(scenario, impacts, omega0, euler0, n_bodies, first_body=0):
     n = next(iter(sizes.values()))
     if n < 1:
         raise ScenarioError('ensemble: needs at least one body')
-    if omega0 is not None:
-        omega0 = np.asarray(omega0, dtype=float)
-        if omega0.shape != (n, 3) or not np.all(np.isfinite(omega0)):
-            raise ScenarioError(f'omega0: must be a finite (N, 3) array, got shape {omega0.shape}')
+    omega: FloatArray | None = None
+    euler: FloatArray | None = None
+    bodies: list[tuple[Impact, ...]] | None = None
+    if drawn_omega0 is not None:
+        omega = np.asarray(drawn_omega0, dtype=float)
+        if omega.shape != (n, 3) or not np.all(np.isfinite(omega)):
+            raise ScenarioError(f'omega0: must be a finite (N, 3) array, got shape {omega.shape}')
         # the bounds of Scenario (every body of the reference path is one), checked here for the
         # compiled path too
-        fastest = float(np.max(np.linalg.norm(omega0, axis=1)))
+        fastest = float(np.max(np.linalg.norm(omega, axis=1)))
         if fastest > MAX_OMEGA:
             raise ScenarioError(
                 f'omega0: |omega0| = {fastest:.3g} rad/yr exceeds {MAX_OMEGA:g} rad/yr')
@@ -146,13 +176,13 @@ def _bodies(scenario, impacts, omega0, euler0, n_bodies, first_body=0):
             raise ScenarioError(f'duration: a body turns by |omega0| * duration = '
                                 f'{fastest * scenario.duration:.3g} rad, above '
                                 f'{MAX_ROTATION:.0e} rad')
-    if euler0 is not None:
-        euler0 = np.asarray(euler0, dtype=float)
-        if euler0.shape != (n, 3) or not np.all(np.isfinite(euler0)):
-            raise ScenarioError(f'euler0: must be a finite (N, 3) array, got shape {euler0.shape}')
-    if impacts is not None:
-        impacts = [tuple(body) for body in impacts]
-        for b, body in enumerate(impacts):
+    if drawn_euler0 is not None:
+        euler = np.asarray(drawn_euler0, dtype=float)
+        if euler.shape != (n, 3) or not np.all(np.isfinite(euler)):
+            raise ScenarioError(f'euler0: must be a finite (N, 3) array, got shape {euler.shape}')
+    if drawn_impacts is not None:
+        bodies = [tuple(body) for body in drawn_impacts]
+        for b, body in enumerate(bodies):
             for k, impact in enumerate(body):
                 if not isinstance(impact, Impact):
                     raise ScenarioError(f'impacts[{b}][{k}]: must be an Impact, got {impact!r}')
@@ -160,10 +190,11 @@ def _bodies(scenario, impacts, omega0, euler0, n_bodies, first_body=0):
                     raise ScenarioError(f'impacts[{b}][{k}].start: the pulse must end by the end '
                                         f'of the run ({scenario.duration:g} yr); it ends at '
                                         f'{impact.end!r}')
-    return n, impacts, omega0, euler0
+    return n, bodies, omega, euler
 
 
-def ensemble_scenarios(scenario: Scenario, *, impacts=None, omega0=None, euler0=None,
+def ensemble_scenarios(scenario: Scenario, *, impacts: ImpactsInput = None,
+                       omega0: VectorsInput = None, euler0: VectorsInput = None,
                        n_bodies: int | None = None, first_body: int = 0) -> list[Scenario]:
     """
     Return the N single-body scenarios an ensemble integrates (body k = element k).
@@ -178,7 +209,7 @@ def ensemble_scenarios(scenario: Scenario, *, impacts=None, omega0=None, euler0=
                                          first_body)
     out = []
     for b in range(n):
-        changes = {}
+        changes: dict[str, Any] = {}
         if impacts is not None:
             changes['impacts'] = impacts[b]
         if omega0 is not None:
@@ -191,7 +222,7 @@ def ensemble_scenarios(scenario: Scenario, *, impacts=None, omega0=None, euler0=
 
 def random_impacts(n_bodies: int, duration: float, *, rate: float, torque: float,
                    pulse: float = 3e-7, frame: str = 'body',
-                   seed=None) -> list[tuple[Impact, ...]]:
+                   seed: int | None = None) -> list[tuple[Impact, ...]]:
     """
     Draw N independent random impact sequences.
 
@@ -215,9 +246,11 @@ def random_impacts(n_bodies: int, duration: float, *, rate: float, torque: float
     return out
 
 
-def _sequence(starts, directions, torque, pulse, frame) -> tuple[Impact, ...]:
+def _sequence(starts: FloatArray, directions: FloatArray, torque: float, pulse: float,
+              frame: str) -> tuple[Impact, ...]:
     """Return the impacts of one body: sorted ``starts`` [yr], unit ``directions`` (k, 3)."""
-    return tuple(Impact(float(s), pulse, tuple(float(v) for v in torque * d), frame)
+    return tuple(Impact(float(s), pulse, (float(torque * d[0]), float(torque * d[1]),
+                                          float(torque * d[2])), frame)
                  for s, d in zip(starts, directions))
 
 
@@ -238,7 +271,7 @@ def body_rng(seed: int, body: int, stream: int) -> np.random.Generator:
                                                         spawn_key=(int(stream), int(body))))
 
 
-def _check_seed(seed) -> int:
+def _check_seed(seed: object) -> int:
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ScenarioError(f'seed: must be an integer >= 0, got {seed!r}')
     return int(seed)
@@ -320,7 +353,7 @@ class GaussianSpread:
         object.__setattr__(self, 'sigma', tuple(float(v) for v in sigma))
         object.__setattr__(self, 'seed', _check_seed(self.seed))
 
-    def draw(self, first: int, count: int, stream: int) -> np.ndarray:
+    def draw(self, first: int, count: int, stream: int) -> FloatArray:
         """Return the (count, 3) vectors of bodies ``first`` ... ``first + count - 1``."""
         out = np.empty((count, 3))
         center, sigma = np.array(self.center), np.array(self.sigma)
@@ -332,12 +365,12 @@ class GaussianSpread:
 # ---------------------------------------------------------------------------------------
 # The ensemble
 # ---------------------------------------------------------------------------------------
-def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=None, euler0=None,
-                      n_bodies: int | None = None, fast: bool | None = None,
-                      progress: Callable[[float, float, int], None] | None = None,
+def simulate_ensemble(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
+                      impacts: ImpactsInput = None, omega0: VectorsInput = None,
+                      euler0: VectorsInput = None, n_bodies: int | None = None,
+                      fast: bool | None = None, progress: Progress | None = None,
                       checkpoints: int | None = None,
-                      threads: int | None = None, first_body: int = 0,
-                      client=None, chunk_size: int | None = None) -> EnsembleResult:
+                      threads: int | None = None, first_body: int = 0) -> EnsembleResult:
     """
     Integrate N bodies of one scenario at once and sample them at the times ``t_eval``.
 
@@ -368,22 +401,15 @@ def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=N
     first_body
         Index in the whole ensemble of this call's first body: the samplers draw bodies
         ``first_body``, ``first_body + 1``, ... (how a chunk of a bigger run draws its own).
-    client
-        A Dask ``distributed.Client``: the bodies are split into chunks of ``chunk_size``,
-        each integrated by this function in a task on the cluster's workers (one thread per
-        task), and gathered here; ``wall_time`` is then the wall-clock time of the whole
-        distributed run. The same results, bit for bit, as without it (:func:`iter_chunks`,
-        :mod:`tumble_ros.core.ensemble_dask`; results bigger than memory go to a store
-        instead: ``tumble_ros.ensembles.run_ensemble_to_store``).
-    chunk_size
-        Bodies per task with a ``client`` (default: :func:`default_chunk_size`).
+
+    Notes
+    -----
+    The same ensemble as chunks on a Dask cluster, gathered here or written to a store (the
+    same results, bit for bit): ``tumble_ros.ensembles.run_ensemble(..., client=...)`` and
+    ``run_ensemble_to_store`` (:mod:`tumble_ros.runs.ensembles`).
 
     """
-    if client is not None:
-        return _simulate_on_client(client, scenario, t_eval, impacts=impacts, omega0=omega0,
-                                   euler0=euler0, n_bodies=n_bodies, fast=fast,
-                                   chunk_size=chunk_size, progress=progress)
-    times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
+    times = sample_times(scenario, t_eval)
     n, impacts, omega0, euler0 = _bodies(scenario, impacts, omega0, euler0, n_bodies, first_body)
     method = INTEGRATORS[scenario.integrator.method]
     why = why_no_fast_path(method, scenario.attitude)
@@ -399,15 +425,19 @@ def simulate_ensemble(scenario: Scenario, t_eval=None, *, impacts=None, omega0=N
     return _ensemble_reference(scenario, times, n, impacts, omega0, euler0, progress)
 
 
-def _ensemble_reference(scenario, times, n, impacts, omega0, euler0, progress) -> EnsembleResult:
+def _ensemble_reference(scenario: Scenario, times: FloatArray, n: int,
+                        impacts: list[tuple[Impact, ...]] | None, omega0: FloatArray | None,
+                        euler0: FloatArray | None, progress: Progress | None
+                        ) -> EnsembleResult:
+    """Run the bodies one after the other with the reference :func:`simulate`."""
     per_body = any(v is not None for v in (impacts, omega0, euler0))
     bodies = ensemble_scenarios(scenario, impacts=impacts, omega0=omega0, euler0=euler0,
                                 n_bodies=None if per_body else n)
     m = times.size
     omega, euler = np.full((n, m, 3), np.nan), np.full((n, m, 3), np.nan)
     quat, jac = np.full((n, m, 4), np.nan), np.full((n, m), np.nan)
-    success, n_steps, nfev, messages = (np.zeros(n, bool), np.zeros(n, np.int64),
-                                        np.zeros(n, np.int64), [])
+    success, n_steps, nfev = np.zeros(n, bool), np.zeros(n, np.int64), np.zeros(n, np.int64)
+    messages: list[str] = []
     start = time.perf_counter()
     for b, body in enumerate(bodies):
         r = simulate(body, times, fast=False)
@@ -423,8 +453,12 @@ def _ensemble_reference(scenario, times, n, impacts, omega0, euler0, progress) -
                           wall, False)
 
 
-def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, progress, checkpoints,
-                       threads):
+def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
+                       impacts: list[tuple[Impact, ...]] | None, omega0: FloatArray | None,
+                       euler0: FloatArray | None, method: type[Stepper],
+                       progress: Progress | None, checkpoints: int, threads: int
+                       ) -> EnsembleResult:
+    """Run the bodies in blocks of the compiled ensemble loop, on ``threads`` threads."""
     settings = scenario.integrator
     gammas = method.composition() if hasattr(method, 'composition') else ()
     # the work budget at the fastest body's rate (limits.step_budget; adaptive methods only)
@@ -432,6 +466,8 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
         np.max(np.linalg.norm(np.atleast_2d(omega0), axis=-1)))
     budget = (step_budget(scenario.output_interval, max(scenario.own_rate, spin),
                           settings.max_step) if method.adaptive else (math.inf, math.inf))
+    if method.kernel is None:
+        raise ValueError(f'method {method.name!r} has no compiled loop')
     cfg = K.config_array(method.kernel, settings, gammas, method.order or 0, budget)
     # segment tables
     if impacts is None:
@@ -492,7 +528,8 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
                 progress((c + 1) / len(stops), t_stop, int(steps.sum()))
     wall = time.perf_counter() - start
 
-    failed = states[:, K.ST.STATUS] == K.STATUS.FAILED
+    # (layout's STATUS is a namedtuple built from a field string: mypy sees a plain tuple)
+    failed = states[:, K.ST.STATUS] == K.STATUS.FAILED  # type: ignore[attr-defined]
     success = (k_out == m) & ~failed
     messages = tuple(failure_message(states[b], method.name) if failed[b] else ''
                      for b in range(n))
@@ -508,8 +545,9 @@ def _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, prog
                 continue
             q = y_out[rows, :kk, 3:]
             quat[rows, :kk] = continuous_quaternions(q)
-            c = quaternions_to_matrices(q)
-            jac[rows, :kk] = jacobi_integral(times[:kk], omega[rows, :kk], c, scenario.inertia,
+            matrices = quaternions_to_matrices(q)
+            jac[rows, :kk] = jacobi_integral(times[:kk], omega[rows, :kk], matrices,
+                                             scenario.inertia,
                                              scenario.orbit_rate)
     return EnsembleResult(times, omega, e_out, quat, jac, success, messages, steps, nfev, wall,
                           True)
@@ -551,7 +589,7 @@ class ChunkResult:
     n_impacts: np.ndarray
 
 
-def _is_sampler(value) -> bool:
+def _is_sampler(value: object) -> bool:
     return isinstance(value, (RandomImpacts, GaussianSpread))
 
 
@@ -576,8 +614,8 @@ def default_chunk_size(n_bodies: int, n_samples: int, workers: int = 1) -> int:
     return int(min(MAX_CHUNK_BODIES, by_memory, by_balance))
 
 
-def prepare_inputs(scenario: Scenario, impacts, omega0, euler0,
-                   n_bodies: int | None) -> tuple[int, dict]:
+def prepare_inputs(scenario: Scenario, impacts: ImpactsInput, omega0: VectorsInput,
+                   euler0: VectorsInput, n_bodies: int | None) -> tuple[int, Inputs]:
     """
     Validate an ensemble's inputs once (the driver of a chunked run); return N and the inputs.
 
@@ -587,21 +625,78 @@ def prepare_inputs(scenario: Scenario, impacts, omega0, euler0,
     if n_bodies is None and any(_is_sampler(v) for v in (impacts, omega0, euler0)):
         raise ScenarioError('n_bodies: needed with RandomImpacts or GaussianSpread inputs '
                             '(they draw one entry per body)')
-    explicit = [None if _is_sampler(v) else v for v in (impacts, omega0, euler0)]
-    n, e_impacts, e_omega0, e_euler0 = _bodies(scenario, *explicit, n_bodies)
+    n, e_impacts, e_omega0, e_euler0 = _bodies(
+        scenario, None if _is_sampler(impacts) else impacts,
+        None if _is_sampler(omega0) else omega0, None if _is_sampler(euler0) else euler0,
+        n_bodies)
     inputs = {'impacts': impacts if _is_sampler(impacts) else e_impacts,
               'omega0': omega0 if _is_sampler(omega0) else e_omega0,
               'euler0': euler0 if _is_sampler(euler0) else e_euler0}
     return n, inputs
 
 
-def _chunk_inputs(inputs: dict, start: int, stop: int) -> dict:
+def _chunk_inputs(inputs: Inputs, start: int, stop: int) -> Inputs:
     """Samplers travel whole (the task draws its own bodies); explicit inputs are sliced."""
     return {k: v if v is None or _is_sampler(v) else v[start:stop] for k, v in inputs.items()}
 
 
-def run_chunk(scenario: Scenario, t_eval, inputs: dict, index: int, start: int, stop: int,
-              fast: bool | None = None, threads: int | None = 1) -> ChunkResult:
+@dataclass(frozen=True)
+class ChunkTask:
+    """
+    One chunk to run: the arguments of :func:`run_chunk` besides the scenario and times.
+
+    ``inputs``: the chunk's own (samplers whole, explicit per-body values sliced).
+    """
+
+    index: int
+    start: int
+    stop: int
+    inputs: Inputs
+
+
+@dataclass(frozen=True)
+class ChunkPlan:
+    """
+    An ensemble cut into chunks: what every engine runs, whatever it runs on.
+
+    Attributes
+    ----------
+    times : (n,) the sample times [yr], checked.
+    n_bodies, chunk_size : N and the bodies per chunk (the last chunk may be shorter).
+    inputs : the whole ensemble's checked inputs (:func:`prepare_inputs`).
+    tasks : the chunks to run (those not skipped), in order of index.
+
+    """
+
+    times: FloatArray
+    n_bodies: int
+    chunk_size: int
+    inputs: Inputs
+    tasks: tuple[ChunkTask, ...]
+
+
+def plan_chunks(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
+                impacts: ImpactsInput = None, omega0: VectorsInput = None,
+                euler0: VectorsInput = None, n_bodies: int | None = None,
+                chunk_size: int | None = None, workers: int = 1,
+                skip: Collection[int] = frozenset()) -> ChunkPlan:
+    """
+    Check an ensemble's inputs and cut its bodies into chunks; return the plan.
+
+    Inputs as :func:`simulate_ensemble`. ``chunk_size`` None: :func:`default_chunk_size` for
+    ``workers`` workers. Chunks whose index is in ``skip`` are left out of ``tasks``.
+    """
+    times = sample_times(scenario, t_eval)
+    n, inputs = prepare_inputs(scenario, impacts, omega0, euler0, n_bodies)
+    size = default_chunk_size(n, times.size, workers) if chunk_size is None else chunk_size
+    tasks = tuple(ChunkTask(i, a, b, _chunk_inputs(inputs, a, b))
+                  for i, (a, b) in enumerate(chunk_ranges(n, size)) if i not in skip)
+    return ChunkPlan(times, n, int(size), inputs, tasks)
+
+
+def run_chunk(scenario: Scenario, t_eval: npt.ArrayLike | None, inputs: Inputs, index: int,
+              start: int, stop: int, fast: bool | None = None,
+              threads: int | None = 1) -> ChunkResult:
     """
     Integrate bodies ``start`` ... ``stop - 1`` of an ensemble: the task of a chunk.
 
@@ -620,69 +715,27 @@ def run_chunk(scenario: Scenario, t_eval, inputs: dict, index: int, start: int, 
     return ChunkResult(index, start, stop, result, omega0, euler0, n_impacts)
 
 
-def iter_chunks(scenario: Scenario, t_eval=None, *, impacts=None, omega0=None, euler0=None,
-                n_bodies: int | None = None, chunk_size: int | None = None, client=None,
-                fast: bool | None = None, skip=frozenset(), threads: int | None = None,
-                max_in_flight: int | None = None) -> Iterator[ChunkResult]:
+def iter_chunks(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
+                impacts: ImpactsInput = None, omega0: VectorsInput = None,
+                euler0: VectorsInput = None, n_bodies: int | None = None,
+                chunk_size: int | None = None, fast: bool | None = None,
+                skip: Collection[int] = frozenset(),
+                threads: int | None = None) -> Iterator[ChunkResult]:
     """
-    Yield the results of the ensemble's chunks as they finish (in any order).
+    Yield the results of the ensemble's chunks, one after the other, in this process.
 
-    Inputs as :func:`~.ensemble.simulate_ensemble`. ``client``: a Dask ``distributed.Client``
-    (None: the chunks run here one after the other, each on ``threads`` threads, default all
-    cores). Chunks whose index is in ``skip`` are not run. With a client at most
-    ``max_in_flight`` tasks (default: twice the cluster's threads, plus 2) are submitted at
-    once, so neither the workers nor this process hold more than that many chunks' results.
-    Closing the iterator early (an exception, Ctrl-C) cancels the tasks not finished.
-    With a client, a task that raises anything but a ScenarioError raises
-    :class:`~.ensemble_dask.EnsembleRunError` here.
+    Inputs as :func:`simulate_ensemble`; the chunks of :func:`plan_chunks` (those in ``skip``
+    not run), each on ``threads`` threads (default all cores). The same chunks on a Dask
+    cluster, as they finish: ``tumble_ros.ensembles.run_chunks(..., client=...)``.
     """
-    times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
-    n, inputs = prepare_inputs(scenario, impacts, omega0, euler0, n_bodies)
-    workers = 1 if client is None else max(1, len(client.nthreads()))
-    size = default_chunk_size(n, times.size, workers) if chunk_size is None else chunk_size
-    todo = [(i, a, b) for i, (a, b) in enumerate(chunk_ranges(n, size)) if i not in skip]
-    if client is None:
-        for i, a, b in todo:
-            yield run_chunk(scenario, times, _chunk_inputs(inputs, a, b), i, a, b, fast,
-                            threads)
-        return
-    from .ensemble_dask import map_as_completed
-
-    yield from map_as_completed(client, run_chunk,
-                                [(scenario, times, _chunk_inputs(inputs, a, b), i, a, b, fast, 1)
-                                 for i, a, b in todo],
-                                names=[f'chunk-{i}' for i, _, _ in todo],
-                                max_in_flight=max_in_flight)
+    plan = plan_chunks(scenario, t_eval, impacts=impacts, omega0=omega0, euler0=euler0,
+                       n_bodies=n_bodies, chunk_size=chunk_size, skip=skip)
+    for task in plan.tasks:
+        yield run_chunk(scenario, plan.times, task.inputs, task.index, task.start, task.stop,
+                        fast, threads)
 
 
-def _simulate_on_client(client, scenario: Scenario, t_eval=None, *, impacts=None,
-                        omega0=None, euler0=None, n_bodies: int | None = None,
-                        fast: bool | None = None, chunk_size: int | None = None,
-                        progress: Callable[[float, float, int], None] | None = None
-                        ) -> EnsembleResult:
-    """
-    Return :func:`~.ensemble.simulate_ensemble` (same arguments) run as chunks on ``client``.
-
-    ``progress(fraction of bodies done, t_end [yr], body-steps so far)`` is called as each
-    chunk finishes; ``wall_time`` is the wall-clock time of the whole run.
-    """
-    start = time.perf_counter()
-    explicit = [v for v in (impacts, omega0, euler0) if v is not None and not _is_sampler(v)]
-    total = n_bodies if n_bodies is not None else len(explicit[0]) if explicit else 1
-    parts, done, steps = {}, 0, 0
-    for chunk in iter_chunks(scenario, t_eval, impacts=impacts, omega0=omega0, euler0=euler0,
-                             n_bodies=n_bodies, chunk_size=chunk_size, client=client,
-                             fast=fast):
-        parts[chunk.index] = chunk.result
-        done += chunk.stop - chunk.start
-        steps += int(chunk.result.n_steps.sum())
-        if progress is not None:
-            progress(done / total, float(chunk.result.t[-1]), steps)
-    result = concatenate_results(parts[i] for i in sorted(parts))
-    return replace(result, wall_time=time.perf_counter() - start)
-
-
-def concatenate_results(parts) -> EnsembleResult:
+def concatenate_results(parts: Iterable[EnsembleResult]) -> EnsembleResult:
     """
     Join the results of consecutive groups of bodies (same times) into one, in the given order.
 
@@ -696,7 +749,7 @@ def concatenate_results(parts) -> EnsembleResult:
     if any(p.t.shape != t.shape or np.any(p.t != t) for p in parts):
         raise ValueError('concatenate_results: the parts have different sample times')
 
-    def cat(name):
+    def cat(name: str) -> Any:
         return np.concatenate([getattr(p, name) for p in parts])
 
     return EnsembleResult(t, cat('omega'), cat('euler'), cat('quaternion'), cat('jacobi'),
@@ -708,12 +761,13 @@ def concatenate_results(parts) -> EnsembleResult:
 class _NoPool:
     """``ThreadPoolExecutor`` stand-in that runs in the calling thread."""
 
-    def __enter__(self):
+    def __enter__(self) -> _NoPool:
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> Literal[False]:
         return False
 
     @staticmethod
-    def map(fn, items):  # noqa: A003 (the name of the Executor method it stands in for)
+    def map(fn: Callable[[Any], Any],  # noqa: A003 (the name of the Executor method)
+            items: Iterable[Any]) -> Iterator[Any]:
         return map(fn, items)

@@ -25,13 +25,16 @@ from __future__ import annotations
 import bisect
 from dataclasses import dataclass
 import math
+from typing import Callable, NamedTuple
 
 import numpy as np
+import numpy.typing as npt
 
 from tumble_ros.errors import CoreError
 
-from .dynamics import ATTITUDE_MODELS, jacobi_integral
+from .dynamics import ATTITUDE_MODELS, AttitudeModel, jacobi_integral
 from .integrators import FAILED, INTEGRATORS, RUNNING, SegmentProblem
+from .integrators.base import Stepper
 from .integrators.compiled import CompiledStepper, why_no_fast_path
 from .kernels.checks import finite_norm
 from .kernels.tracking import track_pieces, track_rate, unwrapped_euler
@@ -50,6 +53,10 @@ __all__ = ['Propagator', 'IntegrationError', 'Sample',
 FAST_WORK_BUDGET = 50_000
 REFERENCE_WORK_BUDGET = 1_000
 _NO_OMEGA = np.zeros(3)
+
+FloatArray = npt.NDArray[np.float64]
+#: A right-hand side f(t, y) of the equations of motion.
+Rhs = Callable[[float, FloatArray], FloatArray]
 
 
 def _interpolated_nonfinite_message(t: float) -> str:
@@ -86,10 +93,10 @@ class Sample:
     """
 
     t: float
-    omega: np.ndarray
-    quaternion: np.ndarray
-    euler: np.ndarray
-    matrix: np.ndarray
+    omega: FloatArray
+    quaternion: FloatArray
+    euler: FloatArray
+    matrix: FloatArray
     inertia: tuple[float, float, float]
     orbit_rate: float
 
@@ -136,7 +143,9 @@ class Propagator:
         if fast and why:
             raise ValueError(f'fast path not available: {why}')
         self.fast = not why if fast is None else bool(fast)
-        self._runner = (_CompiledRunner if self.fast else _ReferenceRunner)(self)
+        self._runner: _ReferenceRunner | _CompiledRunner = (
+            _CompiledRunner(self._method) if self.fast else _ReferenceRunner(self._method,
+                                                                             self._model))
         self._impacts: list[Impact] = []
         self._cuts = scenario.segment_cuts    # the encounter window's edges (a flyby)
         self._segments = split_at_impacts(scenario.duration, (), self._cuts)
@@ -149,11 +158,11 @@ class Propagator:
         self.n_steps = 0
         self._euler_track = np.array(scenario.euler0, dtype=float)
         self._track_at_t = self._euler_track.copy()  # continuous Euler angles at self.t
-        self._quat_prev = None
-        self._edge_state: dict[float, np.ndarray] = {}  # state at impact edges reached so far
+        self._quat_prev: FloatArray | None = None
+        self._edge_state: dict[float, FloatArray] = {}  # state at impact edges reached so far
         self._reported: set[int] = set()
         self._reported_cuts: set[float] = set()
-        self._stepper = None
+        self._stepper: Stepper | None = None
         for impact in scenario.impacts:
             self.schedule(impact)
         self._start_segment(self.t, self.y)
@@ -167,7 +176,7 @@ class Propagator:
     @property
     def nfev(self) -> int:
         """Right-hand-side evaluations so far."""
-        return self._nfev_done + self._stepper.nfev
+        return self._nfev_done + self._current().nfev
 
     @property
     def impacts(self) -> tuple[Impact, ...]:
@@ -194,7 +203,7 @@ class Propagator:
             self._euler_track = self._track_at_t.copy()
             self._start_segment(self.t, self.y)
 
-    def advance_to(self, t: float) -> np.ndarray:
+    def advance_to(self, t: float) -> FloatArray:
         """
         Integrate to time ``t`` [yr] (not before the current time) and return the state.
 
@@ -208,7 +217,7 @@ class Propagator:
             raise ValueError(f't = {t!r} must lie in [{self.t!r}, {self.t_end!r}] yr')
         while not self._advance_until(t, self._default_budget())[1]:
             pass
-        y = self._stepper.state_at(t)
+        y = self._current().state_at(t)
         euler = self._continuous_euler(y[3:])
         if euler is None or not finite_norm(y):
             # dense output inside a step whose end points are finite but whose state ran away
@@ -217,8 +226,8 @@ class Propagator:
         self.y, self.t, self._track_at_t = y, t, euler
         return self.y
 
-    def sample_many(self, times, *,
-                    budget: float | None = None) -> tuple[int, dict[str, np.ndarray], str]:
+    def sample_many(self, times: npt.ArrayLike, *,
+                    budget: float | None = None) -> tuple[int, dict[str, FloatArray], str]:
         """
         Sample (as :meth:`sample`) every time of the sorted sequence ``times``, into arrays.
 
@@ -264,7 +273,8 @@ class Propagator:
     def _default_budget(self) -> int:
         return self._runner.work_budget
 
-    def _sample_into(self, times, arrays, y_out, k0: int, budget: float) -> tuple[int, str]:
+    def _sample_into(self, times: FloatArray, arrays: dict[str, FloatArray],
+                     y_out: FloatArray | None, k0: int, budget: float) -> tuple[int, str]:
         """
         Sample times[k0:] into rows k0... of ``arrays``.
 
@@ -272,9 +282,11 @@ class Propagator:
         "").
         """
         k_stop = min(times.size, k0 + int(min(budget, times.size)))
-        return self._runner.sample_into(times, arrays, y_out, k0, k_stop, budget)
+        if y_out is None:
+            return self._sample_stepwise(times, arrays, k0, k_stop, budget)
+        return self._sample_compiled(times, arrays, y_out, k0, k_stop, budget)
 
-    def pop_completed_impacts(self) -> list[tuple[Impact, np.ndarray, np.ndarray]]:
+    def pop_completed_impacts(self) -> list[tuple[Impact, FloatArray, FloatArray]]:
         """
         Impacts that ended by the current time and were not returned before.
 
@@ -294,7 +306,7 @@ class Propagator:
                 done.append((impact, self._edge_state[impact.start], y_end))
         return done
 
-    def pop_window_edges(self) -> list[tuple[float, np.ndarray]]:
+    def pop_window_edges(self) -> list[tuple[float, FloatArray]]:
         """
         Return the encounter window's edges reached and not returned before: (t, state).
 
@@ -313,11 +325,12 @@ class Propagator:
                 done.append((t, y))
         return done
 
-    def quaternion_of(self, y: np.ndarray) -> np.ndarray:
+    def quaternion_of(self, y: FloatArray) -> FloatArray:
         """Return the unit quaternion (scalar first, body -> orbital) of a state vector."""
         if self._model.name == 'quaternion':
-            return y[3:] / np.linalg.norm(y[3:])
-        return matrix_to_quaternion(self._model.to_matrix(y[3:]))
+            q: FloatArray = y[3:] / np.linalg.norm(y[3:])
+            return q
+        return np.asarray(matrix_to_quaternion(self._model.to_matrix(y[3:])), dtype=float)
 
     def sample(self, t: float) -> Sample:
         """Advance to ``t`` and describe the state there."""
@@ -339,7 +352,13 @@ class Propagator:
         )
 
     # -- internals ------------------------------------------------------------------
-    def _start_segment(self, t0: float, y0: np.ndarray) -> None:
+    def _current(self) -> Stepper:
+        """Return the stepper of the running segment (there is one from __init__ on)."""
+        if self._stepper is None:
+            raise RuntimeError('Propagator: no segment started')
+        return self._stepper
+
+    def _start_segment(self, t0: float, y0: FloatArray) -> None:
         if t0 in self._cuts or any(t0 in (i.start, i.end) for i in self._impacts):
             self._edge_state[t0] = np.array(y0)
         k = bisect.bisect_right(self._segment_starts, t0) - 1
@@ -350,9 +369,10 @@ class Propagator:
         problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
                                  segment.torque_orbital, sc.attitude, sc.extra_torques,
                                  sc.step_budget)
-        self._stepper = self._runner.new_stepper(segment, t0, y0, problem)
+        self._stepper = self._runner.new_stepper(
+            segment, t0, y0, problem, self.scenario, None if self._split else self._switching_rhs)
 
-    def _switching_rhs(self):
+    def _switching_rhs(self) -> Rhs:
         """Pulses as a time switch inside one smooth-looking RHS (demonstration only)."""
         sc, make = self.scenario, self._model.make_rhs
         free = make(sc.inertia, sc.orbit_rate, extra_torques=sc.extra_torques)
@@ -361,7 +381,7 @@ class Propagator:
                              else ((0, 0, 0), i.torque)), extra_torques=sc.extra_torques))
                   for i in self._impacts]
 
-        def rhs(t, y):
+        def rhs(t: float, y: FloatArray) -> FloatArray:
             for impact, pulsed in pulses:
                 if impact.start <= t < impact.end:
                     return pulsed(t, y)
@@ -378,169 +398,76 @@ class Propagator:
         """
         if self.status == FAILED:
             raise IntegrationError(self.message, self.t)
-        stepper = self._stepper
+        stepper = self._current()
         work = 0
         while t > stepper.t:
             if stepper.status != RUNNING:
                 self._start_segment(stepper.t, stepper.y.copy())
-                stepper = self._stepper
+                stepper = self._current()
                 continue
             if work >= budget:
                 return work, False
-            work += self._runner.advance(stepper, t, budget - work)
+            done = self._runner.advance(stepper, t, budget - work, self._euler_track)
+            self.n_steps += done.steps
+            if done.failure:
+                self.status, self.message = FAILED, done.failure
+                raise IntegrationError(done.failure, done.t_good)
+            work += done.work
         return work, True
 
-    def _unwrapped(self, attitude) -> np.ndarray | None:
-        """
-        Return phi, psi unwrapped towards the track, and theta.
-
-        The compiled loop's conversion (``kernels.tracking``); None if they are not finite (a
-        state that ran away: ``kernels.tracking.set_track`` skips it the same way).
-        """
-        y = np.concatenate((_NO_OMEGA, attitude))
-        phi, psi, theta = unwrapped_euler(y, 0, self._euler_track)
-        if not (math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta)):
-            return None
-        return np.array([phi, psi, theta])
-
-    def _continuous_euler(self, attitude) -> np.ndarray | None:
+    def _continuous_euler(self, attitude: FloatArray) -> FloatArray | None:
         if self._model.name != 'quaternion':
             euler = np.array(attitude, dtype=float)
             return euler if np.all(np.isfinite(euler)) else None
-        return self._unwrapped(attitude)
+        return unwrapped_towards(attitude, self._euler_track)
 
-
-class _ReferenceRunner:
-    """The reference path: the method's own stepper, one step at a time, phi/psi in Python."""
-
-    work_budget = REFERENCE_WORK_BUDGET
-
-    def __init__(self, propagator: Propagator) -> None:
-        self._p = propagator
-
-    def output_buffer(self, n: int) -> None:
-        """Return no buffer: samples come one at a time from :meth:`Propagator.sample`."""
-        return None
-
-    def new_stepper(self, segment: Segment, t0: float, y0: np.ndarray, problem):
-        """Return the method's stepper for ``segment``, from ``t0``, ``y0``."""
-        p, sc = self._p, self._p.scenario
-        rhs = (p._model.make_rhs(sc.inertia, sc.orbit_rate, segment.torque_body,
-                                 segment.torque_orbital, problem.extra_torques)
-               if p._split else p._switching_rhs())
-        return p._method(rhs, t0, y0, segment.t1, sc.integrator, problem=problem)
-
-    def advance(self, stepper, t: float, budget: float) -> int:
-        """Take one step; return its work (1 + the tracking's dense evaluations)."""
-        p = self._p
-        t_before = stepper.t
-        stepper.step()
-        p.n_steps += 1
-        message = stepper.message
-        if stepper.status != FAILED and p._model.singular(stepper.y[3:]):
-            message = (f'attitude singular at t = {stepper.t:.10g} yr '
-                       f'(theta = {stepper.y[5]:.3g} rad): the '
-                       "Euler-angle equations divide by sin(theta); use attitude 'quaternion'")
-        if stepper.status == FAILED or message:
-            p.status, p.message = FAILED, message
-            raise IntegrationError(message, t_before)
-        if p._model.name == 'quaternion':
-            return 1 + self._track_euler(stepper)
-        return 1
-
-    def _track_euler(self, stepper) -> int:
-        """
-        Follow phi, psi continuously through the step just taken (quaternion mode).
-
-        Returns the dense evaluations it took.
-        """
-        y = stepper.y
-        # the compiled loop's bound and subdivision (kernels.tracking)
-        h = stepper.t - stepper.t_old
-        n = track_pieces(track_rate(*y.tolist()) * h)
-        for j in range(1, n + 1):
-            tj = stepper.t if j == n else stepper.t_old + h * j / n
-            att = y[3:] if j == n else stepper.state_at(tj)[3:]
-            euler = self._p._unwrapped(att)
-            if euler is not None:
-                self._p._euler_track = euler
-        return n - 1
-
-    def sample_into(self, times, arrays, y_out, k0: int, k_stop: int,
-                    budget: float) -> tuple[int, str]:
-        """Sample times[k0:k_stop] one by one (see :meth:`Propagator._sample_into`)."""
-        p = self._p
+    def _sample_stepwise(self, times: FloatArray, arrays: dict[str, FloatArray], k0: int,
+                         k_stop: int, budget: float) -> tuple[int, str]:
+        """Sample times[k0:k_stop] one by one (the reference path; see :meth:`_sample_into`)."""
         omega, euler, quat, matrices = (arrays['omega'], arrays['euler'], arrays['quaternion'],
                                         arrays['matrix'])
         work = 0
         for k in range(k0, k_stop):
             t = float(times[k])
             try:
-                used, reached = p._advance_until(t, budget - work)
+                used, reached = self._advance_until(t, budget - work)
                 work += used
                 if not reached:
                     return k, ''
-                s = p.sample(t)
+                s = self.sample(t)
             except IntegrationError as err:
                 return k, str(err) or 'integration failed'
             omega[k], euler[k], quat[k], matrices[k] = s.omega, s.euler, s.quaternion, s.matrix
         return k_stop, ''
 
-
-class _CompiledRunner:
-    """The fast path: the method's compiled loop, many steps and samples per call."""
-
-    work_budget = FAST_WORK_BUDGET
-
-    def __init__(self, propagator: Propagator) -> None:
-        self._p = propagator
-
-    def output_buffer(self, n: int) -> np.ndarray:
-        """Return the (n, 7) array the compiled loop writes the sampled states into."""
-        return np.empty((n, 7))
-
-    def new_stepper(self, segment: Segment, t0: float, y0: np.ndarray, problem):
-        """Return a compiled stepper of the method for ``segment``, from ``t0``, ``y0``."""
-        p = self._p
-        return CompiledStepper(p._method, None, t0, y0, segment.t1, p.scenario.integrator,
-                               problem=problem)
-
-    def advance(self, stepper, t: float, budget: float) -> int:
-        """Run the compiled loop towards ``t`` within ``budget``; return the work done."""
-        p = self._p
-        _, steps = stepper.advance(t, p._euler_track, budget=budget)
-        p.n_steps += steps
-        if stepper.status == FAILED:
-            p.status, p.message = FAILED, stepper.message or 'integration failed'
-            raise IntegrationError(p.message, stepper.t)
-        return stepper.work
-
-    def sample_into(self, times, arrays, y_out, k0: int, k_stop: int,
-                    budget: float) -> tuple[int, str]:
-        """Sample times[k0:k_stop] inside the compiled loop (see Propagator._sample_into)."""
-        p = self._p
+    def _sample_compiled(self, times: FloatArray, arrays: dict[str, FloatArray],
+                         y_out: FloatArray, k0: int, k_stop: int,
+                         budget: float) -> tuple[int, str]:
+        """Sample times[k0:k_stop] inside the compiled loop (see :meth:`_sample_into`)."""
         omega, euler, quat, matrices = (arrays['omega'], arrays['euler'], arrays['quaternion'],
                                         arrays['matrix'])
         work = 0
-        if p.status == FAILED:
-            return k0, p.message
+        if self.status == FAILED:
+            return k0, self.message
         t_view = times[:k_stop]
         k, message = k0, ''
         while k < k_stop:
-            stepper = p._stepper
+            stepper = self._current()
             if stepper.status != RUNNING and t_view[k] > stepper.t:
-                p._start_segment(stepper.t, stepper.y.copy())
+                self._start_segment(stepper.t, stepper.y.copy())
                 work += 1
                 continue
             if work >= budget:
                 break
-            k, steps = stepper.advance(t_view[-1], p._euler_track, t_view, y_out, euler, k,
+            if not isinstance(stepper, CompiledStepper):
+                raise TypeError('Propagator: the compiled sampling needs a compiled stepper')
+            k, steps = stepper.advance(t_view[-1], self._euler_track, t_view, y_out, euler, k,
                                        budget - work)
             work += stepper.work
-            p.n_steps += steps
+            self.n_steps += steps
             if stepper.status == FAILED:
-                p.status, p.message = FAILED, stepper.message or 'integration failed'
-                message = p.message
+                self.status, self.message = FAILED, stepper.message or 'integration failed'
+                message = self.message
                 break
         if k > k0:
             # the rule of advance_to: no sample with a non-finite state or Euler angles
@@ -551,14 +478,134 @@ class _CompiledRunner:
             bad = np.flatnonzero(~(np.isfinite(norm2) & np.isfinite(euler[k0:k]).all(axis=1)))
             if bad.size:
                 k = k0 + int(bad[0])
-                p.status, p.message = FAILED, _interpolated_nonfinite_message(float(times[k]))
-                message = p.message
+                self.status = FAILED
+                self.message = _interpolated_nonfinite_message(float(times[k]))
+                message = self.message
         if k > k0:
             y = y_out[k0:k]
             omega[k0:k] = y[:, :3]
-            quat[k0:k] = continuous_quaternions(y[:, 3:], p._quat_prev)
+            quat[k0:k] = continuous_quaternions(y[:, 3:], self._quat_prev)
             matrices[k0:k] = quaternions_to_matrices(y[:, 3:])
-            p._quat_prev = quat[k - 1].copy()
-            p.t, p.y = float(times[k - 1]), y_out[k - 1].copy()
-            p._track_at_t = euler[k - 1].copy()
+            self._quat_prev = quat[k - 1].copy()
+            self.t, self.y = float(times[k - 1]), y_out[k - 1].copy()
+            self._track_at_t = euler[k - 1].copy()
         return k, message
+
+
+def unwrapped_towards(attitude: FloatArray, track: FloatArray) -> FloatArray | None:
+    """
+    Return phi, psi of a quaternion ``attitude`` unwrapped towards ``track`` [rad], and theta.
+
+    The compiled loop's conversion (``kernels.tracking``); None if they are not finite (a
+    state that ran away: ``kernels.tracking.set_track`` skips it the same way).
+    """
+    y = np.concatenate((_NO_OMEGA, attitude))
+    phi, psi, theta = unwrapped_euler(y, 0, track)
+    if not (math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta)):
+        return None
+    return np.array([phi, psi, theta])
+
+
+class Advance(NamedTuple):
+    """
+    What one call of a strategy's ``advance`` did.
+
+    ``work``: units of work spent; ``steps``: integration steps taken (counted even when the
+    last one failed); ``failure``: why the integration failed ('' if it did not), ``t_good``
+    the last good time [yr] then.
+    """
+
+    work: int
+    steps: int
+    failure: str = ''
+    t_good: float = math.nan
+
+
+class _ReferenceRunner:
+    """The reference path: the method's own stepper, one step at a time, phi/psi in Python."""
+
+    work_budget = REFERENCE_WORK_BUDGET
+
+    def __init__(self, method: type[Stepper], model: AttitudeModel) -> None:
+        self._method, self._model = method, model
+
+    def output_buffer(self, n: int) -> None:
+        """Return no buffer: samples come one at a time from :meth:`Propagator.sample`."""
+        return None
+
+    def new_stepper(self, segment: Segment, t0: float, y0: FloatArray, problem: SegmentProblem,
+                    scenario: Scenario, switching: Callable[[], Rhs] | None) -> Stepper:
+        """
+        Return the method's stepper for ``segment``, from ``t0``, ``y0``.
+
+        ``switching``: None (the segment's own smooth right-hand side), or what builds the
+        time-switched one of ``split_impacts=False``.
+        """
+        rhs = (self._model.make_rhs(scenario.inertia, scenario.orbit_rate, segment.torque_body,
+                                    segment.torque_orbital, problem.extra_torques)
+               if switching is None else switching())
+        return self._method(rhs, t0, y0, segment.t1, scenario.integrator, problem=problem)
+
+    def advance(self, stepper: Stepper, t: float, budget: float, track: FloatArray) -> Advance:
+        """Take one step, following the Euler angles in ``track`` (updated in place)."""
+        t_before = stepper.t
+        stepper.step()
+        message = stepper.message
+        if stepper.status != FAILED and self._model.singular(stepper.y[3:]):
+            message = (f'attitude singular at t = {stepper.t:.10g} yr '
+                       f'(theta = {stepper.y[5]:.3g} rad): the '
+                       "Euler-angle equations divide by sin(theta); use attitude 'quaternion'")
+        if stepper.status == FAILED or message:
+            return Advance(0, 1, message, t_before)
+        if self._model.name == 'quaternion':
+            return Advance(1 + self._track_euler(stepper, track), 1)
+        return Advance(1, 1)
+
+    def _track_euler(self, stepper: Stepper, track: FloatArray) -> int:
+        """
+        Follow phi, psi continuously through the step just taken (quaternion mode).
+
+        ``track`` is updated in place. Returns the dense evaluations it took.
+        """
+        y, t_old = stepper.y, stepper.t_old
+        if t_old is None:
+            return 0  # (no step taken yet: nothing to follow)
+        # the compiled loop's bound and subdivision (kernels.tracking)
+        h = stepper.t - t_old
+        n = track_pieces(track_rate(*y.tolist()) * h)
+        for j in range(1, n + 1):
+            tj = stepper.t if j == n else t_old + h * j / n
+            att = y[3:] if j == n else stepper.state_at(tj)[3:]
+            euler = unwrapped_towards(att, track)
+            if euler is not None:
+                track[:] = euler
+        return int(n) - 1
+
+
+class _CompiledRunner:
+    """The fast path: the method's compiled loop, many steps and samples per call."""
+
+    work_budget = FAST_WORK_BUDGET
+
+    def __init__(self, method: type[Stepper]) -> None:
+        self._method = method
+
+    def output_buffer(self, n: int) -> FloatArray:
+        """Return the (n, 7) array the compiled loop writes the sampled states into."""
+        return np.empty((n, 7))
+
+    def new_stepper(self, segment: Segment, t0: float, y0: FloatArray, problem: SegmentProblem,
+                    scenario: Scenario, switching: Callable[[], Rhs] | None) -> Stepper:
+        """Return a compiled stepper of the method for ``segment``, from ``t0``, ``y0``."""
+        return CompiledStepper(self._method, None, t0, y0, segment.t1, scenario.integrator,
+                               problem=problem)
+
+    def advance(self, stepper: Stepper, t: float, budget: float, track: FloatArray) -> Advance:
+        """Run the compiled loop towards ``t`` within ``budget``; ``track`` updated in place."""
+        if not isinstance(stepper, CompiledStepper):
+            raise TypeError('Propagator: the compiled path needs a compiled stepper')
+        _, steps = stepper.advance(t, track, budget=budget)
+        if stepper.status == FAILED:
+            return Advance(stepper.work, steps, stepper.message or 'integration failed',
+                           stepper.t)
+        return Advance(stepper.work, steps)

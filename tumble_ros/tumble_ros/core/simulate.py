@@ -5,12 +5,15 @@ from dataclasses import dataclass
 import math
 
 import numpy as np
+import numpy.typing as npt
 
 from .dynamics import jacobi_integral
 from .propagator import Propagator
 from .scenario import Scenario, ScenarioError
 
-__all__ = ['simulate', 'SimulationResult']
+__all__ = ['sample_times', 'simulate', 'SimulationResult']
+
+FloatArray = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -45,7 +48,16 @@ class SimulationResult:
     n_steps: int
 
 
-def _check_times(t_eval, duration: float) -> np.ndarray:
+def sample_times(scenario: Scenario, t_eval: npt.ArrayLike | None = None) -> FloatArray:
+    """
+    Return the sample times [yr] of a run: ``t_eval`` checked, or the scenario's output grid.
+
+    ``t_eval`` must be a non-empty, finite, sorted 1-D sequence inside [0, duration]
+    (ScenarioError naming ``t_eval`` otherwise); None gives ``scenario.output_times``.
+    """
+    if t_eval is None:
+        return np.asarray(scenario.output_times, dtype=float)
+    duration = scenario.duration
     t = np.asarray(t_eval, dtype=float)
     if t.ndim != 1 or t.size == 0:
         raise ScenarioError(
@@ -60,7 +72,8 @@ def _check_times(t_eval, duration: float) -> np.ndarray:
     return t
 
 
-def simulate(scenario: Scenario, t_eval=None, *, split_impacts: bool = True,
+def simulate(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
+             split_impacts: bool = True,
              fast: bool | None = None) -> SimulationResult:
     """
     Integrate ``scenario`` and sample it at exactly the times ``t_eval`` [yr].
@@ -73,7 +86,7 @@ def simulate(scenario: Scenario, t_eval=None, *, split_impacts: bool = True,
     Raises ScenarioError for invalid ``t_eval``; a numerical failure is reported in the
     result (``success=False``, ``message``), not raised.
     """
-    times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
+    times = sample_times(scenario, t_eval)
     prop = Propagator(scenario, split_impacts=split_impacts, fast=fast)
     n = times.size
     # to the end, in bounded calls

@@ -39,11 +39,15 @@ from pathlib import Path
 import shutil
 import socket
 import time
-from typing import Iterator
+from typing import Any, Collection, Iterable, Iterator, Mapping, TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from tumble_ros.errors import IoError
+
+if TYPE_CHECKING:  # (xarray is imported where it is used: io users without it load this module)
+    import xarray
 
 __all__ = ['EnsembleStore', 'EnsembleStoreError', 'EnsembleStoreLocked', 'lock_path',
            'open_ensemble', 'store_lock', 'STATUS_FAILED', 'STATUS_PENDING', 'STATUS_SUCCEEDED',
@@ -95,10 +99,10 @@ class EnsembleStoreLocked(EnsembleStoreError):
     """An ensemble store that another live run is writing (its lock file names it)."""
 
 
-def lock_path(path) -> Path:
+def lock_path(path: str | Path) -> Path:
     """Return the lock file of the store at ``path``: ``X.zarr.lock`` beside ``X.zarr``."""
-    path = Path(path)
-    return path.with_name(path.name + '.lock')
+    store = Path(path)
+    return store.with_name(store.name + '.lock')
 
 
 def _owner(lock: Path) -> str:
@@ -111,7 +115,7 @@ def _owner(lock: Path) -> str:
 
 
 @contextmanager
-def store_lock(path) -> Iterator[Path]:
+def store_lock(path: str | Path) -> Iterator[Path]:
     """
     Hold the one-writer lock of the store at ``path`` while the block runs.
 
@@ -159,7 +163,7 @@ def store_lock(path) -> Iterator[Path]:
         os.close(fd)
 
 
-def _check_layout(path: Path, attrs: dict, names) -> None:
+def _check_layout(path: Path, attrs: Mapping[str, Any], names: Collection[str]) -> None:
     """Refuse a store that is not a tumble_ros ensemble of this format, or lacks a variable."""
     if attrs.get('format') != FORMAT:
         raise EnsembleStoreError(f'{path}: not a tumble_ros ensemble store')
@@ -176,7 +180,7 @@ def _check_layout(path: Path, attrs: dict, names) -> None:
             raise EnsembleStoreError(f'{path}: damaged ensemble store: no attribute {key!r}')
 
 
-def _fit_reasons(reasons) -> np.ndarray:
+def _fit_reasons(reasons: Iterable[object]) -> npt.NDArray[np.str_]:
     out = []
     for text in reasons:
         text = str(text)
@@ -192,7 +196,7 @@ class EnsembleStore:
     ``attrs['fingerprint']`` must match). Read results with :func:`open_ensemble`.
     """
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: str | Path) -> None:
         import zarr
 
         self.path = Path(path)
@@ -201,13 +205,13 @@ class EnsembleStore:
         except Exception as err:  # zarr raises several types for a missing or foreign store
             raise EnsembleStoreError(f'{self.path}: not an ensemble store '
                                      f"({' '.join(str(err).split())})") from None
-        self.attrs = dict(self._group.attrs)
+        self.attrs: dict[str, Any] = dict(self._group.attrs)
         _check_layout(self.path, self.attrs, set(self._group.array_keys()))
         try:
             self.n_bodies = int(self.attrs['n_bodies'])
             self.chunk_size = int(self.attrs['chunk_size'])
             self.n_chunks = -(-self.n_bodies // self.chunk_size)
-            shapes = {name: self._group[name].shape for name in (*VARIABLES, 'chunk_done')}
+            shapes = {name: self._array(name).shape for name in (*VARIABLES, 'chunk_done')}
         except (TypeError, ValueError, ZeroDivisionError, KeyError) as err:
             raise EnsembleStoreError(f'{self.path}: damaged ensemble store ({err})') from None
         wrong = [name for name, shape in shapes.items()
@@ -216,8 +220,13 @@ class EnsembleStore:
             raise EnsembleStoreError(f"{self.path}: damaged ensemble store: {', '.join(wrong)} "
                                      f'not of {self.n_bodies} bodies in {self.n_chunks} chunks')
 
+    def _array(self, name: str) -> Any:
+        """Return the Zarr array ``name`` (the layout check found it among the arrays)."""
+        return self._group[name]
+
     @classmethod
-    def create(cls, path, *, n_bodies: int, times, chunk_size: int, attrs: dict,
+    def create(cls, path: str | Path, *, n_bodies: int, times: npt.ArrayLike,
+               chunk_size: int, attrs: Mapping[str, Any],
                overwrite: bool = False) -> 'EnsembleStore':
         """
         Create the store at ``path`` for N bodies sampled at ``times`` [yr]; nothing written.
@@ -229,11 +238,11 @@ class EnsembleStore:
         import xarray as xr
 
         path = Path(path)
-        times = np.asarray(times, dtype=float)
-        if n_bodies < 1 or chunk_size < 1 or times.ndim != 1 or times.size < 1:
+        t = np.asarray(times, dtype=float)
+        if n_bodies < 1 or chunk_size < 1 or t.ndim != 1 or t.size < 1:
             raise EnsembleStoreError(f'{path}: needs n_bodies >= 1, chunk_size >= 1 and '
                                      f'sample times, got {n_bodies}, {chunk_size}, '
-                                     f'{times.shape}')
+                                     f'{t.shape}')
         if path.exists() or path.is_symlink():
             if not overwrite:
                 raise EnsembleStoreError(f'{path}: exists (resume the same run, or overwrite)')
@@ -241,9 +250,9 @@ class EnsembleStore:
                 shutil.rmtree(path)
             else:
                 path.unlink()
-        sizes = {'body': n_bodies, 'time': times.size, 'component': 3, 'angle': 3,
+        sizes = {'body': n_bodies, 'time': t.size, 'component': 3, 'angle': 3,
                  'quaternion_component': 4}
-        data = {}
+        data: dict[str, Any] = {}
         for name, (dims, dtype, var_attrs) in VARIABLES.items():
             shape = tuple(sizes[d] for d in dims)
             chunks = (chunk_size,) + shape[1:]
@@ -254,13 +263,13 @@ class EnsembleStore:
                                'bodies': 'chunk i holds bodies [i * chunk_size, '
                                          '(i + 1) * chunk_size)'})
         coords = {'body': np.arange(n_bodies, dtype=np.int64),
-                  'time': ('time', times, {'long_name': 'simulated time', 'units': 'yr'}),
+                  'time': ('time', t, {'long_name': 'simulated time', 'units': 'yr'}),
                   'component': ['x', 'y', 'z'], 'angle': ['phi', 'psi', 'theta'],
                   'quaternion_component': ['w', 'x', 'y', 'z']}
         all_attrs = {**attrs, 'format': FORMAT, 'format_version': FORMAT_VERSION,
                      'n_bodies': int(n_bodies), 'chunk_size': int(chunk_size)}
         ds = xr.Dataset(data, coords=coords, attrs=all_attrs)
-        encoding = {'chunk_done': {'chunks': (1,)}}
+        encoding: dict[str, dict[str, Any]] = {'chunk_done': {'chunks': (1,)}}
         for name, (dims, dtype, _) in VARIABLES.items():
             if dtype.startswith('f'):
                 encoding[name] = {'_FillValue': np.nan}
@@ -272,7 +281,7 @@ class EnsembleStore:
         return cls(path)
 
     @classmethod
-    def resume(cls, path, *, fingerprint: str) -> 'EnsembleStore':
+    def resume(cls, path: str | Path, *, fingerprint: str) -> 'EnsembleStore':
         """Open an existing store to go on writing the same run (same ``fingerprint``)."""
         store = cls(path)
         if store.attrs.get('fingerprint') != fingerprint:
@@ -281,19 +290,19 @@ class EnsembleStore:
                 f'or chunk size differ from this one); write to a new path, or overwrite it')
         return store
 
-    def done(self) -> np.ndarray:
+    def done(self) -> npt.NDArray[np.bool_]:
         """Return (n_chunks,) bool: which chunks are written completely."""
         try:
-            return np.asarray(self._group['chunk_done'][:], dtype=bool)
+            return np.asarray(self._array('chunk_done')[:], dtype=bool)
         except (RuntimeError, ValueError, OSError) as err:   # a chunk that does not decode
             raise EnsembleStoreError(f'{self.path}: damaged ensemble store: cannot read '
                                      f"chunk_done ({' '.join(str(err).split())})") from None
 
-    def read(self, name: str, bodies=slice(None)) -> np.ndarray:
+    def read(self, name: str, bodies: int | slice = slice(None)) -> npt.NDArray[Any]:
         """Return the stored values of variable ``name`` for ``bodies`` (an index or slice)."""
-        return np.asarray(self._group[name][bodies])
+        return np.asarray(self._array(name)[bodies])
 
-    def write_chunk(self, index: int, start: int, arrays: dict) -> None:
+    def write_chunk(self, index: int, start: int, arrays: Mapping[str, Any]) -> None:
         """
         Write chunk ``index`` (bodies ``start`` ...) from ``arrays`` (every VARIABLES name).
 
@@ -308,16 +317,16 @@ class EnsembleStore:
             raise EnsembleStoreError(f'{self.path}: chunk {index} lacks {missing}')
         stop = min(self.n_bodies, start + self.chunk_size)
         for name, (_, dtype, _) in VARIABLES.items():
-            values = _fit_reasons(arrays[name]) if name == 'reason' else np.asarray(
-                arrays[name], dtype=dtype)
+            values: npt.NDArray[Any] = _fit_reasons(arrays[name]) if name == 'reason' \
+                else np.asarray(arrays[name], dtype=dtype)
             if values.shape[0] != stop - start:
                 raise EnsembleStoreError(f'{self.path}: chunk {index}: {name} has '
                                          f'{values.shape[0]} bodies, expected {stop - start}')
-            self._group[name][start:stop] = values
-        self._group['chunk_done'][index] = True
+            self._array(name)[start:stop] = values
+        self._array('chunk_done')[index] = True
 
 
-def open_ensemble(path) -> 'xarray.Dataset':  # noqa: F821 (xarray is imported lazily)
+def open_ensemble(path: str | Path) -> xarray.Dataset:
     """
     Open an ensemble store as an xarray Dataset (lazy: read as needed, chunk by chunk).
 
@@ -327,13 +336,14 @@ def open_ensemble(path) -> 'xarray.Dataset':  # noqa: F821 (xarray is imported l
     """
     import xarray as xr
 
-    path = Path(path)
-    if not path.is_dir():
-        raise EnsembleStoreError(f'{path}: no ensemble store there')
+    store = Path(path)
+    if not store.is_dir():
+        raise EnsembleStoreError(f'{store}: no ensemble store there')
     try:
-        ds = xr.open_zarr(str(path), consolidated=True)
+        ds: xarray.Dataset = xr.open_zarr(str(store), consolidated=True)
     except Exception as err:  # zarr/xarray raise several types for a damaged store
-        raise EnsembleStoreError(f'{path}: cannot open the ensemble store '
+        raise EnsembleStoreError(f'{store}: cannot open the ensemble store '
                                  f"({' '.join(str(err).split())})") from None
-    _check_layout(path, ds.attrs, set(ds.variables))
+    _check_layout(store, {str(k): v for k, v in ds.attrs.items()},
+                  {str(name) for name in ds.variables})
     return ds

@@ -1,21 +1,21 @@
 r"""
 The Dask engine of ensembles: tasks on a ``distributed`` cluster, results as they finish.
 
-:func:`~.ensemble.iter_chunks` and ``simulate_ensemble(..., client=...)`` cut the bodies of an
-ensemble into chunks; with a Dask client, each chunk is one task (:func:`~.ensemble.run_chunk`:
-the compiled loop runs inside it) on the workers of a ``distributed`` cluster: an embedded
-``LocalCluster`` (the default way to use every core in separate processes) or a cluster started
-with Dask's own ``dask scheduler`` and ``dask worker`` commands (docs/python.md, "Running on a
-cluster"). Dask does the scheduling, the transport and the fault tolerance (a task whose worker
-dies is run again elsewhere); this module only submits, hands results back as they finish and
-cancels what is left when the caller stops::
+:func:`~.chunks.run_chunks` and :func:`~.chunks.run_ensemble` run the chunks of an ensemble
+(:func:`tumble_ros.core.ensemble.plan_chunks`); with a Dask client, each chunk is one task
+(:func:`tumble_ros.core.ensemble.run_chunk`: the compiled loop runs inside it) on the workers
+of a ``distributed`` cluster: an embedded ``LocalCluster`` (the default way to use every core in
+separate processes) or a cluster started with Dask's own ``dask scheduler`` and ``dask worker``
+commands (docs/python.md, "Running on a cluster"). Dask does the scheduling, the transport and
+the fault tolerance (a task whose worker dies is run again elsewhere); this module only submits,
+hands results back as they finish and cancels what is left when the caller stops::
 
-    from tumble_ros.core import load_scenario, RandomImpacts, simulate_ensemble
-    from tumble_ros.core.ensemble_dask import dask_client
+    from tumble_ros.core import load_scenario, RandomImpacts
+    from tumble_ros.ensembles import dask_client, run_ensemble
     sc = load_scenario('tumble_ros/config/fig9.yaml').replace(duration=20.0, output_interval=1.0)
     with dask_client(workers=2) as client:
-        res = simulate_ensemble(sc, impacts=RandomImpacts(rate=0.5, torque=1e6, seed=1),
-                                n_bodies=100_000, client=client)
+        res = run_ensemble(sc, impacts=RandomImpacts(rate=0.5, torque=1e6, seed=1),
+                           n_bodies=100_000, client=client)
 
 **Same answer everywhere.** Body k's result depends on body k's inputs only: the compiled
 loop integrates each body on its own, and the per-body random inputs (``RandomImpacts``,
@@ -31,25 +31,26 @@ from __future__ import annotations
 from contextlib import contextmanager
 import logging
 from pathlib import Path
-from typing import Callable, Iterator, Sequence
+from typing import Any, Callable, Iterator, Sequence, TypeVar
 import uuid
 
 import numpy as np
 
+from tumble_ros.core import ScenarioError
 from tumble_ros.errors import CoreError
 
-from .scenario import ScenarioError
+__all__ = ['EnsembleRunError', 'dask_client', 'map_as_completed', 'LOOPBACK']
 
-__all__ = ['EnsembleRunError', 'dask_client', 'map_as_completed']
+R = TypeVar('R')
 
 
 class EnsembleRunError(CoreError):
     """A distributed ensemble run that could not run: no cluster, a task that raised."""
 
 
-def map_as_completed(client, fn: Callable, calls: Sequence[tuple], *,
+def map_as_completed(client: Any, fn: Callable[..., R], calls: Sequence[tuple[Any, ...]], *,
                      names: Sequence[str] | None = None,
-                     max_in_flight: int | None = None) -> Iterator:
+                     max_in_flight: int | None = None) -> Iterator[R]:
     """
     Yield ``fn(*args)`` for each ``args`` of ``calls``, run as tasks on ``client``, as they finish.
 
@@ -66,8 +67,8 @@ def map_as_completed(client, fn: Callable, calls: Sequence[tuple], *,
     run = uuid.uuid4().hex[:8]
     names = [str(k) for k in range(len(calls))] if names is None else list(names)
     waiting = iter(zip(names, calls))
-    futures = as_completed()
-    submitted = []
+    futures = as_completed()  # type: ignore[no-untyped-call]  # (distributed has no hints here)
+    submitted: list[Any] = []
 
     def submit_next() -> None:
         item = next(waiting, None)
@@ -75,14 +76,14 @@ def map_as_completed(client, fn: Callable, calls: Sequence[tuple], *,
             name, args = item
             future = client.submit(fn, *args, key=f'tumble-ensemble-{run}-{name}')
             submitted.append(future)
-            futures.add(future)
+            futures.add(future)  # type: ignore[no-untyped-call]  # (distributed has no hints here)
 
     try:
         for _ in range(max(1, int(max_in_flight))):
             submit_next()
         for future in futures:
             try:
-                value = future.result()
+                value: R = future.result()
             except ScenarioError:
                 raise
             except Exception as err:  # the task's own exception, re-raised by Dask here
@@ -104,7 +105,7 @@ LOOPBACK = '127.0.0.1'
 
 @contextmanager
 def dask_client(workers: int | None = None, scheduler: str | None = None, *,
-                timeout: float = 30.0, dashboard: bool = False):
+                timeout: float = 30.0, dashboard: bool = False) -> Iterator[Any]:
     """
     Yield a Dask ``distributed.Client``; close it (and its local cluster) on exit.
 
@@ -125,30 +126,29 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, *,
 
     if scheduler is not None:
         try:
-            client = Client(scheduler, timeout=timeout)
+            # (distributed has no type hints here)
+            client = Client(scheduler, timeout=timeout)  # type: ignore[no-untyped-call]
         except (OSError, TimeoutError, ValueError) as err:
             raise EnsembleRunError(f'cannot reach the Dask scheduler at {scheduler!r}: '
                                    f'{err}') from None
         try:
             yield client
         finally:
-            client.close()
+            client.close()  # type: ignore[no-untyped-call]  # (distributed has no hints here)
         return
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise ScenarioError(f'workers: must be an integer >= 1, got {workers!r}')
     with _workers_ignore_sigint():
         try:
-            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1,
-                                   processes=True, host=LOOPBACK,
-                                   dashboard_address=f'{LOOPBACK}:0',
-                                   worker_dashboard_address=None,
-                                   silence_logs=logging.CRITICAL,
-                                   scheduler_kwargs={'dashboard': bool(dashboard)})
+            cluster = LocalCluster(  # type: ignore[no-untyped-call]  # (no hints in distributed)
+                n_workers=int(workers), threads_per_worker=1, processes=True, host=LOOPBACK,
+                dashboard_address=f'{LOOPBACK}:0', worker_dashboard_address=None,
+                silence_logs=logging.CRITICAL, scheduler_kwargs={'dashboard': bool(dashboard)})
         except (RuntimeError, OSError, TimeoutError, ValueError) as err:
             raise EnsembleRunError(f'cannot start a local Dask cluster of {workers} workers: '
                                    f'{type(err).__name__}: {err}') from None
         try:
-            with Client(cluster) as client:
+            with Client(cluster) as client:  # type: ignore[no-untyped-call]  # (no hints)
                 yield client
         finally:
             cluster.close()

@@ -1,8 +1,8 @@
 """
 Run an ensemble into a store: each chunk written as its task finishes, a restart resumes.
 
-:func:`run_ensemble_to_store` is :func:`tumble_ros.core.iter_chunks` (in this process, or as
-tasks on a Dask client) feeding :class:`tumble_ros.io.EnsembleStore`: the store is created with
+:func:`run_ensemble_to_store` is :func:`~.chunks.run_chunks` (in this process, or as tasks on a
+Dask client) feeding :class:`tumble_ros.io.EnsembleStore`: the store is created with
 its full shape, every finished chunk is written into its region and marked done, so memory
 holds only the chunks in flight, whatever N. Run again with the same store and the same run
 (checked by a fingerprint of the scenario, sample times, inputs, N and chunk size), it skips
@@ -16,15 +16,19 @@ import hashlib
 import json
 from pathlib import Path
 import time
-from typing import Callable
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from tumble_ros.core import dump_scenario, Scenario
-from tumble_ros.core.ensemble import default_chunk_size, iter_chunks, prepare_inputs
-from tumble_ros.core.simulate import _check_times
+from tumble_ros.core.ensemble import (default_chunk_size, ImpactsInput, Inputs, prepare_inputs,
+                                      Progress, VectorsInput)
+from tumble_ros.core.simulate import sample_times
 from tumble_ros.io.ensemble_store import (EnsembleStore, SCENARIO_ATTR, STATUS_FAILED,
                                           STATUS_PENDING, STATUS_SUCCEEDED, store_lock)
+
+from .chunks import run_chunks, workers_of
 
 __all__ = ['EnsembleRunSummary', 'run_ensemble_to_store', 'run_fingerprint']
 
@@ -82,16 +86,16 @@ class EnsembleRunSummary:
         return out
 
 
-def _describe(value) -> object:
+def _describe(value: object) -> object:
     """Return a JSON-able description of one per-body input (samplers by their fields)."""
     if value is None:
         return "the scenario's"
-    if is_dataclass(value):
+    if is_dataclass(value) and not isinstance(value, type):
         return {'kind': type(value).__name__, **asdict(value)}
     return {'kind': 'explicit per-body values'}
 
 
-def _digest(value) -> str:
+def _digest(value: object) -> str:
     """Return a hash of an explicit per-body input (impact tuples or an array)."""
     h = hashlib.sha256()
     if isinstance(value, np.ndarray):
@@ -101,7 +105,8 @@ def _digest(value) -> str:
     return h.hexdigest()
 
 
-def run_fingerprint(scenario: Scenario, times: np.ndarray, inputs: dict, n_bodies: int,
+def run_fingerprint(scenario: Scenario, times: npt.NDArray[np.float64], inputs: Inputs,
+                    n_bodies: int,
                     chunk_size: int) -> str:
     """Return the hash that identifies a run in its store (what a restart must match)."""
     h = hashlib.sha256()
@@ -116,7 +121,7 @@ def run_fingerprint(scenario: Scenario, times: np.ndarray, inputs: dict, n_bodie
     return h.hexdigest()
 
 
-def _engine(client) -> str:
+def _engine(client: Any) -> str:
     if client is None:
         return 'threads in this process'
     workers = client.nthreads()
@@ -124,12 +129,13 @@ def _engine(client) -> str:
             f'{client.scheduler.address}')
 
 
-def run_ensemble_to_store(scenario: Scenario, store, *, n_bodies: int | None = None,
-                          impacts=None, omega0=None, euler0=None, t_eval=None,
-                          chunk_size: int | None = None, client=None, fast: bool | None = None,
+def run_ensemble_to_store(scenario: Scenario, store: str | Path, *,
+                          n_bodies: int | None = None, impacts: ImpactsInput = None,
+                          omega0: VectorsInput = None, euler0: VectorsInput = None,
+                          t_eval: npt.ArrayLike | None = None, chunk_size: int | None = None,
+                          client: Any = None, fast: bool | None = None,
                           threads: int | None = None, overwrite: bool = False,
-                          progress: Callable[[float, float, int], None] | None = None
-                          ) -> EnsembleRunSummary:
+                          progress: Progress | None = None) -> EnsembleRunSummary:
     """
     Integrate an ensemble chunk by chunk into the Zarr store ``store``; return a summary.
 
@@ -160,7 +166,7 @@ def run_ensemble_to_store(scenario: Scenario, store, *, n_bodies: int | None = N
 
     """
     start = time.perf_counter()
-    times = scenario.output_times if t_eval is None else _check_times(t_eval, scenario.duration)
+    times = sample_times(scenario, t_eval)
     n, inputs = prepare_inputs(scenario, impacts, omega0, euler0, n_bodies)
     path = Path(store)
     with store_lock(path):
@@ -168,9 +174,10 @@ def run_ensemble_to_store(scenario: Scenario, store, *, n_bodies: int | None = N
                            overwrite, progress, start)
 
 
-def _run_locked(scenario: Scenario, path: Path, times: np.ndarray, n: int, inputs: dict,
-                chunk_size: int | None, client, fast: bool | None, threads: int | None,
-                overwrite: bool, progress, start: float) -> EnsembleRunSummary:
+def _run_locked(scenario: Scenario, path: Path, times: npt.NDArray[np.float64], n: int,
+                inputs: Inputs, chunk_size: int | None, client: Any, fast: bool | None,
+                threads: int | None, overwrite: bool, progress: Progress | None,
+                start: float) -> EnsembleRunSummary:
     """:func:`run_ensemble_to_store` once it holds the store's lock."""
     resuming = path.exists() and not overwrite
     if resuming:
@@ -179,8 +186,7 @@ def _run_locked(scenario: Scenario, path: Path, times: np.ndarray, n: int, input
         out = EnsembleStore.resume(path, fingerprint=run_fingerprint(scenario, times, inputs, n,
                                                                      size))
     else:
-        workers = 1 if client is None else max(1, len(client.nthreads()))
-        size = default_chunk_size(n, times.size, workers) if chunk_size is None \
+        size = default_chunk_size(n, times.size, workers_of(client)) if chunk_size is None \
             else int(chunk_size)
         attrs = {'title': 'tumble_ros ensemble',
                  SCENARIO_ATTR: dump_scenario(scenario),
@@ -194,18 +200,18 @@ def _run_locked(scenario: Scenario, path: Path, times: np.ndarray, n: int, input
     done = out.done()
     skip = frozenset(np.flatnonzero(done).tolist())
     written = int(sum(min(n, (i + 1) * size) - i * size for i in skip))
-    run_chunks, steps = 0, 0
-    for chunk in iter_chunks(scenario, times, impacts=inputs['impacts'],
-                             omega0=inputs['omega0'], euler0=inputs['euler0'], n_bodies=n,
-                             chunk_size=size, client=client, fast=fast, skip=skip,
-                             threads=threads):
+    chunks_run, steps = 0, 0
+    for chunk in run_chunks(scenario, times, impacts=inputs['impacts'],
+                            omega0=inputs['omega0'], euler0=inputs['euler0'], n_bodies=n,
+                            chunk_size=size, client=client, fast=fast, skip=skip,
+                            threads=threads):
         r = chunk.result
         out.write_chunk(chunk.index, chunk.start, {
             'omega': r.omega, 'euler': r.euler, 'quaternion': r.quaternion, 'jacobi': r.jacobi,
             'status': np.where(r.success, STATUS_SUCCEEDED, STATUS_FAILED),
             'reason': list(r.messages), 'n_steps': r.n_steps, 'nfev': r.nfev,
             'omega0': chunk.omega0, 'euler0': chunk.euler0, 'n_impacts': chunk.n_impacts})
-        run_chunks += 1
+        chunks_run += 1
         steps += int(r.n_steps.sum())
         written += chunk.stop - chunk.start
         if progress is not None:
@@ -214,7 +220,7 @@ def _run_locked(scenario: Scenario, path: Path, times: np.ndarray, n: int, input
     failed = np.flatnonzero(status == STATUS_FAILED)
     failures = tuple((int(b), str(out.read('reason', int(b))))
                      for b in failed[:MAX_LISTED_FAILURES])
-    return EnsembleRunSummary(path, n, out.n_chunks, size, run_chunks, len(skip),
+    return EnsembleRunSummary(path, n, out.n_chunks, size, chunks_run, len(skip),
                               int(np.sum(status == STATUS_SUCCEEDED)), int(failed.size),
                               int(np.sum(status == STATUS_PENDING)), steps,
                               time.perf_counter() - start, _engine(client), failures)
