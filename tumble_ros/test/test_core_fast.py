@@ -145,9 +145,11 @@ def test_warm_up_compiles_the_single_body_and_ensemble_loops():
     from tumble_ros.cli.warmup import warm_up
 
     assert warm_up() > 0.0
-    for loop in (kernels.advance, kernels.ensemble_advance, kernels.ensemble_init):
-        # compiled (or loaded from the cache) for the real argument types
-        assert loop.signatures, loop
+    for name in kernels.KERNELS:  # every registered method's own loops
+        loops = kernels.loops(name)
+        for loop in (loops.advance, loops.ensemble_advance, loops.ensemble_init):
+            # compiled (or loaded from the cache) for the real argument types
+            assert loop.signatures, (name, loop)
 
 
 _SUBPROCESS = r"""
@@ -213,9 +215,9 @@ def test_an_edit_to_any_kernel_file_invalidates_the_cache(tmp_path, monkeypatch)
     cached machine code, which inlined the old rk4, in use).
     """
     from tumble_ros.core import jit
-    from tumble_ros.core.kernels import rk4, stepping
+    from tumble_ros.core.kernels import rk4
 
-    for function in (stepping.advance, rk4.start):
+    for function in (kernels.loops('rk4').advance, rk4.start):
         locator = function._cache._impl._locator  # numba's cache internals (checked here)
         assert isinstance(locator, jit._CompiledSourcesLocator)
         assert locator.get_source_stamp() == jit.compiled_sources_hash()
@@ -274,9 +276,10 @@ def test_kernels_are_compiled_without_reference_counting():
     numba's defaults it does (so this test would see them come back). The same value either way.
     """
     from tumble_ros.core import jit
-    from tumble_ros.core.kernels import ensemble, splitting, stepping
+    from tumble_ros.core.kernels import splitting
 
-    for function in (stepping.advance, ensemble.ensemble_advance, splitting.flow):
+    loops = kernels.loops('splitting')
+    for function in (loops.advance, loops.ensemble_advance, splitting.flow):
         assert function.targetoptions['_nrt'] is False
         assert function.targetoptions['nogil'] is True
     uncached = {k: v for k, v in jit.JIT_OPTIONS.items() if k != 'cache'}  # (cached IR: none)

@@ -36,12 +36,19 @@ import functools
 import hashlib
 import os
 from pathlib import Path
+import types
+from typing import Any, Callable, cast, TypeVar
 
 __all__ = ['COMPILED', 'NUMBA_VERSION', 'JIT_OPTIONS', 'jit', 'jit_inline', 'called',
-           'python_source', 'COMPILED_SOURCES', 'compiled_sources_hash']
+           'python_source', 'specialise', 'COMPILED_SOURCES', 'compiled_sources_hash']
 
+#: A function (the decorators return a compiled function typed as the one they are given).
+F = TypeVar('F', bound=Callable[..., Any])
+
+_numba: Any  # (numba has no type information)
 try:  # pragma: no cover - exercised by the environment, not by a test
-    import numba as _numba
+    import numba
+    _numba = numba
 except ImportError:  # pragma: no cover
     _numba = None
 
@@ -52,7 +59,7 @@ COMPILED = bool(_numba is not None and not _numba.config.DISABLE_JIT
 
 #: numba options of every kernel: cached, numpy's error model (1/0 is inf, not an exception), no
 #: GIL (threads), no runtime (no allocation, no reference counting: see the module's docstring).
-JIT_OPTIONS = {'cache': True, 'error_model': 'numpy', 'nogil': True, '_nrt': False}
+JIT_OPTIONS: dict[str, Any] = {'cache': True, 'error_model': 'numpy', 'nogil': True, '_nrt': False}
 
 _CORE = Path(__file__).resolve().parent
 #: The files whose compiled functions inline each other: one cache stamp for all.
@@ -62,7 +69,7 @@ COMPILED_SOURCES: tuple[Path, ...] = tuple(
 
 
 @functools.lru_cache(maxsize=None)
-def _hash(stamps: tuple) -> bytes:
+def _hash(stamps: tuple[tuple[int, int], ...]) -> bytes:
     digest = hashlib.sha256()
     for path in COMPILED_SOURCES:
         digest.update(path.name.encode())
@@ -77,39 +84,42 @@ def compiled_sources_hash() -> bytes:
 
 
 if COMPILED:
-    from numba.core import caching as _caching
+    from numba.core import caching
+    _caching: Any = caching
 
-    class _CompiledSourcesLocator(_caching.InTreeCacheLocator):
+    class _CompiledSourcesLocator(_caching.InTreeCacheLocator):  # type: ignore[misc]  # (numba)
         """numba's in-tree cache, stamped with the hash of all :data:`COMPILED_SOURCES`."""
 
-        def __init__(self, py_func, py_file):
+        def __init__(self, py_func: Callable[..., Any], py_file: str) -> None:
             super().__init__(py_func, py_file)
             if _numba.config.CACHE_DIR:  # NUMBA_CACHE_DIR is honoured, as numba does
                 self._cache_path = os.path.join(_numba.config.CACHE_DIR,
                                                 self.get_suitable_cache_subpath(py_file))
 
-        def get_source_stamp(self):
+        def get_source_stamp(self) -> bytes:
             return compiled_sources_hash()
 
         @classmethod
-        def from_function(cls, py_func, py_file):
+        def from_function(cls, py_func: Callable[..., Any],
+                          py_file: str) -> _CompiledSourcesLocator | None:
             try:
                 if Path(py_file).resolve() not in COMPILED_SOURCES:
                     return None
             except OSError:
                 return None
-            return super().from_function(py_func, py_file)
+            located: _CompiledSourcesLocator | None = super().from_function(py_func, py_file)
+            return located
 
     _IMPL = getattr(_caching, 'CacheImpl', None) or getattr(_caching, '_CacheImpl')
     _LOCATORS = _IMPL._locator_classes
     if _CompiledSourcesLocator not in _LOCATORS:
         _LOCATORS.insert(0, _CompiledSourcesLocator)
 
-    def jit(f):
+    def jit(f: F, cache: bool = True) -> F:
         """Compile ``f`` (nogil: ensembles run blocks of bodies in several threads at once)."""
-        return _numba.njit(**JIT_OPTIONS)(f)
+        return cast(F, _numba.njit(**{**JIT_OPTIONS, 'cache': cache})(f))
 
-    def jit_inline(f):
+    def jit_inline(f: F, cache: bool = True) -> F:
         """
         Compile ``f`` to be inlined into its callers at numba's IR level.
 
@@ -117,19 +127,48 @@ if COMPILED:
         small step), and LLVM optimises across the inlined body. Only for the per-step hot
         path: inlining multiplies compile time.
         """
-        return _numba.njit(**JIT_OPTIONS, inline='always')(f)
+        return cast(F, _numba.njit(**{**JIT_OPTIONS, 'cache': cache}, inline='always')(f))
 
-    def called(f):
+    def called(f: F) -> F:
         """Compile a :func:`jit_inline` function separately (not inlined), for cold paths."""
-        return jit(f.py_func)
+        return jit(python_source(f))
+
+    def _inlined(f: Callable[..., Any]) -> bool:
+        return bool(getattr(f, 'targetoptions', {}).get('inline') == 'always')
 else:
-    def jit(f):
+    def jit(f: F, cache: bool = True) -> F:
         """Return ``f`` unchanged (numba absent or disabled)."""
         return f
 
-    jit_inline = called = jit
+    jit_inline = jit
+
+    def called(f: F) -> F:
+        """Return ``f`` unchanged (numba absent or disabled)."""
+        return f
+
+    def _inlined(f: Callable[..., Any]) -> bool:
+        return False
 
 
-def python_source(f):
+def python_source(f: F) -> F:
     """Return the Python function behind a compiled one (it runs on numpy arrays too)."""
-    return getattr(f, 'py_func', f)
+    return cast(F, getattr(f, 'py_func', f))
+
+
+def specialise(f: F, namespace: dict[str, Any], suffix: str, cache: bool = True) -> F:
+    """
+    Return a copy of compiled function ``f`` that sees the globals ``namespace``, compiled as f.
+
+    Its global names (the functions it calls) are looked up in ``namespace``, which numba
+    treats as compile-time constants, as it does a module's globals: ``kernels.methods``
+    binds a method's functions this way. The copy is named ``<name>__<suffix>`` (its own
+    entry in numba's cache); ``cache=False`` keeps it out of the cache.
+    """
+    source = python_source(f)
+    copy = types.FunctionType(source.__code__, namespace, source.__name__,
+                              source.__defaults__, source.__closure__)
+    copy.__qualname__ = f'{source.__qualname__}__{suffix}'
+    copy.__doc__ = source.__doc__
+    copy.__annotations__ = dict(source.__annotations__)
+    compile_ = jit_inline if _inlined(f) else jit
+    return cast(F, compile_(copy, cache=cache))

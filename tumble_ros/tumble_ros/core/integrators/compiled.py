@@ -9,9 +9,12 @@ angles, output sampling) done inside the compiled loop. The Propagator uses it w
 """
 from __future__ import annotations
 
+import functools
 import math
+from typing import Any, Callable
 
 import numpy as np
+import numpy.typing as npt
 
 from .base import FAILED, FINISHED, RUNNING, SegmentProblem, step_nan_message, Stepper
 from .. import kernels as K
@@ -26,7 +29,7 @@ _EMPTY_E = np.empty((0, 3))
 _STATUS = {K.STATUS.RUNNING: RUNNING, K.STATUS.FINISHED: FINISHED, K.STATUS.FAILED: FAILED}
 
 
-def failure_message(st: np.ndarray, method_name: str) -> str:
+def failure_message(st: K.Array, method_name: str) -> str:
     """Return the reference path's message for the failure recorded in a kernel state ``st``."""
     t_good = float(st[K.ST.FAIL_T])
     code = st[K.ST.FAIL]
@@ -71,18 +74,21 @@ class CompiledStepper(Stepper):
     ``kernel`` to run); ``problem`` is required, ``fun`` is not used.
     """
 
-    adaptive = False  # replaced per instance by the method's flags
+    adaptive = False  # the method's flags: on the class of each method (:func:`_flavour`)
 
-    def __init__(self, method: type[Stepper], fun, t0, y0, t_bound, settings,
+    def __new__(cls, method: type[Stepper], *args: Any, **kwargs: Any) -> CompiledStepper:
+        """Return an instance of the subclass carrying ``method``'s flags (:func:`_flavour`)."""
+        return super().__new__(_flavour(method))
+
+    def __init__(self, method: type[Stepper], fun: Callable[..., Any], t0: float,
+                 y0: npt.NDArray[np.float64], t_bound: float, settings: Any,
                  problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         if problem is None:
             raise ValueError('CompiledStepper needs the SegmentProblem')
+        if method.kernel is None:
+            raise ValueError(f'method {method.name!r} has no compiled loop')
         self.method = method
-        self.name = method.name
-        self.adaptive = method.adaptive
-        self.symplectic = method.symplectic
-        self.order = method.order
         gammas = method.composition() if hasattr(method, 'composition') else ()
         self._cfg = K.config_array(method.kernel, settings, gammas, method.order or 0,
                                    problem.step_budget if method.adaptive else
@@ -93,7 +99,8 @@ class CompiledStepper(Stepper):
         self.work = 0  # units of work of the last advance()
         self._st = K.new_state()
         self._st[K.ST.Y:K.ST.Y + K.N] = self.y
-        K.seg_init(self._p, self._extra, self._cfg, self._st, self.t, self.t_bound)
+        self._loops = K.loops(method.kernel)
+        self._loops.seg_init(self._p, self._extra, self._cfg, self._st, self.t, self.t_bound)
         self._sync()
 
     @property
@@ -119,12 +126,13 @@ class CompiledStepper(Stepper):
         """Take one step; returns the new status."""
         if self.status != RUNNING:
             raise RuntimeError(f'step() on a stepper whose status is {self.status!r}')
-        K.step(self._p, self._extra, self._cfg, self._st)
+        self._loops.step(self._p, self._extra, self._cfg, self._st)
         self._sync()
         return self.status
 
-    def advance(self, t_target: float, track: np.ndarray, t_out=None, y_out=None, e_out=None,
-                k: int = 0, budget: float = math.inf) -> tuple[int, int]:
+    def advance(self, t_target: float, track: K.Array, t_out: K.Array | None = None,
+                y_out: K.Array | None = None, e_out: K.Array | None = None, k: int = 0,
+                budget: float = math.inf) -> tuple[int, int]:
         """
         Step in compiled code until t_target, the segment's end, a failure or the ``budget``.
 
@@ -139,11 +147,12 @@ class CompiledStepper(Stepper):
         if t_out is None:
             t_out, y_out, e_out = _EMPTY_T, _EMPTY_Y, _EMPTY_E
         if self.status != RUNNING:
-            k, steps, work = K.emit(self._p, self._extra, self._cfg, self._st, track, t_out,
-                                    y_out, e_out, k), 0, 0
+            k, steps, work = self._loops.emit(self._p, self._extra, self._cfg, self._st, track,
+                                              t_out, y_out, e_out, k), 0, 0
         else:
-            k, steps, work = K.advance(self._p, self._extra, self._cfg, self._st, track,
-                                       float(t_target), t_out, y_out, e_out, k, float(budget))
+            k, steps, work = self._loops.advance(self._p, self._extra, self._cfg, self._st,
+                                                 track, float(t_target), t_out, y_out, e_out, k,
+                                                 float(budget))
         self.work = int(work)
         self._sync()
         return int(k), int(steps)
@@ -153,11 +162,20 @@ class CompiledStepper(Stepper):
         if t == self.t or self.t_old is None or not (self.t_old <= t <= self.t):
             return super().state_at(t)  # the end of the step, or the error
         # the kernel maps t to local time as Stepper.state_at does
-        K.dense(self._p, self._extra, self._cfg, self._st, float(t))
+        self._loops.dense(self._p, self._extra, self._cfg, self._st, float(t))
         return self._st[K.ST.SCRATCH:K.ST.SCRATCH + K.N].copy()
 
-    def _step_impl(self):  # pragma: no cover - step() is overridden
+    def _step_impl(self) -> tuple[bool, str]:  # pragma: no cover - step() is overridden
         raise NotImplementedError
 
-    def _state_at_impl(self, tau):  # pragma: no cover - state_at() is overridden
+    def _state_at_impl(self, tau: float) -> K.Array:  # pragma: no cover - state_at() is overridden
         raise NotImplementedError
+
+
+@functools.lru_cache(maxsize=None)
+def _flavour(method: type[Stepper]) -> type[CompiledStepper]:
+    """Return the subclass of :class:`CompiledStepper` with ``method``'s name and flags."""
+    return type(f'Compiled{method.__name__}', (CompiledStepper,),
+                {'name': method.name, 'adaptive': method.adaptive,
+                 'symplectic': method.symplectic, 'order': method.order,
+                 'kernel': method.kernel, '__doc__': CompiledStepper.__doc__})

@@ -18,18 +18,20 @@ One module per concern, every arrow downward:
   (``integrators.fixed_step.RK4``), :mod:`.dop853` (scipy's DOP853 transcribed),
   :mod:`.splitting` (``integrators.splitting``);
 * :mod:`.stepping`: the stepping loop of one body on one segment (set-up, step + checks,
-  Euler tracking, output sampling); :mod:`.ensemble`: the loop over bodies and segments.
+  Euler tracking, output sampling); :mod:`.ensemble`: the loop over bodies and segments;
+* :mod:`.methods`: the registry of the compiled methods (:data:`KERNELS`, one line each) and
+  each method's copy of those two loops with its step inlined (:func:`loops`).
 
 Quaternion attitude only. ``python -m tumble_ros.core.kernels`` prints the array layouts.
 """
 from .arrays import config_array, free_flow_split, new_state, problem_array, problem_arrays
 from .checks import collapsed, finite_norm, MIN_STEP_ULPS
 from .dop853 import MAX_REJECTIONS
-from .ensemble import ensemble_advance, ensemble_init
-from .layout import CF, describe, FAIL, KERNEL_IDS, METHOD, N, PR, ST, STATUS
+from .layout import Array, CF, describe, Extra, FAIL, N, PR, ST, STATUS
+from .methods import (ensemble_advance, ensemble_init, kernel_id, kernel_name, KERNELS, Loops,
+                      loops)
 from .physics import body_torque, free_flow, rhs, rhs_called
 from .splitting import flow_called, MAX_PULSE_SUBSTEPS, pulse_step_count
-from .stepping import advance, dense, emit, seg_init, step
 from .tracking import (
     MAX_TRACK_PIECES,
     set_track,
@@ -41,10 +43,11 @@ from .tracking import (
 )
 from ..jit import COMPILED, NUMBA_VERSION
 
-__all__ = ['COMPILED', 'NUMBA_VERSION', 'ST', 'PR', 'CF', 'N', 'STATUS', 'FAIL', 'METHOD',
-           'KERNEL_IDS', 'describe', 'config_array', 'free_flow_split', 'new_state',
+__all__ = ['COMPILED', 'NUMBA_VERSION', 'ST', 'PR', 'CF', 'N', 'STATUS', 'FAIL', 'Array',
+           'Extra', 'KERNELS', 'Loops', 'loops', 'kernel_id', 'kernel_name', 'describe',
+           'config_array', 'free_flow_split', 'new_state',
            'problem_array', 'problem_arrays', 'collapsed', 'finite_norm', 'MIN_STEP_ULPS',
            'MAX_REJECTIONS', 'ensemble_advance', 'ensemble_init', 'body_torque', 'free_flow',
            'rhs', 'rhs_called', 'flow_called', 'MAX_PULSE_SUBSTEPS', 'pulse_step_count',
-           'advance', 'dense', 'emit', 'seg_init', 'step', 'MAX_TRACK_PIECES', 'set_track',
+           'MAX_TRACK_PIECES', 'set_track',
            'track_pieces', 'track_rate', 'UNWRAP_MIN_SIN', 'UNWRAP_STEP', 'unwrap_towards']

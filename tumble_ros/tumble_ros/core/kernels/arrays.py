@@ -6,27 +6,33 @@ layout CF) and ``new_state`` (a zeroed state, layout ST).
 """
 from __future__ import annotations
 
-import numpy as np
+from typing import Any, Iterable, Sequence
 
-from .layout import CF, KERNEL_IDS, MAX_STAGES, PR, ST
+import numpy as np
+import numpy.typing as npt
+
+from .layout import Array, CF, MAX_STAGES, PR, ST
+from .methods import kernel_id
 from ..torques.gravity_gradient import tidal_coefficients
 
 __all__ = ['free_flow_split', 'problem_arrays', 'problem_array', 'config_array', 'new_state']
 
 
-def free_flow_split(inertia) -> tuple[float, tuple[float, float, float]]:
+def free_flow_split(inertia: Iterable[float]) -> tuple[float, tuple[float, float, float]]:
     """
     (1/I_r, (c_x, c_y, c_z)) with I_r the middle moment and c_i = 1/I_i - 1/I_r.
 
     c_r is exactly 0, and so is c_i for a moment equal to I_r (symmetric body: exact free flow).
     """
-    inertia = tuple(float(v) for v in inertia)
-    r = sorted(range(3), key=lambda i: inertia[i])[1]
-    inv_ref = 1.0 / inertia[r]
-    return inv_ref, tuple(0.0 if i == r else 1.0 / inertia[i] - inv_ref for i in range(3))
+    moments = tuple(float(v) for v in inertia)
+    r = sorted(range(3), key=lambda i: moments[i])[1]
+    inv_ref = 1.0 / moments[r]
+    cx, cy, cz = (0.0 if i == r else 1.0 / moments[i] - inv_ref for i in range(3))
+    return inv_ref, (cx, cy, cz)
 
 
-def problem_arrays(inertia, orbit_rate, torques) -> np.ndarray:
+def problem_arrays(inertia: Iterable[float], orbit_rate: float,
+                   torques: npt.ArrayLike) -> Array:
     """
     Return the problem rows (layout PR) of n segments of one body: (n, PR.SIZE).
 
@@ -34,30 +40,32 @@ def problem_arrays(inertia, orbit_rate, torques) -> np.ndarray:
     [inertia units * rad/yr^2]. Used by the single-body path and the ensembles alike.
     """
     ix, iy, iz = (float(v) for v in inertia)
-    torques = np.asarray(torques, dtype=float).reshape(-1, 6)
-    p = np.zeros((len(torques), PR.SIZE))
+    pulses = np.asarray(torques, dtype=float).reshape(-1, 6)
+    p = np.zeros((len(pulses), PR.SIZE))
     p[:, PR.INERTIA:PR.INERTIA + 3] = ix, iy, iz
     p[:, PR.INV_INERTIA:PR.INV_INERTIA + 3] = 1.0 / ix, 1.0 / iy, 1.0 / iz
     p[:, PR.EULER:PR.EULER + 3] = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
     p[:, PR.ORBIT_RATE] = float(orbit_rate)
     p[:, PR.TIDAL:PR.TIDAL + 3] = tidal_coefficients((ix, iy, iz), orbit_rate)
-    p[:, PR.PULSE_BODY:PR.PULSE_BODY + 3] = torques[:, :3]
-    p[:, PR.PULSE_ORBITAL:PR.PULSE_ORBITAL + 3] = torques[:, 3:]
-    p[:, PR.HAS_ORBITAL] = np.where(np.any(torques[:, 3:] != 0.0, axis=1), 1.0, 0.0)
+    p[:, PR.PULSE_BODY:PR.PULSE_BODY + 3] = pulses[:, :3]
+    p[:, PR.PULSE_ORBITAL:PR.PULSE_ORBITAL + 3] = pulses[:, 3:]
+    p[:, PR.HAS_ORBITAL] = np.where(np.any(pulses[:, 3:] != 0.0, axis=1), 1.0, 0.0)
     inv_ref, coeffs = free_flow_split((ix, iy, iz))
     p[:, PR.INV_REF] = inv_ref
     p[:, PR.FLOW:PR.FLOW + 3] = coeffs
     return p
 
 
-def problem_array(inertia, orbit_rate, torque_body=(0.0, 0.0, 0.0),
-                  torque_orbital=(0.0, 0.0, 0.0)) -> np.ndarray:
+def problem_array(inertia: Iterable[float], orbit_rate: float,
+                  torque_body: Sequence[float] = (0.0, 0.0, 0.0),
+                  torque_orbital: Sequence[float] = (0.0, 0.0, 0.0)) -> Array:
     """Return the problem array of one segment (see :func:`problem_arrays`)."""
-    return problem_arrays(inertia, orbit_rate, [*torque_body, *torque_orbital])[0]
+    row: Array = problem_arrays(inertia, orbit_rate, [*torque_body, *torque_orbital])[0]
+    return row
 
 
-def config_array(kernel: str, settings, gammas=(), order: int = 0,
-                 step_budget=(np.inf, np.inf)) -> np.ndarray:
+def config_array(kernel: str, settings: Any, gammas: Iterable[float] = (), order: int = 0,
+                 step_budget: tuple[float, float] = (np.inf, np.inf)) -> Array:
     """
     Return the config array (layout CF): method, step, tolerances, order, composition.
 
@@ -66,26 +74,26 @@ def config_array(kernel: str, settings, gammas=(), order: int = 0,
     """
     cfg = np.zeros(CF.SIZE)
     cfg[CF.WINDOW], cfg[CF.WINDOW_STEPS] = (float(v) for v in step_budget)
-    cfg[CF.METHOD] = KERNEL_IDS[kernel]
+    cfg[CF.METHOD] = kernel_id(kernel)
     cfg[CF.ORDER] = float(order)
     cfg[CF.STEP] = settings.step
     cfg[CF.RTOL] = settings.rtol
     cfg[CF.ATOL] = settings.atol
     cfg[CF.MAX_STEP] = settings.max_step if settings.max_step > 0 else np.inf
-    gammas = tuple(float(g) for g in gammas)
-    if len(gammas) > MAX_STAGES:
+    stages = tuple(float(g) for g in gammas)
+    if len(stages) > MAX_STAGES:
         raise ValueError(f'at most {MAX_STAGES} composition stages')
-    cfg[CF.N_STAGES] = len(gammas)
+    cfg[CF.N_STAGES] = len(stages)
     total = 0.0
-    for j, g in enumerate(gammas):
+    for j, g in enumerate(stages):
         total += g
         cfg[CF.GAMMA + j] = g
         cfg[CF.CUM + j] = total
-    if gammas:
-        cfg[CF.CUM + len(gammas) - 1] = 1.0  # the last stage ends exactly at t + h
+    if stages:
+        cfg[CF.CUM + len(stages) - 1] = 1.0  # the last stage ends exactly at t + h
     return cfg
 
 
-def new_state() -> np.ndarray:
+def new_state() -> Array:
     """Return a zeroed state array (layout ST)."""
     return np.zeros(ST.SIZE)

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from .layout import Array
 from ..jit import jit
 
 __all__ = ['finite_norm', 'collapsed', 'MIN_STEP_ULPS']
@@ -19,7 +20,7 @@ MIN_STEP_ULPS = 16.0
 
 
 @jit
-def finite_norm(y):
+def finite_norm(y: Array) -> bool:
     """
     Return whether |y|^2 is finite.
 
@@ -33,7 +34,7 @@ def finite_norm(y):
 
 
 @jit
-def collapsed(tau_good, tau, tau_bound):
+def collapsed(tau_good: float, tau: float, tau_bound: float) -> bool:
     """
     Return whether a step from local time tau_good to tau (before tau_bound) collapsed.
 
@@ -42,5 +43,5 @@ def collapsed(tau_good, tau, tau_bound):
     """
     if not tau < tau_bound:
         return False
-    ulp = np.nextafter(abs(tau_good), np.inf) - abs(tau_good)
+    ulp: float = np.nextafter(abs(tau_good), np.inf) - abs(tau_good)
     return tau - tau_good <= MIN_STEP_ULPS * ulp

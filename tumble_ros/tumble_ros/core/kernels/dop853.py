@@ -12,7 +12,7 @@ import math
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
-from .layout import CF, FAIL, N, ST
+from .layout import Array, CF, Extra, FAIL, N, ST, STATUS
 from .physics import rhs, rhs_called
 from ..jit import jit
 
@@ -35,18 +35,21 @@ MAX_REJECTIONS = 1000
 
 
 @jit
-def _rms(st, o, scale_o):
+def _rms(st: Array, o: int, scale_o: int) -> float:
     """Return scipy's norm(x) = ||x|| / sqrt(n) of st[o:o+7] / st[scale_o:scale_o+7]."""
     acc = 0.0
     for i in range(N):
         v = st[o + i] / st[scale_o + i]
         acc += v * v
-    return math.sqrt(acc) / N ** 0.5
+    root_n: float = N ** 0.5
+    return math.sqrt(acc) / root_n
 
 
 @jit
-def start(p, extra, cfg, st):
+def start(p: Array, extra: Extra, cfg: Array, st: Array) -> None:
     """Evaluate f at the segment's start and choose the first step (select_initial_step)."""
+    if st[ST.STATUS] != STATUS.RUNNING:  # scipy's solver is never built for an empty segment
+        return
     rtol = cfg[CF.RTOL]
     atol = cfg[CF.ATOL]
     span = st[ST.TAU_BOUND]
@@ -87,7 +90,7 @@ def start(p, extra, cfg, st):
 
 
 @jit
-def step(p, extra, cfg, st):
+def step(p: Array, extra: Extra, cfg: Array, st: Array) -> float:
     """Take a step as scipy's RungeKutta._step_impl with DOP853's rk_step; returns a FAIL code."""
     t = st[ST.TAU]               # scipy's t is the local time
     t_bound = st[ST.TAU_BOUND]
@@ -185,7 +188,7 @@ def step(p, extra, cfg, st):
 
 
 @jit
-def dense(p, extra, cfg, st, tau):
+def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
     """Write DOP853's 7th-order interpolant at local time tau of the last step to ST.SCRATCH."""
     tau_old = st[ST.TAU_OLD]
     if st[ST.DENSE] == 0.0:

@@ -9,17 +9,22 @@ and runs blocks of bodies in threads (the loops release the GIL).
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
-from .layout import ST, STATUS
+from .layout import Array, Extra, ST, STATUS
 from .stepping import advance, emit, seg_init
 from ..jit import jit
 
-__all__ = ['body_advance', 'ensemble_advance', 'ensemble_init']
+__all__ = ['body_advance', 'ensemble_advance', 'ensemble_init', 'LOOP_FUNCTIONS']
+
+#: The functions :mod:`.methods` copies per method (they call the :mod:`.stepping` loop).
+LOOP_FUNCTIONS = ('body_advance', 'ensemble_advance', 'ensemble_init')
 
 
 @jit
-def body_advance(extra, cfg, probs, seg_t, first, last, cur, st, track, t_stop, t_out, y_out,
-                 e_out, k):
+def body_advance(extra: Extra, cfg: Array, probs: Array, seg_t: Array, first: int, last: int,
+                 cur: int, st: Array, track: Array, t_stop: float, t_out: Array, y_out: Array,
+                 e_out: Array, k: int) -> tuple[int, int, int]:
     """
     Advance one body through its segments probs[first:last] until t >= t_stop.
 
@@ -44,8 +49,11 @@ def body_advance(extra, cfg, probs, seg_t, first, last, cur, st, track, t_stop, 
 
 
 @jit
-def ensemble_advance(extra, cfg, probs, seg_t, seg_ptr, cur, states, tracks, t_stop, t_out,
-                     y_out, e_out, k_out, steps_out, b0, b1):
+def ensemble_advance(extra: Extra, cfg: Array, probs: Array, seg_t: Array,
+                     seg_ptr: npt.NDArray[np.int64], cur: npt.NDArray[np.int64], states: Array,
+                     tracks: Array, t_stop: float, t_out: Array, y_out: Array, e_out: Array,
+                     k_out: npt.NDArray[np.int64], steps_out: npt.NDArray[np.int64], b0: int,
+                     b1: int) -> None:
     """Run :func:`body_advance` for bodies b0 .. b1-1 (releases the GIL)."""
     for b in range(b0, b1):
         c, k, n = body_advance(extra, cfg, probs, seg_t, seg_ptr[b], seg_ptr[b + 1], cur[b],
@@ -56,7 +64,8 @@ def ensemble_advance(extra, cfg, probs, seg_t, seg_ptr, cur, states, tracks, t_s
 
 
 @jit
-def ensemble_init(extra, cfg, probs, seg_t, seg_ptr, states, b0, b1):
+def ensemble_init(extra: Extra, cfg: Array, probs: Array, seg_t: Array,
+                  seg_ptr: npt.NDArray[np.int64], states: Array, b0: int, b1: int) -> None:
     """seg_init of the first segment of bodies b0 .. b1-1 (their states hold y0)."""
     for b in range(b0, b1):
         s = seg_ptr[b]

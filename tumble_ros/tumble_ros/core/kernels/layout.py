@@ -14,9 +14,19 @@ Frames: omega and torques in body principal axes; the quaternion turns body into
 from __future__ import annotations
 
 from collections import namedtuple
+from typing import Any, NamedTuple
+
+import numpy as np
+import numpy.typing as npt
 
 __all__ = ['layout', 'describe', 'ST', 'PR', 'CF', 'N', 'MAX_STAGES', 'STATUS', 'FAIL',
-           'METHOD', 'KERNEL_IDS']
+           'Array', 'Extra']
+
+#: The kernels' arrays: flat float64 (a state, a problem, a config, outputs).
+Array = npt.NDArray[np.float64]
+#: The extra torques (``torques.extra_torque_arrays``): (compiled functions, parameter rows),
+#: or None (no loop at all).
+Extra = tuple[tuple[Any, ...], npt.NDArray[np.float64]] | None
 
 #: Size of the state vector: omega (3) + quaternion (4).
 N = 7
@@ -26,13 +36,14 @@ MAX_STAGES = 16
 RK_STAGES = 16
 
 
-def layout(name: str, fields: list[tuple[str, int, str]]):
+def layout(name: str, fields: list[tuple[str, int, str]]) -> Any:
     """Return a namedtuple ``name`` of the fields' offsets (consecutive), plus ``SIZE``."""
     offsets, at = [], 0
     for _, size, _ in fields:
         offsets.append(at)
         at += size
-    cls = namedtuple(name, [f[0] for f in fields] + ['SIZE'])
+    make: Any = namedtuple  # (a name known at run time only)
+    cls = make(name, [f[0] for f in fields] + ['SIZE'])
     table = cls(*offsets, at)
     _MEANINGS[name] = [(f[0], off, f[1], f[2]) for f, off in zip(fields, offsets)]
     return table
@@ -41,7 +52,7 @@ def layout(name: str, fields: list[tuple[str, int, str]]):
 _MEANINGS: dict[str, list[tuple[str, int, int, str]]] = {}
 
 
-def describe(table) -> str:
+def describe(table: Any) -> str:
     """Return a table (offset, size, name, meaning) of a layout made by :func:`layout`."""
     rows = _MEANINGS[type(table).__name__]
     lines = [f'{type(table).__name__}: {table.SIZE} float64']
@@ -106,7 +117,7 @@ PR = layout('Problem', [
 
 #: A method and its settings (``cfg``).
 CF = layout('Config', [
-    ('METHOD', 1, 'METHOD.RK4 / DOP853 / SPLITTING'),
+    ('METHOD', 1, 'the method: its number in the registry (methods.kernel_id)'),
     ('STEP', 1, 'fixed step [yr]'),
     ('RTOL', 1, 'relative tolerance'),
     ('ATOL', 1, 'absolute tolerance'),
@@ -119,12 +130,28 @@ CF = layout('Config', [
     ('WINDOW_STEPS', 1, 'work budget: most accepted steps within one window (inf: no budget)'),
 ])
 
-#: ST.STATUS values (floats: they live in the state array).
-STATUS = namedtuple('Status', 'RUNNING FINISHED FAILED')(0.0, 1.0, 2.0)
-#: ST.FAIL values: why a step failed.
-FAIL = namedtuple('Fail', 'NONE NONFINITE COLLAPSE TOO_SMALL STEP_NAN REJECTED BUDGET')(
-    0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
-#: CF.METHOD values.
-METHOD = namedtuple('Method', 'RK4 DOP853 SPLITTING')(1, 2, 3)
-#: Registry key (``Stepper.kernel``) -> CF.METHOD value.
-KERNEL_IDS = {'rk4': METHOD.RK4, 'dop853': METHOD.DOP853, 'splitting': METHOD.SPLITTING}
+
+class Status(NamedTuple):
+    """ST.STATUS values (floats: they live in the state array)."""
+
+    RUNNING: float
+    FINISHED: float
+    FAILED: float
+
+
+class Fail(NamedTuple):
+    """ST.FAIL values: why a step failed."""
+
+    NONE: float
+    NONFINITE: float
+    COLLAPSE: float
+    TOO_SMALL: float
+    STEP_NAN: float
+    REJECTED: float
+    BUDGET: float
+
+
+#: ST.STATUS values.
+STATUS = Status(0.0, 1.0, 2.0)
+#: ST.FAIL values.
+FAIL = Fail(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from .layout import PR
+from .layout import Array, Extra, PR
 from ..jit import called, jit, jit_inline
 from ..torques.gravity_gradient import sun_direction_body, tidal_torque
 from ..torques.pulses import pulse_torque
@@ -20,7 +20,8 @@ __all__ = ['body_torque', 'rhs', 'rhs_called', 'free_flow', 'axis_rotation']
 
 
 @jit_inline
-def body_torque(p, extra, t, q0, q1, q2, q3):
+def body_torque(p: Array, extra: Extra, t: float, q0: float, q1: float, q2: float,
+                q3: float) -> tuple[float, float, float]:
     """
     Return the total torque on the body (body axes) at time t and attitude q.
 
@@ -46,7 +47,7 @@ def body_torque(p, extra, t, q0, q1, q2, q3):
 
 
 @jit_inline
-def rhs(p, extra, t, st, yo, oo):
+def rhs(p: Array, extra: Extra, t: float, st: Array, yo: int, oo: int) -> None:
     """
     Write f(t, y) for y = st[yo:yo+7] to st[oo:oo+7]: the quaternion-attitude equations.
 
@@ -76,7 +77,8 @@ rhs_called = called(rhs)
 
 
 @jit
-def axis_rotation(axis, beta, px, py, pz, q0, q1, q2, q3):
+def axis_rotation(axis: int, beta: float, px: float, py: float, pz: float, q0: float, q1: float,
+                  q2: float, q3: float) -> tuple[float, float, float, float, float, float, float]:
     """Exact flow of 1/2 c pi_axis^2 (beta = c pi_axis a): pi turns by -beta, q by +beta."""
     c2 = math.cos(0.5 * beta)
     s2 = math.sin(0.5 * beta)
@@ -101,7 +103,8 @@ def axis_rotation(axis, beta, px, py, pz, q0, q1, q2, q3):
 
 
 @jit_inline
-def free_flow(p, a, px, py, pz, q0, q1, q2, q3):
+def free_flow(p: Array, a: float, px: float, py: float, pz: float, q0: float, q1: float,
+              q2: float, q3: float) -> tuple[float, float, float, float, float, float, float]:
     """
     Return the free rigid body's exact-per-piece flow over time a: (pi, q) after it.
 

@@ -3,31 +3,75 @@ Compiled ``rk4``: the classical Runge-Kutta method of order 4 (``integrators.fix
 
 n = ceil(span / step) equal steps on a segment, local time tau_k = k h (exactly tau_bound at
 the last step), cubic Hermite dense output whose end-of-step derivative opens the next step.
-Each function works on one body's state ``st`` (layout :data:`~.layout.ST`).
+``start``/``step``/``dense`` work on one body's state ``st`` (layout :data:`~.layout.ST`).
+
+The method is written once: :func:`step_count`, :func:`stage`, :func:`combine`, :func:`next_tau`
+and :func:`hermite` are its arithmetic, which the compiled step applies per component (floats,
+inlined) and the reference stepper ``integrators.fixed_step.RK4`` (any attitude, any
+right-hand side) applies to numpy arrays through their Python source: the same operations in
+the same order, so the two give the same bits.
 """
 from __future__ import annotations
 
-import numpy as np
+from typing import TypeVar
 
-from .layout import CF, FAIL, N, ST
+import numpy as np
+import numpy.typing as npt
+
+from .layout import Array, CF, Extra, FAIL, N, ST
 from .physics import rhs, rhs_called
 from ..jit import jit, jit_inline
 
-__all__ = ['step_count', 'start', 'step', 'dense']
+__all__ = ['step_count', 'stage', 'combine', 'next_tau', 'hermite', 'start', 'step', 'dense',
+           'V']
+
+#: A component (compiled loop) or a whole state vector (reference stepper).
+V = TypeVar('V', float, npt.NDArray[np.float64])
 
 
 @jit
-def step_count(span, step):
+def step_count(span: float, step: float) -> float:
     """Return n = ceil(span / step) (a float, at least 1) for a segment of length ``span``."""
     if not span > 0.0:
         return 1.0
     # np.ceil stays a float (math.ceil is an int64 in numba: a span / step above 9e18 wrapped
     # around to one step over the whole segment)
-    return max(1.0, np.ceil(span / step * (1.0 - 1e-12)))
+    n: float = np.ceil(span / step * (1.0 - 1e-12))
+    return max(1.0, n)
+
+
+@jit_inline
+def stage(y: V, k: V, a: float) -> V:
+    """Return a stage's argument y + a k (a = h/2 or h)."""
+    return y + a * k
+
+
+@jit_inline
+def combine(y: V, k1: V, k2: V, k3: V, k4: V, h: float) -> V:
+    """Return the step's result y + h/6 (k1 + 2 (k2 + k3) + k4)."""
+    return y + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
+
+
+@jit_inline
+def next_tau(n_steps: float, n_total: float, h: float, tau_bound: float) -> float:
+    """Return the local time after step n_steps + 1: (n_steps + 1) h, exactly tau_bound last."""
+    # tau_k = k h: no accumulated rounding in t over millions of steps (over 10^6 steps,
+    # t + h + h + ... drifts by ~1e-10 yr, enough to show in the Jacobi integral at 1e-13)
+    return tau_bound if n_steps + 1.0 >= n_total else (n_steps + 1.0) * h
+
+
+@jit_inline
+def hermite(s: float) -> tuple[float, float, float, float]:
+    """Return the cubic Hermite weights (h00, h10, h01, h11) at s in [0, 1] of a step."""
+    h00 = (1.0 + 2.0 * s) * (1.0 - s) ** 2
+    h10 = s * (1.0 - s) ** 2
+    h01 = s * s * (3.0 - 2.0 * s)
+    h11 = s * s * (s - 1.0)
+    return h00, h10, h01, h11
 
 
 @jit
-def start(p, extra, cfg, st):
+def start(p: Array, extra: Extra, cfg: Array, st: Array) -> None:
     """Set the segment's step count and step (st[ST.TAU_BOUND] is its span)."""
     n = step_count(st[ST.TAU_BOUND], cfg[CF.STEP])
     st[ST.H] = st[ST.TAU_BOUND] / n
@@ -35,7 +79,7 @@ def start(p, extra, cfg, st):
 
 
 @jit_inline
-def step(p, extra, cfg, st):
+def step(p: Array, extra: Extra, cfg: Array, st: Array) -> float:
     """Take one step from st[ST.Y] at local time st[ST.TAU]; returns a FAIL code."""
     h = st[ST.H]
     tau = st[ST.TAU]
@@ -47,29 +91,27 @@ def step(p, extra, cfg, st):
     k3 = ST.K + N
     k4 = ST.K + 2 * N
     for i in range(N):
-        st[ST.TMP + i] = st[ST.Y + i] + (0.5 * h) * st[ST.F + i]
+        st[ST.TMP + i] = stage(st[ST.Y + i], st[ST.F + i], 0.5 * h)
     rhs(p, extra, t0 + (tau + 0.5 * h), st, ST.TMP, k2)
     for i in range(N):
-        st[ST.TMP + i] = st[ST.Y + i] + (0.5 * h) * st[k2 + i]
+        st[ST.TMP + i] = stage(st[ST.Y + i], st[k2 + i], 0.5 * h)
     rhs(p, extra, t0 + (tau + 0.5 * h), st, ST.TMP, k3)
     for i in range(N):
-        st[ST.TMP + i] = st[ST.Y + i] + h * st[k3 + i]
+        st[ST.TMP + i] = stage(st[ST.Y + i], st[k3 + i], h)
     rhs(p, extra, t0 + (tau + h), st, ST.TMP, k4)
     st[ST.NFEV] += 3.0
     for i in range(N):
         st[ST.F_OLD + i] = st[ST.F + i]
-        st[ST.Y + i] = st[ST.Y + i] + (h / 6.0) * (
-            st[ST.F + i] + 2.0 * (st[k2 + i] + st[k3 + i]) + st[k4 + i])
+        st[ST.Y + i] = combine(st[ST.Y + i], st[ST.F + i], st[k2 + i], st[k3 + i], st[k4 + i],
+                               h)
     st[ST.TAU_OLD] = tau
-    # tau_k = k h (no accumulated rounding in t over millions of steps)
-    st[ST.TAU] = (st[ST.TAU_BOUND] if st[ST.N_STEPS] + 1.0 >= st[ST.N_TOTAL]
-                  else (st[ST.N_STEPS] + 1.0) * h)
+    st[ST.TAU] = next_tau(st[ST.N_STEPS], st[ST.N_TOTAL], h, st[ST.TAU_BOUND])
     st[ST.F_VALID] = 0.0
     return FAIL.NONE
 
 
 @jit
-def dense(p, extra, cfg, st, tau):
+def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
     """Write the cubic Hermite interpolant at local time tau of the last step to ST.SCRATCH."""
     if st[ST.F_VALID] == 0.0:  # f at the end of the step
         rhs_called(p, extra, st[ST.T0] + st[ST.TAU], st, ST.Y, ST.F)
@@ -78,10 +120,7 @@ def dense(p, extra, cfg, st, tau):
     tau_old = st[ST.TAU_OLD]
     h = st[ST.TAU] - tau_old
     s = (tau - tau_old) / h
-    h00 = (1.0 + 2.0 * s) * (1.0 - s) ** 2
-    h10 = s * (1.0 - s) ** 2
-    h01 = s * s * (3.0 - 2.0 * s)
-    h11 = s * s * (s - 1.0)
+    h00, h10, h01, h11 = hermite(s)
     for i in range(N):
         st[ST.SCRATCH + i] = (h00 * st[ST.Y_OLD + i] + (h10 * h) * st[ST.F_OLD + i]
                               + h01 * st[ST.Y + i] + (h11 * h) * st[ST.F + i])

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .layout import CF, FAIL, PR, ST
+from .layout import Array, CF, Extra, FAIL, PR, ST
 from .physics import body_torque, free_flow
 from .rk4 import step_count
 from ..jit import called, jit, jit_inline
@@ -24,7 +24,8 @@ MAX_PULSE_SUBSTEPS = 1000
 
 
 @jit_inline
-def flow(p, extra, cfg, st, yo, po, to, t0, s0, h, yd, pd, td):
+def flow(p: Array, extra: Extra, cfg: Array, st: Array, yo: int, po: int, to: int, t0: float,
+         s0: float, h: float, yd: int, pd: int, td: int) -> None:
     """
     Take one composed splitting step of length h from local time s0 (absolute time t0 + s0).
 
@@ -73,7 +74,8 @@ flow_called = called(flow)
 
 
 @jit
-def pulse_step_count(p, span, step, order, wx, wy, wz):
+def pulse_step_count(p: Array, span: float, step: float, order: float, wx: float, wy: float,
+                     wz: float) -> float:
     """
     Return the number of equal steps (a float) of a splitting method on a segment.
 
@@ -126,7 +128,7 @@ def pulse_step_count(p, span, step, order, wx, wy, wz):
 
 
 @jit
-def start(p, extra, cfg, st):
+def start(p: Array, extra: Extra, cfg: Array, st: Array) -> None:
     """Set the segment's step count (:func:`pulse_step_count`), momentum and opening torque."""
     span = st[ST.TAU_BOUND]
     n = pulse_step_count(p, span, cfg[CF.STEP], cfg[CF.ORDER], st[ST.Y], st[ST.Y + 1],
@@ -143,7 +145,7 @@ def start(p, extra, cfg, st):
 
 
 @jit_inline
-def step(p, extra, cfg, st):
+def step(p: Array, extra: Extra, cfg: Array, st: Array) -> float:
     """Advance one composed step, momentum and torque carried; returns a FAIL code."""
     h = st[ST.H]
     tau = st[ST.TAU]
@@ -161,7 +163,7 @@ def step(p, extra, cfg, st):
 
 
 @jit
-def dense(p, extra, cfg, st, tau):
+def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
     """Write a step of the method from the step's start to local time tau to ST.SCRATCH."""
     tau_old = st[ST.TAU_OLD]
     flow_called(p, extra, cfg, st, ST.Y_OLD, ST.PI_OLD, ST.TORQUE_OLD, st[ST.T0], tau_old,

@@ -8,23 +8,47 @@ continuous Euler angles (:mod:`.tracking`, as ``Propagator``) and output samplin
 segment runs without returning to Python. Like the reference steppers (``integrators.base``:
 "Local time") every method steps in the segment's local time tau = t - t0 (st[ST.TAU]);
 st[ST.T] is the absolute time handed out.
+
+A template: the functions below call the method through the names :func:`method_start`,
+:func:`method_step` and :func:`method_dense`, which :mod:`.methods` binds, for each method of
+its registry, to that method's module (a copy of these functions per method, compiled with the
+method inlined: no run-time dispatch). Called here, unbound, they raise.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from . import dop853, rk4, splitting
 from .checks import collapsed, finite_norm, MIN_STEP_ULPS
-from .layout import CF, FAIL, METHOD, N, ST, STATUS
+from .layout import Array, CF, Extra, FAIL, N, ST, STATUS
 from .tracking import (refresh_track, set_track, track_pieces, track_rate, UNWRAP_STEP,
                        unwrapped_euler)
 from ..jit import jit, jit_inline
 
-__all__ = ['seg_init', 'step', 'dense', 'track_euler', 'emit', 'advance']
+__all__ = ['seg_init', 'step', 'dense', 'track_euler', 'emit', 'advance', 'LOOP_FUNCTIONS']
+
+#: The functions of this module that call the method (directly or through each other): the
+#: ones :mod:`.methods` copies per method, in an order where each comes after those it calls.
+LOOP_FUNCTIONS = ('seg_init', 'step', 'dense', 'track_update', 'track_euler', 'emit', 'advance')
+
+
+def method_start(p: Array, extra: Extra, cfg: Array, st: Array) -> None:
+    """Start the segment: the method's ``start`` (bound per method by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run the loops of kernels.methods.loops(name)')
+
+
+def method_step(p: Array, extra: Extra, cfg: Array, st: Array) -> float:
+    """Take one step, return a FAIL code: the method's ``step`` (bound by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run the loops of kernels.methods.loops(name)')
+
+
+def method_dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
+    """Dense output at local time tau: the method's ``dense`` (bound by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run the loops of kernels.methods.loops(name)')
 
 
 @jit
-def seg_init(p, extra, cfg, st, t0, t_bound):
+def seg_init(p: Array, extra: Extra, cfg: Array, st: Array, t0: float,
+             t_bound: float) -> None:
     """Start a segment [t0, t_bound] from the state already in st[ST.Y] (counters reset)."""
     st[ST.T] = t0
     st[ST.T0] = t0
@@ -45,17 +69,11 @@ def seg_init(p, extra, cfg, st, t0, t_bound):
     st[ST.COLLAPSE] = MIN_STEP_ULPS * (np.nextafter(big, np.inf) - big)
     st[ST.WIN_T] = t0
     st[ST.WIN_STEPS] = 0.0
-    method = int(cfg[CF.METHOD])
-    if method == METHOD.RK4:
-        rk4.start(p, extra, cfg, st)
-    elif method == METHOD.SPLITTING:
-        splitting.start(p, extra, cfg, st)
-    elif st[ST.STATUS] == STATUS.RUNNING:  # scipy's solver is never built for an empty segment
-        dop853.start(p, extra, cfg, st)
+    method_start(p, extra, cfg, st)
 
 
 @jit_inline
-def step(p, extra, cfg, st):
+def step(p: Array, extra: Extra, cfg: Array, st: Array) -> bool:
     """
     One step of the segment's method with the checks of ``integrators.base.Stepper.step``.
 
@@ -75,13 +93,7 @@ def step(p, extra, cfg, st):
     tau_old_good = st[ST.TAU_OLD]
     for i in range(N):
         st[ST.Y_OLD + i] = st[ST.Y + i]
-    method = int(cfg[CF.METHOD])
-    if method == METHOD.RK4:
-        code = rk4.step(p, extra, cfg, st)
-    elif method == METHOD.DOP853:
-        code = dop853.step(p, extra, cfg, st)
-    else:
-        code = splitting.step(p, extra, cfg, st)
+    code = method_step(p, extra, cfg, st)
     if code == FAIL.NONE and not finite_norm(st[ST.Y:ST.Y + N]):
         code = FAIL.NONFINITE
     # (the exact test only for steps near the collapse bound: ST.COLLAPSE >= 16 ulp(tau_good))
@@ -113,7 +125,7 @@ def step(p, extra, cfg, st):
 
 
 @jit
-def dense(p, extra, cfg, st, t):
+def dense(p: Array, extra: Extra, cfg: Array, st: Array, t: float) -> None:
     """State at absolute time t in [t_old, t] of the last step, written to st[ST.SCRATCH]."""
     if t == st[ST.T]:
         for i in range(N):
@@ -121,17 +133,12 @@ def dense(p, extra, cfg, st, t):
         return
     # local time, kept inside the step (integrators.base.Stepper.state_at)
     tau = min(max(t - st[ST.T0], st[ST.TAU_OLD]), st[ST.TAU])
-    method = int(cfg[CF.METHOD])
-    if method == METHOD.RK4:
-        rk4.dense(p, extra, cfg, st, tau)
-    elif method == METHOD.DOP853:
-        dop853.dense(p, extra, cfg, st, tau)
-    else:
-        splitting.dense(p, extra, cfg, st, tau)
+    method_dense(p, extra, cfg, st, tau)
 
 
 @jit
-def track_update(p, extra, cfg, st, track, increment):
+def track_update(p: Array, extra: Extra, cfg: Array, st: Array, track: Array,
+                 increment: float) -> int:
     """
     Update the track through the last step (the reference's subdivision).
 
@@ -157,7 +164,7 @@ def track_update(p, extra, cfg, st, track, increment):
 
 
 @jit_inline
-def track_euler(p, extra, cfg, st, track):
+def track_euler(p: Array, extra: Extra, cfg: Array, st: Array, track: Array) -> int:
     """
     Follow phi, psi continuously through the step just taken (``Propagator._track_euler``).
 
@@ -179,7 +186,8 @@ def track_euler(p, extra, cfg, st, track):
 
 
 @jit
-def emit(p, extra, cfg, st, track, t_out, y_out, e_out, k):
+def emit(p: Array, extra: Extra, cfg: Array, st: Array, track: Array, t_out: Array,
+         y_out: Array, e_out: Array, k: int) -> int:
     """Write every output t_out[k:] <= t (state and unwrapped Euler angles); returns the new k."""
     n_out = t_out.shape[0]
     while k < n_out and t_out[k] <= st[ST.T]:
@@ -200,7 +208,9 @@ def emit(p, extra, cfg, st, track, t_out, y_out, e_out, k):
 
 
 @jit
-def advance(p, extra, cfg, st, track, t_target, t_out, y_out, e_out, k, budget):
+def advance(p: Array, extra: Extra, cfg: Array, st: Array, track: Array, t_target: float,
+            t_out: Array, y_out: Array, e_out: Array, k: int,
+            budget: float) -> tuple[int, int, int]:
     """
     Step the segment until t >= t_target, tracking the Euler angles and writing the outputs.
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from .layout import ST
+from .layout import Array, ST
 from ..jit import jit, jit_inline
 
 __all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards',
@@ -28,13 +28,13 @@ _TWO_PI = 2.0 * math.pi
 
 
 @jit
-def unwrap_towards(angle, reference):
+def unwrap_towards(angle: float, reference: float) -> float:
     """Return angle + 2 pi k nearest to ``reference`` [rad]."""
     return angle + _TWO_PI * round((reference - angle) / _TWO_PI)
 
 
 @jit
-def unwrapped_euler(st, o, track):
+def unwrapped_euler(st: Array, o: int, track: Array) -> tuple[float, float, float]:
     """
     Return the paper's (phi, psi, theta) of quaternion st[o+3:o+7].
 
@@ -65,7 +65,7 @@ def unwrapped_euler(st, o, track):
 
 
 @jit
-def set_track(st, o, track):
+def set_track(st: Array, o: int, track: Array) -> None:
     """
     Set track to the unwrapped Euler angles of st[o:o+7], unless they are not finite.
 
@@ -79,7 +79,8 @@ def set_track(st, o, track):
 
 
 @jit_inline
-def track_rate(wx, wy, wz, q0, q1, q2, q3):
+def track_rate(wx: float, wy: float, wz: float, q0: float, q1: float, q2: float,
+               q3: float) -> float:
     """Return the bound |w| / max(UNWRAP_MIN_SIN, sin theta) on how fast phi, psi turn [rad/yr]."""
     w = math.sqrt(wx ** 2 + wy ** 2 + wz ** 2)
     s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
@@ -89,7 +90,7 @@ def track_rate(wx, wy, wz, q0, q1, q2, q3):
 
 
 @jit
-def track_pieces(angle):
+def track_pieces(angle: float) -> int:
     """Return how many pieces a step is followed in (1 .. MAX_TRACK_PIECES), from its bound."""
     pieces = angle / UNWRAP_STEP
     # (not <=: also an infinite rate, |w| overflowing in a state running away)
@@ -99,7 +100,7 @@ def track_pieces(angle):
 
 
 @jit
-def refresh_track(st, track):
+def refresh_track(st: Array, track: Array) -> None:
     """Bring a lazily updated track to the current state (see ``stepping.track_euler``)."""
     if st[ST.BUDGET] > 0.0:
         set_track(st, ST.Y, track)
