@@ -5,10 +5,15 @@ numba compiles the single-body and the ensemble loops of each compiled method
 (``core.kernels.KERNELS``) on their first use (then cached beside the sources); ``make setup``
 runs this after each build so that no run waits for it. It also compiles the loops' variant for
 one extra torque (``core.torques.TorqueComponent``: every single extra torque shares it,
-whatever its function) and the reference path's calls.
+whatever its function) and the reference path's calls. The methods compile in parallel, one
+process each on up to as many cores as there are (each method's loops are its own copies, so
+the compilations share nothing), and each says when it is ready.
 """
 from __future__ import annotations
 
+from concurrent.futures import as_completed, ProcessPoolExecutor
+import multiprocessing
+import os
 import sys
 import time
 
@@ -26,35 +31,56 @@ def _no_torque(par: object, t: float, q0: float, q1: float, q2: float,
     return 0.0, 0.0, 0.0
 
 
-def warm_up() -> float:
+def _tiny(extra: bool) -> Scenario:
+    """Return the smallest scenario that runs a loop (with one extra torque if ``extra``)."""
+    tiny = Scenario(duration=1e-3, output_interval=1e-3,
+                    integrator=IntegratorSettings(method='splitting', step=1e-4))
+    return tiny.replace(torques=(TorqueComponent('warm-up', _no_torque),)) if extra else tiny
+
+
+def _warm_method(name: str) -> float:
+    """Compile (or load) one method's single-body and ensemble loops; return the seconds."""
+    started = time.perf_counter()
+    for extra in (False, True):
+        run = _tiny(extra).replace(integrator=IntegratorSettings(method=name, step=1e-4))
+        simulate(run)
+        simulate_ensemble(run, n_bodies=2)
+    return time.perf_counter() - started
+
+
+def warm_up(report: bool = False) -> float:
     """
     Compile every method's single-body and ensemble loops now, or load them from the cache.
 
-    Returns the seconds taken (0 when numba is unavailable).
+    The methods compile in parallel processes (up to the CPU count); ``report`` prints a line
+    as each is ready. Returns the seconds taken (0 when numba is unavailable).
     """
     if not kernels.COMPILED:
         return 0.0
     started = time.perf_counter()
-    tiny = Scenario(duration=1e-3, output_interval=1e-3,
-                    integrator=IntegratorSettings(method='splitting', step=1e-4))
-    with_extra = tiny.replace(torques=(TorqueComponent('warm-up', _no_torque),))
     # one integrator name per compiled method (its loops serve every name sharing the kernel)
-    compiled = {cls.kernel: name for name, cls in INTEGRATORS.items()
-                if cls.kernel in kernels.KERNELS}
-    for scenario in (tiny, with_extra):
-        for name in compiled.values():
-            run = scenario.replace(integrator=IntegratorSettings(method=name, step=1e-4))
-            simulate(run)
-            simulate_ensemble(run, n_bodies=2)
+    compiled = sorted({cls.kernel: name for name, cls in INTEGRATORS.items()
+                       if cls.kernel in kernels.KERNELS}.values())
+    workers = max(1, min(len(compiled), os.cpu_count() or 1))
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context('spawn')) as pool:
+        futures = {pool.submit(_warm_method, name): name for name in compiled}
+        for future in as_completed(futures):
+            seconds = future.result()
+            if report:
+                print(f'   {futures[future]} loops ready ({seconds:.1f} s)', flush=True)
+    for extra in (False, True):
         for method in ('splitting', 'rk4', 'dop853'):   # the reference path's compiled calls
-            simulate(scenario.replace(integrator=IntegratorSettings(method=method, step=1e-4)),
-                     fast=False)
+            simulate(_tiny(extra).replace(
+                integrator=IntegratorSettings(method=method, step=1e-4)), fast=False)
     return time.perf_counter() - started
 
 
 def main(argv: list[str] | None = None) -> int:
     """Warm up, and say how long it took."""
-    seconds = warm_up()
+    if kernels.COMPILED:
+        print('== compiling the integration loops (numba; once per build, then cached)',
+              flush=True)
+    seconds = warm_up(report=True)
     print(f'== compiled loops ready ({seconds:.1f} s)' if kernels.COMPILED
           else '== numba not available: the reference path will be used', file=sys.stdout)
     return 0
