@@ -68,6 +68,8 @@ def warm_up(report: bool = False) -> float:
             seconds = future.result()
             if report:
                 print(f'   {futures[future]} loops ready ({seconds:.1f} s)', flush=True)
+    for name in compiled:   # loaded here from the cache the workers wrote (milliseconds)
+        _warm_method(name)
     for extra in (False, True):
         for method in ('splitting', 'rk4', 'dop853'):   # the reference path's compiled calls
             simulate(_tiny(extra).replace(
