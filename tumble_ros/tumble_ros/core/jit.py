@@ -36,6 +36,7 @@ import functools
 import hashlib
 import os
 from pathlib import Path
+from typing import Any, Callable
 
 __all__ = ['COMPILED', 'NUMBA_VERSION', 'JIT_OPTIONS', 'jit', 'jit_inline', 'called',
            'python_source', 'COMPILED_SOURCES', 'compiled_sources_hash']
@@ -130,6 +131,6 @@ else:
     jit_inline = called = jit
 
 
-def python_source(f):
+def python_source(f: Callable[..., Any]) -> Callable[..., Any]:
     """Return the Python function behind a compiled one (it runs on numpy arrays too)."""
     return getattr(f, 'py_func', f)

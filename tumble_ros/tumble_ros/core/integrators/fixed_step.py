@@ -9,8 +9,14 @@ works in the segment's local time tau = t - t0 (``base``: "Local time").
 from __future__ import annotations
 
 import math
+from typing import Callable, TYPE_CHECKING
 
-from .base import Stepper
+import numpy as np
+
+from .base import SegmentProblem, Stepper
+
+if TYPE_CHECKING:
+    from ..scenario import IntegratorSettings
 
 __all__ = ['RK4']
 
@@ -29,28 +35,30 @@ class RK4(Stepper):
     order = 4
     kernel = 'rk4'
 
-    def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
+    def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
+                 t_bound: float, settings: IntegratorSettings,
+                 problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         span = self.tau_bound
         n = max(1, math.ceil(span / settings.step * (1.0 - 1e-12))) if span > 0 else 1
         self._h = span / n
         self._n_total = n
-        self._f = None  # derivative at (t, y), computed lazily
-        self._y_old = None
-        self._f_old = None
+        self._f: np.ndarray | None = None  # derivative at (t, y), computed lazily
+        self._y_old: np.ndarray | None = None
+        self._f_old: np.ndarray | None = None
         self._nfev = 0
 
     @property
     def nfev(self) -> int:
         return self._nfev
 
-    def _deriv(self):
+    def _deriv(self) -> np.ndarray:
         if self._f is None:
             self._f = self.local_fun(self.tau, self.y)
             self._nfev += 1
         return self._f
 
-    def _step_impl(self):
+    def _step_impl(self) -> tuple[bool, str]:
         h, tau, y = self._h, self.tau, self.y
         fun = self.local_fun
         k1 = self._deriv()
@@ -69,7 +77,9 @@ class RK4(Stepper):
         self._f = None
         return True, ''
 
-    def _state_at_impl(self, tau):
+    def _state_at_impl(self, tau: float) -> np.ndarray:
+        # state_at() hands out states within a step taken
+        assert self.tau_old is not None and self._y_old is not None and self._f_old is not None
         h = self.tau - self.tau_old
         s = (tau - self.tau_old) / h
         f1 = self._deriv()
