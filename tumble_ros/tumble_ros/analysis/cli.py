@@ -100,7 +100,7 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _error(text: str) -> int:
+def _error(text: object) -> int:
     print(f'ERROR: {" ".join(str(text).split())}', file=sys.stderr)
     return 1
 

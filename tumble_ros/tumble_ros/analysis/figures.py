@@ -501,7 +501,8 @@ def gapped_envelope(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarra
     pieces = runs(t)
     if len(pieces) == 1:
         return envelope(t, y)
-    ts, ys = [], []
+    ts: list[np.ndarray] = []
+    ys: list[np.ndarray | list[float]] = []
     for a, b in pieces:
         et, ey = envelope(t[a:b], y[a:b])
         ts += [et, et[-1:]]

@@ -45,6 +45,7 @@ import math
 from pathlib import Path
 import re
 import sys
+from typing import Any
 
 import numpy as np
 
@@ -378,9 +379,9 @@ def load_recording(path, *, namespace: str | None = None, run: str | None = None
 
     # Raw columns, stamps as integer ns (seconds_per_year may only be known later in the file).
     raw: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    impacts_raw: list[tuple[int, object]] = []
-    scenarios: list[tuple[int, object]] = []
-    statuses: list[tuple[int, object]] = []
+    impacts_raw: list[tuple[int, Any]] = []  # (stamp [ns], ROS message)
+    scenarios: list[tuple[int, Any]] = []
+    statuses: list[tuple[int, Any]] = []
     norm_models: list[str] = []
     comparator_status = None
     # The per-sample topics as numpy columns (io.columns: ~1 M messages/s), the rest decoded.
@@ -429,7 +430,8 @@ def load_recording(path, *, namespace: str | None = None, run: str | None = None
     def years(ns: np.ndarray) -> np.ndarray:
         return ns.astype(np.float64) / timebase.ns_per_year
 
-    stamps, omega = _sorted(*raw.get(ANGULAR_VELOCITY, ([], [])), 3)
+    stamp_ns, rows = raw.get(ANGULAR_VELOCITY, ([], []))
+    stamps, omega = _sorted(stamp_ns, rows, 3)
     if mixed:   # another run chosen away: its samples are on the same topic, not separable
         shared = len(stamps) - len(np.unique(stamps))
         left_out.append(f'{in_namespace(namespace, ANGULAR_VELOCITY)}: the samples of the other '
@@ -471,12 +473,12 @@ def load_recording(path, *, namespace: str | None = None, run: str | None = None
         rec.error_models = tuple(norm_models)
     rec.comparator_status = comparator_status
 
-    for ns, msg in sorted(impacts_raw, key=lambda item: item[0]):
+    for stamp, msg in sorted(impacts_raw, key=lambda item: item[0]):
         frame = int(msg.frame)
         rec.impacts.append(ImpactRecord(
             id=int(msg.id), start=float(msg.start), end=float(msg.end),
             frame=IMPACT_FRAMES.get(frame, f'frame {frame}'), torque=_vec(msg.torque),
-            delta_omega=_vec(msg.delta_omega), t=timebase.to_years(ns)))
+            delta_omega=_vec(msg.delta_omega), t=timebase.to_years(stamp)))
     for _, msg in scenarios:
         q = msg.attitude
         rec.segments.append(SegmentStart(
@@ -490,7 +492,7 @@ def load_recording(path, *, namespace: str | None = None, run: str | None = None
             break
         except (ScenarioError, ValueError, TypeError) as err:   # a description we cannot use
             rec.scenario_error = ' '.join(str(err).split()) or type(err).__name__
-    for ns, msg in statuses:
+    for _, msg in statuses:
         state = int(msg.state)
         rec.status.append(StatusRecord(t=float(msg.t), state=SIM_STATES.get(state, str(state)),
                                        message=str(msg.message)))

@@ -60,9 +60,9 @@ import numpy as np
 import numpy.typing as npt
 from scipy.special import ellipj, ellipk, ellipkinc
 
+from .array_types import ArrayLike, FloatArray
 from .rotation import quaternion_to_euler
 from .scenario import ENCOUNTER_TORQUE_FRACTION, Scenario, ScenarioError
-from .array_types import ArrayLike, FloatArray
 
 __all__ = [
     'AnalyticModel',

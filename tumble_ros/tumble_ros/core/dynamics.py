@@ -33,6 +33,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from . import kernels
+from .array_types import ArrayLike, FloatArray, Vector3
 from .rotation import (
     euler_to_matrix,
     euler_to_quaternion,
@@ -40,7 +41,6 @@ from .rotation import (
     quaternion_to_matrix,
 )
 from .torques import extra_torque_arrays, gravity_gradient_potential, TorqueComponent
-from .array_types import ArrayLike, FloatArray, Vector3
 
 __all__ = [
     'AttitudeModel',

@@ -25,6 +25,7 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
+from .array_types import ArrayLike, FloatArray
 from .dynamics import ATTITUDE_MODELS
 from .integrators import INTEGRATORS
 from .jit import python_source
@@ -48,7 +49,6 @@ from .params_file import check_params_file, parse_params_text
 from .timebase import SampleGrid, TimeBase
 from .torques import orbital_to_body, TorqueComponent
 from .torques.orbits import KeplerOrbit, perturber_position
-from .array_types import ArrayLike, FloatArray
 from .units import TIME_UNITS, to_years
 
 __all__ = [

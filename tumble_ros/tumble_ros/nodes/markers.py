@@ -164,7 +164,9 @@ class MarkerScene:
                                             self.scenario.inertia)
         arrow(4, momentum, MOMENTUM_LENGTH)
         if self.perturber_ns is not None:
-            arrow(5, torquing_body_direction(self.scenario, t), PERTURBER_LENGTH)
+            direction = torquing_body_direction(self.scenario, t)
+            assert direction is not None  # (perturber_ns: something torques)
+            arrow(5, direction, PERTURBER_LENGTH)
         return values
 
     def encode(self, stamp_ns, t, quaternion, omega) -> np.ndarray:

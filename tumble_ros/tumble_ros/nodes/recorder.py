@@ -301,7 +301,8 @@ class RecorderNode(GuardedNode):
                 self._last_stamp[topic] = (_header_stamp_ns(data), time.monotonic())
 
         callback = on_message if self._message_info else (lambda data: on_message(data, None))
-        self.create_subscription(msg_class, topic, callback, qos, raw=True)
+        # (rclpy hands a two-argument callback the MessageInfo too; its stubs know one argument)
+        self.create_subscription(msg_class, topic, callback, qos, raw=True)  # type: ignore[arg-type]
         self.get_logger().info(f'recording {topic} ({type_name})')
 
     def _slowest_live_stamp(self) -> int | None:
