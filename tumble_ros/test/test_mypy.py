@@ -43,6 +43,22 @@ CLEAN = [
     'tumble_ros.io',
     'tumble_ros.io.mcap_bulk',
     'tumble_ros.io.mcap_writer',
+    'tumble_ros.analysis.*',
+    'tumble_ros.cli',
+    'tumble_ros.cli.progress',
+    'tumble_ros.cli.warmup',
+    'tumble_ros.nodes',
+    'tumble_ros.nodes.bringup',
+    'tumble_ros.nodes.clocks',
+    'tumble_ros.nodes.guarded',
+    'tumble_ros.nodes.markers',
+    'tumble_ros.nodes.parameters',
+    'tumble_ros.nodes.progress',
+    'tumble_ros.nodes.qos',
+    'tumble_ros.nodes.recorder',
+    'tumble_ros.nodes.runner',
+    'tumble_ros.nodes.shutdown',
+    'tumble_ros.nodes.sources',
 ]
 
 #: ``path:line: error: message  [code]`` as mypy prints it (paths relative to the root).

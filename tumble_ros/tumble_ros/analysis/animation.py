@@ -34,7 +34,7 @@ import os
 from pathlib import Path
 import struct
 import sys
-from typing import Any, Callable
+from typing import Any, Callable, TextIO
 
 from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -165,7 +165,7 @@ def _xyz(v) -> np.ndarray:
     return np.array([float(v.x), float(v.y), float(v.z)])
 
 
-def marker_scene(array) -> Scene:
+def marker_scene(array: Any) -> Scene:
     """Return the primitives of a decoded visualization_msgs/MarkerArray (SPHERE, CUBE, ARROW)."""
     scene: Scene = []
     for m in array.markers:
@@ -312,7 +312,7 @@ def _replace(temporary: Path, path: Path) -> None:
             temporary.unlink()
 
 
-def stderr_bar(name: str, stream=None) -> Callable[[int, int], None]:
+def stderr_bar(name: str, stream: TextIO | None = None) -> Callable[[int, int], None]:
     """Return a progress callback drawing ``name: [#####     ] 50% (60 of 120 frames)``."""
     def report(done: int, total: int) -> None:
         out = stream or sys.stderr
@@ -398,7 +398,8 @@ def _writer(path: Path, fps: float):
                         'one frame of it a .png')
 
 
-def write_animation(rec: Recording, path, *, frames: int = FRAMES, fps: float = FPS,
+def write_animation(rec: Recording, path: str | os.PathLike[str], *, frames: int = FRAMES,
+                    fps: float = FPS,
                     at: float | None = None, overwrite: bool = False,
                     progress: Callable[[int, int], None] | None = None) -> tuple[Path, int]:
     """
@@ -464,7 +465,7 @@ def write_animation(rec: Recording, path, *, frames: int = FRAMES, fps: float = 
     return path, len(chosen)
 
 
-def write_still(rec: Recording, path, *, at: float | None = None,
+def write_still(rec: Recording, path: str | os.PathLike[str], *, at: float | None = None,
                 overwrite: bool = False) -> tuple[Path, float]:
     """
     Draw the recorded ``markers`` scene at ``at`` [yr] (default: the first) into ``path`` (PNG).

@@ -42,10 +42,11 @@ from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 import math
+import os
 from pathlib import Path
 import re
 import sys
-from typing import Any
+from typing import Any, TextIO
 
 import numpy as np
 
@@ -255,7 +256,7 @@ class Recording:
 Progress = Callable[[int, int], None]
 
 
-def stderr_progress(min_total: int = 100_000, stream=None) -> Progress:
+def stderr_progress(min_total: int = 100_000, stream: TextIO | None = None) -> Progress:
     """
     Return a progress callback that prints every 10 % to ``stream`` (default: stderr).
 
@@ -360,7 +361,8 @@ def _own_run(path: Path, topic: str, scenarios: list, run: str | None
     return own, [d for d, r in zip(scenarios, ids) if r == own], lines, any(others.keys() - {''})
 
 
-def load_recording(path, *, namespace: str | None = None, run: str | None = None,
+def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None,
+                   run: str | None = None,
                    progress: Progress | None = None) -> Recording:
     """
     Read ``path`` once and return its :class:`Recording`.

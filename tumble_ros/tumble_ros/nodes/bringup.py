@@ -37,6 +37,7 @@ from pathlib import Path
 import signal
 import sys
 import time
+from typing import TextIO
 
 import rclpy
 from rclpy.context import Context
@@ -118,7 +119,7 @@ def _isolated(visible: bool):
 
 def run_bringup(params_file: str | os.PathLike[str] | None = None, output: str | None = None,
                 model: str | None = None, ros_args: list[str] | None = None,
-                progress=sys.stderr, executor_name: str = 'events',
+                progress: TextIO | None = sys.stderr, executor_name: str = 'events',
                 visible: bool = False, offline: bool = False,
                 markers: bool = True) -> BringupResult:
     """
