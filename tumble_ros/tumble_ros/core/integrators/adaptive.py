@@ -15,20 +15,18 @@ of the steps they report instead (:class:`_StepClock`).
 """
 from __future__ import annotations
 
-from typing import Any, Callable, TYPE_CHECKING
+from typing import Any, Callable
 
 import numpy as np
 from scipy import integrate
 
-from .base import SegmentProblem, step_nan_message, Stepper
+from .base import SegmentProblem, step_nan_message, Stepper, StepSettings
 
-if TYPE_CHECKING:
-    from ..scenario import IntegratorSettings
 
 __all__ = ['RK45', 'DOP853', 'Radau', 'BDF', 'LSODA', 'Adams']
 
 
-def _max_step(settings: IntegratorSettings) -> float:
+def _max_step(settings: StepSettings) -> float:
     return settings.max_step if settings.max_step > 0 else float(np.inf)
 
 
@@ -108,7 +106,7 @@ class _ScipyStepper(Stepper):
     solver_class: type
 
     def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
-                 t_bound: float, settings: IntegratorSettings,
+                 t_bound: float, settings: StepSettings,
                  problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         self._solver: Any = None  # a scipy OdeSolver (untyped)
@@ -191,7 +189,7 @@ class Adams(Stepper):
     adaptive = True
 
     def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
-                 t_bound: float, settings: IntegratorSettings,
+                 t_bound: float, settings: StepSettings,
                  problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         self._nfev = 0

@@ -42,7 +42,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 import math
-from typing import Callable, ClassVar, TYPE_CHECKING
+from typing import Callable, ClassVar, Protocol, TYPE_CHECKING
 
 import numpy as np
 
@@ -50,7 +50,6 @@ from ..kernels.checks import collapsed, finite_norm
 from ..limits import budget_message
 
 if TYPE_CHECKING:
-    from ..scenario import IntegratorSettings
     from ..torques import TorqueComponent
 
 __all__ = ['Stepper', 'SegmentProblem', 'RUNNING', 'FINISHED', 'FAILED']
@@ -92,6 +91,26 @@ class SegmentProblem:
     attitude: str = 'quaternion'
     extra_torques: tuple[TorqueComponent, ...] = ()
     step_budget: tuple[float, float] = (math.inf, math.inf)
+
+
+class StepSettings(Protocol):
+    """What a stepper reads of its settings (:class:`~..scenario.IntegratorSettings`)."""
+
+    @property
+    def rtol(self) -> float:
+        """Relative tolerance (adaptive methods)."""
+
+    @property
+    def atol(self) -> float:
+        """Absolute tolerance [rad/yr] (adaptive methods)."""
+
+    @property
+    def step(self) -> float:
+        """Step [yr] (fixed-step and splitting methods)."""
+
+    @property
+    def max_step(self) -> float:
+        """Largest step [yr] of the adaptive methods; 0: none."""
 
 
 class Stepper(ABC):
@@ -139,7 +158,7 @@ class Stepper(ABC):
     kernel: ClassVar[str | None] = None
 
     def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
-                 t_bound: float, settings: IntegratorSettings,
+                 t_bound: float, settings: StepSettings,
                  problem: SegmentProblem | None = None) -> None:
         self.fun = fun
         self.problem = problem

@@ -9,14 +9,12 @@ works in the segment's local time tau = t - t0 (``base``: "Local time").
 from __future__ import annotations
 
 import math
-from typing import Callable, TYPE_CHECKING
+from typing import Callable
 
 import numpy as np
 
-from .base import SegmentProblem, Stepper
+from .base import SegmentProblem, Stepper, StepSettings
 
-if TYPE_CHECKING:
-    from ..scenario import IntegratorSettings
 
 __all__ = ['RK4']
 
@@ -36,7 +34,7 @@ class RK4(Stepper):
     kernel = 'rk4'
 
     def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
-                 t_bound: float, settings: IntegratorSettings,
+                 t_bound: float, settings: StepSettings,
                  problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         span = self.tau_bound

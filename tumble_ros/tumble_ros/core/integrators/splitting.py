@@ -50,17 +50,15 @@ the reference path; the compiled loop runs them many steps per call.
 """
 from __future__ import annotations
 
-from typing import Callable, Sequence, TYPE_CHECKING
+from typing import Callable, Sequence
 
 import numpy as np
 
-from .base import SegmentProblem, Stepper
+from .base import SegmentProblem, Stepper, StepSettings
 from ..kernels import (body_torque, config_array, flow_called, N, new_state, problem_array,
                        pulse_step_count, ST)
 from ..torques import extra_torque_arrays
 
-if TYPE_CHECKING:
-    from ..scenario import IntegratorSettings
 
 __all__ = ['Splitting', 'Splitting4', 'Splitting6', 'COMPOSITIONS']
 
@@ -99,7 +97,7 @@ class Splitting(Stepper):
         return COMPOSITIONS[cls.order]
 
     def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
-                 t_bound: float, settings: IntegratorSettings,
+                 t_bound: float, settings: StepSettings,
                  problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         if problem is None:
