@@ -218,6 +218,18 @@ def test_help_on_every_executable_prints_its_usage_and_exits_0(spawn):
     assert all(name in main.output for name in EXECUTABLES), main.output
 
 
+def test_help_without_docstrings_prints_the_usage_line_and_exits_0():
+    """``python -OO`` strips the modules' docstrings: ``--help`` still prints its usage."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, '-OO', '-m', 'tumble_ros', 'recorder', '--help'],
+                          capture_output=True, text=True, timeout=SLOW)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith('usage: recorder'), done.stdout
+    assert 'Traceback' not in done.stderr, done.stderr
+
+
 def test_every_installed_executable_is_one_of_the_module_entry():
     """setup.py's console scripts and ``python -m tumble_ros``'s executables are the same."""
     from importlib.metadata import distribution

@@ -20,6 +20,9 @@ Errors: what the analysis refuses is a :class:`tumble_ros.errors.AnalysisError` 
 here; the figures' ``FigurePathError`` and ``FigureExistsError`` derive from it), an unreadable
 file a :class:`tumble_ros.io.McapError`; both are :class:`tumble_ros.errors.TumbleRosError`.
 """
+import os
+from pathlib import Path
+
 from tumble_ros.errors import AnalysisError
 
 from .recording import load_recording, Recording
@@ -30,7 +33,9 @@ __all__ = ['AnalysisError', 'AnalysisSummary', 'Recording', 'analyze', 'format_s
            'load_recording', 'summary_to_dict', 'write_figures']
 
 
-def write_figures(rec, out_dir, summary=None, *, overwrite: bool = False):
+def write_figures(rec: Recording, out_dir: str | os.PathLike[str],
+                  summary: AnalysisSummary | None = None, *,
+                  overwrite: bool = False) -> list[Path]:
     """:func:`tumble_ros.analysis.figures.write_figures` (imports matplotlib on first use)."""
     from .figures import write_figures as _write
 

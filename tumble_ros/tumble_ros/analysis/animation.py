@@ -34,7 +34,7 @@ import os
 from pathlib import Path
 import struct
 import sys
-from typing import Callable
+from typing import Any, Callable, TextIO
 
 from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -149,7 +149,8 @@ def recorded_scene(rec: Recording, t: np.ndarray, quaternion: np.ndarray,
             scene.append(Arrow((0.0, 0.0, 0.0), tuple(MOMENTUM_LENGTH * momentum[j] / norm),
                                COLORS['momentum'], _LABELS[MARKER_MOMENTUM]))
         if perturber is not None:
-            name = MARKER_PERTURBER if rec.scenario.orbit is not None else MARKER_SUN
+            orbit = rec.scenario.orbit if rec.scenario is not None else None
+            name = MARKER_PERTURBER if orbit is not None else MARKER_SUN
             scene.append(Arrow((0.0, 0.0, 0.0), tuple(PERTURBER_LENGTH * perturber[j]),
                                COLORS['torquing_body'], _LABELS[name]))
         scenes.append(scene)
@@ -164,7 +165,7 @@ def _xyz(v) -> np.ndarray:
     return np.array([float(v.x), float(v.y), float(v.z)])
 
 
-def marker_scene(array) -> Scene:
+def marker_scene(array: Any) -> Scene:
     """Return the primitives of a decoded visualization_msgs/MarkerArray (SPHERE, CUBE, ARROW)."""
     scene: Scene = []
     for m in array.markers:
@@ -311,7 +312,7 @@ def _replace(temporary: Path, path: Path) -> None:
             temporary.unlink()
 
 
-def stderr_bar(name: str, stream=None) -> Callable[[int, int], None]:
+def stderr_bar(name: str, stream: TextIO | None = None) -> Callable[[int, int], None]:
     """Return a progress callback drawing ``name: [#####     ] 50% (60 of 120 frames)``."""
     def report(done: int, total: int) -> None:
         out = stream or sys.stderr
@@ -355,8 +356,8 @@ class _GifStream:
 
     def __init__(self, fps: float) -> None:
         self.delay = max(1, min(65535, round(100.0 / fps)))   # hundredths of a second
-        self.fig = None
-        self.stream = None
+        self.fig: Any = None      # the matplotlib Figure, while saving
+        self.stream: Any = None   # the open GIF file, while saving
 
     @contextmanager
     def saving(self, fig, outfile: str, dpi: float):
@@ -376,7 +377,8 @@ class _GifStream:
 
         buffer = io.BytesIO()
         self.fig.savefig(buffer, format='rgba', dpi=self.dpi)
-        frame = Image.frombuffer('RGBA', self.size, buffer.getbuffer(), 'raw', 'RGBA', 0, 1)
+        frame = Image.frombuffer('RGBA', self.size, buffer.getbuffer(),  # type: ignore[arg-type]
+                                 'raw', 'RGBA', 0, 1)  # (Pillow takes any buffer)
         frame = frame.convert('RGB').quantize(256)
         for part in GifImagePlugin.getdata(frame, include_color_table=True,
                                            duration=self.delay * 10):
@@ -391,12 +393,13 @@ def _writer(path: Path, fps: float):
         if not animation.writers.is_available('ffmpeg'):
             raise AnalysisError(f'{path}: MP4 needs ffmpeg, which is not installed here; '
                                 'write a .gif (Pillow) instead')
-        return animation.FFMpegWriter(fps=fps, bitrate=1800)
+        return animation.FFMpegWriter(fps=fps, bitrate=1800)  # type: ignore[arg-type]  # a float
     raise AnalysisError(f'{path}: the animation is a .gif (Pillow) or an .mp4 (ffmpeg), or '
                         'one frame of it a .png')
 
 
-def write_animation(rec: Recording, path, *, frames: int = FRAMES, fps: float = FPS,
+def write_animation(rec: Recording, path: str | os.PathLike[str], *, frames: int = FRAMES,
+                    fps: float = FPS,
                     at: float | None = None, overwrite: bool = False,
                     progress: Callable[[int, int], None] | None = None) -> tuple[Path, int]:
     """
@@ -446,6 +449,7 @@ def write_animation(rec: Recording, path, *, frames: int = FRAMES, fps: float = 
         return path, 1
     # The writer driven directly (not FuncAnimation.save, which draws every frame twice).
     temporary = path.with_name(f'.{path.stem}.{os.getpid()}.tmp{path.suffix}')
+    assert writer is not None  # (not single)
     try:
         with writer.saving(fig, str(temporary), DPI):
             for j in range(len(chosen)):
@@ -461,7 +465,7 @@ def write_animation(rec: Recording, path, *, frames: int = FRAMES, fps: float = 
     return path, len(chosen)
 
 
-def write_still(rec: Recording, path, *, at: float | None = None,
+def write_still(rec: Recording, path: str | os.PathLike[str], *, at: float | None = None,
                 overwrite: bool = False) -> tuple[Path, float]:
     """
     Draw the recorded ``markers`` scene at ``at`` [yr] (default: the first) into ``path`` (PNG).
@@ -475,7 +479,8 @@ def write_still(rec: Recording, path, *, at: float | None = None,
     if topic not in rec.topics or rec.topics[topic][1] == 0:
         raise AnalysisError(f'{rec.path}: no {topic} scenes (recorded before the 3D scene '
                             'existed, or with markers:=false)')
-    chosen, t_chosen = None, None
+    chosen: Any = None
+    t_chosen = 0.0
     for record in read_messages(rec.path, topics=[topic]):
         markers = record.message.markers
         if not markers:

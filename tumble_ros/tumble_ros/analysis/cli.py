@@ -24,9 +24,11 @@ stderr, never a traceback. Progress for big files (>= 100,000 messages) goes to 
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterable
 import json
 import math
 import sys
+from typing import NoReturn
 
 from tumble_ros.errors import AnalysisError
 from tumble_ros.io import McapError
@@ -49,7 +51,8 @@ class _UsageError(Exception):
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # noqa: D102 - argparse hook: one ERROR line instead of usage+exit 2
+    # argparse hook: one ERROR line instead of usage+exit 2
+    def error(self, message: str) -> NoReturn:  # noqa: D102
         raise _UsageError(f'{message} (see {self.prog} --help)')
 
 
@@ -100,7 +103,7 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _error(text: str) -> int:
+def _error(text: object) -> int:
     print(f'ERROR: {" ".join(str(text).split())}', file=sys.stderr)
     return 1
 
@@ -145,7 +148,7 @@ def _check_options(args) -> str | None:
     return None
 
 
-def command(argv=None) -> int:
+def command(argv: Iterable[str] | None = None) -> int:
     """Run the command on ``argv`` (without the program name); returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
     try:

@@ -102,7 +102,8 @@ def comparator_errors(rec: Recording) -> tuple[ErrorStats | None, str | None]:
     t_departure = float(t[beyond[0]]) if len(beyond) else None
     comp = None
     if vectors is not None and len(vectors):
-        comp = tuple(float(v) for v in np.nanmax(np.abs(vectors), axis=0))
+        cx, cy, cz = (float(v) for v in np.nanmax(np.abs(vectors), axis=0))
+        comp = (cx, cy, cz)
     return ErrorStats(
         models=models, source=source, n=len(t), max_abs=float(norm[k]), t_max_abs=float(t[k]),
         rms_abs=float(np.sqrt(np.mean(norm[finite] ** 2))), max_rel=max_rel, t_max_rel=t_max_rel,

@@ -25,7 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 import re
-from typing import TYPE_CHECKING
+from typing import Any, TYPE_CHECKING
 
 from tumble_ros.core.units import HOURS_PER_YEAR
 
@@ -77,11 +77,11 @@ class DisplayUnits:
         """Return a time or a period [yr] in :attr:`time`."""
         return years / self.years_per_time
 
-    def w(self, rad_per_year):
+    def w(self, rad_per_year: Any) -> Any:
         """Return a rate [rad/yr] (a number or an array) in :attr:`rate`."""
         return rad_per_year * self.years_per_time
 
-    def torque(self, per_year2):
+    def torque(self, per_year2: Any) -> Any:
         """Return a torque [I rad/yr^2] (a number or an array) in :attr:`torque_unit`."""
         return per_year2 * self.years_per_time ** 2
 

@@ -26,9 +26,10 @@ from dataclasses import dataclass
 import math
 import os
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
+import numpy.typing as npt
 
 from tumble_ros.core import (EnsembleResult, IntegratorSettings, Scenario, ScenarioError,
                              simulate, simulate_ensemble)
@@ -141,8 +142,9 @@ def _about(axis, angle: float) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * cross @ cross
 
 
-def tumbler_states(inertia, precession_period: float, rotation_period: float, pole,
-                   phase, turn) -> tuple[np.ndarray, np.ndarray]:
+def tumbler_states(inertia: npt.ArrayLike, precession_period: float, rotation_period: float,
+                   pole: npt.ArrayLike, phase: npt.ArrayLike,
+                   turn: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """
     Return (omega0 (n, 3) [rad/yr], euler0 (n, 3) [rad]) of tumblers with the given spin state.
 
@@ -236,6 +238,7 @@ def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
     nominal = np.asarray(scenario.inertia, dtype=float)
     q0 = euler_to_quaternion(*scenario.euler0)
     observed = spin_state(scenario.omega0, nominal, q0)
+    assert observed.pole is not None  # (a spin state with an attitude has its pole)
     if observed.mode != 'SAM':
         raise ValueError(f'encounter_ensemble: the nominal state is {observed.mode}; the '
                          "ensemble keeps a short-axis mode's periods")

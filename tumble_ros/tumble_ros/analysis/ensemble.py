@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from pathlib import Path
 import sys
-from typing import Sequence
+from typing import Any, Sequence, TYPE_CHECKING
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -30,6 +31,9 @@ from tumble_ros.io import open_ensemble
 from tumble_ros.io.ensemble_store import SCENARIO_ATTR
 
 from .display import display_units, DisplayUnits
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ['ensemble_statistics', 'final_spin', 'plot_ensemble', 'format_statistics',
            'ensemble_units', 'main']
@@ -45,7 +49,8 @@ def _index(ds, time) -> int:
     return k
 
 
-def final_spin(ds, time: float | None = None, max_spin_states: int = MAX_SPIN_STATES) -> dict:
+def final_spin(ds: xr.Dataset, time: float | None = None,
+               max_spin_states: int = MAX_SPIN_STATES) -> dict[str, Any]:
     """
     Return per-body arrays of the spin at ``time`` [yr] (default the last sample).
 
@@ -78,8 +83,8 @@ def _stats(x: np.ndarray) -> dict:
             'median': float(p50), 'p95': float(p95)}
 
 
-def ensemble_statistics(ds, time: float | None = None,
-                        max_spin_states: int = MAX_SPIN_STATES) -> dict:
+def ensemble_statistics(ds: xr.Dataset, time: float | None = None,
+                        max_spin_states: int = MAX_SPIN_STATES) -> dict[str, Any]:
     """
     Return the distributions of the spin at ``time`` [yr] (default the last sample).
 
@@ -104,7 +109,7 @@ def ensemble_statistics(ds, time: float | None = None,
             'pole_latitude': _stats(spin['pole_latitude'])}
 
 
-def ensemble_units(ds) -> DisplayUnits:
+def ensemble_units(ds: xr.Dataset) -> DisplayUnits:
     """Return the units a store is shown in: its time span's, its scenario's frame."""
     t = ds.time.values
     span = float(t[-1] - t[0]) if t.size else 0.0
@@ -147,7 +152,7 @@ def format_statistics(stats: dict, units: DisplayUnits) -> str:
     ])
 
 
-def plot_ensemble(ds, out_dir, time: float | None = None,
+def plot_ensemble(ds: xr.Dataset, out_dir: str | os.PathLike[str], time: float | None = None,
                   max_spin_states: int = MAX_SPIN_STATES) -> Path:
     """Draw the distributions of :func:`ensemble_statistics` into ``out_dir/ensemble.png``."""
     spin = final_spin(ds, time, max_spin_states)

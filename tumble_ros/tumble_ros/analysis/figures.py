@@ -95,9 +95,10 @@ class _UnitTicks(MaxNLocator):
         super().__init__(nbins='auto', steps=[1, 2, 2.5, 5, 10])
         self.years_per_unit = years_per_unit
 
-    def tick_values(self, vmin, vmax):
+    # (matplotlib's stubs say Sequence[float]; MaxNLocator returns an array)
+    def tick_values(self, vmin: float, vmax: float) -> np.ndarray:  # type: ignore[override]
         scale = self.years_per_unit
-        return super().tick_values(vmin / scale, vmax / scale) * scale
+        return np.asarray(super().tick_values(vmin / scale, vmax / scale)) * scale
 
 
 def _unit(rec: Recording) -> DisplayUnits:
@@ -237,7 +238,7 @@ def _write(drawings: list[Drawing], out_dir, overwrite: bool) -> list[Path]:
         os.close(dir_fd)
 
 
-def check_outputs(out_dir, names: list[str], overwrite: bool) -> None:
+def check_outputs(out_dir: str | os.PathLike[str], names: list[str], overwrite: bool) -> None:
     """
     Refuse before any work what :func:`write_files` would refuse at the end (FigurePathError).
 
@@ -267,7 +268,8 @@ def check_outputs(out_dir, names: list[str], overwrite: bool) -> None:
                               'directory)')
 
 
-def write_files(files: list[Drawing], out_dir, overwrite: bool) -> list[Path]:
+def write_files(files: list[Drawing], out_dir: str | os.PathLike[str],
+                overwrite: bool) -> list[Path]:
     """
     Write ``files`` ((name, bytes) pairs) into ``out_dir``, created if needed.
 
@@ -327,7 +329,8 @@ def _mark_impacts(ax, rec: Recording) -> None:
         ax.axvspan(start, end, color='tab:red', alpha=0.25)
 
 
-def plot_angular_velocity(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
+def plot_angular_velocity(rec: Recording, out_dir: str | os.PathLike[str], *,
+                          overwrite: bool = False) -> list[Path]:
     """``omega.png``: the three components against t, the model's overlaid if recorded."""
     return _write(_draw_angular_velocity(rec, _departure(rec)), out_dir, overwrite)
 
@@ -387,7 +390,8 @@ def _draw_angular_velocity(rec: Recording, departure: float | None = None) -> li
     return [_png(fig, 'omega.png')]
 
 
-def plot_omega_windows(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
+def plot_omega_windows(rec: Recording, out_dir: str | os.PathLike[str], *,
+                       overwrite: bool = False) -> list[Path]:
     """``omega_windows.png``: w at full resolution at the start, each impact and the end."""
     return _write(_draw_omega_windows(rec), out_dir, overwrite)
 
@@ -441,7 +445,8 @@ def _draw_omega_windows(rec: Recording) -> list[Drawing]:
     return [_png(fig, 'omega_windows.png')]
 
 
-def plot_wy_vs_wx(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
+def plot_wy_vs_wx(rec: Recording, out_dir: str | os.PathLike[str], *,
+                  overwrite: bool = False) -> list[Path]:
     """``wy_vs_wx.png``: the transverse angular velocity's path (paper Fig 9, bottom)."""
     return _write(_draw_wy_vs_wx(rec), out_dir, overwrite)
 
@@ -501,7 +506,8 @@ def gapped_envelope(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarra
     pieces = runs(t)
     if len(pieces) == 1:
         return envelope(t, y)
-    ts, ys = [], []
+    ts: list[np.ndarray] = []
+    ys: list[np.ndarray | list[float]] = []
     for a, b in pieces:
         et, ey = envelope(t[a:b], y[a:b])
         ts += [et, et[-1:]]
@@ -529,7 +535,8 @@ def _draw_path_density(ax, x: np.ndarray, y: np.ndarray) -> None:
                        label=f'log10 samples per pixel ({len(x):,} samples)')
 
 
-def plot_error(rec: Recording, out_dir, *, overwrite: bool = False) -> list[Path]:
+def plot_error(rec: Recording, out_dir: str | os.PathLike[str], *,
+               overwrite: bool = False) -> list[Path]:
     """``error.png``: error components and |error| against t; nothing without a comparator."""
     return _write(_draw_error(rec), out_dir, overwrite)
 
@@ -567,7 +574,7 @@ def _draw_error(rec: Recording) -> list[Drawing]:
     return [_png(fig, 'error.png')]
 
 
-def plot_impacts(rec: Recording, out_dir, *, samples: int = 25,
+def plot_impacts(rec: Recording, out_dir: str | os.PathLike[str], *, samples: int = 25,
                  overwrite: bool = False) -> list[Path]:
     """
     Plot ``impact_<k>_id<id>.png`` per impact event (paper Fig 10).
@@ -617,7 +624,8 @@ def _draw_impacts(rec: Recording, samples: int = 25) -> list[Drawing]:
     return drawings
 
 
-def plot_spectrum(rec: Recording, out_dir, summary: AnalysisSummary | None = None, *,
+def plot_spectrum(rec: Recording, out_dir: str | os.PathLike[str],
+                  summary: AnalysisSummary | None = None, *,
                   overwrite: bool = False) -> list[Path]:
     """
     Plot ``spectrum_wx.png``: the amplitude spectrum of wx (as in the summary).
@@ -677,7 +685,8 @@ def _line_style(k: int) -> tuple[str, str]:
     return _LINE_COLORS[k % len(_LINE_COLORS)], _LINE_STYLES[k % len(_LINE_STYLES)]
 
 
-def write_figures(rec: Recording, out_dir, summary: AnalysisSummary | None = None, *,
+def write_figures(rec: Recording, out_dir: str | os.PathLike[str],
+                  summary: AnalysisSummary | None = None, *,
                   overwrite: bool = False) -> list[Path]:
     """
     Write every figure the recording supports; return the paths written.

@@ -32,7 +32,8 @@ def impact_summaries(rec: Recording) -> list[ImpactSummary]:
         i = int(np.searchsorted(rec.t, event.start, side='right')) - 1
         k = int(np.searchsorted(rec.t, event.end, side='left'))
         if 0 <= i < rec.n and k < rec.n:
-            jump = tuple(float(v) for v in rec.omega[k] - rec.omega[i])
+            dx, dy, dz = (float(v) for v in rec.omega[k] - rec.omega[i])
+            jump = (dx, dy, dz)
             out.append(ImpactSummary(event, float(rec.t[i]), float(rec.t[k]), jump))
         else:
             out.append(ImpactSummary(event, None, None, None))

@@ -42,9 +42,11 @@ from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 import math
+import os
 from pathlib import Path
 import re
 import sys
+from typing import Any, TextIO
 
 import numpy as np
 
@@ -247,7 +249,7 @@ class Recording:
 Progress = Callable[[int, int], None]
 
 
-def stderr_progress(min_total: int = 100_000, stream=None) -> Progress:
+def stderr_progress(min_total: int = 100_000, stream: TextIO | None = None) -> Progress:
     """
     Return a progress callback that prints every 10 % to ``stream`` (default: stderr).
 
@@ -352,7 +354,8 @@ def _own_run(path: Path, topic: str, scenarios: list, run: str | None
     return own, [d for d, r in zip(scenarios, ids) if r == own], lines, any(others.keys() - {''})
 
 
-def load_recording(path, *, namespace: str | None = None, run: str | None = None,
+def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None,
+                   run: str | None = None,
                    progress: Progress | None = None) -> Recording:
     """
     Read ``path`` once and return its :class:`Recording`.
@@ -371,9 +374,9 @@ def load_recording(path, *, namespace: str | None = None, run: str | None = None
 
     # Raw columns, stamps as integer ns (seconds_per_year may only be known later in the file).
     raw: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    impacts_raw: list[tuple[int, object]] = []
-    scenarios: list[tuple[int, object]] = []
-    statuses: list[tuple[int, object]] = []
+    impacts_raw: list[tuple[int, Any]] = []  # (stamp [ns], ROS message)
+    scenarios: list[tuple[int, Any]] = []
+    statuses: list[tuple[int, Any]] = []
     norm_models: list[str] = []
     comparator_status = None
     # The per-sample topics as numpy columns (io.columns: ~1 M messages/s), the rest decoded.
@@ -419,7 +422,8 @@ def load_recording(path, *, namespace: str | None = None, run: str | None = None
     def years(ns: np.ndarray) -> np.ndarray:
         return ns.astype(np.float64) / timebase.ns_per_year
 
-    stamps, omega = _sorted(*raw.get(ANGULAR_VELOCITY, ([], [])), 3)
+    stamp_ns, rows = raw.get(ANGULAR_VELOCITY, ([], []))
+    stamps, omega = _sorted(stamp_ns, rows, 3)
     if mixed:   # another run chosen away: its samples are on the same topic, not separable
         shared = len(stamps) - len(np.unique(stamps))
         left_out.append(f'{in_namespace(namespace, ANGULAR_VELOCITY)}: the samples of the other '
@@ -461,12 +465,12 @@ def load_recording(path, *, namespace: str | None = None, run: str | None = None
         rec.error_models = tuple(norm_models)
     rec.comparator_status = comparator_status
 
-    for ns, msg in sorted(impacts_raw, key=lambda item: item[0]):
+    for stamp, msg in sorted(impacts_raw, key=lambda item: item[0]):
         frame = int(msg.frame)
         rec.impacts.append(ImpactRecord(
             id=int(msg.id), start=float(msg.start), end=float(msg.end),
             frame=IMPACT_FRAMES.get(frame, f'frame {frame}'), torque=_vec(msg.torque),
-            delta_omega=_vec(msg.delta_omega), t=timebase.to_years(ns)))
+            delta_omega=_vec(msg.delta_omega), t=timebase.to_years(stamp)))
     for _, msg in scenarios:
         q = msg.attitude
         rec.segments.append(SegmentStart(
@@ -480,7 +484,7 @@ def load_recording(path, *, namespace: str | None = None, run: str | None = None
             break
         except (ScenarioError, ValueError, TypeError) as err:   # a description we cannot use
             rec.scenario_error = ' '.join(str(err).split()) or type(err).__name__
-    for ns, msg in statuses:
+    for _, msg in statuses:
         state = int(msg.state)
         rec.status.append(StatusRecord(t=float(msg.t), state=SIM_STATES.get(state, str(state)),
                                        message=str(msg.message)))

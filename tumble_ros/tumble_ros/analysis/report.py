@@ -66,8 +66,9 @@ def _time_and_scenario(s: AnalysisSummary) -> list[str]:
     out = []
     u = _units(s)
     p = s.sampling
+    dt_min = p.dt_min if p.dt_min is not None else math.nan  # (set with dt)
     dt = (f'dt = {u.time_text(p.dt)}' + (' (uniform)' if p.uniform else
-                                         f' (median; {_g(u.t(p.dt_min))} .. '
+                                         f' (median; {_g(u.t(dt_min))} .. '
                                          f'{u.time_text(p.dt_max)})')
           if p.dt is not None else 'one sample')
     out.append(f'simulated time: {p.n} samples of {in_namespace(s.namespace, ANGULAR_VELOCITY)}, '
@@ -148,6 +149,7 @@ def _impacts(s: AnalysisSummary) -> list[str]:
                    f'{_v(u.w(np.asarray(e.delta_omega)))} {u.rate}, |delta_omega| = '
                    f'{_g(u.w(math.hypot(*e.delta_omega)))}')
         if imp.sampled_jump is not None:
+            assert imp.t_before is not None  # (a jump is measured between two samples)
             out.append(f'      recorded w jump between the samples at t = '
                        f'{_g(u.t(imp.t_before))} and {u.time_text(imp.t_after)}: '
                        f'{_v(u.w(np.asarray(imp.sampled_jump)))} {u.rate} '
@@ -174,6 +176,7 @@ def _frequencies(s: AnalysisSummary) -> list[str]:
         for k, peak in enumerate(sp.peaks, 1):
             match = ''
             if peak.nearest:
+                assert peak.offset is not None  # (set with nearest)
                 alias = (f' aliased to {_g(u.w(peak.omega - peak.offset))}'
                          if peak.nearest_aliased else '')
                 match = (f', nearest line {peak.nearest} = {_g(u.w(peak.nearest_omega))}{alias} '
@@ -223,6 +226,7 @@ def _spin(s: AnalysisSummary) -> list[str]:
 
 def _before_after(s: AnalysisSummary, u: DisplayUnits) -> str:
     """One line: what the encounter did (start -> end of the recording)."""
+    assert s.spin is not None  # (a flyby's summary has one)
     a, b = s.spin.start, s.spin.end
     w0, w1 = s.spin.rate_start, s.spin.rate_end
     rate = (f'|w| {u.rate_text(w0, 4)} -> {u.rate_text(w1, 4)} (x {w1 / w0:.4g})'

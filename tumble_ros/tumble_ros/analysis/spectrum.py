@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+from typing import Sequence
 
 import numpy as np
 
@@ -67,7 +68,8 @@ def _uniform(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, float, bool]:
     return np.interp(grid, t, x), dt, True
 
 
-def spectrum(t, x, lines: list[TheoryLine] = (), *, component: str = 'wx', n_peaks: int = 5,
+def spectrum(t: np.ndarray, x: np.ndarray, lines: Sequence[TheoryLine] = (), *,
+             component: str = 'wx', n_peaks: int = 5,
              threshold: float = PEAK_THRESHOLD) -> Spectrum | None:
     """
     Return the dominant frequencies of ``x(t)``.

@@ -54,11 +54,13 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 import math
-from typing import ClassVar, NamedTuple
+from typing import Any, ClassVar, NamedTuple, Sequence
 
 import numpy as np
+import numpy.typing as npt
 from scipy.special import ellipj, ellipk, ellipkinc
 
+from .array_types import ArrayLike, FloatArray
 from .rotation import quaternion_to_euler
 from .scenario import ENCOUNTER_TORQUE_FRACTION, Scenario, ScenarioError
 
@@ -99,6 +101,10 @@ SEPARATRIX_TOL = 1e-9
 COS_THETA_TOL = 1e-9
 #: The meaning of wE = a w0, the free term of the symmetric body.
 _FREE_NUTATION = 'free nutation wE = a w0'
+#: (name, meaning) of a linearised model's free term, then of each forcing term (None: not listed).
+_FrequencyNames = tuple[tuple[str, str], *tuple[tuple[str, str] | None, ...]]
+#: A complex128 array (w = wx + i wy).
+ComplexArray = npt.NDArray[np.complex128]
 
 
 class ModelNotApplicable(ScenarioError):
@@ -116,7 +122,7 @@ class ModelNotApplicable(ScenarioError):
         self.model = model
         self.reason = reason
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[type[ModelNotApplicable], tuple[str, str]]:
         return type(self), (self.model, self.reason)
 
 
@@ -155,8 +161,9 @@ class AnchorState:
     euler: np.ndarray
 
     @classmethod
-    def build(cls, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None,
-              euler=None) -> 'AnchorState':
+    def build(cls, scenario: Scenario, t0: float = 0.0, omega: ArrayLike | None = None,
+              quaternion: ArrayLike | None = None,
+              euler: ArrayLike | None = None) -> 'AnchorState':
         """
         Anchor state from the optional pieces; defaults come from the scenario.
 
@@ -233,8 +240,8 @@ class AnalyticModel(ABC):
     #: A model of the torque-free motion: it also applies outside a flyby's encounter window.
     torque_free: ClassVar[bool] = False
 
-    def __init__(self, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None,
-                 euler=None) -> None:
+    def __init__(self, scenario: Scenario, t0: float = 0.0, omega: ArrayLike | None = None,
+                 quaternion: ArrayLike | None = None, euler: ArrayLike | None = None) -> None:
         state = AnchorState.build(scenario, t0, omega, quaternion, euler)
         reason = type(self).applies(scenario, state)
         if reason is not None:
@@ -269,7 +276,7 @@ class AnalyticModel(ABC):
         """Anchor time [yr]."""
         return self.state.t0
 
-    def omega(self, t) -> np.ndarray:
+    def omega(self, t: ArrayLike) -> FloatArray:
         """Angular velocity [rad/yr], body axes, at times ``t`` [yr]: shape t.shape + (3,)."""
         t = np.asarray(t, dtype=float)
         return self._omega(t.reshape(-1) - self.state.t0).reshape(t.shape + (3,))
@@ -294,14 +301,15 @@ class AnalyticModel(ABC):
 # --------------------------------------------------------------------------------------
 # Linearised symmetric-body models (paper eqs 16-19 and beyond)
 # --------------------------------------------------------------------------------------
-def _forced_rotator(tau, lam, w_anchor, b, coeffs, freqs) -> np.ndarray:
+def _forced_rotator(tau: FloatArray, lam: float, w_anchor: complex, b: float,
+                    coeffs: Sequence[complex], freqs: Sequence[float]) -> ComplexArray:
     """
     Solution of dw/dt = i lam w + b sum_k C_k exp(i W_k tau), w(0) = w_anchor.
 
     Variation of constants; the sinc form covers resonant terms (W_k = lam) exactly and
     does not lose precision near them.
     """
-    w = np.exp(1j * lam * tau) * w_anchor
+    w: ComplexArray = np.exp(1j * lam * tau) * w_anchor
     for c, om in zip(coeffs, freqs):
         half = 0.5 * (om - lam) * tau
         w = w + b * c * tau * np.exp(0.5j * (lam + om) * tau) * np.sinc(half / np.pi)
@@ -317,7 +325,7 @@ class _LinearSymmetric(AnalyticModel):
     """
 
     @classmethod
-    def _reason(cls, scenario, state):
+    def _reason(cls, scenario: Scenario, state: AnchorState) -> str | None:
         ix, iy, _ = scenario.inertia
         if not _equal(ix, iy):
             return (f'inertia: a linearised model needs a symmetric body, Ix == Iy within '
@@ -332,7 +340,7 @@ class _LinearSymmetric(AnalyticModel):
         """Extra phase [rad] of the free term exp(i lam tau) w(t0), zero at tau = 0; None: none."""
         return None
 
-    def _frequency_names(self) -> tuple[tuple[str, str] | None, ...]:
+    def _frequency_names(self) -> _FrequencyNames:
         """(name, meaning) of the free term and of the forcing at ``freqs`` (None: not listed)."""
         raise NotImplementedError
 
@@ -372,14 +380,14 @@ class _LinearSymmetric(AnalyticModel):
                       -self.psi_dot - 2.0 * self.beta_dot)
         self.w_anchor = complex(self.state.omega[0], self.state.omega[1])
 
-    def _omega(self, tau):
+    def _omega(self, tau: FloatArray) -> FloatArray:
         w = _forced_rotator(tau, self.lam, self.w_anchor, self.b, self.coeffs, self.freqs)
         extra = self._free_phase(tau)
         if extra is not None:
             w = w + np.expm1(1j * extra) * np.exp(1j * self.lam * tau) * self.w_anchor
         return np.stack([w.real, w.imag, np.full_like(tau, self.w0)], axis=-1)
 
-    def euler(self, t) -> np.ndarray:
+    def euler(self, t: ArrayLike) -> FloatArray:
         """Return the model's kinematics (phi, psi, theta) [rad] at ``t``, shape t.shape + (3,)."""
         t = np.asarray(t, dtype=float)
         tau = t - self.state.t0
@@ -402,7 +410,7 @@ class PaperModel(_LinearSymmetric):
     label = 'paper eqs 16-19 with corrections 1-10 (docs/paper.md)'
 
     @classmethod
-    def _reason(cls, scenario, state):
+    def _reason(cls, scenario: Scenario, state: AnchorState) -> str | None:
         reason = super()._reason(scenario, state)
         if reason is None and abs(math.cos(state.euler[2])) < COS_THETA_TOL:
             reason = (f'{_attitude_name(scenario, state)}: theta = {state.euler[2]!r} is pi/2 '
@@ -410,7 +418,7 @@ class PaperModel(_LinearSymmetric):
                       'diverges')
         return reason
 
-    def _rates(self):
+    def _rates(self) -> tuple[float, float, float]:
         w_e = self.a * self.w0
         return w_e, -w_e, (self.w0 + w_e) / math.cos(self.state.euler[2])
 
@@ -419,7 +427,7 @@ class PaperModel(_LinearSymmetric):
         """Return the paper's wA = 2 (ws + (w0 + wE)/cos theta) (correction 6) [rad/yr]."""
         return 2.0 * self.beta_dot
 
-    def _frequency_names(self):
+    def _frequency_names(self) -> _FrequencyNames:
         # forcing at wE (resonant with the free term: the same line), wE + wA and wE - wA
         forced = f"paper's forced term, wA = {self.w_a:.6g} rad/yr"
         return (('wE', _FREE_NUTATION), None, ('|wA+wE|', forced), ('|wA-wE|', forced))
@@ -442,10 +450,10 @@ class FastSpinModel(_LinearSymmetric):
     label = ('beyond the paper (docs/paper.md, correction 11): linearised, fast spin about a '
              'fixed figure axis')
 
-    def _rates(self):
+    def _rates(self) -> tuple[float, float, float]:
         return self.a * self.w0, self.w0, 0.0
 
-    def _frequency_names(self):
+    def _frequency_names(self) -> _FrequencyNames:
         # forcing at -w0, -w0 + 2 ws and -w0 - 2 ws
         return (('wE', _FREE_NUTATION), ('|w0|', 'fast-spin forced term (spin)'),
                 ('|w0-2ws|', 'fast-spin forced term'), ('|w0+2ws|', 'fast-spin forced term'))
@@ -455,7 +463,7 @@ class _Precessing(_LinearSymmetric):
     """Fast spin with the figure axis precessing about the orbit normal at -Op."""
 
     @classmethod
-    def _reason(cls, scenario, state):
+    def _reason(cls, scenario: Scenario, state: AnchorState) -> str | None:
         reason = super()._reason(scenario, state)
         if reason is None and state.omega[2] == 0.0:
             reason = (f'{_omega_name(scenario, state)}: wz = 0; the precession rate '
@@ -479,7 +487,7 @@ class _Precessing(_LinearSymmetric):
         op = self.precession_rate
         return self.a * self.w0 + shift, self.w0 + op * math.cos(self.state.euler[2]), -op
 
-    def _forced_names(self) -> tuple[tuple[str, str], ...]:
+    def _forced_names(self) -> tuple[tuple[str, str], tuple[str, str], tuple[str, str]]:
         # forcing at -w0', -w0' + 2 ws' and -w0' - 2 ws' (w0' = psi', ws' = ws + phi')
         spin = f"forced term, w0' = w0 + Op cos(theta0) = {self.psi_dot:.6g} rad/yr"
         orbit = f"forced term, ws' = ws - Op = {self.beta_dot:.6g} rad/yr"
@@ -503,10 +511,10 @@ class FastSpinPrecessingModel(_Precessing):
              'Op = (3/2) ws^2 a cos(theta0)/((1+a) w0) of the figure axis and of the free '
              "term's phase")
 
-    def _rates(self):
+    def _rates(self) -> tuple[float, float, float]:
         return self._precessing_rates(self.precession_rate)
 
-    def _frequency_names(self):
+    def _frequency_names(self) -> _FrequencyNames:
         free = f'fast-spin nutation with the precession Op = {self.precession_rate:.4g}'
         return (('|wE+Op|', free),) + self._forced_names()
 
@@ -533,14 +541,14 @@ class FastSpinAdiabaticModel(_Precessing):
         """Mean shift of the nutation frequency, dbar = S (3 cos^2 theta0 - 1)/2 [rad/yr]."""
         return self.stiffness * (3.0 * math.cos(self.state.euler[2]) ** 2 - 1.0) / 2.0
 
-    def _rates(self):
+    def _rates(self) -> tuple[float, float, float]:
         return self._precessing_rates(self.mean_shift)
 
-    def _frequency_names(self):
+    def _frequency_names(self) -> _FrequencyNames:
         free = f'fast-spin nutation with the tidal shift dbar = {self.mean_shift:.4g}'
         return (('|wE+dbar|', free),) + self._forced_names()
 
-    def _free_phase(self, tau):
+    def _free_phase(self, tau: FloatArray) -> FloatArray:
         # integral over [t0, t] of -(3/2) S sin^2(theta) cos 2 beta, beta = beta0 + beta_dot tau,
         # written without dividing by beta_dot: (sin(2b0 + 2 bd tau) - sin 2b0)/(2 bd)
         #   = tau cos(2 b0 + bd tau) sinc(bd tau)
@@ -571,6 +579,7 @@ def _extra_torque_reason(scenario: Scenario, state: AnchorState, torque_free: bo
                    ' (outside its encounter window the torque-free models apply)'))
     t_in, t_out = window
     if t_in <= state.t0 < t_out:
+        assert scenario.orbit is not None  # an encounter window is a flyby orbit's
         distance = scenario.orbit.pericentre * ENCOUNTER_TORQUE_FRACTION ** (-1.0 / 3.0)
         return (f"t0: inside the flyby's encounter window: from t = {t_in:.9g} to "
                 f'{t_out:.9g} yr its tidal torque exceeds {ENCOUNTER_TORQUE_FRACTION:g} of the '
@@ -594,7 +603,7 @@ class TorqueFreeSymmetricModel(AnalyticModel):
     label = "exact: torque-free symmetric top (Euler's equations, Ix = Iy)"
 
     @classmethod
-    def _reason(cls, scenario, state):
+    def _reason(cls, scenario: Scenario, state: AnchorState) -> str | None:
         reason = _torque_free_reason(scenario)
         ix, iy, _ = scenario.inertia
         if reason is None and not _equal(ix, iy):
@@ -602,15 +611,15 @@ class TorqueFreeSymmetricModel(AnalyticModel):
                       f'relative; got {list(scenario.inertia)} (use torque_free_exact)')
         return reason
 
-    def _setup(self):
+    def _setup(self) -> None:
         ix, _, iz = self.scenario.inertia
         self.w_e = (iz - ix) / ix * float(self.state.omega[2])
 
-    def _omega(self, tau):
+    def _omega(self, tau: FloatArray) -> FloatArray:
         w = np.exp(1j * self.w_e * tau) * complex(self.state.omega[0], self.state.omega[1])
         return np.stack([w.real, w.imag, np.full_like(tau, self.state.omega[2])], axis=-1)
 
-    def frequencies(self):
+    def frequencies(self) -> tuple[Frequency, ...]:
         """Return wE = |a wz|, the one frequency of wx [rad/yr]."""
         return (Frequency('wE', abs(self.w_e), _FREE_NUTATION),)
 
@@ -639,7 +648,7 @@ class TorqueFreeExactModel(AnalyticModel):
     label = 'exact: torque-free Euler-Poinsot solution (Jacobi elliptic functions)'
 
     @classmethod
-    def _reason(cls, scenario, state):
+    def _reason(cls, scenario: Scenario, state: AnchorState) -> str | None:
         reason = _torque_free_reason(scenario)
         if reason is None:
             setup = cls._solve(scenario.inertia, state.omega)
@@ -648,7 +657,8 @@ class TorqueFreeExactModel(AnalyticModel):
         return reason
 
     @staticmethod
-    def _solve(inertia, w):
+    def _solve(inertia: Sequence[float] | FloatArray,
+               w: Sequence[float] | FloatArray) -> tuple[str, tuple[Any, ...]] | str:
         """('const' | 'sym' | 'ell', parameters) for the state, or a reason string."""
         inertia = [float(v) for v in inertia]
         w = [float(v) for v in w]
@@ -694,8 +704,10 @@ class TorqueFreeExactModel(AnalyticModel):
         mode = 'short-axis' if p == hi else 'long-axis'
         return 'ell', (p, q, r, a_p, a_q, a_r, m, nu, u0, period, mode)
 
-    def _setup(self):
-        self.kind, self.params = self._solve(self.scenario.inertia, self.state.omega)
+    def _setup(self) -> None:
+        setup = self._solve(self.scenario.inertia, self.state.omega)
+        assert not isinstance(setup, str)  # applies() refused the state otherwise
+        self.kind, self.params = setup
 
     @property
     def mode(self) -> str:
@@ -706,12 +718,12 @@ class TorqueFreeExactModel(AnalyticModel):
     def period(self) -> float:
         """Period of omega in the body [yr] (inf for a constant omega)."""
         if self.kind == 'ell':
-            return self.params[9] / abs(self.params[7])
+            return float(self.params[9] / abs(self.params[7]))
         if self.kind == 'sym' and self.params[3] != 0.0:
-            return 2.0 * math.pi / abs(self.params[3])
+            return float(2.0 * math.pi / abs(self.params[3]))
         return math.inf
 
-    def frequencies(self):
+    def frequencies(self) -> tuple[Frequency, ...]:
         """Return 2 pi/period [rad/yr] (the fundamental of omega in the body); none if constant."""
         period = self.period
         if not (math.isfinite(period) and period > 0):
@@ -719,7 +731,7 @@ class TorqueFreeExactModel(AnalyticModel):
         return (Frequency('Euler-Poinsot', 2 * math.pi / period,
                           f'torque-free period {period:.6g} yr ({self.mode})'),)
 
-    def _omega(self, tau):
+    def _omega(self, tau: FloatArray) -> FloatArray:
         w0 = self.state.omega
         out = np.empty(tau.shape + (3,))
         if self.kind == 'const':
@@ -761,8 +773,9 @@ def _model_class(name: str) -> type[AnalyticModel]:
                             f"(known: {', '.join(MODELS)})") from None
 
 
-def make_model(name: str, scenario: Scenario, t0: float = 0.0, omega=None, quaternion=None,
-               euler=None) -> AnalyticModel:
+def make_model(name: str, scenario: Scenario, t0: float = 0.0, omega: ArrayLike | None = None,
+               quaternion: ArrayLike | None = None,
+               euler: ArrayLike | None = None) -> AnalyticModel:
     """
     Build the analytic model ``name`` anchored at (t0, omega, attitude).
 

@@ -28,18 +28,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from . import kernels
+from .array_types import ArrayLike, FloatArray, Vector3
 from .rotation import (
     euler_to_matrix,
     euler_to_quaternion,
     matrix_to_euler,
     quaternion_to_matrix,
 )
-from .torques import extra_torque_arrays, gravity_gradient_potential
+from .torques import extra_torque_arrays, gravity_gradient_potential, TorqueComponent
 
 __all__ = [
     'AttitudeModel',
@@ -51,17 +52,22 @@ __all__ = [
 ]
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
-_ZERO = (0.0, 0.0, 0.0)
+_ZERO: Vector3 = (0.0, 0.0, 0.0)
+#: The kernels' ``extra`` argument (:func:`~.torques.extra_torque_arrays`).
+ExtraTorques = tuple[tuple[Callable[..., Any], ...], FloatArray] | None
 
 
-def _segment_arrays(inertia, orbit_rate, torque_body, torque_orbital, extra_torques):
+def _segment_arrays(inertia: ArrayLike, orbit_rate: float, torque_body: ArrayLike,
+                    torque_orbital: ArrayLike, extra_torques: Sequence[TorqueComponent],
+                    ) -> tuple[FloatArray, ExtraTorques]:
     """Return the kernels' problem array and ``extra`` argument of one segment."""
     return (kernels.problem_array(inertia, orbit_rate, torque_body, torque_orbital),
             extra_torque_arrays(extra_torques))
 
 
-def _make_quaternion_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO,
-                         extra_torques=()) -> Rhs:
+def _make_quaternion_rhs(inertia: ArrayLike, orbit_rate: float, torque_body: ArrayLike = _ZERO,
+                         torque_orbital: ArrayLike = _ZERO,
+                         extra_torques: Sequence[TorqueComponent] = ()) -> Rhs:
     """
     Return f(t, y) for the quaternion attitude: the kernels' right-hand side (one implementation).
 
@@ -80,8 +86,9 @@ def _make_quaternion_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=
     return rhs
 
 
-def _make_euler_rhs(inertia, orbit_rate, torque_body=_ZERO, torque_orbital=_ZERO,
-                    extra_torques=()) -> Rhs:
+def _make_euler_rhs(inertia: ArrayLike, orbit_rate: float, torque_body: ArrayLike = _ZERO,
+                    torque_orbital: ArrayLike = _ZERO,
+                    extra_torques: Sequence[TorqueComponent] = ()) -> Rhs:
     """
     Return f(t, y) for the paper's Euler angles: eq 15 kinematics, the kernels' torque.
 
@@ -128,7 +135,7 @@ class AttitudeModel:
     from_euler: Callable[[float, float, float], np.ndarray]
     to_matrix: Callable[[np.ndarray], np.ndarray]
     make_rhs: Callable[..., Rhs]
-    singular: Callable[[np.ndarray], bool]
+    singular: Callable[[Sequence[float] | np.ndarray], bool]
 
     def to_euler(self, attitude: np.ndarray) -> tuple[float, float, float]:
         """Paper's Euler angles (phi, psi, theta), phi and psi wrapped to (-pi, pi]."""
@@ -156,23 +163,27 @@ ATTITUDE_MODELS: dict[str, AttitudeModel] = {
 }
 
 
-def kinetic_energy(omega, inertia) -> np.ndarray:
+def kinetic_energy(omega: ArrayLike, inertia: ArrayLike) -> FloatArray:
     """Rotational kinetic energy 1/2 w.I.w for (3,) or (n, 3) body rates."""
     w = np.asarray(omega, dtype=float)
-    return 0.5 * np.sum(w * w * np.asarray(inertia, dtype=float), axis=-1)
+    energy: FloatArray = 0.5 * np.sum(w * w * np.asarray(inertia, dtype=float), axis=-1)
+    return energy
 
 
-def angular_momentum_orbital(omega, c_body_to_orbital, inertia) -> np.ndarray:
+def angular_momentum_orbital(omega: ArrayLike, c_body_to_orbital: np.ndarray,
+                             inertia: ArrayLike) -> FloatArray:
     """
     Angular momentum L = C (I w) in orbital-frame components.
 
     Shapes: omega (3,) with a (3, 3) matrix, or (n, 3) with (n, 3, 3).
     """
     h = np.asarray(omega, dtype=float) * np.asarray(inertia, dtype=float)
-    return np.einsum('...ij,...j->...i', c_body_to_orbital, h)
+    momentum: FloatArray = np.einsum('...ij,...j->...i', c_body_to_orbital, h)
+    return momentum
 
 
-def jacobi_integral(t, omega, c_body_to_orbital, inertia, orbit_rate: float) -> np.ndarray:
+def jacobi_integral(t: ArrayLike, omega: ArrayLike, c_body_to_orbital: ArrayLike,
+                    inertia: ArrayLike, orbit_rate: float) -> FloatArray:
     """
     Jacobi integral of the circular-orbit problem (conserved without impacts).
 
@@ -193,5 +204,6 @@ def jacobi_integral(t, omega, c_body_to_orbital, inertia, orbit_rate: float) -> 
     # body components of an orbital vector v are C^T v
     u = np.einsum('...ji,...j->...i', c, u_orbital)
     z = c[..., 2, :]
-    return (kinetic_energy(w, i) + gravity_gradient_potential(u, i, orbit_rate)
-            + orbit_rate * np.sum(i * w * z, axis=-1))
+    jacobi: FloatArray = (kinetic_energy(w, i) + gravity_gradient_potential(u, i, orbit_rate)
+                          + orbit_rate * np.sum(i * w * z, axis=-1))
+    return jacobi

@@ -26,7 +26,10 @@ import os
 from pathlib import Path
 import re
 import stat
-from typing import Any
+from typing import Any, TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import yaml
 
 from .limits import MAX_PARAMS_FILE_BYTES, ScenarioError
 
@@ -85,7 +88,7 @@ def _read_bytes(path: Path) -> bytes:
     return data
 
 
-def params_loader():
+def params_loader() -> type[yaml.SafeLoader]:
     """
     Return a YAML SafeLoader that reads numbers as ROS 2 does.
 
@@ -105,7 +108,7 @@ def params_loader():
     return ParamsLoader
 
 
-def parse_params_text(text: str, name: object = None) -> Mapping:
+def parse_params_text(text: str, name: object = None) -> Mapping[str, Any]:
     """
     Return the document of a params file's text (read as ROS 2 reads it: :func:`params_loader`).
 
@@ -116,7 +119,8 @@ def parse_params_text(text: str, name: object = None) -> Mapping:
 
     prefix = '' if name is None else f'params file {name}: '
     try:
-        document = yaml.load(text, Loader=params_loader())   # noqa: S506 (a SafeLoader)
+        document: Mapping[str, Any] = yaml.load(  # noqa: S506 (a SafeLoader)
+            text, Loader=params_loader())
     except yaml.YAMLError as err:
         raise ScenarioError(f'{prefix}not valid YAML: {_one_line(err)}') from None
     if not node_sections(document):
@@ -148,7 +152,8 @@ def section_applies(key: str, node_fqn: str) -> bool:
     return re.fullmatch(pattern, node_fqn) is not None
 
 
-def check_params_file(path: str | os.PathLike, node_fqn: str | None = None) -> Mapping:
+def check_params_file(path: str | os.PathLike[str],
+                      node_fqn: str | None = None) -> Mapping[str, Any]:
     """
     Read and check the params file ``path``; return its YAML document.
 

@@ -23,6 +23,8 @@ import math
 
 import numpy as np
 
+from .array_types import FloatSequence
+
 __all__ = [
     'quaternions_to_matrices',
     'continuous_quaternions',
@@ -67,7 +69,7 @@ def matrix_to_euler(r: np.ndarray) -> tuple[float, float, float]:
     return phi, psi, theta
 
 
-def quaternion_to_matrix(q) -> np.ndarray:
+def quaternion_to_matrix(q: FloatSequence) -> np.ndarray:
     """
     Rotation matrix C(q) (body -> orbital components) of a quaternion, scalar first.
 
@@ -105,9 +107,9 @@ def matrix_to_quaternion(c: np.ndarray) -> np.ndarray:
     else:
         s = 2.0 * math.sqrt(1.0 + 2.0 * c[2, 2] - tr)
         q = ((c[1, 0] - c[0, 1]) / s, (c[0, 2] + c[2, 0]) / s, (c[1, 2] + c[2, 1]) / s, 0.25 * s)
-    q = np.array(q)
-    q /= np.linalg.norm(q)
-    return -q if q[0] < 0.0 else q
+    unit = np.array(q)
+    unit /= np.linalg.norm(unit)
+    return -unit if unit[0] < 0.0 else unit
 
 
 def euler_to_quaternion(phi: float, psi: float, theta: float) -> np.ndarray:
@@ -115,12 +117,12 @@ def euler_to_quaternion(phi: float, psi: float, theta: float) -> np.ndarray:
     return matrix_to_quaternion(euler_to_matrix(phi, psi, theta).T)
 
 
-def quaternion_to_euler(q) -> tuple[float, float, float]:
+def quaternion_to_euler(q: FloatSequence) -> tuple[float, float, float]:
     """Return the paper's Euler angles (phi, psi, theta) of a body -> orbital quaternion."""
     return matrix_to_euler(quaternion_to_matrix(q).T)
 
 
-def quaternion_multiply(p, q) -> np.ndarray:
+def quaternion_multiply(p: FloatSequence, q: FloatSequence) -> np.ndarray:
     """Hamilton product p * q of two scalar-first quaternions."""
     p0, p1, p2, p3 = p
     q0, q1, q2, q3 = q
@@ -151,7 +153,7 @@ def quaternions_to_matrices(q: np.ndarray) -> np.ndarray:
     return c
 
 
-def continuous_quaternions(q: np.ndarray, previous=None) -> np.ndarray:
+def continuous_quaternions(q: np.ndarray, previous: np.ndarray | None = None) -> np.ndarray:
     """
     Normalise (..., n, 4) quaternions; flip signs so that consecutive ones have q.q' >= 0.
 

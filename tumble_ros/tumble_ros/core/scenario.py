@@ -21,10 +21,11 @@ import dataclasses
 from dataclasses import dataclass, field
 import math
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 
+from .array_types import ArrayLike, FloatArray
 from .dynamics import ATTITUDE_MODELS
 from .integrators import INTEGRATORS
 from .jit import python_source
@@ -111,13 +112,13 @@ def _positive(name: str, value: Any) -> float:
     return v
 
 
-def _one_of(name: str, value: Any, allowed) -> str:
+def _one_of(name: str, value: Any, allowed: Iterable[str]) -> str:
     if value not in allowed:
         _fail(name, f'must be one of {sorted(allowed)}', value)
-    return value
+    return str(value)
 
 
-def _set(obj, name: str, value: Any) -> None:
+def _set(obj: object, name: str, value: Any) -> None:
     object.__setattr__(obj, name, value)
 
 
@@ -510,7 +511,7 @@ class Scenario:
         orbit = (self.orbit.torque_component(self.inertia),) if self.orbit is not None else ()
         return orbit + self.torques
 
-    def perturber_position(self, t) -> np.ndarray:
+    def perturber_position(self, t: ArrayLike) -> FloatArray:
         """
         Return where the torquing body is in the orbital frame, (n, 3) [km], at ``t`` [yr].
 
@@ -519,7 +520,7 @@ class Scenario:
         """
         return perturber_position(self.orbit_rate, self.orbit, t)
 
-    def perturber_in_body(self, t, quaternion) -> np.ndarray:
+    def perturber_in_body(self, t: ArrayLike, quaternion: ArrayLike) -> FloatArray:
         """
         Return where the torquing body is in body axes, (n, 3) [km], at ``t`` [yr].
 
@@ -529,7 +530,8 @@ class Scenario:
         position = self.perturber_position(t)
         q = np.asarray(quaternion, dtype=float).reshape(-1, 4)
         body = python_source(orbital_to_body)(*position.T, *q.T)
-        return np.stack(body, axis=-1)
+        stacked: FloatArray = np.stack(body, axis=-1)
+        return stacked
 
     @property
     def output_grid(self) -> SampleGrid:
@@ -548,7 +550,7 @@ class Scenario:
         """
         return self.output_grid.times()
 
-    def replace(self, **changes) -> 'Scenario':
+    def replace(self, **changes: Any) -> 'Scenario':
         """Return a copy with some fields changed (validated again)."""
         return dataclasses.replace(self, **changes)
 
@@ -771,7 +773,8 @@ def parse_scenario(text: str, node: str = 'sim', ignore: frozenset[str] = frozen
     return _scenario_from_document(parse_params_text(text), node, ignore)
 
 
-def _scenario_from_document(document: Mapping, node: str, ignore: frozenset[str]) -> Scenario:
+def _scenario_from_document(document: Mapping[str, Any], node: str,
+                            ignore: frozenset[str]) -> Scenario:
     """Return the scenario of the ``node`` section of a params file's checked document."""
     for key in (f'/**/{node}', node, f'/{node}', '/**'):
         if key in document:

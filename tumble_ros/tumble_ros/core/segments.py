@@ -9,9 +9,12 @@ inertia units x rad/yr^2 (body torques in body axes, orbital ones in the orbital
 """
 from __future__ import annotations
 
-from typing import NamedTuple, Sequence
+from typing import NamedTuple, Sequence, TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .scenario import Impact
 
 __all__ = ['Segment', 'segment_torques', 'split_at_impacts']
 
@@ -25,20 +28,23 @@ class Segment(NamedTuple):
     torque_orbital: tuple[float, float, float]
 
 
-def segment_torques(impacts, t0: float, t1: float) -> tuple[tuple, tuple]:
+def segment_torques(impacts: Sequence[Impact], t0: float,
+                    t1: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """Return the (body, orbital) torques of the pulses active on [t0, t1], summed in order."""
     mid = 0.5 * (t0 + t1)
     body, orbital = np.zeros(3), np.zeros(3)
     for impact in impacts:
         if impact.start <= mid < impact.end:
             (body if impact.frame == 'body' else orbital)[:] += impact.torque
-    return tuple(body), tuple(orbital)
+    b0, b1, b2 = body
+    o0, o1, o2 = orbital
+    return (b0, b1, b2), (o0, o1, o2)
 
 
 _ZERO_TORQUES = segment_torques((), 0.0, 1.0)
 
 
-def split_at_impacts(duration: float, impacts: Sequence,
+def split_at_impacts(duration: float, impacts: Sequence[Impact],
                      cuts: Sequence[float] = ()) -> list[Segment]:
     """
     Return the segments of [0, ``duration``] cut at the edges of ``impacts`` and at ``cuts``.

@@ -24,7 +24,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+from .array_types import ArrayLike, FloatArray
+
+if TYPE_CHECKING:
+    from .scenario import Scenario
 
 __all__ = ['BodyShape', 'ELLIPSOID', 'BOX', 'MIN_THICKNESS', 'body_shape',
            'torquing_body_direction', 'AXIS_LENGTH', 'MOMENTUM_LENGTH', 'PERTURBER_LENGTH',
@@ -76,7 +83,7 @@ class BodyShape:
                 'no body has them')
 
 
-def body_shape(inertia) -> BodyShape:
+def body_shape(inertia: ArrayLike) -> BodyShape:
     """
     Return the shape drawn for the principal moments ``inertia`` (Ix, Iy, Iz) [normalised].
 
@@ -91,10 +98,10 @@ def body_shape(inertia) -> BodyShape:
     semi = semi / semi.max()
     semi = np.maximum(semi, MIN_THICKNESS)
     return BodyShape(ELLIPSOID if physical else BOX,
-                     tuple(float(v) for v in semi), physical)
+                     (float(semi[0]), float(semi[1]), float(semi[2])), physical)
 
 
-def torquing_body_direction(scenario, t) -> np.ndarray | None:
+def torquing_body_direction(scenario: Scenario, t: ArrayLike) -> FloatArray | None:
     """
     Return the unit direction from the asteroid to the torquing body, orbital frame: (n, 3).
 
@@ -106,4 +113,5 @@ def torquing_body_direction(scenario, t) -> np.ndarray | None:
     if scenario.orbit is None and scenario.orbit_rate == 0.0:
         return None
     position = scenario.perturber_position(np.atleast_1d(np.asarray(t, dtype=float)))
-    return position / np.linalg.norm(position, axis=-1, keepdims=True)
+    direction: FloatArray = position / np.linalg.norm(position, axis=-1, keepdims=True)
+    return direction

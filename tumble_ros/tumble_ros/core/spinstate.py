@@ -43,6 +43,7 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import ellipkm1, elliprf, elliprj
 
+from .array_types import ArrayLike, Vector3
 from .rotation import quaternion_to_matrix
 
 __all__ = ['SpinState', 'spin_state', 'omega_for_periods']
@@ -80,7 +81,8 @@ class SpinState:
     pole_latitude: float | None = None
 
 
-def spin_state(omega, inertia, quaternion=None) -> SpinState:
+def spin_state(omega: ArrayLike, inertia: ArrayLike,
+               quaternion: ArrayLike | None = None) -> SpinState:
     """
     Return the spin state through a sample: w [rad/yr] in body axes, principal ``inertia``.
 
@@ -100,11 +102,12 @@ def spin_state(omega, inertia, quaternion=None) -> SpinState:
     if momentum == 0.0:
         raise ValueError('spin_state: the body is at rest (w = 0)')
     d = momentum * momentum / (2.0 * energy)
-    pole = lon = lat = None
+    pole: Vector3 | None = None
+    lon = lat = None
     if quaternion is not None:
         c = quaternion_to_matrix(np.asarray(quaternion, dtype=float))
         direction = c @ (moments * w) / momentum
-        pole = tuple(float(v) for v in direction)
+        pole = (float(direction[0]), float(direction[1]), float(direction[2]))
         lon = math.atan2(direction[1], direction[0])
         lat = math.asin(max(-1.0, min(1.0, direction[2])))
     principal = sum(abs(v) > 1e-12 * np.linalg.norm(w) for v in (w1, w2, w3)) == 1
@@ -149,7 +152,8 @@ def _precession_period(mode: str, moments: tuple[float, float, float], momentum:
     return 2.0 * math.pi / abs(rate)
 
 
-def omega_for_periods(inertia, precession_period: float, rotation_period: float) -> np.ndarray:
+def omega_for_periods(inertia: ArrayLike, precession_period: float,
+                      rotation_period: float) -> np.ndarray:
     """
     Return a w [rad/yr] (body axes) of the short-axis mode with the given periods [yr].
 

@@ -17,9 +17,12 @@ This fills the ``Writer``'s private chunk builder and statistics (mcap 1.x,
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, Sequence
 
+from mcap.data_stream import RecordBuilder
 from mcap.opcode import Opcode
 from mcap.records import MessageIndex
+from mcap.writer import Writer
 import numpy as np
 
 __all__ = ['bulk_supported', 'append_block']
@@ -29,11 +32,11 @@ __all__ = ['bulk_supported', 'append_block']
 _HEADER = 31
 
 
-def _private(writer, name: str):
+def _private(writer: Writer, name: str) -> Any:
     return getattr(writer, f'_Writer__{name}', None)
 
 
-def bulk_supported(writer) -> bool:
+def bulk_supported(writer: Writer) -> bool:
     """Tell whether ``writer`` (an mcap ``Writer``) has the chunk builder this module fills."""
     builder = _private(writer, 'chunk_builder')
     stats = _private(writer, 'statistics')
@@ -58,7 +61,7 @@ class _BlockIndex(MessageIndex):
             self.records.clear()
         self.blocks.append(np.column_stack([log_times, offsets]).astype('<u8'))
 
-    def write(self, stream) -> None:
+    def write(self, stream: RecordBuilder) -> None:
         """Write the record as MessageIndex.write does, the entries packed at once."""
         parts = self.blocks + ([np.array(self.records, dtype='<u8').reshape(-1, 2)]
                                if self.records else [])
@@ -67,10 +70,10 @@ class _BlockIndex(MessageIndex):
         stream.write2(self.channel_id)
         stream.write4(len(entries) * 16)
         stream.write(np.ascontiguousarray(entries, dtype='<u8').tobytes())
-        stream.finish_record()
+        stream.finish_record()  # type: ignore[no-untyped-call]  # unannotated in mcap
 
 
-def _record_dtype(sizes) -> tuple[np.dtype, list[int]]:
+def _record_dtype(sizes: Sequence[int]) -> tuple[np.dtype[np.void], list[int]]:
     """Return the packed dtype of one sample's m records and each record's offset in it."""
     fields, offsets, at = [], [], 0
     for j, size in enumerate(sizes):
@@ -81,7 +84,8 @@ def _record_dtype(sizes) -> tuple[np.dtype, list[int]]:
     return np.dtype(fields), offsets
 
 
-def append_block(writer, channel_ids, rows, log_times: np.ndarray,
+def append_block(writer: Writer, channel_ids: Sequence[int], rows: Sequence[np.ndarray],
+                 log_times: np.ndarray,
                  publish_times: np.ndarray) -> None:
     """
     Append n samples of m channels to ``writer``'s chunk in progress (one chunk, no flush).

@@ -51,9 +51,11 @@ from pathlib import Path
 import stat
 import threading
 import time
+from typing import Any, BinaryIO, Sequence
 
 from mcap.writer import CompressionType, LIBRARY_IDENTIFIER, Writer
 import numpy as np
+import numpy.typing as npt
 import yaml
 
 from .mcap_bulk import append_block, bulk_supported
@@ -72,11 +74,12 @@ _NEVER = 2 ** 62
 _UINT64_MAX = 2 ** 64 - 1
 
 
-def _check_time(name: str, value) -> int:
+def _check_time(name: str, value: object) -> int:
     try:
         if isinstance(value, bool):
             raise TypeError
-        value = operator.index(value)       # int, numpy integers
+        # int, numpy integers (operator.index is the check: TypeError for anything else)
+        value = operator.index(value)  # type: ignore[arg-type]
     except TypeError:
         raise ValueError(f'{name} must be an int number of nanoseconds, got {value!r}') from None
     if not 0 <= value <= _UINT64_MAX:
@@ -95,7 +98,7 @@ _QOS_DEFAULTS = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
                  'avoid_ros_namespace_conventions': False}
 
 
-def offered_qos_yaml(*profiles: Mapping) -> str:
+def offered_qos_yaml(*profiles: Mapping[str, Any]) -> str:
     """
     Return the ``offered_qos_profiles`` text of rosbag2 (Jazzy) for the given publisher profiles.
 
@@ -147,7 +150,7 @@ def _check_qos(text: str) -> None:
                              f'(rosbag2 writes all of {list(QOS_KEYS)}; see offered_qos_yaml)')
 
 
-def open_new(path: Path):
+def open_new(path: Path) -> BinaryIO:
     """
     Open ``path`` for a new recording (binary, write-only): created here, or claimed empty.
 
@@ -194,8 +197,8 @@ class McapWriter:
     that old. ``compression``: ``'zstd'`` (default), ``'lz4'`` or ``'none'``.
     """
 
-    def __init__(self, path, *, chunk_bytes: int = 1_000_000, chunk_seconds: float = 1.0,
-                 compression: str = 'zstd'):
+    def __init__(self, path: str | os.PathLike[str], *, chunk_bytes: int = 1_000_000,
+                 chunk_seconds: float = 1.0, compression: str = 'zstd') -> None:
         if isinstance(chunk_bytes, bool) or not isinstance(chunk_bytes, int) or chunk_bytes <= 0:
             raise ValueError(f'chunk_bytes must be a positive int, got {chunk_bytes!r}')
         if (isinstance(chunk_seconds, bool) or not isinstance(chunk_seconds, (int, float))
@@ -334,7 +337,9 @@ class McapWriter:
             if self._pending_bytes >= self._chunk_bytes or self._too_old():
                 self._flush_locked()
 
-    def write_rows(self, channel_ids, rows, log_time_ns, publish_time_ns=None) -> None:
+    def write_rows(self, channel_ids: Sequence[int], rows: Sequence[np.ndarray],
+                   log_time_ns: npt.ArrayLike, publish_time_ns: npt.ArrayLike | None = None,
+                   ) -> None:
         """
         Append n samples of several channels, interleaved: for each k, one message per channel.
 
@@ -358,10 +363,11 @@ class McapWriter:
             if None in topics:
                 raise ValueError(f'channel ids {list(channel_ids)!r}: not all returned by '
                                  'add_channel')
+            named = [t for t in topics if t is not None]  # (all of them: checked)
             aging = self._chunk_seconds != math.inf
             if not aging and self._bulk:
                 self._write_blocks(list(channel_ids), rows, logs, sent)
-                for topic in topics:
+                for topic in named:
                     self._counts[topic] += n
                 return
             blobs = [(c, r.tobytes(), r.shape[1]) for c, r in zip(channel_ids, rows)]
@@ -377,10 +383,11 @@ class McapWriter:
                 self._pending_bytes += sample_bytes
                 if self._pending_bytes >= self._chunk_bytes or (aging and self._too_old()):
                     self._flush_locked()
-            for topic in topics:
+            for topic in named:
                 self._counts[topic] += n
 
-    def _write_blocks(self, channel_ids, rows, logs, sent) -> None:
+    def _write_blocks(self, channel_ids: list[int], rows: list[np.ndarray], logs: list[int],
+                      sent: list[int]) -> None:
         """
         Append rows in blocks that end where the per-message path would finalise a chunk.
 
@@ -435,7 +442,7 @@ class McapWriter:
             try:
                 if self._pending_messages:
                     self._chunks_written += 1
-                self._writer.finish()
+                self._writer.finish()  # type: ignore[no-untyped-call]  # unannotated in mcap
                 self._messages_flushed += self._pending_messages
                 self._pending_messages = 0
                 self._pending_bytes = 0
@@ -446,7 +453,7 @@ class McapWriter:
     def __enter__(self) -> McapWriter:
         return self
 
-    def __exit__(self, *exc_info) -> None:
+    def __exit__(self, *exc_info: object) -> None:
         self.close()
 
     def __repr__(self) -> str:
@@ -469,7 +476,7 @@ class McapWriter:
             self._chunks_written += 1
         # mcap's Writer.flush(): finalise the chunk in progress (if it holds messages), write
         # what is buffered and flush the stream.
-        self._writer.flush()
+        self._writer.flush()  # type: ignore[no-untyped-call]  # unannotated in mcap
         self._messages_flushed += self._pending_messages
         self._pending_messages = 0
         self._pending_bytes = 0

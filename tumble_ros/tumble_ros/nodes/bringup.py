@@ -37,10 +37,12 @@ from pathlib import Path
 import signal
 import sys
 import time
+from typing import TextIO
 
 import rclpy
 from rclpy.context import Context
 from rclpy.exceptions import ParameterException
+from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from tumble_ros import topics
@@ -53,7 +55,7 @@ from tumble_ros.nodes.runner import close_node, EXECUTORS, init_rclpy
 from tumble_ros.nodes.shutdown import StopSignals
 from tumble_ros.nodes.sim import SimNode
 from tumble_ros.runs.offline import record_offline
-from tumble_ros_interfaces.msg import SimStatus
+from tumble_ros_interfaces.msg import SimStatus  # type: ignore[attr-defined]  # ROS message
 
 __all__ = ['run_bringup', 'BringupResult', 'main', 'scenario_file', 'shipped_scenarios']
 
@@ -115,9 +117,9 @@ def _isolated(visible: bool):
             os.environ[key] = saved
 
 
-def run_bringup(params_file: str | None = None, output: str | None = None,
+def run_bringup(params_file: str | os.PathLike[str] | None = None, output: str | None = None,
                 model: str | None = None, ros_args: list[str] | None = None,
-                progress=sys.stderr, executor_name: str = 'events',
+                progress: TextIO | None = sys.stderr, executor_name: str = 'events',
                 visible: bool = False, offline: bool = False,
                 markers: bool = True) -> BringupResult:
     """
@@ -153,7 +155,7 @@ def _run_offline(args, output, model, progress, stop: StopSignals,
     """Build the simulator and comparator for their parameters only; record offline."""
     context = Context()
     init_rclpy(args, context)
-    nodes = []
+    nodes: list[Node] = []
     try:
         sim = SimNode(context=context, parameter_overrides=[
             Parameter('real_time_factor', value=0.0), Parameter('markers', value=markers)])
@@ -203,7 +205,7 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
     context = Context()
     init_rclpy(args, context)
     executor = EXECUTORS[executor_name](context=context)
-    nodes = []
+    nodes: list[Node] = []
     try:
         sim = SimNode(context=context, parameter_overrides=[
             Parameter('real_time_factor', value=0.0), Parameter('min_consumers', value=2),
@@ -211,7 +213,8 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
         nodes.append(sim)
         comparator_overrides = [Parameter('run_id', value=sim.run_id),
                                 *([Parameter('model', value=model)] if model else [])]
-        nodes.append(ComparatorNode(context=context, parameter_overrides=comparator_overrides))
+        comparator = ComparatorNode(context=context, parameter_overrides=comparator_overrides)
+        nodes.append(comparator)
         recorder_overrides = [Parameter('output', value=str(output))] if output else []
         recorder = RecorderNode(context=context, parameter_overrides=recorder_overrides,
                                 message_info=executor_name != 'events')
@@ -235,7 +238,6 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
                 last_line = time.monotonic()
         # Let the consumers take what is in flight, until every sample and every comparison
         # has been recorded (latched status/scenario: the last one is always delivered).
-        comparator = nodes[1]
 
         def drained() -> bool:
             counts = recorder.counts

@@ -39,6 +39,7 @@ from tumble_ros.core.dynamics import angular_momentum_orbital
 from tumble_ros.core.rotation import quaternions_to_matrices
 from tumble_ros.core.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, MOMENTUM_LENGTH,
                                    PERTURBER_LENGTH, torquing_body_direction)
+from tumble_ros.core.timebase import SampleGrid
 from tumble_ros.io import message_definition, MessageTemplate
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -164,14 +165,18 @@ class MarkerScene:
                                             self.scenario.inertia)
         arrow(4, momentum, MOMENTUM_LENGTH)
         if self.perturber_ns is not None:
-            arrow(5, torquing_body_direction(self.scenario, t), PERTURBER_LENGTH)
+            direction = torquing_body_direction(self.scenario, t)
+            assert direction is not None  # (perturber_ns: something torques)
+            arrow(5, direction, PERTURBER_LENGTH)
         return values
 
-    def encode(self, stamp_ns, t, quaternion, omega) -> np.ndarray:
+    def encode(self, stamp_ns: np.ndarray, t: np.ndarray, quaternion: np.ndarray,
+               omega: np.ndarray) -> np.ndarray:
         """Return n scenes (see :meth:`columns`) as CDR messages, one (n, size) uint8 row each."""
         return self.encoder.encode(len(stamp_ns), self.columns(stamp_ns, t, quaternion, omega))
 
-    def encode_samples(self, grid, every: int, k0: int, n: int, arrays: dict) -> np.ndarray:
+    def encode_samples(self, grid: SampleGrid, every: int, k0: int, n: int,
+                       arrays: dict[str, np.ndarray]) -> np.ndarray:
         """
         Return the scenes of the grid samples k0 .. k0 + n - 1 that get one, as CDR rows.
 

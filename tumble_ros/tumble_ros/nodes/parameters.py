@@ -109,7 +109,7 @@ def _value(node: Node, name: str) -> Any:
     return list(value) if isinstance(value, (list, tuple)) or hasattr(value, 'tolist') else value
 
 
-def read_parameters(node: Node, names) -> dict[str, Any]:
+def read_parameters(node: Node, names: Iterable[str]) -> dict[str, Any]:
     """Return the current values of the named parameters."""
     return {name: _value(node, name) for name in names}
 

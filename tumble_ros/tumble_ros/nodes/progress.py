@@ -21,7 +21,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from tumble_ros import topics
 from tumble_ros.nodes.clocks import steady_timer
-from tumble_ros_interfaces.msg import ConsumerProgress
+from tumble_ros_interfaces.msg import ConsumerProgress  # type: ignore[attr-defined]  # ROS message
 
 __all__ = ['ProgressReporter', 'ConsumerTracker', 'ProducedTopics', 'PROGRESS_TOPIC',
            'CONSUMER_TIMEOUT']

@@ -42,7 +42,7 @@ from pathlib import Path
 import re
 import struct
 import time
-from typing import Callable
+from typing import Any, Callable
 
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidTopicNameException
@@ -301,7 +301,9 @@ class RecorderNode(GuardedNode):
                 self._last_stamp[topic] = (_header_stamp_ns(data), time.monotonic())
 
         callback = on_message if self._message_info else (lambda data: on_message(data, None))
-        self.create_subscription(msg_class, topic, callback, qos, raw=True)
+        # (rclpy hands a two-argument callback the MessageInfo too; its stubs know one argument)
+        self.create_subscription(msg_class, topic, callback,  # type: ignore[arg-type]
+                                 qos, raw=True)
         self.get_logger().info(f'recording {topic} ({type_name})')
 
     def _slowest_live_stamp(self) -> int | None:
@@ -469,7 +471,7 @@ def _import_type(type_name: str):
     return getattr(importlib.import_module(f'{package}.{kind}'), name)
 
 
-def qos_dict(qos: QoSProfile) -> dict:
+def qos_dict(qos: QoSProfile) -> dict[str, Any]:
     def duration(d) -> tuple[int, int]:
         ns = d.nanoseconds
         return divmod(ns, 1_000_000_000)
@@ -484,7 +486,7 @@ def qos_dict(qos: QoSProfile) -> dict:
     }
 
 
-def main(args=None) -> int:
+def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run tumble_ros recorder``."""
     # the events executor cannot hand MessageInfo over: publish times are then receipt times
     return run_node(lambda: RecorderNode(message_info=chosen_executor() != 'events'), args,

@@ -120,7 +120,7 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
     args = sys.argv if args is None else args
     if wants_help(args):
         print(f'usage: {name} [--ros-args [-p NAME:=VALUE ...] [--params-file FILE]]\n\n'
-              f'{sys.modules[make_node.__module__].__doc__.strip()}')
+              f"{(sys.modules[make_node.__module__].__doc__ or '').strip()}")
         return 0
     problem = params_file_problem(args)
     try:

@@ -21,7 +21,8 @@ from __future__ import annotations
 import os
 import signal
 import threading
-from typing import Callable, TYPE_CHECKING
+from types import FrameType
+from typing import Any, Callable, TYPE_CHECKING
 
 if TYPE_CHECKING:   # rclpy is imported when spinning only: StopSignals is installed before it
     from rclpy.executors import Executor
@@ -46,7 +47,7 @@ class StopSignals:
     def __init__(self, name: str) -> None:
         self.name = name
         self.signum: int | None = None
-        self._saved: dict[int, object] = {}
+        self._saved: dict[int, Callable[[int, FrameType | None], Any] | int | None] = {}
         self._outer: StopSignals | None = None
 
     def __enter__(self) -> StopSignals:

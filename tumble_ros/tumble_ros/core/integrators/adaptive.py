@@ -15,16 +15,19 @@ of the steps they report instead (:class:`_StepClock`).
 """
 from __future__ import annotations
 
+from typing import Any, Callable
+
 import numpy as np
 from scipy import integrate
 
-from .base import step_nan_message, Stepper
+from .base import SegmentProblem, step_nan_message, Stepper, StepSettings
+
 
 __all__ = ['RK45', 'DOP853', 'Radau', 'BDF', 'LSODA', 'Adams']
 
 
-def _max_step(settings) -> float:
-    return settings.max_step if settings.max_step > 0 else np.inf
+def _max_step(settings: StepSettings) -> float:
+    return settings.max_step if settings.max_step > 0 else float(np.inf)
 
 
 class _StepClock:
@@ -57,7 +60,7 @@ class _StepClock:
         return solver_t + ((tau - self.hi) - self.lo)
 
 
-class _CompensatedLSODA(integrate.LSODA):
+class _CompensatedLSODA(integrate.LSODA):  # type: ignore[misc]  # scipy is untyped
     """
     scipy's LSODA whose time is the exact sum of its steps (:class:`_StepClock`).
 
@@ -66,14 +69,15 @@ class _CompensatedLSODA(integrate.LSODA):
     ``t``) are in exact time, and the right-hand side gets the exact time.
     """
 
-    def __init__(self, fun, t0, y0, t_bound, **options):
+    def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
+                 t_bound: float, **options: Any) -> None:
         if t0 != 0.0:
             raise ValueError('_CompensatedLSODA starts at t0 = 0 (local time)')
         self.clock = _StepClock()
         super().__init__(lambda t, y: fun(t + self.clock.shift, y), t0, y0, t_bound,
                          **options)
 
-    def _step_impl(self):
+    def _step_impl(self) -> tuple[bool, str | None]:
         # scipy's LSODA._step_impl (one step, itask 5: never past tcrit) on LSODA's clock
         solver = self._lsoda_solver
         integrator = solver._integrator
@@ -101,21 +105,23 @@ class _ScipyStepper(Stepper):
     adaptive = True
     solver_class: type
 
-    def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
+    def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
+                 t_bound: float, settings: StepSettings,
+                 problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
-        self._solver = None
+        self._solver: Any = None  # a scipy OdeSolver (untyped)
         if self.status == 'running':
             self._solver = self.solver_class(
                 self.local_fun, 0.0, self.y, self.tau_bound,
                 rtol=settings.rtol, atol=settings.atol, max_step=_max_step(settings),
             )
-        self._dense = None
+        self._dense: Any = None
 
     @property
     def nfev(self) -> int:
-        return self._solver.nfev if self._solver is not None else 0
+        return int(self._solver.nfev) if self._solver is not None else 0
 
-    def _step_impl(self):
+    def _step_impl(self) -> tuple[bool, str]:
         solver = self._solver
         h_abs = getattr(solver, 'h_abs', None)
         if h_abs is not None and h_abs != h_abs:
@@ -129,10 +135,11 @@ class _ScipyStepper(Stepper):
         self._dense = None
         return True, ''
 
-    def _state_at_impl(self, tau):
+    def _state_at_impl(self, tau: float) -> np.ndarray:
         if self._dense is None:
             self._dense = self._solver.dense_output()
-        return self._dense(tau)
+        state: np.ndarray = self._dense(tau)
+        return state
 
 
 class RK45(_ScipyStepper):
@@ -181,7 +188,9 @@ class Adams(Stepper):
     name = 'adams'
     adaptive = True
 
-    def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
+    def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
+                 t_bound: float, settings: StepSettings,
+                 problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         self._nfev = 0
         # the exact local time of VODE's state: hi + lo, the compensated sum of its steps
@@ -189,7 +198,7 @@ class Adams(Stepper):
         self._shift = 0.0  # that time minus VODE's own (tn), after its last step
         t0 = self.t0
 
-        def counted(tau, y):
+        def counted(tau: float, y: np.ndarray) -> np.ndarray:
             self._nfev += 1
             return fun(t0 + (tau + self._shift), y)
 
@@ -203,7 +212,7 @@ class Adams(Stepper):
     def nfev(self) -> int:
         return self._nfev
 
-    def _step_impl(self):
+    def _step_impl(self) -> tuple[bool, str]:
         ode = self._ode
         tau_prev = self.tau
         if self._hi + self._lo < self.tau_bound:
@@ -225,7 +234,7 @@ class Adams(Stepper):
         self.tau_old, self.tau, self.y = tau_prev, tau, np.array(y, dtype=float)
         return True, ''
 
-    def _interpolate(self, tau):
+    def _interpolate(self, tau: float) -> np.ndarray:
         # With itask=1 and tau behind VODE's current time, VODE interpolates within its last
         # step (its Nordsieck history) without stepping. Keep the ode object's own
         # notion of "current" (t, y) unchanged so the next one-step call continues there.
@@ -240,5 +249,5 @@ class Adams(Stepper):
                 f'adams (VODE) could not interpolate at t = {self.t0 + tau!r} yr')
         return y
 
-    def _state_at_impl(self, tau):
+    def _state_at_impl(self, tau: float) -> np.ndarray:
         return self._interpolate(tau)

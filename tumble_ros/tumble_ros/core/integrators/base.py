@@ -42,12 +42,15 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 import math
-from typing import Callable, ClassVar
+from typing import Callable, ClassVar, Protocol, TYPE_CHECKING
 
 import numpy as np
 
 from ..kernels.checks import collapsed, finite_norm
 from ..limits import budget_message
+
+if TYPE_CHECKING:
+    from ..torques import TorqueComponent
 
 __all__ = ['Stepper', 'SegmentProblem', 'RUNNING', 'FINISHED', 'FAILED']
 
@@ -86,8 +89,28 @@ class SegmentProblem:
     torque_body: tuple[float, float, float] = (0.0, 0.0, 0.0)
     torque_orbital: tuple[float, float, float] = (0.0, 0.0, 0.0)
     attitude: str = 'quaternion'
-    extra_torques: tuple = ()
+    extra_torques: tuple[TorqueComponent, ...] = ()
     step_budget: tuple[float, float] = (math.inf, math.inf)
+
+
+class StepSettings(Protocol):
+    """What a stepper reads of its settings (:class:`~..scenario.IntegratorSettings`)."""
+
+    @property
+    def rtol(self) -> float:
+        """Relative tolerance (adaptive methods)."""
+
+    @property
+    def atol(self) -> float:
+        """Absolute tolerance [rad/yr] (adaptive methods)."""
+
+    @property
+    def step(self) -> float:
+        """Step [yr] (fixed-step and splitting methods)."""
+
+    @property
+    def max_step(self) -> float:
+        """Largest step [yr] of the adaptive methods; 0: none."""
 
 
 class Stepper(ABC):
@@ -134,7 +157,8 @@ class Stepper(ABC):
     #: Name of the compiled loop in ``core/kernels/`` (quaternion attitude), or None.
     kernel: ClassVar[str | None] = None
 
-    def __init__(self, fun: Callable, t0: float, y0: np.ndarray, t_bound: float, settings,
+    def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
+                 t_bound: float, settings: StepSettings,
                  problem: SegmentProblem | None = None) -> None:
         self.fun = fun
         self.problem = problem
@@ -162,7 +186,8 @@ class Stepper(ABC):
 
     def local_fun(self, tau: float, y: np.ndarray) -> np.ndarray:
         """Return the right-hand side at local time ``tau`` (absolute time t0 + tau)."""
-        return self.fun(self.t0 + tau, y)
+        derivative = self.fun(self.t0 + tau, y)
+        return derivative
 
     def absolute(self, tau: float) -> float:
         """Return the absolute time of local time ``tau``: t0 + tau, exactly t_bound at the end."""
@@ -204,7 +229,7 @@ class Stepper(ABC):
         """State at ``t`` within the last step [t_old, t] (dense output); a new array."""
         if t == self.t:
             return self.y.copy()
-        if self.t_old is None or not (self.t_old <= t <= self.t):
+        if self.t_old is None or self.tau_old is None or not (self.t_old <= t <= self.t):
             raise ValueError(f't = {t!r} is outside the last step [{self.t_old!r}, {self.t!r}]')
         # t - t0 rounds: keep it inside the step's local times
         return self._state_at_impl(min(max(t - self.t0, self.tau_old), self.tau))

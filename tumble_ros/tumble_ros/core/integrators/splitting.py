@@ -50,10 +50,15 @@ the reference path; the compiled loop runs them many steps per call.
 """
 from __future__ import annotations
 
-from .base import Stepper
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .base import SegmentProblem, Stepper, StepSettings
 from ..kernels import (body_torque, config_array, flow_called, N, new_state, problem_array,
                        pulse_step_count, ST)
 from ..torques import extra_torque_arrays
+
 
 __all__ = ['Splitting', 'Splitting4', 'Splitting6', 'COMPOSITIONS']
 
@@ -91,7 +96,9 @@ class Splitting(Stepper):
     def composition(cls) -> tuple[float, ...]:
         return COMPOSITIONS[cls.order]
 
-    def __init__(self, fun, t0, y0, t_bound, settings, problem=None):
+    def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
+                 t_bound: float, settings: StepSettings,
+                 problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         if problem is None:
             raise ValueError(f'{self.name}: needs the rigid-body problem '
@@ -118,8 +125,10 @@ class Splitting(Stepper):
         ix, iy, iz = problem.inertia
         # pi = I w is carried from step to step, not recomputed from w: the round trip
         # w -> I w -> w would bias |L| by ~1e-17 per step (1e-12 over 10^5 steps).
-        self._pi = (ix * self.y[0], iy * self.y[1], iz * self.y[2])
-        self._y_old = self._pi_old = self._torq_old = None
+        self._pi: tuple[float, ...] = (ix * self.y[0], iy * self.y[1], iz * self.y[2])
+        self._y_old: np.ndarray | None = None
+        self._pi_old: tuple[float, ...] | None = None
+        self._torq_old: tuple[float, ...] | None = None
         self._nfev = 0
 
     @property
@@ -127,7 +136,8 @@ class Splitting(Stepper):
         """Torque evaluations (one per stage)."""
         return self._nfev
 
-    def _flow(self, s0, y, pi, torq, h):
+    def _flow(self, s0: float, y: np.ndarray, pi: Sequence[float], torq: Sequence[float],
+              h: float) -> tuple[np.ndarray, tuple[float, ...], tuple[float, ...]]:
         """
         Take a composed step of length h: the kernels' own step (``kernels.splitting.flow``).
 
@@ -143,7 +153,7 @@ class Splitting(Stepper):
         return (st[ST.Y:ST.Y + N].copy(), tuple(st[ST.PI:ST.PI + 3].tolist()),
                 tuple(st[ST.TORQUE:ST.TORQUE + 3].tolist()))
 
-    def _step_impl(self):
+    def _step_impl(self) -> tuple[bool, str]:
         s = self.tau
         self._y_old, self._pi_old, self._torq_old = self.y, self._pi, self._torq
         try:
@@ -160,7 +170,10 @@ class Splitting(Stepper):
                     else (self.n_steps + 1) * self._h)
         return True, ''
 
-    def _state_at_impl(self, tau):
+    def _state_at_impl(self, tau: float) -> np.ndarray:
+        # state_at() hands out states within a step taken
+        assert self.tau_old is not None and self._y_old is not None
+        assert self._pi_old is not None and self._torq_old is not None
         return self._flow(self.tau_old, self._y_old, self._pi_old, self._torq_old,
                           tau - self.tau_old)[0]
 

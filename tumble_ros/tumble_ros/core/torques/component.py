@@ -29,10 +29,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, Callable
+from typing import Any, Callable, Iterable, Sequence
 import warnings
 
 import numpy as np
+import numpy.typing as npt
 
 from ..jit import COMPILED
 
@@ -44,13 +45,14 @@ if COMPILED:
     from numba.core.ccallback import CFunc as _CFunc
 
     #: The signature of a torque function: (par, t, q0, q1, q2, q3) -> (Mx, My, Mz).
-    SIGNATURE = _t.UniTuple(_t.float64, 3)(_t.float64[::1], *([_t.float64] * 5))
+    SIGNATURE = _t.UniTuple(  # type: ignore[no-untyped-call]  # unannotated in numba
+        _t.float64, 3)(_t.float64[::1], *([_t.float64] * 5))
     # numba calls first-class function types "experimental"; they are what lets a torque from
     # outside core reach the cached kernels without recompiling them
     warnings.filterwarnings('ignore', category=numba.NumbaExperimentalFeatureWarning)
 
 
-def torque_function(f: Callable) -> Callable:
+def torque_function(f: Callable[..., Any]) -> Callable[..., Any]:
     """
     Make ``f(par, t, q0, q1, q2, q3) -> (Mx, My, Mz)`` a torque function the kernels can call.
 
@@ -67,7 +69,8 @@ def torque_function(f: Callable) -> Callable:
 
 def _is_torque_function(f: Any) -> bool:
     if COMPILED:
-        return isinstance(f, _CFunc) and f._sig == SIGNATURE
+        # (CFunc's signature attribute is not in numba's stubs)
+        return isinstance(f, _CFunc) and f._sig == SIGNATURE  # type: ignore[attr-defined]
     return callable(f)
 
 
@@ -88,7 +91,7 @@ class TorqueComponent:
     """
 
     name: str
-    function: Callable
+    function: Callable[..., Any]
     parameters: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
@@ -111,7 +114,8 @@ class TorqueComponent:
         if value.shape != (3,):
             raise ValueError(f'torques[{self.name}].function: must return 3 numbers (Mx, My, Mz)')
 
-    def torque(self, t: float, quaternion) -> np.ndarray:
+    def torque(self, t: float, quaternion: Sequence[float] | npt.NDArray[np.float64],
+               ) -> npt.NDArray[np.float64]:
         """Return the body-axis torque at time ``t`` [yr] and attitude ``quaternion``."""
         q = [float(v) for v in quaternion]
         par = np.array(self.parameters if self.parameters else (0.0,), dtype=np.float64)
@@ -126,17 +130,18 @@ class TorqueComponent:
 NO_EXTRA = None
 
 
-def extra_torque_arrays(components) -> tuple[tuple, np.ndarray]:
+def extra_torque_arrays(components: Iterable[TorqueComponent],
+                        ) -> tuple[tuple[Callable[..., Any], ...], npt.NDArray[np.float64]] | None:
     """
     Return the kernels' ``extra`` argument: (functions, parameters) of the components.
 
     ``parameters`` is (n, width) float64, row j the parameters of function j (zero-padded).
     """
-    components = tuple(components)
-    if not components:
+    listed = tuple(components)
+    if not listed:
         return NO_EXTRA
-    width = max(1, max(len(c.parameters) for c in components))
-    par = np.zeros((len(components), width))
-    for j, c in enumerate(components):
+    width = max(1, max(len(c.parameters) for c in listed))
+    par = np.zeros((len(listed), width))
+    for j, c in enumerate(listed):
         par[j, :len(c.parameters)] = c.parameters
-    return tuple(c.function for c in components), par
+    return tuple(c.function for c in listed), par

@@ -13,7 +13,8 @@ __all__ = ['orbital_to_body']
 
 
 @jit_inline
-def orbital_to_body(mx, my, mz, q0, q1, q2, q3):
+def orbital_to_body(mx: float, my: float, mz: float, q0: float, q1: float, q2: float,
+                    q3: float) -> tuple[float, float, float]:
     """Return the body components C(q)^T m of the orbital-frame vector m."""
     s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
     bx = ((1.0 - s * (q2 * q2 + q3 * q3)) * mx + s * (q1 * q2 + q0 * q3) * my

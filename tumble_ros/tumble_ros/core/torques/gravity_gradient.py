@@ -14,8 +14,10 @@ source) on numpy arrays, so the formula exists once.
 from __future__ import annotations
 
 import math
+from typing import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from .frames import orbital_to_body
 from ..jit import jit_inline, python_source
@@ -25,7 +27,8 @@ __all__ = ['sun_direction_orbital', 'sun_direction_body', 'tidal_torque', 'tidal
 
 
 @jit_inline
-def sun_direction_body(orbit_rate, t, q0, q1, q2, q3):
+def sun_direction_body(orbit_rate: float, t: float, q0: float, q1: float, q2: float,
+                       q3: float) -> tuple[float, float, float]:
     """
     Return the unit Sun direction u = C(q)^T s(t) in body axes.
 
@@ -37,7 +40,8 @@ def sun_direction_body(orbit_rate, t, q0, q1, q2, q3):
 
 
 @jit_inline
-def tidal_torque(kx, ky, kz, ux, uy, uz):
+def tidal_torque(kx: float, ky: float, kz: float, ux: float, uy: float,
+                 uz: float) -> tuple[float, float, float]:
     """
     Return M = 3 ws^2 u x (I u) in body axes (paper eq 12 with GM/R0^3 = ws^2).
 
@@ -47,7 +51,8 @@ def tidal_torque(kx, ky, kz, ux, uy, uz):
     return kx * uy * uz, ky * ux * uz, kz * ux * uy
 
 
-def tidal_coefficients(inertia, orbit_rate: float) -> tuple[float, float, float]:
+def tidal_coefficients(inertia: Sequence[float] | npt.NDArray[np.float64],
+                       orbit_rate: float) -> tuple[float, float, float]:
     """Return (3 ws^2 (Iz - Iy), 3 ws^2 (Ix - Iz), 3 ws^2 (Iy - Ix)) for :func:`tidal_torque`."""
     ix, iy, iz = (float(v) for v in inertia)
     ws = float(orbit_rate)
@@ -55,17 +60,21 @@ def tidal_coefficients(inertia, orbit_rate: float) -> tuple[float, float, float]
     return k * (iz - iy), k * (ix - iz), k * (iy - ix)
 
 
-def sun_direction_orbital(t, orbit_rate: float) -> np.ndarray:
+def sun_direction_orbital(t: npt.ArrayLike, orbit_rate: float) -> npt.NDArray[np.float64]:
     """
     Return the unit vector from the asteroid to the Sun in the orbital frame, R0(t)/R0.
 
     ``t`` [yr]: a number, (3,) out, or an array of n times, (n, 3) out.
     """
     angle = orbit_rate * np.asarray(t, dtype=float)
-    return np.stack([np.sin(angle), np.cos(angle), np.zeros_like(angle)], axis=-1)
+    direction: npt.NDArray[np.float64] = np.stack([np.sin(angle), np.cos(angle),
+                                                   np.zeros_like(angle)], axis=-1)
+    return direction
 
 
-def gravity_gradient_torque(u_body, inertia, orbit_rate: float) -> np.ndarray:
+def gravity_gradient_torque(u_body: npt.ArrayLike,
+                            inertia: Sequence[float] | npt.NDArray[np.float64],
+                            orbit_rate: float) -> npt.NDArray[np.float64]:
     """
     Torque M = 3 ws^2 u x (I u) in body axes for (3,) or (n, 3) Sun directions ``u_body``.
 
@@ -74,10 +83,12 @@ def gravity_gradient_torque(u_body, inertia, orbit_rate: float) -> np.ndarray:
     u = np.asarray(u_body, dtype=float)
     torque = python_source(tidal_torque)(*tidal_coefficients(inertia, orbit_rate),
                                          u[..., 0], u[..., 1], u[..., 2])
-    return np.stack(np.broadcast_arrays(*torque), axis=-1)
+    stacked: npt.NDArray[np.float64] = np.stack(np.broadcast_arrays(*torque), axis=-1)
+    return stacked
 
 
-def gravity_gradient_potential(u_body, inertia, orbit_rate: float) -> np.ndarray:
+def gravity_gradient_potential(u_body: npt.ArrayLike, inertia: npt.ArrayLike,
+                               orbit_rate: float) -> npt.NDArray[np.float64]:
     """
     Orientation-dependent part of the tidal potential energy, (3/2) ws^2 u.I.u.
 
@@ -86,4 +97,5 @@ def gravity_gradient_potential(u_body, inertia, orbit_rate: float) -> np.ndarray
     """
     u = np.asarray(u_body, dtype=float)
     i = np.asarray(inertia, dtype=float)
-    return 1.5 * orbit_rate**2 * np.sum(u * u * i, axis=-1)
+    potential: npt.NDArray[np.float64] = 1.5 * orbit_rate**2 * np.sum(u * u * i, axis=-1)
+    return potential

@@ -32,8 +32,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from .component import torque_function, TorqueComponent
 from .frames import orbital_to_body
@@ -79,14 +81,14 @@ def perturber_radius(gm: float) -> tuple[float, str]:
     return 0.0, ''
 
 
-def _number(name: str, value, unit: str) -> float:
+def _number(name: str, value: object, unit: str) -> float:
     """Return ``value`` as a float; ValueError naming ``name`` unless a finite number."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ValueError(f'orbit.{name}: must be a finite number{unit}, got {value!r}')
     return float(value)
 
 
-def _check_gm(gm) -> float:
+def _check_gm(gm: object) -> float:
     """Return the validated GM [km^3/s^2] (``orbit.gm``)."""
     gm = _number('gm', gm, ' [km^3/s^2]')
     if not 0.0 < gm <= MAX_GM:
@@ -95,7 +97,7 @@ def _check_gm(gm) -> float:
     return gm
 
 
-def _resolve_radius(gm: float, radius) -> tuple[float, str]:
+def _resolve_radius(gm: float, radius: object) -> tuple[float, str]:
     """
     Return (the perturber's radius [km], where it comes from) for ``orbit.radius``.
 
@@ -114,7 +116,7 @@ def _resolve_radius(gm: float, radius) -> tuple[float, str]:
 
 
 @jit
-def eccentric_anomaly(mean_anomaly, e):
+def eccentric_anomaly(mean_anomaly: float, e: float) -> float:
     """Return E with E - e sin E = M (0 <= e < 1), E in (-pi, pi] + the turns of M."""
     turns = _TWO_PI * math.floor((mean_anomaly + math.pi) / _TWO_PI)
     m = mean_anomaly - turns                       # in [-pi, pi)
@@ -137,7 +139,7 @@ def eccentric_anomaly(mean_anomaly, e):
 
 
 @jit
-def hyperbolic_anomaly(mean_anomaly, e):
+def hyperbolic_anomaly(mean_anomaly: float, e: float) -> float:
     """Return H with e sinh H - H = M (e > 1)."""
     m = abs(mean_anomaly)
     x = math.log(2.0 * m / e + 1.8)               # the logarithmic starter, x >= 0
@@ -156,7 +158,8 @@ def hyperbolic_anomaly(mean_anomaly, e):
 
 
 @jit
-def orbit_state(t, gm, a, e, t_p, lambda_p):
+def orbit_state(t: float, gm: float, a: float, e: float, t_p: float,
+                lambda_p: float) -> tuple[float, float]:
     """
     Return (R, lambda): the perturber's distance [L] and in-plane angle [rad] at time t [yr].
 
@@ -186,7 +189,8 @@ def orbit_state(t, gm, a, e, t_p, lambda_p):
 
 
 @jit_inline
-def plane_to_orbital(sin_angle, cos_angle, cos_i, sin_i, cos_node, sin_node):
+def plane_to_orbital(sin_angle: float, cos_angle: float, cos_i: float, sin_i: float,
+                     cos_node: float, sin_node: float) -> tuple[float, float, float]:
     """Return s = Rz(node) Rx(i) (sin lambda, cos lambda, 0): the orbit plane's direction."""
     y = cos_angle * cos_i
     return (sin_angle * cos_node - y * sin_node, sin_angle * sin_node + y * cos_node,
@@ -194,7 +198,8 @@ def plane_to_orbital(sin_angle, cos_angle, cos_i, sin_i, cos_node, sin_node):
 
 
 @torque_function
-def kepler_tidal_torque(par, t, q0, q1, q2, q3):
+def kepler_tidal_torque(par: npt.NDArray[np.float64], t: float, q0: float, q1: float, q2: float,
+                        q3: float) -> tuple[float, float, float]:
     """
     Return the tidal torque of a perturber on a Kepler orbit, body axes.
 
@@ -362,7 +367,7 @@ class KeplerOrbit:
         return (math.cos(self.inclination), math.sin(self.inclination), math.cos(self.node),
                 math.sin(self.node))
 
-    def state(self, t) -> tuple[np.ndarray, np.ndarray]:
+    def state(self, t: npt.ArrayLike) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """Return the distances R [km] and in-plane angles lambda [rad] at times ``t`` [yr]."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         gm = self.gm_per_yr2
@@ -370,21 +375,24 @@ class KeplerOrbit:
                         for x in t])
         return out[:, 0], out[:, 1]
 
-    def direction(self, t) -> np.ndarray:
+    def direction(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Return the unit direction to the perturber in the orbital frame: (n, 3)."""
         return self._direction(self.state(t)[1])
 
-    def position(self, t) -> np.ndarray:
+    def position(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Return where the perturber is in the orbital frame: (n, 3) coordinates [km]."""
         distance, angle = self.state(t)
-        return distance[:, None] * self._direction(angle)
+        position: npt.NDArray[np.float64] = distance[:, None] * self._direction(angle)
+        return position
 
     def _direction(self, angle: np.ndarray) -> np.ndarray:
         """Return the orbital-frame unit vectors of in-plane angles lambda [rad]: (n, 3)."""
         s = python_source(plane_to_orbital)(np.sin(angle), np.cos(angle), *self._plane())
-        return np.stack(s, axis=-1)
+        stacked: npt.NDArray[np.float64] = np.stack(s, axis=-1)
+        return stacked
 
-    def torque_component(self, inertia) -> TorqueComponent:
+    def torque_component(self, inertia: Sequence[float] | npt.NDArray[np.float64],
+                         ) -> TorqueComponent:
         """Return this orbit's tidal torque on a body of principal moments ``inertia``."""
         ix, iy, iz = (float(v) for v in inertia)
         return TorqueComponent('kepler_orbit', kepler_tidal_torque,
@@ -408,7 +416,8 @@ def orientation_from_elements(inclination: float, node: float,
             'inclination': inclination - math.pi, 'node': node}
 
 
-def perturber_position(orbit_rate: float, orbit: KeplerOrbit | None, t) -> np.ndarray:
+def perturber_position(orbit_rate: float, orbit: KeplerOrbit | None,
+                       t: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """
     Return where the torquing body is, in the orbital frame: (n, 3) [km] at times ``t`` [yr].
 
@@ -421,7 +430,9 @@ def perturber_position(orbit_rate: float, orbit: KeplerOrbit | None, t) -> np.nd
     if orbit is not None:
         return orbit.position(t)
     if orbit_rate == 0.0:
-        return np.tile([0.0, math.inf, 0.0], (t.size, 1))
+        far: npt.NDArray[np.float64] = np.tile([0.0, math.inf, 0.0], (t.size, 1))
+        return far
     ws = orbit_rate / SECONDS_PER_YEAR
     distance = (GM_SUN / (ws * ws)) ** (1.0 / 3.0)
-    return distance * sun_direction_orbital(t, orbit_rate)
+    position: npt.NDArray[np.float64] = distance * sun_direction_orbital(t, orbit_rate)
+    return position

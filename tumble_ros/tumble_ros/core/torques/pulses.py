@@ -15,7 +15,9 @@ __all__ = ['pulse_torque']
 
 
 @jit_inline
-def pulse_torque(bx, by, bz, has_orbital, mx, my, mz, q0, q1, q2, q3):
+def pulse_torque(bx: float, by: float, bz: float, has_orbital: float, mx: float, my: float,
+                 mz: float, q0: float, q1: float, q2: float,
+                 q3: float) -> tuple[float, float, float]:
     """Return the body-axis torque of a body-fixed pulse b plus an orbital-frame pulse m."""
     if has_orbital != 0.0:
         ox, oy, oz = orbital_to_body(mx, my, mz, q0, q1, q2, q3)
