@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import math
 import os
 from pathlib import Path
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 import numpy.typing as npt

@@ -61,7 +61,9 @@ def _segment_arrays(inertia: ArrayLike, orbit_rate: float, torque_body: ArrayLik
                     torque_orbital: ArrayLike, extra_torques: Sequence[TorqueComponent],
                     ) -> tuple[FloatArray, ExtraTorques]:
     """Return the kernels' problem array and ``extra`` argument of one segment."""
-    return (kernels.problem_array(inertia, orbit_rate, torque_body, torque_orbital),
+    return (kernels.problem_array(np.asarray(inertia, dtype=float), orbit_rate,
+                                  tuple(np.asarray(torque_body, dtype=float)),
+                                  tuple(np.asarray(torque_orbital, dtype=float))),
             extra_torque_arrays(extra_torques))
 
 

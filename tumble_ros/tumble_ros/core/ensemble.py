@@ -528,8 +528,7 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
                 progress((c + 1) / len(stops), t_stop, int(steps.sum()))
     wall = time.perf_counter() - start
 
-    # (layout's STATUS is a namedtuple built from a field string: mypy sees a plain tuple)
-    failed = states[:, K.ST.STATUS] == K.STATUS.FAILED  # type: ignore[attr-defined]
+    failed = states[:, K.ST.STATUS] == K.STATUS.FAILED
     success = (k_out == m) & ~failed
     messages = tuple(failure_message(states[b], method.name) if failed[b] else ''
                      for b in range(n))

@@ -597,8 +597,9 @@ class _CompiledRunner:
     def new_stepper(self, segment: Segment, t0: float, y0: FloatArray, problem: SegmentProblem,
                     scenario: Scenario, switching: Callable[[], Rhs] | None) -> Stepper:
         """Return a compiled stepper of the method for ``segment``, from ``t0``, ``y0``."""
-        return CompiledStepper(self._method, None, t0, y0, segment.t1, scenario.integrator,
-                               problem=problem)
+        # no right-hand side: the compiled loop evaluates its own (problem)
+        return CompiledStepper(self._method, None,  # type: ignore[arg-type]
+                               t0, y0, segment.t1, scenario.integrator, problem=problem)
 
     def advance(self, stepper: Stepper, t: float, budget: float, track: FloatArray) -> Advance:
         """Run the compiled loop towards ``t`` within ``budget``; ``track`` updated in place."""

@@ -14,7 +14,7 @@ source) on numpy arrays, so the formula exists once.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -81,8 +81,8 @@ def gravity_gradient_torque(u_body: npt.ArrayLike,
     The same arithmetic as the kernels (:func:`tidal_torque`), on arrays.
     """
     u = np.asarray(u_body, dtype=float)
-    torque = python_source(tidal_torque)(*tidal_coefficients(inertia, orbit_rate),
-                                         u[..., 0], u[..., 1], u[..., 2])
+    on_arrays: Callable[..., Any] = python_source(tidal_torque)   # floats or arrays alike
+    torque = on_arrays(*tidal_coefficients(inertia, orbit_rate), u[..., 0], u[..., 1], u[..., 2])
     stacked: npt.NDArray[np.float64] = np.stack(np.broadcast_arrays(*torque), axis=-1)
     return stacked
 
