@@ -29,8 +29,8 @@ from scipy.integrate import solve_ivp
 from common import Timer, section
 
 from tumble_ros.core import IntegratorSettings, jacobi_integral, kernels, load_scenario, simulate
-from tumble_ros.core.propagator import quaternions_to_matrices
-from tumble_ros.core.rotation import euler_to_quaternion
+from tumble_ros.core.model.rotation import euler_to_quaternion
+from tumble_ros.core.propagation.propagator import quaternions_to_matrices
 
 CONFIG = Path(__file__).resolve().parents[1] / "tumble_ros" / "config" / "fig9.yaml"
 TARGET = 1e-9       # max relative Jacobi drift

@@ -290,7 +290,7 @@ def test_the_display_envelope_keeps_every_extreme_and_few_points():
 
 def test_the_ensemble_statistics_print_with_units_and_the_pole_in_degrees(tmp_path):
     """``python -m tumble_ros.analysis.ensemble``: every number with its unit, no raw dict."""
-    from tumble_ros.core.ensemble import GaussianSpread
+    from tumble_ros.core.propagation.ensemble import GaussianSpread
     from tumble_ros.ensembles import run_ensemble_to_store
 
     sc = Scenario(inertia=(1.0, 1.5, 2.0), orbit_rate=0.0, omega0=(2.0, 1.0, 10.0),
@@ -311,7 +311,7 @@ def test_the_ensemble_statistics_print_with_units_and_the_pole_in_degrees(tmp_pa
     assert key.strip() == 'pole latitude [deg, orbital frame]'
     median = float(latitude.split('median ')[1].split(',')[0])
     from tumble_ros.core import simulate
-    from tumble_ros.core.spinstate import spin_state
+    from tumble_ros.core.model.spinstate import spin_state
     r = simulate(sc)            # the nominal body (the spread is 0.01 rad/yr of 10)
     nominal = math.degrees(spin_state(r.omega[-1], sc.inertia, r.quaternion[-1]).pole_latitude)
     assert abs(nominal) > 5.0 and median == pytest.approx(nominal, abs=0.5), (median, nominal)

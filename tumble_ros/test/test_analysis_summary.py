@@ -376,7 +376,7 @@ def test_spectrum_separates_two_lines():
 
 def test_the_spin_state_at_start_and_end_is_reported(tmp_path):
     """An impact changes the tumbling state: the summary's start and end states say how."""
-    from tumble_ros.core.spinstate import spin_state
+    from tumble_ros.core.model.spinstate import spin_state
 
     sc = Scenario(inertia=(1.0, 1.5, 2.0), orbit_rate=0.0, omega0=(2.0, 1.0, 10.0),
                   duration=1.0, output_interval=0.01,

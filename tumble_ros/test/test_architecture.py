@@ -151,9 +151,9 @@ def test_the_run_layer_imports_nodes_only_in_the_offline_writer():
 
 def test_the_check_sees_relative_and_nested_imports():
     known = modules()
-    ensemble = imports(PACKAGE / 'core' / 'ensemble.py', known)
+    ensemble = imports(PACKAGE / 'core' / 'propagation' / 'ensemble.py', known)
     assert 'tumble_ros.core.kernels' in ensemble  # `from . import kernels as K`
-    assert 'tumble_ros.core.simulate' in ensemble  # `from .simulate import ...`
+    assert 'tumble_ros.core.propagation.simulate' in ensemble  # `from .simulate import ...`
     assert 'tumble_ros.core' in imports(PACKAGE / 'cli' / 'warmup.py', known)
 
 
@@ -210,11 +210,11 @@ def test_no_module_imports_a_private_name_of_another():
 #: propagator or the scenario.
 CORE_BOTTOM = {
     'tumble_ros.core.jit': set(),
-    'tumble_ros.core.units': set(),
-    'tumble_ros.core.torques': {'tumble_ros.core.jit', 'tumble_ros.core.units'},
+    'tumble_ros.core.model.units': set(),
+    'tumble_ros.core.torques': {'tumble_ros.core.jit', 'tumble_ros.core.model.units'},
     'tumble_ros.core.kernels': {'tumble_ros.core.jit', 'tumble_ros.core.torques'},
-    'tumble_ros.core.limits': {'tumble_ros.core.kernels', 'tumble_ros.core.jit',
-                               'tumble_ros.core.torques'},
+    'tumble_ros.core.model.limits': {'tumble_ros.core.kernels', 'tumble_ros.core.jit',
+                                     'tumble_ros.core.torques'},
 }
 
 

@@ -4,7 +4,7 @@ import math
 import numpy as np
 
 from tumble_ros.core import angular_momentum_orbital, IntegratorSettings, Scenario, simulate
-from tumble_ros.core.rotation import quaternion_to_matrix
+from tumble_ros.core.model.rotation import quaternion_to_matrix
 
 TIGHT = IntegratorSettings(method='dop853', rtol=1e-13, atol=1e-14)
 

@@ -21,18 +21,10 @@ import time
 import numpy as np
 import pytest
 
-from tumble_ros.core import (
-    Impact,
-    IntegratorSettings,
-    kernels,
-    Propagator,
-    Scenario,
-    ScenarioError,
-    simulate,
-    TimeBase,
-)
-from tumble_ros.core.propagator import FAST_WORK_BUDGET, REFERENCE_WORK_BUDGET
-from tumble_ros.core.scenario import time_resolution
+from tumble_ros.core import (Impact, IntegratorSettings, kernels, Propagator, Scenario,
+                             ScenarioError, simulate, TimeBase)
+from tumble_ros.core.model.scenario import time_resolution
+from tumble_ros.core.propagation.propagator import FAST_WORK_BUDGET, REFERENCE_WORK_BUDGET
 
 needs_numba = pytest.mark.skipif(not kernels.COMPILED,
                                  reason='numba not available: only the reference path runs')
@@ -155,7 +147,7 @@ _NAN_STEP = r"""
 import json
 import numpy as np
 from tumble_ros.core import IntegratorSettings, kernels
-from tumble_ros.core.dynamics import ATTITUDE_MODELS
+from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.integrators import INTEGRATORS, SegmentProblem
 from tumble_ros.core.integrators.compiled import CompiledStepper
 # Below the Scenario's validation: ws = 1e300 makes 3 ws^2 infinite and the right-hand side

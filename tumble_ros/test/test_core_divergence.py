@@ -71,7 +71,7 @@ def test_a_runaway_spin_up_stops_at_the_work_budget():
 
     from test_core_boundaries import run_python
 
-    from tumble_ros.core.limits import MIN_WINDOW_STEPS
+    from tumble_ros.core.model.limits import MIN_WINDOW_STEPS
 
     out = run_python(_RUNAWAY, json.dumps(RUNAWAY))
     assert out['budget'] == [0.002, MIN_WINDOW_STEPS]
@@ -85,8 +85,8 @@ def test_a_runaway_spin_up_stops_at_the_work_budget():
 @pytest.mark.parametrize('fast', [False, True])
 def test_every_path_and_the_ensembles_stop_at_the_work_budget(monkeypatch, fast):
     """The reference path (scipy's methods), the compiled loop and both ensembles stop alike."""
-    from tumble_ros.core import limits
-    from tumble_ros.core.ensemble import simulate_ensemble
+    from tumble_ros.core.model import limits
+    from tumble_ros.core.propagation.ensemble import simulate_ensemble
 
     if fast and not kernels.COMPILED:
         pytest.skip('numba not available')
@@ -106,7 +106,7 @@ def test_every_path_and_the_ensembles_stop_at_the_work_budget(monkeypatch, fast)
 
 
 def test_the_work_budget_is_generous_and_grows_with_the_scenarios_rates():
-    from tumble_ros.core.limits import MIN_WINDOW_STEPS, STEPS_PER_RADIAN
+    from tumble_ros.core.model.limits import MIN_WINDOW_STEPS, STEPS_PER_RADIAN
 
     assert Scenario().step_budget == (0.002, MIN_WINDOW_STEPS)
     fast_spinner = Scenario(omega0=(0.0, 0.0, 1e8), duration=1.0, output_interval=0.5)

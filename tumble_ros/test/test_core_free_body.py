@@ -6,7 +6,7 @@ import pytest
 
 from tumble_ros.core import (angular_momentum_orbital, IntegratorSettings, kinetic_energy, METHODS,
                              Scenario, simulate)
-from tumble_ros.core.rotation import quaternion_to_matrix
+from tumble_ros.core.model.rotation import quaternion_to_matrix
 
 TIGHT = IntegratorSettings(method='dop853', rtol=1e-13, atol=1e-13)
 

@@ -2,7 +2,7 @@
 import numpy as np
 
 from tumble_ros.core import IntegratorSettings, jacobi_integral, Scenario, simulate
-from tumble_ros.core.rotation import quaternion_to_matrix
+from tumble_ros.core.model.rotation import quaternion_to_matrix
 
 # Paper Figs 7/8: a = 3, theta = 0.9, phi = 0.5, wx0 = wy0 = 0.1, wz0 = 30, ws = 1.
 FIG7 = Scenario(inertia=(1.0, 1.0, 4.0), allow_unphysical_inertia=True, orbit_rate=1.0,

@@ -21,8 +21,8 @@ import pytest
 
 from tumble_ros.core import (Impact, INTEGRATORS, IntegratorSettings, kernels, load_scenario,
                              Propagator)
-from tumble_ros.core.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.integrators import SegmentProblem
+from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 FIG10 = load_scenario(CONFIG / 'fig10.yaml').replace(duration=1.01, output_interval=0.01)

@@ -145,7 +145,7 @@ def test_simulate_rejects_bad_t_eval():
 
 
 def test_every_parameter_is_documented():
-    from tumble_ros.core.scenario import PARAMETER_DOCS, PARAMETER_NAMES
+    from tumble_ros.core.model.scenario import PARAMETER_DOCS, PARAMETER_NAMES
 
     assert set(PARAMETER_DOCS) == set(PARAMETER_NAMES) == set(Scenario().to_parameters())
 
@@ -173,7 +173,7 @@ def test_dump_parse_round_trip():
 
 def test_a_params_file_over_the_size_limit_is_refused_before_it_is_read(tmp_path):
     """A 60-MB omega0 list was parsed (1.2 GB held); now its size alone refuses it."""
-    from tumble_ros.core.limits import MAX_PARAMS_FILE_BYTES
+    from tumble_ros.core.model.limits import MAX_PARAMS_FILE_BYTES
 
     path = tmp_path / 'huge.yaml'
     head = 'sim:\n  ros__parameters:\n    omega0: ['
@@ -198,7 +198,7 @@ def test_a_long_wrong_list_is_named_in_a_short_line(tmp_path):
 
 def test_more_scheduled_impacts_than_the_limit_are_refused_before_the_run():
     """10**6 scheduled impacts took 3.9 GB and produced nothing."""
-    from tumble_ros.core.limits import MAX_IMPACTS
+    from tumble_ros.core.model.limits import MAX_IMPACTS
 
     n = MAX_IMPACTS + 1
     params = {'duration': 2.0, 'impacts.start': [1.0 * k / n for k in range(n)],

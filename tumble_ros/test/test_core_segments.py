@@ -2,7 +2,7 @@
 import numpy as np
 
 from tumble_ros.core import Impact
-from tumble_ros.core.segments import segment_torques, split_at_impacts
+from tumble_ros.core.propagation.segments import segment_torques, split_at_impacts
 
 
 def test_overlapping_pulses_are_cut_at_every_edge_and_summed():

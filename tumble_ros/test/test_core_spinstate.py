@@ -1,5 +1,5 @@
 """
-The spin state of a tumbler (core/spinstate.py) against closed forms and simulated motion.
+The spin state of a tumbler (core/model/spinstate.py) against closed forms and simulated motion.
 
 The rotation period against the time between the body-frame w's returns in a simulation, the
 precession period against the turning of the reference axis about L in the simulated attitude,
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from tumble_ros.core import IntegratorSettings, Scenario, simulate
-from tumble_ros.core.rotation import euler_to_quaternion, quaternion_to_matrix
-from tumble_ros.core.spinstate import spin_state
+from tumble_ros.core.model.rotation import euler_to_quaternion, quaternion_to_matrix
+from tumble_ros.core.model.spinstate import spin_state
 
 
 def test_the_symmetric_top_has_its_closed_form():

@@ -9,23 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tumble_ros.core import (
-    angular_momentum_orbital,
-    Impact,
-    INTEGRATORS,
-    IntegratorSettings,
-    kernels,
-    load_scenario,
-    METHODS,
-    Propagator,
-    Scenario,
-    ScenarioError,
-    SegmentProblem,
-    simulate,
-    SPLITTING_METHODS,
-)
+from tumble_ros.core import (angular_momentum_orbital, Impact, INTEGRATORS, IntegratorSettings,
+                             kernels, load_scenario, METHODS, Propagator, Scenario, ScenarioError,
+                             SegmentProblem, simulate, SPLITTING_METHODS)
 from tumble_ros.core.integrators import FINISHED
-from tumble_ros.core.rotation import quaternion_to_matrix
+from tumble_ros.core.model.rotation import quaternion_to_matrix
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 ORDERS = {'splitting': 2, 'splitting4': 4, 'splitting6': 6}

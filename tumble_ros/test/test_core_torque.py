@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from tumble_ros.core.dynamics import ATTITUDE_MODELS
-from tumble_ros.core.rotation import euler_to_matrix, quaternion_to_matrix
+from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
+from tumble_ros.core.model.rotation import euler_to_matrix, quaternion_to_matrix
 from tumble_ros.core.torques import gravity_gradient_torque, sun_direction_orbital
 
 RNG = np.random.default_rng(11)

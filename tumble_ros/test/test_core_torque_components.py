@@ -14,19 +14,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from tumble_ros.core import (
-    Impact,
-    INTEGRATORS,
-    IntegratorSettings,
-    kernels,
-    Propagator,
-    Scenario,
-    simulate,
-    simulate_ensemble,
-    torque_function,
-    TorqueComponent,
-)
-from tumble_ros.core.rotation import euler_to_quaternion
+from tumble_ros.core import (Impact, INTEGRATORS, IntegratorSettings, kernels, Propagator,
+                             Scenario, simulate, simulate_ensemble, torque_function,
+                             TorqueComponent)
+from tumble_ros.core.model.rotation import euler_to_quaternion
 
 
 @torque_function

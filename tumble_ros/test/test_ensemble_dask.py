@@ -15,8 +15,8 @@ from tumble_ros.cli.ensemble import main
 from tumble_ros.core import (ensemble_scenarios, GaussianSpread, Impact, IntegratorSettings,
                              iter_chunks, load_scenario, parse_scenario, RandomImpacts,
                              ScenarioError, simulate_ensemble)
-from tumble_ros.ensembles import (dask_client, EnsembleRunError, EnsembleStoreError,
-                                  open_ensemble, run_ensemble, run_ensemble_to_store)
+from tumble_ros.ensembles import (dask_client, EnsembleRunError, EnsembleStoreError, open_ensemble,
+                                  run_ensemble, run_ensemble_to_store)
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 FIELDS = ('omega', 'euler', 'quaternion', 'jacobi', 'success', 'n_steps', 'nfev')
@@ -239,7 +239,7 @@ def test_command_line_on_a_local_cluster_and_on_a_running_scheduler(client, tmp_
 
 def test_the_analysis_reads_the_store(tmp_path, capsys):
     from tumble_ros.analysis.ensemble import ensemble_statistics, final_spin, main as analyse
-    from tumble_ros.core.spinstate import spin_state
+    from tumble_ros.core.model.spinstate import spin_state
 
     sc = fig9(duration=1.0)
     inputs = random_inputs(sc, n=12)

@@ -14,7 +14,7 @@ import pytest
 
 from tumble_ros import topics
 from tumble_ros.core import Impact, load_scenario, Scenario, TimeBase
-from tumble_ros.core.shape import body_shape, BOX, ELLIPSOID, MIN_THICKNESS
+from tumble_ros.core.model.shape import body_shape, BOX, ELLIPSOID, MIN_THICKNESS
 from tumble_ros.io import message_definition, MessageTemplate, read_messages
 from tumble_ros.nodes.markers import marker_every, MARKER_FRAMES
 from tumble_ros.runs.offline import record_offline

@@ -13,7 +13,8 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / 'tumble_ros'
 #: The ROS-free packages (a researcher uses them without a ROS install) and files each must have.
 ROS_FREE = {
-    'core': {'scenario.py', 'propagator.py', 'kernels/stepping.py', 'ensemble.py',
+    'core': {'model/scenario.py', 'propagation/propagator.py', 'kernels/stepping.py',
+             'propagation/ensemble.py',
              'integrators/splitting.py'},
     'io': {'msgdefs.py', 'mcap_reader.py', 'mcap_writer.py', 'ensemble_store.py'},
     'ensembles': {'__init__.py'},

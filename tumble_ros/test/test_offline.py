@@ -207,7 +207,7 @@ def test_a_stop_is_served_after_one_bounded_slice_and_slices_change_no_bit(tmp_p
     of one uninterrupted call (Propagator.sample_many's contract, checked here on the file).
     """
     from tumble_ros.core import Propagator, TimeBase
-    from tumble_ros.core.propagator import FAST_WORK_BUDGET
+    from tumble_ros.core.propagation.propagator import FAST_WORK_BUDGET
 
     sc = Scenario(duration=2.0, output_interval=0.002)
     checks = []

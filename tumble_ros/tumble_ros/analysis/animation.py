@@ -6,7 +6,7 @@ The asteroid tumbling, drawn offline: an animation of a recording, a still of it
     python -m tumble_ros analyze RUN.mcap --still scene.png [--at 0.5]
 
 :func:`write_animation` draws, frame by frame, the body (the shape of
-:func:`tumble_ros.core.shape.body_shape`), its principal axes, the direction of its angular
+:func:`tumble_ros.core.model.shape.body_shape`), its principal axes, the direction of its angular
 momentum L = C(q) I w and of the torquing body, in the orbital frame, at the attitude of the
 recorded samples; beside it w against t (the whole run, scaled on the numeric solution, with the
 model as in ``omega.png``) and the comparator's |error|, a cursor at the frame's time. Frames
@@ -42,14 +42,14 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 import numpy as np
 
-from tumble_ros.core.dynamics import angular_momentum_orbital
-from tumble_ros.core.rotation import quaternions_to_matrices
-from tumble_ros.core.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, ELLIPSOID,
-                                   MOMENTUM_LENGTH, PERTURBER_LENGTH, torquing_body_direction)
+from tumble_ros.core.model.dynamics import angular_momentum_orbital
+from tumble_ros.core.model.rotation import quaternions_to_matrices
+from tumble_ros.core.model.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, ELLIPSOID,
+                                         MOMENTUM_LENGTH, PERTURBER_LENGTH,
+                                         torquing_body_direction)
 from tumble_ros.errors import AnalysisError
 from tumble_ros.io import read_messages
-from tumble_ros.topics import (MARKER_AXES, MARKER_MOMENTUM, MARKER_PERTURBER, MARKER_SUN,
-                               MARKERS)
+from tumble_ros.topics import MARKER_AXES, MARKER_MOMENTUM, MARKER_PERTURBER, MARKER_SUN, MARKERS
 
 from .figures import envelope, numeric_limits
 from .recording import Recording

@@ -1,8 +1,8 @@
 """
 The units and the frame the analysis shows a recording in: chosen once, used by text and figures.
 
-Inside, the analysis computes in years [yr], rad/yr and radians (``core.units``). What it prints
-and draws is in the units of the field, chosen here from the run's span and its scenario:
+Inside, the analysis computes in years [yr], rad/yr and radians (``core.model.units``). What it
+prints and draws is in the units of the field, chosen here from the run's span and its scenario:
 
 * times, periods and rates in one time unit: years for a run of a year or more (the paper's
   runs: t in yr, w in rad/yr, periods in yr with hours or days beside), otherwise the largest
@@ -27,7 +27,7 @@ import math
 import re
 from typing import Any, TYPE_CHECKING
 
-from tumble_ros.core.units import HOURS_PER_YEAR
+from tumble_ros.core.model.units import HOURS_PER_YEAR
 
 from .timeaxis import display_unit
 

@@ -8,7 +8,7 @@ not pin down, and on its moments of inertia. This module runs that Monte Carlo:
 
 * the observables are kept: every body has the nominal scenario's precession and rotation
   periods and pole (the photometric solution), recomputed from its ``omega0``/``euler0`` with
-  :func:`~tumble_ros.core.spinstate.spin_state`;
+  :func:`~tumble_ros.core.model.spinstate.spin_state`;
 * what is drawn: the moments of inertia (a uniform spread around the nominal ratios), the phase
   of the tumbling cycle (the polhode, a uniform fraction of P_psi) and the body's turn about its
   angular momentum (uniform in [0, 2 pi));
@@ -31,11 +31,12 @@ from typing import Callable
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core import (EnsembleResult, IntegratorSettings, Scenario, ScenarioError,
-                             simulate, simulate_ensemble)
-from tumble_ros.core.rotation import euler_to_quaternion, matrix_to_euler, quaternion_to_matrix
-from tumble_ros.core.spinstate import omega_for_periods, spin_state
-from tumble_ros.core.units import HOURS_PER_YEAR
+from tumble_ros.core import (EnsembleResult, IntegratorSettings, Scenario, ScenarioError, simulate,
+                             simulate_ensemble)
+from tumble_ros.core.model.rotation import (euler_to_quaternion, matrix_to_euler,
+                                            quaternion_to_matrix)
+from tumble_ros.core.model.spinstate import omega_for_periods, spin_state
+from tumble_ros.core.model.units import HOURS_PER_YEAR
 
 __all__ = ['EncounterResult', 'encounter_ensemble', 'tumbler_states', 'format_encounter',
            'encounter_figure', 'draw_encounter', 'encounter_memory', 'MAX_INERTIA_SPREAD',
@@ -149,7 +150,7 @@ def tumbler_states(inertia: npt.ArrayLike, precession_period: float, rotation_pe
     Return (omega0 (n, 3) [rad/yr], euler0 (n, 3) [rad]) of tumblers with the given spin state.
 
     Each has the short-axis mode of periods P_phi, P_psi [yr]
-    (:func:`~tumble_ros.core.spinstate.omega_for_periods`) and its angular momentum along
+    (:func:`~tumble_ros.core.model.spinstate.omega_for_periods`) and its angular momentum along
     ``pole`` (unit vector, orbital frame), at ``phase`` (fraction of P_psi) of its tumbling
     cycle and turned by ``turn`` [rad] about the pole. Phase 0, turn 0: w at the polhode point
     of :func:`omega_for_periods`, the body's L turned onto the pole by a fixed rotation.

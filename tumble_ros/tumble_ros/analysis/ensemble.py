@@ -6,7 +6,7 @@ Analysis of an ensemble store: distributions of the final spin, periods, mode an
 Works on what :func:`tumble_ros.io.open_ensemble` returns (any run written by
 ``tumble_ros.ensembles.run_ensemble_to_store`` or ``ensemble --out X.zarr``), reading the store
 chunk by chunk: the final angular velocity of every succeeded body, and the torque-free spin
-state (:func:`tumble_ros.core.spinstate.spin_state`: SAM/LAM mode, rotation and precession
+state (:func:`tumble_ros.core.model.spinstate.spin_state`: SAM/LAM mode, rotation and precession
 periods [yr], pole of L in the orbital frame) of up to ``max_spin_states`` bodies spread evenly
 over the ensemble (the spin state costs ~1 ms per body). The dicts are in those units; the
 printout and the figure in the store's display units (``display``: rates and periods in the
@@ -25,7 +25,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 import numpy as np
 from tumble_ros.core import parse_scenario
-from tumble_ros.core.spinstate import spin_state
+from tumble_ros.core.model.spinstate import spin_state
 from tumble_ros.errors import AnalysisError, TumbleRosError
 from tumble_ros.io import open_ensemble
 from tumble_ros.io.ensemble_store import SCENARIO_ATTR

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from tumble_ros.core import jacobi_integral
-from tumble_ros.core.rotation import euler_to_matrix, quaternion_to_matrix
+from tumble_ros.core.model.rotation import euler_to_matrix, quaternion_to_matrix
 from tumble_ros.topics import ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, SCENARIO
 
 from .impacts import impact_intervals

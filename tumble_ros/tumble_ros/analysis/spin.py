@@ -1,5 +1,5 @@
 """
-The tumbling state at the start and at the end of a recording (``core.spinstate``).
+The tumbling state at the start and at the end of a recording (``core.model.spinstate``).
 
 The torque-free spin state through the first and the last sample that has both w and the
 attitude: mode (SAM / LAM), rotation and precession periods, the pole (L's direction in the
@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from tumble_ros.core.spinstate import spin_state, SpinState
+from tumble_ros.core.model.spinstate import spin_state, SpinState
 
 from .recording import Recording
 from .timeaxis import same_stamps

@@ -7,43 +7,38 @@ Quick start::
     result = simulate(Scenario(), t_eval=[0.0, 1.0, 2.0])
     result.omega   # (3, 3) angular velocity [rad/yr], body axes
 
-Modules: ``rotation`` (Euler angles, matrices, quaternions), ``torques`` (the torques as
-components: gravity gradient, impact pulses, and :class:`TorqueComponent` for torques
-defined outside core), ``dynamics`` (equations of motion, invariants), ``integrators`` (one
-interface, name registries, the Lie-Poisson splitting methods), ``jit`` (the numba switch)
-and ``kernels`` (the physics every path runs and the compiled loops), ``scenario``
-(validated inputs), ``propagator``
-(incremental integration split at impacts), ``simulate`` (batch runs), ``ensemble`` (N
-bodies at once, and the chunks of bigger runs; where chunks run, Dask included, is the run
-layer's: ``tumble_ros.runs.ensembles``),
-``analytic`` (the paper's approximate solution, better linearisations, exact torque-free
-motion), ``timebase`` (simulated years <-> ROS stamps).
+Packages, by concern: ``model`` (the body and its inputs: ``scenario`` validated, ``shape``,
+``spinstate``, ``units``, ``rotation`` (Euler angles, matrices, quaternions), ``dynamics``
+(equations of motion, invariants), ``limits``), ``propagation`` (``propagator``: incremental
+integration split at impacts; ``simulate``: batch runs; ``ensemble``: N bodies at once;
+``timebase``: simulated years <-> ROS stamps), ``torques`` (the torques as components:
+gravity gradient, impact pulses, and :class:`TorqueComponent` for torques defined outside
+core), ``integrators`` (one interface, name registries, the Lie-Poisson splitting methods),
+``kernels`` (the physics every path runs and the compiled loops, one registry of compiled
+methods); modules ``analytic`` (the paper's approximate solution, better linearisations,
+exact torque-free motion) and ``jit`` (the numba switch). The Dask engine is not numerics: it
+is in the run layer (:mod:`tumble_ros.runs.ensembles`).
 Performance and long runs: docs/performance.md.
 """
-from .analytic import (AnalyticModel, AnchorState, applicability, characteristic_frequencies,
-                       DEPARTURE, departure_text, Frequency, make_model, ModelNotApplicable)
-from .analytic import MODELS as ANALYTIC_MODELS
-from .dynamics import angular_momentum_orbital, ATTITUDE_MODELS, jacobi_integral, kinetic_energy
-from .ensemble import (body_rng, ChunkResult, concatenate_results, ensemble_scenarios,
-                       EnsembleResult, GaussianSpread, iter_chunks, random_impacts,
-                       RandomImpacts, simulate_ensemble)
-from .integrators import INTEGRATORS, METHODS, SegmentProblem, SPLITTING_METHODS
-from .params_file import check_params_file
-from .propagator import IntegrationError, Propagator, Sample
-from .scenario import (
-    dump_scenario,
-    Impact,
-    ImpactLimits,
-    IntegratorSettings,
-    load_scenario,
-    PARAMETER_DOCS,
-    parse_scenario,
-    Scenario,
-    ScenarioError,
-)
-from .simulate import simulate, SimulationResult
-from .timebase import TimeBase
-from .torques import torque_function, TorqueComponent
+from tumble_ros.core.analytic import (AnalyticModel, AnchorState, applicability,
+                                      characteristic_frequencies, DEPARTURE, departure_text,
+                                      Frequency, make_model, ModelNotApplicable)
+from tumble_ros.core.analytic import MODELS as ANALYTIC_MODELS
+from tumble_ros.core.integrators import INTEGRATORS, METHODS, SegmentProblem, SPLITTING_METHODS
+from tumble_ros.core.model.dynamics import (angular_momentum_orbital, ATTITUDE_MODELS,
+                                            jacobi_integral, kinetic_energy)
+from tumble_ros.core.model.params_file import check_params_file
+from tumble_ros.core.model.scenario import (dump_scenario, Impact, ImpactLimits,
+                                            IntegratorSettings, load_scenario, PARAMETER_DOCS,
+                                            parse_scenario, Scenario, ScenarioError)
+from tumble_ros.core.propagation.ensemble import (body_rng, ChunkResult, concatenate_results,
+                                                  ensemble_scenarios, EnsembleResult,
+                                                  GaussianSpread, iter_chunks, random_impacts,
+                                                  RandomImpacts, simulate_ensemble)
+from tumble_ros.core.propagation.propagator import IntegrationError, Propagator, Sample
+from tumble_ros.core.propagation.simulate import simulate, SimulationResult
+from tumble_ros.core.propagation.timebase import TimeBase
+from tumble_ros.core.torques import torque_function, TorqueComponent
 
 __all__ = [
     'ANALYTIC_MODELS',

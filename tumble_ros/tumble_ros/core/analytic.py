@@ -60,9 +60,9 @@ import numpy as np
 import numpy.typing as npt
 from scipy.special import ellipj, ellipk, ellipkinc
 
-from .array_types import ArrayLike, FloatArray
-from .rotation import quaternion_to_euler
-from .scenario import ENCOUNTER_TORQUE_FRACTION, Scenario, ScenarioError
+from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.model.rotation import quaternion_to_euler
+from tumble_ros.core.model.scenario import ENCOUNTER_TORQUE_FRACTION, Scenario, ScenarioError
 
 __all__ = [
     'AnalyticModel',

@@ -6,12 +6,12 @@ recorder writes them, both through :class:`MarkerScene`: one MarkerArray per sho
 marker in the frame ``orbital`` and stamped with the sample's stamp, so that RViz and Foxglove
 (fixed frame ``orbital``) show the body tumbling. Namespaces (``ns``) and ids:
 
-* ``body`` 0: the body (:func:`tumble_ros.core.shape.body_shape`): a SPHERE scaled to the
+* ``body`` 0: the body (:func:`tumble_ros.core.model.shape.body_shape`): a SPHERE scaled to the
   uniform ellipsoid of the principal moments (scale = 2 x semi-axes, the longest semi-axis 1),
   or a CUBE when the moments break the triangle inequality (no body has them); position 0,
   orientation = the attitude quaternion (body -> orbital) of the sample;
 * ``axes`` 0, 1, 2: ARROWs along the body's principal axes x, y, z (red, green, blue),
-  ``AXIS_LENGTH`` long (lengths and colours: :mod:`tumble_ros.core.shape`): orientation = the
+  ``AXIS_LENGTH`` long (lengths and colours: :mod:`tumble_ros.core.model.shape`): orientation = the
   attitude times the fixed rotation taking +x onto the axis (:data:`AXIS_ROTATIONS`);
 * ``angular_momentum`` 0: an ARROW from 0 to L / |L| * ``MOMENTUM_LENGTH`` (``points``),
   L = C(q) I w in the orbital frame (its direction; |L| is in the recording's w);
@@ -35,11 +35,11 @@ from rclpy.serialization import serialize_message
 from std_msgs.msg import ColorRGBA
 from tumble_ros import topics
 from tumble_ros.core import Scenario
-from tumble_ros.core.dynamics import angular_momentum_orbital
-from tumble_ros.core.rotation import quaternions_to_matrices
-from tumble_ros.core.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, MOMENTUM_LENGTH,
-                                   PERTURBER_LENGTH, torquing_body_direction)
-from tumble_ros.core.timebase import SampleGrid
+from tumble_ros.core.model.dynamics import angular_momentum_orbital
+from tumble_ros.core.model.rotation import quaternions_to_matrices
+from tumble_ros.core.model.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, MOMENTUM_LENGTH,
+                                         PERTURBER_LENGTH, torquing_body_direction)
+from tumble_ros.core.propagation.timebase import SampleGrid
 from tumble_ros.io import message_definition, MessageTemplate
 from visualization_msgs.msg import Marker, MarkerArray
 

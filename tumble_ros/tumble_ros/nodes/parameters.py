@@ -1,7 +1,7 @@
 """
 Declaring and reading ROS 2 parameters with descriptors (description, unit, range).
 
-The scenario's parameters come from :data:`tumble_ros.core.scenario.PARAMETER_DOCS` and are
+The scenario's parameters come from :data:`tumble_ros.core.model.scenario.PARAMETER_DOCS` and are
 validated by :class:`tumble_ros.core.Scenario` itself: the node adds no rules of its own.
 They are read-only: a scenario is fixed for the life of a run.
 """
@@ -15,7 +15,7 @@ from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from tumble_ros.core import check_params_file, PARAMETER_DOCS, Scenario, ScenarioError
-from tumble_ros.core.params_file import section_applies
+from tumble_ros.core.model.params_file import section_applies
 from tumble_ros.errors import NodeError
 
 __all__ = ['EMPTY_ARRAY_TYPES', 'declare_node_parameters', 'declare_scenario_parameters',

@@ -20,8 +20,9 @@ and publishes every ``output_interval`` of simulated time:
   the 3D scene of every ``marker_decimation``-th sample (:mod:`.markers`).
 
 Every stamp is ROS time carrying simulated time, ``status`` included (the time of the last
-published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year) (``core.timebase``). The node
-is the clock source: it paces on the steady clock whatever ``use_sim_time`` says. Services:
+published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year)
+(``core.propagation.timebase``). The node is the clock source: it paces on the steady clock
+whatever ``use_sim_time`` says. Services:
 ``apply_impact`` (tumble_ros_interfaces/ApplyImpact, every request answered), ``pause``,
 ``resume``, ``step`` (std_srvs/Trigger). Impacts are queued by the service and applied at the
 next step boundary, never inside the callback. The node holds no physics and no run logic:
@@ -44,23 +45,20 @@ from std_srvs.srv import Trigger
 
 from tumble_ros import topics
 from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeBase
-from tumble_ros.core.units import seconds_per_year_of
+from tumble_ros.core.model.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.markers import marker_every, MarkerScene
 from tumble_ros.nodes.messages import FRAMES, message_class, new_run_id, SampleEncoder
-from tumble_ros.nodes.parameters import (
-    declare_node_parameters,
-    declare_scenario_parameters,
-    read_scenario_parameters,
-)
+from tumble_ros.nodes.parameters import (declare_node_parameters, declare_scenario_parameters,
+                                         read_scenario_parameters)
 from tumble_ros.nodes.progress import ConsumerTracker
 from tumble_ros.nodes.qos import PUBLISHER_QOS, publisher_qos, SERVICE_QOS
 from tumble_ros.nodes.record_messages import description_message, impact_message, status_message
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
-from tumble_ros.runs.records import (DIVERGED, FINISHED, ImpactEnded, PAUSED, RUNNING,
-                                     SampleBlock, SegmentStart, SessionRecord, StatusChange)
+from tumble_ros.runs.records import (DIVERGED, FINISHED, ImpactEnded, PAUSED, RUNNING, SampleBlock,
+                                     SegmentStart, SessionRecord, StatusChange)
 from tumble_ros.runs.session import output_grid, SimulationSession
 from tumble_ros_interfaces.msg import (  # type: ignore[attr-defined]  # rosidl-generated
     ImpactEvent, ScenarioDescription, SimStatus)

@@ -26,9 +26,9 @@ from typing import Sequence
 
 import numpy as np
 
-from tumble_ros.core import (AnalyticModel, DEPARTURE, departure_text, make_model,
-                             parse_scenario, ScenarioError, TimeBase)
-from tumble_ros.core.timebase import SampleGrid
+from tumble_ros.core import (AnalyticModel, DEPARTURE, departure_text, make_model, parse_scenario,
+                             ScenarioError, TimeBase)
+from tumble_ros.core.propagation.timebase import SampleGrid
 
 from .records import (ComparedSample, ComparisonBlock, ComparisonStatus, Floats, OK,
                       SampleBlock, SegmentStart, WARN)

@@ -44,8 +44,8 @@ from rclpy.serialization import serialize_message
 
 from tumble_ros import topics
 from tumble_ros.core import Scenario, TimeBase
-from tumble_ros.core.propagator import FAST_WORK_BUDGET
-from tumble_ros.core.timebase import SampleGrid
+from tumble_ros.core.propagation.propagator import FAST_WORK_BUDGET
+from tumble_ros.core.propagation.timebase import SampleGrid
 from tumble_ros.io import McapWriter, offered_qos_yaml
 from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.nodes.messages import new_run_id, SampleEncoder

@@ -2,8 +2,9 @@
 The simulation session: what the simulator does each batch, without ROS, in one place.
 
 A :class:`SimulationSession` integrates a :class:`~tumble_ros.core.Scenario` on its output grid
-(:class:`~tumble_ros.core.timebase.SampleGrid`) with :class:`~tumble_ros.core.Propagator`:
-``advance(k_last)`` samples the grid up to index ``k_last`` and returns the batch's records
+(:class:`~tumble_ros.core.propagation.timebase.SampleGrid`) with
+:class:`~tumble_ros.core.Propagator`: ``advance(k_last)`` samples the grid up to index
+``k_last`` and returns the batch's records
 (:mod:`.records`), in the order they go out: the impacts that ended and the segments that
 started within the batch (a segment's description precedes its samples, so a comparator keeps
 the previous segment's model for samples that trail it), the samples, then a status change when
@@ -19,7 +20,7 @@ from collections import deque
 import numpy as np
 
 from tumble_ros.core import dump_scenario, Impact, Propagator, Scenario, TimeBase
-from tumble_ros.core.timebase import SampleGrid
+from tumble_ros.core.propagation.timebase import SampleGrid
 
 from .records import (DIVERGED, FINISHED, Floats, ImpactEnded, PAUSED, RUNNING, SampleBlock,
                       SegmentStart, SessionRecord, StatusChange)

@@ -16,10 +16,10 @@ compiled loop in ``core/kernels/``; :mod:`.compiled`).
 """
 from __future__ import annotations
 
-from .adaptive import Adams, BDF, DOP853, LSODA, Radau, RK45
-from .base import FAILED, FINISHED, RUNNING, SegmentProblem, Stepper
-from .fixed_step import RK4
-from .splitting import Splitting, Splitting4, Splitting6
+from tumble_ros.core.integrators.adaptive import Adams, BDF, DOP853, LSODA, Radau, RK45
+from tumble_ros.core.integrators.base import FAILED, FINISHED, RUNNING, SegmentProblem, Stepper
+from tumble_ros.core.integrators.fixed_step import RK4
+from tumble_ros.core.integrators.splitting import Splitting, Splitting4, Splitting6
 
 METHODS: dict[str, type[Stepper]] = {
     cls.name: cls for cls in (RK4, RK45, DOP853, Radau, BDF, LSODA, Adams)

@@ -20,7 +20,8 @@ from typing import Any, Callable
 import numpy as np
 from scipy import integrate
 
-from .base import SegmentProblem, step_nan_message, Stepper, StepSettings
+from tumble_ros.core.integrators.base import (SegmentProblem, step_nan_message, Stepper,
+                                              StepSettings)
 
 
 __all__ = ['RK45', 'DOP853', 'Radau', 'BDF', 'LSODA', 'Adams']

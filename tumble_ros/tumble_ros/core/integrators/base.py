@@ -46,11 +46,11 @@ from typing import Callable, ClassVar, Protocol, TYPE_CHECKING
 
 import numpy as np
 
-from ..kernels.checks import collapsed, finite_norm
-from ..limits import budget_message
+from tumble_ros.core.kernels.checks import collapsed, finite_norm
+from tumble_ros.core.model.limits import budget_message
 
 if TYPE_CHECKING:
-    from ..torques import TorqueComponent
+    from tumble_ros.core.torques import TorqueComponent
 
 __all__ = ['Stepper', 'SegmentProblem', 'RUNNING', 'FINISHED', 'FAILED']
 

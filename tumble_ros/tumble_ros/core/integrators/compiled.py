@@ -16,10 +16,11 @@ from typing import Any, Callable
 import numpy as np
 import numpy.typing as npt
 
-from .base import FAILED, FINISHED, RUNNING, SegmentProblem, step_nan_message, Stepper
-from .. import kernels as K
-from ..limits import budget_message
-from ..torques import extra_torque_arrays
+from tumble_ros.core import kernels as K
+from tumble_ros.core.integrators.base import (FAILED, FINISHED, RUNNING, SegmentProblem,
+                                              step_nan_message, Stepper)
+from tumble_ros.core.model.limits import budget_message
+from tumble_ros.core.torques import extra_torque_arrays
 
 __all__ = ['CompiledStepper', 'fast_path_available', 'why_no_fast_path', 'failure_message']
 

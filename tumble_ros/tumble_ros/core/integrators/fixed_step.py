@@ -17,9 +17,9 @@ from typing import Any, Callable
 import numpy as np
 import numpy.typing as npt
 
-from .base import SegmentProblem, Stepper, StepSettings
-from ..jit import python_source
-from ..kernels import rk4 as _rk4
+from tumble_ros.core.integrators.base import SegmentProblem, Stepper, StepSettings
+from tumble_ros.core.jit import python_source
+from tumble_ros.core.kernels import rk4 as _rk4
 
 # the kernel's functions run on numpy arrays (their Python source: the compiled ones take floats)
 _step_count = python_source(_rk4.step_count)
@@ -46,7 +46,8 @@ class RK4(Stepper):
     kernel = 'rk4'
 
     def __init__(self, fun: Callable[..., Any], t0: float, y0: npt.NDArray[np.float64],
-                 t_bound: float, settings: StepSettings, problem: SegmentProblem | None = None) -> None:
+                 t_bound: float, settings: StepSettings,
+                 problem: SegmentProblem | None = None) -> None:
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         span = self.tau_bound
         n = int(_step_count(span, settings.step))

@@ -54,10 +54,10 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .base import SegmentProblem, Stepper, StepSettings
-from ..kernels import (body_torque, config_array, flow_called, N, new_state, problem_array,
-                       pulse_step_count, ST)
-from ..torques import extra_torque_arrays
+from tumble_ros.core.integrators.base import SegmentProblem, Stepper, StepSettings
+from tumble_ros.core.kernels import (body_torque, config_array, flow_called, N, new_state,
+                                     problem_array, pulse_step_count, ST)
+from tumble_ros.core.torques import extra_torque_arrays
 
 
 __all__ = ['Splitting', 'Splitting4', 'Splitting6', 'COMPOSITIONS']
@@ -121,7 +121,8 @@ class Splitting(Stepper):
         self._gammas = self.composition()
         self._cfg = config_array(self.kernel, settings, self._gammas, self.order)
         self._work = new_state()  # the kernels' state layout, for their flow
-        self._torq: tuple[float, ...] = body_torque(self._p, self._extra, self.t0 + self.tau, *self.y[3:].tolist())
+        self._torq: tuple[float, ...] = body_torque(self._p, self._extra, self.t0 + self.tau,
+                                                    *self.y[3:].tolist())
         ix, iy, iz = problem.inertia
         # pi = I w is carried from step to step, not recomputed from w: the round trip
         # w -> I w -> w would bias |L| by ~1e-17 per step (1e-12 over 10^5 steps).

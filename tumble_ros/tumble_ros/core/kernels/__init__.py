@@ -24,24 +24,19 @@ One module per concern, every arrow downward:
 
 Quaternion attitude only. ``python -m tumble_ros.core.kernels`` prints the array layouts.
 """
-from .arrays import config_array, free_flow_split, new_state, problem_array, problem_arrays
-from .checks import collapsed, finite_norm, MIN_STEP_ULPS
-from .dop853 import MAX_REJECTIONS
-from .layout import Array, CF, describe, Extra, FAIL, N, PR, ST, STATUS
-from .methods import (ensemble_advance, ensemble_init, kernel_id, kernel_name, KERNELS, Loops,
-                      loops)
-from .physics import body_torque, free_flow, rhs, rhs_called
-from .splitting import flow_called, MAX_PULSE_SUBSTEPS, pulse_step_count
-from .tracking import (
-    MAX_TRACK_PIECES,
-    set_track,
-    track_pieces,
-    track_rate,
-    UNWRAP_MIN_SIN,
-    UNWRAP_STEP,
-    unwrap_towards,
-)
-from ..jit import COMPILED, NUMBA_VERSION
+from tumble_ros.core.jit import COMPILED, NUMBA_VERSION
+from tumble_ros.core.kernels.arrays import (config_array, free_flow_split, new_state,
+                                            problem_array, problem_arrays)
+from tumble_ros.core.kernels.checks import collapsed, finite_norm, MIN_STEP_ULPS
+from tumble_ros.core.kernels.dop853 import MAX_REJECTIONS
+from tumble_ros.core.kernels.layout import Array, CF, describe, Extra, FAIL, N, PR, ST, STATUS
+from tumble_ros.core.kernels.methods import (ensemble_advance, ensemble_init, kernel_id,
+                                             kernel_name, KERNELS, Loops, loops)
+from tumble_ros.core.kernels.physics import body_torque, free_flow, rhs, rhs_called
+from tumble_ros.core.kernels.splitting import flow_called, MAX_PULSE_SUBSTEPS, pulse_step_count
+from tumble_ros.core.kernels.tracking import (MAX_TRACK_PIECES, set_track, track_pieces,
+                                              track_rate, UNWRAP_MIN_SIN, UNWRAP_STEP,
+                                              unwrap_towards)
 
 __all__ = ['COMPILED', 'NUMBA_VERSION', 'ST', 'PR', 'CF', 'N', 'STATUS', 'FAIL', 'Array',
            'Extra', 'KERNELS', 'Loops', 'loops', 'kernel_id', 'kernel_name', 'describe',

@@ -11,9 +11,9 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .layout import Array, CF, MAX_STAGES, PR, ST
-from .methods import kernel_id
-from ..torques.gravity_gradient import tidal_coefficients
+from tumble_ros.core.kernels.layout import Array, CF, MAX_STAGES, PR, ST
+from tumble_ros.core.kernels.methods import kernel_id
+from tumble_ros.core.torques.gravity_gradient import tidal_coefficients
 
 __all__ = ['free_flow_split', 'problem_arrays', 'problem_array', 'config_array', 'new_state']
 

@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 
-from .layout import Array
-from ..jit import jit
+from tumble_ros.core.jit import jit
+from tumble_ros.core.kernels.layout import Array
 
 __all__ = ['finite_norm', 'collapsed', 'MIN_STEP_ULPS']
 

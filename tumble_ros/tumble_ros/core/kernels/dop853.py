@@ -12,9 +12,9 @@ import math
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
-from .layout import Array, CF, Extra, FAIL, N, ST, STATUS
-from .physics import rhs, rhs_called
-from ..jit import jit
+from tumble_ros.core.jit import jit
+from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST, STATUS
+from tumble_ros.core.kernels.physics import rhs, rhs_called
 
 __all__ = ['start', 'step', 'dense', 'MAX_REJECTIONS']
 

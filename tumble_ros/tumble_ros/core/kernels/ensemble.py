@@ -3,17 +3,17 @@ The ensemble loop: many bodies, each with its own segments (impact sequences).
 
 Bodies share the method (``cfg``) and the extra torques (``extra``); each has its segments'
 problems ``probs[seg_ptr[b]:seg_ptr[b+1]]`` (layout :data:`~.layout.PR`) and edges ``seg_t``,
-its state ``states[b]`` and Euler track ``tracks[b]``. ``core/ensemble.py`` builds the arrays
-and runs blocks of bodies in threads (the loops release the GIL).
+its state ``states[b]`` and Euler track ``tracks[b]``. ``core/propagation/ensemble.py`` builds
+the arrays and runs blocks of bodies in threads (the loops release the GIL).
 """
 from __future__ import annotations
 
 import numpy as np
 import numpy.typing as npt
 
-from .layout import Array, Extra, ST, STATUS
-from .stepping import advance, emit, seg_init
-from ..jit import jit
+from tumble_ros.core.jit import jit
+from tumble_ros.core.kernels.layout import Array, Extra, ST, STATUS
+from tumble_ros.core.kernels.stepping import advance, emit, seg_init
 
 __all__ = ['body_advance', 'ensemble_advance', 'ensemble_init', 'LOOP_FUNCTIONS']
 

@@ -25,9 +25,9 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any, Callable, NamedTuple
 
-from . import dop853, ensemble, rk4, splitting, stepping
-from .layout import Array, CF, Extra
-from ..jit import COMPILED_SOURCES, specialise
+from tumble_ros.core.jit import COMPILED_SOURCES, specialise
+from tumble_ros.core.kernels import dop853, ensemble, rk4, splitting, stepping
+from tumble_ros.core.kernels.layout import Array, CF, Extra
 
 __all__ = ['KERNELS', 'Loops', 'loops', 'kernel_id', 'kernel_name', 'loops_for', 'cached',
            'ensemble_init', 'ensemble_advance']

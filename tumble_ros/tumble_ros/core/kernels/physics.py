@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import math
 
-from .layout import Array, Extra, PR
-from ..jit import called, jit, jit_inline
-from ..torques.gravity_gradient import sun_direction_body, tidal_torque
-from ..torques.pulses import pulse_torque
+from tumble_ros.core.jit import called, jit, jit_inline
+from tumble_ros.core.kernels.layout import Array, Extra, PR
+from tumble_ros.core.torques.gravity_gradient import sun_direction_body, tidal_torque
+from tumble_ros.core.torques.pulses import pulse_torque
 
 __all__ = ['body_torque', 'rhs', 'rhs_called', 'free_flow', 'axis_rotation']
 

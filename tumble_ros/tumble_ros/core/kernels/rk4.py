@@ -18,9 +18,9 @@ from typing import TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from .layout import Array, CF, Extra, FAIL, N, ST
-from .physics import rhs, rhs_called
-from ..jit import jit, jit_inline
+from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST
+from tumble_ros.core.kernels.physics import rhs, rhs_called
 
 __all__ = ['step_count', 'stage', 'combine', 'next_tau', 'hermite', 'start', 'step', 'dense',
            'V']

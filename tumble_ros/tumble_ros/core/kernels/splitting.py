@@ -11,10 +11,10 @@ import math
 
 import numpy as np
 
-from .layout import Array, CF, Extra, FAIL, PR, ST
-from .physics import body_torque, free_flow
-from .rk4 import step_count
-from ..jit import called, jit, jit_inline
+from tumble_ros.core.jit import called, jit, jit_inline
+from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, PR, ST
+from tumble_ros.core.kernels.physics import body_torque, free_flow
+from tumble_ros.core.kernels.rk4 import step_count
 
 __all__ = ['flow', 'flow_called', 'pulse_step_count', 'start', 'step', 'dense',
            'MAX_PULSE_SUBSTEPS']

@@ -18,11 +18,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .checks import collapsed, finite_norm, MIN_STEP_ULPS
-from .layout import Array, CF, Extra, FAIL, N, ST, STATUS
-from .tracking import (refresh_track, set_track, track_pieces, track_rate, UNWRAP_STEP,
-                       unwrapped_euler)
-from ..jit import jit, jit_inline
+from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.kernels.checks import collapsed, finite_norm, MIN_STEP_ULPS
+from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST, STATUS
+from tumble_ros.core.kernels.tracking import (refresh_track, set_track, track_pieces, track_rate,
+                                              UNWRAP_STEP, unwrapped_euler)
 
 __all__ = ['seg_init', 'step', 'dense', 'track_euler', 'emit', 'advance', 'LOOP_FUNCTIONS']
 

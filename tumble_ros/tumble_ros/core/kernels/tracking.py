@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import math
 
-from .layout import Array, ST
-from ..jit import jit, jit_inline
+from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.kernels.layout import Array, ST
 
 __all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards',
            'unwrapped_euler', 'set_track', 'track_rate', 'track_pieces', 'refresh_track']

@@ -35,7 +35,7 @@ import warnings
 import numpy as np
 import numpy.typing as npt
 
-from ..jit import COMPILED
+from tumble_ros.core.jit import COMPILED
 
 __all__ = ['TorqueComponent', 'torque_function', 'extra_torque_arrays', 'NO_EXTRA']
 

@@ -19,8 +19,8 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .frames import orbital_to_body
-from ..jit import jit_inline, python_source
+from tumble_ros.core.jit import jit_inline, python_source
+from tumble_ros.core.torques.frames import orbital_to_body
 
 __all__ = ['sun_direction_orbital', 'sun_direction_body', 'tidal_torque', 'tidal_coefficients',
            'gravity_gradient_torque', 'gravity_gradient_potential']

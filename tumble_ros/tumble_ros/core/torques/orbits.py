@@ -37,11 +37,11 @@ from typing import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .component import torque_function, TorqueComponent
-from .frames import orbital_to_body
-from .gravity_gradient import sun_direction_orbital, tidal_torque
-from ..jit import jit, jit_inline, python_source
-from ..units import GM_SUN, PERTURBER_RADII, SECONDS_PER_YEAR
+from tumble_ros.core.jit import jit, jit_inline, python_source
+from tumble_ros.core.model.units import GM_SUN, PERTURBER_RADII, SECONDS_PER_YEAR
+from tumble_ros.core.torques.component import torque_function, TorqueComponent
+from tumble_ros.core.torques.frames import orbital_to_body
+from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital, tidal_torque
 
 __all__ = ['KeplerOrbit', 'eccentric_anomaly', 'hyperbolic_anomaly', 'orbit_state',
            'kepler_tidal_torque', 'perturber_position', 'orientation_from_elements',

@@ -9,8 +9,9 @@ Ensemble runs: where the chunks of an ensemble run and where their results go.
                                         impacts=RandomImpacts(rate=0.5, torque=1e6, seed=1))
     ds = open_ensemble('ens.zarr')                       # xarray Dataset: omega (body, time, ...)
 
-The numbers are core's (:mod:`tumble_ros.core.ensemble`: the in-process ensemble, the chunks
-and the task of one chunk); the store is io's (:mod:`tumble_ros.io.ensemble_store`). Here:
+The numbers are core's (:mod:`tumble_ros.core.propagation.ensemble`: the in-process ensemble,
+the chunks and the task of one chunk); the store is io's (:mod:`tumble_ros.io.ensemble_store`).
+Here:
 :mod:`.dask_engine` (the Dask client, tasks as they finish), :mod:`.chunks` (the engine of a
 run: this process or Dask; :func:`run_ensemble` in memory), :mod:`.to_store` (a run into a
 store, chunk by chunk, resumable). ``tumble_ros.ensembles`` re-exports these names.

@@ -1,8 +1,9 @@
 """
 Where an ensemble's chunks run: in this process, or as tasks on a Dask client.
 
-The chunks and the work of each are core's (:func:`tumble_ros.core.ensemble.plan_chunks`,
-:func:`tumble_ros.core.ensemble.run_chunk`); this module picks the engine:
+The chunks and the work of each are core's
+(:func:`tumble_ros.core.propagation.ensemble.plan_chunks`,
+:func:`tumble_ros.core.propagation.ensemble.run_chunk`); this module picks the engine:
 :func:`run_chunks` yields the chunks' results as they finish, :func:`run_ensemble` gathers them
 into one :class:`~tumble_ros.core.EnsembleResult` (``client=None``: the in-process
 :func:`tumble_ros.core.simulate_ensemble` itself). Body k's numbers do not depend on the
@@ -19,8 +20,8 @@ import numpy.typing as npt
 
 from tumble_ros.core import concatenate_results, EnsembleResult, iter_chunks, Scenario
 from tumble_ros.core import simulate_ensemble
-from tumble_ros.core.ensemble import (ChunkResult, ImpactsInput, plan_chunks, Progress,
-                                      run_chunk, VectorsInput)
+from tumble_ros.core.propagation.ensemble import (ChunkResult, ImpactsInput, plan_chunks, Progress,
+                                                  run_chunk, VectorsInput)
 
 from .dask_engine import map_as_completed
 
@@ -77,8 +78,8 @@ def run_ensemble(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
     Inputs as :func:`tumble_ros.core.simulate_ensemble` (which this is, with ``client=None``).
     ``client``: a Dask ``distributed.Client`` (:func:`~.dask_engine.dask_client`): the bodies
     are cut into chunks of ``chunk_size`` (default
-    :func:`tumble_ros.core.ensemble.default_chunk_size`), each integrated in a task on the
-    cluster's workers (one thread per task) and gathered here, with the same results bit for
+    :func:`tumble_ros.core.propagation.ensemble.default_chunk_size`), each integrated in a task
+    on the cluster's workers (one thread per task) and gathered here, with the same results bit for
     bit. With a client, ``progress(fraction of bodies done, t_end [yr], body-steps so far)`` is
     called as each chunk finishes and ``wall_time`` is the wall-clock time of the whole run.
     Results bigger than memory go to a store instead: :func:`~.to_store.run_ensemble_to_store`.

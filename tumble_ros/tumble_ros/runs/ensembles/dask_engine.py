@@ -2,13 +2,14 @@ r"""
 The Dask engine of ensembles: tasks on a ``distributed`` cluster, results as they finish.
 
 :func:`~.chunks.run_chunks` and :func:`~.chunks.run_ensemble` run the chunks of an ensemble
-(:func:`tumble_ros.core.ensemble.plan_chunks`); with a Dask client, each chunk is one task
-(:func:`tumble_ros.core.ensemble.run_chunk`: the compiled loop runs inside it) on the workers
-of a ``distributed`` cluster: an embedded ``LocalCluster`` (the default way to use every core in
-separate processes) or a cluster started with Dask's own ``dask scheduler`` and ``dask worker``
-commands (docs/python.md, "Running on a cluster"). Dask does the scheduling, the transport and
-the fault tolerance (a task whose worker dies is run again elsewhere); this module only submits,
-hands results back as they finish and cancels what is left when the caller stops::
+(:func:`tumble_ros.core.propagation.ensemble.plan_chunks`); with a Dask client, each chunk is
+one task (:func:`tumble_ros.core.propagation.ensemble.run_chunk`: the compiled loop runs inside
+it) on the workers of a ``distributed`` cluster: an embedded ``LocalCluster`` (the default way
+to use every core in separate processes) or a cluster started with Dask's own ``dask
+scheduler`` and ``dask worker`` commands (docs/python.md, "Running on a cluster"). Dask does
+the scheduling, the transport and the fault tolerance (a task whose worker dies is run again
+elsewhere); this module only submits, hands results back as they finish and cancels what is
+left when the caller stops::
 
     from tumble_ros.core import load_scenario, RandomImpacts
     from tumble_ros.ensembles import dask_client, run_ensemble

@@ -22,9 +22,9 @@ import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core import dump_scenario, Scenario
-from tumble_ros.core.ensemble import (default_chunk_size, ImpactsInput, Inputs, prepare_inputs,
-                                      Progress, VectorsInput)
-from tumble_ros.core.simulate import sample_times
+from tumble_ros.core.propagation.ensemble import (default_chunk_size, ImpactsInput, Inputs,
+                                                  prepare_inputs, Progress, VectorsInput)
+from tumble_ros.core.propagation.simulate import sample_times
 from tumble_ros.io.ensemble_store import (EnsembleStore, SCENARIO_ATTR, STATUS_FAILED,
                                           STATUS_PENDING, STATUS_SUCCEEDED, store_lock)
 
@@ -152,7 +152,7 @@ def run_ensemble_to_store(scenario: Scenario, store: str | Path, *,
         (unless ``overwrite``: it is replaced).
     chunk_size
         Bodies per chunk (task and store chunk); default: the store's when resuming, else
-        :func:`tumble_ros.core.ensemble.default_chunk_size`.
+        :func:`tumble_ros.core.propagation.ensemble.default_chunk_size`.
     client
         A Dask ``distributed.Client`` (``tumble_ros.ensembles.dask_client``), or None: the
         chunks run in this process one after the other.

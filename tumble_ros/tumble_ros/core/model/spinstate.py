@@ -43,8 +43,8 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import ellipkm1, elliprf, elliprj
 
-from .array_types import ArrayLike, Vector3
-from .rotation import quaternion_to_matrix
+from tumble_ros.core.array_types import ArrayLike, Vector3
+from tumble_ros.core.model.rotation import quaternion_to_matrix
 
 __all__ = ['SpinState', 'spin_state', 'omega_for_periods']
 

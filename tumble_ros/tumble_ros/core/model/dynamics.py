@@ -32,15 +32,12 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from . import kernels
-from .array_types import ArrayLike, FloatArray, Vector3
-from .rotation import (
-    euler_to_matrix,
-    euler_to_quaternion,
-    matrix_to_euler,
-    quaternion_to_matrix,
-)
-from .torques import extra_torque_arrays, gravity_gradient_potential, TorqueComponent
+from tumble_ros.core import kernels
+from tumble_ros.core.array_types import ArrayLike, FloatArray, Vector3
+from tumble_ros.core.model.rotation import (euler_to_matrix, euler_to_quaternion, matrix_to_euler,
+                                            quaternion_to_matrix)
+from tumble_ros.core.torques import (extra_torque_arrays, gravity_gradient_potential,
+                                     TorqueComponent)
 
 __all__ = [
     'AttitudeModel',

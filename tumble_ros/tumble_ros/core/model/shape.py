@@ -28,10 +28,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .array_types import ArrayLike, FloatArray
+from tumble_ros.core.array_types import ArrayLike, FloatArray
 
 if TYPE_CHECKING:
-    from .scenario import Scenario
+    from tumble_ros.core.model.scenario import Scenario
 
 __all__ = ['BodyShape', 'ELLIPSOID', 'BOX', 'MIN_THICKNESS', 'body_shape',
            'torquing_body_direction', 'AXIS_LENGTH', 'MOMENTUM_LENGTH', 'PERTURBER_LENGTH',

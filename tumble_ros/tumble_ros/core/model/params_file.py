@@ -28,10 +28,10 @@ import re
 import stat
 from typing import Any, TYPE_CHECKING
 
+from tumble_ros.core.model.limits import MAX_PARAMS_FILE_BYTES, ScenarioError
+
 if TYPE_CHECKING:
     import yaml
-
-from .limits import MAX_PARAMS_FILE_BYTES, ScenarioError
 
 __all__ = ['check_params_file', 'node_sections', 'params_loader', 'parse_params_text',
            'section_applies']

@@ -41,17 +41,17 @@ from typing import (Any, Callable, Collection, Iterable, Iterator, Literal, Sequ
 import numpy as np
 import numpy.typing as npt
 
-from . import kernels as K
-from .dynamics import ATTITUDE_MODELS, jacobi_integral
-from .integrators import INTEGRATORS
-from .integrators.base import Stepper
-from .integrators.compiled import failure_message, why_no_fast_path
-from .limits import MAX_OMEGA, MAX_ROTATION, step_budget
-from .rotation import continuous_quaternions, quaternions_to_matrices
-from .scenario import Impact, IMPACT_FRAMES, Scenario, ScenarioError
-from .segments import split_at_impacts
-from .simulate import sample_times, simulate
-from .torques import extra_torque_arrays
+from tumble_ros.core import kernels as K
+from tumble_ros.core.integrators import INTEGRATORS
+from tumble_ros.core.integrators.base import Stepper
+from tumble_ros.core.integrators.compiled import failure_message, why_no_fast_path
+from tumble_ros.core.model.dynamics import ATTITUDE_MODELS, jacobi_integral
+from tumble_ros.core.model.limits import MAX_OMEGA, MAX_ROTATION, step_budget
+from tumble_ros.core.model.rotation import continuous_quaternions, quaternions_to_matrices
+from tumble_ros.core.model.scenario import Impact, IMPACT_FRAMES, Scenario, ScenarioError
+from tumble_ros.core.propagation.segments import split_at_impacts
+from tumble_ros.core.propagation.simulate import sample_times, simulate
+from tumble_ros.core.torques import extra_torque_arrays
 
 __all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts',
            'RandomImpacts', 'GaussianSpread', 'body_rng', 'concatenate_results', 'ChunkResult',

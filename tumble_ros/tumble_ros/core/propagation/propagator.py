@@ -30,17 +30,17 @@ from typing import Callable, NamedTuple
 import numpy as np
 import numpy.typing as npt
 
+from tumble_ros.core.integrators import FAILED, INTEGRATORS, RUNNING, SegmentProblem
+from tumble_ros.core.integrators.base import Stepper
+from tumble_ros.core.integrators.compiled import CompiledStepper, why_no_fast_path
+from tumble_ros.core.kernels.checks import finite_norm
+from tumble_ros.core.kernels.tracking import track_pieces, track_rate, unwrapped_euler
+from tumble_ros.core.model.dynamics import ATTITUDE_MODELS, AttitudeModel, jacobi_integral
+from tumble_ros.core.model.rotation import (continuous_quaternions, matrix_to_quaternion,
+                                            quaternions_to_matrices)
+from tumble_ros.core.model.scenario import Impact, Scenario, ScenarioError
+from tumble_ros.core.propagation.segments import Segment, split_at_impacts
 from tumble_ros.errors import CoreError
-
-from .dynamics import ATTITUDE_MODELS, AttitudeModel, jacobi_integral
-from .integrators import FAILED, INTEGRATORS, RUNNING, SegmentProblem
-from .integrators.base import Stepper
-from .integrators.compiled import CompiledStepper, why_no_fast_path
-from .kernels.checks import finite_norm
-from .kernels.tracking import track_pieces, track_rate, unwrapped_euler
-from .rotation import continuous_quaternions, matrix_to_quaternion, quaternions_to_matrices
-from .scenario import Impact, Scenario, ScenarioError
-from .segments import Segment, split_at_impacts
 
 __all__ = ['Propagator', 'IntegrationError', 'Sample',
            'quaternions_to_matrices', 'FAST_WORK_BUDGET', 'REFERENCE_WORK_BUDGET']

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from .dynamics import jacobi_integral
-from .propagator import Propagator
-from .scenario import Scenario, ScenarioError
+from tumble_ros.core.model.dynamics import jacobi_integral
+from tumble_ros.core.model.scenario import Scenario, ScenarioError
+from tumble_ros.core.propagation.propagator import Propagator
 
 __all__ = ['sample_times', 'simulate', 'SimulationResult']
 

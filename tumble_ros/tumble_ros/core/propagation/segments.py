@@ -14,7 +14,7 @@ from typing import NamedTuple, Sequence, TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from .scenario import Impact
+    from tumble_ros.core.model.scenario import Impact
 
 __all__ = ['Segment', 'segment_torques', 'split_at_impacts']
 

@@ -25,31 +25,19 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
-from .array_types import ArrayLike, FloatArray
-from .dynamics import ATTITUDE_MODELS
-from .integrators import INTEGRATORS
-from .jit import python_source
-from .limits import (
-    MAX_ATOL,
-    MAX_DURATION,
-    MAX_IMPACTS,
-    MAX_OMEGA,
-    MAX_ORBIT_RATE,
-    MAX_ROTATION,
-    MAX_RTOL,
-    MAX_SAMPLES,
-    MAX_STEPS,
-    MIN_ORBIT_RATE,
-    MIN_RTOL,
-    RESOLUTION_ULPS,
-    ScenarioError,
-    step_budget,
-)
-from .params_file import check_params_file, parse_params_text
-from .timebase import SampleGrid, TimeBase
-from .torques import orbital_to_body, TorqueComponent
-from .torques.orbits import KeplerOrbit, perturber_position
-from .units import TIME_UNITS, to_years
+from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.integrators import INTEGRATORS
+from tumble_ros.core.jit import python_source
+from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
+from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, MAX_OMEGA,
+                                          MAX_ORBIT_RATE, MAX_ROTATION, MAX_RTOL, MAX_SAMPLES,
+                                          MAX_STEPS, MIN_ORBIT_RATE, MIN_RTOL, RESOLUTION_ULPS,
+                                          ScenarioError, step_budget)
+from tumble_ros.core.model.params_file import check_params_file, parse_params_text
+from tumble_ros.core.model.units import TIME_UNITS, to_years
+from tumble_ros.core.propagation.timebase import SampleGrid, TimeBase
+from tumble_ros.core.torques import orbital_to_body, TorqueComponent
+from tumble_ros.core.torques.orbits import KeplerOrbit, perturber_position
 
 __all__ = [
     'ScenarioError',
@@ -659,7 +647,7 @@ def _orbit_from_parameters(params: Mapping[str, Any]) -> KeplerOrbit | None:
 #: Unit and meaning of every scenario parameter (the nodes' descriptors, the README tables).
 PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'time_unit': ('', 'unit of every time, rate and torque below: yr (default), d, h, min or s; '
-                  'converted to years once, when the scenario is read (core/units.py)'),
+                  'converted to years once, when the scenario is read (core/model/units.py)'),
     'inertia': ('normalised', 'principal moments of inertia (Ix, Iy, Iz); only ratios matter'),
     'allow_unphysical_inertia': (
         '', 'accept moments that break the triangle inequality (paper Figs 3, 6-10)'),

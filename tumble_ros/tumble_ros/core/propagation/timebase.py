@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from .limits import MAX_SAMPLES, ScenarioError
+from tumble_ros.core.model.limits import MAX_SAMPLES, ScenarioError
 
 __all__ = ['TimeBase', 'SampleGrid', 'MAX_STAMP_NS']
 

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from .array_types import FloatSequence
+from tumble_ros.core.array_types import FloatSequence
 
 __all__ = [
     'quaternions_to_matrices',

@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import math
 
+from tumble_ros.core.kernels.checks import MIN_STEP_ULPS
 from tumble_ros.errors import CoreError
-
-from .kernels.checks import MIN_STEP_ULPS
 
 __all__ = ['ScenarioError', 'MIN_RTOL', 'MAX_RTOL', 'MIN_ORBIT_RATE', 'MAX_ORBIT_RATE',
            'MAX_OMEGA', 'MAX_ATOL', 'MAX_DURATION', 'MAX_STEPS', 'MAX_SAMPLES', 'MAX_ROTATION',

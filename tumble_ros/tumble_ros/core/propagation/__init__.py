@@ -1,0 +1,5 @@
+"""
+Integrating a scenario in time.
+
+The propagator (segments split at impacts), batch runs, ensembles of bodies, the time base.
+"""
