@@ -15,7 +15,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 
-from tumble_ros.nodes.qos import LATCHED_QOS, STATE_QOS
+from tumble_ros.runs.messages.qos import LATCHED_QOS, STATE_QOS
 
 
 class RosHarness:

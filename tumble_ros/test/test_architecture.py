@@ -28,19 +28,6 @@ ALLOWED = {
     '__main__': {'nodes', 'analysis', 'cli', 'runs'},
     '__init__': set(),
 }
-#: Arrows up that are allowed for now, module -> module. The offline recording writes the
-#: messages the live nodes publish, built by the nodes' message modules; until those move below
-#: the run layer (issue 26, the lead's step after the run layer), runs.offline imports them.
-#: Nothing else in runs imports nodes.
-EXCEPTIONS = {
-    'tumble_ros.runs.offline': {
-        'tumble_ros.nodes.messages',          # SampleEncoder, new_run_id
-        'tumble_ros.nodes.record_messages',   # records -> messages (built by nodes.messages)
-        'tumble_ros.nodes.markers',           # the 3D scene's messages
-        'tumble_ros.nodes.qos',               # the offered QoS written with each channel
-        'tumble_ros.nodes.recorder',          # qos_dict, the live recorder's channel metadata
-    },
-}
 
 
 def module_name(path: Path) -> str:
@@ -107,8 +94,7 @@ def test_no_import_circle():
 
 def test_every_arrow_points_down():
     upward = sorted(f'{a} -> {b}' for a, targets in graph().items() for b in targets
-                    if layer(b) != layer(a) and layer(b) not in ALLOWED[layer(a)]
-                    and b not in EXCEPTIONS.get(a, set()))
+                    if layer(b) != layer(a) and layer(b) not in ALLOWED[layer(a)])
     assert not upward
 
 
@@ -123,37 +109,47 @@ def external_imports(path: Path) -> set[str]:
     return {m for m in found if not m.startswith('tumble_ros.') and m != 'tumble_ros'}
 
 
-#: ROS in the run layer: rclpy's serialisation in the offline writer (and the messages it
-#: serialises), nothing anywhere else.
-RUNS_ROS = {'tumble_ros.runs.offline': {'rclpy.serialization',
-                                        'rclpy.serialization.serialize_message'}}
+#: ROS in the run layer: only its ROS half (runs.messages: message classes, rclpy's QoS and
+#: serialisation) and the offline writer that serialises them; never a node or an executor.
+RUNS_ROS_MODULES = ('tumble_ros.runs.messages', 'tumble_ros.runs.offline')
+RCLPY_ALLOWED = {'rclpy.serialization', 'rclpy.qos', 'rclpy.duration'}
 
 
-def test_the_run_layer_imports_no_rclpy():
+def _is_ros(target: str) -> bool:
+    top = target.split('.')[0]
+    return top in {'rclpy', 'rosidl_runtime_py'} or top.endswith(('_msgs', '_interfaces'))
+
+
+def test_the_run_layer_imports_ros_only_in_its_ros_half():
     ros = []
     for path in sorted((PACKAGE / 'runs').rglob('*.py')):
         name = module_name(path)
+        half = any(name == m or name.startswith(m + '.') for m in RUNS_ROS_MODULES)
         for target in sorted(external_imports(path)):
-            if target.split('.')[0] == 'rclpy' and target not in RUNS_ROS.get(name, set()):
+            rclpy_ok = any(target == a or target.startswith(a + '.') for a in RCLPY_ALLOWED)
+            if _is_ros(target) and not (half and (target.split('.')[0] != 'rclpy' or rclpy_ok)):
                 ros.append(f'{name} -> {target}')
     assert not ros
     assert 'rclpy.serialization' in external_imports(PACKAGE / 'runs' / 'offline.py')
+    assert 'rclpy.qos' in external_imports(PACKAGE / 'runs' / 'messages' / 'qos.py')
 
 
-def test_the_run_layer_imports_nodes_only_in_the_offline_writer():
+def test_the_run_layer_imports_no_node():
     edges = graph()
     into_nodes = sorted(f'{a} -> {b}' for a, targets in edges.items() for b in targets
-                        if layer(a) == 'runs' and layer(b) == 'nodes'
-                        and b not in EXCEPTIONS.get(a, set()))
+                        if layer(a) == 'runs' and layer(b) == 'nodes')
     assert not into_nodes
     assert 'tumble_ros.runs.session' in edges and 'tumble_ros.runs.comparison' in edges
+    assert 'tumble_ros.runs.messages.builders' in edges['tumble_ros.runs.offline']
 
 
 def test_the_check_sees_relative_and_nested_imports():
     known = modules()
     ensemble = imports(PACKAGE / 'core' / 'propagation' / 'ensemble.py', known)
-    assert 'tumble_ros.core.kernels' in ensemble  # `from . import kernels as K`
-    assert 'tumble_ros.core.propagation.simulate' in ensemble  # `from .simulate import ...`
+    assert 'tumble_ros.core.kernels' in ensemble  # `from tumble_ros.core import kernels as K`
+    assert 'tumble_ros.core.propagation.simulate' in ensemble
+    io = imports(PACKAGE / 'io' / '__init__.py', known)
+    assert 'tumble_ros.io.columns' in io  # `from .columns import ...`
     assert 'tumble_ros.core' in imports(PACKAGE / 'cli' / 'warmup.py', known)
 
 

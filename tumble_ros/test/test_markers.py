@@ -1,5 +1,5 @@
 """
-The 3D scene (nodes.markers): decoded by the standard readers, equal to the recorded samples.
+The 3D scene (runs.messages.markers): decoded by the standard readers, equal to the samples.
 
 The expected values are computed here from the recorded attitude and angular velocity and from
 textbook formulas (an ellipsoid's moments from its semi-axes), never taken from the code under
@@ -16,7 +16,7 @@ from tumble_ros import topics
 from tumble_ros.core import Impact, load_scenario, Scenario, TimeBase
 from tumble_ros.core.model.shape import body_shape, BOX, ELLIPSOID, MIN_THICKNESS
 from tumble_ros.io import message_definition, MessageTemplate, read_messages
-from tumble_ros.nodes.markers import marker_every, MARKER_FRAMES
+from tumble_ros.runs.messages.markers import marker_every, MARKER_FRAMES
 from tumble_ros.runs.offline import record_offline
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'

@@ -10,8 +10,8 @@ from std_srvs.srv import Trigger
 from tumble_ros import topics
 from tumble_ros.core import make_model, Scenario, TimeBase
 from tumble_ros.nodes.comparator import ComparatorNode
-from tumble_ros.nodes.qos import DESCRIPTION_QOS, STATE_QOS
 from tumble_ros.nodes.sim import SimNode
+from tumble_ros.runs.messages.qos import DESCRIPTION_QOS, STATE_QOS
 from tumble_ros_interfaces.msg import ErrorNorm, ScenarioDescription
 
 RUN = {'duration': 0.2, 'output_interval': 0.002, 'real_time_factor': 0.0, 'min_consumers': 1}

@@ -14,7 +14,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 
 from tumble_ros import topics
-from tumble_ros.nodes.messages import SampleEncoder, Vector3StampedReader
+from tumble_ros.runs.messages.builders import SampleEncoder, Vector3StampedReader
 from tumble_ros_interfaces.msg import ErrorNorm
 
 #: Awkward values: signed zero, a subnormal, extremes, infinities.

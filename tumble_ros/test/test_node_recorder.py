@@ -300,7 +300,7 @@ def test_a_consumers_announced_topics_hold_the_recorders_progress_until_subscrib
     from builtin_interfaces.msg import Time
     from geometry_msgs.msg import Vector3Stamped
     from tumble_ros.nodes.progress import PROGRESS_QOS, PROGRESS_TOPIC
-    from tumble_ros.nodes.qos import STATE_QOS
+    from tumble_ros.runs.messages.qos import STATE_QOS
     from tumble_ros_interfaces.msg import ConsumerProgress
 
     recorder = ros.start(RecorderNode, output=str(tmp_path / 'announced.mcap'),

@@ -13,8 +13,8 @@ from std_srvs.srv import Trigger
 
 from tumble_ros import topics
 from tumble_ros.core import Impact, Scenario, ScenarioError, simulate, TimeBase
-from tumble_ros.nodes.qos import STATE_QOS
 from tumble_ros.nodes.sim import SimNode
+from tumble_ros.runs.messages.qos import STATE_QOS
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 
@@ -260,7 +260,7 @@ def test_as_fast_as_the_consumers_take_it_loses_nothing(ros):
     import time
 
     from tumble_ros.nodes.progress import ProgressReporter
-    from tumble_ros.nodes.qos import STATE_QOS
+    from tumble_ros.runs.messages.qos import STATE_QOS
 
     reporter = ProgressReporter(ros.probe)
     got = []

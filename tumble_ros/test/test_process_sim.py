@@ -84,7 +84,7 @@ def test_an_unknown_executor_is_refused_with_a_reason(process):
 def test_sim_process_paces_on_a_consumer_in_another_process(ros, process):
     from tumble_ros.core import TimeBase
     from tumble_ros.nodes.progress import ProgressReporter
-    from tumble_ros.nodes.qos import STATE_QOS
+    from tumble_ros.runs.messages.qos import STATE_QOS
 
     reporter = ProgressReporter(ros.probe)
     got = []

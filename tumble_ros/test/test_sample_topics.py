@@ -14,8 +14,8 @@ import pytest
 from tumble_ros import topics
 from tumble_ros.core import Scenario
 from tumble_ros.io import read_columns, sample_values
-from tumble_ros.nodes.messages import SampleEncoder
 from tumble_ros.nodes.sim import SimNode
+from tumble_ros.runs.messages.builders import SampleEncoder
 from tumble_ros.runs.offline import record_offline
 from tumble_ros_interfaces.msg import SimStatus
 

@@ -18,9 +18,9 @@ from tumble_ros.io import read_messages, summarize
 from tumble_ros.nodes.bringup import main as bringup_main, run_bringup
 from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.parameters import params_file_problem, section_applies
-from tumble_ros.nodes.qos import SERVICE_QOS
 from tumble_ros.nodes.recorder import RecorderNode
 from tumble_ros.nodes.sim import MAX_PENDING_IMPACTS, SimNode
+from tumble_ros.runs.messages.qos import SERVICE_QOS
 from tumble_ros_interfaces.msg import ImpactEvent, ScenarioDescription, SimStatus
 from tumble_ros_interfaces.srv import ApplyImpact
 import yaml

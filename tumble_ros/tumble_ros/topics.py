@@ -86,7 +86,7 @@ class SampleTopic:
     """
     One per-sample topic, described once: what it is and how its columns come from a sample block.
 
-    The live encoder (``nodes.messages.SampleEncoder``: the simulator, the comparator, the
+    The live encoder (``runs.messages.builders.SampleEncoder``: the simulator, the comparator, the
     offline writer), the columnar decoder (``io.columns.sample_values``), the analysis and the
     viewer layouts' check (tests/test_foxglove_layout.py) all read it.
     ``name``: relative topic name; ``type_name``: its ROS type (flat: a header, numbers, maybe

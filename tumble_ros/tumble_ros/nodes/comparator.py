@@ -51,14 +51,14 @@ from tumble_ros import topics
 from tumble_ros.core import ANALYTIC_MODELS
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
-from tumble_ros.nodes.messages import SampleEncoder, Vector3StampedReader
 from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.progress import ProgressReporter
-from tumble_ros.nodes.qos import DESCRIPTION_QOS, PUBLISHER_QOS, STATE_QOS
-from tumble_ros.nodes.record_messages import comparison_status_message, segment_start_of
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
 from tumble_ros.runs.comparison import Comparison
+from tumble_ros.runs.messages.builders import SampleEncoder, Vector3StampedReader
+from tumble_ros.runs.messages.qos import DESCRIPTION_QOS, PUBLISHER_QOS, STATE_QOS
+from tumble_ros.runs.messages.records import comparison_status_message, segment_start_of
 from tumble_ros.runs.records import ComparedSample, ComparisonStatus, ERROR, OK
 from tumble_ros_interfaces.msg import (  # type: ignore[attr-defined]  # rosidl-generated
     ErrorNorm, ScenarioDescription)

@@ -42,7 +42,7 @@ from pathlib import Path
 import re
 import struct
 import time
-from typing import Any, Callable
+from typing import Callable
 
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import InvalidTopicNameException
@@ -58,9 +58,9 @@ from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.progress import ProducedTopics, ProgressReporter
-from tumble_ros.nodes.qos import STATE_QOS
 from tumble_ros.nodes.runner import chosen_executor, run_node
 from tumble_ros.nodes.sources import SourceMonitor
+from tumble_ros.runs.messages.qos import qos_dict, STATE_QOS
 
 __all__ = ['RecorderNode', 'DEFAULT_TOPICS', 'main']
 
@@ -134,10 +134,6 @@ def stamp_reader(type_name: str) -> Callable[[bytes], int | None] | None:
             return _header_stamp_ns(data, 8) if count else None
         return element_stamp
     return None
-
-
-def _policy_name(policy) -> str:
-    return policy.name.lower()
 
 
 class RecorderNode(GuardedNode):
@@ -469,21 +465,6 @@ def _import_type(type_name: str):
         raise NotAnInterface(f'{kind}/{name} is no interface of an installed ROS interface '
                              f'package {package!r} (ament index: rosidl_interfaces): not imported')
     return getattr(importlib.import_module(f'{package}.{kind}'), name)
-
-
-def qos_dict(qos: QoSProfile) -> dict[str, Any]:
-    def duration(d) -> tuple[int, int]:
-        ns = d.nanoseconds
-        return divmod(ns, 1_000_000_000)
-
-    return {
-        'history': _policy_name(qos.history), 'depth': qos.depth,
-        'reliability': _policy_name(qos.reliability), 'durability': _policy_name(qos.durability),
-        'deadline': duration(qos.deadline), 'lifespan': duration(qos.lifespan),
-        'liveliness': _policy_name(qos.liveliness),
-        'liveliness_lease_duration': duration(qos.liveliness_lease_duration),
-        'avoid_ros_namespace_conventions': qos.avoid_ros_namespace_conventions,
-    }
 
 
 def main(args: list[str] | None = None) -> int:

@@ -27,7 +27,7 @@ whatever ``use_sim_time`` says. Services:
 ``resume``, ``step`` (std_srvs/Trigger). Impacts are queued by the service and applied at the
 next step boundary, never inside the callback. The node holds no physics and no run logic:
 what a batch does is :class:`~tumble_ros.runs.session.SimulationSession`'s (the offline recording's
-too); the node publishes its records (:mod:`tumble_ros.nodes.record_messages`).
+too); the node publishes its records (:mod:`tumble_ros.runs.messages.records`).
 """
 from __future__ import annotations
 
@@ -48,15 +48,15 @@ from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeB
 from tumble_ros.core.model.units import seconds_per_year_of
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
-from tumble_ros.nodes.markers import marker_every, MarkerScene
-from tumble_ros.nodes.messages import FRAMES, message_class, new_run_id, SampleEncoder
 from tumble_ros.nodes.parameters import (declare_node_parameters, declare_scenario_parameters,
                                          read_scenario_parameters)
 from tumble_ros.nodes.progress import ConsumerTracker
-from tumble_ros.nodes.qos import PUBLISHER_QOS, publisher_qos, SERVICE_QOS
-from tumble_ros.nodes.record_messages import description_message, impact_message, status_message
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
+from tumble_ros.runs.messages.builders import FRAMES, message_class, new_run_id, SampleEncoder
+from tumble_ros.runs.messages.markers import marker_every, MarkerScene
+from tumble_ros.runs.messages.qos import PUBLISHER_QOS, publisher_qos, SERVICE_QOS
+from tumble_ros.runs.messages.records import description_message, impact_message, status_message
 from tumble_ros.runs.records import (DIVERGED, FINISHED, ImpactEnded, PAUSED, RUNNING, SampleBlock,
                                      SegmentStart, SessionRecord, StatusChange)
 from tumble_ros.runs.session import output_grid, SimulationSession

@@ -7,10 +7,10 @@ publish, from the same run layer: the simulator's samples, impact events, segmen
 states (:class:`~.session.SimulationSession`, the live simulator's session) and the
 comparator's model, error and error norm (:class:`~.comparison.Comparison`, the live
 comparator's) go to the MCAP file without DDS: the per-sample messages encoded as numpy columns
-by the encoder the live simulator publishes with (:class:`~tumble_ros.nodes.messages.
-SampleEncoder`), the others built by :mod:`tumble_ros.nodes.record_messages` and serialised by
+by the encoder the live simulator publishes with (:class:`~tumble_ros.runs.messages.builders.
+SampleEncoder`), the others built by :mod:`tumble_ros.runs.messages.records` and serialised by
 rclpy. Channels, schemas and the offered QoS metadata are those the live recorder writes
-(:func:`~tumble_ros.nodes.qos.as_discovered` of each publisher's profile).
+(:func:`~tumble_ros.runs.messages.qos.as_discovered` of each publisher's profile).
 
 Log times are simulated time on the ROS clock, as the live recorder's (its default ``log_time``
 ``sim``): a message's log time is the stamp of the sample it belongs to (``seconds_per_year``
@@ -47,12 +47,11 @@ from tumble_ros.core import Scenario, TimeBase
 from tumble_ros.core.propagation.propagator import FAST_WORK_BUDGET
 from tumble_ros.core.propagation.timebase import SampleGrid
 from tumble_ros.io import McapWriter, offered_qos_yaml
-from tumble_ros.nodes.markers import marker_every, marker_samples, MarkerScene
-from tumble_ros.nodes.messages import new_run_id, SampleEncoder
-from tumble_ros.nodes.qos import as_discovered, publisher_qos
-from tumble_ros.nodes.record_messages import (comparison_status_message, description_message,
+from tumble_ros.runs.messages.builders import new_run_id, SampleEncoder
+from tumble_ros.runs.messages.markers import marker_every, marker_samples, MarkerScene
+from tumble_ros.runs.messages.qos import as_discovered, publisher_qos, qos_dict
+from tumble_ros.runs.messages.records import (comparison_status_message, description_message,
                                               impact_message, status_message)
-from tumble_ros.nodes.recorder import qos_dict
 
 from .comparison import Comparison
 from .records import (ComparisonStatus, DIVERGED, ImpactEnded, RUNNING, SampleBlock,
@@ -244,7 +243,7 @@ class _Writer:
 
         The simulator's: /clock (if published), ω, attitude, Euler angles, and the perturber's
         position when the scenario has a Kepler orbit (as the live simulator), encoded as the
-        live simulator encodes them (:class:`~tumble_ros.nodes.messages.SampleEncoder`).
+        live simulator encodes them (:class:`~tumble_ros.runs.messages.builders.SampleEncoder`).
         """
         channels, n, ns = self.channels, len(block), block.stamps
         sim = channels.encoder.simulator(ns, block.omega, block.quaternion, block.euler,
@@ -270,7 +269,7 @@ class _Writer:
 
 @dataclass
 class _Scene:
-    """The simulator's markers (nodes.markers): the same scenes of the same samples."""
+    """The simulator's markers (runs.messages.markers): the same scenes of the same samples."""
 
     scene: MarkerScene
     every: int

@@ -3,7 +3,7 @@ What a 3D view of the asteroid needs, as plain numpy: its shape, and where the t
 
 The inertia of a scenario is normalised (only the ratios of the principal moments matter), so
 the body is drawn at a display scale: its longest semi-axis is 1 (the viewer's length unit, a
-metre in RViz and Foxglove). Both the live markers (``nodes.markers``) and the offline
+metre in RViz and Foxglove). Both the live markers (``runs.messages.markers``) and the offline
 animation (``analysis.animation``) take the shape from here.
 
 A uniform-density ellipsoid of semi-axes (a, b, c) and mass m has the principal moments

@@ -10,8 +10,8 @@ from __future__ import annotations
 from diagnostic_msgs.msg import DiagnosticStatus
 
 from tumble_ros.core import TimeBase
-from tumble_ros.nodes.messages import (comparison_status, impact_event, scenario_description,
-                                       sim_status)
+from tumble_ros.runs.messages.builders import (comparison_status, impact_event,
+                                               scenario_description, sim_status)
 from tumble_ros.runs.records import ComparisonStatus, ImpactEnded, SegmentStart, StatusChange
 from tumble_ros_interfaces.msg import (  # type: ignore[attr-defined]  # rosidl-generated
     ImpactEvent, ScenarioDescription, SimStatus)

@@ -8,8 +8,8 @@ attitude quaternion body -> orbital (scalar first), stamps [ns] of ROS time.
 from __future__ import annotations
 
 import importlib
-import math
 import struct
+from typing import Any, Sequence
 import uuid
 
 from builtin_interfaces.msg import Time
@@ -28,7 +28,7 @@ from tumble_ros_interfaces.msg import (  # type: ignore[attr-defined]
 from tumble_ros_interfaces.srv import ApplyImpact  # type: ignore[attr-defined]
 
 __all__ = ['stamp', 'FRAMES', 'FRAME_CODES', 'new_run_id', 'scenario_description', 'impact_event',
-           'sim_status', 'comparison_status', 'comparison_values', 'error_norms',
+           'sim_status', 'comparison_status',
            'SampleEncoder', 'Vector3StampedReader', 'message_class']
 
 #: ApplyImpact / ImpactEvent frame codes <-> Impact frames.
@@ -43,7 +43,7 @@ def stamp(ns: int) -> Time:
     return Time(sec=sec, nanosec=nanosec)
 
 
-def _vector(v) -> Vector3:
+def _vector(v: Sequence[float]) -> Vector3:
     return Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
 
 
@@ -58,7 +58,8 @@ def new_run_id() -> str:
 
 
 def scenario_description(scenario_yaml: str, seconds_per_year: float, revision: int,
-                         stamp_ns: int, t0: float, omega, quaternion,
+                         stamp_ns: int, t0: float, omega: Sequence[float],
+                         quaternion: Sequence[float],
                          run_id: str) -> ScenarioDescription:
     """
     Describe the scenario and the state (omega, quaternion) its segment starts from at t0.
@@ -78,7 +79,8 @@ def scenario_description(scenario_yaml: str, seconds_per_year: float, revision: 
     return msg
 
 
-def impact_event(impact: Impact, impact_id: int, stamp_ns: int, delta_omega) -> ImpactEvent:
+def impact_event(impact: Impact, impact_id: int, stamp_ns: int,
+                 delta_omega: Sequence[float]) -> ImpactEvent:
     """Report an impact that ended: its pulse and the jump of omega it made [rad/yr]."""
     event = ImpactEvent()
     event.header.stamp = stamp(stamp_ns)
@@ -106,19 +108,6 @@ def comparison_status(level: bytes, node_name: str, message: str,
     return status
 
 
-def comparison_values(numeric, model) -> tuple[list[float], float, float]:
-    """Return (numeric - model, its norm, norm / |numeric|) of two 3-vectors [rad/yr]."""
-    error = [n - m for n, m in zip(numeric, model)]
-    return (error, *error_norms(numeric, error))
-
-
-def error_norms(numeric, error) -> tuple[float, float]:
-    """Return (|error|, |error| / |numeric|) of two 3-vectors [rad/yr] (inf for numeric 0)."""
-    norm = math.hypot(*error)
-    magnitude = math.hypot(*numeric)
-    return norm, norm / magnitude if magnitude > 0 else math.inf
-
-
 _STAMP = ('header.stamp.sec', 'header.stamp.nanosec')
 
 
@@ -138,7 +127,8 @@ def _layout(type_name: str) -> FlatLayout:
 def message_class(type_name: str) -> type:
     """Return the rclpy message class of a ROS type name (``geometry_msgs/msg/Vector3Stamped``)."""
     package, kind, name = type_name.split('/')
-    return getattr(importlib.import_module(f'{package}.{kind}'), name)
+    cls: type = getattr(importlib.import_module(f'{package}.{kind}'), name)
+    return cls
 
 
 class SampleEncoder:
@@ -159,10 +149,11 @@ class SampleEncoder:
     """
 
     def __init__(self) -> None:
-        self._encoders: dict[tuple, FlatEncoder] = {}
+        self._encoders: dict[tuple[Any, ...], FlatEncoder] = {}
         self._comparison: dict[str, tuple[FlatEncoder, ...]] = {}
 
-    def _encoder(self, topic: topics.SampleTopic, strings: tuple = ()) -> FlatEncoder:
+    def _encoder(self, topic: topics.SampleTopic,
+                 strings: tuple[tuple[str, str], ...] = ()) -> FlatEncoder:
         key = (topic, strings)
         encoder = self._encoders.get(key)
         if encoder is None:
@@ -170,7 +161,7 @@ class SampleEncoder:
                 _layout(topic.type_name), {'header.frame_id': topic.frame, **dict(strings)})
         return encoder
 
-    def encode(self, topic: topics.SampleTopic, ns: np.ndarray, columns,
+    def encode(self, topic: topics.SampleTopic, ns: np.ndarray, columns: Any,
                strings: dict[str, str] | None = None) -> np.ndarray:
         """
         Return n messages of ``topic`` as (n, size) uint8 rows.
@@ -230,14 +221,15 @@ class SampleEncoder:
         block = {'model': model, 'error': error, 'norm': norm, 'relative': relative}
         return self.samples(topics.COMPARATOR, ns, block, {'model': model_name})
 
-    def one(self, topic: topics.SampleTopic, ns: int, numbers,
+    def one(self, topic: topics.SampleTopic, ns: int, numbers: Sequence[float],
             strings: dict[str, str] | None = None) -> bytes:
         """Return one message of ``topic`` (``numbers``: its fields' values, in order) as bytes."""
         sec, nanosec = divmod(ns, 1_000_000_000)
         given = tuple(sorted((strings or {}).items()))
         return self._encoder(topic, given).one(sec, nanosec, *numbers)
 
-    def comparison(self, ns: int, model, error, norm: float, relative: float,
+    def comparison(self, ns: int, model: Sequence[float], error: Sequence[float], norm: float,
+                   relative: float,
                    model_name: str) -> tuple[bytes, bytes, bytes]:
         """Return one sample's comparator messages (model, error, norms) as bytes."""
         encoders = self._comparison.get(model_name)

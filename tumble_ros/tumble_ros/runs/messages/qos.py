@@ -1,4 +1,6 @@
 """QoS profiles shared by the tumble_ros nodes (one place, so publishers and subscribers match)."""
+from typing import Any
+
 from rclpy.duration import Duration
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile,
                        ReliabilityPolicy)
@@ -98,3 +100,23 @@ def as_discovered(profile: QoSProfile) -> QoSProfile:
                       durability=profile.durability, deadline=_INFINITE, lifespan=_INFINITE,
                       liveliness=LivelinessPolicy.AUTOMATIC,
                       liveliness_lease_duration=_INFINITE)
+
+
+def _policy_name(policy: Any) -> str:
+    return str(policy.name.lower())
+
+
+def qos_dict(qos: QoSProfile) -> dict[str, Any]:
+    """Return ``qos`` as the recorded form's fields (policy names lower case, (s, ns))."""
+    def duration(d: Duration) -> tuple[int, int]:
+        ns: int = d.nanoseconds
+        return divmod(ns, 1_000_000_000)
+
+    return {
+        'history': _policy_name(qos.history), 'depth': qos.depth,
+        'reliability': _policy_name(qos.reliability), 'durability': _policy_name(qos.durability),
+        'deadline': duration(qos.deadline), 'lifespan': duration(qos.lifespan),
+        'liveliness': _policy_name(qos.liveliness),
+        'liveliness_lease_duration': duration(qos.liveliness_lease_duration),
+        'avoid_ros_namespace_conventions': qos.avoid_ros_namespace_conventions,
+    }

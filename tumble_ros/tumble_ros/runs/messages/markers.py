@@ -28,6 +28,7 @@ the inertia is normalised.
 from __future__ import annotations
 
 import math
+from typing import Any, Sequence
 
 from geometry_msgs.msg import Point
 import numpy as np
@@ -70,15 +71,16 @@ def marker_every(decimation: int, samples: int) -> int:
 def marker_samples(k0: int, k1: int, every: int, count: int) -> np.ndarray:
     """Return the grid indices in [k0, k1) that get a scene: k % every == 0, and the last one."""
     k = np.arange(k0, k1, dtype=np.int64)
-    return k[(k % every == 0) | (k == count - 1)]
+    chosen: np.ndarray = k[(k % every == 0) | (k == count - 1)]
+    return chosen
 
 
-def _color(rgba) -> ColorRGBA:
+def _color(rgba: Sequence[float]) -> ColorRGBA:
     r, g, b, a = rgba
     return ColorRGBA(r=float(r), g=float(g), b=float(b), a=float(a))
 
 
-def _quaternion_products(q: np.ndarray, r) -> np.ndarray:
+def _quaternion_products(q: np.ndarray, r: Any) -> np.ndarray:
     """Return the Hamilton products q * r of (n, 4) quaternions with one r, (n, 4)."""
     q0, q1, q2, q3 = q.T
     r0, r1, r2, r3 = r
@@ -105,7 +107,7 @@ class MarkerScene:
         """Return the scene with every number that does not change from sample to sample."""
         markers = []
 
-        def add(ns: str, marker_id: int, kind: int, scale, color: ColorRGBA,
+        def add(ns: str, marker_id: int, kind: int, scale: Any, color: ColorRGBA,
                 points: int = 0) -> None:
             m = Marker(ns=ns, id=marker_id, type=kind, action=Marker.ADD, color=color)
             m.header.frame_id = topics.FRAME_ORBITAL
