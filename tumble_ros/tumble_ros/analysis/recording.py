@@ -30,11 +30,12 @@ only one whose ``angular_velocity`` topic is in the file (:func:`find_namespaces
 it refuses and lists them.
 
 Runs: every ``/scenario`` description carries its run's ``run_id``
-(:func:`tumble_ros.runs.messages.builders.new_run_id`). ``load_recording`` reads one run: the
-one given (``run``), or the only one. Descriptions without a run id beside a run's (a foreign
-publisher's) are counted, reported in :attr:`Recording.left_out` and left out; descriptions of several runs
-(two simulators shared the topics, so their samples mix on the same topics) are refused unless
-``run`` chooses one. A recording whose descriptions carry no run id (older files) is read whole.
+(:func:`tumble_ros.runs.messages.builders.new_run_id`). ``load_recording`` reads one run: the one
+given (``run``), or the only one. Descriptions without a run id beside a run's (a foreign
+publisher's) are counted, reported in :attr:`Recording.left_out` and left out; descriptions of
+several runs (two simulators shared the topics, so their samples mix on the same topics) are
+refused unless ``run`` chooses one. A recording whose descriptions carry no run id (older files)
+is read whole.
 """
 from __future__ import annotations
 
