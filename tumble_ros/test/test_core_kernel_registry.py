@@ -9,6 +9,7 @@ symmetric top, and gives the numbers of its reference stepper (a plain numpy mid
 import midpoint_kernel
 import numpy as np
 import pytest
+from test_core_free_body import symmetric_top_omega  # the closed form, written once
 
 from tumble_ros.core import (IntegratorSettings, kernels, Propagator, Scenario, simulate,
                              simulate_ensemble)
@@ -52,15 +53,6 @@ def midpoint(monkeypatch):
     return 'midpoint'
 
 
-def symmetric_top_omega(t, omega0=OMEGA0):
-    """Return the closed form for Ix = Iy, no torque: w_perp turns at (Iz - Ix)/Ix wz."""
-    ix, _, iz = INERTIA
-    wx0, wy0, wz0 = omega0
-    lam = (iz - ix) / ix * wz0
-    c, s = np.cos(lam * t), np.sin(lam * t)
-    return np.stack([wx0 * c - wy0 * s, wx0 * s + wy0 * c, np.full_like(t, wz0)], -1)
-
-
 def top(method, step):
     return Scenario(inertia=INERTIA, orbit_rate=0.0, omega0=OMEGA0, euler0=(0.5, 0.2, 0.7),
                     duration=2.0, output_interval=0.25,
@@ -69,7 +61,7 @@ def top(method, step):
 
 def error(result):
     assert result.success, result.message
-    return np.max(np.abs(result.omega - symmetric_top_omega(result.t)))
+    return np.max(np.abs(result.omega - symmetric_top_omega(result.t, INERTIA, OMEGA0)))
 
 
 def observed_order(errors, steps):
