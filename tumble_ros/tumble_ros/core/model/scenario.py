@@ -37,7 +37,9 @@ from tumble_ros.core.model.params_file import check_params_file, parse_params_te
 from tumble_ros.core.model.units import TIME_UNITS, to_years
 from tumble_ros.core.propagation.timebase import SampleGrid, TimeBase
 from tumble_ros.core.torques import orbital_to_body, TorqueComponent
+from tumble_ros.core.torques.ephemeris import Ephemeris, read_ephemeris
 from tumble_ros.core.torques.orbits import KeplerOrbit, perturber_position
+from tumble_ros.core.torques.perturbers import Perturber
 
 __all__ = [
     'ScenarioError',
@@ -48,6 +50,10 @@ __all__ = [
     'ENCOUNTER_TORQUE_FRACTION',
     'ImpactLimits',
     'PARAMETER_DOCS',
+    'PERTURBER_DOCS',
+    'PERTURBER_FIELDS',
+    'ORBIT_PERTURBER',
+    'perturber_parameter_names',
     'time_resolution',
     'load_scenario',
     'parse_scenario',
@@ -325,6 +331,11 @@ class Scenario:
         (``core.torques``: defined outside core, run by every integrator). Python API only:
         they are functions, so they are not ROS parameters (:meth:`to_parameters` leaves them
         out).
+    perturbers : tuple of Perturber
+        More torquing bodies (``core.torques.perturbers``: the Earth, the Moon, the Sun...),
+        each from a Kepler orbit or a tabulated ephemeris, optionally with its J2; each is a
+        torque component. ``orbit``, when given, is the first perturber (:attr:`all_perturbers`,
+        named ``kepler_orbit``). With perturbers, ``orbit_rate`` must be 0.
 
     """
 
@@ -340,6 +351,7 @@ class Scenario:
     impacts: tuple[Impact, ...] = ()
     torques: tuple[TorqueComponent, ...] = ()
     orbit: KeplerOrbit | None = None
+    perturbers: tuple[Perturber, ...] = ()
 
     def __post_init__(self) -> None:
         inertia = _vector('inertia', self.inertia)
@@ -448,6 +460,7 @@ class Scenario:
             if self.orbit_rate != 0.0:
                 _fail('orbit_rate', 'must be 0 with a Kepler orbit (orbit.kind kepler or flyby): '
                       'the orbit gives the tidal torque', self.orbit_rate)
+        _set(self, 'perturbers', _checked_perturbers(self))
 
     # -- derived quantities ---------------------------------------------------------
     @property
@@ -462,11 +475,12 @@ class Scenario:
         each side (:mod:`.analytic`), and the integration is cut at its edges
         (:attr:`segment_cuts`) so the simulator describes the state there.
         """
-        if self.orbit is None or self.orbit.e < 1.0:
+        orbit = self.primary_orbit
+        if orbit is None or orbit.e < 1.0:
             return None
-        tau = self.orbit.time_from_pericentre(
-            self.orbit.pericentre * ENCOUNTER_TORQUE_FRACTION ** (-1.0 / 3.0))
-        return self.orbit.t_p - tau, self.orbit.t_p + tau
+        tau = orbit.time_from_pericentre(
+            orbit.pericentre * ENCOUNTER_TORQUE_FRACTION ** (-1.0 / 3.0))
+        return orbit.t_p - tau, orbit.t_p + tau
 
     @property
     def segment_cuts(self) -> tuple[float, ...]:
@@ -478,9 +492,9 @@ class Scenario:
 
     @property
     def own_rate(self) -> float:
-        """Return the scenario's own rate [rad/yr]: max(|omega0|, orbit_rate, orbit's n)."""
-        return max(math.hypot(*self.omega0), self.orbit_rate,
-                   self.orbit.mean_motion if self.orbit is not None else 0.0)
+        """Return the scenario's own rate [rad/yr]: max(|omega0|, orbit_rate, orbits' n)."""
+        return max([math.hypot(*self.omega0), self.orbit_rate]
+                   + [p.mean_motion for p in self.all_perturbers])
 
     @property
     def step_budget(self) -> tuple[float, float]:
@@ -494,19 +508,38 @@ class Scenario:
         return step_budget(self.output_interval, self.own_rate, self.integrator.max_step)
 
     @property
+    def all_perturbers(self) -> tuple[Perturber, ...]:
+        """Return the torquing bodies: ``orbit`` first (named ``kepler_orbit``), then ``perturbers``."""
+        orbit = (Perturber(ORBIT_PERTURBER, self.orbit),) if self.orbit is not None else ()
+        return orbit + self.perturbers
+
+    @property
+    def primary_orbit(self) -> KeplerOrbit | None:
+        """Return the first perturber's Kepler orbit (the flyby's), None if it has none."""
+        bodies = self.all_perturbers
+        source = bodies[0].source if bodies else None
+        return source if isinstance(source, KeplerOrbit) else None
+
+    @property
     def extra_torques(self) -> tuple[TorqueComponent, ...]:
-        """Return the torques beyond the circular orbit's and the impacts': orbit, then torques."""
-        orbit = (self.orbit.torque_component(self.inertia),) if self.orbit is not None else ()
-        return orbit + self.torques
+        """Return the torques beyond the circular orbit's and the impacts': perturbers, torques."""
+        return tuple(p.torque_component(self.inertia) for p in self.all_perturbers) + self.torques
 
     def perturber_position(self, t: ArrayLike) -> FloatArray:
         """
-        Return where the torquing body is in the orbital frame, (n, 3) [km], at ``t`` [yr].
+        Return where the (first) torquing body is in the orbital frame, (n, 3) [km], at ``t`` [yr].
 
-        The Kepler orbit's body, or on the circular orbit the Sun at the distance the orbit rate
-        gives (:func:`~.torques.orbits.perturber_position`).
+        The first of :attr:`all_perturbers`, or on the circular orbit the Sun at the distance the
+        orbit rate gives (:func:`~.torques.orbits.perturber_position`).
         """
-        return perturber_position(self.orbit_rate, self.orbit, t)
+        bodies = self.all_perturbers
+        if bodies:
+            return bodies[0].position(t)
+        return perturber_position(self.orbit_rate, None, t)
+
+    def perturber_positions(self, t: ArrayLike) -> dict[str, FloatArray]:
+        """Return where each perturber is, orbital frame: {name: (n, 3) [km]} at ``t`` [yr]."""
+        return {p.name: p.position(t) for p in self.all_perturbers}
 
     def perturber_in_body(self, t: ArrayLike, quaternion: ArrayLike) -> FloatArray:
         """
@@ -567,21 +600,24 @@ class Scenario:
         for name in _ORBIT_FIELDS:
             params[f'orbit.{name}'] = getattr(orbit, name)
         params.update(dict.fromkeys((f'orbit.{name}' for name in _FLYBY_FIELDS), 0.0))
+        params.update(_perturber_parameters(self.perturbers))
         return params
 
     @classmethod
-    def from_parameters(cls, params: Mapping[str, Any]) -> 'Scenario':
+    def from_parameters(cls, params: Mapping[str, Any], folder: Path | None = None) -> 'Scenario':
         """
         Build from a flat parameter mapping; missing keys take their defaults.
 
+        ``folder``: where relative ephemeris files are looked for first (the params file's).
         Raises ScenarioError for unknown keys and invalid values.
         """
-        known = set(PARAMETER_NAMES)
+        known = set(PARAMETER_NAMES) | set(perturber_parameter_names(params))
         unknown = sorted(set(params) - known)
         if unknown:
             raise ScenarioError(
                 f"{unknown[0]}: unknown scenario parameter (known: {', '.join(sorted(known))})")
         unit = _one_of('time_unit', params.get('time_unit', 'yr'), TIME_UNITS)
+        perturbers = _perturbers_from_parameters(params, unit, folder)
         params = to_years(params, unit)
         plain = {k: params[k] for k in _SCENARIO_PLAIN if k in params}
         integ = {
@@ -590,6 +626,7 @@ class Scenario:
         plain['integrator'] = IntegratorSettings(**integ)
         plain['impacts'] = _impacts_from_parameters(params)
         plain['orbit'] = _orbit_from_parameters(params)
+        plain['perturbers'] = perturbers
         return cls(**plain)
 
 
@@ -609,20 +646,24 @@ PARAMETER_NAMES: tuple[str, ...] = (
     + tuple(f'integrator.{f.name}' for f in dataclasses.fields(IntegratorSettings))
     + _IMPACT_KEYS
     + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS + _FLYBY_FIELDS)
+    + ('perturbers.names',)
 )
 
 
-def _orbit_from_parameters(params: Mapping[str, Any]) -> KeplerOrbit | None:
+def _orbit_from_parameters(params: Mapping[str, Any], prefix: str = 'orbit',
+                           kinds: tuple[str, ...] = _ORBIT_KINDS,
+                           kind: str | None = None) -> KeplerOrbit | None:
     """
-    Return the Kepler orbit of ``orbit.*`` (None for orbit.kind circular, the default).
+    Return the Kepler orbit of ``<prefix>.*`` (None for orbit.kind circular, the default).
 
     ``flyby`` states the hyperbola by its perigee and speed (:meth:`KeplerOrbit.flyby`) instead
     of a and e; the scenario keeps the resulting Kepler orbit (it is written back as ``kepler``).
     """
-    kind = _one_of('orbit.kind', params.get('orbit.kind', 'circular'), _ORBIT_KINDS)
-    values = {name: params.get(f'orbit.{name}', getattr(_DEFAULT_ORBIT, name))
+    if kind is None:
+        kind = _one_of(f'{prefix}.kind', params.get(f'{prefix}.kind', 'circular'), kinds)
+    values = {name: params.get(f'{prefix}.{name}', getattr(_DEFAULT_ORBIT, name))
               for name in _ORBIT_FIELDS}
-    flyby = {name: params.get(f'orbit.{name}', 0.0) for name in _FLYBY_FIELDS}
+    flyby = {name: params.get(f'{prefix}.{name}', 0.0) for name in _FLYBY_FIELDS}
     unused = {'circular': {**values, **flyby}, 'kepler': flyby,
               'flyby': {name: values[name] for name in ('a', 'e')}}[kind]
     defaults = {**{n: getattr(_DEFAULT_ORBIT, n) for n in _ORBIT_FIELDS},
@@ -631,7 +672,7 @@ def _orbit_from_parameters(params: Mapping[str, Any]) -> KeplerOrbit | None:
         if value != defaults[name]:
             used_by = 'flyby' if name in _FLYBY_FIELDS else (
                 'kepler' if name in ('a', 'e') else 'kepler and flyby')
-            _fail(f'orbit.{name}', f'is used only with orbit.kind: {used_by}', value)
+            _fail(f'{prefix}.{name}', f'is used only with {prefix}.kind: {used_by}', value)
     if kind == 'circular':
         return None
     try:
@@ -641,7 +682,7 @@ def _orbit_from_parameters(params: Mapping[str, Any]) -> KeplerOrbit | None:
         return KeplerOrbit.flyby(values['gm'], flyby['perigee'], v_inf=flyby['v_inf'],
                                  v_perigee=flyby['v_perigee'], **shared)
     except ValueError as err:
-        raise ScenarioError(str(err)) from None
+        raise ScenarioError(str(err).replace('orbit.', f'{prefix}.')) from None
 
 
 #: Unit and meaning of every scenario parameter (the nodes' descriptors, the README tables).
@@ -693,7 +734,149 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'orbit.perigee': ('km', 'closest distance of the flyby (flyby)'),
     'orbit.v_inf': ('km/s', 'hyperbolic excess speed; give it or v_perigee (flyby)'),
     'orbit.v_perigee': ('km/s', 'speed at perigee; give it or v_inf (flyby)'),
+    'perturbers.names': ('', 'more torquing bodies (earth, moon, sun...), each described by '
+                         'perturbers.<name>.*: docs/ros.md, "Perturbers"'),
 }
+
+
+# -- perturbers: the Scenario's checks and its perturbers.* parameters ---------------------------
+#: The name of ``orbit``'s perturber (:attr:`Scenario.all_perturbers`).
+ORBIT_PERTURBER = 'kepler_orbit'
+PERTURBER_KINDS = ('kepler', 'flyby', 'ephemeris')
+#: A perturber's parameters besides the orbit's (``perturbers.<name>.<field>``) and their
+#: defaults; the orbit's are ``_ORBIT_FIELDS`` and ``_FLYBY_FIELDS``.
+_PERTURBER_OWN = {'kind': '', 'ephemeris_file': '', 'epoch_jd': 0.0, 'ephemeris_time_unit': '',
+                  'j2': 0.0, 'pole': [0.0, 0.0, 1.0]}
+PERTURBER_FIELDS = tuple(_PERTURBER_OWN) + _ORBIT_FIELDS + _FLYBY_FIELDS
+#: Where a relative ephemeris file is looked for after the params file's folder: the package's
+#: scenario files (the source tree's ``config/``, installed as share/tumble_ros/config).
+PACKAGE_CONFIG = Path(__file__).resolve().parents[3] / 'config'
+
+
+def _checked_perturbers(scenario: Scenario) -> tuple[Perturber, ...]:
+    """Return ``scenario.perturbers`` checked against the rest of the scenario."""
+    perturbers = tuple(scenario.perturbers)
+    names = [ORBIT_PERTURBER] if scenario.orbit is not None else []
+    for k, body in enumerate(perturbers):
+        if not isinstance(body, Perturber):
+            _fail(f'perturbers[{k}]', 'must be a core.torques.perturbers.Perturber', body)
+        if body.name in names:
+            _fail('perturbers.names', f'must be distinct (and not {ORBIT_PERTURBER!r}, the '
+                  "name of orbit's perturber)", [p.name for p in perturbers])
+        names.append(body.name)
+        source = body.source
+        if isinstance(source, Ephemeris) and not (source.start <= 0.0
+                                                  and scenario.duration <= source.end):
+            _fail(f'perturbers.{body.name}.ephemeris_file',
+                  f'the table must cover the run, [0, {scenario.duration:g}] yr; it covers '
+                  f'[{source.start:.6g}, {source.end:.6g}] yr', source.source)
+    if perturbers and scenario.orbit_rate != 0.0:
+        _fail('orbit_rate', 'must be 0 with perturbers: they give the tidal torque',
+              scenario.orbit_rate)
+    return perturbers
+
+
+def perturber_parameter_names(params: Mapping[str, Any]) -> tuple[str, ...]:
+    """Return the ``perturbers.<name>.<field>`` names of the perturbers ``params`` names."""
+    names = params.get('perturbers.names', []) or []
+    if isinstance(names, str) or not all(isinstance(n, str) for n in names):
+        _fail('perturbers.names', 'must be a list of names', names)
+    return tuple(f'perturbers.{n}.{f}' for n in names for f in PERTURBER_FIELDS)
+
+
+def _ephemeris_path(field: str, value: Any, folder: Path | None) -> Path:
+    """Return the ephemeris file: absolute, else in ``folder``, else in the package's config."""
+    if not isinstance(value, str) or not value:
+        _fail(field, 'must name a file (a Horizons vector table or t, x, y, z)', value)
+    path = Path(value).expanduser()
+    places = [path] if path.is_absolute() else [
+        *((folder / path,) if folder is not None else ()), PACKAGE_CONFIG / path]
+    for place in places:
+        if place.is_file():
+            return place
+    _fail(field, 'no such file (looked in ' + ', '.join(str(p) for p in places) + ')', value)
+    raise AssertionError  # (unreachable: _fail raises)
+
+
+def _perturbers_from_parameters(params: Mapping[str, Any], unit: str,
+                                folder: Path | None) -> tuple[Perturber, ...]:
+    """Return the perturbers of ``perturbers.*`` (times in ``unit``, converted here)."""
+    bodies = []
+    for name in params.get('perturbers.names', []) or []:
+        prefix = f'perturbers.{name}'
+        get = {f: params.get(f'{prefix}.{f}', d) for f, d in _PERTURBER_OWN.items()}
+        kind = _one_of(f'{prefix}.kind', get['kind'], PERTURBER_KINDS)
+        if kind == 'ephemeris':
+            for f in _ORBIT_FIELDS + _FLYBY_FIELDS:
+                value = params.get(f'{prefix}.{f}')
+                if f not in ('gm', 'radius') and value not in (None, 0.0,
+                                                               getattr(_DEFAULT_ORBIT, f, 0.0)):
+                    _fail(f'{prefix}.{f}', 'is used only with kind: kepler or flyby', value)
+            time_unit = get['ephemeris_time_unit'] or unit
+            _one_of(f'{prefix}.ephemeris_time_unit', time_unit, TIME_UNITS)
+            path = _ephemeris_path(f'{prefix}.ephemeris_file', get['ephemeris_file'], folder)
+            try:
+                source: KeplerOrbit | Ephemeris = read_ephemeris(
+                    path, epoch_jd=_finite(f'{prefix}.epoch_jd', get['epoch_jd']),
+                    time_unit=time_unit)
+            except ValueError as err:
+                raise ScenarioError(f'{prefix}.ephemeris_file: {err}') from None
+            gm, radius = params.get(f'{prefix}.gm', 0.0), params.get(f'{prefix}.radius', 0.0)
+        else:
+            for f in ('ephemeris_file', 'epoch_jd', 'ephemeris_time_unit'):
+                if get[f] != _PERTURBER_OWN[f]:
+                    _fail(f'{prefix}.{f}', 'is used only with kind: ephemeris', get[f])
+            scaled = dict(params)
+            if f'{prefix}.t_p' in scaled:
+                scaled[f'{prefix}.t_p'] = _finite(f'{prefix}.t_p', scaled[f'{prefix}.t_p']) \
+                    * TIME_UNITS[unit]
+            orbit = _orbit_from_parameters(scaled, prefix, PERTURBER_KINDS, kind)
+            assert orbit is not None  # (kepler and flyby give one)
+            source, gm, radius = orbit, 0.0, orbit.radius
+        try:
+            bodies.append(Perturber(name, source, gm=gm, j2=get['j2'], radius=radius,
+                                    pole=tuple(get['pole'])))
+        except (TypeError, ValueError) as err:
+            raise ScenarioError(str(err)) from None
+    return tuple(bodies)
+
+
+#: Unit and meaning of each ``perturbers.<name>.<field>`` (as PARAMETER_DOCS).
+PERTURBER_DOCS: dict[str, tuple[str, str]] = {
+    'kind': ('', 'kepler (elements gm, a, e, ... as orbit.*), flyby (gm, perigee, v_inf or '
+             'v_perigee, ...) or ephemeris (ephemeris_file, gm)'),
+    'ephemeris_file': ('', 'a JPL Horizons vector table or a plain t, x, y, z table: the '
+                       "perturber's position relative to the asteroid [km], orbital frame; "
+                       "relative paths: the params file's folder, then the package's config/"),
+    'epoch_jd': ('d', 'Julian date (TDB) of t = 0, for a Horizons table'),
+    'ephemeris_time_unit': ('', "unit of a plain table's t; '' = time_unit"),
+    'j2': ('', "the perturber's J2 (the Earth 1.0826e-3); 0 = a point mass"),
+    'pole': ('', "the perturber's pole, orbital frame (its J2's axis)"),
+    **{f: (unit, text.replace('(kepler)', '(kind kepler)').replace(
+        '(kepler, flyby)', '(kind kepler, flyby)').replace('(flyby)', '(kind flyby)'))
+       for f in _ORBIT_FIELDS + _FLYBY_FIELDS
+       for unit, text in [PARAMETER_DOCS[f'orbit.{f}']]},
+}
+
+
+def _perturber_parameters(perturbers: Iterable[Perturber]) -> dict[str, Any]:
+    """Return ``perturbers.*`` of ``perturbers`` (an ephemeris by its file, '' if it has none)."""
+    params: dict[str, Any] = {'perturbers.names': [p.name for p in perturbers]}
+    for body in perturbers:
+        prefix = f'perturbers.{body.name}'
+        source = body.source
+        values: dict[str, Any] = {**_PERTURBER_OWN, 'j2': body.j2, 'pole': list(body.pole)}
+        orbit = source if isinstance(source, KeplerOrbit) else _DEFAULT_ORBIT
+        values.update({f: getattr(orbit, f) for f in _ORBIT_FIELDS})
+        values.update(dict.fromkeys(_FLYBY_FIELDS, 0.0))
+        if isinstance(source, Ephemeris):
+            values.update(kind='ephemeris', gm=body.gm, radius=body.radius,
+                          ephemeris_file=source.source, epoch_jd=source.epoch_jd,
+                          ephemeris_time_unit=source.time_unit)
+        else:
+            values['kind'] = 'kepler'
+        params.update({f'{prefix}.{f}': v for f, v in values.items()})
+    return params
 
 
 def _impacts_from_parameters(params: Mapping[str, Any]) -> tuple[Impact, ...]:
@@ -751,7 +934,7 @@ def load_scenario(path: str | Path, node: str = 'sim',
     """
     document = check_params_file(path)
     try:
-        return _scenario_from_document(document, node, ignore)
+        return _scenario_from_document(document, node, ignore, Path(path).parent)
     except ScenarioError as err:
         raise ScenarioError(f'{path}: {err}') from None
 
@@ -762,7 +945,7 @@ def parse_scenario(text: str, node: str = 'sim', ignore: frozenset[str] = frozen
 
 
 def _scenario_from_document(document: Mapping[str, Any], node: str,
-                            ignore: frozenset[str]) -> Scenario:
+                            ignore: frozenset[str], folder: Path | None = None) -> Scenario:
     """Return the scenario of the ``node`` section of a params file's checked document."""
     for key in (f'/**/{node}', node, f'/{node}', '/**'):
         if key in document:
@@ -775,7 +958,7 @@ def _scenario_from_document(document: Mapping[str, Any], node: str,
     if not isinstance(section, Mapping) or not isinstance(section.get('ros__parameters'), Mapping):
         raise ScenarioError("the node section has no 'ros__parameters' mapping")
     params = {k: v for k, v in _flatten(section['ros__parameters']).items() if k not in ignore}
-    return Scenario.from_parameters(params)
+    return Scenario.from_parameters(params, folder)
 
 
 def dump_scenario(scenario: Scenario, node: str = 'sim') -> str:

@@ -23,7 +23,7 @@ from tumble_ros.core.jit import jit_inline, python_source
 from tumble_ros.core.torques.frames import orbital_to_body
 
 __all__ = ['sun_direction_orbital', 'sun_direction_body', 'tidal_torque', 'tidal_coefficients',
-           'gravity_gradient_torque', 'gravity_gradient_potential']
+           'point_mass_torque', 'gravity_gradient_torque', 'gravity_gradient_potential']
 
 
 @jit_inline
@@ -49,6 +49,22 @@ def tidal_torque(kx: float, ky: float, kz: float, ux: float, uy: float,
     (Ix - Iz) ux uz, Mz = 3 ws^2 (Iy - Ix) ux uy.
     """
     return kx * uy * uz, ky * ux * uz, kz * ux * uy
+
+
+@jit_inline
+def point_mass_torque(gm: float, x: float, y: float, z: float, ix: float, iy: float,
+                      iz: float) -> tuple[float, float, float]:
+    """
+    Return M = 3 GM / R^3 u x (I u), body axes: the torque of a point mass at (x, y, z).
+
+    ``gm`` [L^3/yr^2] (km^3/yr^2 for the perturbers), (x, y, z) the point mass's position
+    relative to the body's centre of mass in body principal axes [L], R its norm, u = (x, y,
+    z) / R; (ix, iy, iz) the principal moments. The degree-2 torque law of every perturber
+    (:mod:`.perturbers`): the one call a torque to higher degree replaces.
+    """
+    r = math.sqrt(x * x + y * y + z * z)
+    k = 3.0 * gm / (r * r * r)
+    return tidal_torque(k * (iz - iy), k * (ix - iz), k * (iy - ix), x / r, y / r, z / r)
 
 
 def tidal_coefficients(inertia: Sequence[float] | npt.NDArray[np.float64],

@@ -1,5 +1,5 @@
 """
-Keplerian orbits of the torquing body, and their tidal torque as a torque component.
+Keplerian orbits of a torquing body relative to the asteroid (a perturber's source).
 
 The paper's circular orbit (``gravity_gradient``) keeps the Sun at a constant distance. Here the
 perturber (the Sun on an eccentric orbit, or a planet on a hyperbolic flyby) moves on a
@@ -26,25 +26,22 @@ Kepler's equation: elliptic (0 <= e < 1) M = E - e sin E, hyperbolic (e > 1) M =
 with the mean anomaly M = n (t - t_p), n = sqrt(GM / |a|^3). Both are solved by Newton's method
 from a starter that converges for every e in range (Danby 1987 for the ellipse, M = 0.85 e
 offset; the logarithmic starter for the hyperbola) to a few ulp; the solvers are compiled
-(``core.jit``) and called by the torque function inside the integrators' loops.
+(``core.jit``) and called by the torque function inside the integrators' loops
+(:func:`.perturbers.kepler_perturber_torque`: a Kepler orbit is a perturber's source).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Sequence
-
 import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core.jit import jit, jit_inline, python_source
 from tumble_ros.core.model.units import GM_SUN, PERTURBER_RADII, SECONDS_PER_YEAR
-from tumble_ros.core.torques.component import torque_function, TorqueComponent
-from tumble_ros.core.torques.frames import orbital_to_body
-from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital, tidal_torque
+from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital
 
 __all__ = ['KeplerOrbit', 'eccentric_anomaly', 'hyperbolic_anomaly', 'orbit_state',
-           'kepler_tidal_torque', 'perturber_position', 'orientation_from_elements',
+           'plane_to_orbital', 'perturber_position', 'orientation_from_elements',
            'perturber_radius', 'MAX_ECCENTRICITY', 'MAX_GM', 'MAX_SEMI_MAJOR_AXIS',
            'GM_MATCH']
 
@@ -195,24 +192,6 @@ def plane_to_orbital(sin_angle: float, cos_angle: float, cos_i: float, sin_i: fl
     y = cos_angle * cos_i
     return (sin_angle * cos_node - y * sin_node, sin_angle * sin_node + y * cos_node,
             cos_angle * sin_i)
-
-
-@torque_function
-def kepler_tidal_torque(par: npt.NDArray[np.float64], t: float, q0: float, q1: float, q2: float,
-                        q3: float) -> tuple[float, float, float]:
-    """
-    Return the tidal torque of a perturber on a Kepler orbit, body axes.
-
-    par = (GM [L^3/yr^2], a, e, t_p, lambda_p, Ix, Iy, Iz, cos i, sin i, cos node, sin node):
-    see :func:`orbit_state` and :func:`plane_to_orbital`.
-    """
-    distance, angle = orbit_state(t, par[0], par[1], par[2], par[3], par[4])
-    sx, sy, sz = plane_to_orbital(math.sin(angle), math.cos(angle), par[8], par[9], par[10],
-                                  par[11])
-    ux, uy, uz = orbital_to_body(sx, sy, sz, q0, q1, q2, q3)
-    k = 3.0 * par[0] / (distance * distance * distance)
-    return tidal_torque(k * (par[7] - par[6]), k * (par[5] - par[7]), k * (par[6] - par[5]),
-                        ux, uy, uz)
 
 
 @dataclass(frozen=True)
@@ -385,19 +364,29 @@ class KeplerOrbit:
         position: npt.NDArray[np.float64] = distance[:, None] * self._direction(angle)
         return position
 
+    def velocity(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """
+        Return the perturber's velocity relative to the asteroid, orbital frame: (n, 3) [km/s].
+
+        Radial speed sqrt(GM / p) e sin nu, transverse sqrt(GM / p) (1 + e cos nu) along
+        d/dlambda of the direction, p = a |1 - e^2| the semi-latus rectum.
+        """
+        distance, angle = self.state(t)
+        nu = angle - self.lambda_p
+        scale = math.sqrt(self.gm / (self.a * abs(1.0 - self.e * self.e)))
+        radial = scale * self.e * np.sin(nu)
+        transverse = scale * (1.0 + self.e * np.cos(nu))
+        along = np.stack(python_source(plane_to_orbital)(np.cos(angle), -np.sin(angle),
+                                                         *self._plane()), axis=-1)
+        velocity: npt.NDArray[np.float64] = (radial[:, None] * self._direction(angle)
+                                             + transverse[:, None] * along)
+        return velocity
+
     def _direction(self, angle: np.ndarray) -> np.ndarray:
         """Return the orbital-frame unit vectors of in-plane angles lambda [rad]: (n, 3)."""
         s = python_source(plane_to_orbital)(np.sin(angle), np.cos(angle), *self._plane())
         stacked: npt.NDArray[np.float64] = np.stack(s, axis=-1)
         return stacked
-
-    def torque_component(self, inertia: Sequence[float] | npt.NDArray[np.float64],
-                         ) -> TorqueComponent:
-        """Return this orbit's tidal torque on a body of principal moments ``inertia``."""
-        ix, iy, iz = (float(v) for v in inertia)
-        return TorqueComponent('kepler_orbit', kepler_tidal_torque,
-                               (self.gm_per_yr2, self.a, self.e, self.t_p, self.lambda_p,
-                                ix, iy, iz) + self._plane())
 
 
 def orientation_from_elements(inclination: float, node: float,
