@@ -781,6 +781,8 @@ def perturber_parameter_names(params: Mapping[str, Any]) -> tuple[str, ...]:
     names = params.get('perturbers.names', []) or []
     if isinstance(names, str) or not all(isinstance(n, str) for n in names):
         _fail('perturbers.names', 'must be a list of names', names)
+    if len(set(names)) != len(names):
+        _fail('perturbers.names', 'must be distinct', names)
     return tuple(f'perturbers.{n}.{f}' for n in names for f in PERTURBER_FIELDS)
 
 

@@ -33,6 +33,7 @@ in the frame the attitude is given in.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from decimal import Decimal, InvalidOperation
 import math
 from pathlib import Path
 import re
@@ -220,8 +221,13 @@ def _numbers(text: str) -> list[float]:
     return [float(v.replace('D', 'E').replace('d', 'e')) for v in re.findall(_NUMBER, text)]
 
 
-def _horizons_records(lines: Sequence[str], name: str) -> list[list[float]]:
-    """Return [jd, x, y, z (, vx, vy, vz)] per record between $$SOE and $$EOE."""
+def _days_since(jd: str, epoch_jd: float) -> float:
+    """Return JD - epoch_jd [d] from the printed JD, exactly (a JD in float64 is ~40 us)."""
+    return float(Decimal(jd) - Decimal(repr(epoch_jd)))
+
+
+def _horizons_records(lines: Sequence[str], name: str, epoch_jd: float) -> list[list[float]]:
+    """Return [days since epoch_jd, x, y, z (, vx, vy, vz)] per record ($$SOE to $$EOE)."""
     records: list[list[float]] = []
     labelled: dict[str, float] = {}
 
@@ -236,8 +242,8 @@ def _horizons_records(lines: Sequence[str], name: str) -> list[list[float]]:
             continue
         if ',' in line:                               # CSV_FORMAT = YES: one line a record
             fields = [f.strip() for f in line.split(',') if f.strip()]
-            values = [float(f) for f in fields if re.fullmatch(_NUMBER, f)]
-            records.append(values)
+            values = [float(f) for f in fields[1:] if re.fullmatch(_NUMBER, f)]
+            records.append([_days_since(fields[0], epoch_jd)] + values)
             continue
         found = _LABELLED.findall(line)
         if found:
@@ -246,7 +252,7 @@ def _horizons_records(lines: Sequence[str], name: str) -> list[list[float]]:
         head = line.split('=')[0]
         if '=' in line and re.fullmatch(r'\s*' + _NUMBER + r'\s*', head):
             close()                                   # "2462240.5 = A.D. 2029-Apr-13 ..."
-            records.append([float(head)])
+            records.append([_days_since(head.strip(), epoch_jd)])
             continue
         if records:
             records[-1].extend(_numbers(line))        # unlabelled X Y Z [VX VY VZ ...]
@@ -288,9 +294,9 @@ def read_ephemeris(path: str | Path, *, epoch_jd: float = 0.0, time_unit: str = 
             raise ValueError(f'{name}: Output units {units!r} not read (one of '
                              f'{sorted(_HORIZONS_UNITS)})')
         km, seconds = _HORIZONS_UNITS[units]
-        rows = _horizons_records(lines[marks[0] + 1:marks[1]], name)
+        rows = _horizons_records(lines[marks[0] + 1:marks[1]], name, epoch_jd)
         table = _table(rows, name)
-        times = (table[:, 0] - epoch_jd) / DAYS_PER_YEAR
+        times = table[:, 0] / DAYS_PER_YEAR
         scale = (km, km / seconds)
         provenance = {'epoch_jd': float(epoch_jd), 'time_unit': ''}
     else:

@@ -145,7 +145,8 @@ class Perturber:
         The reference radius of J2 [km]; 0: the Sun's, the Earth's or the Moon's when ``gm`` is
         theirs (``units.PERTURBER_RADII``). Needed (> 0) when ``j2`` is not 0.
     pole : (float, float, float)
-        The perturber's pole (the symmetry axis of its J2), orbital frame; normalised here.
+        The direction of the perturber's pole (the symmetry axis of its J2), orbital frame; any
+        length but 0 (kept as given, normalised where used: :meth:`law`).
 
     Every field is checked here; a ValueError names it (``perturbers.<name>.<field>``).
 
@@ -199,7 +200,7 @@ class Perturber:
         norm = math.sqrt(sum(v * v for v in k))
         if not norm > 0.0:
             raise ValueError(f'{field}.pole: must not be the zero vector, got {pole!r}')
-        object.__setattr__(self, 'pole', (k[0] / norm, k[1] / norm, k[2] / norm))
+        object.__setattr__(self, 'pole', (k[0], k[1], k[2]))
 
     @property
     def kind(self) -> SourceKind:
@@ -207,10 +208,12 @@ class Perturber:
         return SOURCE_KINDS[type(self.source)]
 
     def law(self, inertia: Sequence[float] | npt.NDArray[np.float64]) -> tuple[float, ...]:
-        """Return the torque law's block: (GM [km^3/yr^2], Ix, Iy, Iz, GM J2 R^2, pole)."""
+        """Return the torque law's block: (GM [km^3/yr^2], Ix, Iy, Iz, GM J2 R^2, unit pole)."""
         gm = self.gm * _KM3_PER_YR2
         ix, iy, iz = (float(v) for v in inertia)
-        return (gm, ix, iy, iz, gm * self.j2 * self.radius * self.radius) + self.pole
+        norm = math.sqrt(sum(v * v for v in self.pole))
+        return (gm, ix, iy, iz, gm * self.j2 * self.radius * self.radius,
+                self.pole[0] / norm, self.pole[1] / norm, self.pole[2] / norm)
 
     def torque_component(self, inertia: Sequence[float] | npt.NDArray[np.float64],
                          ) -> TorqueComponent:
