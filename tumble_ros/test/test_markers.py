@@ -154,6 +154,24 @@ def test_an_unphysical_body_is_a_box_and_a_flyby_body_is_drawn(tmp_path):
     assert [m.ns for m in scene.markers] == ['body', 'axes', 'axes', 'axes', 'angular_momentum']
 
 
+def test_each_perturber_is_drawn(tmp_path):
+    from tumble_ros.core.torques.orbits import KeplerOrbit
+    from tumble_ros.core.torques.perturbers import Perturber
+    sun = Perturber('sun', KeplerOrbit(gm=1.3271244e11, a=1.5e8, e=1.5, t_p=0.05))
+    moon = Perturber('moon', KeplerOrbit(gm=4902.800066, a=4e5, e=0.3, node=1.0))
+    sc = Scenario(orbit_rate=0.0, perturbers=(sun, moon), duration=0.1, output_interval=0.01)
+    result = record_offline(sc, tmp_path / 'two.mcap')
+    scenes = _scenes(result.output)
+    t = np.arange(11) * 0.01
+    for k, scene in enumerate(scenes):
+        arrows = {m.id: m for m in scene.markers if m.ns == 'perturber'}
+        assert sorted(arrows) == [0, 1]
+        for j, body in enumerate((sun, moon)):
+            r = body.position([t[k]])[0]
+            np.testing.assert_allclose(_direction(arrows[j].points), r / np.linalg.norm(r),
+                                       atol=1e-12)
+
+
 def test_rosbags_decodes_the_scene_too(recorded):
     _, result = recorded
     from rosbags.highlevel import AnyReader

@@ -149,8 +149,8 @@ def recorded_scene(rec: Recording, t: np.ndarray, quaternion: np.ndarray,
             scene.append(Arrow((0.0, 0.0, 0.0), tuple(MOMENTUM_LENGTH * momentum[j] / norm),
                                COLORS['momentum'], _LABELS[MARKER_MOMENTUM]))
         if perturber is not None:
-            orbit = rec.scenario.orbit if rec.scenario is not None else None
-            name = MARKER_PERTURBER if orbit is not None else MARKER_SUN
+            bodies = rec.scenario.all_perturbers if rec.scenario is not None else ()
+            name = MARKER_PERTURBER if bodies else MARKER_SUN
             scene.append(Arrow((0.0, 0.0, 0.0), tuple(PERTURBER_LENGTH * perturber[j]),
                                COLORS['torquing_body'], _LABELS[name]))
         scenes.append(scene)

@@ -296,7 +296,7 @@ def _title(rec: Recording) -> str:
         w0 = ', '.join(f'{u.w(w):.4g}' for w in sc.omega0)
         text += (f'\nI = ({", ".join(f"{i:.4g}" for i in sc.inertia)}), a = {(iz - ix) / ix:.3g}, '
                  f'$\\theta_0$ = {sc.euler0[2]:.3g} rad, $\\omega_0$ = ({w0}) {u.rate}')
-        if sc.orbit is None:
+        if not sc.all_perturbers:
             text += f', $\\omega_s$ = {u.w(sc.orbit_rate):.3g} {u.rate}'
     return text
 

@@ -80,7 +80,7 @@ def jacobi_drift(rec: Recording) -> tuple[InvariantDrift | None, str | None]:
         if rec.scenario_error:
             why = f'{rec.topic(SCENARIO)} could not be parsed: {rec.scenario_error}'
         return None, why
-    if rec.scenario.orbit is not None:
+    if rec.scenario.all_perturbers:
         return None, ('not conserved on a Kepler orbit (orbit.kind kepler or flyby: the tidal '
                       'potential changes with the distance); see docs/physics.md')
     found = _attitude_matrices(rec)

@@ -81,7 +81,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.out is not None:     # refused now, not after the run
             check_outputs(args.out, names, args.overwrite)
         sc = load_scenario(args.config, ignore=frozenset(SIM_NODE_PARAMETERS))
-        if sc.orbit is None or sc.orbit.e <= 1.0:
+        if sc.primary_orbit is None or sc.primary_orbit.e <= 1.0:
             raise ScenarioError(f'{args.config}: needs an orbit.kind: flyby (a hyperbolic '
                                 'orbit); this scenario has none')
         with interrupts():

@@ -572,15 +572,17 @@ def _extra_torque_reason(scenario: Scenario, state: AnchorState, torque_free: bo
     """
     window = scenario.encounter_window
     names = ', '.join(t.name for t in scenario.extra_torques)
-    if not torque_free or window is None or scenario.torques:
+    several = len(scenario.all_perturbers) > 1   # (the window is the first one's)
+    if not torque_free or window is None or scenario.torques or several:
         return ("the analytic models know the circular orbit's torque only; this scenario "
                 f'also has {names}'
-                + ('' if window is None or scenario.torques else
+                + ('' if window is None or scenario.torques or several else
                    ' (outside its encounter window the torque-free models apply)'))
     t_in, t_out = window
     if t_in <= state.t0 < t_out:
-        assert scenario.orbit is not None  # an encounter window is a flyby orbit's
-        distance = scenario.orbit.pericentre * ENCOUNTER_TORQUE_FRACTION ** (-1.0 / 3.0)
+        orbit = scenario.primary_orbit
+        assert orbit is not None  # an encounter window is a flyby orbit's
+        distance = orbit.pericentre * ENCOUNTER_TORQUE_FRACTION ** (-1.0 / 3.0)
         return (f"t0: inside the flyby's encounter window: from t = {t_in:.9g} to "
                 f'{t_out:.9g} yr its tidal torque exceeds {ENCOUNTER_TORQUE_FRACTION:g} of the '
                 f'perigee value (R < {distance:.6g} km) and no analytic model applies; the '

@@ -15,6 +15,8 @@ from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from tumble_ros.core import check_params_file, PARAMETER_DOCS, Scenario, ScenarioError
+from tumble_ros.core.model.scenario import (PERTURBER_DEFAULTS, PERTURBER_DOCS,
+                                            perturber_parameter_names)
 from tumble_ros.core.model.params_file import section_applies
 from tumble_ros.errors import NodeError
 
@@ -38,6 +40,7 @@ EMPTY_ARRAY_TYPES = {
     'impacts.duration': Parameter.Type.DOUBLE_ARRAY,
     'impacts.torque': Parameter.Type.DOUBLE_ARRAY,
     'impacts.frame': Parameter.Type.STRING_ARRAY,
+    'perturbers.names': Parameter.Type.STRING_ARRAY,
 }
 
 
@@ -73,6 +76,29 @@ def declare_scenario_parameters(node: Node) -> None:
             # Typed empty: through set_parameters, the one way rclpy keeps a given type for [].
             node.set_parameters([Parameter(name, EMPTY_ARRAY_TYPES[name], [])])
         node.set_descriptor(name, descriptor)
+    _declare_perturbers(node)
+
+
+def _declare_perturbers(node: Node) -> None:
+    """
+    Declare ``perturbers.<name>.<field>`` for every name of ``perturbers.names``.
+
+    Their names depend on that list, so they are declared once it is read; the Scenario checks
+    the names and every value.
+    """
+    try:
+        names = perturber_parameter_names(
+            {'perturbers.names': list(node.get_parameter('perturbers.names').value)})
+    except ScenarioError:
+        return       # (the Scenario refuses the list, naming it, when it is read)
+    for name in names:
+        field = name.rsplit('.', 1)[1]
+        unit, description = PERTURBER_DOCS[field]
+        descriptor = ParameterDescriptor(
+            description=describe(description, unit),
+            additional_constraints='validated by tumble_ros.core.Scenario (docs/physics.md)',
+            read_only=True, dynamic_typing=True)
+        node.declare_parameter(name, PERTURBER_DEFAULTS[field], descriptor)
 
 
 def node_parameter(node: Node, name: str, default: Any, unit: str, description: str,
@@ -116,7 +142,12 @@ def read_parameters(node: Node, names: Iterable[str]) -> dict[str, Any]:
 
 def read_scenario_parameters(node: Node) -> dict[str, Any]:
     """Return the scenario parameters' values (see :func:`declare_scenario_parameters`)."""
-    return read_parameters(node, PARAMETER_DOCS)
+    values = read_parameters(node, PARAMETER_DOCS)
+    try:
+        perturbers = perturber_parameter_names(values)
+    except ScenarioError:
+        return values   # (refused, naming perturbers.names, by Scenario.from_parameters)
+    return {**values, **read_parameters(node, perturbers)}
 
 
 def refuse_unknown_parameters(nodes: Iterable[Node]) -> None:

@@ -115,7 +115,7 @@ class SimNode(GuardedNode):
         publish = self.create_publisher
         qos = PUBLISHER_QOS
         self._pub_perturber = (publish(Vector3Stamped, topics.PERTURBER, qos[topics.PERTURBER])
-                               if self.scenario.orbit is not None else None)
+                               if self.scenario.all_perturbers else None)
         self._pub_clock = (publish(Clock, topics.CLOCK, qos[topics.CLOCK])
                            if params['publish_clock'] else None)
         # the per-sample topics, published as CDR bytes of the encoder's rows

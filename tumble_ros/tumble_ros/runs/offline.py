@@ -184,7 +184,7 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
     slicer = Slicer()
     ended: StatusChange | None = None   # the run's end (finished or diverged)
     with McapWriter(output, chunk_seconds=math.inf) as writer:
-        channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None,
+        channels = _Channels(writer, publish_clock, perturber=bool(scenario.all_perturbers),
                              markers=markers)
         writer_of = _Writer(channels, comparison, scene, publish_clock)
         channels.comparison_status(comparison.waiting(), model_name)

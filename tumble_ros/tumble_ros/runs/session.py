@@ -174,7 +174,7 @@ class SimulationSession:
         """Return the samples from grid index k0 (with the perturber's position if it torques)."""
         stamps = (np.arange(k0, k0 + len(times), dtype=np.int64) * self.grid.interval_ns)
         perturber = (self.scenario.perturber_in_body(times, quaternion)
-                     if self.scenario.orbit is not None else None)
+                     if self.scenario.all_perturbers else None)
         return SampleBlock(k0, times, stamps, omega, quaternion, euler, perturber)
 
     def _segment_records(self) -> list[SessionRecord]:

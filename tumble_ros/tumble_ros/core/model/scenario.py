@@ -52,6 +52,7 @@ __all__ = [
     'PARAMETER_DOCS',
     'PERTURBER_DOCS',
     'PERTURBER_FIELDS',
+    'PERTURBER_DEFAULTS',
     'ORBIT_PERTURBER',
     'perturber_parameter_names',
     'time_resolution',
@@ -748,6 +749,10 @@ PERTURBER_KINDS = ('kepler', 'flyby', 'ephemeris')
 _PERTURBER_OWN = {'kind': '', 'ephemeris_file': '', 'epoch_jd': 0.0, 'ephemeris_time_unit': '',
                   'j2': 0.0, 'pole': [0.0, 0.0, 1.0]}
 PERTURBER_FIELDS = tuple(_PERTURBER_OWN) + _ORBIT_FIELDS + _FLYBY_FIELDS
+#: The default of every ``perturbers.<name>.<field>`` (the nodes declare them with these).
+PERTURBER_DEFAULTS: dict[str, Any] = {**_PERTURBER_OWN,
+                                      **{f: getattr(_DEFAULT_ORBIT, f) for f in _ORBIT_FIELDS},
+                                      **dict.fromkeys(_FLYBY_FIELDS, 0.0)}
 #: Where a relative ephemeris file is looked for after the params file's folder: the package's
 #: scenario files (the source tree's ``config/``, installed as share/tumble_ros/config).
 PACKAGE_CONFIG = Path(__file__).resolve().parents[3] / 'config'
@@ -787,12 +792,13 @@ def perturber_parameter_names(params: Mapping[str, Any]) -> tuple[str, ...]:
 
 
 def _ephemeris_path(field: str, value: Any, folder: Path | None) -> Path:
-    """Return the ephemeris file: absolute, else in ``folder``, else in the package's config."""
+    """Return the ephemeris file: absolute, else in ``folder`` (or the working directory), else
+    in the package's config."""
     if not isinstance(value, str) or not value:
         _fail(field, 'must name a file (a Horizons vector table or t, x, y, z)', value)
     path = Path(value).expanduser()
-    places = [path] if path.is_absolute() else [
-        *((folder / path,) if folder is not None else ()), PACKAGE_CONFIG / path]
+    places = [path] if path.is_absolute() else [(folder or Path.cwd()) / path,
+                                                PACKAGE_CONFIG / path]
     for place in places:
         if place.is_file():
             return place

@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Scenario
 
 __all__ = ['BodyShape', 'ELLIPSOID', 'BOX', 'MIN_THICKNESS', 'body_shape',
-           'torquing_body_direction', 'AXIS_LENGTH', 'MOMENTUM_LENGTH', 'PERTURBER_LENGTH',
+           'torquing_body_direction', 'torquing_body_directions', 'AXIS_LENGTH', 'MOMENTUM_LENGTH', 'PERTURBER_LENGTH',
            'COLORS']
 
 #: Shape kinds.
@@ -105,13 +105,28 @@ def torquing_body_direction(scenario: Scenario, t: ArrayLike) -> FloatArray | No
     """
     Return the unit direction from the asteroid to the torquing body, orbital frame: (n, 3).
 
-    The Sun of the circular orbit (``orbit_rate``), or the body on the Kepler orbit or flyby
-    (``scenario.orbit``) at the times ``t`` [yr]: the direction of
+    The Sun of the circular orbit (``orbit_rate``), or the first perturber (``scenario.orbit``,
+    else the first of ``scenario.perturbers``) at the times ``t`` [yr]: the direction of
     :meth:`~tumble_ros.core.Scenario.perturber_position`. None when nothing torques
-    (``orbit_rate`` 0 and no orbit).
+    (``orbit_rate`` 0 and no perturber).
     """
-    if scenario.orbit is None and scenario.orbit_rate == 0.0:
+    if not scenario.all_perturbers and scenario.orbit_rate == 0.0:
         return None
     position = scenario.perturber_position(np.atleast_1d(np.asarray(t, dtype=float)))
     direction: FloatArray = position / np.linalg.norm(position, axis=-1, keepdims=True)
     return direction
+
+
+def torquing_body_directions(scenario: Scenario, t: ArrayLike) -> list[FloatArray]:
+    """
+    Return the unit direction to each torquing body, orbital frame: one (n, 3) per body.
+
+    Each of :attr:`~tumble_ros.core.Scenario.all_perturbers`, or the circular orbit's Sun; an
+    empty list when nothing torques.
+    """
+    times = np.atleast_1d(np.asarray(t, dtype=float))
+    if not scenario.all_perturbers:
+        first = torquing_body_direction(scenario, times)
+        return [] if first is None else [first]
+    return [p / np.linalg.norm(p, axis=-1, keepdims=True)
+            for p in scenario.perturber_positions(times).values()]

@@ -15,8 +15,9 @@ marker in the frame ``orbital`` and stamped with the sample's stamp, so that RVi
   attitude times the fixed rotation taking +x onto the axis (:data:`AXIS_ROTATIONS`);
 * ``angular_momentum`` 0: an ARROW from 0 to L / |L| * ``MOMENTUM_LENGTH`` (``points``),
   L = C(q) I w in the orbital frame (its direction; |L| is in the recording's w);
-* ``sun`` 0 (circular orbit) or ``perturber`` 0 (Kepler orbit): an ARROW from 0 towards the
-  torquing body, ``PERTURBER_LENGTH`` long; absent when nothing torques (``orbit_rate`` 0).
+* ``sun`` 0 (circular orbit) or ``perturber`` 0, 1, ... (one per perturber, in the order of
+  ``Scenario.all_perturbers``: the Kepler orbit, then ``perturbers``): an ARROW from 0 towards
+  the torquing body, ``PERTURBER_LENGTH`` long; absent when nothing torques (``orbit_rate`` 0).
 
 Every array of one run has the same markers, strings and sequence lengths, so its CDR differs
 from sample to sample only in numbers: :class:`~tumble_ros.io.MessageTemplate` writes them
@@ -39,7 +40,8 @@ from tumble_ros.core import Scenario
 from tumble_ros.core.model.dynamics import angular_momentum_orbital
 from tumble_ros.core.model.rotation import quaternions_to_matrices
 from tumble_ros.core.model.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, MOMENTUM_LENGTH,
-                                         PERTURBER_LENGTH, torquing_body_direction)
+                                         PERTURBER_LENGTH, torquing_body_direction,
+                                         torquing_body_directions)
 from tumble_ros.core.propagation.timebase import SampleGrid
 from tumble_ros.io import message_definition, MessageTemplate
 from visualization_msgs.msg import Marker, MarkerArray
@@ -97,7 +99,8 @@ class MarkerScene:
         self.scenario = scenario
         self.shape = body_shape(scenario.inertia)
         self.perturber_ns = (None if torquing_body_direction(scenario, 0.0) is None
-                             else NS_PERTURBER if scenario.orbit is not None else NS_SUN)
+                             else NS_PERTURBER if scenario.all_perturbers else NS_SUN)
+        self.perturbers = max(1, len(scenario.all_perturbers))
         self.message = self._template()
         self.encoder = MessageTemplate(topics.TYPES[topics.MARKERS],
                                        message_definition(topics.TYPES[topics.MARKERS]),
@@ -124,8 +127,9 @@ class MarkerScene:
         add(NS_MOMENTUM, 0, Marker.ARROW, (0.05, 0.1, 0.2), _color(COLORS['momentum']),
             points=2)
         if self.perturber_ns is not None:
-            add(self.perturber_ns, 0, Marker.ARROW, (0.05, 0.1, 0.2),
-                _color(COLORS['torquing_body']), points=2)
+            for j in range(self.perturbers):
+                add(self.perturber_ns, j, Marker.ARROW, (0.05, 0.1, 0.2),
+                    _color(COLORS['torquing_body']), points=2)
         return MarkerArray(markers=markers)
 
     @property
@@ -166,10 +170,8 @@ class MarkerScene:
                                             quaternions_to_matrices(quaternion),
                                             self.scenario.inertia)
         arrow(4, momentum, MOMENTUM_LENGTH)
-        if self.perturber_ns is not None:
-            direction = torquing_body_direction(self.scenario, t)
-            assert direction is not None  # (perturber_ns: something torques)
-            arrow(5, direction, PERTURBER_LENGTH)
+        for j, direction in enumerate(torquing_body_directions(self.scenario, t)):
+            arrow(5 + j, direction, PERTURBER_LENGTH)
         return values
 
     def encode(self, stamp_ns: np.ndarray, t: np.ndarray, quaternion: np.ndarray,
