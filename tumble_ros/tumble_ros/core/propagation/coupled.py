@@ -1,0 +1,274 @@
+"""
+Coupled orbit and attitude: the asteroid's flyby orbit integrated together with its rotation.
+
+Elsewhere the perturber moves on a fixed Kepler orbit and only the spin feels the encounter.
+Here the relative orbit feels the body's shape too: the perturber (a point mass M, GM_p) and the
+asteroid (mass m, principal moments per unit mass A = I / m [km^2], GM_a) attract each other
+with the asteroid's field to degree 2 (MacCullagh), so the orbit's and the spin's angular
+momentum exchange. With R the perturber's position relative to the asteroid (orbital, inertial
+frame, as everywhere in core), C(q) the attitude (body -> orbital), u = C^T R / |R|:
+
+    R'' = -G(M + m) R / R^3 + G(M + m) C g_2(C^T R)      (g_2: ``quadrupole_acceleration``)
+    A w' = (A w) x w + point_mass_torque(GM_p, C^T R, A)  (3 GM_p / R^3 u x (A u))
+    q' = q (0, w) / 2
+
+g_2 is the body's field beyond its monopole per unit G m; the relative acceleration is the
+reaction of that field at the perturber times (M + m) / m (two-body reduction). The torque is
+the law every perturber uses (``torques.gravity_gradient.point_mass_torque``): force and
+torque come from one mutual potential,
+
+    U / m = -GM_p (1 / R + (tr A - 3 u.A u) / (2 R^3)),
+
+so the total energy E / m = (M / (M + m)) V^2 / 2 + w.A w / 2 + U / m and the total angular
+momentum L / m = (M / (M + m)) R x V + C A w are conserved (docs/physics.md, "Coupled orbit and
+attitude"). ``degree`` 0 is the point-mass limit: no torque, no back-reaction, the fixed
+hyperbola.
+
+The orbit is integrated by Encke's method: the deviation dR = R - R_k from the scenario's Kepler
+orbit R_k(t) (``torques.orbits.KeplerOrbit``, whose ``gm`` is G(M + m), the relative orbit's),
+so that a deviation of millimetres on 38,000 km keeps its own relative precision, and the
+exchanged energy and angular momentum are computed from the deviations without cancellation.
+Integrated with scipy's DOP853 (rtol 3e-14 by default, just above its floor of 100 ulp).
+
+Units: km, yr (velocities in km/yr inside, km/s in :attr:`CoupledResult.velocity`), rad/yr;
+energies per unit asteroid mass [km^2/yr^2], angular momenta per unit mass [km^2/yr].
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Callable, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from tumble_ros.core.jit import python_source
+from tumble_ros.core.model.rotation import euler_to_quaternion, quaternion_to_matrix
+from tumble_ros.core.model.scenario import Scenario
+from tumble_ros.core.model.units import SECONDS_PER_YEAR
+from tumble_ros.core.torques.gravity_gradient import point_mass_torque, quadrupole_acceleration
+from tumble_ros.core.torques.orbits import KeplerOrbit
+
+__all__ = ['CoupledBody', 'CoupledResult', 'propagate_coupled', 'DEGREES']
+
+FloatArray = npt.NDArray[np.float64]
+#: The body's field degrees the coupled problem knows: 0 (a point mass) and 2 (MacCullagh).
+DEGREES = (0, 2)
+_YR2 = SECONDS_PER_YEAR * SECONDS_PER_YEAR
+_torque: Callable[..., tuple[float, float, float]] = python_source(point_mass_torque)
+_field: Callable[..., tuple[float, float, float]] = python_source(quadrupole_acceleration)
+
+
+@dataclass(frozen=True)
+class CoupledBody:
+    """
+    The asteroid as the coupled problem needs it: its GM and its moments per unit mass.
+
+    Attributes
+    ----------
+    gm : float
+        The asteroid's GM [km^3/s^2] (Apophis, ~4e10 kg: ~2.7e-9), > 0.
+    inertia_per_mass : (Ax, Ay, Az)
+        Principal moments of inertia per unit mass [km^2] (a homogeneous ellipsoid of
+        semi-axes a, b, c: ((b^2 + c^2) / 5, (a^2 + c^2) / 5, (a^2 + b^2) / 5)).
+    degree : int
+        The body's field: 2 (MacCullagh: the torque and its reaction) or 0 (a point mass).
+
+    """
+
+    gm: float
+    inertia_per_mass: tuple[float, float, float]
+    degree: int = 2
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.gm) and self.gm > 0.0):
+            raise ValueError(f'coupled.gm: must be a finite number > 0 km^3/s^2, got {self.gm!r}')
+        moments = tuple(float(v) for v in self.inertia_per_mass)
+        if len(moments) != 3 or not all(math.isfinite(v) and v > 0.0 for v in moments):
+            raise ValueError('coupled.inertia_per_mass: must be 3 finite moments > 0 km^2, got '
+                             f'{self.inertia_per_mass!r}')
+        object.__setattr__(self, 'inertia_per_mass', moments)
+        if self.degree not in DEGREES:
+            raise ValueError(f'coupled.degree: must be one of {DEGREES}, got {self.degree!r}')
+
+    @classmethod
+    def ellipsoid(cls, gm: float, semi_axes: Sequence[float], degree: int = 2) -> 'CoupledBody':
+        """Return a homogeneous ellipsoid of semi-axes (a, b, c) [km] along x, y, z."""
+        a2, b2, c2 = (float(v) ** 2 for v in semi_axes)
+        return cls(gm, ((b2 + c2) / 5.0, (a2 + c2) / 5.0, (a2 + b2) / 5.0), degree)
+
+
+@dataclass(frozen=True)
+class CoupledResult:
+    """
+    Samples of a coupled run at n times.
+
+    Attributes
+    ----------
+    t : (n,) [yr].
+    omega : (n, 3) [rad/yr], body axes. quaternion : (n, 4) body -> orbital, scalar first.
+    position : (n, 3) the perturber relative to the asteroid [km], orbital frame.
+    velocity : (n, 3) its velocity [km/s].
+    deviation : (n, 3) position - the fixed Kepler orbit's [km] (Encke's dR).
+    orbit_energy, spin_energy, potential_energy : (n,) [km^2/yr^2 per unit asteroid mass]
+        The changes since t[0] of the orbit's two-body energy, of w.A w / 2, and of the
+        orientation-dependent potential -GM_p (tr A - 3 u.A u) / (2 R^3).
+    orbit_momentum, spin_momentum : (n, 3) [km^2/yr per unit mass], orbital frame
+        The change of (M / (M + m)) R x V since t[0], and C A w.
+    energy, momentum : float
+        The total energy and the norm of the total angular momentum at t[0] (the scales of
+        the conservation: E = (M / (M + m)) (V^2 / 2 - G(M + m) / R) + the rest).
+    success : bool; message : str; nfev : int.
+
+    """
+
+    t: FloatArray
+    omega: FloatArray
+    quaternion: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    deviation: FloatArray
+    orbit_energy: FloatArray
+    spin_energy: FloatArray
+    potential_energy: FloatArray
+    orbit_momentum: FloatArray
+    spin_momentum: FloatArray
+    energy: float
+    momentum: float
+    success: bool
+    message: str
+    nfev: int
+
+    @property
+    def energy_change(self) -> FloatArray:
+        """Return the change of the total energy since t[0] (0 but for the integration)."""
+        change: FloatArray = self.orbit_energy + self.spin_energy + self.potential_energy
+        return change
+
+    @property
+    def momentum_change(self) -> FloatArray:
+        """Return the change of the total angular momentum since t[0], (n, 3)."""
+        change: FloatArray = self.orbit_momentum + self.spin_momentum - self.spin_momentum[0]
+        return change
+
+
+def _quaternion_rate(q: FloatArray, w: FloatArray) -> FloatArray:
+    q0, q1, q2, q3 = q
+    wx, wy, wz = w
+    return 0.5 * np.array([-q1 * wx - q2 * wy - q3 * wz, q0 * wx + q2 * wz - q3 * wy,
+                           q0 * wy - q1 * wz + q3 * wx, q0 * wz + q1 * wy - q2 * wx])
+
+
+def _inverse_cube_difference(rk: FloatArray, dr: FloatArray) -> tuple[float, float, float]:
+    """Return (|R|, |R_k|, 1/|R|^3 - 1/|R_k|^3) for R = R_k + dR, without cancellation."""
+    r_k = float(np.linalg.norm(rk))
+    r = float(np.linalg.norm(rk + dr))
+    closer = -(2.0 * float(rk @ dr) + float(dr @ dr)) / (r + r_k)      # r_k - r
+    return r, r_k, closer * (r_k * r_k + r_k * r + r * r) / (r ** 3 * r_k ** 3)
+
+
+def propagate_coupled(scenario: Scenario, body: CoupledBody,
+                      t_eval: Sequence[float] | FloatArray | None = None, *,
+                      coupled: bool = True, rtol: float = 3e-14) -> CoupledResult:
+    """
+    Integrate the scenario's flyby with the orbit and the spin coupled (module docstring).
+
+    ``scenario``: its first perturber's Kepler orbit (``orbit`` or ``perturbers[0]``), whose
+    ``gm`` is G(M + m); no other torque (other perturbers, ``torques``, ``impacts``, the
+    circular orbit): refused with a ValueError. Its ``inertia`` is not used: ``body`` gives the
+    moments (their ratios should be the scenario's). ``t_eval``: sample times [yr] (default the
+    output grid). ``coupled`` False: the same equations without the back-reaction on the orbit
+    (the fixed hyperbola), to measure the coupling.
+    """
+    orbit = scenario.primary_orbit
+    if orbit is None or len(scenario.all_perturbers) != 1 or scenario.torques \
+            or scenario.impacts or scenario.orbit_rate != 0.0:
+        raise ValueError('coupled: needs a scenario whose only torque is one perturber on a '
+                         'Kepler orbit (orbit.kind kepler or flyby), got perturbers '
+                         f'{[p.name for p in scenario.all_perturbers]}, '
+                         f'{len(scenario.torques)} torques, {len(scenario.impacts)} impacts, '
+                         f'orbit_rate {scenario.orbit_rate!r}')
+    gm_total = orbit.gm_per_yr2
+    gm_p = (orbit.gm - body.gm) * _YR2
+    if not gm_p > 0.0:
+        raise ValueError(f"coupled.gm: the asteroid's GM must be below the orbit's G(M + m) = "
+                         f'{orbit.gm!r} km^3/s^2, got {body.gm!r}')
+    share = gm_p / gm_total                              # M / (M + m)
+    a = np.asarray(body.inertia_per_mass)
+    field = body.degree >= 2
+    times = np.asarray(scenario.output_times if t_eval is None else t_eval, dtype=float)
+    from scipy.integrate import solve_ivp
+
+    def kepler(t: float) -> tuple[FloatArray, FloatArray]:
+        return orbit.position([t])[0], orbit.velocity([t])[0] * SECONDS_PER_YEAR
+
+    def rhs(t: float, y: FloatArray) -> FloatArray:
+        dr, dv, w, q = y[0:3], y[3:6], y[6:9], y[9:13]
+        rk, _ = kepler(t)
+        r_vec = rk + dr
+        c = quaternion_to_matrix(q)
+        rb = c.T @ r_vec
+        out = np.empty(13)
+        out[0:3] = dv
+        r, r_k, difference = _inverse_cube_difference(rk, dr)
+        # Encke: -G(M+m) (R / r^3 - R_k / r_k^3), then the body's field (its reaction)
+        accel = -gm_total * (dr / r ** 3 + rk * difference)
+        if field and coupled:
+            accel += gm_total * (c @ np.array(_field(*a, *rb)))
+        out[3:6] = accel
+        torque = np.array(_torque(gm_p, *rb, *a)) if field else np.zeros(3)
+        out[6:9] = (np.cross(a * w, w) + torque) / a
+        out[9:13] = _quaternion_rate(q, w)
+        return out
+
+    q0 = euler_to_quaternion(*scenario.euler0)
+    y0 = np.concatenate([np.zeros(6), scenario.omega0, q0])
+    t0 = float(times[0]) if times.size and times[0] < 0.0 else 0.0
+    scale_v = float(np.linalg.norm(kepler(t0)[1]))
+    atol = np.concatenate([np.full(3, 1e-17), np.full(3, 1e-17 * scale_v / 1e3),
+                           np.full(3, 1e-15 * float(np.linalg.norm(scenario.omega0)) + 1e-300),
+                           np.full(4, 1e-16)])
+    sol = solve_ivp(rhs, (t0, float(times[-1])), y0, method='DOP853', t_eval=times, rtol=rtol,
+                    atol=atol)
+    y = sol.y.T
+    return _result(scenario, orbit, body, share, gm_p, sol.t, y, bool(sol.success),
+                   str(sol.message) if not sol.success else '', int(sol.nfev))
+
+
+def _result(scenario: Scenario, orbit: KeplerOrbit, body: CoupledBody, share: float,
+            gm_p: float, t: FloatArray, y: FloatArray, success: bool, message: str,
+            nfev: int) -> CoupledResult:
+    """Return the samples with the energies and angular momenta (module docstring)."""
+    a = np.asarray(body.inertia_per_mass)
+    dr, dv, w, q = y[:, 0:3], y[:, 3:6], y[:, 6:9], y[:, 9:13]
+    rk = orbit.position(t)
+    vk = orbit.velocity(t) * SECONDS_PER_YEAR
+    r_vec = rk + dr
+    n = len(t)
+    orbit_energy = np.empty(n)
+    potential = np.empty(n)
+    spin_momentum = np.empty((n, 3))
+    gm_total = orbit.gm_per_yr2
+    for k in range(n):
+        r = float(np.linalg.norm(r_vec[k]))
+        r_k = float(np.linalg.norm(rk[k]))
+        inverse_difference = (2.0 * float(rk[k] @ dr[k]) + float(dr[k] @ dr[k])) \
+            / (r + r_k) / (r * r_k)                       # 1/r_k - 1/r
+        orbit_energy[k] = share * (float(vk[k] @ dv[k]) + 0.5 * float(dv[k] @ dv[k])
+                                   + gm_total * inverse_difference)
+        c = quaternion_to_matrix(q[k])
+        u = c.T @ r_vec[k] / r
+        potential[k] = (-gm_p * (a.sum() - 3.0 * float(u @ (a * u))) / (2.0 * r ** 3)
+                        if body.degree >= 2 else 0.0)
+        spin_momentum[k] = c @ (a * w[k])
+    spin = 0.5 * np.sum(a * w * w, axis=1)
+    orbit_momentum = share * (np.cross(dr, vk) + np.cross(rk, dv) + np.cross(dr, dv))
+    energy = (share * (0.5 * float(vk[0] @ vk[0]) - gm_total / float(np.linalg.norm(rk[0])))
+              + spin[0] + potential[0])
+    momentum = float(np.linalg.norm(share * np.cross(rk[0], vk[0]) + spin_momentum[0]))
+    return CoupledResult(
+        t=t, omega=w, quaternion=q, position=r_vec, velocity=(vk + dv) / SECONDS_PER_YEAR,
+        deviation=dr, orbit_energy=orbit_energy, spin_energy=spin - spin[0],
+        potential_energy=potential - potential[0], orbit_momentum=orbit_momentum,
+        spin_momentum=spin_momentum, energy=energy, momentum=momentum, success=success,
+        message=message, nfev=nfev)
