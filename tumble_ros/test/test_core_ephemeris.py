@@ -1,5 +1,5 @@
 """
-Tabulated ephemerides (core/torques/ephemeris.py): reading, interpolation order, a flyby through one.
+Tabulated ephemerides (core/torques/ephemeris.py): reading, interpolation order, a flyby.
 
 The interpolant is checked against the exact Kepler hyperbola it samples (positions, and
 positions with velocities): its error converges at the order of a quintic (h^6); the reader
@@ -115,8 +115,8 @@ def test_a_horizons_vector_table_is_read(tmp_path, csv, labels, units):
 def test_a_plain_table_is_read_in_the_scenarios_time_unit(tmp_path):
     table = sampled(1.0, False, end_h=12.0)
     hours = np.asarray(table.times) * HOURS_PER_YEAR
-    lines = ['t, x, y, z   # hours, km'] + [f'{h!r}, {x!r}, {y!r}, {z!r}'
-                                             for h, (x, y, z) in zip(hours.tolist(), table.positions)]
+    rows = zip(hours.tolist(), table.positions)
+    lines = ['t, x, y, z   # hours, km'] + [f'{h!r}, {x!r}, {y!r}, {z!r}' for h, (x, y, z) in rows]
     path = tmp_path / 'earth.csv'
     path.write_text('\n'.join(lines) + '\n')
     read = read_ephemeris(path, time_unit='h')

@@ -15,9 +15,9 @@ from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from tumble_ros.core import check_params_file, PARAMETER_DOCS, Scenario, ScenarioError
+from tumble_ros.core.model.params_file import section_applies
 from tumble_ros.core.model.scenario import (PERTURBER_DEFAULTS, PERTURBER_DOCS,
                                             perturber_parameter_names)
-from tumble_ros.core.model.params_file import section_applies
 from tumble_ros.errors import NodeError
 
 __all__ = ['EMPTY_ARRAY_TYPES', 'declare_node_parameters', 'declare_scenario_parameters',

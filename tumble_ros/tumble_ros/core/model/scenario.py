@@ -510,7 +510,7 @@ class Scenario:
 
     @property
     def all_perturbers(self) -> tuple[Perturber, ...]:
-        """Return the torquing bodies: ``orbit`` first (named ``kepler_orbit``), then ``perturbers``."""
+        """Return the torquing bodies: ``orbit`` first (``kepler_orbit``), then ``perturbers``."""
         orbit = (Perturber(ORBIT_PERTURBER, self.orbit),) if self.orbit is not None else ()
         return orbit + self.perturbers
 
@@ -792,8 +792,7 @@ def perturber_parameter_names(params: Mapping[str, Any]) -> tuple[str, ...]:
 
 
 def _ephemeris_path(field: str, value: Any, folder: Path | None) -> Path:
-    """Return the ephemeris file: absolute, else in ``folder`` (or the working directory), else
-    in the package's config."""
+    """Return the ephemeris file: absolute, else in ``folder`` (or the cwd), else in config/."""
     if not isinstance(value, str) or not value:
         _fail(field, 'must name a file (a Horizons vector table or t, x, y, z)', value)
     path = Path(value).expanduser()

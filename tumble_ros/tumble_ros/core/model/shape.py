@@ -34,8 +34,8 @@ if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Scenario
 
 __all__ = ['BodyShape', 'ELLIPSOID', 'BOX', 'MIN_THICKNESS', 'body_shape',
-           'torquing_body_direction', 'torquing_body_directions', 'AXIS_LENGTH', 'MOMENTUM_LENGTH', 'PERTURBER_LENGTH',
-           'COLORS']
+           'torquing_body_direction', 'torquing_body_directions', 'AXIS_LENGTH',
+           'MOMENTUM_LENGTH', 'PERTURBER_LENGTH', 'COLORS']
 
 #: Shape kinds.
 ELLIPSOID = 'ellipsoid'

@@ -33,7 +33,7 @@ in the frame the attitude is given in.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from decimal import Decimal, InvalidOperation
+from decimal import Decimal
 import math
 from pathlib import Path
 import re
@@ -183,8 +183,9 @@ class Ephemeris:
 @jit_inline
 def _horner(par: npt.NDArray[np.float64], c: int, s: float) -> float:
     """Return sum_p par[c + p] s^p for p = 0..5."""
-    return par[c] + s * (par[c + 1] + s * (par[c + 2] + s * (par[c + 3] + s * (
+    value: float = par[c] + s * (par[c + 1] + s * (par[c + 2] + s * (par[c + 3] + s * (
         par[c + 4] + s * par[c + 5]))))
+    return value
 
 
 @jit_inline
@@ -298,7 +299,7 @@ def read_ephemeris(path: str | Path, *, epoch_jd: float = 0.0, time_unit: str = 
         table = _table(rows, name)
         times = table[:, 0] / DAYS_PER_YEAR
         scale = (km, km / seconds)
-        provenance = {'epoch_jd': float(epoch_jd), 'time_unit': ''}
+        epoch, table_unit = float(epoch_jd), ''
     else:
         rows = []
         for k, line in enumerate(lines, 1):
@@ -314,11 +315,12 @@ def read_ephemeris(path: str | Path, *, epoch_jd: float = 0.0, time_unit: str = 
         table = _table(rows, name)
         times = table[:, 0] * TIME_UNITS[time_unit]
         scale = (1.0, 1.0)
-        provenance = {'epoch_jd': 0.0, 'time_unit': time_unit}
+        epoch, table_unit = 0.0, time_unit
     positions = table[:, 1:4] * scale[0]
     velocities = table[:, 4:7] * scale[1] if table.shape[1] >= 7 else np.empty((0, 3))
     return Ephemeris(tuple(times), tuple(map(tuple, positions)),
-                     tuple(map(tuple, velocities)), source=name, **provenance)
+                     tuple(map(tuple, velocities)), source=name, epoch_jd=epoch,
+                     time_unit=table_unit)
 
 
 def _table(rows: list[list[float]], name: str) -> npt.NDArray[np.float64]:

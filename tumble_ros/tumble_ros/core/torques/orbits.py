@@ -33,6 +33,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import Any, Callable
+
 import numpy as np
 import numpy.typing as npt
 
@@ -376,8 +378,8 @@ class KeplerOrbit:
         scale = math.sqrt(self.gm / (self.a * abs(1.0 - self.e * self.e)))
         radial = scale * self.e * np.sin(nu)
         transverse = scale * (1.0 + self.e * np.cos(nu))
-        along = np.stack(python_source(plane_to_orbital)(np.cos(angle), -np.sin(angle),
-                                                         *self._plane()), axis=-1)
+        on_arrays: Callable[..., Any] = python_source(plane_to_orbital)
+        along = np.stack(on_arrays(np.cos(angle), -np.sin(angle), *self._plane()), axis=-1)
         velocity: npt.NDArray[np.float64] = (radial[:, None] * self._direction(angle)
                                              + transverse[:, None] * along)
         return velocity
