@@ -43,9 +43,10 @@ STATUS = 'status'
 SCENARIO = 'scenario'
 #: consumers' progress, for the simulator's pacing (subscribed by the simulator).
 CONSUMER_PROGRESS = 'consumer_progress'
-#: where the torquing body is [km] in body axes (geometry_msgs/Vector3Stamped, frame ``body``):
-#: its direction is the u of the tidal torque, its norm the distance; one per sample, published
-#: when the scenario has a Kepler orbit or a flyby (orbit.kind kepler or flyby).
+#: where the (first) torquing body is [km] in body axes (geometry_msgs/Vector3Stamped, frame
+#: ``body``): its direction is the u of the tidal torque, its norm the distance; one per sample,
+#: published when the scenario has a perturber (orbit.kind kepler or flyby, or perturbers.*):
+#: the first of ``Scenario.all_perturbers`` (the markers draw each).
 PERTURBER = 'perturber'
 #: the 3D scene (visualization_msgs/MarkerArray, frame ``orbital``): body, axes, L, Sun.
 MARKERS = 'markers'
@@ -190,7 +191,7 @@ def recorded() -> tuple[str, ...]:
 
 
 #: Namespaces (``ns``) of the ``markers`` scene: the body, its principal axes (ids 0, 1, 2: x, y,
-#: z), the angular momentum's direction, the Sun (circular orbit) or the perturber (Kepler orbit).
+#: z), the angular momentum's direction, the Sun (circular orbit) or the perturbers (ids 0, 1...).
 MARKER_BODY = 'body'
 MARKER_AXES = 'axes'
 MARKER_MOMENTUM = 'angular_momentum'
