@@ -214,3 +214,21 @@ def test_j2_needs_a_radius_unless_the_gm_is_a_known_bodys():
         Perturber('x', orbit, j2=1e-3)
     assert Perturber('x', orbit, j2=1e-3, radius=100.0).radius == 100.0
     assert math.isclose(Perturber('e', KeplerOrbit(gm=GM_EARTH, a=1e5, e=0.1)).radius, 6378.137)
+
+
+def test_an_ensemble_runs_several_perturbers_and_a_table_as_simulate_does():
+    from tumble_ros.core import simulate_ensemble
+    from tumble_ros.core.torques.ephemeris import Ephemeris
+
+    earth = KeplerOrbit.flyby(GM_EARTH, 40000.0, v_inf=6.0, t_p=0.004, lambda_p=0.3)
+    knots = np.linspace(-0.001, 0.009, 241)
+    table = Ephemeris(tuple(knots), tuple(map(tuple, earth.position(knots))))
+    moon = KeplerOrbit(gm=4902.800066, a=20000.0, e=0.3, t_p=0.001, lambda_p=2.0)
+    sc = Scenario(inertia=(0.64, 0.97, 1.0), orbit_rate=0.0, omega0=(30.0, 0.0, 200.0),
+                  duration=0.008, output_interval=1e-3,
+                  perturbers=(Perturber('earth', table, gm=GM_EARTH, j2=1e-3),
+                              Perturber('moon', moon)),
+                  integrator=IntegratorSettings(method='splitting6', step=1e-5))
+    ens = simulate_ensemble(sc, n_bodies=2, omega0=[sc.omega0, (10.0, 5.0, 150.0)])
+    np.testing.assert_allclose(ens.omega[0], simulate(sc).omega, rtol=0, atol=1e-10)
+    assert np.max(np.abs(ens.omega[0] - simulate(sc.replace(perturbers=())).omega)) > 1e-2
