@@ -167,9 +167,13 @@ class Ephemeris:
         n the number of intervals, then the n + 1 knots [yr], then the (n, 3, 6) coefficients of
         :meth:`coefficients`, row-major.
         """
-        t = np.asarray(self.times)
-        block = np.concatenate([[t.size - 1.0], t, self.coefficients().reshape(-1)])
-        return tuple(float(v) for v in block)
+        cached: tuple[float, ...] | None = self.__dict__.get('_parameters')
+        if cached is None:        # computed once (~0.1 s for 2,000 knots), kept with the table
+            t = np.asarray(self.times)
+            block = np.concatenate([[t.size - 1.0], t, self.coefficients().reshape(-1)])
+            cached = tuple(float(v) for v in block)
+            object.__setattr__(self, '_parameters', cached)
+        return cached
 
     def position(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Return the interpolated positions [km], orbital frame, (n, 3), at times ``t`` [yr]."""
