@@ -131,6 +131,16 @@ def test_the_coupling_of_apophis_is_tiny(runs):
     assert 1e-14 < coupling[-1] < 1e-11
 
 
+def test_a_mass_models_mass_and_moments_give_the_body():
+    class Model:
+        mass = 5.0e10
+        principal_moments = np.array([1.0, 2.0, 2.5]) * 5.0e8
+
+    body = CoupledBody.of(Model())
+    assert body.gm == pytest.approx(G * 5.0e10, rel=1e-5)
+    assert body.inertia_per_mass == (0.01, 0.02, 0.025)
+
+
 def test_a_scenario_with_more_than_one_torque_is_refused():
     moon = Perturber('moon', KeplerOrbit(gm=4902.800066, a=4e5, e=0.05))
     with pytest.raises(ValueError, match=r'^coupled: needs a scenario whose only torque is one '

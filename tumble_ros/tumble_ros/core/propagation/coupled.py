@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Callable, Sequence
+from typing import Callable, Protocol, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -45,11 +45,11 @@ import numpy.typing as npt
 from tumble_ros.core.jit import python_source
 from tumble_ros.core.model.rotation import euler_to_quaternion, quaternion_to_matrix
 from tumble_ros.core.model.scenario import Scenario
-from tumble_ros.core.model.units import SECONDS_PER_YEAR
+from tumble_ros.core.model.units import GRAVITATIONAL_CONSTANT, SECONDS_PER_YEAR
 from tumble_ros.core.torques.gravity_gradient import point_mass_torque, quadrupole_acceleration
 from tumble_ros.core.torques.orbits import KeplerOrbit
 
-__all__ = ['CoupledBody', 'CoupledResult', 'propagate_coupled', 'DEGREES']
+__all__ = ['CoupledBody', 'CoupledResult', 'MassProperties', 'propagate_coupled', 'DEGREES']
 
 FloatArray = npt.NDArray[np.float64]
 #: The body's field degrees the coupled problem knows: 0 (a point mass) and 2 (MacCullagh).
@@ -57,6 +57,18 @@ DEGREES = (0, 2)
 _YR2 = SECONDS_PER_YEAR * SECONDS_PER_YEAR
 _torque: Callable[..., tuple[float, float, float]] = python_source(point_mass_torque)
 _field: Callable[..., tuple[float, float, float]] = python_source(quadrupole_acceleration)
+
+
+class MassProperties(Protocol):
+    """What :meth:`CoupledBody.of` reads of a mass model: its mass and principal moments."""
+
+    @property
+    def mass(self) -> float:
+        """Mass [kg]."""
+
+    @property
+    def principal_moments(self) -> FloatArray:
+        """Principal moments of inertia [kg km^2], (3,)."""
 
 
 @dataclass(frozen=True)
@@ -90,6 +102,14 @@ class CoupledBody:
         object.__setattr__(self, 'inertia_per_mass', moments)
         if self.degree not in DEGREES:
             raise ValueError(f'coupled.degree: must be one of {DEGREES}, got {self.degree!r}')
+
+    @classmethod
+    def of(cls, model: MassProperties, degree: int = 2) -> 'CoupledBody':
+        """Return the body of a mass model (mass [kg], principal moments [kg km^2])."""
+        mass = float(model.mass)
+        moments = np.asarray(model.principal_moments, dtype=float) / mass
+        return cls(GRAVITATIONAL_CONSTANT * mass,
+                   (float(moments[0]), float(moments[1]), float(moments[2])), degree)
 
     @classmethod
     def ellipsoid(cls, gm: float, semi_axes: Sequence[float], degree: int = 2) -> 'CoupledBody':
