@@ -47,6 +47,9 @@ from typing import Any, Sequence
 import numpy as np
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.torques.component import TorqueComponent
+from tumble_ros.core.torques.multipole import multipole_torque_component
+from tumble_ros.core.torques.orbits import KeplerOrbit
 
 __all__ = ['GravityField', 'regular_solid_harmonics', 'principal_frame', 'FRAME_TOLERANCE',
            'MAX_DEGREE']
@@ -293,6 +296,35 @@ class GravityField:
         n = self.degree if degree is None else int(degree)
         rows = np.tril_indices(n + 1)
         return tuple(float(v) for v in self.C[rows]) + tuple(float(v) for v in self.S[rows])
+
+    def inertia_scale(self, inertia: Sequence[float] | FloatArray) -> float:
+        """
+        Return scale = principal moment [kg km^2] / normalised moment of a scenario's inertia.
+
+        ValueError unless :attr:`principal_moments` are proportional to ``inertia`` (the
+        scenario's normalised (Ix, Iy, Iz), same axes) to :data:`FRAME_TOLERANCE` relative: a
+        field and the inertia the body turns with cannot disagree.
+        """
+        ratios = [m / float(i) for m, i in zip(self.principal_moments, inertia)]
+        scale = sum(ratios) / 3.0
+        if not all(abs(r - scale) <= FRAME_TOLERANCE * scale for r in ratios):
+            raise ValueError(
+                f'gravity_field.principal_moments: must be proportional to the inertia '
+                f'{[float(i) for i in inertia]} (same axes) to {FRAME_TOLERANCE:g} relative, '
+                f'got {list(self.principal_moments)} kg km^2 (ratios {ratios})')
+        return scale
+
+    def torque_component(self, orbit: KeplerOrbit, inertia: Sequence[float] | FloatArray,
+                         degree: int) -> TorqueComponent:
+        """
+        Return the torque of a perturber on ``orbit`` on this field to ``degree``.
+
+        In the scenario's normalised ``inertia`` units (:meth:`inertia_scale`) * rad/yr^2:
+        :func:`~tumble_ros.core.torques.multipole.multipole_kepler_torque`.
+        """
+        field = self.truncated(degree)
+        return multipole_torque_component(orbit, self.mass / self.inertia_scale(inertia),
+                                          self.reference_radius, degree, field.packed())
 
     def __eq__(self, other: Any) -> bool:
         """Return True for the same mass, radius, moments and coefficients."""
