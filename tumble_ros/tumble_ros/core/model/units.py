@@ -20,8 +20,7 @@ from typing import Any, Mapping
 
 __all__ = ['TIME_UNITS', 'HOURS_PER_YEAR', 'SECONDS_PER_YEAR', 'to_years', 'TIME_POWERS',
            'seconds_per_year_of',
-           'GM_SUN', 'GM_EARTH', 'GM_MOON', 'KM_PER_AU', 'PERTURBER_RADII',
-           'GRAVITATIONAL_CONSTANT']
+           'GM_SUN', 'GM_EARTH', 'GM_MOON', 'KM_PER_AU', 'PERTURBER_RADII']
 
 HOURS_PER_YEAR = 365.25 * 24.0
 SECONDS_PER_YEAR = HOURS_PER_YEAR * 3600.0
@@ -43,8 +42,6 @@ PERTURBER_RADII = {
     'Earth': (GM_EARTH, 6378.137),
     'Moon': (GM_MOON, 1737.4),
 }
-#: Newton's constant G [km^3 / (kg s^2)] (CODATA 2018: 6.67430e-11 m^3 / (kg s^2)).
-GRAVITATIONAL_CONSTANT = 6.67430e-20
 #: The astronomical unit [km] (IAU 2012 Resolution B2: 149,597,870,700 m exactly).
 KM_PER_AU = 149597870.7
 #: Years per unit of each accepted ``time_unit``.

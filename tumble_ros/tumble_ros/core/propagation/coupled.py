@@ -45,7 +45,8 @@ import numpy.typing as npt
 from tumble_ros.core.jit import python_source
 from tumble_ros.core.model.rotation import euler_to_quaternion, quaternion_to_matrix
 from tumble_ros.core.model.scenario import Scenario
-from tumble_ros.core.model.units import GRAVITATIONAL_CONSTANT, SECONDS_PER_YEAR
+from tumble_ros.core.model.gravity_field import G_KM3
+from tumble_ros.core.model.units import SECONDS_PER_YEAR
 from tumble_ros.core.torques.gravity_gradient import point_mass_torque, quadrupole_acceleration
 from tumble_ros.core.torques.orbits import KeplerOrbit
 
@@ -108,7 +109,7 @@ class CoupledBody:
         """Return the body of a mass model (mass [kg], principal moments [kg km^2])."""
         mass = float(model.mass)
         moments = np.asarray(model.principal_moments, dtype=float) / mass
-        return cls(GRAVITATIONAL_CONSTANT * mass,
+        return cls(G_KM3 * mass,
                    (float(moments[0]), float(moments[1]), float(moments[2])), degree)
 
     @classmethod

@@ -11,12 +11,18 @@ attitude q (body -> orbital):
       + oblateness_torque(GM J2 R^2, C(q)^T k, s, I)      (when J2 != 0; :mod:`.oblateness`)
 
 in one compiled function per kind of source (:data:`SOURCE_KINDS`, a registry) that reads the
-component's ``par``: ``par[0:8]`` = (GM [km^3/yr^2], Ix, Iy, Iz, GM J2 R^2 [km^5/yr^2], pole
-kx, ky, kz (orbital frame)), then the source's own block. Several perturbers are several
-components: the kernels add their torques (``kernels.physics.body_torque``).
+component's ``par``: ``par[0:9]`` = (GM [km^3/yr^2], Ix, Iy, Iz, GM J2 R^2 [km^5/yr^2], pole
+kx, ky, kz (orbital frame), o), then the source's own block, then, when the body's field to
+degree N is given (o > 0), at ``par[o:]`` (GM M / scale, its reference radius [km], N, its
+packed Stokes coefficients with C_00 = 0). Several perturbers are several components: the
+kernels add their torques (``kernels.physics.body_torque``).
 
-:func:`perturber_torque` is the one place the torque law is applied: a body's field to a higher
-degree replaces its ``point_mass_torque`` call, for every source at once.
+:func:`perturber_torque` is the one place the torque law is applied: the point-mass law on the
+inertia (``gravity_gradient.point_mass_torque``, degree 2), or, with the body's field, the
+torque -m_p R x a(R) to degree N (``multipole.field_torque``), for every source at once. The
+field's monopole is left out (C_00 = 0): it exerts no torque, and R x a_00(R) computed in
+floating point is not 0 but ~1e-16 |R| |a_00|, which at R = 1e6 km from a 0.3-km body is 5e-3
+of the quadrupole torque.
 
 Units: GM [km^3/s^2] in the dataclass (as every table states it), km^3/yr^2 inside.
 """
@@ -24,7 +30,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Protocol, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -35,20 +41,23 @@ from tumble_ros.core.torques.component import torque_function, TorqueComponent
 from tumble_ros.core.torques.ephemeris import Ephemeris, ephemeris_position
 from tumble_ros.core.torques.frames import orbital_to_body
 from tumble_ros.core.torques.gravity_gradient import point_mass_torque
+from tumble_ros.core.torques.multipole import field_torque
 from tumble_ros.core.torques.oblateness import oblateness_torque
 from tumble_ros.core.torques.orbits import (KeplerOrbit, MAX_GM, orbit_state, perturber_radius,
                                             plane_to_orbital)
 
 __all__ = ['Perturber', 'Source', 'SourceKind', 'SOURCE_KINDS', 'perturber_torque',
-           'kepler_perturber_torque', 'ephemeris_perturber_torque', 'MAX_J2', 'LAW_WIDTH']
+           'kepler_perturber_torque', 'ephemeris_perturber_torque', 'MAX_J2', 'LAW_WIDTH',
+           'BodyField', 'field_block']
 
 #: Where a perturber is: a Kepler orbit or a tabulated ephemeris, relative to the asteroid.
 Source = KeplerOrbit | Ephemeris
 #: Largest |J2| accepted: 0.1 (the Earth's is 1.08e-3, Saturn's, the most oblate planet's,
 #: 1.63e-2).
 MAX_J2 = 0.1
-#: Parameters of the torque law ahead of the source's block: GM, Ix, Iy, Iz, GM J2 R^2, pole.
-LAW_WIDTH = 8
+#: Parameters of the torque law ahead of the source's block: GM, Ix, Iy, Iz, GM J2 R^2, pole,
+#: the offset of the body's field block (0: none).
+LAW_WIDTH = 9
 _KM3_PER_YR2 = SECONDS_PER_YEAR * SECONDS_PER_YEAR
 
 
@@ -62,7 +71,11 @@ def perturber_torque(par: npt.NDArray[np.float64], x: float, y: float, z: float,
     its law block (module docstring); q the attitude (body -> orbital).
     """
     sx, sy, sz = orbital_to_body(x, y, z, q0, q1, q2, q3)
-    tx, ty, tz = point_mass_torque(par[0], sx, sy, sz, par[1], par[2], par[3])
+    o = int(par[8])
+    if o == 0:
+        tx, ty, tz = point_mass_torque(par[0], sx, sy, sz, par[1], par[2], par[3])
+    else:
+        tx, ty, tz = field_torque(sx, sy, sz, par[o], par[o + 1], int(par[o + 2]), par, o + 3)
     if par[4] != 0.0:
         kx, ky, kz = orbital_to_body(par[5], par[6], par[7], q0, q1, q2, q3)
         jx, jy, jz = oblateness_torque(par[4], kx, ky, kz, sx, sy, sz, par[1], par[2], par[3])
@@ -78,21 +91,58 @@ def kepler_perturber_torque(par: npt.NDArray[np.float64], t: float, q0: float, q
     """
     Return the torque of a perturber on a Kepler orbit, body axes.
 
-    par[8:] = (a, e, t_p, lambda_p, cos i, sin i, cos node, sin node): :func:`~.orbits.
+    par[9:17] = (a, e, t_p, lambda_p, cos i, sin i, cos node, sin node): :func:`~.orbits.
     orbit_state` with the GM par[0] and :func:`~.orbits.plane_to_orbital`.
     """
-    distance, angle = orbit_state(t, par[0], par[8], par[9], par[10], par[11])
-    sx, sy, sz = plane_to_orbital(math.sin(angle), math.cos(angle), par[12], par[13], par[14],
-                                  par[15])
+    distance, angle = orbit_state(t, par[0], par[9], par[10], par[11], par[12])
+    sx, sy, sz = plane_to_orbital(math.sin(angle), math.cos(angle), par[13], par[14], par[15],
+                                  par[16])
     return perturber_torque(par, distance * sx, distance * sy, distance * sz, q0, q1, q2, q3)
 
 
 @torque_function
 def ephemeris_perturber_torque(par: npt.NDArray[np.float64], t: float, q0: float, q1: float,
                                q2: float, q3: float) -> tuple[float, float, float]:
-    """Return the torque of a perturber on a tabulated ephemeris (par[8:]: its block)."""
+    """Return the torque of a perturber on a tabulated ephemeris (par[9:]: its block)."""
     x, y, z = ephemeris_position(par, LAW_WIDTH, t)
     return perturber_torque(par, x, y, z, q0, q1, q2, q3)
+
+
+class BodyField(Protocol):
+    """The body's gravity field as the torque law reads it (``model.gravity_field``)."""
+
+    @property
+    def mass(self) -> float:
+        """Mass M [kg]."""
+
+    @property
+    def reference_radius(self) -> float:
+        """The coefficients' reference radius [km]."""
+
+    @property
+    def degree(self) -> int:
+        """The degree N."""
+
+    def packed(self, degree: int | None = None) -> tuple[float, ...]:
+        """Return C then S, lower triangles row by row (C_00 first)."""
+
+    def inertia_scale(self, inertia: Sequence[float] | npt.NDArray[np.float64]) -> float:
+        """Return principal moment [kg km^2] / normalised moment."""
+
+
+def field_block(field: BodyField, inertia: Sequence[float] | npt.NDArray[np.float64],
+                gm: float) -> tuple[float, ...]:
+    """
+    Return the field block of the torque law for a perturber of GM ``gm`` [km^3/yr^2].
+
+    (GM M / scale, reference radius [km], N, C and S packed with C_00 = 0): the torque
+    -GM M R x a(R) / GM_body in the scenario's normalised inertia units (scale =
+    ``field.inertia_scale(inertia)``; ValueError when the field's moments disagree with it).
+    """
+    packed = list(field.packed())
+    packed[0] = 0.0                         # no monopole (module docstring)
+    return (gm * field.mass / field.inertia_scale(inertia), float(field.reference_radius),
+            float(field.degree), *packed)
 
 
 def _kepler_block(orbit: KeplerOrbit) -> tuple[float, ...]:
@@ -207,20 +257,38 @@ class Perturber:
         """Return how the source is run (:data:`SOURCE_KINDS`)."""
         return SOURCE_KINDS[type(self.source)]
 
-    def law(self, inertia: Sequence[float] | npt.NDArray[np.float64]) -> tuple[float, ...]:
-        """Return the torque law's block: (GM [km^3/yr^2], Ix, Iy, Iz, GM J2 R^2, unit pole)."""
+    def law(self, inertia: Sequence[float] | npt.NDArray[np.float64],
+            field_offset: int = 0) -> tuple[float, ...]:
+        """
+        Return the torque law's block.
+
+        (GM [km^3/yr^2], Ix, Iy, Iz, GM J2 R^2 [km^5/yr^2], unit pole, the offset of the body's
+        field block or 0).
+        """
         gm = self.gm * _KM3_PER_YR2
         ix, iy, iz = (float(v) for v in inertia)
         norm = math.sqrt(sum(v * v for v in self.pole))
         return (gm, ix, iy, iz, gm * self.j2 * self.radius * self.radius,
-                self.pole[0] / norm, self.pole[1] / norm, self.pole[2] / norm)
+                self.pole[0] / norm, self.pole[1] / norm, self.pole[2] / norm,
+                float(field_offset))
 
     def torque_component(self, inertia: Sequence[float] | npt.NDArray[np.float64],
-                         ) -> TorqueComponent:
-        """Return this perturber's torque on a body of principal moments ``inertia``."""
+                         field: BodyField | None = None) -> TorqueComponent:
+        """
+        Return this perturber's torque on a body of principal moments ``inertia``.
+
+        ``field``: the body's gravity field to degree N (``model.gravity_field.GravityField``,
+        its moments proportional to ``inertia``): the torque to that degree; None: the
+        point-mass law on the inertia (degree 2).
+        """
         kind = self.kind
+        source = kind.block(self.source)
+        if field is None:
+            return TorqueComponent(self.name, kind.function, self.law(inertia) + source)
+        offset = LAW_WIDTH + len(source)
         return TorqueComponent(self.name, kind.function,
-                               self.law(inertia) + kind.block(self.source))
+                               self.law(inertia, offset) + source
+                               + field_block(field, inertia, self.gm * _KM3_PER_YR2))
 
     def position(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Return where the perturber is relative to the asteroid [km], orbital frame, (n, 3)."""
