@@ -16,9 +16,10 @@ from scipy.integrate import solve_ivp
 
 from tumble_ros.core import load_scenario, simulate
 from tumble_ros.core.jit import python_source
+from tumble_ros.core.model.gravity_field import GravityField, principal_frame
 from tumble_ros.core.model.units import SECONDS_PER_YEAR
-from tumble_ros.core.propagation.coupled import CoupledBody, propagate_coupled
-from tumble_ros.core.torques.gravity_gradient import quadrupole_acceleration
+from tumble_ros.core.propagation.coupled import CoupledBody, field_potential, propagate_coupled
+from tumble_ros.core.torques.multipole import field_acceleration
 from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
 
@@ -43,19 +44,29 @@ def runs():
                                                                      coupled=False)
 
 
-def test_the_bodys_field_is_the_gradient_of_maccullaghs_potential():
-    field = python_source(quadrupole_acceleration)
-    for _ in range(5):
-        a = RNG.uniform(0.5, 2.0, 3)
-        x = RNG.normal(size=3) * 10.0
-
-        def potential(p):
-            r2 = np.sum(p * p)
-            return -(a.sum() - 3.0 * np.sum(a * p * p) / r2) / (2.0 * r2 ** 1.5)
-
-        h = 1e-30
-        gradient = [np.imag(potential(x + 1j * h * np.eye(3)[k])) / h for k in range(3)]
-        np.testing.assert_allclose(field(*a, *x), -np.array(gradient), rtol=1e-13)
+def test_the_potential_is_maccullaghs_at_degree_2_and_its_gradient_the_field():
+    """The energy's potential against MacCullagh's formula, its gradient against the force."""
+    acceleration = python_source(field_acceleration)
+    m = RNG.uniform(0.5, 1.5, 60) * 1e9
+    r, moments, _ = principal_frame(m, RNG.normal(size=(60, 3)) * [0.2, 0.15, 0.1])
+    radius = float(np.max(np.linalg.norm(r, axis=1)))
+    for degree in (2, 4):
+        field = GravityField.from_point_masses(m, r, degree, radius)
+        packed = np.array(field.packed())
+        packed[0] = 0.0                                   # beyond the monopole
+        for _ in range(3):
+            x = RNG.normal(size=3) * 3.0
+            h = 1e-30
+            gradient = [np.imag(field_potential(*(x + 1j * h * np.eye(3)[k]), radius, degree,
+                                                packed)) / h for k in range(3)]
+            np.testing.assert_allclose(acceleration(*x, 1.0, radius, degree, packed, 0),
+                                       gradient, rtol=1e-11, atol=1e-14 * np.linalg.norm(gradient))
+            if degree == 2:      # U_2 = -(tr A - 3 u.A u) / (2 R^3) per unit G m, A = I / m
+                a = np.asarray(field.principal_moments) / field.mass
+                u = x / np.linalg.norm(x)
+                maccullagh = (a.sum() - 3.0 * u @ (a * u)) / (2.0 * np.linalg.norm(x) ** 3)
+                assert np.real(field_potential(*x, radius, degree, packed)) == pytest.approx(
+                    maccullagh, rel=1e-10)
 
 
 def test_energy_and_angular_momentum_are_conserved_while_spin_and_orbit_exchange_them(runs):
@@ -131,20 +142,40 @@ def test_the_coupling_of_apophis_is_tiny(runs):
     assert 1e-14 < coupling[-1] < 1e-11
 
 
-def test_a_mass_models_mass_and_moments_give_the_body():
-    class Model:
-        mass = 5.0e10
-        principal_moments = np.array([1.0, 2.0, 2.5]) * 5.0e8
-
-    body = CoupledBody.of(Model())
-    assert body.gm == pytest.approx(G * 5.0e10, rel=1e-5)
-    assert body.inertia_per_mass == (0.01, 0.02, 0.025)
-
-
 def test_a_scenario_with_more_than_one_torque_is_refused():
     moon = Perturber('moon', KeplerOrbit(gm=4902.800066, a=4e5, e=0.05))
     with pytest.raises(ValueError, match=r'^coupled: needs a scenario whose only torque is one '
                                          r"perturber.*\['kepler_orbit', 'moon'\]"):
         propagate_coupled(APOPHIS.replace(perturbers=(moon,)), apophis_body())
-    with pytest.raises(ValueError, match=r'^coupled.degree: must be one of \(0, 2\), got 3'):
-        CoupledBody(1e-9, (1.0, 1.0, 1.0), degree=3)
+    with pytest.raises(ValueError, match=r'^coupled.degree: must be 0 \(a point mass\) or in '
+                                         r'\[2, 2\]'):
+        CoupledBody(apophis_body().field, degree=3)
+
+
+def test_to_degree_4_the_totals_are_conserved_as_well():
+    """
+    The ellipsoid as 4,224 equal point masses on a grid, its field to degree 4.
+
+    Measured 2026-12-04: the balance closes to 8.7e-13 of the spin energy and 4.2e-13 of the
+    spin's angular momentum, as at degree 2; degree 4 moves the spin after the flyby by 1.7e-12
+    of |w| from degree 2.
+    """
+    semi = np.sqrt(np.sum(APOPHIS.inertia) - 2.0 * np.asarray(APOPHIS.inertia))
+    semi *= 0.17 / np.prod(semi) ** (1.0 / 3.0)
+    grid = (np.arange(20) + 0.5) / 10.0 - 1.0
+    points = np.stack(np.meshgrid(grid, grid, grid, indexing='ij'), -1).reshape(-1, 3)
+    points = points[np.sum(points ** 2, axis=1) <= 1.0] * semi
+    mass = np.full(len(points), apophis_body().field.mass / len(points))
+    r, _, _ = principal_frame(mass, points)
+    field = GravityField.from_point_masses(mass, r, 4, float(semi.max()))
+    assert abs(field.C[4, 0]) > 1e-3                       # it has degree-4 moments
+    runs = {degree: propagate_coupled(APOPHIS, CoupledBody(field, degree)) for degree in (2, 4)}
+    four = runs[4]
+    a = np.asarray(CoupledBody(field).inertia_per_mass)
+    spin_energy = 0.5 * np.sum(a * four.omega[0] ** 2)
+    spin_momentum = np.linalg.norm(four.spin_momentum[0])
+    assert np.max(np.abs(four.energy_change)) <= 1e-12 * abs(four.energy)
+    assert np.max(np.abs(four.energy_change)) < 2e-12 * spin_energy
+    assert np.max(np.linalg.norm(four.momentum_change, axis=1)) < 1e-12 * spin_momentum
+    change = np.linalg.norm(four.omega[-1] - runs[2].omega[-1]) / np.linalg.norm(four.omega[-1])
+    assert 1e-14 < change < 1e-10

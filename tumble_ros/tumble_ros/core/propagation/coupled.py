@@ -3,26 +3,25 @@ Coupled orbit and attitude: the asteroid's flyby orbit integrated together with 
 
 Elsewhere the perturber moves on a fixed Kepler orbit and only the spin feels the encounter.
 Here the relative orbit feels the body's shape too: the perturber (a point mass M, GM_p) and the
-asteroid (mass m, principal moments per unit mass A = I / m [km^2], GM_a) attract each other
-with the asteroid's field to degree 2 (MacCullagh), so the orbit's and the spin's angular
-momentum exchange. With R the perturber's position relative to the asteroid (orbital, inertial
-frame, as everywhere in core), C(q) the attitude (body -> orbital), u = C^T R / |R|:
+asteroid (mass m, its gravity field to degree N: ``model.gravity_field.GravityField``, principal
+moments per unit mass A = I / m [km^2]) attract each other with the body's field beyond its
+monopole, so the orbit's and the spin's angular momentum exchange. With R the perturber's
+position relative to the asteroid (orbital, inertial frame, as everywhere in core), C(q) the
+attitude (body -> orbital):
 
-    R'' = -G(M + m) R / R^3 + G(M + m) C g_2(C^T R)      (g_2: ``quadrupole_acceleration``)
-    A w' = (A w) x w + point_mass_torque(GM_p, C^T R, A)  (3 GM_p / R^3 u x (A u))
+    R'' = -G(M + m) R / R^3 + G(M + m) C g_N(C^T R)
+    A w' = (A w) x w + T / m,    T / m = -GM_p (C^T R) x g_N(C^T R)
     q' = q (0, w) / 2
 
-g_2 is the body's field beyond its monopole per unit G m; the relative acceleration is the
-reaction of that field at the perturber times (M + m) / m (two-body reduction). The torque is
-the law every perturber uses (``torques.gravity_gradient.point_mass_torque``): force and
-torque come from one mutual potential,
-
-    U / m = -GM_p (1 / R + (tr A - 3 u.A u) / (2 R^3)),
-
-so the total energy E / m = (M / (M + m)) V^2 / 2 + w.A w / 2 + U / m and the total angular
-momentum L / m = (M / (M + m)) R x V + C A w are conserved (docs/physics.md, "Coupled orbit and
-attitude"). ``degree`` 0 is the point-mass limit: no torque, no back-reaction, the fixed
-hyperbola.
+g_N is the body's field beyond its monopole per unit G m (``multipole.field_acceleration`` with
+C_00 = 0): the relative acceleration is its reaction at the perturber times (M + m) / m
+(two-body reduction), and the torque is the same field's, -m_p R x a(R) (``multipole.
+field_torque``, the law of every perturber with a field). Force and torque come from one mutual
+potential, U / m = -GM_p / R + GM_p Phi_N(C^T R), Phi_N the field's potential beyond the
+monopole per unit G m, so the total energy E / m = (M / (M + m)) V^2 / 2 + w.A w / 2 + U / m
+and the total angular momentum L / m = (M / (M + m)) R x V + C A w are conserved
+(docs/physics.md, "Coupled orbit and attitude"). ``degree`` 0 is the point-mass limit: no
+torque, no back-reaction, the fixed hyperbola.
 
 The orbit is integrated by Encke's method: the deviation dR = R - R_k from the scenario's Kepler
 orbit R_k(t) (``torques.orbits.KeplerOrbit``, whose ``gm`` is G(M + m), the relative orbit's),
@@ -37,86 +36,123 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Callable, Protocol, Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core.jit import python_source
+from tumble_ros.core.model.gravity_field import G_KM3, GravityField
 from tumble_ros.core.model.rotation import euler_to_quaternion, quaternion_to_matrix
 from tumble_ros.core.model.scenario import Scenario
-from tumble_ros.core.model.gravity_field import G_KM3
 from tumble_ros.core.model.units import SECONDS_PER_YEAR
-from tumble_ros.core.torques.gravity_gradient import point_mass_torque, quadrupole_acceleration
+from tumble_ros.core.torques.multipole import field_acceleration, field_torque
 from tumble_ros.core.torques.orbits import KeplerOrbit
 
-__all__ = ['CoupledBody', 'CoupledResult', 'MassProperties', 'propagate_coupled', 'DEGREES']
+__all__ = ['CoupledBody', 'CoupledResult', 'propagate_coupled', 'field_potential']
 
 FloatArray = npt.NDArray[np.float64]
-#: The body's field degrees the coupled problem knows: 0 (a point mass) and 2 (MacCullagh).
-DEGREES = (0, 2)
 _YR2 = SECONDS_PER_YEAR * SECONDS_PER_YEAR
-_torque: Callable[..., tuple[float, float, float]] = python_source(point_mass_torque)
-_field: Callable[..., tuple[float, float, float]] = python_source(quadrupole_acceleration)
+_acceleration: Callable[..., tuple[float, float, float]] = python_source(field_acceleration)
+_torque: Callable[..., tuple[float, float, float]] = python_source(field_torque)
 
 
-class MassProperties(Protocol):
-    """What :meth:`CoupledBody.of` reads of a mass model: its mass and principal moments."""
+def field_potential(x: complex, y: complex, z: complex, radius: float, degree: int,
+                    coefficients: Sequence[float] | FloatArray) -> complex:
+    """
+    Return the field's potential U per unit GM at (x, y, z): (1/a) sum C_nm V_nm + S_nm W_nm.
 
-    @property
-    def mass(self) -> float:
-        """Mass [kg]."""
-
-    @property
-    def principal_moments(self) -> FloatArray:
-        """Principal moments of inertia [kg km^2], (3,)."""
+    Montenbruck & Gill (2000) eq 3.29 with the recursions of ``multipole``'s docstring;
+    ``coefficients`` packed as ``GravityField.packed`` (C_00 = 0 leaves the monopole out);
+    the acceleration is grad U (``multipole.field_acceleration``). Complex arguments pass
+    through (the tests differentiate it by complex steps).
+    """
+    r2 = x * x + y * y + z * z
+    xs, ys, zs, q = x * radius / r2, y * radius / r2, z * radius / r2, radius * radius / r2
+    tri = (degree + 1) * (degree + 2) // 2
+    total: complex = 0.0
+    vmm: complex = radius / r2 ** 0.5
+    wmm: complex = 0.0
+    for m in range(degree + 1):
+        if m > 0:
+            f = 2.0 * m - 1.0
+            vmm, wmm = f * (xs * vmm - ys * wmm), f * (xs * wmm + ys * vmm)
+        v1, w1 = vmm, wmm
+        v2: complex = 0.0
+        w2: complex = 0.0
+        for n in range(m, degree + 1):
+            if n > m:
+                c1 = (2.0 * n - 1.0) / (n - m)
+                c2 = (n + m - 1.0) / (n - m)
+                v1, v2 = c1 * zs * v1 - c2 * q * v2, v1
+                w1, w2 = c1 * zs * w1 - c2 * q * w2, w1
+            row = n * (n + 1) // 2 + m
+            total += coefficients[row] * v1 + coefficients[tri + row] * w1
+    return total / radius
 
 
 @dataclass(frozen=True)
 class CoupledBody:
     """
-    The asteroid as the coupled problem needs it: its GM and its moments per unit mass.
+    The asteroid as the coupled problem needs it: its gravity field and how far to take it.
 
     Attributes
     ----------
-    gm : float
-        The asteroid's GM [km^3/s^2] (Apophis, ~4e10 kg: ~2.7e-9), > 0.
-    inertia_per_mass : (Ax, Ay, Az)
-        Principal moments of inertia per unit mass [km^2] (a homogeneous ellipsoid of
-        semi-axes a, b, c: ((b^2 + c^2) / 5, (a^2 + c^2) / 5, (a^2 + b^2) / 5)).
-    degree : int
-        The body's field: 2 (MacCullagh: the torque and its reaction) or 0 (a point mass).
+    field : GravityField
+        Its field to degree N (mass, reference radius, Stokes coefficients, principal
+        moments), e.g. a mass model's ``gravity_field(N)``.
+    degree : int or None
+        The degree used: None (the field's), 2 ... N, or 0 (a point mass: no torque, no
+        back-reaction).
 
     """
 
-    gm: float
-    inertia_per_mass: tuple[float, float, float]
-    degree: int = 2
+    field: GravityField
+    degree: int | None = None
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.gm) and self.gm > 0.0):
-            raise ValueError(f'coupled.gm: must be a finite number > 0 km^3/s^2, got {self.gm!r}')
-        moments = tuple(float(v) for v in self.inertia_per_mass)
-        if len(moments) != 3 or not all(math.isfinite(v) and v > 0.0 for v in moments):
-            raise ValueError('coupled.inertia_per_mass: must be 3 finite moments > 0 km^2, got '
-                             f'{self.inertia_per_mass!r}')
-        object.__setattr__(self, 'inertia_per_mass', moments)
-        if self.degree not in DEGREES:
-            raise ValueError(f'coupled.degree: must be one of {DEGREES}, got {self.degree!r}')
+        if not isinstance(self.field, GravityField):
+            raise ValueError(f'coupled.field: must be a GravityField, got {self.field!r}')
+        degree = self.field.degree if self.degree is None else self.degree
+        if isinstance(degree, bool) or not isinstance(degree, int) or not (
+                degree == 0 or 2 <= degree <= self.field.degree):
+            raise ValueError(f'coupled.degree: must be 0 (a point mass) or in [2, '
+                             f"{self.field.degree}] (the field's), got {self.degree!r}")
+        object.__setattr__(self, 'degree', degree)
 
-    @classmethod
-    def of(cls, model: MassProperties, degree: int = 2) -> 'CoupledBody':
-        """Return the body of a mass model (mass [kg], principal moments [kg km^2])."""
-        mass = float(model.mass)
-        moments = np.asarray(model.principal_moments, dtype=float) / mass
-        return cls(G_KM3 * mass,
-                   (float(moments[0]), float(moments[1]), float(moments[2])), degree)
+    @property
+    def gm(self) -> float:
+        """Return the asteroid's GM [km^3/s^2]."""
+        return float(self.field.gm)
+
+    @property
+    def inertia_per_mass(self) -> tuple[float, float, float]:
+        """Return the principal moments per unit mass [km^2]."""
+        a, b, c = (float(v) / self.field.mass for v in self.field.principal_moments)
+        return a, b, c
+
+    def packed(self) -> FloatArray:
+        """Return the coefficients to :attr:`degree`, C_00 = 0 (the field beyond its monopole)."""
+        degree = max(int(self.degree or 0), 2)
+        packed = np.array(self.field.truncated(degree).packed())
+        packed[0] = 0.0
+        if self.degree == 0:
+            packed[:] = 0.0
+        return packed
 
     @classmethod
     def ellipsoid(cls, gm: float, semi_axes: Sequence[float], degree: int = 2) -> 'CoupledBody':
-        """Return a homogeneous ellipsoid of semi-axes (a, b, c) [km] along x, y, z."""
+        """
+        Return a homogeneous ellipsoid of semi-axes (a, b, c) [km] to degree 2 (MacCullagh).
+
+        Its moments ((b^2 + c^2) / 5, ...) per unit mass; the degree-4 field of an ellipsoid
+        is a mass model's (``gravity_field``). ``degree`` 0: the point mass.
+        """
         a2, b2, c2 = (float(v) ** 2 for v in semi_axes)
-        return cls(gm, ((b2 + c2) / 5.0, (a2 + c2) / 5.0, (a2 + b2) / 5.0), degree)
+        mass = gm / G_KM3
+        moments = (mass * (b2 + c2) / 5.0, mass * (a2 + c2) / 5.0, mass * (a2 + b2) / 5.0)
+        radius = math.sqrt(max(a2, b2, c2))
+        return cls(GravityField.from_principal_moments(mass, radius, moments, 2), degree)
 
 
 @dataclass(frozen=True)
@@ -216,7 +252,9 @@ def propagate_coupled(scenario: Scenario, body: CoupledBody,
                          f'{orbit.gm!r} km^3/s^2, got {body.gm!r}')
     share = gm_p / gm_total                              # M / (M + m)
     a = np.asarray(body.inertia_per_mass)
-    field = body.degree >= 2
+    field = body.degree != 0
+    packed = body.packed()
+    radius, degree = float(body.field.reference_radius), max(int(body.degree or 0), 2)
     times = np.asarray(scenario.output_times if t_eval is None else t_eval, dtype=float)
     from scipy.integrate import solve_ivp
 
@@ -235,9 +273,11 @@ def propagate_coupled(scenario: Scenario, body: CoupledBody,
         # Encke: -G(M+m) (R / r^3 - R_k / r_k^3), then the body's field (its reaction)
         accel = -gm_total * (dr / r ** 3 + rk * difference)
         if field and coupled:
-            accel += gm_total * (c @ np.array(_field(*a, *rb)))
+            accel += gm_total * (c @ np.array(_acceleration(*rb, 1.0, radius, degree, packed,
+                                                            0)))
         out[3:6] = accel
-        torque = np.array(_torque(gm_p, *rb, *a)) if field else np.zeros(3)
+        torque = (np.array(_torque(*rb, gm_p, radius, degree, packed, 0)) if field
+                  else np.zeros(3))
         out[6:9] = (np.cross(a * w, w) + torque) / a
         out[9:13] = _quaternion_rate(q, w)
         return out
@@ -261,6 +301,8 @@ def _result(scenario: Scenario, orbit: KeplerOrbit, body: CoupledBody, share: fl
             nfev: int) -> CoupledResult:
     """Return the samples with the energies and angular momenta (module docstring)."""
     a = np.asarray(body.inertia_per_mass)
+    packed = body.packed()
+    radius, degree = float(body.field.reference_radius), max(int(body.degree or 0), 2)
     dr, dv, w, q = y[:, 0:3], y[:, 3:6], y[:, 6:9], y[:, 9:13]
     rk = orbit.position(t)
     vk = orbit.velocity(t) * SECONDS_PER_YEAR
@@ -278,9 +320,9 @@ def _result(scenario: Scenario, orbit: KeplerOrbit, body: CoupledBody, share: fl
         orbit_energy[k] = share * (float(vk[k] @ dv[k]) + 0.5 * float(dv[k] @ dv[k])
                                    + gm_total * inverse_difference)
         c = quaternion_to_matrix(q[k])
-        u = c.T @ r_vec[k] / r
-        potential[k] = (-gm_p * (a.sum() - 3.0 * float(u @ (a * u))) / (2.0 * r ** 3)
-                        if body.degree >= 2 else 0.0)
+        rb = c.T @ r_vec[k]
+        potential[k] = -gm_p * float(np.real(field_potential(rb[0], rb[1], rb[2], radius,
+                                                             degree, packed)))
         spin_momentum[k] = c @ (a * w[k])
     spin = 0.5 * np.sum(a * w * w, axis=1)
     orbit_momentum = share * (np.cross(dr, vk) + np.cross(rk, dv) + np.cross(dr, dv))

@@ -23,8 +23,7 @@ from tumble_ros.core.jit import jit_inline, python_source
 from tumble_ros.core.torques.frames import orbital_to_body
 
 __all__ = ['sun_direction_orbital', 'sun_direction_body', 'tidal_torque', 'tidal_coefficients',
-           'point_mass_torque', 'quadrupole_acceleration', 'gravity_gradient_torque',
-           'gravity_gradient_potential']
+           'point_mass_torque', 'gravity_gradient_torque', 'gravity_gradient_potential']
 
 
 @jit_inline
@@ -66,26 +65,6 @@ def point_mass_torque(gm: float, x: float, y: float, z: float, ix: float, iy: fl
     r = math.sqrt(x * x + y * y + z * z)
     k = 3.0 * gm / (r * r * r)
     return tidal_torque(k * (iz - iy), k * (ix - iz), k * (iy - ix), x / r, y / r, z / r)
-
-
-@jit_inline
-def quadrupole_acceleration(ax: float, ay: float, az: float, x: float, y: float,
-                            z: float) -> tuple[float, float, float]:
-    """
-    Return the body's degree-2 field beyond its monopole at (x, y, z), per unit G m, body axes.
-
-    MacCullagh's potential per unit G m, Phi_2 = -(tr A - 3 u.A u) / (2 R^3), (ax, ay, az)
-    = A the principal moments per unit mass [L^2], (x, y, z) the field point [L], R its norm,
-    u = (x, y, z) / R; the acceleration -grad Phi_2 = 3 / (2 R^5) (-(tr A) r - 2 A r
-    + 5 (u.A u) r) [1/L^2]. The reaction of :func:`point_mass_torque`: with it, a point mass's
-    orbit and the body's spin exchange angular momentum exactly (:mod:`..propagation.coupled`).
-    """
-    r2 = x * x + y * y + z * z
-    k = 1.5 / (r2 * r2 * math.sqrt(r2))
-    trace = ax + ay + az
-    projected = 5.0 * (ax * x * x + ay * y * y + az * z * z) / r2
-    return (k * (projected - trace - 2.0 * ax) * x, k * (projected - trace - 2.0 * ay) * y,
-            k * (projected - trace - 2.0 * az) * z)
 
 
 def tidal_coefficients(inertia: Sequence[float] | npt.NDArray[np.float64],

@@ -113,15 +113,15 @@ class BodyField(Protocol):
 
     @property
     def mass(self) -> float:
-        """Mass M [kg]."""
+        """Return the mass M [kg]."""
 
     @property
     def reference_radius(self) -> float:
-        """The coefficients' reference radius [km]."""
+        """Return the coefficients' reference radius [km]."""
 
     @property
     def degree(self) -> int:
-        """The degree N."""
+        """Return the degree N."""
 
     def packed(self, degree: int | None = None) -> tuple[float, ...]:
         """Return C then S, lower triangles row by row (C_00 first)."""
