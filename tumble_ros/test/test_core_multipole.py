@@ -241,13 +241,14 @@ def test_through_a_degree_4_flyby_momentum_and_energy_change_by_the_torque():
     change = momentum[-1] - momentum[0]
     assert np.linalg.norm(change) > 1e-2 * np.linalg.norm(momentum[0])    # the flyby matters
     np.testing.assert_allclose(change, simpson(torque_orbital, x=r.t, axis=0), rtol=0,
-                               atol=1e-7 * np.linalg.norm(momentum[0]))
+                               atol=1e-10 * np.linalg.norm(momentum[0]))   # 4e-13 seen
     energy = 0.5 * np.sum(inertia * r.omega ** 2, axis=1)
     work = cumulative_simpson(np.sum(r.omega * torque, axis=1), x=r.t, initial=0.0)
     assert abs(energy[-1] - energy[0]) > 3e-4 * energy[0]
-    np.testing.assert_allclose(energy - energy[0], work, rtol=0, atol=1e-7 * energy[0])
+    np.testing.assert_allclose(energy - energy[0], work, rtol=0, atol=1e-7 * energy[0])  # 5e-9
     quadrupole = simulate(sc.replace(gravity_degree=2))
-    assert np.max(np.abs(quadrupole.omega - r.omega)) > 1e-3 * np.linalg.norm(sc.omega0)
+    # degree 4 moves the spin by 1.8e-3 of |omega0| from the quadrupole's (measured)
+    assert np.max(np.abs(quadrupole.omega - r.omega)) > 3e-4 * np.linalg.norm(sc.omega0)
 
 
 def test_degree_3_of_the_inertia_alone_runs_as_todays_torque():
