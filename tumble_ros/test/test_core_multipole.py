@@ -266,7 +266,7 @@ def test_the_scenario_refuses_a_bad_gravity_degree_naming_it():
         sc.replace(gravity_degree=5)
     with pytest.raises(ScenarioError, match=r'^gravity\.degree: .*Kepler orbit.*got 3$'):
         Scenario(gravity_degree=3, gravity_field=sc.gravity_field, inertia=sc.inertia)
-    with pytest.raises(ScenarioError, match=r"^gravity\.degree: .*no gravity_field.*got 4$"):
+    with pytest.raises(ScenarioError, match=r'^gravity\.degree: .*no gravity_field.*got 4$'):
         sc.replace(gravity_degree=4, gravity_field=None)
     with pytest.raises(ScenarioError, match=r'^gravity\.degree: .*integer.*got 2\.0$'):
         sc.replace(gravity_degree=2.0)
@@ -276,3 +276,24 @@ def test_the_scenario_refuses_a_bad_gravity_degree_naming_it():
     with pytest.raises(ScenarioError, match=r'^gravity\.degree: .*Kepler orbit.*got 4$'):
         Scenario.from_parameters({'gravity.degree': 4})
     assert Scenario().to_parameters()['gravity.degree'] == 2
+
+
+def test_an_ensemble_runs_the_degree_4_torque_as_simulate_does():
+    from tumble_ros.core import simulate_ensemble
+
+    sc = _flyby(4, integrator=IntegratorSettings(method='splitting6', step=2e-5),
+                output_interval=1e-3)
+    ens = simulate_ensemble(sc, n_bodies=2, omega0=[sc.omega0, (100.0, 50.0, 1500.0)])
+    np.testing.assert_allclose(ens.omega[0], simulate(sc).omega, rtol=0, atol=1e-8)
+    quadrupole = simulate_ensemble(sc.replace(gravity_degree=2), n_bodies=2,
+                                   omega0=[sc.omega0, (100.0, 50.0, 1500.0)])
+    assert np.max(np.abs(ens.omega - quadrupole.omega)) > 3e-4 * np.linalg.norm(sc.omega0)
+
+
+def test_the_scenario_with_its_field_pickles_as_dask_ships_it():
+    import pickle
+
+    sc = _flyby(4)
+    copy = pickle.loads(pickle.dumps(sc))
+    assert copy == sc and copy.gravity_field == sc.gravity_field
+    assert copy.extra_torques[0].parameters == sc.extra_torques[0].parameters
