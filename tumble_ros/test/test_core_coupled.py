@@ -59,7 +59,7 @@ def test_the_potential_is_maccullaghs_at_degree_2_and_its_gradient_the_field():
             h = 1e-30
             gradient = [np.imag(field_potential(*(x + 1j * h * np.eye(3)[k]), radius, degree,
                                                 packed)) / h for k in range(3)]
-            np.testing.assert_allclose(acceleration(*x, 1.0, radius, degree, packed, 0),
+            np.testing.assert_allclose(acceleration(*x, 1.0, radius, degree, packed, 0, 0),
                                        gradient, rtol=1e-11, atol=1e-14 * np.linalg.norm(gradient))
             if degree == 2:      # U_2 = -(tr A - 3 u.A u) / (2 R^3) per unit G m, A = I / m
                 a = np.asarray(field.principal_moments) / field.mass

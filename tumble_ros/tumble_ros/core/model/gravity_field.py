@@ -48,8 +48,8 @@ import numpy as np
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.torques.component import TorqueComponent
-from tumble_ros.core.torques.multipole import multipole_torque_component
 from tumble_ros.core.torques.orbits import KeplerOrbit
+from tumble_ros.core.torques.perturbers import Perturber
 
 __all__ = ['GravityField', 'regular_solid_harmonics', 'principal_frame', 'FRAME_TOLERANCE',
            'MAX_DEGREE']
@@ -319,12 +319,11 @@ class GravityField:
         """
         Return the torque of a perturber on ``orbit`` on this field to ``degree``.
 
-        In the scenario's normalised ``inertia`` units (:meth:`inertia_scale`) * rad/yr^2:
-        :func:`~tumble_ros.core.torques.multipole.multipole_kepler_torque`.
+        In the scenario's normalised ``inertia`` units (:meth:`inertia_scale`) * rad/yr^2: the
+        orbit as a perturber (:class:`~tumble_ros.core.torques.perturbers.Perturber`, named
+        ``kepler_orbit`` as the scenario's) whose torque law takes this field.
         """
-        field = self.truncated(degree)
-        return multipole_torque_component(orbit, self.mass / self.inertia_scale(inertia),
-                                          self.reference_radius, degree, field.packed())
+        return Perturber('kepler_orbit', orbit).torque_component(inertia, self.truncated(degree))
 
     def __eq__(self, other: Any) -> bool:
         """Return True for the same mass, radius, moments and coefficients."""

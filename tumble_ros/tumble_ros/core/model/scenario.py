@@ -29,6 +29,7 @@ from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.jit import python_source
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
+from tumble_ros.core.model.gravity_field import GravityField, MAX_DEGREE
 from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, MAX_OMEGA,
                                           MAX_ORBIT_RATE, MAX_ROTATION, MAX_RTOL, MAX_SAMPLES,
                                           MAX_STEPS, MIN_ORBIT_RATE, MIN_RTOL, RESOLUTION_ULPS,
@@ -337,6 +338,16 @@ class Scenario:
         each from a Kepler orbit or a tabulated ephemeris, optionally with its J2; each is a
         torque component. ``orbit``, when given, is the first perturber (:attr:`all_perturbers`,
         named ``kepler_orbit``). With perturbers, ``orbit_rate`` must be 0.
+    gravity_degree : int
+        Degree N of every perturber's gravitational torque (ROS ``gravity.degree``): 2 (default)
+        the quadrupole of the inertia (``gravity_gradient.point_mass_torque``); 3 to the
+        field's degree, the body's ``gravity_field`` to degree N (:mod:`~.torques.multipole`,
+        through ``perturbers.perturber_torque``). Above 2 it needs a perturber and
+        ``gravity_field``.
+    gravity_field : GravityField or None
+        The body's field (``core.model.gravity_field``): its principal moments must be
+        proportional to ``inertia`` (same axes) to 1e-9 relative; they do not set it. Python API
+        only for now (:meth:`to_parameters` leaves it out).
 
     """
 
@@ -353,6 +364,8 @@ class Scenario:
     torques: tuple[TorqueComponent, ...] = ()
     orbit: KeplerOrbit | None = None
     perturbers: tuple[Perturber, ...] = ()
+    gravity_degree: int = 2
+    gravity_field: GravityField | None = None
 
     def __post_init__(self) -> None:
         inertia = _vector('inertia', self.inertia)
@@ -462,6 +475,27 @@ class Scenario:
                 _fail('orbit_rate', 'must be 0 with a Kepler orbit (orbit.kind kepler or flyby): '
                       'the orbit gives the tidal torque', self.orbit_rate)
         _set(self, 'perturbers', _checked_perturbers(self))
+        self._check_gravity()
+
+    def _check_gravity(self) -> None:
+        """Validate ``gravity_degree`` (``gravity.degree``) and ``gravity_field``."""
+        degree, body = self.gravity_degree, self.gravity_field
+        if isinstance(degree, bool) or not isinstance(degree, int) or not (
+                2 <= degree <= MAX_DEGREE):
+            _fail('gravity.degree', f'must be an integer in [2, {MAX_DEGREE}]', degree)
+        if body is not None and not isinstance(body, GravityField):
+            _fail('gravity_field', 'must be a core.model.gravity_field.GravityField or None', body)
+        if degree > 2 and not self.all_perturbers:
+            _fail('gravity.degree', 'above 2 needs a perturber (a Kepler orbit: orbit.kind '
+                  'kepler or flyby; or perturbers)', degree)
+        if degree > 2 and (body is None or degree > body.degree):
+            _fail('gravity.degree', f"must be <= the gravity_field's degree "
+                  f"({body.degree if body is not None else 'no gravity_field'})", degree)
+        if body is not None:
+            try:
+                body.inertia_scale(self.inertia)
+            except ValueError as err:
+                raise ScenarioError(str(err)) from None
 
     # -- derived quantities ---------------------------------------------------------
     @property
@@ -523,8 +557,16 @@ class Scenario:
 
     @property
     def extra_torques(self) -> tuple[TorqueComponent, ...]:
-        """Return the torques beyond the circular orbit's and the impacts': perturbers, torques."""
-        return tuple(p.torque_component(self.inertia) for p in self.all_perturbers) + self.torques
+        """
+        Return the torques beyond the circular orbit's and the impacts': perturbers, torques.
+
+        Each perturber's torque on the inertia's quadrupole, or with ``gravity_degree`` > 2 on
+        the body's ``gravity_field`` to that degree.
+        """
+        field = (self.gravity_field.truncated(self.gravity_degree)
+                 if self.gravity_degree > 2 and self.gravity_field is not None else None)
+        return tuple(p.torque_component(self.inertia, field)
+                     for p in self.all_perturbers) + self.torques
 
     def perturber_position(self, t: ArrayLike) -> FloatArray:
         """
@@ -602,6 +644,7 @@ class Scenario:
             params[f'orbit.{name}'] = getattr(orbit, name)
         params.update(dict.fromkeys((f'orbit.{name}' for name in _FLYBY_FIELDS), 0.0))
         params.update(_perturber_parameters(self.perturbers))
+        params['gravity.degree'] = self.gravity_degree
         return params
 
     @classmethod
@@ -628,6 +671,7 @@ class Scenario:
         plain['impacts'] = _impacts_from_parameters(params)
         plain['orbit'] = _orbit_from_parameters(params)
         plain['perturbers'] = perturbers
+        plain['gravity_degree'] = params.get('gravity.degree', 2)
         return cls(**plain)
 
 
@@ -648,6 +692,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
     + _IMPACT_KEYS
     + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS + _FLYBY_FIELDS)
     + ('perturbers.names',)
+    + ('gravity.degree',)
 )
 
 
@@ -737,6 +782,9 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'orbit.v_perigee': ('km/s', 'speed at perigee; give it or v_inf (flyby)'),
     'perturbers.names': ('', 'more torquing bodies (earth, moon, sun...), each described by '
                          'perturbers.<name>.*: docs/ros.md, "Perturbers"'),
+    'gravity.degree': ('', "degree N of every perturber's gravitational torque: 2 (default) the "
+                       "inertia's quadrupole; 3 to 30 the body's gravity field to degree N "
+                       '(needs a perturber and the field)'),
 }
 
 

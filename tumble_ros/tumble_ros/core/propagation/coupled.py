@@ -274,7 +274,7 @@ def propagate_coupled(scenario: Scenario, body: CoupledBody,
         accel = -gm_total * (dr / r ** 3 + rk * difference)
         if field and coupled:
             accel += gm_total * (c @ np.array(_acceleration(*rb, 1.0, radius, degree, packed,
-                                                            0)))
+                                                            0, 2)))
         out[3:6] = accel
         torque = (np.array(_torque(*rb, gm_p, radius, degree, packed, 0)) if field
                   else np.zeros(3))

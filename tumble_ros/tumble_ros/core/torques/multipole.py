@@ -59,15 +59,9 @@ import math
 import numpy as np
 
 from tumble_ros.core.jit import jit_inline
-from tumble_ros.core.torques.component import torque_function, TorqueComponent
-from tumble_ros.core.torques.frames import orbital_to_body
-from tumble_ros.core.torques.orbits import KeplerOrbit, orbit_state, plane_to_orbital
 
-__all__ = ['field_acceleration', 'field_torque', 'multipole_kepler_torque',
-           'multipole_torque_component', 'packed_size', 'PAR_HEADER']
+__all__ = ['field_acceleration', 'field_torque', 'packed_size']
 
-#: Parameters before the coefficients in :func:`multipole_kepler_torque`'s ``par``.
-PAR_HEADER = 12
 
 
 def packed_size(degree: int) -> int:
@@ -77,12 +71,14 @@ def packed_size(degree: int) -> int:
 
 @jit_inline
 def field_acceleration(x: float, y: float, z: float, gm: float, radius: float, degree: int,
-                       coefficients: np.ndarray, offset: int) -> tuple[float, float, float]:
+                       coefficients: np.ndarray, offset: int,
+                       lowest: int) -> tuple[float, float, float]:
     """
     Return the body's gravitational acceleration at (x, y, z) (body frame, outside the body).
 
     ``gm`` the body's GM [L^3/T^2], ``radius`` the coefficients' reference radius a [L],
-    ``degree`` N; ``coefficients[offset:]`` C then S packed to degree N (the module's
+    the degrees ``lowest`` to ``degree`` N (0: the whole field; 2: without the central
+    attraction); ``coefficients[offset:]`` C then S packed to degree N (the module's
     docstring). Acceleration in L/T^2, body frame (Montenbruck & Gill eq 3.33, by the order-
     by-order recursion of the module's docstring).
     """
@@ -119,7 +115,7 @@ def field_acceleration(x: float, y: float, z: float, gm: float, radius: float, d
             w2 = w1
             v1 = vp
             w1 = wp
-            if p == 0:
+            if p <= lowest:
                 continue
             n = p - 1
             row = n * (n + 1) // 2
@@ -157,46 +153,10 @@ def field_torque(x: float, y: float, z: float, gm_p_mass: float, radius: float, 
     ``gm_p_mass`` = GM_p M (the perturber's GM times the body's mass; or, normalised, GM_p M /
     scale); the rest as :func:`field_acceleration`. Torque about the centre of mass, body axes,
     in the units of gm_p_mass / L (e.g. kg km^2/s^2 for km^3/s^2 kg and km).
+
+    Degrees 0 and 1 are left out: their torque is zero (R x R; the centre of mass), and the
+    central term's a(R), ~(R/a)^2 larger than the rest, would leave its rounding in R x a.
     """
-    ax, ay, az = field_acceleration(x, y, z, gm_p_mass, radius, degree, coefficients, offset)
+    ax, ay, az = field_acceleration(x, y, z, gm_p_mass, radius, degree, coefficients, offset,
+                                    2)
     return -(y * az - z * ay), -(z * ax - x * az), -(x * ay - y * ax)
-
-
-@torque_function
-def multipole_kepler_torque(par: np.ndarray, t: float, q0: float, q1: float, q2: float,
-                            q3: float) -> tuple[float, float, float]:
-    """
-    Return the degree-N torque of a perturber on a Kepler orbit, body axes.
-
-    par = (GM_p [km^3/yr^2], a, e, t_p, lambda_p, cos i, sin i, cos node, sin node,
-    GM_p M / scale [km^3/yr^2 x normalised-inertia/km^2], reference radius [km], N, then C
-    and S packed): see :func:`.orbits.kepler_tidal_torque` for the orbit, :func:`field_torque`.
-    Torque in normalised inertia * rad/yr^2.
-    """
-    distance, angle = orbit_state(t, par[0], par[1], par[2], par[3], par[4])
-    sx, sy, sz = plane_to_orbital(math.sin(angle), math.cos(angle), par[5], par[6], par[7],
-                                  par[8])
-    ux, uy, uz = orbital_to_body(sx, sy, sz, q0, q1, q2, q3)
-    return field_torque(distance * ux, distance * uy, distance * uz, par[9], par[10],
-                        int(par[11]), par, PAR_HEADER)
-
-
-def multipole_torque_component(orbit: KeplerOrbit, mass_per_scale: float,
-                               reference_radius: float, degree: int,
-                               packed: tuple[float, ...]) -> TorqueComponent:
-    """
-    Return the torque component of a perturber on ``orbit`` on a body's field to ``degree``.
-
-    ``mass_per_scale`` = M / scale [normalised inertia / km^2] (scale = principal moment
-    [kg km^2] / normalised moment), ``reference_radius`` [km], ``packed`` the coefficients to
-    ``degree`` (:meth:`GravityField.packed`; :meth:`GravityField.torque_component` builds it).
-    """
-    if len(packed) != packed_size(degree):
-        raise ValueError(f'gravity_field: {len(packed)} packed coefficients for degree '
-                         f'{degree}, expected {packed_size(degree)}')
-    gm = orbit.gm_per_yr2
-    header = (gm, orbit.a, orbit.e, orbit.t_p, orbit.lambda_p,
-              math.cos(orbit.inclination), math.sin(orbit.inclination), math.cos(orbit.node),
-              math.sin(orbit.node), gm * mass_per_scale, reference_radius, float(degree))
-    return TorqueComponent(f'kepler_orbit_degree_{degree}', multipole_kepler_torque,
-                           header + tuple(packed))
