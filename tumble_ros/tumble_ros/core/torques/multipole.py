@@ -63,7 +63,6 @@ from tumble_ros.core.jit import jit_inline
 __all__ = ['field_acceleration', 'field_torque', 'packed_size']
 
 
-
 def packed_size(degree: int) -> int:
     """Return the number of packed coefficients (C and S) to ``degree``: (N+1)(N+2)."""
     return (degree + 1) * (degree + 2)
