@@ -129,6 +129,20 @@ def test_the_degree_2_component_is_todays_kepler_torque_to_rounding():
     assert np.linalg.norm(today.torque(0.001, (1.0, 0.0, 0.0, 0.0))) > 0.0
 
 
+def test_the_acceleration_without_its_lowest_degrees_is_the_difference():
+    """``lowest`` 2 leaves out degrees 0 and 1 (the default 0 keeps them)."""
+    m, q = solid_body()
+    a = float(np.linalg.norm(q, axis=1).max())
+    field = GravityField.from_point_masses(m, q, 5, a)
+    c = np.array(field.packed())
+    point = np.array([2.0, -1.0, 1.5]) * a
+    whole = np.array(field_acceleration(*point, 3.0, a, 5, c, 0))
+    central = -3.0 * point / np.linalg.norm(point) ** 3
+    beyond = np.array(field_acceleration(*point, 3.0, a, 5, c, 0, 2))
+    np.testing.assert_allclose(beyond, whole - central, rtol=0, atol=1e-13 * np.linalg.norm(whole))
+    assert np.linalg.norm(beyond) > 1e-3 * np.linalg.norm(whole)
+
+
 def test_odd_degrees_vanish_for_a_centrally_symmetric_body():
     """Point masses in +- pairs: C_nm = S_nm = 0 for odd n; degree 2k+1 torque = degree 2k's."""
     m, q = solid_body(150)

@@ -52,7 +52,7 @@ from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
 
 __all__ = ['GravityField', 'regular_solid_harmonics', 'principal_frame', 'FRAME_TOLERANCE',
-           'MAX_DEGREE']
+           'MAX_DEGREE', 'G_KM3']
 
 #: Relative tolerance of a field's frame (centre of mass, principal axes) and of its moments'
 #: agreement with C_20, C_22: relative to the second moment (A + B + C) / (M a^2).

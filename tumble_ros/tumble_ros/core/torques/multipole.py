@@ -71,7 +71,7 @@ def packed_size(degree: int) -> int:
 @jit_inline
 def field_acceleration(x: float, y: float, z: float, gm: float, radius: float, degree: int,
                        coefficients: np.ndarray, offset: int,
-                       lowest: int) -> tuple[float, float, float]:
+                       lowest: int = 0) -> tuple[float, float, float]:
     """
     Return the body's gravitational acceleration at (x, y, z) (body frame, outside the body).
 
