@@ -10,13 +10,15 @@ centrally symmetric bodies). The shape files round trip; bad ones are refused na
 the line and the problem.
 """
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.special import lpmv, roots_jacobi, roots_legendre
 
+from tumble_ros.core.model.body import BodySpec
 from tumble_ros.core.model.limits import ScenarioError
-from tumble_ros.core.model.mass_models import (Ellipsoid, ellipsoid_stokes,
+from tumble_ros.core.model.mass_models import (DensityMoments, Ellipsoid, ellipsoid_stokes,
                                                KG_PER_KM3_PER_DENSITY, MassModelError, Polyhedron,
                                                tetrahedron_rule)
 from tumble_ros.core.model.shape_files import (box_mesh, ellipsoid_mesh, load_shape, read_mesh,
@@ -459,3 +461,82 @@ def test_the_shipped_apophis_shape_has_the_cited_inertia_ratios_and_size(name):
     assert (6 * body.volume / np.pi) ** (1 / 3) == pytest.approx(0.34, rel=1e-6)
     other = load_shape(resolve_shape_path('config/shapes/apophis.obj'), DENSITY)
     np.testing.assert_allclose(body.vertices, other.vertices, rtol=1e-12)
+
+
+# -- Density moments given directly, and the body.* parameters ---------------------------------
+
+def apophis_moments(**changes):
+    """Return DensityMoments parameters of the Apophis-like ellipsoid to degree 4."""
+    body = Ellipsoid(AXES, DENSITY)
+    C, S = body.stokes(4, 0.25)
+    stokes = [v for n in range(1, 5) for m in range(n + 1)
+              for v in (n, m, C[n, m], S[n, m])]
+    params = {'mass': body.mass, 'reference_radius': 0.25, 'stokes': stokes,
+              'principal_moments': tuple(body.principal_moments)}
+    params.update(changes)
+    return params
+
+
+def test_density_moments_of_an_ellipsoid_are_accepted_with_its_moments():
+    moments = DensityMoments.from_parameters(apophis_moments())
+    body = Ellipsoid(AXES, DENSITY)
+    np.testing.assert_array_equal(moments.C, body.stokes(4, 0.25)[0])
+    np.testing.assert_allclose(moments.principal_moments, body.principal_moments, rtol=1e-15)
+    assert moments.degree == 4 and moments.C[0, 0] == 1.0
+
+
+@pytest.mark.parametrize('changes, message', [
+    ({'stokes': [2, 0, -0.05, 0.0]}, 'stokes C20: disagrees with the principal moments'),
+    ({'stokes': [1, 1, 1e-3, 0.0]}, 'stokes C11: must be 0: the frame is the centre of mass'),
+    ({'stokes': [2, 1, 0.0, 1e-3]}, 'stokes S21: must be 0: the frame is the principal axes'),
+    ({'stokes': [2, 0, 0.0]}, 'stokes: must be a flat list of'),
+    ({'stokes': [2, 3, 0.0, 0.0]}, r'stokes\[0:2\]: must be integers'),
+    ({'principal_moments': (1.0, 1.0, 3.0)}, 'principal_moments: break the triangle'),
+    ({'mass': -1.0}, 'mass: must be a finite number > 0'),
+])
+def test_density_moments_that_disagree_are_refused(changes, message):
+    with pytest.raises(MassModelError, match=message):
+        DensityMoments.from_parameters(apophis_moments(**changes))
+
+
+def test_a_body_spec_derives_the_normalised_inertia_from_its_model():
+    spec = BodySpec.from_parameters({'body.model': 'ellipsoid', 'body.semi_axes': list(AXES),
+                                     'body.density': 2600})
+    a2, b2, c2 = (s * s for s in AXES)
+    expected = np.array([b2 + c2, a2 + c2, a2 + b2]) / (a2 + b2)
+    np.testing.assert_allclose(spec.inertia, expected, rtol=1e-15)
+    assert spec.density == 2600.0 and isinstance(spec.density, float)
+    assert BodySpec.from_parameters(spec.to_parameters()) == spec
+    assert BodySpec().inertia is None and BodySpec().mass_model is None
+
+
+def test_a_body_spec_reads_the_shipped_shape_into_principal_axes(tmp_path):
+    spec = BodySpec.from_parameters({'body.model': 'polyhedron', 'body.density': 2600,
+                                     'body.shape_file': 'config/shapes/apophis_radar.tab'})
+    assert Path(spec.shape_file).is_absolute()
+    np.testing.assert_allclose(spec.inertia, [0.64, 0.97, 1.0], atol=1e-9)
+    # a shifted copy beside a params file: read relative to it, moved back, the move recorded
+    v = spec.mass_model.vertices
+    write_obj(tmp_path / 'moved.obj', v + [1.0, 2.0, 3.0], spec.mass_model.facets)
+    moved = BodySpec.from_parameters({'body.model': 'polyhedron', 'body.density': 2600,
+                                      'body.shape_file': 'moved.obj'}, tmp_path / 'run.yaml')
+    np.testing.assert_allclose(moved.mass_model.reference.offset, [1.0, 2.0, 3.0], atol=1e-12)
+    np.testing.assert_allclose(moved.inertia, spec.inertia, rtol=1e-10)  # (12 digits written)
+
+
+@pytest.mark.parametrize('params, message', [
+    ({'body.model': 'blob'}, 'body.model: must be one of'),
+    ({'body.model': 'ellipsoid', 'body.semi_axes': [1, 1, 1], 'body.density': 2600,
+      'body.shape_file': 'x.obj'}, 'body.shape_file: is not used by body.model ellipsoid'),
+    ({'body.model': 'inertia', 'body.density': 2600}, 'body.density: is not used by'),
+    ({'body.model': 'polyhedron', 'body.density': 2600}, 'body.shape_file: .*needs one'),
+    ({'body.model': 'polyhedron', 'body.density': 2600, 'body.shape_file': 'no.obj'},
+     "body.shape_file: 'no.obj' not found"),
+    ({'body.model': 'ellipsoid', 'body.semi_axes': [1, 1, 1], 'body.density': 2.6},
+     r'body.density: must be in \[100, 30000\] kg/m\^3'),
+    ({'body.model': 'ellipsoid', 'body.semi_axes': [1, 1, 1], 'body.color': 'red'},
+     'body.color: unknown body parameter'),
+])
+def test_bad_body_parameters_are_refused_naming_the_parameter(params, message):
+    with pytest.raises(ScenarioError, match=message):
+        BodySpec.from_parameters(params)

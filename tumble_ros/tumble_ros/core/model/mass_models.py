@@ -49,8 +49,8 @@ from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.model.limits import ScenarioError
 
 __all__ = ['MassModelError', 'Reference', 'IDENTITY', 'MassModel', 'Ellipsoid', 'Polyhedron',
-           'MASS_MODELS', 'KG_PER_KM3_PER_DENSITY', 'tetrahedron_rule', 'ellipsoid_stokes',
-           'principal_frame']
+           'DensityMoments', 'MASS_MODELS', 'KG_PER_KM3_PER_DENSITY', 'tetrahedron_rule',
+           'ellipsoid_stokes', 'principal_frame']
 
 #: Mass [kg] of 1 km^3 at a density of 1 kg/m^3.
 KG_PER_KM3_PER_DENSITY = 1e9
@@ -543,6 +543,135 @@ class Polyhedron:
                    params.get('density'))  # type: ignore[arg-type]
 
 
+# -- Density moments given directly -----------------------------------------------------------
+
+#: Relative agreement required between given principal moments and given C20, C22.
+MOMENTS_TOLERANCE = 1e-9
+
+
+def _stokes_arrays(stokes: Any) -> tuple[FloatArray, FloatArray]:
+    """Return (C, S) from a flat list n, m, C_nm, S_nm, n, m, ... (C00 = 1 implied)."""
+    values = np.asarray(stokes, dtype=float).ravel()
+    if values.size % 4:
+        _fail('stokes', 'must be a flat list of (n, m, C_nm, S_nm) quadruples', list(values))
+    rows = values.reshape(-1, 4)
+    if not np.all(np.isfinite(rows)):
+        _fail('stokes', 'must be finite numbers', list(values))
+    degree = int(max(2, rows[:, 0].max(initial=0)))
+    C, S = np.zeros((degree + 1, degree + 1)), np.zeros((degree + 1, degree + 1))
+    C[0, 0] = 1.0
+    for k, (n, m, c, s) in enumerate(rows):
+        if n != int(n) or m != int(m) or not 0 <= m <= n or n < 1:
+            _fail(f'stokes[{4 * k}:{4 * k + 2}]', 'must be integers n >= 1, 0 <= m <= n',
+                  (n, m))
+        C[int(n), int(m)], S[int(n), int(m)] = c, s
+    return C, S
+
+
+@dataclass(frozen=True, eq=False)
+class DensityMoments:
+    """
+    A body given by its density moments directly: a gravity field in its principal frame.
+
+    ``mass`` [kg], ``reference_radius`` [km], ``C``, ``S`` (N+1, N+1) unnormalised Stokes
+    coefficients (C00 = 1), ``principal_moments`` (A, B, C) [kg km^2] (the trace is not in
+    the Stokes coefficients, so it is given). Checked: the frame is the centre of mass
+    (C10 = C11 = S11 = 0) and principal (C21 = S21 = S22 = 0); C20 and C22 agree with the
+    moments (C20 = (A + B - 2C) / (2 M R^2), C22 = (B - A) / (4 M R^2), to
+    :data:`MOMENTS_TOLERANCE` of (A + B + C) / (M R^2)); the moments are a body's (each at most
+    the sum of the other two).
+    """
+
+    mass: float
+    reference_radius: float
+    C: FloatArray
+    S: FloatArray
+    principal_moments_given: tuple[float, float, float]
+
+    kind = 'moments'
+    volume = None
+    convex = None
+
+    def __post_init__(self) -> None:
+        for name in ('mass', 'reference_radius'):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not math.isfinite(value) or value <= 0:
+                _fail(name, 'must be a finite number > 0', value)
+        C, S = np.asarray(self.C, dtype=float), np.asarray(self.S, dtype=float)
+        if C.ndim != 2 or C.shape != S.shape or C.shape[0] != C.shape[1] or C.shape[0] < 3:
+            _fail('stokes', 'C and S must be (N+1, N+1) arrays, N >= 2', (C.shape, S.shape))
+        moments = np.asarray(self.principal_moments_given, dtype=float)
+        if moments.shape != (3,) or not np.all(np.isfinite(moments)) or np.any(moments <= 0):
+            _fail('principal_moments', 'must be 3 finite numbers > 0 [kg km^2]',
+                  self.principal_moments_given)
+        if np.any(moments > moments.sum() - moments + 1e-12 * moments.sum()):
+            _fail('principal_moments', 'break the triangle inequality (each at most the sum '
+                  'of the other two): no body has them', tuple(moments))
+        for (n, m, array, label) in ((1, 0, C, 'C'), (1, 1, C, 'C'), (1, 1, S, 'S')):
+            if array[n, m] != 0.0:
+                _fail(f'stokes {label}{n}{m}', 'must be 0: the frame is the centre of mass',
+                      float(array[n, m]))
+        for (n, m, array, label) in ((2, 1, C, 'C'), (2, 1, S, 'S'), (2, 2, S, 'S')):
+            if array[n, m] != 0.0:
+                _fail(f'stokes {label}{n}{m}', 'must be 0: the frame is the principal axes',
+                      float(array[n, m]))
+        a, b, c = moments
+        mr2 = self.mass * self.reference_radius ** 2
+        scale = (a + b + c) / mr2
+        for (n, m, expected) in ((2, 0, (a + b - 2 * c) / (2 * mr2)), (2, 2, (b - a) / (4 * mr2))):
+            if abs(C[n, m] - expected) > MOMENTS_TOLERANCE * scale:
+                _fail(f'stokes C{n}{m}', f'disagrees with the principal moments, which give '
+                      f'{expected:.12g}', float(C[n, m]))
+        C.setflags(write=False)
+        S.setflags(write=False)
+        object.__setattr__(self, 'C', C)
+        object.__setattr__(self, 'S', S)
+        object.__setattr__(self, 'principal_moments_given', tuple(float(v) for v in moments))
+
+    @property
+    def degree(self) -> int:
+        """Return the degree N of the coefficients given."""
+        return int(self.C.shape[0]) - 1
+
+    @property
+    def centre_of_mass(self) -> FloatArray:
+        """Return the centre of mass: the origin [km]."""
+        return np.zeros(3)
+
+    @property
+    def principal_moments(self) -> FloatArray:
+        """Return the principal moments (A, B, C) [kg km^2]."""
+        return np.asarray(self.principal_moments_given, dtype=float)
+
+    @property
+    def inertia_tensor(self) -> FloatArray:
+        """Return the inertia tensor about the centre of mass [kg km^2] (diagonal)."""
+        return np.diag(self.principal_moments)
+
+    @property
+    def reference(self) -> Reference:
+        """Given in principal axes: nothing moved."""
+        return IDENTITY
+
+    def gravity_field(self, degree: int, reference_radius: float | None = None) -> Any:
+        """Return the GravityField to ``degree`` (<= the degree given; zeros beyond it)."""
+        if reference_radius not in (None, self.reference_radius):
+            raise ValueError('reference_radius: density moments are given at '
+                             f'{self.reference_radius} km, got {reference_radius}')
+        C, S = np.zeros((degree + 1, degree + 1)), np.zeros((degree + 1, degree + 1))
+        n = min(degree, self.degree) + 1
+        C[:n, :n], S[:n, :n] = self.C[:n, :n], self.S[:n, :n]
+        return _field(self.mass, self.reference_radius, C, S, self.principal_moments)
+
+    @classmethod
+    def from_parameters(cls, params: Mapping[str, Any]) -> DensityMoments:
+        """Build from ``mass``, ``reference_radius``, ``stokes`` (flat), ``principal_moments``."""
+        C, S = _stokes_arrays(params.get('stokes', ()))
+        return cls(params.get('mass'), params.get('reference_radius'), C, S,  # type: ignore
+                   params.get('principal_moments'))  # type: ignore[arg-type]
+
+
 def _field(mass: float, radius: float, C: FloatArray, S: FloatArray,
            moments: FloatArray) -> Any:
     from tumble_ros.core.model.gravity_field import GravityField
@@ -554,4 +683,5 @@ def _field(mass: float, radius: float, C: FloatArray, S: FloatArray,
 MASS_MODELS: dict[str, Any] = {
     'ellipsoid': Ellipsoid,
     'polyhedron': Polyhedron,
+    'moments': DensityMoments,
 }
