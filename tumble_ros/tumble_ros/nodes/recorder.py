@@ -176,20 +176,22 @@ class RecorderNode(GuardedNode):
         # (monotonic time of the last look, the quiet per-sample topics without publishers)
         self._gone_checked: tuple[float, set[str]] = (-math.inf, set())
         self._per_sample_discovered_at = -math.inf  # monotonic time of the last look
+        #: this namespace's tumble topics (resolved names)
+        self._tumble_topics = {self.resolve_topic_name(t) for t in DEFAULT_TOPICS}
         self._progress = ProgressReporter(self, source=self._slowest_live_stamp,
                                           heard=lambda: self._produced.heard())
         # per-sample topics other consumers announce (the comparator's): subscribed at once
         self._produced = ProducedTopics(
-            self, on_new=lambda: self._discover(per_sample_only=True),
+            self, on_new=lambda: self._discover(quick=True),
             on_late=lambda topic: self.get_logger().warning(
                 f'{topic}: announced but not found on the graph within '
                 f'{self._produced.wait:g} s: not waiting for it'))
         self._discover()
         steady_timer(self, p['discovery_period'], self._discover)
         steady_timer(self, p['chunk_seconds'] / 4, self._poll)
-        tumble = {self.resolve_topic_name(t) for t in DEFAULT_TOPICS}
         self._sources = SourceMonitor(
-            self, lambda: [t for t, c in self._channels.items() if c >= 0 and t in tumble],
+            self, lambda: [t for t, c in self._channels.items()
+                           if c >= 0 and t in self._tumble_topics],
             self._on_sources)
         self.get_logger().info(f'recording to {path}')
 
@@ -233,12 +235,21 @@ class RecorderNode(GuardedNode):
         return topic in self._explicit or (self._pattern is not None
                                            and self._pattern.search(topic) is not None)
 
-    def _discover(self, per_sample_only: bool = False) -> None:
-        """Subscribe to the wanted topics not recorded yet (``per_sample_only``: of them)."""
+    def _discover(self, quick: bool = False) -> None:
+        """
+        Subscribe to the wanted topics not recorded yet.
+
+        ``quick``: only the per-sample topics and the tumble topics of this namespace
+        (:data:`DEFAULT_TOPICS`), looked for every QUIET_TOPIC whatever ``discovery_period``: a
+        simulator's ``/clock``, ``status`` and markers, discovered a moment after its first
+        topics, are subscribed at once, not a ``discovery_period`` later (a short run could be
+        over by then, and those topics lost).
+        """
         for topic, types in self.get_topic_names_and_types():
             if topic in self._channels or not self._wanted(topic):
                 continue
-            if per_sample_only and not (len(types) == 1 and types[0] in PER_SAMPLE_TYPES):
+            if quick and topic not in self._tumble_topics and not (
+                    len(types) == 1 and types[0] in PER_SAMPLE_TYPES):
                 continue
             if len(types) != 1:
                 self.get_logger().warning(f'not recording {topic}: it has several types {types}')
@@ -317,7 +328,7 @@ class RecorderNode(GuardedNode):
         now = time.monotonic()
         if now - self._per_sample_discovered_at >= QUIET_TOPIC:
             self._per_sample_discovered_at = now
-            self._discover(per_sample_only=True)
+            self._discover(quick=True)
         if self._produced.awaited(lambda t: t in self._channels or not self._wanted(t)):
             return None   # a consumer's announced topic is not subscribed yet: hold
         gone = self._gone_topics(now)
