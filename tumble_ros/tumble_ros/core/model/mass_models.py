@@ -46,6 +46,7 @@ import numpy as np
 from scipy.special import roots_jacobi
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.model.gravity_field import GravityField, regular_solid_harmonics
 from tumble_ros.core.model.limits import ScenarioError
 
 __all__ = ['MassModelError', 'Reference', 'IDENTITY', 'MassModel', 'Ellipsoid', 'Polyhedron',
@@ -54,6 +55,8 @@ __all__ = ['MassModelError', 'Reference', 'IDENTITY', 'MassModel', 'Ellipsoid', 
 
 #: Mass [kg] of 1 km^3 at a density of 1 kg/m^3.
 KG_PER_KM3_PER_DENSITY = 1e9
+#: Points summed at once into the solid harmonics (memory: 2 (N + 1)^2 doubles a point).
+CHUNK_POINTS = 20_000
 #: Accepted densities [kg/m^3]: from below a comet's (~500) to above osmium's (22,590); a
 #: value under the minimum is most likely in g/cm^3.
 MIN_DENSITY, MAX_DENSITY = 100.0, 30000.0
@@ -170,7 +173,8 @@ class MassModel(Protocol):
     def principal_moments(self) -> FloatArray:
         """Principal moments [kg km^2], (3,), in the order of :meth:`gravity_field`'s axes."""
 
-    def gravity_field(self, degree: int, reference_radius: float | None = None) -> Any:
+    def gravity_field(self, degree: int,
+                      reference_radius: float | None = None) -> GravityField:
         """Return the GravityField to ``degree`` in the centre-of-mass principal-axis frame."""
 
 
@@ -325,7 +329,8 @@ class Ellipsoid:
         """Return the unnormalised (C, S) to ``degree`` (:func:`ellipsoid_stokes`)."""
         return ellipsoid_stokes(self.semi_axes, degree, reference_radius or self.radius)
 
-    def gravity_field(self, degree: int, reference_radius: float | None = None) -> Any:
+    def gravity_field(self, degree: int,
+                      reference_radius: float | None = None) -> GravityField:
         """Return the GravityField to ``degree`` (closed form), principal-axis frame."""
         C, S = self.stokes(degree, reference_radius)
         return _field(self.mass, reference_radius or self.radius, C, S,
@@ -511,30 +516,47 @@ class Polyhedron:
         """Return the default reference radius [km]: the farthest vertex from the centre."""
         return float(np.linalg.norm(self.vertices - self.centre_of_mass, axis=1).max())
 
-    def point_masses(self, degree: int) -> tuple[FloatArray, FloatArray]:
+    def point_masses(self, degree: int,
+                     apex: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
         """
         Return (masses [kg] (n,), positions [km] (n, 3)) in principal axes, exact to ``degree``.
 
-        The :func:`tetrahedron_rule` on every tetrahedron (centre of mass, facet): the sum of
-        ``m_k P(x_k)`` equals the integral of ``rho P`` over the body for every polynomial P of
-        degree <= ``degree``. A tetrahedron of negative signed volume (a facet seen from behind
-        from the centre: a non-convex body) gives negative masses.
+        The :func:`tetrahedron_rule` on every tetrahedron (``apex``, facet), ``apex`` [km, in
+        the principal frame] by default the centre of mass: the sum of ``m_k P(x_k)`` equals the
+        integral of ``rho P`` over the body for every polynomial P of degree <= ``degree``,
+        whatever the apex. A tetrahedron of negative signed volume (a facet seen from behind
+        from the apex: a non-convex body, or an apex outside) gives negative masses.
         """
         body = self if self.is_principal else self.in_principal_axes()
         bary, weights = tetrahedron_rule(degree)
-        p = body.vertices[body.facets] - body.centre_of_mass            # (F, 3, 3)
+        top = body.centre_of_mass if apex is None else np.asarray(apex, dtype=float)
+        p = body.vertices[body.facets] - top            # (F, 3, 3)
         vol = np.einsum('ij,ij->i', p[:, 0], np.cross(p[:, 1], p[:, 2])) / 6.0
-        positions = np.einsum('qk,fkj->fqj', bary, p).reshape(-1, 3)
+        positions = (np.einsum('qk,fkj->fqj', bary, p) + top).reshape(-1, 3)
         masses = (vol[:, None] * weights[None, :]).ravel() * self.density \
             * KG_PER_KM3_PER_DENSITY
         return masses, positions
 
-    def gravity_field(self, degree: int, reference_radius: float | None = None) -> Any:
-        """Return the exact GravityField to ``degree`` in the principal-axis frame."""
-        from tumble_ros.core.model.gravity_field import GravityField
+    def gravity_field(self, degree: int,
+                      reference_radius: float | None = None) -> GravityField:
+        """
+        Return the exact GravityField to ``degree`` in the principal-axis frame.
+
+        The sums of :meth:`point_masses` over the regular solid harmonics (the gravity field
+        module's formulas; signed masses, so a non-convex body too), ``reference_radius``
+        [km] by default :attr:`radius`. Summed in chunks of :data:`CHUNK_POINTS` points.
+        """
+        radius = reference_radius or self.radius
         masses, positions = self.point_masses(degree)
-        return GravityField.from_point_masses(masses, positions, degree,
-                                              reference_radius or self.radius)
+        C, S = np.zeros((degree + 1, degree + 1)), np.zeros((degree + 1, degree + 1))
+        for k in range(0, len(masses), CHUNK_POINTS):
+            v, w = regular_solid_harmonics(positions[k:k + CHUNK_POINTS], degree)
+            C += np.einsum('i,inm->nm', masses[k:k + CHUNK_POINTS], v)
+            S += np.einsum('i,inm->nm', masses[k:k + CHUNK_POINTS], w)
+        norm = _normalisation(degree) / (self.mass * radius ** np.arange(degree + 1)[:, None])
+        C, S = C * norm, S * norm
+        C[0, 0], S[:, 0] = 1.0, 0.0
+        return _field(self.mass, radius, C, S, self.principal_moments)
 
     @classmethod
     def from_parameters(cls, params: Mapping[str, Any]) -> Polyhedron:
@@ -545,13 +567,13 @@ class Polyhedron:
 
 # -- Density moments given directly -----------------------------------------------------------
 
-#: Relative agreement required between given principal moments and given C20, C22.
-MOMENTS_TOLERANCE = 1e-9
-
 
 def _stokes_arrays(stokes: Any) -> tuple[FloatArray, FloatArray]:
     """Return (C, S) from a flat list n, m, C_nm, S_nm, n, m, ... (C00 = 1 implied)."""
-    values = np.asarray(stokes, dtype=float).ravel()
+    try:
+        values = np.asarray(stokes, dtype=float).ravel()
+    except (TypeError, ValueError):
+        _fail('stokes', 'must be a flat list of numbers n, m, C_nm, S_nm, ...', stokes)
     if values.size % 4:
         _fail('stokes', 'must be a flat list of (n, m, C_nm, S_nm) quadruples', list(values))
     rows = values.reshape(-1, 4)
@@ -568,71 +590,27 @@ def _stokes_arrays(stokes: Any) -> tuple[FloatArray, FloatArray]:
     return C, S
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True)
 class DensityMoments:
     """
-    A body given by its density moments directly: a gravity field in its principal frame.
+    A body given by its density moments directly: a :class:`GravityField`.
 
-    ``mass`` [kg], ``reference_radius`` [km], ``C``, ``S`` (N+1, N+1) unnormalised Stokes
-    coefficients (C00 = 1), ``principal_moments`` (A, B, C) [kg km^2] (the trace is not in
-    the Stokes coefficients, so it is given). Checked: the frame is the centre of mass
-    (C10 = C11 = S11 = 0) and principal (C21 = S21 = S22 = 0); C20 and C22 agree with the
-    moments (C20 = (A + B - 2C) / (2 M R^2), C22 = (B - A) / (4 M R^2), to
-    :data:`MOMENTS_TOLERANCE` of (A + B + C) / (M R^2)); the moments are a body's (each at most
-    the sum of the other two).
+    The field (mass [kg], reference radius [km], unnormalised Stokes C, S, principal moments
+    [kg km^2]: the trace is not in the coefficients, so it is given) is checked by
+    GravityField: the frame is the centre of mass (C10, C11, S11 zero) and principal (C21,
+    S21, S22 zero), C20 and C22 agree with the moments, the moments are a body's.
     """
 
-    mass: float
-    reference_radius: float
-    C: FloatArray
-    S: FloatArray
-    principal_moments_given: tuple[float, float, float]
+    field: GravityField
 
     kind = 'moments'
     volume = None
     convex = None
 
-    def __post_init__(self) -> None:
-        for name in ('mass', 'reference_radius'):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                    or not math.isfinite(value) or value <= 0:
-                _fail(name, 'must be a finite number > 0', value)
-        C, S = np.asarray(self.C, dtype=float), np.asarray(self.S, dtype=float)
-        if C.ndim != 2 or C.shape != S.shape or C.shape[0] != C.shape[1] or C.shape[0] < 3:
-            _fail('stokes', 'C and S must be (N+1, N+1) arrays, N >= 2', (C.shape, S.shape))
-        moments = np.asarray(self.principal_moments_given, dtype=float)
-        if moments.shape != (3,) or not np.all(np.isfinite(moments)) or np.any(moments <= 0):
-            _fail('principal_moments', 'must be 3 finite numbers > 0 [kg km^2]',
-                  self.principal_moments_given)
-        if np.any(moments > moments.sum() - moments + 1e-12 * moments.sum()):
-            _fail('principal_moments', 'break the triangle inequality (each at most the sum '
-                  'of the other two): no body has them', tuple(moments))
-        for (n, m, array, label) in ((1, 0, C, 'C'), (1, 1, C, 'C'), (1, 1, S, 'S')):
-            if array[n, m] != 0.0:
-                _fail(f'stokes {label}{n}{m}', 'must be 0: the frame is the centre of mass',
-                      float(array[n, m]))
-        for (n, m, array, label) in ((2, 1, C, 'C'), (2, 1, S, 'S'), (2, 2, S, 'S')):
-            if array[n, m] != 0.0:
-                _fail(f'stokes {label}{n}{m}', 'must be 0: the frame is the principal axes',
-                      float(array[n, m]))
-        a, b, c = moments
-        mr2 = self.mass * self.reference_radius ** 2
-        scale = (a + b + c) / mr2
-        for (n, m, expected) in ((2, 0, (a + b - 2 * c) / (2 * mr2)), (2, 2, (b - a) / (4 * mr2))):
-            if abs(C[n, m] - expected) > MOMENTS_TOLERANCE * scale:
-                _fail(f'stokes C{n}{m}', f'disagrees with the principal moments, which give '
-                      f'{expected:.12g}', float(C[n, m]))
-        C.setflags(write=False)
-        S.setflags(write=False)
-        object.__setattr__(self, 'C', C)
-        object.__setattr__(self, 'S', S)
-        object.__setattr__(self, 'principal_moments_given', tuple(float(v) for v in moments))
-
     @property
-    def degree(self) -> int:
-        """Return the degree N of the coefficients given."""
-        return int(self.C.shape[0]) - 1
+    def mass(self) -> float:
+        """Return the mass [kg]."""
+        return self.field.mass
 
     @property
     def centre_of_mass(self) -> FloatArray:
@@ -642,7 +620,7 @@ class DensityMoments:
     @property
     def principal_moments(self) -> FloatArray:
         """Return the principal moments (A, B, C) [kg km^2]."""
-        return np.asarray(self.principal_moments_given, dtype=float)
+        return np.asarray(self.field.principal_moments, dtype=float)
 
     @property
     def inertia_tensor(self) -> FloatArray:
@@ -654,29 +632,48 @@ class DensityMoments:
         """Given in principal axes: nothing moved."""
         return IDENTITY
 
-    def gravity_field(self, degree: int, reference_radius: float | None = None) -> Any:
-        """Return the GravityField to ``degree`` (<= the degree given; zeros beyond it)."""
-        if reference_radius not in (None, self.reference_radius):
+    def gravity_field(self, degree: int,
+                      reference_radius: float | None = None) -> GravityField:
+        """Return the field to ``degree`` (zeros beyond the degree given)."""
+        if reference_radius not in (None, self.field.reference_radius):
             raise ValueError('reference_radius: density moments are given at '
-                             f'{self.reference_radius} km, got {reference_radius}')
+                             f'{self.field.reference_radius} km, got {reference_radius}')
+        if degree <= self.field.degree:
+            return self.field.truncated(degree)
         C, S = np.zeros((degree + 1, degree + 1)), np.zeros((degree + 1, degree + 1))
-        n = min(degree, self.degree) + 1
-        C[:n, :n], S[:n, :n] = self.C[:n, :n], self.S[:n, :n]
-        return _field(self.mass, self.reference_radius, C, S, self.principal_moments)
+        n = self.field.degree + 1
+        C[:n, :n], S[:n, :n] = self.field.C, self.field.S
+        return _field(self.mass, self.field.reference_radius, C, S, self.principal_moments)
 
     @classmethod
     def from_parameters(cls, params: Mapping[str, Any]) -> DensityMoments:
         """Build from ``mass``, ``reference_radius``, ``stokes`` (flat), ``principal_moments``."""
         C, S = _stokes_arrays(params.get('stokes', ()))
-        return cls(params.get('mass'), params.get('reference_radius'), C, S,  # type: ignore
-                   params.get('principal_moments'))  # type: ignore[arg-type]
+        try:
+            field = GravityField(params.get('mass'),  # type: ignore[arg-type]
+                                 params.get('reference_radius'),  # type: ignore[arg-type]
+                                 C, S, params.get('principal_moments'))  # type: ignore[arg-type]
+        except (TypeError, ValueError) as exc:
+            text = str(exc).replace('gravity_field.', '', 1)
+            raise MassModelError(f'stokes {text}' if text[:2] in ('C[', 'S[') else text) \
+                from None
+        return cls(field)
 
 
 def _field(mass: float, radius: float, C: FloatArray, S: FloatArray,
-           moments: FloatArray) -> Any:
-    from tumble_ros.core.model.gravity_field import GravityField
+           moments: FloatArray) -> GravityField:
     return GravityField(mass=mass, reference_radius=radius, C=C, S=S,
-                        principal_moments=tuple(float(m) for m in moments))
+                        principal_moments=(float(moments[0]), float(moments[1]),
+                                           float(moments[2])))
+
+
+def _normalisation(degree: int) -> FloatArray:
+    """Return (2 - delta_m0) (n - m)! / (n + m)!, (degree + 1, degree + 1), 0 for m > n."""
+    f = np.zeros((degree + 1, degree + 1))
+    for n in range(degree + 1):
+        for m in range(n + 1):
+            f[n, m] = (2.0 - (m == 0)) * math.factorial(n - m) / math.factorial(n + m)
+    return f
 
 
 #: The mass models by name (``body.model`` in a params file; ``inertia`` is no mass model).
