@@ -29,6 +29,7 @@ from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.jit import python_source
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
+from tumble_ros.core.model.gravity_field import GravityField, MAX_DEGREE
 from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, MAX_OMEGA,
                                           MAX_ORBIT_RATE, MAX_ROTATION, MAX_RTOL, MAX_SAMPLES,
                                           MAX_STEPS, MIN_ORBIT_RATE, MIN_RTOL, RESOLUTION_ULPS,
@@ -325,6 +326,15 @@ class Scenario:
         (``core.torques``: defined outside core, run by every integrator). Python API only:
         they are functions, so they are not ROS parameters (:meth:`to_parameters` leaves them
         out).
+    gravity_degree : int
+        Degree N of the Kepler orbit's gravitational torque (ROS ``gravity.degree``): 2
+        (default) the quadrupole of the inertia (:func:`~.torques.orbits.kepler_tidal_torque`);
+        3 to the field's degree, the body's ``gravity_field`` to degree N
+        (:mod:`~.torques.multipole`). Above 2 it needs ``orbit`` and ``gravity_field``.
+    gravity_field : GravityField or None
+        The body's field (``core.model.gravity_field``): its principal moments must be
+        proportional to ``inertia`` (same axes) to 1e-9 relative; they do not set it. Python API
+        only for now (:meth:`to_parameters` leaves it out).
 
     """
 
@@ -340,6 +350,8 @@ class Scenario:
     impacts: tuple[Impact, ...] = ()
     torques: tuple[TorqueComponent, ...] = ()
     orbit: KeplerOrbit | None = None
+    gravity_degree: int = 2
+    gravity_field: GravityField | None = None
 
     def __post_init__(self) -> None:
         inertia = _vector('inertia', self.inertia)
@@ -448,6 +460,27 @@ class Scenario:
             if self.orbit_rate != 0.0:
                 _fail('orbit_rate', 'must be 0 with a Kepler orbit (orbit.kind kepler or flyby): '
                       'the orbit gives the tidal torque', self.orbit_rate)
+        self._check_gravity()
+
+    def _check_gravity(self) -> None:
+        """Validate ``gravity_degree`` (``gravity.degree``) and ``gravity_field``."""
+        degree, body = self.gravity_degree, self.gravity_field
+        if isinstance(degree, bool) or not isinstance(degree, int) or not (
+                2 <= degree <= MAX_DEGREE):
+            _fail('gravity.degree', f'must be an integer in [2, {MAX_DEGREE}]', degree)
+        if body is not None and not isinstance(body, GravityField):
+            _fail('gravity_field', 'must be a core.model.gravity_field.GravityField or None', body)
+        if degree > 2 and self.orbit is None:
+            _fail('gravity.degree', 'above 2 needs a Kepler orbit (orbit.kind kepler or flyby)',
+                  degree)
+        if degree > 2 and (body is None or degree > body.degree):
+            _fail('gravity.degree', f"must be <= the gravity_field's degree "
+                  f"({body.degree if body is not None else 'no gravity_field'})", degree)
+        if body is not None:
+            try:
+                body.inertia_scale(self.inertia)
+            except ValueError as err:
+                raise ScenarioError(str(err)) from None
 
     # -- derived quantities ---------------------------------------------------------
     @property
@@ -496,8 +529,12 @@ class Scenario:
     @property
     def extra_torques(self) -> tuple[TorqueComponent, ...]:
         """Return the torques beyond the circular orbit's and the impacts': orbit, then torques."""
-        orbit = (self.orbit.torque_component(self.inertia),) if self.orbit is not None else ()
-        return orbit + self.torques
+        if self.orbit is None:
+            return self.torques
+        if self.gravity_degree > 2 and self.gravity_field is not None:
+            return (self.gravity_field.torque_component(self.orbit, self.inertia,
+                                                        self.gravity_degree),) + self.torques
+        return (self.orbit.torque_component(self.inertia),) + self.torques
 
     def perturber_position(self, t: ArrayLike) -> FloatArray:
         """
@@ -567,6 +604,7 @@ class Scenario:
         for name in _ORBIT_FIELDS:
             params[f'orbit.{name}'] = getattr(orbit, name)
         params.update(dict.fromkeys((f'orbit.{name}' for name in _FLYBY_FIELDS), 0.0))
+        params['gravity.degree'] = self.gravity_degree
         return params
 
     @classmethod
@@ -590,6 +628,7 @@ class Scenario:
         plain['integrator'] = IntegratorSettings(**integ)
         plain['impacts'] = _impacts_from_parameters(params)
         plain['orbit'] = _orbit_from_parameters(params)
+        plain['gravity_degree'] = params.get('gravity.degree', 2)
         return cls(**plain)
 
 
@@ -609,6 +648,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
     + tuple(f'integrator.{f.name}' for f in dataclasses.fields(IntegratorSettings))
     + _IMPACT_KEYS
     + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS + _FLYBY_FIELDS)
+    + ('gravity.degree',)
 )
 
 
@@ -693,6 +733,9 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'orbit.perigee': ('km', 'closest distance of the flyby (flyby)'),
     'orbit.v_inf': ('km/s', 'hyperbolic excess speed; give it or v_perigee (flyby)'),
     'orbit.v_perigee': ('km/s', 'speed at perigee; give it or v_inf (flyby)'),
+    'gravity.degree': ('', "degree N of the Kepler orbit's gravitational torque: 2 (default) the "
+                       "inertia's quadrupole; 3 to 30 the body's gravity field to degree N "
+                       '(needs kepler or flyby and the field)'),
 }
 
 

@@ -77,12 +77,14 @@ def packed_size(degree: int) -> int:
 
 @jit_inline
 def field_acceleration(x: float, y: float, z: float, gm: float, radius: float, degree: int,
-                       coefficients: np.ndarray, offset: int) -> tuple[float, float, float]:
+                       coefficients: np.ndarray, offset: int,
+                       lowest: int) -> tuple[float, float, float]:
     """
     Return the body's gravitational acceleration at (x, y, z) (body frame, outside the body).
 
     ``gm`` the body's GM [L^3/T^2], ``radius`` the coefficients' reference radius a [L],
-    ``degree`` N; ``coefficients[offset:]`` C then S packed to degree N (the module's
+    the degrees ``lowest`` to ``degree`` N (0: the whole field; 2: without the central
+    attraction); ``coefficients[offset:]`` C then S packed to degree N (the module's
     docstring). Acceleration in L/T^2, body frame (Montenbruck & Gill eq 3.33, by the order-
     by-order recursion of the module's docstring).
     """
@@ -119,7 +121,7 @@ def field_acceleration(x: float, y: float, z: float, gm: float, radius: float, d
             w2 = w1
             v1 = vp
             w1 = wp
-            if p == 0:
+            if p <= lowest:
                 continue
             n = p - 1
             row = n * (n + 1) // 2
@@ -157,8 +159,12 @@ def field_torque(x: float, y: float, z: float, gm_p_mass: float, radius: float, 
     ``gm_p_mass`` = GM_p M (the perturber's GM times the body's mass; or, normalised, GM_p M /
     scale); the rest as :func:`field_acceleration`. Torque about the centre of mass, body axes,
     in the units of gm_p_mass / L (e.g. kg km^2/s^2 for km^3/s^2 kg and km).
+
+    Degrees 0 and 1 are left out: their torque is zero (R x R; the centre of mass), and the
+    central term's a(R), ~(R/a)^2 larger than the rest, would leave its rounding in R x a.
     """
-    ax, ay, az = field_acceleration(x, y, z, gm_p_mass, radius, degree, coefficients, offset)
+    ax, ay, az = field_acceleration(x, y, z, gm_p_mass, radius, degree, coefficients, offset,
+                                    2)
     return -(y * az - z * ay), -(z * ax - x * az), -(x * ay - y * ax)
 
 
