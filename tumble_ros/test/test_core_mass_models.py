@@ -600,3 +600,80 @@ def test_an_icosphere_field_converges_to_the_ellipsoid_field():
         assert np.max(np.abs(field.C[1::2])) < 1e-15 and np.max(np.abs(field.S)) < 1e-15
     assert errors[-1] < 0.02
     assert convergence_order(errors, [320, 1280, 5120]) == pytest.approx(2.0, abs=0.15)
+
+
+# -- The scenario's body.* parameters ----------------------------------------------------------
+
+CONFIG = Path(__file__).resolve().parents[1] / 'config'
+
+
+def apophis_params(**changes):
+    """Return the flat parameters of config/apophis_2029.yaml with ``changes``."""
+    from tumble_ros.core import load_scenario
+    params = load_scenario(CONFIG / 'apophis_2029.yaml').to_parameters()
+    params.update(changes)
+    return params
+
+
+def test_a_scenario_derives_its_inertia_and_field_from_the_shipped_shape():
+    from tumble_ros.core import Scenario
+    params = apophis_params(**{'body.model': 'polyhedron', 'body.density': 2600.0,
+                               'body.shape_file': 'config/shapes/apophis.obj',
+                               'gravity.degree': 4})
+    scenario = Scenario.from_parameters(params)        # its inertia 0.64 : 0.97 : 1 agrees
+    shape = load_shape(resolve_shape_path('config/shapes/apophis.obj'), 2600.0)
+    np.testing.assert_allclose(scenario.inertia, shape.principal_moments
+                               / shape.principal_moments.max(), rtol=1e-15)
+    assert scenario.gravity_field == shape.gravity_field(4)
+    assert scenario.gravity_field.degree == 4
+    again = Scenario.from_parameters(scenario.to_parameters())
+    assert again == scenario
+
+
+def test_a_scenario_refuses_an_inertia_that_disagrees_with_its_mass_model():
+    from tumble_ros.core import Scenario
+    body = {'body.model': 'ellipsoid', 'body.semi_axes': [0.3, 0.2, 0.1], 'body.density': 2000}
+    with pytest.raises(ScenarioError, match=r'^inertia: disagrees with the mass model \(body.'
+                                            r'model ellipsoid\).*got \[0.64, 0.97, 1.0\]'):
+        Scenario.from_parameters(apophis_params(**body))
+    with pytest.raises(ScenarioError, match='inertia: disagrees'):   # the default, stated
+        Scenario.from_parameters({'inertia': [1.0, 1.0, 1.5], **body})
+    scenario = Scenario.from_parameters(body)             # no inertia given: derived
+    a2, b2, c2 = 0.09, 0.04, 0.01
+    np.testing.assert_allclose(scenario.inertia, np.array([b2 + c2, a2 + c2, a2 + b2]) / 0.13,
+                               rtol=1e-15)
+    with pytest.raises(ScenarioError, match='inertia: disagrees'):
+        scenario.replace(inertia=(1.0, 2.0, 2.5))
+
+
+def test_the_papers_normalised_inertia_scenarios_are_unchanged():
+    from tumble_ros.core import load_scenario, Scenario
+    for name in ('default.yaml', 'fig4.yaml', 'fig6.yaml', 'apophis_2029.yaml'):
+        scenario = load_scenario(CONFIG / name)
+        assert scenario.body == BodySpec() and scenario.body.mass_model is None
+        assert scenario.gravity_field is None
+    assert Scenario().inertia == (1.0, 1.0, 1.5)
+    assert Scenario().to_parameters()['body.model'] == 'inertia'
+
+
+def test_a_params_file_names_its_shape_relative_to_itself(tmp_path):
+    from tumble_ros.core import load_scenario
+    v, f = ellipsoid_mesh((0.3, 0.2, 0.1), 2)
+    (tmp_path / 'shapes').mkdir()
+    write_counts(tmp_path / 'shapes' / 'body.tab', v + [5.0, 0.0, 0.0], f)
+    (tmp_path / 'run.yaml').write_text(
+        '/**/sim:\n  ros__parameters:\n    body:\n      model: polyhedron\n'
+        '      shape_file: shapes/body.tab\n      density: 1500.0\n')
+    scenario = load_scenario(tmp_path / 'run.yaml')
+    assert scenario.body.shape_file == str(tmp_path / 'shapes' / 'body.tab')
+    np.testing.assert_allclose(scenario.body.mass_model.reference.offset, [5.0, 0, 0],
+                               atol=1e-12)
+    body = Polyhedron(v, f, 1500.0)
+    np.testing.assert_allclose(scenario.inertia, body.principal_moments
+                               / body.principal_moments.max(), rtol=1e-10)  # (12 digits)
+    (tmp_path / 'bad.yaml').write_text(
+        '/**/sim:\n  ros__parameters:\n    body:\n      model: polyhedron\n'
+        '      shape_file: shapes/none.tab\n      density: 1500.0\n')
+    with pytest.raises(ScenarioError, match="bad.yaml: body.shape_file: 'shapes/none.tab' not "
+                                            'found'):
+        load_scenario(tmp_path / 'bad.yaml')

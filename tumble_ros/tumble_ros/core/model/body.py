@@ -25,6 +25,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any, Mapping
 
+from tumble_ros.core.model.gravity_field import GravityField
 from tumble_ros.core.model.limits import ScenarioError
 from tumble_ros.core.model.mass_models import (DensityMoments, Ellipsoid, MassModelError,
                                                Polyhedron)
@@ -114,6 +115,13 @@ class BodySpec:
         top = max(moments)
         return (moments[0] / top, moments[1] / top, moments[2] / top)
 
+    def gravity_field(self, degree: int) -> GravityField:
+        """Return the mass model's GravityField to ``degree`` (cached), principal frame."""
+        if self.mass_model is None:
+            raise MassModelError(f'body.model: inertia has no gravity field beyond degree 2, '
+                                 f'got degree {degree}')
+        return _field(self, degree)
+
     def to_parameters(self) -> dict[str, Any]:
         """Return the ``body.*`` flat parameters."""
         return {f'body.{name}': (list(getattr(self, name))
@@ -161,6 +169,13 @@ def _build(spec: BodySpec) -> Ellipsoid | Polyhedron | DensityMoments | None:
     except ScenarioError as exc:
         raise _named(exc) from None
     return None
+
+
+@lru_cache(maxsize=32)
+def _field(spec: BodySpec, degree: int) -> GravityField:
+    model = spec.mass_model
+    assert model is not None
+    return model.gravity_field(degree)
 
 
 def _named(exc: ScenarioError) -> MassModelError:
