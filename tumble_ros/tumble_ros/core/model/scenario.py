@@ -341,8 +341,8 @@ class Scenario:
         ``inertia`` (default: ``inertia`` is the body) or ``ellipsoid``, ``polyhedron``,
         ``moments``. With a mass model, ``inertia`` is derived from it (principal moments over
         the largest): an ``inertia`` left at its default is replaced, another one must agree
-        to 1e-9 relative; ``gravity_field``, when None and ``gravity_degree`` > 2, is the
-        model's to that degree.
+        to 1e-9 relative; ``gravity_field``, when None (or of a lower degree) and
+        ``gravity_degree`` > 2, is the model's to that degree.
 
     """
 
@@ -483,7 +483,9 @@ class Scenario:
             _check_body_inertia(self.inertia, self.body)
         _set(self, 'inertia', derived)
         degree = self.gravity_degree
-        if self.gravity_field is None and isinstance(degree, int) and 2 < degree <= MAX_DEGREE:
+        held = self.gravity_field
+        if isinstance(degree, int) and 2 < degree <= MAX_DEGREE and (
+                held is None or (isinstance(held, GravityField) and held.degree < degree)):
             _set(self, 'gravity_field', self.body.gravity_field(degree))
 
     def _check_gravity(self) -> None:
