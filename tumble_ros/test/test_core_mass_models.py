@@ -264,6 +264,11 @@ def test_a_box_polyhedron_has_no_odd_degree_moments():
     C, S = brute_stokes(masses, points, 7, 0.4)
     assert np.max(np.abs(C[1::2])) < 1e-15 and np.max(np.abs(S)) < 1e-15
     assert abs(C[2, 0]) > 0.05 and abs(C[4, 0]) > 1e-3
+    field = body.gravity_field(7, 0.4)
+    np.testing.assert_allclose(field.C, C, rtol=0, atol=1e-15)
+    assert np.max(np.abs(field.C[1::2])) < 1e-15 and np.max(np.abs(field.S)) < 1e-15
+    cube = Polyhedron(*box_mesh((0.2, 0.2, 0.2)), DENSITY)      # equal moments: axes kept
+    assert cube.is_principal and cube.gravity_field(4).C[2, 0] == pytest.approx(0, abs=1e-15)
 
 
 def test_an_icosphere_converges_to_the_ellipsoid_stokes_coefficients():
