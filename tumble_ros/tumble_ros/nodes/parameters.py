@@ -38,6 +38,7 @@ EMPTY_ARRAY_TYPES = {
     'impacts.duration': Parameter.Type.DOUBLE_ARRAY,
     'impacts.torque': Parameter.Type.DOUBLE_ARRAY,
     'impacts.frame': Parameter.Type.STRING_ARRAY,
+    'body.stokes': Parameter.Type.DOUBLE_ARRAY,
 }
 
 

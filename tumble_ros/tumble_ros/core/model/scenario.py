@@ -28,6 +28,7 @@ import numpy as np
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.jit import python_source
+from tumble_ros.core.model.body import BODY_PARAMETER_DOCS, BodySpec
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.model.gravity_field import GravityField, MAX_DEGREE
 from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, MAX_OMEGA,
@@ -335,6 +336,13 @@ class Scenario:
         The body's field (``core.model.gravity_field``): its principal moments must be
         proportional to ``inertia`` (same axes) to 1e-9 relative; they do not set it. Python API
         only for now (:meth:`to_parameters` leaves it out).
+    body : BodySpec
+        The mass model (ROS ``body.*``; docs/physics.md, "Mass models"): ``body.model``
+        ``inertia`` (default: ``inertia`` is the body) or ``ellipsoid``, ``polyhedron``,
+        ``moments``. With a mass model, ``inertia`` is derived from it (principal moments over
+        the largest): an ``inertia`` left at its default is replaced, another one must agree
+        to 1e-9 relative; ``gravity_field``, when None (or of a lower degree) and
+        ``gravity_degree`` > 2, is the model's to that degree.
 
     """
 
@@ -352,8 +360,10 @@ class Scenario:
     orbit: KeplerOrbit | None = None
     gravity_degree: int = 2
     gravity_field: GravityField | None = None
+    body: BodySpec = field(default_factory=BodySpec)
 
     def __post_init__(self) -> None:
+        self._apply_body()
         inertia = _vector('inertia', self.inertia)
         for k, v in enumerate(inertia):
             if v <= 0.0:
@@ -461,6 +471,22 @@ class Scenario:
                 _fail('orbit_rate', 'must be 0 with a Kepler orbit (orbit.kind kepler or flyby): '
                       'the orbit gives the tidal torque', self.orbit_rate)
         self._check_gravity()
+
+    def _apply_body(self) -> None:
+        """Derive ``inertia`` (and ``gravity_field``) from the mass model ``body``."""
+        if not isinstance(self.body, BodySpec):
+            _fail('body', 'must be a core.model.body.BodySpec', self.body)
+        derived = self.body.inertia
+        if derived is None:
+            return
+        if tuple(self.inertia) != Scenario.__dataclass_fields__['inertia'].default:
+            _check_body_inertia(self.inertia, self.body)
+        _set(self, 'inertia', derived)
+        degree = self.gravity_degree
+        held = self.gravity_field
+        if isinstance(degree, int) and 2 < degree <= MAX_DEGREE and (
+                held is None or (isinstance(held, GravityField) and held.degree < degree)):
+            _set(self, 'gravity_field', self.body.gravity_field(degree))
 
     def _check_gravity(self) -> None:
         """Validate ``gravity_degree`` (``gravity.degree``) and ``gravity_field``."""
@@ -605,14 +631,18 @@ class Scenario:
             params[f'orbit.{name}'] = getattr(orbit, name)
         params.update(dict.fromkeys((f'orbit.{name}' for name in _FLYBY_FIELDS), 0.0))
         params['gravity.degree'] = self.gravity_degree
+        params.update(self.body.to_parameters())
         return params
 
     @classmethod
-    def from_parameters(cls, params: Mapping[str, Any]) -> 'Scenario':
+    def from_parameters(cls, params: Mapping[str, Any],
+                        params_file: str | Path | None = None) -> 'Scenario':
         """
         Build from a flat parameter mapping; missing keys take their defaults.
 
-        Raises ScenarioError for unknown keys and invalid values.
+        ``params_file``: the file the parameters come from, if any (``body.shape_file`` may be
+        relative to it). Raises ScenarioError for unknown keys and invalid values, and for an
+        ``inertia`` given beside a mass model that disagrees with it.
         """
         known = set(PARAMETER_NAMES)
         unknown = sorted(set(params) - known)
@@ -629,7 +659,22 @@ class Scenario:
         plain['impacts'] = _impacts_from_parameters(params)
         plain['orbit'] = _orbit_from_parameters(params)
         plain['gravity_degree'] = params.get('gravity.degree', 2)
+        plain['body'] = body = BodySpec.from_parameters(params, params_file)
+        if body.inertia is not None and 'inertia' in params:
+            _check_body_inertia(params['inertia'], body)    # (even if it is the default)
         return cls(**plain)
+
+
+def _check_body_inertia(inertia: Any, body: BodySpec) -> None:
+    """Refuse an ``inertia`` not proportional (1e-9) to the mass model's principal moments."""
+    derived = body.inertia
+    assert derived is not None
+    given = _vector('inertia', inertia)
+    top = max(given)
+    if top <= 0.0 or any(abs(g / top - d) > 1e-9 for g, d in zip(given, derived)):
+        _fail('inertia', f'disagrees with the mass model (body.model {body.model}), whose '
+              f'normalised principal moments are {list(derived)}: give one or the other (a '
+              'body and its inertia cannot disagree)', inertia)
 
 
 _SCENARIO_PLAIN = (
@@ -649,6 +694,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
     + _IMPACT_KEYS
     + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS + _FLYBY_FIELDS)
     + ('gravity.degree',)
+    + tuple(BODY_PARAMETER_DOCS)
 )
 
 
@@ -736,6 +782,7 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'gravity.degree': ('', "degree N of the Kepler orbit's gravitational torque: 2 (default) the "
                        "inertia's quadrupole; 3 to 30 the body's gravity field to degree N "
                        '(needs kepler or flyby and the field)'),
+    **BODY_PARAMETER_DOCS,
 }
 
 
@@ -794,7 +841,7 @@ def load_scenario(path: str | Path, node: str = 'sim',
     """
     document = check_params_file(path)
     try:
-        return _scenario_from_document(document, node, ignore)
+        return _scenario_from_document(document, node, ignore, path)
     except ScenarioError as err:
         raise ScenarioError(f'{path}: {err}') from None
 
@@ -804,8 +851,8 @@ def parse_scenario(text: str, node: str = 'sim', ignore: frozenset[str] = frozen
     return _scenario_from_document(parse_params_text(text), node, ignore)
 
 
-def _scenario_from_document(document: Mapping[str, Any], node: str,
-                            ignore: frozenset[str]) -> Scenario:
+def _scenario_from_document(document: Mapping[str, Any], node: str, ignore: frozenset[str],
+                            path: str | Path | None = None) -> Scenario:
     """Return the scenario of the ``node`` section of a params file's checked document."""
     for key in (f'/**/{node}', node, f'/{node}', '/**'):
         if key in document:
@@ -818,7 +865,7 @@ def _scenario_from_document(document: Mapping[str, Any], node: str,
     if not isinstance(section, Mapping) or not isinstance(section.get('ros__parameters'), Mapping):
         raise ScenarioError("the node section has no 'ros__parameters' mapping")
     params = {k: v for k, v in _flatten(section['ros__parameters']).items() if k not in ignore}
-    return Scenario.from_parameters(params)
+    return Scenario.from_parameters(params, path)
 
 
 def dump_scenario(scenario: Scenario, node: str = 'sim') -> str:
