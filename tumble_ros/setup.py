@@ -17,6 +17,11 @@ setup(
         # Scenario files and the Foxglove layout, found under share/tumble_ros/config.
         (os.path.join('share', package_name, 'config'),
          glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.json'))),
+        # Shape files of mass models (docs/physics.md, "Mass models"), under
+        # share/tumble_ros/config/shapes, where a params file's body.shape_file finds them.
+        (os.path.join('share', package_name, 'config', 'shapes'),
+         glob(os.path.join('config', 'shapes', '*.obj'))
+         + glob(os.path.join('config', 'shapes', '*.tab'))),
         # Launch files, found by `ros2 launch tumble_ros <file>` under share/tumble_ros/launch.
         (os.path.join('share', package_name, 'launch'),
          glob(os.path.join('launch', '*.launch.py'))),

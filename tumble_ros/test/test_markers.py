@@ -217,3 +217,28 @@ def test_a_template_encodes_what_rclpy_decodes():
     assert {b.markers[1].id for b in back} == {7} and back[2].markers[1].ns == 'bb'
     with pytest.raises(KeyError):
         template.encode(1, {'markers[2].id': 1})
+
+
+def test_a_polyhedron_body_is_drawn_as_its_facets_turning_with_the_attitude(tmp_path):
+    from tumble_ros.core.model.body import BodySpec
+    from tumble_ros.core.model.shape_files import load_shape, resolve_shape_path
+    body = BodySpec(model='polyhedron', density=2600.0, shape_file='config/shapes/apophis.obj')
+    sc = Scenario(body=body, duration=0.02, output_interval=0.01)
+    scenes = _scenes(record_offline(sc, tmp_path / 'shape.mcap').output)
+    shape = load_shape(resolve_shape_path('config/shapes/apophis.obj'), 2600.0)
+    v, f = shape.vertices, shape.facets                 # (shipped in principal axes)
+    q, _ = _samples(tmp_path / 'shape.mcap')
+    for scene in scenes:
+        marker = scene.markers[0]
+        assert marker.type == 11 and marker.ns == 'body'          # TRIANGLE_LIST
+        assert (marker.scale.x, marker.scale.y, marker.scale.z) == (1.0, 1.0, 1.0)
+        points = np.array([[p.x, p.y, p.z] for p in marker.points])
+        assert points.shape == (3 * len(f), 3)
+        scale = np.linalg.norm(v, axis=1).max()          # the farthest vertex drawn at 1
+        np.testing.assert_allclose(points, v[f].reshape(-1, 3) / scale, rtol=1e-12)
+        normals = np.cross(points[1::3] - points[0::3], points[2::3] - points[0::3])
+        assert np.all(np.einsum('ij,ij->i', normals, points[0::3]) > 0)   # outward, as read
+        o = marker.pose.orientation
+        stamp = TimeBase.stamp_ns(marker.header.stamp.sec, marker.header.stamp.nanosec)
+        np.testing.assert_allclose([o.w, o.x, o.y, o.z], q[stamp], atol=1e-12)
+    assert len(scenes) == 3

@@ -41,6 +41,7 @@ EMPTY_ARRAY_TYPES = {
     'impacts.torque': Parameter.Type.DOUBLE_ARRAY,
     'impacts.frame': Parameter.Type.STRING_ARRAY,
     'perturbers.names': Parameter.Type.STRING_ARRAY,
+    'body.stokes': Parameter.Type.DOUBLE_ARRAY,
 }
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.jit import python_source
+from tumble_ros.core.model.body import BODY_PARAMETER_DOCS, BodySpec
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.model.gravity_field import GravityField, MAX_DEGREE
 from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, MAX_OMEGA,
@@ -348,6 +349,13 @@ class Scenario:
         The body's field (``core.model.gravity_field``): its principal moments must be
         proportional to ``inertia`` (same axes) to 1e-9 relative; they do not set it. Python API
         only for now (:meth:`to_parameters` leaves it out).
+    body : BodySpec
+        The mass model (ROS ``body.*``; docs/physics.md, "Mass models"): ``body.model``
+        ``inertia`` (default: ``inertia`` is the body) or ``ellipsoid``, ``polyhedron``,
+        ``moments``. With a mass model, ``inertia`` is derived from it (principal moments over
+        the largest): an ``inertia`` left at its default is replaced, another one must agree
+        to 1e-9 relative; ``gravity_field``, when None (or of a lower degree) and
+        ``gravity_degree`` > 2, is the model's to that degree.
 
     """
 
@@ -366,8 +374,10 @@ class Scenario:
     perturbers: tuple[Perturber, ...] = ()
     gravity_degree: int = 2
     gravity_field: GravityField | None = None
+    body: BodySpec = field(default_factory=BodySpec)
 
     def __post_init__(self) -> None:
+        self._apply_body()
         inertia = _vector('inertia', self.inertia)
         for k, v in enumerate(inertia):
             if v <= 0.0:
@@ -476,6 +486,22 @@ class Scenario:
                       'the orbit gives the tidal torque', self.orbit_rate)
         _set(self, 'perturbers', _checked_perturbers(self))
         self._check_gravity()
+
+    def _apply_body(self) -> None:
+        """Derive ``inertia`` (and ``gravity_field``) from the mass model ``body``."""
+        if not isinstance(self.body, BodySpec):
+            _fail('body', 'must be a core.model.body.BodySpec', self.body)
+        derived = self.body.inertia
+        if derived is None:
+            return
+        if tuple(self.inertia) != Scenario.__dataclass_fields__['inertia'].default:
+            _check_body_inertia(self.inertia, self.body)
+        _set(self, 'inertia', derived)
+        degree = self.gravity_degree
+        held = self.gravity_field
+        if isinstance(degree, int) and 2 < degree <= MAX_DEGREE and (
+                held is None or (isinstance(held, GravityField) and held.degree < degree)):
+            _set(self, 'gravity_field', self.body.gravity_field(degree))
 
     def _check_gravity(self) -> None:
         """Validate ``gravity_degree`` (``gravity.degree``) and ``gravity_field``."""
@@ -645,15 +671,18 @@ class Scenario:
         params.update(dict.fromkeys((f'orbit.{name}' for name in _FLYBY_FIELDS), 0.0))
         params.update(_perturber_parameters(self.perturbers))
         params['gravity.degree'] = self.gravity_degree
+        params.update(self.body.to_parameters())
         return params
 
     @classmethod
-    def from_parameters(cls, params: Mapping[str, Any], folder: Path | None = None) -> 'Scenario':
+    def from_parameters(cls, params: Mapping[str, Any],
+                        params_file: str | Path | None = None) -> 'Scenario':
         """
         Build from a flat parameter mapping; missing keys take their defaults.
 
-        ``folder``: where relative ephemeris files are looked for first (the params file's).
-        Raises ScenarioError for unknown keys and invalid values.
+        ``params_file``: the file the parameters come from, if any (``body.shape_file`` and the
+        perturbers' ``ephemeris_file`` may be relative to it). Raises ScenarioError for unknown keys and invalid values, and for an
+        ``inertia`` given beside a mass model that disagrees with it.
         """
         known = set(PARAMETER_NAMES) | set(perturber_parameter_names(params))
         unknown = sorted(set(params) - known)
@@ -661,7 +690,8 @@ class Scenario:
             raise ScenarioError(
                 f"{unknown[0]}: unknown scenario parameter (known: {', '.join(sorted(known))})")
         unit = _one_of('time_unit', params.get('time_unit', 'yr'), TIME_UNITS)
-        perturbers = _perturbers_from_parameters(params, unit, folder)
+        perturbers = _perturbers_from_parameters(
+            params, unit, Path(params_file).parent if params_file is not None else None)
         params = to_years(params, unit)
         plain = {k: params[k] for k in _SCENARIO_PLAIN if k in params}
         integ = {
@@ -672,7 +702,22 @@ class Scenario:
         plain['orbit'] = _orbit_from_parameters(params)
         plain['perturbers'] = perturbers
         plain['gravity_degree'] = params.get('gravity.degree', 2)
+        plain['body'] = body = BodySpec.from_parameters(params, params_file)
+        if body.inertia is not None and 'inertia' in params:
+            _check_body_inertia(params['inertia'], body)    # (even if it is the default)
         return cls(**plain)
+
+
+def _check_body_inertia(inertia: Any, body: BodySpec) -> None:
+    """Refuse an ``inertia`` not proportional (1e-9) to the mass model's principal moments."""
+    derived = body.inertia
+    assert derived is not None
+    given = _vector('inertia', inertia)
+    top = max(given)
+    if top <= 0.0 or any(abs(g / top - d) > 1e-9 for g, d in zip(given, derived)):
+        _fail('inertia', f'disagrees with the mass model (body.model {body.model}), whose '
+              f'normalised principal moments are {list(derived)}: give one or the other (a '
+              'body and its inertia cannot disagree)', inertia)
 
 
 _SCENARIO_PLAIN = (
@@ -693,6 +738,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
     + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS + _FLYBY_FIELDS)
     + ('perturbers.names',)
     + ('gravity.degree',)
+    + tuple(BODY_PARAMETER_DOCS)
 )
 
 
@@ -785,6 +831,7 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'gravity.degree': ('', "degree N of every perturber's gravitational torque: 2 (default) the "
                        "inertia's quadrupole; 3 to 30 the body's gravity field to degree N "
                        '(needs a perturber and the field)'),
+    **BODY_PARAMETER_DOCS,
 }
 
 
@@ -989,7 +1036,7 @@ def load_scenario(path: str | Path, node: str = 'sim',
     """
     document = check_params_file(path)
     try:
-        return _scenario_from_document(document, node, ignore, Path(path).parent)
+        return _scenario_from_document(document, node, ignore, path)
     except ScenarioError as err:
         raise ScenarioError(f'{path}: {err}') from None
 
@@ -999,8 +1046,8 @@ def parse_scenario(text: str, node: str = 'sim', ignore: frozenset[str] = frozen
     return _scenario_from_document(parse_params_text(text), node, ignore)
 
 
-def _scenario_from_document(document: Mapping[str, Any], node: str,
-                            ignore: frozenset[str], folder: Path | None = None) -> Scenario:
+def _scenario_from_document(document: Mapping[str, Any], node: str, ignore: frozenset[str],
+                            path: str | Path | None = None) -> Scenario:
     """Return the scenario of the ``node`` section of a params file's checked document."""
     for key in (f'/**/{node}', node, f'/{node}', '/**'):
         if key in document:
@@ -1013,7 +1060,7 @@ def _scenario_from_document(document: Mapping[str, Any], node: str,
     if not isinstance(section, Mapping) or not isinstance(section.get('ros__parameters'), Mapping):
         raise ScenarioError("the node section has no 'ros__parameters' mapping")
     params = {k: v for k, v in _flatten(section['ros__parameters']).items() if k not in ignore}
-    return Scenario.from_parameters(params, folder)
+    return Scenario.from_parameters(params, path)
 
 
 def dump_scenario(scenario: Scenario, node: str = 'sim') -> str:

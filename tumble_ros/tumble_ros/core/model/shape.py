@@ -33,13 +33,15 @@ from tumble_ros.core.array_types import ArrayLike, FloatArray
 if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Scenario
 
-__all__ = ['BodyShape', 'ELLIPSOID', 'BOX', 'MIN_THICKNESS', 'body_shape',
+__all__ = ['BodyShape', 'ELLIPSOID', 'BOX', 'POLYHEDRON', 'MIN_THICKNESS', 'body_shape',
+           'polyhedron_triangles',
            'torquing_body_direction', 'torquing_body_directions', 'AXIS_LENGTH',
            'MOMENTUM_LENGTH', 'PERTURBER_LENGTH', 'COLORS']
 
 #: Shape kinds.
 ELLIPSOID = 'ellipsoid'
 BOX = 'box'
+POLYHEDRON = 'polyhedron'
 #: Smallest semi-axis drawn, relative to the longest one.
 MIN_THICKNESS = 0.05
 #: Arrow lengths of a scene [display units; the body's longest semi-axis is 1]: the body axes,
@@ -51,6 +53,7 @@ PERTURBER_LENGTH = 2.5
 COLORS = {
     ELLIPSOID: (0.62, 0.57, 0.52, 0.85),
     BOX: (0.9, 0.55, 0.25, 0.6),
+    POLYHEDRON: (0.62, 0.57, 0.52, 0.85),
     'x': (0.9, 0.15, 0.15, 1.0),
     'y': (0.15, 0.75, 0.15, 1.0),
     'z': (0.2, 0.35, 0.95, 1.0),
@@ -99,6 +102,20 @@ def body_shape(inertia: ArrayLike) -> BodyShape:
     semi = np.maximum(semi, MIN_THICKNESS)
     return BodyShape(ELLIPSOID if physical else BOX,
                      (float(semi[0]), float(semi[1]), float(semi[2])), physical)
+
+
+def polyhedron_triangles(vertices: ArrayLike, facets: ArrayLike) -> FloatArray:
+    """
+    Return the corners of every facet, (3 m, 3), at the display scale: a triangle list.
+
+    ``vertices`` (n, 3) [km] in the body's centre-of-mass principal axes, ``facets`` (m, 3)
+    0-based, outward. Scaled so that the farthest vertex from the centre is at 1 (the
+    ellipsoid's longest semi-axis, :func:`body_shape`); corner order kept (outward normals).
+    """
+    v = np.asarray(vertices, dtype=float)
+    f = np.asarray(facets, dtype=np.int64)
+    corners: FloatArray = v[f].reshape(-1, 3) / np.linalg.norm(v, axis=1).max()
+    return corners
 
 
 def torquing_body_direction(scenario: Scenario, t: ArrayLike) -> FloatArray | None:

@@ -8,8 +8,11 @@ marker in the frame ``orbital`` and stamped with the sample's stamp, so that RVi
 
 * ``body`` 0: the body (:func:`tumble_ros.core.model.shape.body_shape`): a SPHERE scaled to the
   uniform ellipsoid of the principal moments (scale = 2 x semi-axes, the longest semi-axis 1),
-  or a CUBE when the moments break the triangle inequality (no body has them); position 0,
-  orientation = the attitude quaternion (body -> orbital) of the sample;
+  or a CUBE when the moments break the triangle inequality (no body has them), or, for a
+  polyhedron mass model (``body.model: polyhedron``), a TRIANGLE_LIST of its facets in its
+  principal axes (:func:`tumble_ros.core.model.shape.polyhedron_triangles`: the farthest vertex
+  at 1, scale 1); position 0, orientation = the attitude quaternion (body -> orbital) of the
+  sample;
 * ``axes`` 0, 1, 2: ARROWs along the body's principal axes x, y, z (red, green, blue),
   ``AXIS_LENGTH`` long (lengths and colours: :mod:`tumble_ros.core.model.shape`): orientation = the
   attitude times the fixed rotation taking +x onto the axis (:data:`AXIS_ROTATIONS`);
@@ -38,10 +41,11 @@ from std_msgs.msg import ColorRGBA
 from tumble_ros import topics
 from tumble_ros.core import Scenario
 from tumble_ros.core.model.dynamics import angular_momentum_orbital
+from tumble_ros.core.model.mass_models import Polyhedron
 from tumble_ros.core.model.rotation import quaternions_to_matrices
 from tumble_ros.core.model.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, MOMENTUM_LENGTH,
-                                         PERTURBER_LENGTH, torquing_body_direction,
-                                         torquing_body_directions)
+                                         PERTURBER_LENGTH, POLYHEDRON, polyhedron_triangles,
+                                         torquing_body_direction, torquing_body_directions)
 from tumble_ros.core.propagation.timebase import SampleGrid
 from tumble_ros.io import message_definition, MessageTemplate
 from visualization_msgs.msg import Marker, MarkerArray
@@ -111,16 +115,22 @@ class MarkerScene:
         markers = []
 
         def add(ns: str, marker_id: int, kind: int, scale: Any, color: ColorRGBA,
-                points: int = 0) -> None:
+                points: int = 0, at: Any = None) -> None:
             m = Marker(ns=ns, id=marker_id, type=kind, action=Marker.ADD, color=color)
             m.header.frame_id = topics.FRAME_ORBITAL
             m.pose.orientation.w = 1.0
             m.scale.x, m.scale.y, m.scale.z = (float(v) for v in scale)
-            m.points = [Point() for _ in range(points)]
+            m.points = ([Point() for _ in range(points)] if at is None else
+                        [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in at])
             markers.append(m)
 
-        add(NS_BODY, 0, Marker.CUBE if self.shape.kind == BOX else Marker.SPHERE,
-            [2.0 * v for v in self.shape.semi_axes], _color(COLORS[self.shape.kind]))
+        model = self.scenario.body.mass_model
+        if isinstance(model, Polyhedron):
+            add(NS_BODY, 0, Marker.TRIANGLE_LIST, (1.0, 1.0, 1.0), _color(COLORS[POLYHEDRON]),
+                at=polyhedron_triangles(model.vertices, model.facets))
+        else:
+            add(NS_BODY, 0, Marker.CUBE if self.shape.kind == BOX else Marker.SPHERE,
+                [2.0 * v for v in self.shape.semi_axes], _color(COLORS[self.shape.kind]))
         for i, axis in enumerate('xyz'):
             add(NS_AXES, i, Marker.ARROW, (AXIS_LENGTH, 0.04, 0.08), _color(COLORS[axis]))
         # ARROW with points: scale = (shaft diameter, head diameter, head length)
