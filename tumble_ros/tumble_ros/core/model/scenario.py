@@ -681,8 +681,9 @@ class Scenario:
         Build from a flat parameter mapping; missing keys take their defaults.
 
         ``params_file``: the file the parameters come from, if any (``body.shape_file`` and the
-        perturbers' ``ephemeris_file`` may be relative to it). Raises ScenarioError for unknown keys and invalid values, and for an
-        ``inertia`` given beside a mass model that disagrees with it.
+        perturbers' ``ephemeris_file`` may be relative to it). Raises ScenarioError for unknown
+        keys and invalid values, and for an ``inertia`` given beside a mass model that disagrees
+        with it.
         """
         known = set(PARAMETER_NAMES) | set(perturber_parameter_names(params))
         unknown = sorted(set(params) - known)
