@@ -302,3 +302,28 @@ def test_the_earths_j2_through_the_apophis_flyby_is_small_and_linear_in_j2():
     assert 1e-5 < change < 1e-4
     np.testing.assert_allclose(twice - point, 2.0 * (once - point), rtol=0,
                                atol=0.01 * change * scale.max())
+
+
+def test_every_perturber_takes_the_mass_models_field_to_the_scenarios_degree():
+    """An ellipsoid body at gravity.degree 4: the Earth (a flyby) and the Moon (a table)."""
+    from tumble_ros.core.torques.ephemeris import Ephemeris
+
+    text = PARAMS.replace('    inertia: [0.64, 0.97, 1.0]\n', """    body:
+      model: ellipsoid
+      semi_axes: [0.217, 0.154, 0.147]
+      density: 2600.0
+    gravity:
+      degree: 4
+""")
+    sc = parse_scenario(text)
+    assert sc.gravity_field is not None and sc.gravity_field.degree >= 4
+    moon = sc.perturbers[1]
+    knots = np.linspace(-0.001, sc.duration + 0.001, 400)
+    table = Ephemeris(tuple(knots), tuple(map(tuple, moon.source.position(knots))))
+    sc = sc.replace(perturbers=(sc.perturbers[0], Perturber('moon', table, gm=moon.gm)))
+    for component in sc.extra_torques:
+        assert component.parameters[8] > 0          # the law reads the body's field
+    four, two = simulate(sc), simulate(sc.replace(gravity_degree=2))
+    assert four.success
+    difference = np.max(np.abs(four.omega - two.omega)) / np.max(np.abs(two.omega))
+    assert 0.0 < difference < 1e-6                  # an ellipsoid's degree 4: (a / R)^2 C_40
