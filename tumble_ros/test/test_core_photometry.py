@@ -304,3 +304,18 @@ def test_in_a_flyby_the_observer_is_on_the_perturber_and_light_time_delays_the_s
     expected = (-2.5 * np.log10(record.brightness / reference)
                 + 5.0 * np.log10(distance / KM_PER_AU))
     np.testing.assert_allclose(record.magnitude, expected, rtol=1e-13)
+
+
+def test_a_sample_comes_out_the_same_bit_for_bit_in_any_block():
+    # the live simulator's batches and the offline writer's differ; their samples must not
+    rng = np.random.default_rng(3)
+    mesh = ellipsoid_mesh((1.0, 0.6, 0.4), 4)
+    n = 300
+    q = np.array([random_rotation(rng) for _ in range(n)])
+    sun = np.array([unit(rng.normal(size=3)) for _ in range(n)])
+    observer = np.array([unit(rng.normal(size=3)) for _ in range(n)])
+    whole = brightness(q, sun, observer, mesh, 'kaasalainen')
+    for start, stop in ((0, 1), (7, 8), (5, 37), (100, 300)):
+        part = brightness(q[start:stop], sun[start:stop], observer[start:stop], mesh,
+                          'kaasalainen')
+        np.testing.assert_array_equal(part, whole[start:stop])

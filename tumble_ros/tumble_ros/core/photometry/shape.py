@@ -27,15 +27,11 @@ import numpy.typing as npt
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.model.shape import body_shape
+from tumble_ros.core.photometry.settings import DEFAULT_SUBDIVISIONS, MAX_SUBDIVISIONS
 
 __all__ = ['Mesh', 'convex_mesh', 'icosphere', 'ellipsoid_mesh', 'body_mesh',
            'DEFAULT_SUBDIVISIONS', 'MAX_SUBDIVISIONS', 'CONVEXITY_TOLERANCE']
 
-#: Subdivisions of the icosphere of :func:`body_mesh` by default: 3, 1,280 facets (the
-#: accuracy and the cost are measured in docs/analysis.md, "Lightcurves: what a telescope sees").
-DEFAULT_SUBDIVISIONS = 3
-#: Most subdivisions accepted: 7, 327,680 facets.
-MAX_SUBDIVISIONS = 7
 #: A vertex may stand this far outside a facet's plane, relative to the mesh's size, and the
 #: mesh still counts as convex (rounding of the coordinates).
 CONVEXITY_TOLERANCE = 1e-9
