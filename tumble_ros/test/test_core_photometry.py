@@ -212,6 +212,7 @@ def test_the_icosphere_has_the_expected_counts_and_a_closed_convex_surface():
         mesh = convex_mesh(v, f)
         # closed: the outward normals weighted by area sum to zero
         assert np.max(np.abs(mesh.areas @ mesh.normals)) < 1e-13
+        convex_mesh(v * np.array([1.0, 0.7, 0.45]), f)     # checked: no error
     mesh = ellipsoid_mesh((1.0, 0.7, 0.45), 5)
     assert mesh.volume == pytest.approx(4.0 / 3.0 * math.pi * 1.0 * 0.7 * 0.45, rel=1e-3)
 

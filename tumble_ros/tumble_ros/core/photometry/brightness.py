@@ -91,26 +91,26 @@ def brightness(quaternion: ArrayLike, sun: ArrayLike, observer: ArrayLike, mesh:
     o_body = to_body(q, _directions('observer', observer, n))
     out = np.empty(n)
     block = max(1, CHUNK_ELEMENTS // mesh.areas.size)
+    columns = tuple(np.ascontiguousarray(mesh.normals[:, k]) for k in range(3))
     for start in range(0, n, block):
-        mu0 = _cosines(s_body[start:start + block], mesh.normals)
-        mu = _cosines(o_body[start:start + block], mesh.normals)
-        seen = (mu0 > 0.0) & (mu > 0.0)
-        mu0 = np.where(seen, mu0, 0.0)
-        mu = np.where(seen, mu, 0.0)
+        # a facet neither lit nor seen counts 0: every law vanishes where mu0 or mu is 0
+        mu0 = np.maximum(_cosines(s_body[start:start + block], columns), 0.0)
+        mu = np.maximum(_cosines(o_body[start:start + block], columns), 0.0)
         out[start:start + block] = np.sum(scatter(mu0, mu) * mesh.areas, axis=1)
     return out
 
 
-def _cosines(direction: FloatArray, normals: FloatArray) -> FloatArray:
+def _cosines(direction: FloatArray, normals: tuple[FloatArray, ...]) -> FloatArray:
     """
-    Return d.n (m, F) of directions (m, 3) and normals (F, 3), elementwise.
+    Return d.n (m, F) of directions (m, 3) and the normals' columns (nx, ny, nz), elementwise.
 
     Not a matrix product: BLAS may order a product's sums by the array's size, and each sample
     must come out the same whatever block it is computed in (the live simulator's batches and
     the offline writer's differ); the row sums above are numpy's, row by row, alike.
     """
-    cosines: FloatArray = (direction[:, 0:1] * normals[:, 0] + direction[:, 1:2] * normals[:, 1]
-                           + direction[:, 2:3] * normals[:, 2])
+    cosines: FloatArray = direction[:, 0:1] * normals[0]
+    cosines += direction[:, 1:2] * normals[1]
+    cosines += direction[:, 2:3] * normals[2]
     return cosines
 
 
