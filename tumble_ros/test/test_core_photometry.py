@@ -292,6 +292,7 @@ def test_in_a_flyby_the_observer_is_on_the_perturber_and_light_time_delays_the_s
     np.testing.assert_allclose(record.t, t + delay / SECONDS_PER_YEAR, rtol=0, atol=1e-18)
     plain = synthetic_lightcurve(sc, t, q, LightcurveSettings(sun=(1.0, 0.0, 0.0)))
     np.testing.assert_array_equal(plain.t, t)
+    np.testing.assert_array_equal(plain.light_time, record.light_time)   # given either way
     np.testing.assert_array_equal(plain.brightness, record.brightness)
     # the body's axes are the inertial ones (q = 1): the aspects are the directions' own angles
     direction = position / distance[:, None]

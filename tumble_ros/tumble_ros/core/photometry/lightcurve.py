@@ -104,10 +104,11 @@ class LightcurveRecord:
     """
     A synthetic lightcurve, one row per sample.
 
-    ``t`` (n,) [yr]: the sample times, or the reception times with light time; ``light_time``
-    (n,) [s] delta / c (0 without it); ``brightness`` (n,) [mesh area units];
-    ``magnitude`` (n,) [mag]; ``phase_angle`` (n,) [rad]; ``sun_aspect``, ``observer_aspect``
-    (n, 2) (latitude, longitude) [rad] in body axes (``brightness`` module docstring).
+    ``t`` (n,) [yr]: the sample times, or the reception times t + delta / c with
+    ``settings.light_time``; ``light_time`` (n,) [s] delta / c (either way); ``brightness``
+    (n,) [mesh area units]; ``magnitude`` (n,) [mag]; ``phase_angle`` (n,) [rad];
+    ``sun_aspect``, ``observer_aspect`` (n, 2) (latitude, longitude) [rad] in body axes
+    (``brightness`` module docstring).
     """
 
     t: FloatArray
@@ -145,9 +146,8 @@ def synthetic_lightcurve(scenario: Scenario, t: ArrayLike, quaternion: ArrayLike
     b = brightness(q, geometry.sun, geometry.observer, mesh, settings.law)
     m = magnitude(b, reference_brightness(mesh, settings.law), geometry.sun_distance,
                   geometry.observer_distance)
-    delay = (geometry.observer_distance * KM_PER_AU / SPEED_OF_LIGHT if settings.light_time
-             else np.zeros(t.size))
-    stamped = t + delay / SECONDS_PER_YEAR
+    delay = geometry.observer_distance * KM_PER_AU / SPEED_OF_LIGHT
+    stamped = t + delay / SECONDS_PER_YEAR if settings.light_time else t.copy()
     return LightcurveRecord(stamped, delay, b, m, phase_angle(geometry.sun, geometry.observer),
                             aspect_angles(q, geometry.sun), aspect_angles(q, geometry.observer))
 
