@@ -321,3 +321,17 @@ def test_a_sample_comes_out_the_same_bit_for_bit_in_any_block():
         part = brightness(q[start:stop], sun[start:stop], observer[start:stop], mesh,
                           'kaasalainen')
         np.testing.assert_array_equal(part, whole[start:stop])
+
+
+def test_the_lightcurve_parameters_are_the_scenarios_and_refused_naming_the_field():
+    from tumble_ros.core import parse_scenario, ScenarioError
+    text = ('/**/sim:\n  ros__parameters:\n    lightcurve:\n      law: lambert\n'
+            '      observer: [0.0, 0.0, 3.0]\n      light_time: true\n')
+    scenario = parse_scenario(text)
+    assert scenario.lightcurve == LightcurveSettings(law='lambert', observer=(0.0, 0.0, 1.0),
+                                                     light_time=True)
+    assert Scenario.from_parameters(scenario.to_parameters()) == scenario
+    with pytest.raises(ScenarioError, match='lightcurve.law: must be one of'):
+        Scenario.from_parameters({'lightcurve.law': 'hapke'})
+    with pytest.raises(ScenarioError, match='lightcurve.colour: unknown'):
+        Scenario.from_parameters({'lightcurve.colour': 'red'})
