@@ -35,8 +35,9 @@ import numpy as np
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.model.shape import body_shape
 from tumble_ros.core.model.units import KM_PER_AU, SECONDS_PER_YEAR
-from tumble_ros.core.photometry.brightness import (aspect_angles, brightness, magnitude,
-                                                   phase_angle, reference_brightness)
+from tumble_ros.core.photometry.brightness import (brightness_in_body, latitude_longitude,
+                                                   magnitude, phase_angle,
+                                                   reference_brightness, to_body)
 from tumble_ros.core.photometry.settings import LightcurveSettings
 from tumble_ros.core.photometry.shape import body_mesh, Mesh
 from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital
@@ -143,13 +144,17 @@ def synthetic_lightcurve(scenario: Scenario, t: ArrayLike, quaternion: ArrayLike
         raise ValueError(f'quaternion: need one per time ({t.size}), got {q.shape[0]}')
     mesh = lightcurve_mesh(scenario, settings) if mesh is None else mesh
     geometry = observer_geometry(scenario, t, settings)
-    b = brightness(q, geometry.sun, geometry.observer, mesh, settings.law)
+    # both directions turned in one call (a fixed cost per call: the live batches are small)
+    n = t.size
+    turned = to_body(np.concatenate([q, q]), np.concatenate([geometry.sun, geometry.observer]))
+    sun, observer = turned[:n], turned[n:]
+    b = brightness_in_body(sun, observer, mesh, settings.law)
     m = magnitude(b, reference_brightness(mesh, settings.law), geometry.sun_distance,
                   geometry.observer_distance)
     delay = geometry.observer_distance * KM_PER_AU / SPEED_OF_LIGHT
     stamped = t + delay / SECONDS_PER_YEAR if settings.light_time else t.copy()
     return LightcurveRecord(stamped, delay, b, m, phase_angle(geometry.sun, geometry.observer),
-                            aspect_angles(q, geometry.sun), aspect_angles(q, geometry.observer))
+                            latitude_longitude(sun), latitude_longitude(observer))
 
 
 @dataclass(frozen=True)
