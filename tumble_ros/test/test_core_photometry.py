@@ -335,3 +335,19 @@ def test_the_lightcurve_parameters_are_the_scenarios_and_refused_naming_the_fiel
         Scenario.from_parameters({'lightcurve.law': 'hapke'})
     with pytest.raises(ScenarioError, match='lightcurve.colour: unknown'):
         Scenario.from_parameters({'lightcurve.colour': 'red'})
+
+
+def test_a_heliocentric_kepler_orbit_places_the_sun_and_no_torque_takes_the_fixed_sun():
+    orbit = KeplerOrbit(gm=1.3271244e11, a=1.5e8, e=0.3)      # the Sun's GM: the Sun moves
+    sc = Scenario(orbit_rate=0.0, orbit=orbit)
+    t = np.linspace(0.0, 1.0, 6)
+    g = observer_geometry(sc, t, LightcurveSettings(observer=(1.0, 0.0, 0.0)))
+    position = orbit.position(t)
+    distance = np.linalg.norm(position, axis=1)
+    np.testing.assert_allclose(g.sun, position / distance[:, None], atol=1e-15)
+    np.testing.assert_allclose(g.sun_distance, distance / KM_PER_AU, rtol=1e-15)
+    np.testing.assert_allclose(g.observer, np.tile([1.0, 0.0, 0.0], (6, 1)))
+    np.testing.assert_allclose(g.observer_distance, 1.0)
+    free = observer_geometry(Scenario(orbit_rate=0.0), t, LightcurveSettings(sun=(0.0, 0.0, 2.0)))
+    np.testing.assert_allclose(free.sun, np.tile([0.0, 0.0, 1.0], (6, 1)))
+    np.testing.assert_allclose(free.observer, free.sun)       # default: along the Sun
