@@ -242,8 +242,8 @@ class _Writer:
 
         The simulator's: /clock (if published), ω, attitude, Euler angles, the perturber's
         position when the scenario has a Kepler orbit and the lightcurve when the body has one
-        (as the live simulator), encoded as the
-        live simulator encodes them (:class:`~tumble_ros.runs.messages.builders.SampleEncoder`).
+        (as the live simulator), encoded as the live simulator encodes them
+        (:class:`~tumble_ros.runs.messages.builders.SampleEncoder`).
         """
         channels, n, ns = self.channels, len(block), block.stamps
         sim = channels.encoder.simulator(ns, block.omega, block.quaternion, block.euler,
