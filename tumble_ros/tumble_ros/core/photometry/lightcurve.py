@@ -47,7 +47,7 @@ if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Scenario
 
 __all__ = ['ObserverGeometry', 'LightcurveRecord', 'observer_geometry', 'synthetic_lightcurve',
-           'lightcurve_mesh', 'LightcurveSampler']
+           'lightcurve_mesh', 'LightcurveSampler', 'LightcurveSettings']
 
 
 @dataclass(frozen=True)
