@@ -219,10 +219,13 @@ def test_the_icosphere_has_the_expected_counts_and_a_closed_convex_surface():
 
 def test_a_concave_mesh_is_refused():
     v, f = icosphere(2)
-    v = v.copy()
-    v[0] *= 0.5                        # push one vertex in: a dimple
-    with pytest.raises(ValueError, match='not convex'):
-        convex_mesh(v, f)
+    for depth in (0.5, 0.05):          # (the sagitta of these facets is ~0.01)
+        dented = v.copy()
+        dented[0] *= 1.0 - depth       # push one vertex in: a dimple
+        with pytest.raises(ValueError, match='not convex'):
+            convex_mesh(dented, f)
+    rounded = np.round(v * np.array([1.0, 0.7, 0.45]), 7)   # printed to 7 decimals: accepted
+    convex_mesh(rounded, f)
 
 
 def test_facets_given_inward_are_turned_outward():
