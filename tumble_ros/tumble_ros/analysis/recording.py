@@ -477,8 +477,10 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
         rec.segments.append(SegmentStart(
             revision=int(msg.revision), segment_start=float(msg.segment_start),
             omega=_vec(msg.omega), quaternion=(float(q.w), float(q.x), float(q.y), float(q.z))))
-    # Every description holds the scenario as started (the same text); the last one readable.
-    for _, msg in reversed(scenarios):
+    # Every description holds the scenario as started; the first of a run (revision 0) with its
+    # scheduled impacts, the later ones without. The last revision 0 readable, else the last
+    # one readable (a recorder that started late).
+    for _, msg in sorted(scenarios[::-1], key=lambda m: int(m[1].revision) != 0):
         try:
             rec.scenario = parse_scenario(msg.parameters_yaml)
             rec.scenario_error = None
