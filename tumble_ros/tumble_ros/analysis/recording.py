@@ -480,7 +480,9 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
     # Every description holds the scenario as started; the first of a run (revision 0) with its
     # scheduled impacts, the later ones without. The last revision 0 readable, else the last
     # one readable (a recorder that started late).
-    for _, msg in sorted(scenarios[::-1], key=lambda m: int(m[1].revision) != 0):
+    latest_first = list(reversed(scenarios))
+    for _, msg in ([d for d in latest_first if int(d[1].revision) == 0]
+                   + [d for d in latest_first if int(d[1].revision) != 0]):
         try:
             rec.scenario = parse_scenario(msg.parameters_yaml)
             rec.scenario_error = None

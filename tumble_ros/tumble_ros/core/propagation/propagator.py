@@ -188,7 +188,7 @@ class Propagator:
 
     @property
     def segments(self) -> tuple[Segment, ...]:
-        """The integration segments of the whole run (:mod:`~.segments`), as scheduled so far."""
+        """Return the integration segments of the whole run (:mod:`~.segments`) so far."""
         return tuple(self._segments)
 
     def schedule(self, impact: Impact) -> None:
