@@ -515,9 +515,9 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
     blocks = list(zip(edges[:-1].tolist(), edges[1:].tolist()))
 
     start = time.perf_counter()
-    method = K.kernel_name(cfg)
+    kernel = K.kernel_name(cfg)
     with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool, \
-            first_use(K.loops(method).ensemble_advance, f'{method} ensemble loops'):
+            first_use(K.loops(kernel).ensemble_advance, f'{kernel} ensemble loops'):
         list(pool.map(lambda blk: K.ensemble_init(extra, cfg, probs, seg_t, seg_ptr, states, *blk),
                       blocks))
         t_end = float(times[-1])
