@@ -94,7 +94,9 @@ class SegmentStart:
     run_id : str
         The run's id (one per run, in every description).
     parameters_yaml : str
-        The scenario as started (``dump_scenario``).
+        The scenario as started (``dump_scenario``): at revision 0 with its scheduled impacts, at
+        later revisions without them (the same text in all of these; an impact's end is on
+        ``impact_events``), so a description's size does not grow with the impacts.
     seconds_per_year : float
         The run's time base (stamp [ns] = t [yr] * 1e9 * seconds_per_year).
     revision : int

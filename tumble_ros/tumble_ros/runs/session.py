@@ -65,7 +65,12 @@ class SimulationSession:
         self.grid = grid
         self.run_id = run_id
         self._propagator = Propagator(scenario, fast=fast)
+        # The first description carries the scenario as started, its scheduled impacts included;
+        # the later ones the same without the impacts list (each is on impact_events when it
+        # ends): a description per impact would otherwise repeat every impact (quadratic).
         self._scenario_yaml = dump_scenario(scenario)
+        self._segment_yaml = (dump_scenario(scenario.replace(impacts=())) if scenario.impacts
+                              else self._scenario_yaml)
         self._next_k = 0        # index of the next sample
         self._revision = 0      # of the next segment start
         self._state = PAUSED if paused else RUNNING
@@ -170,9 +175,13 @@ class SimulationSession:
         return records
 
     def _schedule_pending(self) -> None:
-        while self._pending:
-            impact_id, impact = self._pending.popleft()
-            self._propagator.schedule(impact)
+        """Schedule the impacts requested since the last batch, in one pass."""
+        if not self._pending:
+            return
+        pending = list(self._pending)
+        self._propagator.schedule_many([impact for _, impact in pending])
+        self._pending.clear()
+        for impact_id, impact in pending:
             self._impact_ids[id(impact)] = impact_id
 
     def _block(self, k0: int, times: Floats, omega: Floats, quaternion: Floats,
@@ -210,7 +219,8 @@ class SimulationSession:
         """Describe the segment starting at ``t0`` [yr] in state ``y0``; count the revision."""
         revision, self._revision = self._revision, self._revision + 1
         q = self._propagator.quaternion_of(y0)
+        text = self._segment_yaml if revision else self._scenario_yaml
         return SegmentStart(
-            self.run_id, self._scenario_yaml, self.grid.timebase.seconds_per_year, revision,
+            self.run_id, text, self.grid.timebase.seconds_per_year, revision,
             t0, self.grid.timebase.to_ns(t0), (float(y0[0]), float(y0[1]), float(y0[2])),
             (float(q[0]), float(q[1]), float(q[2]), float(q[3])))
