@@ -33,13 +33,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.model.mass_models import Ellipsoid, Polyhedron
 from tumble_ros.core.model.shape import body_shape
 from tumble_ros.core.model.units import KM_PER_AU, SECONDS_PER_YEAR
 from tumble_ros.core.photometry.brightness import (brightness_in_body, latitude_longitude,
                                                    magnitude, phase_angle,
                                                    reference_brightness, to_body)
 from tumble_ros.core.photometry.settings import LightcurveSettings
-from tumble_ros.core.photometry.shape import body_mesh, Mesh
+from tumble_ros.core.photometry.shape import body_mesh, convex_mesh, ellipsoid_mesh, Mesh
 from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital
 from tumble_ros.core.torques.orbits import perturber_radius, SPEED_OF_LIGHT
 
@@ -122,7 +123,19 @@ class LightcurveRecord:
 
 
 def lightcurve_mesh(scenario: Scenario, settings: LightcurveSettings) -> Mesh:
-    """Return the body's mesh (``shape.body_mesh``; ValueError for unphysical moments)."""
+    """
+    Return the body's mesh, in its principal axes (the scenario's body frame).
+
+    The mass model's shape where the scenario has one (``body.model``): a polyhedron's own
+    facets (ValueError when it is not convex: its self-shadowing is not modelled), an
+    ellipsoid's semi-axes meshed as :func:`~.shape.ellipsoid_mesh`; else the uniform ellipsoid
+    of the principal moments (:func:`~.shape.body_mesh`; ValueError for unphysical moments).
+    """
+    model = scenario.body.mass_model
+    if isinstance(model, Polyhedron):
+        return convex_mesh(model.vertices, model.facets)
+    if isinstance(model, Ellipsoid):
+        return ellipsoid_mesh(model.semi_axes, settings.subdivisions)
     return body_mesh(scenario.inertia, settings.subdivisions)
 
 
@@ -174,10 +187,14 @@ class LightcurveSampler:
         """
         Return the sampler of ``scenario``; None when it has no lightcurve.
 
-        None when ``lightcurve.enabled`` is false or the moments break the triangle inequality
-        (no body has them).
+        None when ``lightcurve.enabled`` is false, the moments break the triangle inequality
+        (no body has them) or the body is a non-convex polyhedron (self-shadowing is not
+        modelled).
         """
         if not scenario.lightcurve.enabled or not body_shape(scenario.inertia).physical:
+            return None
+        model = scenario.body.mass_model
+        if isinstance(model, Polyhedron) and not model.convex:
             return None
         return cls(scenario, lightcurve_mesh(scenario, scenario.lightcurve))
 
