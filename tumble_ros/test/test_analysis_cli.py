@@ -190,6 +190,23 @@ def test_every_figure_with_a_comparator_and_impacts(tmp_path):
         assert _png_size(path)[0] >= 500 and path.stat().st_size > 20_000
 
 
+def test_impact_figures_stop_at_their_cap(tmp_path):
+    """Many impacts: the first MAX_IMPACT_FIGURES get a figure each, the rest none."""
+    from tumble_ros.analysis.figures import MAX_IMPACT_FIGURES
+
+    n = MAX_IMPACT_FIGURES + 3
+    t = np.arange(401) * 0.002
+    omega = np.stack([np.cos(15 * t), np.sin(15 * t), np.full_like(t, 30.0)], -1)
+    impacts = [{'id': k + 1, 'start': 0.01 + 0.03 * k, 'end': 0.01 + 0.03 * k + 3e-7,
+                'torque': (0, 1e3, 0), 'delta_omega': (0, 3e-4, 0)} for k in range(n)]
+    rec = load_recording(write_recording(tmp_path / 'many.mcap', t, omega, impacts=impacts,
+                                         scenario=Scenario(duration=0.8)))
+    assert len(rec.impacts) == n
+    paths = write_figures(rec, tmp_path / 'out')
+    drawn = sorted(p.name for p in paths if p.name.startswith('impact_'))
+    assert drawn == sorted(f'impact_{k}_id{k + 1}.png' for k in range(MAX_IMPACT_FIGURES))
+
+
 def test_figures_that_need_missing_topics_write_nothing(tmp_path):
     t = np.arange(20) * 0.01
     rec = load_recording(write_recording(tmp_path / 'bare.mcap', t, np.ones((20, 3))))
