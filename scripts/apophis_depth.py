@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 from datetime import datetime
+import math
 from pathlib import Path
 import sys
 import time
@@ -34,6 +35,8 @@ from tumble_ros.analysis.depth import (DEGREE3, coupling_size, degree3_sensitivi
 from tumble_ros.analysis.encounter import encounter_ensemble, format_encounter
 from tumble_ros.core import load_scenario, simulate_ensemble
 from tumble_ros.core.model.body import BodySpec
+from tumble_ros.core.model.units import HOURS_PER_YEAR
+from tumble_ros.core.torques.perturbers import Perturber
 from tumble_ros.topics import SIM_NODE_PARAMETERS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,6 +47,9 @@ DIAMETER, DENSITY = 0.34, 2600.0
 #: Perigee: 2029-04-13 21:46 TDB (the scenario's t_p; Souchay et al. 2014), as a Julian date.
 PERIGEE_JD = 2451545.0 + (datetime(2029, 4, 13, 21, 46) - datetime(2000, 1, 1, 12, 0)
                           ).total_seconds() / 86400.0
+#: The Earth's J2 (IERS 2010: 1.0826e-3) and pole in ecliptic J2000 (obliquity 23.4393 deg).
+EARTH_J2 = 1.0826e-3
+EARTH_POLE = (0.0, -math.sin(math.radians(23.4393)), math.cos(math.radians(23.4393)))
 #: |K_3m| <~ 0.01 (Dinsmore & de Wit 2023, sec. 2.3: "typically").
 K_PLAUSIBLE = 0.01
 #: Period precisions [s]: AIME's threshold, their test case's sigma_P (1e-7 of 9 h), and the
@@ -58,6 +64,12 @@ def ellipsoid_axes(inertia) -> tuple[float, float, float]:
     axes = np.sqrt(squares)
     axes *= (DIAMETER / 2.0) / float(np.prod(axes)) ** (1.0 / 3.0)
     return tuple(float(v) for v in axes)
+
+
+def with_earth_j2(sc):
+    """The scenario with its flyby's Earth oblate (J2, pole), as the first perturber."""
+    earth = Perturber('earth', sc.orbit, j2=EARTH_J2, pole=EARTH_POLE)
+    return sc.replace(orbit=None, perturbers=(earth,) + sc.perturbers)
 
 
 def effects_table(sc2, sc4, phases) -> str:
@@ -81,6 +93,7 @@ def effects_table(sc2, sc4, phases) -> str:
         'the Moon': diff(after(sc4.replace(perturbers=(moon,))), base),
         'the Sun': diff(after(sc4.replace(perturbers=(sun,))), base),
         'the Moon and the Sun': diff(after(sc4.replace(perturbers=(moon, sun))), base),
+        "the Earth's J2": diff(after(with_earth_j2(sc4)), base),
     }
     started = time.perf_counter()
     rows['coupled - fixed hyperbola (Earth, degree 4)'] = coupling_size(
@@ -154,7 +167,8 @@ def main(argv: list[str]) -> int:
     effects_md = effects_table(sc2, sc4, phases[::2])
     moon, sun = lunisolar_perturbers(sc4, PERIGEE_JD)
     scenarios = {'today (quadrupole)': sc2, 'degree 4': sc4,
-                 '+ Moon & Sun': sc4.replace(perturbers=(moon, sun))}
+                 '+ Moon & Sun': sc4.replace(perturbers=(moon, sun)),
+                 "+ Earth's J2": with_earth_j2(sc4.replace(perturbers=(moon, sun)))}
     results = {}
     for name, sc in scenarios.items():
         t = time.perf_counter()
@@ -163,8 +177,17 @@ def main(argv: list[str]) -> int:
         print(f'ensemble {name}: {time.perf_counter() - t:.1f} s', file=sys.stderr)
     names = list(results)
     steps = {'degree 4 - today': paired_differences(results[names[0]], results[names[1]]),
-             '+ Moon & Sun - degree 4': paired_differences(results[names[1]], results[names[2]])}
+             '+ Moon & Sun - degree 4': paired_differences(results[names[1]], results[names[2]]),
+             "+ Earth's J2 - (+ Moon & Sun)": paired_differences(results[names[2]],
+                                                                 results[names[3]])}
     dist_md, steps_md = distribution_table(results), steps_table(steps)
+    today = results[names[0]]
+    change = (today.precession_after - today.precession_before) * HOURS_PER_YEAR
+    ssr = (f'P_phi after - before [h] (today): 5 % {np.percentile(change, 5):.1f}, median '
+           f'{np.median(change):.1f}, 95 % {np.percentile(change, 95):.1f}; |change| >= 10 h: '
+           f'{100 * np.mean(np.abs(change) >= 10):.1f} % (faster {100 * np.mean(change <= -10):.1f}'
+           f' %, slower {100 * np.mean(change >= 10):.1f} %), 10 to 15 h: '
+           f'{100 * np.mean((np.abs(change) >= 10) & (np.abs(change) <= 15)):.1f} %')
     base_lines = [f'nominal state after the flyby (degree 4), phase {ph:g}: P_phi '
                   f'{b[0] / 3600:.4f} h, P_psi {b[1] / 3600:.3f} h'
                   for ph, b in zip(phases, sens.base)]
@@ -175,7 +198,7 @@ def main(argv: list[str]) -> int:
         f'the derivative at dC = {sens.deltas[-1]:g})\n\n' + sens_md,
         '## Size of each effect\n\n' + effects_md,
         f'## Ensembles ({args.bodies} bodies, seed 1)\n\n' + dist_md,
-        '## Body by body\n\n' + steps_md,
+        '## Body by body\n\n' + steps_md + '\n\n' + ssr,
         *[f'### {name}\n\n' + format_encounter(r) for name, r in results.items()]])
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / 'summary.txt').write_text(text + '\n')
