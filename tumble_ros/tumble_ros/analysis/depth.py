@@ -94,6 +94,7 @@ def phase_states(scenario: Scenario, phases: npt.ArrayLike) -> tuple[np.ndarray,
     observed = spin_state(scenario.omega0, scenario.inertia,
                           euler_to_quaternion(*scenario.euler0))
     phase = np.atleast_1d(np.asarray(phases, dtype=float))
+    assert observed.pole is not None    # (a spin state with an attitude has its pole)
     return tumbler_states(scenario.inertia, observed.precession_period,
                           observed.rotation_period, observed.pole, phase, np.zeros(phase.size))
 

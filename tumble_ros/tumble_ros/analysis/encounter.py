@@ -33,6 +33,7 @@ import numpy.typing as npt
 
 from tumble_ros.core import (EnsembleResult, IntegratorSettings, Scenario, ScenarioError, simulate,
                              simulate_ensemble)
+from tumble_ros.core.model.mass_models import Ellipsoid
 from tumble_ros.core.model.rotation import (euler_to_quaternion, matrix_to_euler,
                                             quaternion_to_matrix)
 from tumble_ros.core.model.spinstate import omega_for_periods, spin_state
@@ -236,7 +237,7 @@ def with_inertia(scenario: Scenario, moments: npt.ArrayLike) -> Scenario:
     body = scenario.body
     if body.model == 'ellipsoid':
         model = body.mass_model
-        assert model is not None
+        assert isinstance(model, Ellipsoid)
         i = np.asarray(moments)
         squares = np.array([i[1] + i[2] - i[0], i[0] + i[2] - i[1], i[0] + i[1] - i[2]])
         if not np.all(squares > 0.0):
