@@ -37,7 +37,7 @@ BUILD_INPUTS := \
 # Rebuild anyway if build/ or install/ was deleted behind make's back.
 BUILD_PRESENT := $(and $(wildcard install/setup.bash),$(wildcard build/tumble_ros))
 
-.PHONY: help setup test run figures lock clean clean-recordings distclean FORCE
+.PHONY: help setup warmup test run figures lock clean clean-recordings distclean FORCE
 
 help:
 	@echo 'make run    [CONFIG=...]       run the main job (python -m tumble_ros $$CONFIG)'
@@ -46,6 +46,7 @@ help:
 	@echo '             [FIGURES_OUT=docs/figures]  ... or refresh the published ones (then commit)'
 	@echo 'make bench  [BENCH_ARGS=...]   benchmarks: Fig 9 over 2000 yr vs scipy, ensembles (docs/performance.md)'
 	@echo 'make setup                     venv + pinned requirements + colcon build (idempotent)'
+	@echo 'make warmup                    compile every integration loop now (else: each on first use)'
 	@echo 'make lock                      re-pin requirements.txt from requirements.in'
 	@echo 'make clean                     remove build/ install/ log/ and stamps (keeps .venv)'
 	@echo 'make clean-recordings          remove recordings/ (figure runs, walks: tens to hundreds of MB)'
@@ -64,17 +65,22 @@ $(VENV_STAMP): requirements.txt
 $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 	@echo '== colcon build'
 	$(ENV) --build colcon build --symlink-install --base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
-	@# numba compiles the integration loops on first use (~15 s, cached): do it once here.
-	$(ENV) python -m tumble_ros.cli.warmup
+	@# No warm-up here: numba compiles a loop on its first use, only the loops a run uses
+	@# (the default scenario: the dop853 loop), once, then loads it from its cache.
 	@mkdir -p $(STAMPS)
 	touch $@
 
 # Test paths come from pytest.ini (testpaths) unless PYTEST_ARGS names some.
-test: setup
+# The tests use every loop: compile them all ahead, in parallel (about a second once cached).
+test: setup warmup
 	$(ENV) pytest -q -ra --durations=15 $(PYTEST_ARGS)
 
 run: setup
 	$(ENV) python -m tumble_ros $(CONFIG)
+
+# Optional: compile (or load) every integration loop now, one process per method.
+warmup: setup
+	$(ENV) python -m tumble_ros.cli.warmup
 
 # Untracked by default: a figure run leaves a clean clone clean (docs/figures is the published copy).
 FIGURES_OUT ?= build/figures

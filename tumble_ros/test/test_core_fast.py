@@ -152,6 +152,39 @@ def test_warm_up_compiles_the_single_body_and_ensemble_loops():
             assert loop.signatures, (name, loop)
 
 
+@needs_numba
+def test_a_first_use_that_compiles_says_so_and_a_compiled_loop_says_nothing():
+    """The notice of jit.first_use (make run compiles only the loops it uses, on first use)."""
+    import io
+    import threading
+    import time
+
+    from tumble_ros.core.jit import first_use, jit
+
+    def polynomial(x):
+        return 3.0 * x * x + 1.0
+
+    compiled = jit(polynomial, cache=False)   # compiled in this process, at its first call
+    out = io.StringIO()
+    with first_use(compiled, 'test loop', after=0.0, out=out):
+        deadline = time.monotonic() + 30.0   # (the notice comes from a timer thread)
+        while not out.getvalue() and time.monotonic() < deadline:
+            threading.Event().wait(0.01)
+        assert compiled(2.0) == 13.0
+    lines = out.getvalue().splitlines()
+    assert lines[0] == 'compiling the test loop (first use, cached afterwards)...'
+    assert lines[1].startswith('... the test loop is compiled (') and len(lines) == 2
+    # compiled now: nothing to say, whatever the wait
+    quiet = io.StringIO()
+    with first_use(compiled, 'test loop', after=0.0, out=quiet):
+        threading.Event().wait(0.2)
+    assert quiet.getvalue() == ''
+    # a plain Python function (the reference path) neither
+    with first_use(polynomial, 'plain', after=0.0, out=quiet):
+        threading.Event().wait(0.2)
+    assert quiet.getvalue() == ''
+
+
 _SUBPROCESS = r"""
 import json, sys
 import numpy as np

@@ -257,3 +257,69 @@ def test_the_records_states_and_levels_are_the_messages_values():
         SimStatus.RUNNING, SimStatus.PAUSED, SimStatus.FINISHED, SimStatus.DIVERGED)
     assert (records.OK, records.WARN, records.ERROR) == (
         DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR)
+
+
+# -- many impacts: linear in their number ---------------------------------------------------------
+def _many_impacts(n, duration, seed=11):
+    rng = np.random.default_rng(seed)
+    return [Impact(float(s), 3e-7, tuple(rng.normal(size=3) * 1e2),
+                   'orbital' if k % 3 == 0 else 'body')
+            for k, s in enumerate(rng.uniform(0.0, duration - 0.01, n))]
+
+
+def test_impacts_requested_in_any_order_and_batches_give_the_scenarios_run_bit_for_bit():
+    impacts = _many_impacts(120, 2.0)
+    scenario = Scenario(duration=2.0, output_interval=0.004, impacts=tuple(impacts))
+    _, ref = run(scenario, batch=97)
+    rng = np.random.default_rng(2)
+    free = scenario.replace(impacts=())
+    session = SimulationSession(free, output_grid(free, TimeBase()), run_id='r1')
+    records = session.start()
+    order = rng.permutation(len(impacts))
+    for batch in np.split(order, [7, 40, 41, 90]):   # before the first batch of samples
+        for k in batch:
+            session.request_impact(impacts[k])
+        session._schedule_pending()
+    while session.state == RUNNING:
+        records += session.advance(session.samples + 96)
+    got, want = blocks(records), blocks(ref)
+    for name in want:
+        assert np.array_equal(got[name], want[name]), name
+    ended = [r for r in records if isinstance(r, ImpactEnded)]
+    assert [(e.impact, e.stamp_ns, e.delta_omega) for e in ended] == [
+        (e.impact, e.stamp_ns, e.delta_omega) for e in ref if isinstance(e, ImpactEnded)]
+    # every impact reported once, in the order of their ends (distinct starts, equal lengths)
+    assert [e.impact for e in ended] == sorted(impacts, key=lambda i: i.start)
+
+
+def test_descriptions_do_not_repeat_the_scheduled_impacts_and_are_parsed_once(monkeypatch):
+    """
+    Only the first description carries the scheduled impacts; each text is parsed once.
+
+    The later descriptions are the scenario without its impacts (each would otherwise carry
+    every impact: quadratic), and the comparison parses each distinct text once, not once per
+    segment.
+    """
+    from tumble_ros.core import parse_scenario
+    from tumble_ros.runs import comparison as comparison_module
+
+    impacts = _many_impacts(60, 2.0)
+    scenario = Scenario(duration=2.0, output_interval=0.004, impacts=tuple(impacts))
+    _, records = run(scenario, batch=50)
+    starts = [r for r in records if isinstance(r, SegmentStart)]
+    assert [s.revision for s in starts] == list(range(61))
+    assert parse_scenario(starts[0].parameters_yaml) == scenario
+    assert parse_scenario(starts[1].parameters_yaml) == scenario.replace(impacts=())
+    assert len({s.parameters_yaml for s in starts[1:]}) == 1
+    assert len(starts[1].parameters_yaml) < len(starts[0].parameters_yaml) / 5
+    parsed = []
+
+    def counting(text):
+        parsed.append(text)
+        return parse_scenario(text)
+
+    monkeypatch.setattr(comparison_module, 'parse_scenario', counting)
+    comparison = Comparison('paper')
+    statuses = [comparison.anchor(s) for s in starts]
+    assert all(s.level == OK for s in statuses), statuses[0]
+    assert len(parsed) == 2

@@ -19,7 +19,7 @@ from .impacts import impact_intervals
 from .recording import Recording
 from .timeaxis import same_stamps
 
-__all__ = ['InvariantDrift', 'JacobiSegment', 'jacobi_drift']
+__all__ = ['InvariantDrift', 'JacobiSegment', 'jacobi_drift', 'impact_segments']
 
 
 @dataclass(frozen=True)
@@ -90,21 +90,37 @@ def jacobi_drift(rec: Recording) -> tuple[InvariantDrift | None, str | None]:
     idx, c, source = found
     t, w = rec.t[idx], rec.omega[idx]
     j = jacobi_integral(t, w, c, rec.scenario.inertia, rec.scenario.orbit_rate)
-    intervals = impact_intervals(rec)
-    inside = np.zeros(len(t), dtype=bool)
-    segment = np.zeros(len(t), dtype=int)
-    for start, end in intervals:
-        inside |= (t > start) & (t < end)
-        segment += t >= end
+    segment, inside = impact_segments(t, impact_intervals(rec))
     segments = []
-    for k in range(len(intervals) + 1):
-        sel = (segment == k) & ~inside
-        if not sel.any():
-            continue
+    # the samples outside the pulses, grouped by segment (in their order within each)
+    kept = np.flatnonzero(~inside)
+    kept = kept[np.argsort(segment[kept], kind='stable')]
+    cuts = np.flatnonzero(np.diff(segment[kept])) + 1
+    for sel in np.split(kept, cuts) if len(kept) else []:
         js, ts = j[sel], t[sel]
         drift = float(np.max(np.abs(js - js[0])))
         segments.append(JacobiSegment(
-            index=k, t_start=float(ts[0]), t_end=float(ts[-1]), n=int(sel.sum()),
+            index=int(segment[sel[0]]), t_start=float(ts[0]), t_end=float(ts[-1]), n=len(sel),
             j0=float(js[0]), max_drift=drift,
             rel_drift=drift / abs(float(js[0])) if js[0] != 0 else None))
     return InvariantDrift('Jacobi integral', source, tuple(segments), int(inside.sum())), None
+
+
+def impact_segments(t: np.ndarray, intervals: list[tuple[float, float]]
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return, for each time of ``t`` [yr], its segment and whether it lies inside a pulse.
+
+    ``intervals``: the pulses [(start, end)], merged and sorted (:func:`impact_intervals`).
+    Segment k is after the k-th pulse's end (0 before the first); inside means
+    start < t < end. By binary search: O(n log m) for n samples and m pulses.
+    """
+    t = np.asarray(t, dtype=float)
+    if not intervals:
+        return np.zeros(len(t), dtype=int), np.zeros(len(t), dtype=bool)
+    starts = np.array([start for start, _ in intervals], dtype=float)
+    ends = np.array([end for _, end in intervals], dtype=float)
+    segment = np.searchsorted(ends, t, side='right')          # pulses ended at or before t
+    last = np.searchsorted(starts, t, side='left') - 1         # the last pulse started before t
+    inside = (last >= 0) & (t < ends[np.maximum(last, 0)])
+    return segment.astype(int), inside

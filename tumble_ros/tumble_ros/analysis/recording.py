@@ -477,8 +477,12 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
         rec.segments.append(SegmentStart(
             revision=int(msg.revision), segment_start=float(msg.segment_start),
             omega=_vec(msg.omega), quaternion=(float(q.w), float(q.x), float(q.y), float(q.z))))
-    # Every description holds the scenario as started (the same text); the last one readable.
-    for _, msg in reversed(scenarios):
+    # Every description holds the scenario as started; the first of a run (revision 0) with its
+    # scheduled impacts, the later ones without. The last revision 0 readable, else the last
+    # one readable (a recorder that started late).
+    latest_first = list(reversed(scenarios))
+    for _, msg in ([d for d in latest_first if int(d[1].revision) == 0]
+                   + [d for d in latest_first if int(d[1].revision) != 0]):
         try:
             rec.scenario = parse_scenario(msg.parameters_yaml)
             rec.scenario_error = None

@@ -2,12 +2,13 @@
 Compile the integration loops ahead (build tooling): ``python -m tumble_ros.cli.warmup``.
 
 numba compiles the single-body and the ensemble loops of each compiled method
-(``core.kernels.KERNELS``) on their first use (then cached beside the sources); ``make setup``
-runs this after each build so that no run waits for it. It also compiles the loops' variant for
-one extra torque (``core.torques.TorqueComponent``: every single extra torque shares it,
-whatever its function) and the reference path's calls. The methods compile in parallel, one
-process each on up to as many cores as there are (each method's loops are its own copies, so
-the compilations share nothing), and each says when it is ready.
+(``core.kernels.KERNELS``) on their first use (then cached beside the sources): a run compiles
+only the loops it uses (``core.jit.first_use`` says so on stderr). This optional step
+(``make warmup``; ``make test`` runs it first) compiles them all ahead. It also compiles the
+loops' variant for one extra torque (``core.torques.TorqueComponent``: every single extra
+torque shares it, whatever its function) and the reference path's calls. The methods compile in
+parallel, one process each on up to as many cores as there are (each method's loops are its own
+copies, so the compilations share nothing), and each says when it is ready.
 """
 from __future__ import annotations
 

@@ -32,15 +32,20 @@ for the call), so they are compiled without numba's runtime (:data:`JIT_OPTIONS`
 """
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import os
 from pathlib import Path
+import sys
+import threading
+import time
 import types
-from typing import Any, Callable, cast, TypeVar
+from typing import Any, Callable, cast, Iterator, TextIO, TypeVar
 
 __all__ = ['COMPILED', 'NUMBA_VERSION', 'JIT_OPTIONS', 'jit', 'jit_inline', 'called',
-           'python_source', 'specialise', 'COMPILED_SOURCES', 'compiled_sources_hash']
+           'python_source', 'specialise', 'COMPILED_SOURCES', 'compiled_sources_hash',
+           'first_use', 'COMPILE_NOTICE_SECONDS']
 
 #: A function (the decorators return a compiled function typed as the one they are given).
 F = TypeVar('F', bound=Callable[..., Any])
@@ -172,3 +177,46 @@ def specialise(f: F, namespace: dict[str, Any], suffix: str, cache: bool = True)
     copy.__annotations__ = dict(source.__annotations__)
     compile_ = jit_inline if _inlined(f) else jit
     return cast(F, compile_(copy, cache=cache))
+
+
+#: A first call of a compiled loop that takes longer than this [s] says so on stderr (it is
+#: compiling: tens of seconds; loading it from the cache takes well under this).
+COMPILE_NOTICE_SECONDS = 1.5
+
+
+@contextlib.contextmanager
+def first_use(function: Callable[..., Any], label: str,
+              after: float = COMPILE_NOTICE_SECONDS,
+              out: TextIO | None = None) -> Iterator[None]:
+    """
+    Around a call of compiled ``function``: say so when its first call in this process compiles.
+
+    numba compiles a loop on its first call for its argument types (then keeps it in its cache
+    beside the sources), so a run waits only for the loops it uses. When ``function`` has no
+    compiled signature yet in this process and the call is still running after ``after``
+    seconds, a line ``compiling the <label> (first use, cached afterwards)...`` goes to
+    ``out`` (stderr: a node's log), and one more when it is ready. Nothing otherwise (a
+    loaded cache, a plain Python function).
+    """
+    if not COMPILED or getattr(function, 'signatures', None) != []:
+        yield
+        return
+    stream = out if out is not None else sys.stderr
+    started = time.monotonic()
+    said = threading.Event()
+
+    def notice() -> None:
+        said.set()
+        print(f'compiling the {label} (first use, cached afterwards)...', file=stream,
+              flush=True)
+
+    timer = threading.Timer(after, notice)
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
+        if said.is_set():
+            print(f'... the {label} is compiled ({time.monotonic() - started:.0f} s)',
+                  file=stream, flush=True)

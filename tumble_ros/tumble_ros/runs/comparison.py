@@ -27,7 +27,7 @@ from typing import Sequence
 import numpy as np
 
 from tumble_ros.core import (AnalyticModel, DEPARTURE, departure_text, make_model, parse_scenario,
-                             ScenarioError, TimeBase)
+                             Scenario, ScenarioError, TimeBase)
 from tumble_ros.core.propagation.timebase import SampleGrid
 
 from .records import (ComparedSample, ComparisonBlock, ComparisonStatus, Floats, OK,
@@ -43,15 +43,17 @@ LOOKAHEAD = 64
 WAITING = "waiting for the simulator's scenario description"
 
 
-def anchor_model(model_name: str,
-                 start: SegmentStart) -> tuple[AnalyticModel, SampleGrid, str]:
+def anchor_model(model_name: str, start: SegmentStart,
+                 scenario: Scenario | None = None) -> tuple[AnalyticModel, SampleGrid, str]:
     """
     Return (model, the run's output grid, a line saying so) for a segment's start.
 
-    The model is anchored on the state the segment starts from. Raises ScenarioError or
-    ValueError (ModelNotApplicable) when the model cannot be built.
+    The model is anchored on the state the segment starts from. ``scenario``: the description's
+    scenario when already parsed (``parse_scenario(start.parameters_yaml)``). Raises
+    ScenarioError or ValueError (ModelNotApplicable) when the model cannot be built.
     """
-    scenario = parse_scenario(start.parameters_yaml)
+    if scenario is None:
+        scenario = parse_scenario(start.parameters_yaml)
     grid = TimeBase(start.seconds_per_year).grid(scenario.output_interval, scenario.duration)
     model = make_model(model_name, scenario, t0=start.t0, omega=start.omega,
                        quaternion=start.quaternion)
@@ -120,6 +122,9 @@ class Comparison:
         self.latest: SegmentStart | None = None
         self._segments: list[_Segment] = []   # by start, the latest's last
         self._values = GridModelValues()
+        # the last description parsed and its scenario (every segment after the first has the
+        # same text: parsed once, not once per impact)
+        self._parsed: tuple[str, Scenario] | None = None
 
     def waiting(self) -> ComparisonStatus:
         """Return the status before the first segment start (WARN, logged at 0)."""
@@ -159,11 +164,18 @@ class Comparison:
     def _anchor_latest(self, stamp_ns: int) -> ComparisonStatus:
         assert self.latest is not None
         try:
-            model, self.grid, text = anchor_model(self.model_name, self.latest)
+            model, self.grid, text = anchor_model(self.model_name, self.latest,
+                                                  self._scenario(self.latest.parameters_yaml))
         except (ScenarioError, ValueError) as err:
             return ComparisonStatus(WARN, str(err), stamp_ns)
         self._segments[-1].model = model
         return ComparisonStatus(OK, text, stamp_ns)
+
+    def _scenario(self, text: str) -> Scenario:
+        """Return the scenario of a description's text, parsed once while it does not change."""
+        if self._parsed is None or self._parsed[0] != text:
+            self._parsed = (text, parse_scenario(text))
+        return self._parsed[1]
 
     # -- comparing ----------------------------------------------------------------------------
     def _segment_at(self, t: float) -> _Segment | None:

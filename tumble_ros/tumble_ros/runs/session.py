@@ -19,7 +19,9 @@ from collections import deque
 
 import numpy as np
 
+from tumble_ros import topics
 from tumble_ros.core import dump_scenario, Impact, Propagator, Scenario, TimeBase
+from tumble_ros.core.photometry import LightcurveSampler
 from tumble_ros.core.propagation.timebase import SampleGrid
 
 from .records import (DIVERGED, FINISHED, Floats, ImpactEnded, PAUSED, RUNNING, SampleBlock,
@@ -63,12 +65,21 @@ class SimulationSession:
         self.grid = grid
         self.run_id = run_id
         self._propagator = Propagator(scenario, fast=fast)
+        # The first description carries the scenario as started, its scheduled impacts included;
+        # the later ones the same without the impacts list (each is on impact_events when it
+        # ends): a description per impact would otherwise repeat every impact (quadratic).
         self._scenario_yaml = dump_scenario(scenario)
+        self._segment_yaml = (dump_scenario(scenario.replace(impacts=())) if scenario.impacts
+                              else self._scenario_yaml)
         self._next_k = 0        # index of the next sample
         self._revision = 0      # of the next segment start
         self._state = PAUSED if paused else RUNNING
         self._pending: deque[tuple[int, Impact]] = deque()   # (service id, impact)
         self._impact_ids: dict[int, int] = {}   # id(Impact) -> service id, until it ends
+        self._lightcurve = LightcurveSampler.of(scenario)
+        #: The per-sample topics a run publishes only sometimes, and whether this one does.
+        self.optional_topics = {topics.PERTURBER: bool(scenario.all_perturbers),
+                                topics.LIGHTCURVE: self._lightcurve is not None}
 
     # -- state ----------------------------------------------------------------------------
     @property
@@ -164,18 +175,28 @@ class SimulationSession:
         return records
 
     def _schedule_pending(self) -> None:
-        while self._pending:
-            impact_id, impact = self._pending.popleft()
-            self._propagator.schedule(impact)
+        """Schedule the impacts requested since the last batch, in one pass."""
+        if not self._pending:
+            return
+        pending = list(self._pending)
+        self._propagator.schedule_many([impact for _, impact in pending])
+        self._pending.clear()
+        for impact_id, impact in pending:
             self._impact_ids[id(impact)] = impact_id
 
     def _block(self, k0: int, times: Floats, omega: Floats, quaternion: Floats,
                euler: Floats) -> SampleBlock:
-        """Return the samples from grid index k0 (with the perturber's position if it torques)."""
+        """
+        Return the samples from grid index k0.
+
+        With the perturber's position if it torques, and the lightcurve if the body has one.
+        """
         stamps = (np.arange(k0, k0 + len(times), dtype=np.int64) * self.grid.interval_ns)
         perturber = (self.scenario.perturber_in_body(times, quaternion)
                      if self.scenario.all_perturbers else None)
-        return SampleBlock(k0, times, stamps, omega, quaternion, euler, perturber)
+        lightcurve = (self._lightcurve(times, quaternion) if self._lightcurve is not None
+                      else None)
+        return SampleBlock(k0, times, stamps, omega, quaternion, euler, perturber, lightcurve)
 
     def _segment_records(self) -> list[SessionRecord]:
         """
@@ -198,7 +219,8 @@ class SimulationSession:
         """Describe the segment starting at ``t0`` [yr] in state ``y0``; count the revision."""
         revision, self._revision = self._revision, self._revision + 1
         q = self._propagator.quaternion_of(y0)
+        text = self._segment_yaml if revision else self._scenario_yaml
         return SegmentStart(
-            self.run_id, self._scenario_yaml, self.grid.timebase.seconds_per_year, revision,
+            self.run_id, text, self.grid.timebase.seconds_per_year, revision,
             t0, self.grid.timebase.to_ns(t0), (float(y0[0]), float(y0[1]), float(y0[2])),
             (float(q[0]), float(q[1]), float(q[2]), float(q[3])))

@@ -19,6 +19,7 @@ import numpy.typing as npt
 from tumble_ros.core import kernels as K
 from tumble_ros.core.integrators.base import (FAILED, FINISHED, RUNNING, SegmentProblem,
                                               step_nan_message, Stepper)
+from tumble_ros.core.jit import first_use
 from tumble_ros.core.model.limits import budget_message
 from tumble_ros.core.torques import extra_torque_arrays
 
@@ -151,9 +152,10 @@ class CompiledStepper(Stepper):
             k, steps, work = self._loops.emit(self._p, self._extra, self._cfg, self._st, track,
                                               t_out, y_out, e_out, k), 0, 0
         else:
-            k, steps, work = self._loops.advance(self._p, self._extra, self._cfg, self._st,
-                                                 track, float(t_target), t_out, y_out, e_out, k,
-                                                 float(budget))
+            with first_use(self._loops.advance, f'{self.kernel} loop'):
+                k, steps, work = self._loops.advance(self._p, self._extra, self._cfg, self._st,
+                                                     track, float(t_target), t_out, y_out, e_out,
+                                                     k, float(budget))
         self.work = int(work)
         self._sync()
         return int(k), int(steps)

@@ -37,6 +37,7 @@ from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, M
                                           ScenarioError, step_budget)
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
 from tumble_ros.core.model.units import TIME_UNITS, to_years
+from tumble_ros.core.photometry.settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
 from tumble_ros.core.propagation.timebase import SampleGrid, TimeBase
 from tumble_ros.core.torques import orbital_to_body, TorqueComponent
 from tumble_ros.core.torques.ephemeris import Ephemeris, read_ephemeris
@@ -356,6 +357,9 @@ class Scenario:
         the largest): an ``inertia`` left at its default is replaced, another one must agree
         to 1e-9 relative; ``gravity_field``, when None (or of a lower degree) and
         ``gravity_degree`` > 2, is the model's to that degree.
+    lightcurve : LightcurveSettings
+        What the synthetic lightcurve assumes (``core.photometry``; the ``lightcurve.*``
+        parameters): the scattering law, the observer, light time.
 
     """
 
@@ -375,6 +379,7 @@ class Scenario:
     gravity_degree: int = 2
     gravity_field: GravityField | None = None
     body: BodySpec = field(default_factory=BodySpec)
+    lightcurve: LightcurveSettings = field(default_factory=LightcurveSettings)
 
     def __post_init__(self) -> None:
         self._apply_body()
@@ -522,6 +527,8 @@ class Scenario:
                 body.inertia_scale(self.inertia)
             except ValueError as err:
                 raise ScenarioError(str(err)) from None
+        if not isinstance(self.lightcurve, LightcurveSettings):
+            _fail('lightcurve', 'must be a core.photometry.LightcurveSettings', self.lightcurve)
 
     # -- derived quantities ---------------------------------------------------------
     @property
@@ -672,6 +679,7 @@ class Scenario:
         params.update(_perturber_parameters(self.perturbers))
         params['gravity.degree'] = self.gravity_degree
         params.update(self.body.to_parameters())
+        params.update(self.lightcurve.to_parameters())
         return params
 
     @classmethod
@@ -706,6 +714,7 @@ class Scenario:
         plain['body'] = body = BodySpec.from_parameters(params, params_file)
         if body.inertia is not None and 'inertia' in params:
             _check_body_inertia(params['inertia'], body)    # (even if it is the default)
+        plain['lightcurve'] = LightcurveSettings.from_parameters(params)
         return cls(**plain)
 
 
@@ -740,6 +749,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
     + ('perturbers.names',)
     + ('gravity.degree',)
     + tuple(BODY_PARAMETER_DOCS)
+    + tuple(LIGHTCURVE_PARAMETER_DOCS)
 )
 
 
@@ -833,6 +843,7 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
                        "inertia's quadrupole; 3 to 30 the body's gravity field to degree N "
                        '(needs a perturber and the field)'),
     **BODY_PARAMETER_DOCS,
+    **LIGHTCURVE_PARAMETER_DOCS,
 }
 
 
@@ -1073,5 +1084,7 @@ def dump_scenario(scenario: Scenario, node: str = 'sim') -> str:
     """
     import yaml
 
-    return yaml.safe_dump({f'/**/{node}': {'ros__parameters': scenario.to_parameters()}},
-                          sort_keys=False)
+    # libyaml's emitter when PyYAML has it: the same text, 3x faster (10,000 impacts: 0.3 s)
+    dumper = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)
+    return yaml.dump({f'/**/{node}': {'ros__parameters': scenario.to_parameters()}},
+                     Dumper=dumper, sort_keys=False)

@@ -45,6 +45,7 @@ from tumble_ros.core import kernels as K
 from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.integrators.base import Stepper
 from tumble_ros.core.integrators.compiled import failure_message, why_no_fast_path
+from tumble_ros.core.jit import first_use
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS, jacobi_integral
 from tumble_ros.core.model.limits import MAX_OMEGA, MAX_ROTATION, step_budget
 from tumble_ros.core.model.rotation import continuous_quaternions, quaternions_to_matrices
@@ -514,7 +515,9 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
     blocks = list(zip(edges[:-1].tolist(), edges[1:].tolist()))
 
     start = time.perf_counter()
-    with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool:
+    kernel = K.kernel_name(cfg)
+    with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool, \
+            first_use(K.loops(kernel).ensemble_advance, f'{kernel} ensemble loops'):
         list(pool.map(lambda blk: K.ensemble_init(extra, cfg, probs, seg_t, seg_ptr, states, *blk),
                       blocks))
         t_end = float(times[-1])

@@ -24,8 +24,9 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
+import heapq
 import math
-from typing import Callable, NamedTuple
+from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -39,7 +40,7 @@ from tumble_ros.core.model.dynamics import ATTITUDE_MODELS, AttitudeModel, jacob
 from tumble_ros.core.model.rotation import (continuous_quaternions, matrix_to_quaternion,
                                             quaternions_to_matrices)
 from tumble_ros.core.model.scenario import Impact, Scenario, ScenarioError
-from tumble_ros.core.propagation.segments import Segment, split_at_impacts
+from tumble_ros.core.propagation.segments import Segment, split_at_impacts, split_span
 from tumble_ros.errors import CoreError
 
 __all__ = ['Propagator', 'IntegrationError', 'Sample',
@@ -149,7 +150,6 @@ class Propagator:
         self._impacts: list[Impact] = []
         self._cuts = scenario.segment_cuts    # the encounter window's edges (a flyby)
         self._segments = split_at_impacts(scenario.duration, (), self._cuts)
-        self._segment_starts = [s.t0 for s in self._segments]
         self.t = 0.0
         self.y = np.concatenate([scenario.omega0, self._model.from_euler(*scenario.euler0)])
         self.status = RUNNING
@@ -160,11 +160,14 @@ class Propagator:
         self._track_at_t = self._euler_track.copy()  # continuous Euler angles at self.t
         self._quat_prev: FloatArray | None = None
         self._edge_state: dict[float, FloatArray] = {}  # state at impact edges reached so far
-        self._reported: set[int] = set()
+        self._edges: set[float] = set()   # every scheduled impact's start and end [yr]
+        self._longest = 0.0                # the longest scheduled pulse [yr]
+        # the impacts not reported ended yet: (end, order of scheduling, impact), a heap
+        self._unreported: list[tuple[float, int, Impact]] = []
+        self._scheduled = 0                # impacts scheduled so far
         self._reported_cuts: set[float] = set()
         self._stepper: Stepper | None = None
-        for impact in scenario.impacts:
-            self.schedule(impact)
+        self.schedule_many(scenario.impacts)
         self._start_segment(self.t, self.y)
 
     # -- public API -----------------------------------------------------------------
@@ -183,25 +186,70 @@ class Propagator:
         """All impacts scheduled so far, in order of start time."""
         return tuple(self._impacts)
 
+    @property
+    def segments(self) -> tuple[Segment, ...]:
+        """Return the integration segments of the whole run (:mod:`~.segments`) so far."""
+        return tuple(self._segments)
+
     def schedule(self, impact: Impact) -> None:
         """Add an impact; its start must not lie before the current time ``t``."""
-        if impact.start < self.t:
-            raise ScenarioError(
-                f'impact.start: must be >= the current time {self.t!r} yr, got {impact.start!r}')
-        if impact.end > self.t_end:
-            raise ScenarioError(f'impact: must end by the end of the scenario ({self.t_end!r} '
-                                f'yr), ends at {impact.end!r}')
-        bisect.insort(self._impacts, impact, key=lambda i: i.start)
-        affects_segment = self._stepper is not None and impact.start < self._stepper.t_bound
-        if self._split:
-            self._segments = split_at_impacts(self.t_end, self._impacts, self._cuts)
-            self._segment_starts = [s.t0 for s in self._segments]
+        self.schedule_many((impact,))
+
+    def schedule_many(self, impacts: Sequence[Impact]) -> None:
+        """
+        Add impacts, as :meth:`schedule` one after the other would, in one pass.
+
+        Their starts must not lie before the current time ``t`` (ScenarioError otherwise,
+        nothing scheduled). The segments are re-split where the new pulses fall and nowhere
+        else (:func:`~.segments.split_span`): scheduling n impacts costs O(n log n) plus the
+        segments they overlap, not a re-split of the whole run per impact.
+        """
+        for impact in impacts:
+            if impact.start < self.t:
+                raise ScenarioError(f'impact.start: must be >= the current time {self.t!r} yr, '
+                                    f'got {impact.start!r}')
+            if impact.end > self.t_end:
+                raise ScenarioError(f'impact: must end by the end of the scenario '
+                                    f'({self.t_end!r} yr), ends at {impact.end!r}')
+        if not impacts:
+            return
+        new = sorted(impacts, key=lambda i: i.start)   # stable: ties in the order given
+        affects_segment = (self._stepper is not None
+                           and new[0].start < self._stepper.t_bound)
+        for impact in impacts:
+            heapq.heappush(self._unreported, (impact.end, self._scheduled, impact))
+            self._scheduled += 1
+            self._edges.update((impact.start, impact.end))
+            self._longest = max(self._longest, impact.duration)
+        if len(new) > 1 and len(self._impacts) < len(new):
+            # (the earlier ones first among equal starts, as bisect.insort puts them)
+            self._impacts = sorted(self._impacts + new, key=lambda i: i.start)
+            if self._split:
+                self._segments = split_at_impacts(self.t_end, self._impacts, self._cuts)
+        else:
+            for impact in new:
+                bisect.insort(self._impacts, impact, key=lambda i: i.start)
+                if self._split:
+                    self._resplit(impact.start, impact.end)
         if affects_segment or not self._split:
             # Restart from the last state handed out: the running segment's right-hand
             # side or end no longer holds. The Euler-angle track goes back with it (the
             # stepper may have run many steps past self.t in a call cut by its work budget).
             self._euler_track = self._track_at_t.copy()
             self._start_segment(self.t, self.y)
+
+    def _resplit(self, start: float, end: float) -> None:
+        """Split again the segments [start, end] [yr] overlaps (a pulse just scheduled)."""
+        segments = self._segments
+        i0 = max(0, bisect.bisect_right(segments, start, key=lambda s: s.t0) - 1)
+        i1 = bisect.bisect_left(segments, end, key=lambda s: s.t1)
+        a, b = segments[i0].t0, segments[min(i1, len(segments) - 1)].t1
+        # the impacts that may overlap [a, b]: those starting in [a - 2 longest pulses, b)
+        # (twice the longest: an end is start + duration rounded)
+        lo = bisect.bisect_left(self._impacts, a - 2.0 * self._longest, key=lambda i: i.start)
+        hi = bisect.bisect_left(self._impacts, b, key=lambda i: i.start)
+        overlapping = [i for i in self._impacts[lo:hi] if i.end > a]
+        segments[i0:i1 + 1] = split_span(a, b, overlapping, self._cuts)
 
     def advance_to(self, t: float) -> FloatArray:
         """
@@ -293,18 +341,23 @@ class Propagator:
         Each entry is (impact, state at its start, state at its end); the measured change
         of w [rad/yr, body axes] is ``end[:3] - start[:3]``.
         """
-        done = []
-        for impact in self._impacts:
-            key = id(impact)
-            if key in self._reported or impact.end > self.t:
-                continue
+        done, waiting = [], []
+        while self._unreported and self._unreported[0][0] <= self.t:
+            entry = heapq.heappop(self._unreported)
+            impact = entry[2]
             y_end = self._edge_state.get(impact.end)
             if y_end is None and self.t == impact.end:
                 y_end = self.y.copy()  # the segment after the pulse has not started yet
             if y_end is not None and impact.start in self._edge_state:
-                self._reported.add(key)
-                done.append((impact, self._edge_state[impact.start], y_end))
-        return done
+                done.append((impact.start, entry[1], impact, self._edge_state[impact.start],
+                             y_end))
+            elif impact.end == self.t:
+                waiting.append(entry)   # its edge states may still come (else: never will)
+        for entry in waiting:
+            heapq.heappush(self._unreported, entry)
+        # in the order of the impacts (by start, ties in their order of scheduling)
+        return [(impact, y_start, y_end) for *_, impact, y_start, y_end in sorted(
+            done, key=lambda d: (d[0], d[1]))]
 
     def pop_window_edges(self) -> list[tuple[float, FloatArray]]:
         """
@@ -359,9 +412,9 @@ class Propagator:
         return self._stepper
 
     def _start_segment(self, t0: float, y0: FloatArray) -> None:
-        if t0 in self._cuts or any(t0 in (i.start, i.end) for i in self._impacts):
+        if t0 in self._cuts or t0 in self._edges:
             self._edge_state[t0] = np.array(y0)
-        k = bisect.bisect_right(self._segment_starts, t0) - 1
+        k = bisect.bisect_right(self._segments, t0, key=lambda s: s.t0) - 1
         segment = self._segments[max(0, k)]
         if self._stepper is not None:
             self._nfev_done += self._stepper.nfev

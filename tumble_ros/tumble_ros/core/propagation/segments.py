@@ -16,7 +16,7 @@ import numpy as np
 if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Impact
 
-__all__ = ['Segment', 'segment_torques', 'split_at_impacts']
+__all__ = ['Segment', 'segment_torques', 'split_at_impacts', 'split_span']
 
 
 class Segment(NamedTuple):
@@ -54,13 +54,26 @@ def split_at_impacts(duration: float, impacts: Sequence[Impact],
 
     The torques are those of :func:`segment_torques` over the impacts sorted by start (in that
     order), found by a sweep over time rather than a scan of every impact for every segment
-    (a body may have thousands of impacts).
+    (a body may have thousands of impacts): O(n log n) in the impacts.
     """
-    ordered = sorted(impacts, key=lambda i: i.start)
-    edges = {duration, *(t for t in cuts if 0.0 < t < duration)}
+    return split_span(0.0, duration, sorted(impacts, key=lambda i: i.start), cuts)
+
+
+def split_span(a: float, b: float, ordered: Sequence[Impact],
+               cuts: Sequence[float] = ()) -> list[Segment]:
+    """
+    Return the segments of [``a``, ``b``]: :func:`split_at_impacts` restricted to that span.
+
+    ``ordered``: the impacts sorted by start (ties in their order of scheduling); those that
+    do not overlap the span change nothing. The segments are those :func:`split_at_impacts`
+    gives over [0, duration] between two of its edges ``a`` and ``b``, bit for bit (the same
+    edges, the same impacts summed in the same order): :class:`~.propagator.Propagator`
+    re-splits only the span an impact scheduled late overlaps.
+    """
+    edges = {b, *(t for t in cuts if a < t < b)}
     for impact in ordered:
-        edges.update((impact.start, impact.end))
-    bounds = [0.0] + sorted(e for e in edges if e > 0.0)
+        edges.update(t for t in (impact.start, impact.end) if a < t < b)
+    bounds = [a] + sorted(edges)
     segments, active, nxt = [], [], 0
     for t0, t1 in zip(bounds[:-1], bounds[1:]):
         mid = 0.5 * (t0 + t1)
