@@ -1,4 +1,4 @@
-"""Apophis 2029 at the new depth (issue 28): degree 4, degree-3 sensitivity, Moon and Sun, coupling.
+"""Apophis 2029 at the new depth (issue 28): degree 4 and 3, the Moon, the Sun, J2, the coupling.
 
     scripts/env.sh python scripts/apophis_depth.py [--bodies 1000] [--out DIR]
 
@@ -29,9 +29,9 @@ import time
 
 import numpy as np
 
-from tumble_ros.analysis.depth import (DEGREE3, coupling_size, degree3_sensitivity,
-                                       depth_figure, distribution_table, lunisolar_perturbers,
-                                       paired_differences, phase_states, after_state)
+from tumble_ros.analysis.depth import (after_state, coupling_size, DEGREE3,
+                                       degree3_sensitivity, depth_figure, distribution_table,
+                                       lunisolar_perturbers, paired_differences, phase_states)
 from tumble_ros.analysis.encounter import encounter_ensemble, format_encounter
 from tumble_ros.core import load_scenario, simulate_ensemble
 from tumble_ros.core.model.body import BodySpec
@@ -67,13 +67,13 @@ def ellipsoid_axes(inertia) -> tuple[float, float, float]:
 
 
 def with_earth_j2(sc):
-    """The scenario with its flyby's Earth oblate (J2, pole), as the first perturber."""
+    """Return the scenario with its flyby's Earth oblate (J2, pole), the first perturber."""
     earth = Perturber('earth', sc.orbit, j2=EARTH_J2, pole=EARTH_POLE)
     return sc.replace(orbit=None, perturbers=(earth,) + sc.perturbers)
 
 
 def effects_table(sc2, sc4, phases) -> str:
-    """The size of each effect on the nominal state at ``phases``: |difference| after."""
+    """Return the size of each effect on the nominal state at ``phases`` (Markdown)."""
     w0, e0 = phase_states(sc4, phases)
     moon, sun = lunisolar_perturbers(sc4, PERIGEE_JD)
 
@@ -110,7 +110,7 @@ def effects_table(sc2, sc4, phases) -> str:
 
 
 def sensitivity_table(sens, precisions) -> str:
-    """The sensitivity Markdown table; detectable: the change of K = 0.01 >= each precision."""
+    """Return the sensitivity table (Markdown); detectable: the change of K = 0.01 >= each."""
     lines = ['| moment | C of K = 0.01 | dP_phi/dC [s] | dP_psi/dC [s] | dpole/dC [deg] | '
              'dP_phi, dP_psi [s] of K = 0.01 | pole [deg] of K = 0.01 | linearity | '
              'P_phi / P_psi change >= ' + ', '.join(f'{p:g} s' for p in precisions) + ' |',
@@ -128,7 +128,7 @@ def sensitivity_table(sens, precisions) -> str:
 
 
 def steps_table(steps) -> str:
-    """Body-by-body differences of each step (median / 95 % / max)."""
+    """Return the body-by-body differences of each step (median / 95 % / max; Markdown)."""
     lines = ['| step (the same 1000 bodies) | abs dP_phi [s] median / 95 % / max | abs dP_psi [s] '
              '| pole [deg] | mode changed |', '|---|---|---|---|---|']
     for name, d in steps.items():
@@ -139,6 +139,7 @@ def steps_table(steps) -> str:
 
 
 def main(argv: list[str]) -> int:
+    """Run everything and write DIR/summary.txt, table.md, depth.png; return the exit status."""
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument('--bodies', type=int, default=1000)
     p.add_argument('--phases', type=int, default=8, help='phases of the sensitivity (default 8)')
@@ -151,13 +152,16 @@ def main(argv: list[str]) -> int:
                       gravity_degree=4)
     field = sc4.gravity_field
     assert field is not None
-    head = [f'body: homogeneous ellipsoid, semi-axes {", ".join(f"{a * 1000:.1f}" for a in axes)}'
-            f' m, D = {DIAMETER} km, density {DENSITY:g} kg/m^3, mass {field.mass:.3e} kg, '
-            f'moments {", ".join(f"{v / field.principal_moments[2]:.4f}" for v in field.principal_moments)}',
-            f'field: degree {field.degree}, reference radius {field.reference_radius * 1000:.1f} m; '
+    semi = ', '.join(f'{a * 1000:.1f}' for a in axes)
+    ratios = ', '.join(f'{v / field.principal_moments[2]:.4f}' for v in field.principal_moments)
+    head = [f'body: homogeneous ellipsoid, semi-axes {semi} m, D = {DIAMETER} km, density '
+            f'{DENSITY:g} kg/m^3, mass {field.mass:.3e} kg, moments {ratios}',
+            f'field: degree {field.degree}, reference radius '
+            f'{field.reference_radius * 1000:.1f} m; '
             f'C20 {field.C[2, 0]:.5f}, C22 {field.C[2, 2]:.5f}, C40 {field.C[4, 0]:.3e}, '
             f'C42 {field.C[4, 2]:.3e}, C44 {field.C[4, 4]:.3e}; every odd degree and every S '
-            f'zero (max |C3m| {np.max(np.abs(field.C[3])):.1e}, |S| {np.max(np.abs(field.S)):.1e})',
+            f'zero (max |C3m| {np.max(np.abs(field.C[3])):.1e}, '
+            f'|S| {np.max(np.abs(field.S)):.1e})',
             f'perigee JD {PERIGEE_JD:.5f} (2029-04-13 21:46 TDB)']
     phases = np.arange(args.phases) / args.phases
     w0, e0 = phase_states(sc4, phases)
@@ -185,8 +189,9 @@ def main(argv: list[str]) -> int:
     change = (today.precession_after - today.precession_before) * HOURS_PER_YEAR
     ssr = (f'P_phi after - before [h] (today): 5 % {np.percentile(change, 5):.1f}, median '
            f'{np.median(change):.1f}, 95 % {np.percentile(change, 95):.1f}; |change| >= 10 h: '
-           f'{100 * np.mean(np.abs(change) >= 10):.1f} % (faster {100 * np.mean(change <= -10):.1f}'
-           f' %, slower {100 * np.mean(change >= 10):.1f} %), 10 to 15 h: '
+           f'{100 * np.mean(np.abs(change) >= 10):.1f} % (faster '
+           f'{100 * np.mean(change <= -10):.1f} %, slower {100 * np.mean(change >= 10):.1f} %), '
+           '10 to 15 h: '
            f'{100 * np.mean((np.abs(change) >= 10) & (np.abs(change) <= 15)):.1f} %')
     base_lines = [f'nominal state after the flyby (degree 4), phase {ph:g}: P_phi '
                   f'{b[0] / 3600:.4f} h, P_psi {b[1] / 3600:.3f} h'
