@@ -124,6 +124,11 @@ def sensitivity_table(sens, precisions) -> str:
             f'| {kind}{n}{m} | {change:.4f} | {median[k, 0]:.3g} | {median[k, 1]:.3g} | '
             f'{median[k, 2]:.3g} | {dp[0]:.2g}, {dp[1]:.2g} | {median[k, 2] * change:.2g} | '
             f'{np.nanmax(sens.linearity[k, :3]):.0e} | {"; ".join(seen)} |')
+    lines += ['', 'the nominal spin state alone (phase 0), signed: | moment | dP_phi/dC [s] | '
+              'dP_psi/dC [s] | dpole/dC [deg] |', '|---|---|---|---|']
+    for k, (kind, n, m) in enumerate(DEGREE3):
+        d = sens.derivative[k, 0, 0]
+        lines.append(f'| {kind}{n}{m} | {d[0]:.3g} | {d[1]:.3g} | {d[2]:.3g} |')
     return '\n'.join(lines)
 
 
