@@ -4,7 +4,8 @@ For each figure's scenario (tumble_ros/config/fig*.yaml, apophis_2029.yaml): run
 (simulate, compare with the paper's analytic solution, record to
 recordings/figures/<name>.mcap), analyse the recording, write its PNGs to OUT/<name>/
 and its summary to OUT/<name>/summary.txt; for apophis_2029 also the encounter
-ensemble (tumble_ros.cli.encounter, 1000 bodies) into OUT/apophis_2029/encounter/;
+ensemble (tumble_ros.cli.encounter, 1000 bodies) into OUT/apophis_2029/encounter/ and the
+same at the new depth (scripts/apophis_depth.py) into OUT/apophis_2029/depth/;
 finally the index OUT/README.md that sets each figure beside the paper's caption.
 
 OUT is build/figures/ (untracked: a figure run leaves the clone's tracked files as they were;
@@ -25,6 +26,8 @@ from tumble_ros.analysis import analyze, format_summary, load_recording, write_f
 from tumble_ros.analysis.recording import stderr_progress
 from tumble_ros.cli.encounter import main as encounter
 from tumble_ros.nodes.bringup import format_result, run_bringup
+
+from apophis_depth import main as apophis_depth  # scripts/: beside this file
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "tumble_ros" / "config"
@@ -105,6 +108,12 @@ def make(name: str, root: Path = OUT) -> str:
         lines += [f"![{name} encounter]({name}/encounter/encounter.png)", "",
                   f"Ensemble summary: [{name}/encounter/summary.txt]({name}/encounter/summary.txt)",
                   ""]
+        # the same ensemble at the new depth: degree 4, the Moon and the Sun, the Earth's J2
+        if apophis_depth(["--out", str(out / "depth")]) != 0:
+            raise SystemExit("the Apophis depth run failed")
+        lines += [f"![{name} depth]({name}/depth/depth.png)", "",
+                  f"At the new depth (degree 4, the Moon, the Sun, the Earth's J2, the degree-3 "
+                  f"sensitivity): [{name}/depth/summary.txt]({name}/depth/summary.txt)", ""]
     return "\n".join(lines)
 
 

@@ -42,3 +42,6 @@ def test_make_figures_leaves_git_status_as_it_was():
     assert (out / 'fig3' / 'omega.png').stat().st_size > 0
     assert 'closest approach' in (out / 'apophis_2029' / 'summary.txt').read_text()
     assert 'wall time' not in (out / 'apophis_2029' / 'encounter' / 'summary.txt').read_text()
+    assert 'Sensitivity to the degree-3 moments' in (
+        out / 'apophis_2029' / 'depth' / 'summary.txt').read_text()
+    assert (out / 'apophis_2029' / 'depth' / 'depth.png').stat().st_size > 0

@@ -22,7 +22,7 @@ Frames: the scenario's orbital frame (for Apophis, ecliptic J2000), body princip
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 import os
 from pathlib import Path
@@ -33,6 +33,7 @@ import numpy.typing as npt
 
 from tumble_ros.core import (EnsembleResult, IntegratorSettings, Scenario, ScenarioError, simulate,
                              simulate_ensemble)
+from tumble_ros.core.model.mass_models import Ellipsoid
 from tumble_ros.core.model.rotation import (euler_to_quaternion, matrix_to_euler,
                                             quaternion_to_matrix)
 from tumble_ros.core.model.spinstate import omega_for_periods, spin_state
@@ -40,7 +41,7 @@ from tumble_ros.core.model.units import HOURS_PER_YEAR
 
 __all__ = ['EncounterResult', 'encounter_ensemble', 'tumbler_states', 'format_encounter',
            'encounter_figure', 'draw_encounter', 'encounter_memory', 'MAX_INERTIA_SPREAD',
-           'BYTES_PER_BODY']
+           'BYTES_PER_BODY', 'with_inertia']
 
 #: Memory one body of an encounter ensemble holds while it runs and is reported [bytes]: its
 #: inputs, its two samples, its spin states before and after and the saved arrays (measured
@@ -213,6 +214,50 @@ def _draw_inertia(nominal: np.ndarray, spread, observed, rng, tries: int = 1000)
                      f'have the observed periods in {tries} draws')
 
 
+def with_inertia(scenario: Scenario, moments: npt.ArrayLike) -> Scenario:
+    """
+    Return ``scenario`` with the normalised principal ``moments`` (the nominal I3 kept).
+
+    A body given by its inertia alone takes them as they are. With a gravity field beyond the
+    quadrupole, the field must follow (its moments proportional to the inertia):
+
+    * a homogeneous ellipsoid (``body.model: ellipsoid``) is rebuilt with the semi-axes of
+      those moments (``a^2 = 5/(2m) (Iy + Iz - Ix)``... , core/model/shape.py), its volume
+      and density kept, so its whole field (C_40, C_42, C_44 too) is the new ellipsoid's;
+    * a field given directly (``gravity_field``, ``body.model: inertia``) keeps every
+      coefficient but degree 2, which is made the moments' (C_20, C_22;
+      :meth:`~tumble_ros.core.model.gravity_field.GravityField.with_principal_moments`), its
+      largest moment kept [kg km^2];
+    * a polyhedron or density moments cannot be re-derived from moments: refused
+      (ScenarioError naming ``body.model``) unless the moments are the nominal ones.
+    """
+    moments = tuple(float(v) for v in np.asarray(moments, dtype=float))
+    if moments == tuple(scenario.inertia):
+        return scenario
+    body = scenario.body
+    if body.model == 'ellipsoid':
+        model = body.mass_model
+        assert isinstance(model, Ellipsoid)
+        i = np.asarray(moments)
+        squares = np.array([i[1] + i[2] - i[0], i[0] + i[2] - i[1], i[0] + i[1] - i[2]])
+        if not np.all(squares > 0.0):
+            raise ScenarioError(f'inertia: no ellipsoid has the moments {list(moments)}')
+        axes = np.sqrt(squares)
+        axes *= (float(np.prod(model.semi_axes)) / float(np.prod(axes))) ** (1.0 / 3.0)
+        spec = replace(body, semi_axes=tuple(float(v) for v in axes))
+        return scenario.replace(inertia=moments, body=spec, gravity_field=None)
+    if body.model != 'inertia':
+        raise ScenarioError(f'body.model: {body.model} cannot take drawn moments of inertia '
+                            f'(only an ellipsoid or a field given directly can), got moments '
+                            f'{list(moments)} for {list(scenario.inertia)}')
+    field = scenario.gravity_field
+    if field is None:
+        return scenario.replace(inertia=moments)
+    scale = field.inertia_scale(scenario.inertia)
+    return scenario.replace(inertia=moments, gravity_field=field.with_principal_moments(
+        tuple(scale * v for v in moments)))
+
+
 def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
                        inertia_spread: tuple[float, float] = (0.0, 0.0), n_inertia: int = 1,
                        progress: Callable[[int, int], None] | None = None,
@@ -225,7 +270,8 @@ def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
     and pole every body keeps). ``inertia_spread`` = (dA, dB): the ratios I_a/I_c and I_b/I_c of
     the smallest and middle moments are drawn uniformly within +- dA and +- dB of the nominal
     ones, keeping the draws that can have the observed periods (:func:`_draw_inertia`);
-    ``n_inertia`` draws, the first the nominal moments, the bodies split evenly between them.
+    ``n_inertia`` draws, the first the nominal moments, the bodies split evenly between them;
+    a scenario with a gravity field takes each draw's field (:func:`with_inertia`).
     The phase and the turn about L are uniform. Reproducible from ``seed``. Refused before any
     work (ScenarioError, one line): a spread that is not finite or above
     :data:`MAX_INERTIA_SPREAD`, more bodies than the memory available holds
@@ -257,7 +303,7 @@ def encounter_ensemble(scenario: Scenario, n_bodies: int, *, seed: int = 0,
         omega0, euler0 = tumbler_states(moments, observed.precession_period,
                                         observed.rotation_period, observed.pole, phase[body],
                                         turn[body])
-        sc = scenario.replace(inertia=tuple(moments))
+        sc = with_inertia(scenario, moments)
         parts.append((np.tile(moments, (size, 1)),
                       run(sc, [0.0, sc.duration], omega0=omega0, euler0=euler0)))
         if progress is not None:

@@ -276,6 +276,22 @@ class GravityField:
         c[2, 2] = (b - a) / (4.0 * scale)
         return cls(mass, reference_radius, c, np.zeros_like(c), (a, b, cz))
 
+    def with_principal_moments(self, principal_moments: Sequence[float] | FloatArray,
+                               ) -> 'GravityField':
+        """
+        Return this field with other principal moments [kg km^2]: degree 2 made theirs.
+
+        C_20 and C_22 follow the moments (the module's docstring); the mass, the reference
+        radius and every coefficient of degree 0, 1 and 3 ... N are kept (a body whose inertia
+        changed but not its higher moments, e.g. an inertia drawn in an ensemble).
+        """
+        a, b, cz = (float(v) for v in principal_moments)
+        scale = self.mass * self.reference_radius ** 2
+        c = self.C.copy()
+        c[2, 0] = (a + b - 2.0 * cz) / (2.0 * scale)
+        c[2, 2] = (b - a) / (4.0 * scale)
+        return GravityField(self.mass, self.reference_radius, c, self.S.copy(), (a, b, cz))
+
     def truncated(self, degree: int) -> 'GravityField':
         """Return this field to ``degree`` (2 <= degree <= :attr:`degree`)."""
         if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or not (
