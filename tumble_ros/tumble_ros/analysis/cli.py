@@ -8,6 +8,7 @@ The ``analyze`` command: summarise a tumble_ros MCAP recording, optionally write
     python -m tumble_ros.analysis RUN.mcap --run 0a1b2c3d4e5f  # one run of several (run_id)
     python -m tumble_ros.analysis RUN.mcap --animate run.gif   # the body tumbling (GIF / MP4)
     python -m tumble_ros.analysis RUN.mcap --still scene.png   # the recorded 3D scene, one frame
+    python -m tumble_ros.analysis --photometry obs.csv         # periods of a user's lightcurve
 
 Exit status: 0 on success (warnings included), :data:`EXIT_TRUNCATED` (2) when the file is
 truncated or damaged after some complete chunks (a recorder killed mid-run: the summary, figures
@@ -63,7 +64,16 @@ def _parser() -> argparse.ArgumentParser:
                     'duration, comparator error, Jacobi-integral drift per segment, impacts, '
                     'dominant frequencies of wx against the theory, and an aliasing check '
                     '(docs/analysis.md).')
-    parser.add_argument('file', metavar='FILE.mcap', help='the recording')
+    parser.add_argument('file', metavar='FILE.mcap', nargs='?', default=None,
+                        help='the recording (optional with --photometry)')
+    parser.add_argument('--photometry', metavar='FILE.csv', default=None,
+                        help='search a photometry CSV (time, magnitude, optional error; '
+                             'docs/analysis.md, "Periods from a lightcurve") for one or two '
+                             'periods and print them')
+    parser.add_argument('--period-range', type=float, nargs=2, default=None,
+                        metavar=('MIN', 'MAX'),
+                        help='with --photometry: the periods searched [h] (default: 4 '
+                             'median sampling steps to the data span)')
     parser.add_argument('--figures', metavar='DIR', default=None,
                         help='also write the figures (PNG) into DIR, created if needed '
                              '(default: no figures); existing files are not overwritten and '
@@ -122,6 +132,14 @@ def _figures(rec, summary, args) -> list:
 
 def _check_options(args) -> str | None:
     """Why the options are wrong, or None."""
+    if args.file is None and args.photometry is None:
+        return 'need FILE.mcap or --photometry FILE.csv'
+    if args.period_range is not None and args.photometry is None:
+        return '--period-range needs --photometry FILE.csv'
+    if args.photometry is not None and args.file is not None:
+        return '--photometry FILE.csv analyses the CSV alone: drop FILE.mcap'
+    if args.period_range is not None and not 0.0 < args.period_range[0] < args.period_range[1]:
+        return f'--period-range needs 0 < MIN < MAX [h], got {args.period_range}'
     if args.peaks < 1:
         return f'--peaks must be >= 1, got {args.peaks}'
     if args.overwrite and args.figures is None and args.animate is None and args.still is None:
@@ -160,6 +178,8 @@ def command(argv: Iterable[str] | None = None) -> int:
     problem = _check_options(args)
     if problem:
         return _error(problem)
+    if args.photometry is not None:
+        return _photometry(args)
     try:
         progress = None if args.quiet else stderr_progress()
         rec = load_recording(args.file, namespace=args.namespace, run=args.run,
@@ -187,6 +207,34 @@ def command(argv: Iterable[str] | None = None) -> int:
         for key, (path, what) in extra.items():
             print(f'{key}: {path} ({what})')
     return _partial(summary)
+
+
+def _photometry(args) -> int:
+    """Search a photometry CSV for its periods; print them (text or JSON)."""
+    from dataclasses import asdict
+    from .periods import format_periods, search_periods
+    from .photometry_file import read_photometry
+    try:
+        data = read_photometry(args.photometry)
+        low, high = args.period_range if args.period_range is not None else (None, None)
+        try:
+            sol = search_periods(data.t, data.magnitude, data.sigma, low, high)
+        except ValueError as err:
+            raise AnalysisError(f'{args.photometry}: {err}') from None
+    except AnalysisError as err:
+        return _error(err)
+    except KeyboardInterrupt:
+        return _error('interrupted')
+    if args.json:
+        out = asdict(sol)
+        out['p2'] = None if not sol.two_periods else sol.p2
+        out['p2_sigma'] = None if not sol.two_periods else sol.p2_sigma
+        out['unit'] = 'h'
+        print(json.dumps(out, indent=1, default=float))
+    else:
+        print(f'photometry: {args.photometry} (time column {data.time_column}, hours)')
+        print(format_periods(sol))
+    return 0
 
 
 def _partial(summary) -> int:

@@ -22,8 +22,11 @@ The search (docs/analysis.md, "Periods from a lightcurve"):
   b f2) t_i), |a|, |b| <= 2m, computed for the whole grid by one matrix product (no design
   matrix per trial);
 * refinement: Nelder-Mead on the exact least-squares RMS from the best grid point;
-* the order m minimises the BIC N ln(RSS/N) + p ln N at the best pair (p: the coefficients and
-  the frequencies); the search is repeated once when it differs from the starting order;
+* the order m minimises the BIC N ln(RSS/N) + p ln N (p: the coefficients and the
+  frequencies): the grid is searched at the orders 1 to ``start_order`` (3), the pair of least
+  BIC kept, the order then chosen at it among 1 to MAX_ORDER (the grid searched again at a
+  higher one): a low order finds the basis of the lattice, where a high order also fits bases
+  of a finer lattice holding it (f2 / 3, ...);
 * one period or two: the BIC of the best 1-period fit (order chosen by the same rule) against
   the 2-period one; two periods only if the latter's is lower by more than BIC_MARGIN;
 * uncertainties: the formal 1-sigma of the frequencies from the covariance of the nonlinear
@@ -44,7 +47,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 __all__ = ['Harmonic', 'MirrorSolution', 'PeriodSolution', 'campaign_times', 'combination',
-           'fit_series',
+           'fit_series', 'format_periods',
            'harmonics', 'search_periods', 'BIC_MARGIN', 'MAX_ORDER', 'OVERSAMPLE', 'TOP_PEAKS',
            'WINDOW']
 
@@ -384,17 +387,25 @@ def search_periods(t, magnitude, sigma=None, period_min: float | None = None,
     def exact(order: int):
         return lambda u: fit_series(t, y, w, u[0], u[1], order)[0]
 
-    pair = grid_best(start_order)
+    def bic_at(pair: np.ndarray, o: int) -> float:
+        return _bic(fit_series(t, y, w, pair[0], pair[1], o)[0], n, 3 + 2 * len(harmonics(o)))
+
+    # the grid at every order up to start_order: a low order finds the basis of the lattice,
+    # where a high one also fits bases of a finer lattice holding it (f2 / 3, ...)
+    def refined(pair: np.ndarray, o: int) -> np.ndarray:
+        objective = exact(o)
+        step = 1.0 / (OVERSAMPLE * o * span)
+        return _refine(lambda u: math.inf if _degenerate(u[0], u[1], o, span)
+                       else objective(u), pair, np.array([step, step]))
+
+    tried = [(bic_at(p, o), o, tuple(p)) for o in range(1, start_order + 1)
+             for p in [refined(grid_best(o), o)]]
+    pair = np.array(min(tried)[2])
     orders = range(1, max_order + 1)
-    bics = [_bic(fit_series(t, y, w, pair[0], pair[1], o)[0], n, 3 + 2 * len(harmonics(o)))
-            for o in orders]
-    order = orders[int(np.argmin(bics))]
-    if order != start_order:
-        pair = grid_best(order)
-    step = 1.0 / (OVERSAMPLE * order * span)
+    order = orders[int(np.argmin([bic_at(pair, o) for o in orders]))]
+    pair = refined(grid_best(order) if order > start_order else pair, order)
     objective = exact(order)
-    pair = _refine(lambda u: math.inf if _degenerate(u[0], u[1], order, span) else objective(u),
-                   pair, np.array([step, step]))
+    step = 1.0 / (OVERSAMPLE * order * span)
     rss_two, coef_two = fit_series(t, y, w, pair[0], pair[1], order)
     # a basis of the same lattice that fits better at this order (the grid held f1 near the
     # 1-period candidates only) is taken instead, once
@@ -454,3 +465,26 @@ def campaign_times(rng: np.random.Generator, nights: int, night_hours: float = 8
         raise ValueError(f'clouded: every night was lost ({nights} nights, p = {clouded})')
     times = np.concatenate(out)
     return times - times[0]
+
+
+def format_periods(sol: PeriodSolution, unit: str = 'h', harmonics_shown: int = 6) -> str:
+    """The solution as text lines: periods, order, RMS, strongest harmonics, mirror bases."""
+    lines = [f'lightcurve: {sol.n} points over {sol.span:.6g} {unit}']
+    if sol.two_periods:
+        lines.append(f'  two periods: P1 = {sol.p1:.6g} +- {sol.p1_sigma:.2g} {unit}, '
+                     f'P2 = {sol.p2:.6g} +- {sol.p2_sigma:.2g} {unit} (1 sigma), order '
+                     f'{sol.order}, RMS {sol.rms:.4g} mag (one period: {sol.rms_one:.4g})')
+    else:
+        lines.append(f'  one period: P = {sol.p1:.6g} +- {sol.p1_sigma:.2g} {unit} (1 sigma), '
+                     f'order {sol.order}, RMS {sol.rms:.4g} mag (two periods not supported: '
+                     f'BIC {sol.bic_two:.1f} vs {sol.bic_one:.1f})')
+    lines.append('  strongest harmonics (j f1 + k f2: period, amplitude):')
+    for h in sol.harmonics[:harmonics_shown]:
+        period = 1.0 / abs(h.frequency) if h.frequency else math.inf
+        lines.append(f'    ({h.j:+d}, {h.k:+d}): {period:.6g} {unit}, {h.amplitude:.4f} mag')
+    if sol.mirrors:
+        lines.append('  mirror bases of the same frequencies (P1\', P2\', RMS):')
+        for mirror in sol.mirrors:
+            lines.append(f'    {mirror.label}: {mirror.p1:.6g} {unit}, {mirror.p2:.6g} {unit}, '
+                         f'{mirror.rms:.4g} mag')
+    return '\n'.join(lines)
