@@ -212,16 +212,20 @@ def test_the_icosphere_has_the_expected_counts_and_a_closed_convex_surface():
         mesh = convex_mesh(v, f)
         # closed: the outward normals weighted by area sum to zero
         assert np.max(np.abs(mesh.areas @ mesh.normals)) < 1e-13
+        convex_mesh(v * np.array([1.0, 0.7, 0.45]), f)     # checked: no error
     mesh = ellipsoid_mesh((1.0, 0.7, 0.45), 5)
     assert mesh.volume == pytest.approx(4.0 / 3.0 * math.pi * 1.0 * 0.7 * 0.45, rel=1e-3)
 
 
 def test_a_concave_mesh_is_refused():
     v, f = icosphere(2)
-    v = v.copy()
-    v[0] *= 0.5                        # push one vertex in: a dimple
-    with pytest.raises(ValueError, match='not convex'):
-        convex_mesh(v, f)
+    for depth in (0.5, 0.05):          # (the sagitta of these facets is ~0.01)
+        dented = v.copy()
+        dented[0] *= 1.0 - depth       # push one vertex in: a dimple
+        with pytest.raises(ValueError, match='not convex'):
+            convex_mesh(dented, f)
+    rounded = np.round(v * np.array([1.0, 0.7, 0.45]), 7)   # printed to 7 decimals: accepted
+    convex_mesh(rounded, f)
 
 
 def test_facets_given_inward_are_turned_outward():
@@ -291,6 +295,7 @@ def test_in_a_flyby_the_observer_is_on_the_perturber_and_light_time_delays_the_s
     np.testing.assert_allclose(record.t, t + delay / SECONDS_PER_YEAR, rtol=0, atol=1e-18)
     plain = synthetic_lightcurve(sc, t, q, LightcurveSettings(sun=(1.0, 0.0, 0.0)))
     np.testing.assert_array_equal(plain.t, t)
+    np.testing.assert_array_equal(plain.light_time, record.light_time)   # given either way
     np.testing.assert_array_equal(plain.brightness, record.brightness)
     # the body's axes are the inertial ones (q = 1): the aspects are the directions' own angles
     direction = position / distance[:, None]
@@ -304,3 +309,48 @@ def test_in_a_flyby_the_observer_is_on_the_perturber_and_light_time_delays_the_s
     expected = (-2.5 * np.log10(record.brightness / reference)
                 + 5.0 * np.log10(distance / KM_PER_AU))
     np.testing.assert_allclose(record.magnitude, expected, rtol=1e-13)
+
+
+def test_a_sample_comes_out_the_same_bit_for_bit_in_any_block():
+    # the live simulator's batches and the offline writer's differ; their samples must not
+    rng = np.random.default_rng(3)
+    mesh = ellipsoid_mesh((1.0, 0.6, 0.4), 4)
+    n = 300
+    q = np.array([random_rotation(rng) for _ in range(n)])
+    sun = np.array([unit(rng.normal(size=3)) for _ in range(n)])
+    observer = np.array([unit(rng.normal(size=3)) for _ in range(n)])
+    whole = brightness(q, sun, observer, mesh, 'kaasalainen')
+    for start, stop in ((0, 1), (7, 8), (5, 37), (100, 300)):
+        part = brightness(q[start:stop], sun[start:stop], observer[start:stop], mesh,
+                          'kaasalainen')
+        np.testing.assert_array_equal(part, whole[start:stop])
+
+
+def test_the_lightcurve_parameters_are_the_scenarios_and_refused_naming_the_field():
+    from tumble_ros.core import parse_scenario, ScenarioError
+    text = ('/**/sim:\n  ros__parameters:\n    lightcurve:\n      law: lambert\n'
+            '      observer: [0.0, 0.0, 3.0]\n      light_time: true\n')
+    scenario = parse_scenario(text)
+    assert scenario.lightcurve == LightcurveSettings(law='lambert', observer=(0.0, 0.0, 1.0),
+                                                     light_time=True)
+    assert Scenario.from_parameters(scenario.to_parameters()) == scenario
+    with pytest.raises(ScenarioError, match='lightcurve.law: must be one of'):
+        Scenario.from_parameters({'lightcurve.law': 'hapke'})
+    with pytest.raises(ScenarioError, match='lightcurve.colour: unknown'):
+        Scenario.from_parameters({'lightcurve.colour': 'red'})
+
+
+def test_a_heliocentric_kepler_orbit_places_the_sun_and_no_torque_takes_the_fixed_sun():
+    orbit = KeplerOrbit(gm=1.3271244e11, a=1.5e8, e=0.3)      # the Sun's GM: the Sun moves
+    sc = Scenario(orbit_rate=0.0, orbit=orbit)
+    t = np.linspace(0.0, 1.0, 6)
+    g = observer_geometry(sc, t, LightcurveSettings(observer=(1.0, 0.0, 0.0)))
+    position = orbit.position(t)
+    distance = np.linalg.norm(position, axis=1)
+    np.testing.assert_allclose(g.sun, position / distance[:, None], atol=1e-15)
+    np.testing.assert_allclose(g.sun_distance, distance / KM_PER_AU, rtol=1e-15)
+    np.testing.assert_allclose(g.observer, np.tile([1.0, 0.0, 0.0], (6, 1)))
+    np.testing.assert_allclose(g.observer_distance, 1.0)
+    free = observer_geometry(Scenario(orbit_rate=0.0), t, LightcurveSettings(sun=(0.0, 0.0, 2.0)))
+    np.testing.assert_allclose(free.sun, np.tile([0.0, 0.0, 1.0], (6, 1)))
+    np.testing.assert_allclose(free.observer, free.sun)       # default: along the Sun

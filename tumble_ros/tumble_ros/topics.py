@@ -18,8 +18,8 @@ __all__ = [
     'recorded',
     'SIM_NODE_PARAMETERS', 'MARKER_FRAMES',
     'ANGULAR_VELOCITY', 'ATTITUDE', 'EULER_ANGLES', 'CLOCK', 'IMPACT_EVENTS', 'STATUS', 'SCENARIO',
-    'CONSUMER_PROGRESS', 'PERTURBER', 'MARKERS', 'MODEL_ANGULAR_VELOCITY', 'ERROR', 'ERROR_NORM',
-    'COMPARISON_STATUS',
+    'CONSUMER_PROGRESS', 'PERTURBER', 'LIGHTCURVE', 'MARKERS', 'MODEL_ANGULAR_VELOCITY', 'ERROR',
+    'ERROR_NORM', 'COMPARISON_STATUS',
     'APPLY_IMPACT', 'PAUSE', 'RESUME', 'STEP', 'TYPES', 'SIM_TOPICS', 'COMPARATOR_TOPICS',
     'RECORDED', 'PER_SAMPLE', 'SIM_PER_SAMPLE', 'COMPARATOR_PER_SAMPLE', 'FRAME_BODY',
     'FRAME_ORBITAL', 'FRAME_EULER', 'MARKER_BODY', 'MARKER_AXES', 'MARKER_MOMENTUM',
@@ -47,6 +47,10 @@ CONSUMER_PROGRESS = 'consumer_progress'
 #: its direction is the u of the tidal torque, its norm the distance; one per sample, published
 #: when the scenario has a Kepler orbit or a flyby (orbit.kind kepler or flyby).
 PERTURBER = 'perturber'
+#: what a telescope sees (tumble_ros_interfaces/Lightcurve, frame ``body``): brightness,
+#: magnitude, phase angle, the Sun's and the observer's latitude and longitude in body axes;
+#: one per sample, published when the body is physical and ``lightcurve.enabled``.
+LIGHTCURVE = 'lightcurve'
 #: the 3D scene (visualization_msgs/MarkerArray, frame ``orbital``): body, axes, L, Sun.
 MARKERS = 'markers'
 
@@ -75,7 +79,8 @@ COMPARATOR = 'comparator'
 #: A sample block: name -> (n,) or (n, k) numpy array of n samples (what a
 #: :attr:`SampleTopic.columns` reads). The simulator's: ``omega`` (n, 3) [rad/yr] body axes,
 #: ``quaternion`` (n, 4) body -> orbital (scalar first), ``euler`` (n, 3) the continuous
-#: (phi, psi, theta) [rad], ``perturber`` (n, 3) [km] body axes or None (no orbit); the
+#: (phi, psi, theta) [rad], ``perturber`` (n, 3) [km] body axes or None (no orbit),
+#: ``lightcurve`` a ``core.photometry.LightcurveRecord`` or None (no body); the
 #: comparator's: ``model``, ``error`` (n, 3) [rad/yr] body axes, ``norm`` [rad/yr] and
 #: ``relative`` (n,).
 SampleBlock = Mapping[str, Any]
@@ -124,6 +129,15 @@ def _each_of(*keys: str) -> Callable[[SampleBlock], Sequence[Any] | None]:
     return columns
 
 
+def _lightcurve(block: SampleBlock) -> Sequence[Any] | None:
+    """Return the columns of the block's lightcurve record (None without one)."""
+    record = block.get('lightcurve')
+    if record is None:
+        return None
+    return (record.brightness, record.magnitude, record.phase_angle, *record.sun_aspect.T,
+            *record.observer_aspect.T, record.light_time)
+
+
 _XYZ = ('vector.x', 'vector.y', 'vector.z')
 _WXYZ = ('quaternion.w', 'quaternion.x', 'quaternion.y', 'quaternion.z')
 _VECTOR = 'geometry_msgs/msg/Vector3Stamped'
@@ -136,6 +150,10 @@ SAMPLE_TOPICS: tuple[SampleTopic, ...] = (
                 _rows_of('quaternion')),
     SampleTopic(EULER_ANGLES, _VECTOR, _XYZ, FRAME_EULER, SIM, _rows_of('euler')),
     SampleTopic(PERTURBER, _VECTOR, _XYZ, FRAME_BODY, SIM, _rows_of('perturber'), always=False),
+    SampleTopic(LIGHTCURVE, 'tumble_ros_interfaces/msg/Lightcurve',
+                ('brightness', 'magnitude', 'phase_angle', 'sun_aspect_lat', 'sun_aspect_lon',
+                 'observer_aspect_lat', 'observer_aspect_lon', 'light_time'),
+                FRAME_BODY, SIM, _lightcurve, always=False),
     SampleTopic(MODEL_ANGULAR_VELOCITY, _VECTOR, _XYZ, FRAME_BODY, COMPARATOR,
                 _rows_of('model')),
     SampleTopic(ERROR, _VECTOR, _XYZ, FRAME_BODY, COMPARATOR, _rows_of('error')),

@@ -15,8 +15,10 @@ integration split at impacts; ``simulate``: batch runs; ``ensemble``: N bodies a
 gravity gradient, impact pulses, and :class:`TorqueComponent` for torques defined outside
 core), ``integrators`` (one interface, name registries, the Lie-Poisson splitting methods),
 ``kernels`` (the physics every path runs and the compiled loops, one registry of compiled
-methods); modules ``analytic`` (the paper's approximate solution, better linearisations,
-exact torque-free motion) and ``jit`` (the numba switch). The Dask engine is not numerics: it
+methods), ``photometry`` (what a telescope sees: the body's convex mesh, scattering laws,
+disk-integrated brightness, synthetic lightcurves); modules ``analytic`` (the paper's
+approximate solution, better linearisations, exact torque-free motion) and ``jit`` (the numba
+switch). The Dask engine is not numerics: it
 is in the run layer (:mod:`tumble_ros.runs.ensembles`).
 Performance and long runs: docs/performance.md.
 """

@@ -35,7 +35,6 @@ import math
 import time
 from typing import Any
 
-from geometry_msgs.msg import Vector3Stamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.qos import QoSProfile
@@ -114,16 +113,15 @@ class SimNode(GuardedNode):
         self._consumers = ConsumerTracker(self, on_drop=self._publish_status)
         publish = self.create_publisher
         qos = PUBLISHER_QOS
-        self._pub_perturber = (publish(Vector3Stamped, topics.PERTURBER, qos[topics.PERTURBER])
-                               if self.scenario.orbit is not None else None)
         self._pub_clock = (publish(Clock, topics.CLOCK, qos[topics.CLOCK])
                            if params['publish_clock'] else None)
         # the per-sample topics, published as CDR bytes of the encoder's rows
         self._encoder = SampleEncoder()
+        optional = self._session.optional_topics     # (the perturber, the lightcurve)
         sample_publishers = {
             **{t.name: publish(message_class(t.type_name), t.name, publisher_qos(t.name))
-               for t in topics.sample_topics(topics.SIM) if t.name != topics.PERTURBER},
-            topics.PERTURBER: self._pub_perturber, topics.CLOCK: self._pub_clock}
+               for t in topics.sample_topics(topics.SIM) if optional.get(t.name, True)},
+            topics.CLOCK: self._pub_clock}
         self._sample_publishers = {t: p for t, p in sample_publishers.items() if p is not None}
         self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, qos[topics.IMPACT_EVENTS])
         self._pub_status = publish(SimStatus, topics.STATUS, qos[topics.STATUS])
@@ -139,9 +137,10 @@ class SimNode(GuardedNode):
         self.create_service(Trigger, topics.PAUSE, self._on_pause)
         self.create_service(Trigger, topics.RESUME, self._on_resume)
         self.create_service(Trigger, topics.STEP, self._on_step)
-        off = {topics.CLOCK: self._pub_clock, topics.PERTURBER: self._pub_perturber,
-               topics.MARKERS: self._pub_markers}
-        own = [t for t in topics.SIM_TOPICS if off.get(t, True) is not None]
+        absent = {t for t, on in optional.items() if not on} | {
+            t for t, p in ((topics.CLOCK, self._pub_clock), (topics.MARKERS, self._pub_markers))
+            if p is None}
+        own = [t for t in topics.SIM_TOPICS if t not in absent]
         self._sources = SourceMonitor(
             self, lambda: own,
             lambda problem: self._publish_status(
@@ -277,12 +276,13 @@ class SimNode(GuardedNode):
         Publish n samples, each with its /clock, as CDR bytes (:class:`~.messages.SampleEncoder`).
 
         Per sample: /clock, ω [rad/yr] (body axes), the attitude quaternion (scalar first,
-        body -> orbital), the continuous Euler angles (φ, ψ, θ) [rad], and with a Kepler orbit
-        where the torquing body is [km] (body axes).
+        body -> orbital), the continuous Euler angles (φ, ψ, θ) [rad], with a Kepler orbit
+        where the torquing body is [km] (body axes), with a physical body its lightcurve.
         """
         blocks = self._encoder.simulator(block.stamps, block.omega, block.quaternion,
                                          block.euler, clock=self._pub_clock is not None,
-                                         perturber=block.perturber)
+                                         perturber=block.perturber,
+                                         lightcurve=block.lightcurve)
         publishers = [self._sample_publishers[topic].publish for topic, _ in blocks]
         rows = [rows for _, rows in blocks]
         for j in range(len(block)):

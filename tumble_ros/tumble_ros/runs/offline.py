@@ -119,7 +119,7 @@ class OfflineResult:
 class _Channels:
     """The recording's channels, as the live recorder makes them, and their encoders."""
 
-    def __init__(self, writer: McapWriter, publish_clock: bool, perturber: bool,
+    def __init__(self, writer: McapWriter, publish_clock: bool, optional: dict[str, bool],
                  markers: bool) -> None:
         self.writer = writer
         self.ids: dict[str, int] = {}
@@ -127,7 +127,7 @@ class _Channels:
         self.encoder = SampleEncoder()
         for topic in topics.recorded():
             if (topic == topics.CLOCK and not publish_clock
-                    or topic == topics.PERTURBER and not perturber
+                    or not optional.get(topic, True)
                     or topic == topics.MARKERS and not markers):
                 continue
             name = topic if topic.startswith('/') else '/' + topic
@@ -184,8 +184,7 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
     slicer = Slicer()
     ended: StatusChange | None = None   # the run's end (finished or diverged)
     with McapWriter(output, chunk_seconds=math.inf) as writer:
-        channels = _Channels(writer, publish_clock, perturber=scenario.orbit is not None,
-                             markers=markers)
+        channels = _Channels(writer, publish_clock, session.optional_topics, markers=markers)
         writer_of = _Writer(channels, comparison, scene, publish_clock)
         channels.comparison_status(comparison.waiting(), model_name)
         writer_of.records(session.start())
@@ -241,13 +240,15 @@ class _Writer:
         """
         Write a block of samples: the simulator's topics, the comparator's three, the markers.
 
-        The simulator's: /clock (if published), ω, attitude, Euler angles, and the perturber's
-        position when the scenario has a Kepler orbit (as the live simulator), encoded as the
-        live simulator encodes them (:class:`~tumble_ros.runs.messages.builders.SampleEncoder`).
+        The simulator's: /clock (if published), ω, attitude, Euler angles, the perturber's
+        position when the scenario has a Kepler orbit and the lightcurve when the body has one
+        (as the live simulator), encoded as the live simulator encodes them
+        (:class:`~tumble_ros.runs.messages.builders.SampleEncoder`).
         """
         channels, n, ns = self.channels, len(block), block.stamps
         sim = channels.encoder.simulator(ns, block.omega, block.quaternion, block.euler,
-                                         clock=self.publish_clock, perturber=block.perturber)
+                                         clock=self.publish_clock, perturber=block.perturber,
+                                         lightcurve=block.lightcurve)
         compared = self.comparison.compare(block)
         for departure in compared.departures:
             channels.comparison_status(departure, self.comparison.model_name)

@@ -16,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core import Impact
+from tumble_ros.core.photometry import LightcurveRecord
 
 __all__ = ['RUNNING', 'PAUSED', 'FINISHED', 'DIVERGED', 'OK', 'WARN', 'ERROR',
            'SampleBlock', 'SegmentStart', 'ImpactEnded', 'StatusChange', 'ComparisonStatus',
@@ -51,6 +52,8 @@ class SampleBlock:
     euler : (n, 3) the paper's continuous (phi, psi, theta) [rad].
     perturber : (n, 3) where the torquing body is [km] in body axes, or None (no Kepler orbit
         or flyby).
+    lightcurve : what a telescope sees at these samples (``core.photometry``), or None (the
+        body is unphysical, or ``lightcurve.enabled`` is false).
 
     """
 
@@ -61,6 +64,7 @@ class SampleBlock:
     quaternion: Floats
     euler: Floats
     perturber: Floats | None = None
+    lightcurve: LightcurveRecord | None = None
 
     def __len__(self) -> int:
         """Count the samples."""

@@ -19,7 +19,9 @@ from collections import deque
 
 import numpy as np
 
+from tumble_ros import topics
 from tumble_ros.core import dump_scenario, Impact, Propagator, Scenario, TimeBase
+from tumble_ros.core.photometry import LightcurveSampler
 from tumble_ros.core.propagation.timebase import SampleGrid
 
 from .records import (DIVERGED, FINISHED, Floats, ImpactEnded, PAUSED, RUNNING, SampleBlock,
@@ -69,6 +71,10 @@ class SimulationSession:
         self._state = PAUSED if paused else RUNNING
         self._pending: deque[tuple[int, Impact]] = deque()   # (service id, impact)
         self._impact_ids: dict[int, int] = {}   # id(Impact) -> service id, until it ends
+        self._lightcurve = LightcurveSampler.of(scenario)
+        #: The per-sample topics a run publishes only sometimes, and whether this one does.
+        self.optional_topics = {topics.PERTURBER: scenario.orbit is not None,
+                                topics.LIGHTCURVE: self._lightcurve is not None}
 
     # -- state ----------------------------------------------------------------------------
     @property
@@ -171,11 +177,17 @@ class SimulationSession:
 
     def _block(self, k0: int, times: Floats, omega: Floats, quaternion: Floats,
                euler: Floats) -> SampleBlock:
-        """Return the samples from grid index k0 (with the perturber's position if it torques)."""
+        """
+        Return the samples from grid index k0.
+
+        With the perturber's position if it torques, and the lightcurve if the body has one.
+        """
         stamps = (np.arange(k0, k0 + len(times), dtype=np.int64) * self.grid.interval_ns)
         perturber = (self.scenario.perturber_in_body(times, quaternion)
                      if self.scenario.orbit is not None else None)
-        return SampleBlock(k0, times, stamps, omega, quaternion, euler, perturber)
+        lightcurve = (self._lightcurve(times, quaternion) if self._lightcurve is not None
+                      else None)
+        return SampleBlock(k0, times, stamps, omega, quaternion, euler, perturber, lightcurve)
 
     def _segment_records(self) -> list[SessionRecord]:
         """

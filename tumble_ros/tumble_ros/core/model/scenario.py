@@ -35,6 +35,7 @@ from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, M
                                           ScenarioError, step_budget)
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
 from tumble_ros.core.model.units import TIME_UNITS, to_years
+from tumble_ros.core.photometry.settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
 from tumble_ros.core.propagation.timebase import SampleGrid, TimeBase
 from tumble_ros.core.torques import orbital_to_body, TorqueComponent
 from tumble_ros.core.torques.orbits import KeplerOrbit, perturber_position
@@ -325,6 +326,9 @@ class Scenario:
         (``core.torques``: defined outside core, run by every integrator). Python API only:
         they are functions, so they are not ROS parameters (:meth:`to_parameters` leaves them
         out).
+    lightcurve : LightcurveSettings
+        What the synthetic lightcurve assumes (``core.photometry``; the ``lightcurve.*``
+        parameters): the scattering law, the observer, light time.
 
     """
 
@@ -340,6 +344,7 @@ class Scenario:
     impacts: tuple[Impact, ...] = ()
     torques: tuple[TorqueComponent, ...] = ()
     orbit: KeplerOrbit | None = None
+    lightcurve: LightcurveSettings = field(default_factory=LightcurveSettings)
 
     def __post_init__(self) -> None:
         inertia = _vector('inertia', self.inertia)
@@ -448,6 +453,8 @@ class Scenario:
             if self.orbit_rate != 0.0:
                 _fail('orbit_rate', 'must be 0 with a Kepler orbit (orbit.kind kepler or flyby): '
                       'the orbit gives the tidal torque', self.orbit_rate)
+        if not isinstance(self.lightcurve, LightcurveSettings):
+            _fail('lightcurve', 'must be a core.photometry.LightcurveSettings', self.lightcurve)
 
     # -- derived quantities ---------------------------------------------------------
     @property
@@ -567,6 +574,7 @@ class Scenario:
         for name in _ORBIT_FIELDS:
             params[f'orbit.{name}'] = getattr(orbit, name)
         params.update(dict.fromkeys((f'orbit.{name}' for name in _FLYBY_FIELDS), 0.0))
+        params.update(self.lightcurve.to_parameters())
         return params
 
     @classmethod
@@ -590,6 +598,7 @@ class Scenario:
         plain['integrator'] = IntegratorSettings(**integ)
         plain['impacts'] = _impacts_from_parameters(params)
         plain['orbit'] = _orbit_from_parameters(params)
+        plain['lightcurve'] = LightcurveSettings.from_parameters(params)
         return cls(**plain)
 
 
@@ -609,6 +618,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
     + tuple(f'integrator.{f.name}' for f in dataclasses.fields(IntegratorSettings))
     + _IMPACT_KEYS
     + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS + _FLYBY_FIELDS)
+    + tuple(LIGHTCURVE_PARAMETER_DOCS)
 )
 
 
@@ -693,6 +703,7 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'orbit.perigee': ('km', 'closest distance of the flyby (flyby)'),
     'orbit.v_inf': ('km/s', 'hyperbolic excess speed; give it or v_perigee (flyby)'),
     'orbit.v_perigee': ('km/s', 'speed at perigee; give it or v_inf (flyby)'),
+    **LIGHTCURVE_PARAMETER_DOCS,
 }
 
 

@@ -36,13 +36,15 @@ from tumble_ros.core.photometry.scattering import law as find_law, ScatteringLaw
 from tumble_ros.core.photometry.shape import Mesh
 from tumble_ros.core.torques.frames import orbital_to_body
 
-__all__ = ['brightness', 'to_body', 'phase_angle', 'aspect_angles', 'reference_brightness',
-           'magnitude', 'CHUNK_ELEMENTS']
+__all__ = ['brightness', 'brightness_in_body', 'to_body', 'phase_angle', 'aspect_angles',
+           'latitude_longitude', 'reference_brightness', 'magnitude', 'CHUNK_ELEMENTS']
 
 #: The samples x facets blocks of :func:`brightness` hold at most this many numbers (8 MB per
 #: array of float64), so memory stays bounded for long runs and fine meshes.
 CHUNK_ELEMENTS = 2**20
 _to_body: Callable[..., Any] = python_source(orbital_to_body)
+#: 20-point Gauss-Legendre nodes and weights on [-1, 1] (:func:`reference_brightness`).
+_GAUSS_LEGENDRE = np.polynomial.legendre.leggauss(20)
 
 
 def _directions(name: str, value: ArrayLike, n: int) -> FloatArray:
@@ -86,19 +88,39 @@ def brightness(quaternion: ArrayLike, sun: ArrayLike, observer: ArrayLike, mesh:
     """
     q = _quaternions(quaternion)
     n = q.shape[0]
+    return brightness_in_body(to_body(q, _directions('sun', sun, n)),
+                              to_body(q, _directions('observer', observer, n)), mesh, law)
+
+
+def brightness_in_body(sun: FloatArray, observer: FloatArray, mesh: Mesh,
+                       law: str | ScatteringLaw = 'lambert') -> FloatArray:
+    """Return :func:`brightness` of unit directions (n, 3) already in body axes."""
     scatter = find_law(law)
-    s_body = to_body(q, _directions('sun', sun, n))
-    o_body = to_body(q, _directions('observer', observer, n))
+    s_body, o_body = sun, observer
+    n = s_body.shape[0]
     out = np.empty(n)
     block = max(1, CHUNK_ELEMENTS // mesh.areas.size)
+    columns = tuple(np.ascontiguousarray(mesh.normals[:, k]) for k in range(3))
     for start in range(0, n, block):
-        mu0 = s_body[start:start + block] @ mesh.normals.T
-        mu = o_body[start:start + block] @ mesh.normals.T
-        seen = (mu0 > 0.0) & (mu > 0.0)
-        mu0 = np.where(seen, mu0, 0.0)
-        mu = np.where(seen, mu, 0.0)
-        out[start:start + block] = scatter(mu0, mu) @ mesh.areas
+        # a facet neither lit nor seen counts 0: every law vanishes where mu0 or mu is 0
+        mu0 = np.maximum(_cosines(s_body[start:start + block], columns), 0.0)
+        mu = np.maximum(_cosines(o_body[start:start + block], columns), 0.0)
+        out[start:start + block] = np.sum(scatter(mu0, mu) * mesh.areas, axis=1)
     return out
+
+
+def _cosines(direction: FloatArray, normals: tuple[FloatArray, ...]) -> FloatArray:
+    """
+    Return d.n (m, F) of directions (m, 3) and the normals' columns (nx, ny, nz), elementwise.
+
+    Not a matrix product: BLAS may order a product's sums by the array's size, and each sample
+    must come out the same whatever block it is computed in (the live simulator's batches and
+    the offline writer's differ); the row sums above are numpy's, row by row, alike.
+    """
+    cosines: FloatArray = direction[:, 0:1] * normals[0]
+    cosines += direction[:, 1:2] * normals[1]
+    cosines += direction[:, 2:3] * normals[2]
+    return cosines
 
 
 def phase_angle(sun: ArrayLike, observer: ArrayLike) -> FloatArray:
@@ -113,8 +135,12 @@ def phase_angle(sun: ArrayLike, observer: ArrayLike) -> FloatArray:
 
 def aspect_angles(quaternion: ArrayLike, direction: ArrayLike) -> FloatArray:
     """Return (latitude, longitude) [rad] (n, 2) of inertial unit ``direction`` in body axes."""
-    d = to_body(quaternion, direction)
-    d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    return latitude_longitude(to_body(quaternion, direction))
+
+
+def latitude_longitude(direction: FloatArray) -> FloatArray:
+    """Return (latitude, longitude) [rad] (n, 2) of directions (n, 3) in body axes."""
+    d = direction / np.linalg.norm(direction, axis=1, keepdims=True)
     angles: FloatArray = np.stack([np.arcsin(np.clip(d[:, 2], -1.0, 1.0)),
                                    np.arctan2(d[:, 1], d[:, 0])], axis=-1)
     return angles
@@ -127,7 +153,7 @@ def reference_brightness(mesh: Mesh, law: str | ScatteringLaw = 'lambert') -> fl
     The zero-phase brightness of that sphere; the integral by 20-point Gauss-Legendre (exact
     for the polynomial and rational laws of the registry to rounding).
     """
-    x, w = np.polynomial.legendre.leggauss(20)
+    x, w = _GAUSS_LEGENDRE
     mu = 0.5 * (x + 1.0)
     integral = 0.5 * float(np.sum(w * find_law(law)(mu, mu)))
     return 2.0 * math.pi * mesh.equivalent_radius ** 2 * integral

@@ -2,7 +2,9 @@
 Scattering laws: how bright a lit, visible surface element is, S(mu0, mu).
 
 mu0 = cos(incidence) (the Sun's direction against the outward normal), mu = cos(emergence)
-(the observer's); both > 0 where :func:`~.brightness.brightness` calls a law. S is per unit area
+(the observer's). :func:`~.brightness.brightness` calls a law on cosines clipped at 0 (a facet
+not lit or not seen has mu0 = 0 or mu = 0), so every law must vanish when either is 0 (each
+below does: S contains the factor mu0 mu). S is per unit area
 and per unit of the incoming flux, up to a constant albedo factor (a lightcurve is relative):
 
 - ``lambert``: S = mu0 mu (a perfectly diffusing surface; bright limbs dark, the disk darkens
@@ -53,7 +55,7 @@ def kaasalainen(mu0: FloatArray, mu: FloatArray) -> FloatArray:
 
 @dataclass(frozen=True)
 class ScatteringLaw:
-    """A named law S(mu0, mu) on arrays of the same shape (both > 0), and what it models."""
+    """A named law S(mu0, mu) on arrays of one shape (both >= 0, S = 0 if either is 0)."""
 
     name: str
     function: Callable[[FloatArray, FloatArray], FloatArray]

@@ -27,18 +27,16 @@ import numpy.typing as npt
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.model.shape import body_shape
+from tumble_ros.core.photometry.settings import DEFAULT_SUBDIVISIONS, MAX_SUBDIVISIONS
 
 __all__ = ['Mesh', 'convex_mesh', 'icosphere', 'ellipsoid_mesh', 'body_mesh',
            'DEFAULT_SUBDIVISIONS', 'MAX_SUBDIVISIONS', 'CONVEXITY_TOLERANCE']
 
-#: Subdivisions of the icosphere of :func:`body_mesh` by default: 3, 1,280 facets (the
-#: accuracy and the cost are measured in docs/analysis.md, "Lightcurves: what a telescope sees").
-DEFAULT_SUBDIVISIONS = 3
-#: Most subdivisions accepted: 7, 327,680 facets.
-MAX_SUBDIVISIONS = 7
 #: A vertex may stand this far outside a facet's plane, relative to the mesh's size, and the
-#: mesh still counts as convex (rounding of the coordinates).
-CONVEXITY_TOLERANCE = 1e-9
+#: mesh still counts as convex: shape models are often printed to 6-7 significant digits, and
+#: a dent of 1e-6 of the size changes the brightness by less (test_core_photometry.py refuses a
+#: dimple of 1/2 the radius).
+CONVEXITY_TOLERANCE = 1e-6
 _IntArray = npt.NDArray[np.int64]
 
 
@@ -64,7 +62,7 @@ class Mesh:
         return float((3.0 * self.volume / (4.0 * math.pi)) ** (1.0 / 3.0))
 
 
-def convex_mesh(vertices: ArrayLike, facets: ArrayLike) -> Mesh:
+def convex_mesh(vertices: ArrayLike, facets: ArrayLike, *, check_convex: bool = True) -> Mesh:
     """
     Return the :class:`Mesh` of a convex polyhedron: ``vertices`` (V, 3), ``facets`` (F, 3).
 
@@ -72,7 +70,8 @@ def convex_mesh(vertices: ArrayLike, facets: ArrayLike) -> Mesh:
     the argument, for arrays of the wrong shape, non-finite coordinates, indices out of range,
     degenerate facets, or a polyhedron that is not convex (a vertex outside a facet's plane by
     more than :data:`CONVEXITY_TOLERANCE` of its size): the brightness sums visible lit facets
-    without shadowing, which only a convex body makes exact.
+    without shadowing, which only a convex body makes exact. ``check_convex`` False skips that
+    check (O(F V)) for a mesh convex by construction (:func:`ellipsoid_mesh`).
     """
     v = np.asarray(vertices, dtype=float)
     f = np.asarray(facets)
@@ -98,7 +97,8 @@ def convex_mesh(vertices: ArrayLike, facets: ArrayLike) -> Mesh:
     outward = np.einsum('ij,ij->i', normals, (a + b + c) / 3.0 - centre) > 0.0
     normals = np.where(outward[:, None], normals, -normals)
     f = np.where(outward[:, None], f, f[:, ::-1])
-    _check_convex(v, a, normals, size)
+    if check_convex:
+        _check_convex(v, a, normals, size)
     areas = 0.5 * double_area
     centroids = (a + b + c) / 3.0
     volume = float(np.sum(areas * np.einsum('ij,ij->i', centroids, normals)) / 3.0)
@@ -166,7 +166,9 @@ def ellipsoid_mesh(semi_axes: ArrayLike, subdivisions: int = DEFAULT_SUBDIVISION
     if axes.shape != (3,) or not np.all(np.isfinite(axes)) or np.any(axes <= 0.0):
         raise ValueError(f'semi_axes: three positive finite lengths needed, got {semi_axes!r}')
     vertices, facets = icosphere(subdivisions)
-    return convex_mesh(vertices * axes, facets)
+    # convex by construction: points of a sphere span a convex polyhedron, and a linear map
+    # (the scaling) keeps it convex (test_core_photometry.py checks it at every level)
+    return convex_mesh(vertices * axes, facets, check_convex=False)
 
 
 def body_mesh(inertia: ArrayLike, subdivisions: int = DEFAULT_SUBDIVISIONS) -> Mesh:

@@ -191,19 +191,20 @@ class SampleEncoder:
         return out
 
     def simulator(self, ns: np.ndarray, omega: np.ndarray, quaternion: np.ndarray,
-                  euler: np.ndarray, *, clock: bool = True, perturber: np.ndarray | None = None
-                  ) -> list[tuple[str, np.ndarray]]:
+                  euler: np.ndarray, *, clock: bool = True, perturber: np.ndarray | None = None,
+                  lightcurve: Any = None) -> list[tuple[str, np.ndarray]]:
         """
         Return the simulator's messages of n samples: [(topic, (n, size) uint8 rows)], in order.
 
         ``omega`` (n, 3) [rad/yr] body axes, ``quaternion`` (n, 4) body -> orbital (scalar
         first), ``euler`` (n, 3) the continuous (φ, ψ, θ) [rad], ``perturber`` (n, 3) [km] body
-        axes or None; ``clock``: whether ``/clock`` goes out (first, as the node publishes it).
+        axes or None, ``lightcurve`` a ``core.photometry.LightcurveRecord`` or None; ``clock``:
+        whether ``/clock`` goes out (first, as the node publishes it).
         Then every simulator topic of :data:`tumble_ros.topics.SAMPLE_TOPICS` from that block.
         """
         out = [(topics.CLOCK, self._clock(ns))] if clock else []
         block = {'omega': omega, 'quaternion': quaternion, 'euler': euler,
-                 'perturber': perturber}
+                 'perturber': perturber, 'lightcurve': lightcurve}
         return out + self.samples(topics.SIM, ns, block)
 
     def _clock(self, ns: np.ndarray) -> np.ndarray:
