@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tumble_ros.analysis.periods import (_grid_rss, campaign_times, combination, fit_series,
-                                         harmonics, search_periods)
+from tumble_ros.analysis.periods import (_grid_rss, campaign_times, combination, harmonics,
+                                         search_periods)
 from tumble_ros.core import load_scenario, simulate
 from tumble_ros.core.model.rotation import quaternion_to_euler
 from tumble_ros.core.model.spinstate import spin_state
@@ -27,7 +27,7 @@ H = HOURS_PER_YEAR
 
 
 def doubly_periodic(t, f1, f2, terms):
-    """sum of a cos(2 pi (j f1 + k f2) t + phase) over terms (j, k, a, phase)."""
+    """Sum a cos(2 pi (j f1 + k f2) t + phase) over terms (j, k, a, phase)."""
     return sum(a * np.cos(2.0 * np.pi * (j * f1 + k * f2) * t + p) for j, k, a, p in terms)
 
 
@@ -134,7 +134,7 @@ SETTINGS = LightcurveSettings(sun=(0.6, 0.0, -0.8),
 
 
 def campaign(scenario, rng, nights=28, noise=0.01):
-    """The tumbler's synthetic lightcurve over a campaign [h], Gaussian noise [mag]."""
+    """Return the tumbler's synthetic lightcurve over a campaign [h], Gaussian noise [mag]."""
     th = campaign_times(rng, nights, per_hour=10.0)
     sc = scenario.replace(orbit=None, duration=(th[-1] + 1.0) / H)
     run = simulate(sc, th / H)

@@ -77,7 +77,7 @@ class Harmonic:
 
 @dataclass(frozen=True)
 class MirrorSolution:
-    """Another basis (f1', f2') of the same lattice: its label, periods [time] and fit RMS [mag]."""
+    """Another basis (f1', f2') of the lattice: its label, periods [time], fit RMS [mag]."""
 
     label: str
     p1: float
@@ -115,7 +115,7 @@ class PeriodSolution:
     mean: float
 
     def model(self, t: np.ndarray) -> np.ndarray:
-        """The fitted lightcurve at times ``t`` [mag] (same unit and origin as the data's)."""
+        """Return the fitted lightcurve at times ``t`` [mag] (unit and origin of the data)."""
         f2 = 0.0 if not self.two_periods else 1.0 / self.p2
         terms = _terms(self.order, self.two_periods)
         design = _design(np.asarray(t, dtype=float) - self.t0, 1.0 / self.p1, f2, terms)
@@ -123,7 +123,7 @@ class PeriodSolution:
 
 
 def harmonics(order: int, two_periods: bool = True) -> list[tuple[int, int]]:
-    """The (j, k) of the series of ``order`` (k = 0 throughout for one period)."""
+    """Return the (j, k) of the series of ``order`` (k = 0 throughout for one period)."""
     if not two_periods:
         return [(j, 0) for j in range(1, order + 1)]
     return ([(0, k) for k in range(1, order + 1)]
@@ -285,7 +285,7 @@ def _sigma(t: np.ndarray, y: np.ndarray, w: np.ndarray, freqs: np.ndarray,
 
 def combination(frequency: float, f_a: float, f_b: float, largest: int = 4,
                 rel_tol: float = 0.01) -> tuple[int, int] | None:
-    """The (a, b) with |a|, |b| <= ``largest``, |f - (a f_a + b f_b)| <= rel_tol f, or None."""
+    """Return (a, b), |a|, |b| <= ``largest``, |f - (a f_a + b f_b)| <= rel_tol f, or None."""
     found = [(abs(a) + abs(b), abs(frequency - (a * f_a + b * f_b)), (a, b))
              for a in range(-largest, largest + 1) for b in range(-largest, largest + 1)
              if (a, b) != (0, 0)
@@ -468,7 +468,7 @@ def campaign_times(rng: np.random.Generator, nights: int, night_hours: float = 8
 
 
 def format_periods(sol: PeriodSolution, unit: str = 'h', harmonics_shown: int = 6) -> str:
-    """The solution as text lines: periods, order, RMS, strongest harmonics, mirror bases."""
+    """Return the solution as text: periods, order, RMS, strongest harmonics, mirror bases."""
     lines = [f'lightcurve: {sol.n} points over {sol.span:.6g} {unit}']
     if sol.two_periods:
         lines.append(f'  two periods: P1 = {sol.p1:.6g} +- {sol.p1_sigma:.2g} {unit}, '
@@ -483,7 +483,7 @@ def format_periods(sol: PeriodSolution, unit: str = 'h', harmonics_shown: int = 
         period = 1.0 / abs(h.frequency) if h.frequency else math.inf
         lines.append(f'    ({h.j:+d}, {h.k:+d}): {period:.6g} {unit}, {h.amplitude:.4f} mag')
     if sol.mirrors:
-        lines.append('  mirror bases of the same frequencies (P1\', P2\', RMS):')
+        lines.append("  mirror bases of the same frequencies (P1', P2', RMS):")
         for mirror in sol.mirrors:
             lines.append(f'    {mirror.label}: {mirror.p1:.6g} {unit}, {mirror.p2:.6g} {unit}, '
                          f'{mirror.rms:.4g} mag')
