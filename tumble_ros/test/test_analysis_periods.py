@@ -266,3 +266,34 @@ def test_analyze_prints_the_periods_of_a_csv(tmp_path, capsys):
     assert 'ERROR: cannot read photometry' in capsys.readouterr().err
     assert command(['--period-range', '2', '60', 'run.mcap']) == 1
     assert '--period-range needs --photometry' in capsys.readouterr().err
+
+
+def test_analyze_finds_the_periods_of_a_recorded_lightcurve_and_draws_it(apophis, tmp_path,
+                                                                         capsys):
+    from tumble_ros.analysis.cli import command
+    from tumble_ros.runs.offline import record_offline
+    # Apophis ten times faster (P_phi = 2.7374 h, P_psi = 26.22 h) over 10 days, 0.1 h steps
+    sc = apophis.replace(orbit=None, duration=240.0 / H, output_interval=0.1 / H,
+                         omega0=tuple(10.0 * np.asarray(apophis.omega0)), lightcurve=SETTINGS)
+    record_offline(sc, tmp_path / 'run.mcap', markers=False)
+    figures = tmp_path / 'figs'
+    assert command([str(tmp_path / 'run.mcap'), '--lightcurve', '--period-range', '1', '60',
+                    '--figures', str(figures), '--quiet']) == 0
+    out = capsys.readouterr().out
+    assert 'periods of the recorded lightcurve topic' in out and 'two periods' in out
+    png = figures / 'lightcurve.png'
+    assert f'lightcurve: {png}' in out and png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+    # 1/P_phi and the strongest term 2 (1/P_phi - 1/P_psi) are in the lattice found, 1 %
+    line = next(text for text in out.splitlines() if 'two periods' in text)
+    p1, p2 = (float(line.split('P1 = ')[1].split()[0]), float(line.split('P2 = ')[1].split()[0]))
+    assert combination(2 / 3.0565, 1 / p1, 1 / p2, largest=2) is not None, (p1, p2)
+    assert combination(1 / 2.7374, 1 / p1, 1 / p2, largest=2) is not None, (p1, p2)
+    # a second run keeps the figure unless --overwrite (refused before the search)
+    only = tmp_path / 'only'
+    only.mkdir()
+    (only / 'lightcurve.png').write_bytes(b'keep')
+    assert command([str(tmp_path / 'run.mcap'), '--lightcurve', '--figures', str(only),
+                    '--quiet']) == 1
+    assert 'lightcurve.png exists' in capsys.readouterr().err
+    assert (only / 'lightcurve.png').read_bytes() == b'keep'
+    assert [p.name for p in only.iterdir()] == ['lightcurve.png']      # nothing else written

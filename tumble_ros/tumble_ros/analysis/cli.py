@@ -9,6 +9,7 @@ The ``analyze`` command: summarise a tumble_ros MCAP recording, optionally write
     python -m tumble_ros.analysis RUN.mcap --animate run.gif   # the body tumbling (GIF / MP4)
     python -m tumble_ros.analysis RUN.mcap --still scene.png   # the recorded 3D scene, one frame
     python -m tumble_ros.analysis --photometry obs.csv         # periods of a user's lightcurve
+    python -m tumble_ros.analysis RUN.mcap --lightcurve        # periods of the recorded one
 
 Exit status: 0 on success (warnings included), :data:`EXIT_TRUNCATED` (2) when the file is
 truncated or damaged after some complete chunks (a recorder killed mid-run: the summary, figures
@@ -28,6 +29,7 @@ import argparse
 from collections.abc import Iterable
 import json
 import math
+from pathlib import Path
 import sys
 from typing import NoReturn
 
@@ -70,9 +72,13 @@ def _parser() -> argparse.ArgumentParser:
                         help='search a photometry CSV (time, magnitude, optional error; '
                              'docs/analysis.md, "Periods from a lightcurve") for one or two '
                              'periods and print them')
+    parser.add_argument('--lightcurve', action='store_true',
+                        help='also search the recorded lightcurve topic for its periods and '
+                             'print them; with --figures also draw lightcurve.png')
     parser.add_argument('--period-range', type=float, nargs=2, default=None,
                         metavar=('MIN', 'MAX'),
-                        help='with --photometry: the periods searched [h] (default: 4 '
+                        help='with --photometry or --lightcurve: the periods searched [h] '
+                             '(default: 4 '
                              'median sampling steps to the data span)')
     parser.add_argument('--figures', metavar='DIR', default=None,
                         help='also write the figures (PNG) into DIR, created if needed '
@@ -134,8 +140,10 @@ def _check_options(args) -> str | None:
     """Why the options are wrong, or None."""
     if args.file is None and args.photometry is None:
         return 'need FILE.mcap or --photometry FILE.csv'
-    if args.period_range is not None and args.photometry is None:
-        return '--period-range needs --photometry FILE.csv'
+    if args.period_range is not None and args.photometry is None and not args.lightcurve:
+        return '--period-range needs --photometry FILE.csv or --lightcurve'
+    if args.lightcurve and args.file is None:
+        return '--lightcurve needs FILE.mcap (--photometry FILE.csv searches a CSV)'
     if args.photometry is not None and args.file is not None:
         return '--photometry FILE.csv analyses the CSV alone: drop FILE.mcap'
     if args.period_range is not None and not 0.0 < args.period_range[0] < args.period_range[1]:
@@ -187,6 +195,7 @@ def command(argv: Iterable[str] | None = None) -> int:
         for line in rec.left_out:
             print(f'WARNING: {line}', file=sys.stderr)
         summary = analyze(rec, n_peaks=args.peaks)
+        periods = _recorded_periods(rec, args)      # before the figures: its check first
         figures = [] if args.figures is None else _figures(rec, summary, args)
         extra = _pictures(rec, args)
     except (McapError, AnalysisError) as err:
@@ -197,6 +206,9 @@ def command(argv: Iterable[str] | None = None) -> int:
         data = summary_to_dict(summary)
         data['figures'] = [str(p) for p in figures]
         data.update({key: str(value) for key, (value, _) in extra.items()})
+        if periods is not None:
+            data['lightcurve_periods'] = _solution_dict(periods[0])
+            data['figures'] += [str(p) for p in periods[1:]]
         print(json.dumps(data, indent=1, allow_nan=False))
     else:
         print(format_summary(summary))
@@ -206,12 +218,48 @@ def command(argv: Iterable[str] | None = None) -> int:
                 print(f'  {path}')
         for key, (path, what) in extra.items():
             print(f'{key}: {path} ({what})')
+        if periods is not None:
+            from .periods import format_periods
+            print('periods of the recorded lightcurve topic (t in hours):')
+            print(format_periods(periods[0]))
+            for path in periods[1:]:
+                print(f'lightcurve: {path}')
     return _partial(summary)
+
+
+def _recorded_periods(rec, args) -> tuple | None:
+    """Return None, or with --lightcurve (the recorded lightcurve's solution, figure paths)."""
+    if not args.lightcurve:
+        return None
+    from .lightcurve import FIGURE_NAME, recorded_periods, write_lightcurve_figure
+    if args.figures is not None and not args.overwrite and (Path(args.figures)
+                                                            / FIGURE_NAME).exists():
+        raise AnalysisError(f'{Path(args.figures) / FIGURE_NAME} exists (--overwrite '
+                            f'replaces existing figures)')
+    low, high = args.period_range if args.period_range is not None else (None, None)
+    t, mag, sol = recorded_periods(rec, low, high)
+    if args.figures is None:
+        return (sol,)
+    try:
+        return (sol, write_lightcurve_figure(Path(args.figures) / FIGURE_NAME, t, mag, sol,
+                                             overwrite=args.overwrite))
+    except OSError as err:
+        raise AnalysisError(f'cannot write {FIGURE_NAME} to {args.figures}: '
+                            f'{err.strerror or err}') from None
+
+
+def _solution_dict(sol) -> dict:
+    """Return the PeriodSolution as JSON-ready values (p2, p2_sigma None for one period)."""
+    from dataclasses import asdict
+    out = asdict(sol)
+    for key in ('p2', 'p2_sigma'):
+        out[key] = None if not sol.two_periods else out[key]
+    out['unit'] = 'h'
+    return out
 
 
 def _photometry(args) -> int:
     """Search a photometry CSV for its periods; print them (text or JSON)."""
-    from dataclasses import asdict
     from .periods import format_periods, search_periods
     from .photometry_file import read_photometry
     try:
@@ -226,11 +274,7 @@ def _photometry(args) -> int:
     except KeyboardInterrupt:
         return _error('interrupted')
     if args.json:
-        out = asdict(sol)
-        out['p2'] = None if not sol.two_periods else sol.p2
-        out['p2_sigma'] = None if not sol.two_periods else sol.p2_sigma
-        out['unit'] = 'h'
-        print(json.dumps(out, indent=1, default=float))
+        print(json.dumps(_solution_dict(sol), indent=1, default=float))
     else:
         print(f'photometry: {args.photometry} (time column {data.time_column}, hours)')
         print(format_periods(sol))

@@ -24,9 +24,9 @@ The search (docs/analysis.md, "Periods from a lightcurve"):
 * refinement: Nelder-Mead on the exact least-squares RMS from the best grid point;
 * the order m minimises the BIC N ln(RSS/N) + p ln N (p: the coefficients and the
   frequencies): the grid is searched at the orders 1 to ``start_order`` (3), the pair of least
-  BIC kept, the order then chosen at it among 1 to MAX_ORDER (the grid searched again at a
-  higher one): a low order finds the basis of the lattice, where a high order also fits bases
-  of a finer lattice holding it (f2 / 3, ...);
+  BIC kept, the order then chosen at it among 1 to MAX_ORDER (and the pair refined at that
+  order; the grid is not searched again, which bounds the cost): a low order finds the basis
+  of the lattice, where a high order also fits bases of a finer lattice holding it (f2 / 3);
 * one period or two: the BIC of the best 1-period fit (order chosen by the same rule) against
   the 2-period one; two periods only if the latter's is lower by more than BIC_MARGIN;
 * uncertainties: the formal 1-sigma of the frequencies from the covariance of the nonlinear
@@ -403,7 +403,7 @@ def search_periods(t, magnitude, sigma=None, period_min: float | None = None,
     pair = np.array(min(tried)[2])
     orders = range(1, max_order + 1)
     order = orders[int(np.argmin([bic_at(pair, o) for o in orders]))]
-    pair = refined(grid_best(order) if order > start_order else pair, order)
+    pair = refined(pair, order)
     objective = exact(order)
     step = 1.0 / (OVERSAMPLE * order * span)
     rss_two, coef_two = fit_series(t, y, w, pair[0], pair[1], order)
