@@ -139,7 +139,7 @@ def _figures(rec, summary, args) -> list:
 def _check_options(args) -> str | None:
     """Why the options are wrong, or None."""
     if args.file is None and args.photometry is None:
-        return 'need FILE.mcap or --photometry FILE.csv'
+        return 'the following arguments are required: FILE.mcap (or --photometry FILE.csv)'
     if args.period_range is not None and args.photometry is None and not args.lightcurve:
         return '--period-range needs --photometry FILE.csv or --lightcurve'
     if args.lightcurve and args.file is None:

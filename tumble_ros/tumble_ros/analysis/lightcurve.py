@@ -14,6 +14,7 @@ import numpy as np
 
 from tumble_ros.core.model.units import HOURS_PER_YEAR
 from tumble_ros.errors import AnalysisError
+from tumble_ros.topics import LIGHTCURVE
 
 from .periods import PeriodSolution, search_periods
 from .recording import Recording
@@ -29,7 +30,7 @@ _MAGNITUDE = 1
 def recorded_lightcurve(rec: Recording) -> tuple[np.ndarray, np.ndarray]:
     """Return (t [h], magnitude [mag]) of the recording's lit samples; AnalysisError if none."""
     if rec.lightcurve_t.size == 0:
-        raise AnalysisError(f'{rec.path}: no lightcurve topic (lightcurve.enabled false, or a '
+        raise AnalysisError(f'{rec.path}: no {LIGHTCURVE} topic (lightcurve.enabled false, or a '
                             f'body that cannot exist): --lightcurve has nothing to search')
     mag = rec.lightcurve[:, _MAGNITUDE]
     lit = np.isfinite(mag)
@@ -64,7 +65,7 @@ def write_lightcurve_figure(path: Path, t: np.ndarray, mag: np.ndarray, sol: Per
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True,
                                       gridspec_kw={'height_ratios': [3, 1]})
     fine = np.linspace(t.min(), t.max(), 4000)
-    top.plot(t, mag, '.', ms=2, color='0.3', label='lightcurve')
+    top.plot(t, mag, '.', ms=2, color='0.3', label='magnitude')
     top.plot(fine, sol.model(fine), '-', lw=0.7, color='C3', label='fit')
     top.invert_yaxis()
     top.set_ylabel('magnitude [mag]')
