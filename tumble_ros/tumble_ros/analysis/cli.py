@@ -8,6 +8,8 @@ The ``analyze`` command: summarise a tumble_ros MCAP recording, optionally write
     python -m tumble_ros.analysis RUN.mcap --run 0a1b2c3d4e5f  # one run of several (run_id)
     python -m tumble_ros.analysis RUN.mcap --animate run.gif   # the body tumbling (GIF / MP4)
     python -m tumble_ros.analysis RUN.mcap --still scene.png   # the recorded 3D scene, one frame
+    python -m tumble_ros.analysis --photometry obs.csv         # periods of a user's lightcurve
+    python -m tumble_ros.analysis RUN.mcap --lightcurve        # periods of the recorded one
 
 Exit status: 0 on success (warnings included), :data:`EXIT_TRUNCATED` (2) when the file is
 truncated or damaged after some complete chunks (a recorder killed mid-run: the summary, figures
@@ -27,6 +29,7 @@ import argparse
 from collections.abc import Iterable
 import json
 import math
+from pathlib import Path
 import sys
 from typing import NoReturn
 
@@ -63,7 +66,20 @@ def _parser() -> argparse.ArgumentParser:
                     'duration, comparator error, Jacobi-integral drift per segment, impacts, '
                     'dominant frequencies of wx against the theory, and an aliasing check '
                     '(docs/analysis.md).')
-    parser.add_argument('file', metavar='FILE.mcap', help='the recording')
+    parser.add_argument('file', metavar='FILE.mcap', nargs='?', default=None,
+                        help='the recording (optional with --photometry)')
+    parser.add_argument('--photometry', metavar='FILE.csv', default=None,
+                        help='search a photometry CSV (time, magnitude, optional error; '
+                             'docs/analysis.md, "Periods from a lightcurve") for one or two '
+                             'periods and print them')
+    parser.add_argument('--lightcurve', action='store_true',
+                        help='also search the recorded lightcurve topic for its periods and '
+                             'print them; with --figures also draw lightcurve.png')
+    parser.add_argument('--period-range', type=float, nargs=2, default=None,
+                        metavar=('MIN', 'MAX'),
+                        help='with --photometry or --lightcurve: the periods searched [h] '
+                             '(default: 4 '
+                             'median sampling steps to the data span)')
     parser.add_argument('--figures', metavar='DIR', default=None,
                         help='also write the figures (PNG) into DIR, created if needed '
                              '(default: no figures); existing files are not overwritten and '
@@ -122,6 +138,16 @@ def _figures(rec, summary, args) -> list:
 
 def _check_options(args) -> str | None:
     """Why the options are wrong, or None."""
+    if args.file is None and args.photometry is None:
+        return 'the following arguments are required: FILE.mcap (or --photometry FILE.csv)'
+    if args.period_range is not None and args.photometry is None and not args.lightcurve:
+        return '--period-range needs --photometry FILE.csv or --lightcurve'
+    if args.lightcurve and args.file is None:
+        return '--lightcurve needs FILE.mcap (--photometry FILE.csv searches a CSV)'
+    if args.photometry is not None and args.file is not None:
+        return '--photometry FILE.csv analyses the CSV alone: drop FILE.mcap'
+    if args.period_range is not None and not 0.0 < args.period_range[0] < args.period_range[1]:
+        return f'--period-range needs 0 < MIN < MAX [h], got {args.period_range}'
     if args.peaks < 1:
         return f'--peaks must be >= 1, got {args.peaks}'
     if args.overwrite and args.figures is None and args.animate is None and args.still is None:
@@ -160,6 +186,8 @@ def command(argv: Iterable[str] | None = None) -> int:
     problem = _check_options(args)
     if problem:
         return _error(problem)
+    if args.photometry is not None:
+        return _photometry(args)
     try:
         progress = None if args.quiet else stderr_progress()
         rec = load_recording(args.file, namespace=args.namespace, run=args.run,
@@ -167,6 +195,7 @@ def command(argv: Iterable[str] | None = None) -> int:
         for line in rec.left_out:
             print(f'WARNING: {line}', file=sys.stderr)
         summary = analyze(rec, n_peaks=args.peaks)
+        periods = _recorded_periods(rec, args)      # before the figures: its check first
         figures = [] if args.figures is None else _figures(rec, summary, args)
         extra = _pictures(rec, args)
     except (McapError, AnalysisError) as err:
@@ -177,6 +206,9 @@ def command(argv: Iterable[str] | None = None) -> int:
         data = summary_to_dict(summary)
         data['figures'] = [str(p) for p in figures]
         data.update({key: str(value) for key, (value, _) in extra.items()})
+        if periods is not None:
+            data['lightcurve_periods'] = _solution_dict(periods[0])
+            data['figures'] += [str(p) for p in periods[1:]]
         print(json.dumps(data, indent=1, allow_nan=False))
     else:
         print(format_summary(summary))
@@ -186,7 +218,67 @@ def command(argv: Iterable[str] | None = None) -> int:
                 print(f'  {path}')
         for key, (path, what) in extra.items():
             print(f'{key}: {path} ({what})')
+        if periods is not None:
+            from .periods import format_periods
+            print('periods of the recorded lightcurve topic (t in hours):')
+            print(format_periods(periods[0]))
+            for path in periods[1:]:
+                print(f'lightcurve: {path}')
     return _partial(summary)
+
+
+def _recorded_periods(rec, args) -> tuple | None:
+    """Return None, or with --lightcurve (the recorded lightcurve's solution, figure paths)."""
+    if not args.lightcurve:
+        return None
+    from .lightcurve import FIGURE_NAME, recorded_periods, write_lightcurve_figure
+    if args.figures is not None and not args.overwrite and (Path(args.figures)
+                                                            / FIGURE_NAME).exists():
+        raise AnalysisError(f'{Path(args.figures) / FIGURE_NAME} exists (--overwrite '
+                            f'replaces existing figures)')
+    low, high = args.period_range if args.period_range is not None else (None, None)
+    t, mag, sol = recorded_periods(rec, low, high)
+    if args.figures is None:
+        return (sol,)
+    try:
+        return (sol, write_lightcurve_figure(Path(args.figures) / FIGURE_NAME, t, mag, sol,
+                                             overwrite=args.overwrite))
+    except OSError as err:
+        raise AnalysisError(f'cannot write {FIGURE_NAME} to {args.figures}: '
+                            f'{err.strerror or err}') from None
+
+
+def _solution_dict(sol) -> dict:
+    """Return the PeriodSolution as JSON-ready values (p2, p2_sigma None for one period)."""
+    from dataclasses import asdict
+    out = asdict(sol)
+    for key in ('p2', 'p2_sigma'):
+        out[key] = None if not sol.two_periods else out[key]
+    out['unit'] = 'h'
+    return out
+
+
+def _photometry(args) -> int:
+    """Search a photometry CSV for its periods; print them (text or JSON)."""
+    from .periods import format_periods, search_periods
+    from .photometry_file import read_photometry
+    try:
+        data = read_photometry(args.photometry)
+        low, high = args.period_range if args.period_range is not None else (None, None)
+        try:
+            sol = search_periods(data.t, data.magnitude, data.sigma, low, high)
+        except ValueError as err:
+            raise AnalysisError(f'{args.photometry}: {err}') from None
+    except AnalysisError as err:
+        return _error(err)
+    except KeyboardInterrupt:
+        return _error('interrupted')
+    if args.json:
+        print(json.dumps(_solution_dict(sol), indent=1, default=float))
+    else:
+        print(f'photometry: {args.photometry} (time column {data.time_column}, hours)')
+        print(format_periods(sol))
+    return 0
 
 
 def _partial(summary) -> int:

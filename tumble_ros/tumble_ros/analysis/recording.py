@@ -6,6 +6,7 @@ Load a tumble_ros MCAP recording into numpy arrays, in one pass, without a ROS r
     rec.t, rec.omega                # (n,), (n, 3): simulated years, rad/yr (body axes)
     rec.quaternion_t, rec.quaternion  # (m,), (m, 4): scalar first (w, x, y, z), body -> orbital
     rec.perturber_t, rec.perturber    # the torquing body [km], body axes (Kepler orbits only)
+    rec.lightcurve_t, rec.lightcurve  # (k,), (k, 8): the lightcurve topic (magnitude column 1)
     rec.impacts, rec.scenario, rec.topics
 
 Every stamped series keeps its own time axis (the simulator may publish the attitude less
@@ -56,8 +57,8 @@ from tumble_ros.errors import AnalysisError
 from tumble_ros.io import read_columns, sample_values, summarize
 from tumble_ros.topics import (ANGULAR_VELOCITY, ATTITUDE, COMPARISON_STATUS, ERROR, ERROR_NORM,
                                EULER_ANGLES, FRAME_BODY, FRAME_ORBITAL, IMPACT_EVENTS,
-                               in_namespace, MODEL_ANGULAR_VELOCITY, PERTURBER, sample_topic,
-                               SAMPLE_TOPICS, SCENARIO, STATUS, TYPES)
+                               in_namespace, LIGHTCURVE, MODEL_ANGULAR_VELOCITY, PERTURBER,
+                               sample_topic, SAMPLE_TOPICS, SCENARIO, STATUS, TYPES)
 
 __all__ = [
     'EXPECTED_TYPES', 'ROOT_NAMESPACE', 'AnalysisError', 'ImpactRecord', 'SegmentStart',
@@ -70,7 +71,7 @@ __all__ = [
 #: events) are only counted.
 EXPECTED_TYPES = {topic: TYPES[topic] for topic in (
     ANGULAR_VELOCITY, ATTITUDE, EULER_ANGLES, IMPACT_EVENTS, SCENARIO, STATUS, PERTURBER,
-    MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS)}
+    MODEL_ANGULAR_VELOCITY, ERROR, ERROR_NORM, COMPARISON_STATUS, LIGHTCURVE)}
 
 #: The per-sample topics read as columns: topic -> its value fields, in the columns' order
 #: (their descriptions, :data:`tumble_ros.topics.SAMPLE_TOPICS`).
@@ -210,6 +211,9 @@ class Recording:
     quaternion: np.ndarray = field(default_factory=lambda: _empty(4))     # (w, x, y, z)
     perturber_t: np.ndarray = field(default_factory=lambda: np.empty(0))
     perturber: np.ndarray = field(default_factory=lambda: _empty(3))      # [km], body axes
+    lightcurve_t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    # the lightcurve topic's fields (topics.SAMPLE_TOPICS: brightness, magnitude, ...)
+    lightcurve: np.ndarray = field(default_factory=lambda: _empty(8))
     model_t: np.ndarray = field(default_factory=lambda: np.empty(0))
     model_omega: np.ndarray = field(default_factory=lambda: _empty(3))
     error_t: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -453,6 +457,9 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
     if PERTURBER in raw:
         ns, rec.perturber = _sorted(*raw[PERTURBER], 3)
         rec.perturber_t = years(ns)
+    if LIGHTCURVE in raw:
+        ns, rec.lightcurve = _sorted(*raw[LIGHTCURVE], len(_COLUMNS[LIGHTCURVE]))
+        rec.lightcurve_t = years(ns)
     if MODEL_ANGULAR_VELOCITY in raw:
         ns, rec.model_omega = _sorted(*raw[MODEL_ANGULAR_VELOCITY], 3)
         rec.model_t = years(ns)

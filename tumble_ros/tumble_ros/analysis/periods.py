@@ -1,0 +1,490 @@
+"""
+Periods from a lightcurve: the two-period Fourier series of Pravec et al. 2005 (ROS-free, numpy).
+
+A tumbler's lightcurve is doubly periodic: it holds the frequencies j f1 + k f2 of two basic
+frequencies f1 = 1/P1, f2 = 1/P2 (Pravec et al. 2005, Icarus 173, 108, "Tumbling asteroids").
+The model of order m is
+
+    F(t) = C0 + sum_{j=0..m} sum_{k=-m..m} [C_jk cos(2 pi (j f1 + k f2) t)
+                                            + S_jk sin(2 pi (j f1 + k f2) t)]
+
+over (j, k) != (0, 0), k > 0 when j = 0; it is linear in C, S and fitted by weighted least
+squares at every (f1, f2) of a grid; the trial with the least RMS residual wins. A principal-axis
+rotator needs only f1 and its harmonics (the 1-period series of Harris et al. 1989).
+
+The search (docs/analysis.md, "Periods from a lightcurve"):
+
+* a 1-period scan over [1/period_max, 1/period_min] in steps of 1/(OVERSAMPLE m T) (T the data
+  span) gives the candidates for f1: its TOP_PEAKS deepest minima and half of each (the
+  strongest signal of an elongated body is the second harmonic);
+* the 2-period grid: f1 within +-WINDOW steps of each candidate, f2 over the whole range; the
+  normal equations of every trial are assembled from the sums sum_i w_i exp(2 pi i (a f1 +
+  b f2) t_i), |a|, |b| <= 2m, computed for the whole grid by one matrix product (no design
+  matrix per trial);
+* refinement: Nelder-Mead on the exact least-squares RMS from the best grid point;
+* the order m minimises the BIC N ln(RSS/N) + p ln N (p: the coefficients and the
+  frequencies): the grid is searched at the orders 1 to ``start_order`` (3), the pair of least
+  BIC kept, the order then chosen at it among 1 to MAX_ORDER (and the pair refined at that
+  order; the grid is not searched again, which bounds the cost): a low order finds the basis
+  of the lattice, where a high order also fits bases of a finer lattice holding it (f2 / 3);
+* one period or two: the BIC of the best 1-period fit (order chosen by the same rule) against
+  the 2-period one; two periods only if the latter's is lower by more than BIC_MARGIN;
+* uncertainties: the formal 1-sigma of the frequencies from the covariance of the nonlinear
+  least-squares problem (coefficients and frequencies together) at the minimum, scaled by the
+  residual variance;
+* mirror solutions: other bases of the same lattice of frequencies ((f1 - f2, f2), (f1 + f2,
+  f2), (f1, f1 - f2), (f2, f1), ...) with the RMS of their own fit at the same order: at a finite
+  order they differ, and the reader sees how close they come.
+
+Times in any unit (hours for the command line), frequencies in its inverse.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+from scipy.optimize import minimize
+
+__all__ = ['Harmonic', 'MirrorSolution', 'PeriodSolution', 'campaign_times', 'combination',
+           'fit_series', 'format_periods',
+           'harmonics', 'search_periods', 'BIC_MARGIN', 'MAX_ORDER', 'OVERSAMPLE', 'TOP_PEAKS',
+           'WINDOW']
+
+#: grid steps per 1/(m T) in f (T the span, m the order)
+OVERSAMPLE = 3
+#: 1-period minima taken as candidates for f1 (each also halved)
+TOP_PEAKS = 2
+#: the f1 window about each candidate, in grid steps either side
+WINDOW = 4
+#: the highest order tried
+MAX_ORDER = 5
+#: two periods only when their BIC is lower than one period's by more than this
+BIC_MARGIN = 10.0
+#: elements of a grid chunk (pairs x trig sums) held at once
+_CHUNK = 4_000_000
+
+
+@dataclass(frozen=True)
+class Harmonic:
+    """One term of the fit: frequency j f1 + k f2 [1/time], amplitude sqrt(C^2 + S^2) [mag]."""
+
+    j: int
+    k: int
+    frequency: float
+    amplitude: float
+
+
+@dataclass(frozen=True)
+class MirrorSolution:
+    """Another basis (f1', f2') of the lattice: its label, periods [time], fit RMS [mag]."""
+
+    label: str
+    p1: float
+    p2: float
+    rms: float
+
+
+@dataclass(frozen=True)
+class PeriodSolution:
+    """
+    The result of :func:`search_periods`.
+
+    ``p1``, ``p2`` [time unit of t] with their 1-sigma ``p1_sigma``, ``p2_sigma`` (``p2`` and
+    ``p2_sigma`` NaN when ``two_periods`` is False); ``order`` m; ``rms`` [mag] the weighted RMS
+    residual; ``rms_one`` of the best 1-period fit; ``bic_one``, ``bic_two``; ``harmonics`` by
+    decreasing amplitude; ``mirrors`` other bases of the lattice; ``n`` points, ``span`` [time].
+    """
+
+    two_periods: bool
+    p1: float
+    p1_sigma: float
+    p2: float
+    p2_sigma: float
+    order: int
+    rms: float
+    rms_one: float
+    bic_one: float
+    bic_two: float
+    harmonics: tuple[Harmonic, ...]
+    mirrors: tuple[MirrorSolution, ...]
+    n: int
+    span: float
+    coefficients: tuple[float, ...]
+    t0: float
+    mean: float
+
+    def model(self, t: np.ndarray) -> np.ndarray:
+        """Return the fitted lightcurve at times ``t`` [mag] (unit and origin of the data)."""
+        f2 = 0.0 if not self.two_periods else 1.0 / self.p2
+        terms = _terms(self.order, self.two_periods)
+        design = _design(np.asarray(t, dtype=float) - self.t0, 1.0 / self.p1, f2, terms)
+        return self.mean + design @ np.asarray(self.coefficients)
+
+
+def harmonics(order: int, two_periods: bool = True) -> list[tuple[int, int]]:
+    """Return the (j, k) of the series of ``order`` (k = 0 throughout for one period)."""
+    if not two_periods:
+        return [(j, 0) for j in range(1, order + 1)]
+    return ([(0, k) for k in range(1, order + 1)]
+            + [(j, k) for j in range(1, order + 1) for k in range(-order, order + 1)])
+
+
+def _terms(order: int, two_periods: bool) -> np.ndarray:
+    return np.array(harmonics(order, two_periods), dtype=int).reshape(-1, 2)
+
+
+def _design(t: np.ndarray, f1: float, f2: float, terms: np.ndarray) -> np.ndarray:
+    """[1, cos, sin, cos, sin, ...] columns of the series at (f1, f2), shape (n, 1 + 2K)."""
+    phase = 2.0 * np.pi * np.outer(t, terms[:, 0] * f1 + terms[:, 1] * f2)
+    out = np.empty((t.size, 1 + 2 * len(terms)))
+    out[:, 0] = 1.0
+    out[:, 1::2] = np.cos(phase)
+    out[:, 2::2] = np.sin(phase)
+    return out
+
+
+def fit_series(t: np.ndarray, y: np.ndarray, w: np.ndarray, f1: float, f2: float,
+               order: int, two_periods: bool = True) -> tuple[float, np.ndarray]:
+    """Weighted least squares at (f1, f2): (RSS = sum w r^2, coefficients [C0, C, S, ...])."""
+    design = _design(t, f1, f2 if two_periods else 0.0, _terms(order, two_periods))
+    weighted = design * w[:, None]
+    normal = design.T @ weighted
+    normal[np.diag_indices_from(normal)] *= 1.0 + 1e-12       # degenerate pairs stay solvable
+    try:
+        coef = np.linalg.solve(normal, weighted.T @ y)
+    except np.linalg.LinAlgError:
+        sw = np.sqrt(w)
+        coef = np.linalg.lstsq(design * sw[:, None], y * sw, rcond=None)[0]
+    r = (y - design @ coef) * np.sqrt(w)
+    return float(r @ r), coef
+
+
+def _column_algebra(terms: np.ndarray, m: int):
+    """Index and sign tables that build the normal matrix from the trigonometric sums."""
+    # columns: 0 the constant (a cos at (0, 0)), then cos/sin of each term
+    jk = np.vstack([[0, 0], np.repeat(terms, 2, axis=0)])
+    is_sin = np.r_[False, np.tile([False, True], len(terms))]
+    sp = is_sin[:, None]
+    sq = is_sin[None, :]
+    plus = jk[:, None, :] + jk[None, :, :] + 2 * m
+    minus = jk[:, None, :] - jk[None, :, :] + 2 * m
+    # cc = (Re S- + Re S+)/2, ss = (Re S- - Re S+)/2, cos p sin q = (Im S+ - Im S-)/2,
+    # sin p cos q = (Im S+ + Im S-)/2
+    re_minus = np.where(sp == sq, 0.5, 0.0)
+    re_plus = np.where(~sp & ~sq, 0.5, np.where(sp & sq, -0.5, 0.0))
+    im_minus = np.where(~sp & sq, -0.5, np.where(sp & ~sq, 0.5, 0.0))
+    im_plus = np.where(sp != sq, 0.5, 0.0)
+    return jk, is_sin, plus, minus, (re_minus, re_plus, im_minus, im_plus)
+
+
+def _grid_rss(t: np.ndarray, y: np.ndarray, w: np.ndarray, f1s: np.ndarray, f2s: np.ndarray,
+              order: int) -> np.ndarray:
+    """Weighted RSS at every (f1s[i], f2s[j]) by the normal equations, shape (n1, n2)."""
+    m = order
+    terms = _terms(m, True)
+    jk, is_sin, plus, minus, (a, b, c, d) = _column_algebra(terms, m)
+    span = 4 * m + 1
+    powers = np.arange(-2 * m, 2 * m + 1)
+    e1 = np.exp(2j * np.pi * (f1s[:, None, None] * powers[None, :, None]) * t)   # n1, A, N
+    e1w = (e1 * w).reshape(-1, t.size)
+    e1wy = (e1[:, m:3 * m + 1] * (w * y)).reshape(-1, t.size)
+    yy = float(np.sum(w * y * y))
+    n1 = f1s.size
+    out = np.empty((n1, f2s.size))
+    step = max(1, _CHUNK // (n1 * span * max(t.size, 1)))
+    for lo in range(0, f2s.size, step):
+        f2 = f2s[lo:lo + step]
+        e2 = np.exp(2j * np.pi * (f2[:, None, None] * powers[None, :, None]) * t)  # n2, A, N
+        n2 = f2.size
+        s = (e1w @ e2.reshape(-1, t.size).T).reshape(n1, span, n2, span)
+        s = s.transpose(0, 2, 1, 3)                                       # n1, n2, A, A
+        rhs_sum = (e1wy @ e2[:, m:3 * m + 1].reshape(-1, t.size).T)
+        rhs_sum = rhs_sum.reshape(n1, 2 * m + 1, n2, 2 * m + 1).transpose(0, 2, 1, 3)
+        s_minus = s[:, :, minus[..., 0], minus[..., 1]]
+        s_plus = s[:, :, plus[..., 0], plus[..., 1]]
+        normal = (a * s_minus.real + b * s_plus.real + c * s_minus.imag + d * s_plus.imag)
+        r = rhs_sum[:, :, jk[:, 0] + m, jk[:, 1] + m]
+        rhs = np.where(is_sin, r.imag, r.real)
+        diag = np.einsum('...ii->...i', normal)
+        ridge = 1e-10 * diag.max(axis=-1, keepdims=True)
+        normal = normal + ridge[..., None] * np.eye(normal.shape[-1])
+        x = np.linalg.solve(normal, rhs[..., None])[..., 0]
+        out[:, lo:lo + n2] = yy - np.einsum('...i,...i->...', x, rhs)
+    return np.maximum(out, 0.0)
+
+
+def _scan_one(t: np.ndarray, y: np.ndarray, w: np.ndarray, fs: np.ndarray,
+              order: int) -> np.ndarray:
+    """Weighted RSS of the 1-period series at every frequency of ``fs`` (vectorised)."""
+    n_col = 1 + 2 * order
+    harm = np.arange(1, order + 1)
+    out = np.empty(fs.size)
+    step = max(1, _CHUNK // (n_col * max(t.size, 1)))
+    sw = np.sqrt(w)
+    for lo in range(0, fs.size, step):
+        f = fs[lo:lo + step]
+        phase = 2.0 * np.pi * f[:, None, None] * harm[None, None, :] * t[None, :, None]
+        design = np.concatenate([np.ones(phase.shape[:2] + (1,)), np.cos(phase),
+                                 np.sin(phase)], axis=2) * sw[None, :, None]
+        normal = np.einsum('fni,fnj->fij', design, design)
+        rhs = np.einsum('fni,n->fi', design, y * sw)
+        normal += 1e-12 * np.eye(n_col) * normal[:, :1, :1]
+        x = np.linalg.solve(normal, rhs[..., None])[..., 0]
+        out[lo:lo + f.size] = np.sum(w * y * y) - np.einsum('fi,fi->f', x, rhs)
+    return np.maximum(out, 0.0)
+
+
+def _bic(rss: float, n: int, n_par: int) -> float:
+    return n * math.log(max(rss, 1e-300) / n) + n_par * math.log(n)
+
+
+def _degenerate(f1: np.ndarray, f2: np.ndarray, order: int, span: float) -> np.ndarray:
+    """
+    Whether two terms of the series share a frequency within the resolution 1/span.
+
+    That is a f1 + b f2 ~ 0 for some (a, b) != 0 with |a|, |b| <= order: f1/f2 near a ratio of
+    small integers, where the lattice degenerates into one period's harmonics (the same
+    frequency twice is one period, not two) and the fit uses unresolved pairs of frequencies.
+    """
+    out = np.zeros(np.broadcast(f1, f2).shape, dtype=bool)
+    for a in range(0, order + 1):
+        for b in range(-order, order + 1):
+            if (a, b) != (0, 0) and (a > 0 or b > 0):
+                out |= np.abs(a * f1 + b * f2) < 1.0 / span
+    return out
+
+
+def _local_minima(values: np.ndarray, count: int) -> np.ndarray:
+    inner = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
+    return inner[np.argsort(values[inner])][:count]
+
+
+def _refine(objective, start: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    result = minimize(lambda u: objective(start + u * scale), np.zeros(start.size),
+                      method='Nelder-Mead',
+                      options={'xatol': 1e-4, 'fatol': 1e-12, 'maxiter': 400})
+    return start + result.x * scale
+
+
+def _sigma(t: np.ndarray, y: np.ndarray, w: np.ndarray, freqs: np.ndarray,
+           coef: np.ndarray, order: int, two: bool, rss: float) -> np.ndarray:
+    """1-sigma of the frequencies from the nonlinear least-squares covariance."""
+    terms = _terms(order, two)
+    f2 = freqs[1] if two else 0.0
+    design = _design(t, freqs[0], f2, terms)
+    cos_c, sin_c = coef[1::2], coef[2::2]
+    # dF/dnu for nu = j f1 + k f2: 2 pi t (-C sin + S cos)
+    d_nu = 2.0 * np.pi * t[:, None] * (-cos_c * design[:, 2::2] + sin_c * design[:, 1::2])
+    jac = [d_nu @ terms[:, 0]] + ([d_nu @ terms[:, 1]] if two else [])
+    full = np.column_stack([design] + jac) * np.sqrt(w)[:, None]
+    dof = max(t.size - full.shape[1], 1)
+    cov = np.linalg.pinv(full.T @ full) * (rss / dof)
+    return np.sqrt(np.abs(np.diag(cov)[-len(jac):]))
+
+
+def combination(frequency: float, f_a: float, f_b: float, largest: int = 4,
+                rel_tol: float = 0.01) -> tuple[int, int] | None:
+    """Return (a, b), |a|, |b| <= ``largest``, |f - (a f_a + b f_b)| <= rel_tol f, or None."""
+    found = [(abs(a) + abs(b), abs(frequency - (a * f_a + b * f_b)), (a, b))
+             for a in range(-largest, largest + 1) for b in range(-largest, largest + 1)
+             if (a, b) != (0, 0)
+             and abs(frequency - (a * f_a + b * f_b)) <= rel_tol * abs(frequency)]
+    return min(found)[2] if found else None
+
+
+def _mirrors(t, y, w, f1, f2, order) -> tuple[MirrorSolution, ...]:
+    bases = {'(f1 - f2, f2)': (f1 - f2, f2), '(f1 + f2, f2)': (f1 + f2, f2),
+             '(f1, f1 - f2)': (f1, f1 - f2), '(f2, f1)': (f2, f1),
+             '(f1 - 2 f2, f2)': (f1 - 2.0 * f2, f2), '(f1, f1 + f2)': (f1, f1 + f2)}
+    out = []
+    for label, (g1, g2) in bases.items():
+        g1, g2 = abs(g1), abs(g2)
+        if min(g1, g2) <= 0.0:
+            continue
+        rss, _ = fit_series(t, y, w, g1, g2, order)
+        out.append(MirrorSolution(label, 1.0 / g1, 1.0 / g2, math.sqrt(rss / np.sum(w))))
+    return tuple(sorted(out, key=lambda s: s.rms))
+
+
+def _validate(t, y, sigma, period_min, period_max):
+    t = np.asarray(t, dtype=float).ravel()
+    y = np.asarray(y, dtype=float).ravel()
+    if t.size != y.size:
+        raise ValueError(f'magnitude: need one per time ({t.size}), got {y.size}')
+    if t.size < 20:
+        raise ValueError(f't: need at least 20 points, got {t.size}')
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+        raise ValueError('t, magnitude: must be finite')
+    if sigma is None:
+        w = np.ones(t.size)
+    else:
+        s = np.asarray(sigma, dtype=float).ravel()
+        if s.size != t.size or not np.all(np.isfinite(s)) or np.any(s <= 0.0):
+            raise ValueError(f'sigma: need {t.size} finite errors > 0, got {s.size} '
+                             f'(min {np.min(s) if s.size else "none"})')
+        w = 1.0 / s ** 2
+        w = w / w.mean()
+    span = float(t.max() - t.min())
+    if span <= 0.0:
+        raise ValueError(f't: the span must be > 0, got {span}')
+    p_max = span if period_max is None else float(period_max)
+    p_min = (4.0 * float(np.median(np.diff(np.sort(t)))) if period_min is None
+             else float(period_min))
+    if not (0.0 < p_min < p_max):
+        raise ValueError(f'period_min, period_max: need 0 < min < max, got {p_min}, {p_max}')
+    return t, y, w, span, p_min, p_max
+
+
+def search_periods(t, magnitude, sigma=None, period_min: float | None = None,
+                   period_max: float | None = None, start_order: int = 3,
+                   max_order: int = MAX_ORDER) -> PeriodSolution:
+    """
+    Find the one or two periods of a lightcurve (module docstring for the method).
+
+    ``t`` (n,) [any time unit], ``magnitude`` (n,) [mag], ``sigma`` (n,) [mag] optional errors
+    (weights 1/sigma^2); the periods are searched in [``period_min``, ``period_max``] (default:
+    4 median sampling steps to the span). ValueError for bad inputs, naming the argument.
+    """
+    t, y, w, span, p_min, p_max = _validate(t, magnitude, sigma, period_min, period_max)
+    t0, mean = float(t.min()), float(np.average(y, weights=w))
+    t, y = t - t0, y - mean
+    n = t.size
+    wsum = float(np.sum(w))
+    f_lo, f_hi = 1.0 / p_max, 1.0 / p_min
+
+    # one period: scan, refine, choose the order
+    step1 = 1.0 / (OVERSAMPLE * start_order * span)
+    fs = np.arange(f_lo, f_hi + step1, step1)
+    scan = _scan_one(t, y, w, fs, start_order)
+    peaks = fs[_local_minima(scan, TOP_PEAKS)]
+    best_one = (math.inf, 0.0, 1, np.zeros(1))
+    for f in peaks:
+        for order in range(1, max_order + 1):
+            fr = _refine(lambda u: fit_series(t, y, w, u[0], 0.0, order, False)[0],
+                         np.array([f]), np.array([step1]))[0]
+            rss, coef = fit_series(t, y, w, fr, 0.0, order, False)
+            bic = _bic(rss, n, 2 + 2 * order)
+            if bic < best_one[0]:
+                best_one = (bic, fr, order, coef)
+    bic_one, f_one, order_one, coef_one = best_one
+    rss_one, _ = fit_series(t, y, w, f_one, 0.0, order_one, False)
+
+    # two periods: grid about the candidates, then the order, then refinement
+    candidates = np.unique(np.concatenate([peaks, peaks / 2.0]))
+
+    def grid_best(order: int) -> np.ndarray:
+        step = 1.0 / (OVERSAMPLE * order * span)
+        f1s = np.unique(np.concatenate([c + step * np.arange(-WINDOW, WINDOW + 1)
+                                        for c in candidates]))
+        f1s = f1s[(f1s >= f_lo) & (f1s <= f_hi)]
+        f2s = np.arange(f_lo, f_hi + step, step)
+        rss = _grid_rss(t, y, w, f1s, f2s, order)
+        rss[_degenerate(f1s[:, None], f2s[None, :], order, span)] = np.inf
+        i, j = np.unravel_index(np.argmin(rss), rss.shape)
+        return np.array([f1s[i], f2s[j]])
+
+    def exact(order: int):
+        return lambda u: fit_series(t, y, w, u[0], u[1], order)[0]
+
+    def bic_at(pair: np.ndarray, o: int) -> float:
+        return _bic(fit_series(t, y, w, pair[0], pair[1], o)[0], n, 3 + 2 * len(harmonics(o)))
+
+    # the grid at every order up to start_order: a low order finds the basis of the lattice,
+    # where a high one also fits bases of a finer lattice holding it (f2 / 3, ...)
+    def refined(pair: np.ndarray, o: int) -> np.ndarray:
+        objective = exact(o)
+        step = 1.0 / (OVERSAMPLE * o * span)
+        return _refine(lambda u: math.inf if _degenerate(u[0], u[1], o, span)
+                       else objective(u), pair, np.array([step, step]))
+
+    tried = [(bic_at(p, o), o, tuple(p)) for o in range(1, start_order + 1)
+             for p in [refined(grid_best(o), o)]]
+    pair = np.array(min(tried)[2])
+    orders = range(1, max_order + 1)
+    order = orders[int(np.argmin([bic_at(pair, o) for o in orders]))]
+    pair = refined(pair, order)
+    objective = exact(order)
+    step = 1.0 / (OVERSAMPLE * order * span)
+    rss_two, coef_two = fit_series(t, y, w, pair[0], pair[1], order)
+    # a basis of the same lattice that fits better at this order (the grid held f1 near the
+    # 1-period candidates only) is taken instead, once
+    better = _mirrors(t, y, w, pair[0], pair[1], order)
+    if better and better[0].rms ** 2 * wsum < rss_two * (1.0 - 1e-6):
+        pair = _refine(lambda u: math.inf if _degenerate(u[0], u[1], order, span)
+                       else objective(u),
+                       np.array([1.0 / better[0].p1, 1.0 / better[0].p2]),
+                       np.array([step, step]))
+        rss_two, coef_two = fit_series(t, y, w, pair[0], pair[1], order)
+    bic_two = _bic(rss_two, n, 3 + 2 * len(harmonics(order)))
+    two = bic_two < bic_one - BIC_MARGIN
+
+    if two:
+        if pair[1] > pair[0]:      # f1 the higher frequency: P1 < P2
+            pair = pair[::-1]
+            rss_two, coef_two = fit_series(t, y, w, pair[0], pair[1], order)
+        freqs, coef, rss, m = pair, coef_two, rss_two, order
+    else:
+        freqs, coef, rss, m = np.array([f_one]), coef_one, rss_one, order_one
+    sig = _sigma(t, y, w, freqs, coef, m, two, rss)
+    terms = _terms(m, two)
+    f2 = freqs[1] if two else 0.0
+    amps = np.hypot(coef[1::2], coef[2::2])
+    harm = sorted((Harmonic(int(j), int(k), float(j * freqs[0] + k * f2), float(a))
+                   for (j, k), a in zip(terms, amps)), key=lambda h: -h.amplitude)
+    p1 = 1.0 / freqs[0]
+    return PeriodSolution(
+        two_periods=bool(two), p1=p1, p1_sigma=float(sig[0]) * p1 * p1,
+        p2=1.0 / freqs[1] if two else math.nan,
+        p2_sigma=float(sig[1]) / freqs[1] ** 2 if two else math.nan,
+        order=m, rms=math.sqrt(rss / wsum), rms_one=math.sqrt(rss_one / wsum),
+        bic_one=bic_one, bic_two=bic_two, harmonics=tuple(harm),
+        mirrors=_mirrors(t, y, w, freqs[0], freqs[1], m) if two else (),
+        n=n, span=span, coefficients=tuple(float(c) for c in coef), t0=t0, mean=mean)
+
+
+def campaign_times(rng: np.random.Generator, nights: int, night_hours: float = 8.0,
+                   per_hour: float = 6.0, clouded: float = 0.2,
+                   day_hours: float = 24.0) -> np.ndarray:
+    """
+    Sample times [h] of a ground-based campaign, sorted, from 0.
+
+    ``nights`` nights of ``night_hours`` each ``day_hours`` apart, each lost to clouds with
+    probability ``clouded``, the observed ones shortened at random (50-100 %) and sampled
+    ``per_hour`` times an hour at random instants: the gaps and uneven sampling of real data.
+    """
+    out = []
+    for night in range(nights):
+        if rng.random() < clouded:
+            continue
+        length = night_hours * rng.uniform(0.5, 1.0)
+        start = night * day_hours + rng.uniform(0.0, night_hours - length)
+        count = max(2, int(round(length * per_hour)))
+        out.append(start + np.sort(rng.uniform(0.0, length, count)))
+    if not out:
+        raise ValueError(f'clouded: every night was lost ({nights} nights, p = {clouded})')
+    times = np.concatenate(out)
+    return times - times[0]
+
+
+def format_periods(sol: PeriodSolution, unit: str = 'h', harmonics_shown: int = 6) -> str:
+    """Return the solution as text: periods, order, RMS, strongest harmonics, mirror bases."""
+    lines = [f'lightcurve: {sol.n} points over {sol.span:.6g} {unit}']
+    if sol.two_periods:
+        lines.append(f'  two periods: P1 = {sol.p1:.6g} +- {sol.p1_sigma:.2g} {unit}, '
+                     f'P2 = {sol.p2:.6g} +- {sol.p2_sigma:.2g} {unit} (1 sigma), order '
+                     f'{sol.order}, RMS {sol.rms:.4g} mag (one period: {sol.rms_one:.4g})')
+    else:
+        lines.append(f'  one period: P = {sol.p1:.6g} +- {sol.p1_sigma:.2g} {unit} (1 sigma), '
+                     f'order {sol.order}, RMS {sol.rms:.4g} mag (two periods not supported: '
+                     f'BIC {sol.bic_two:.1f} vs {sol.bic_one:.1f})')
+    lines.append('  strongest harmonics (j f1 + k f2: period, amplitude):')
+    for h in sol.harmonics[:harmonics_shown]:
+        period = 1.0 / abs(h.frequency) if h.frequency else math.inf
+        lines.append(f'    ({h.j:+d}, {h.k:+d}): {period:.6g} {unit}, {h.amplitude:.4f} mag')
+    if sol.mirrors:
+        lines.append("  mirror bases of the same frequencies (P1', P2', RMS):")
+        for mirror in sol.mirrors:
+            lines.append(f'    {mirror.label}: {mirror.p1:.6g} {unit}, {mirror.p2:.6g} {unit}, '
+                         f'{mirror.rms:.4g} mag')
+    return '\n'.join(lines)
