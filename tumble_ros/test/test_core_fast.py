@@ -185,6 +185,41 @@ def test_a_first_use_that_compiles_says_so_and_a_compiled_loop_says_nothing():
     assert quiet.getvalue() == ''
 
 
+def test_a_long_first_call_that_is_already_running_is_not_called_compiling():
+    """
+    The notice looks at the loop when it would speak: compiled by then, it is running: silence.
+
+    (A first ensemble call over many bodies compiles or loads its loop in a moment, then runs
+    for seconds; in a Dask run its workers' "compiling" lines broke the one-line Ctrl-C output.)
+    A stand-in dispatcher gets its signature (what numba adds once compiled) before the notice.
+    """
+    import io
+    import threading
+
+    from tumble_ros.core import jit as jit_module
+
+    class Dispatcher:
+        signatures: list = []
+
+    loop = Dispatcher()
+    out = io.StringIO()
+    with jit_module.first_use(loop, 'running loop', after=0.3, out=out):
+        loop.signatures = ['(float64,)']       # compiled at once; the call now runs
+        threading.Event().wait(0.8)
+    assert out.getvalue() == ''
+    still = Dispatcher()
+    with jit_module.first_use(still, 'slow loop', after=0.1, out=out):
+        threading.Event().wait(0.5)            # still compiling when the notice comes
+    assert out.getvalue().startswith('compiling the slow loop (first use')
+    # a quiet command turns them off (for the processes it starts too), and back on after
+    silent = io.StringIO()
+    with jit_module.compile_notices(False):
+        with jit_module.first_use(Dispatcher(), 'quiet loop', after=0.0, out=silent):
+            threading.Event().wait(0.3)
+    assert silent.getvalue() == ''
+    assert jit_module.COMPILE_NOTICE_VARIABLE not in os.environ
+
+
 _SUBPROCESS = r"""
 import json, sys
 import numpy as np

@@ -30,6 +30,7 @@ from tumble_ros.cli.engine import add_engine_arguments, engine, Interrupted, int
 from tumble_ros.cli.progress import ProgressBar
 from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
                              Scenario, ScenarioError)
+from tumble_ros.core.jit import compile_notices
 from tumble_ros.ensembles import (EnsembleStoreError, open_ensemble, run_ensemble,
                                   run_ensemble_to_store)
 from tumble_ros.errors import TumbleRosError
@@ -160,7 +161,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             omega0 = GaussianSpread(sc.omega0, args.omega_spread, seed=args.seed)
         inputs = {'impacts': impacts, 'omega0': omega0}
         to_store = bool(args.out) and args.out.rstrip('/').endswith('.zarr')
-        with interrupts(), engine(args) as client:
+        with interrupts(), compile_notices(not args.quiet), engine(args) as client:
             if to_store:
                 return _to_store(args, sc, inputs, client)
             result = run_ensemble(

@@ -45,7 +45,7 @@ from typing import Any, Callable, cast, Iterator, TextIO, TypeVar
 
 __all__ = ['COMPILED', 'NUMBA_VERSION', 'JIT_OPTIONS', 'jit', 'jit_inline', 'called',
            'python_source', 'specialise', 'COMPILED_SOURCES', 'compiled_sources_hash',
-           'first_use', 'COMPILE_NOTICE_SECONDS']
+           'first_use', 'COMPILE_NOTICE_SECONDS', 'COMPILE_NOTICE_VARIABLE', 'compile_notices']
 
 #: A function (the decorators return a compiled function typed as the one they are given).
 F = TypeVar('F', bound=Callable[..., Any])
@@ -182,6 +182,24 @@ def specialise(f: F, namespace: dict[str, Any], suffix: str, cache: bool = True)
 #: A first call of a compiled loop that takes longer than this [s] says so on stderr (it is
 #: compiling: tens of seconds; loading it from the cache takes well under this).
 COMPILE_NOTICE_SECONDS = 1.5
+#: Environment variable that silences :func:`first_use`'s notices when set to ``0`` (a quiet
+#: command sets it, so that the worker processes it starts, which inherit it, say nothing).
+COMPILE_NOTICE_VARIABLE = 'TUMBLE_ROS_COMPILE_NOTICE'
+
+
+@contextlib.contextmanager
+def compile_notices(on: bool) -> Iterator[None]:
+    """Within: :func:`first_use`'s notices on or off, here and in processes started here."""
+    before = os.environ.get(COMPILE_NOTICE_VARIABLE)
+    if not on:
+        os.environ[COMPILE_NOTICE_VARIABLE] = '0'
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(COMPILE_NOTICE_VARIABLE, None)
+        else:
+            os.environ[COMPILE_NOTICE_VARIABLE] = before
 
 
 @contextlib.contextmanager
@@ -193,12 +211,15 @@ def first_use(function: Callable[..., Any], label: str,
 
     numba compiles a loop on its first call for its argument types (then keeps it in its cache
     beside the sources), so a run waits only for the loops it uses. When ``function`` has no
-    compiled signature yet in this process and the call is still running after ``after``
-    seconds, a line ``compiling the <label> (first use, cached afterwards)...`` goes to
+    compiled signature yet in this process and still none after ``after`` seconds (numba is
+    still compiling or loading it), a line ``compiling the <label> (first use, cached
+    afterwards)...`` goes to
     ``out`` (stderr: a node's log), and one more when it is ready. Nothing otherwise (a
-    loaded cache, a plain Python function).
+    loaded cache, a plain Python function, the environment variable
+    :data:`COMPILE_NOTICE_VARIABLE` set to ``0``).
     """
-    if not COMPILED or getattr(function, 'signatures', None) != []:
+    if (not COMPILED or getattr(function, 'signatures', None) != []
+            or os.environ.get(COMPILE_NOTICE_VARIABLE) == '0'):
         yield
         return
     stream = out if out is not None else sys.stderr
@@ -206,6 +227,10 @@ def first_use(function: Callable[..., Any], label: str,
     said = threading.Event()
 
     def notice() -> None:
+        # numba adds the signature once the loop is compiled (or loaded), before it runs it: a
+        # long first call that is already running says nothing (an ensemble of many bodies)
+        if getattr(function, 'signatures', None):
+            return
         said.set()
         print(f'compiling the {label} (first use, cached afterwards)...', file=stream,
               flush=True)
