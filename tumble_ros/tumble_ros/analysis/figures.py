@@ -581,8 +581,9 @@ def _draw_error(rec: Recording) -> list[Drawing]:
 def plot_impacts(rec: Recording, out_dir: str | os.PathLike[str], *, samples: int = 25,
                  overwrite: bool = False) -> list[Path]:
     """
-    Plot ``impact_<k>_id<id>.png`` per impact event (paper Fig 10), the first
-    :data:`MAX_IMPACT_FIGURES` of them.
+    Plot ``impact_<k>_id<id>.png`` per impact event (paper Fig 10).
+
+    The first :data:`MAX_IMPACT_FIGURES` impacts in time get one each.
 
     Each shows w over +-``samples`` sampling intervals (at least +-10 pulse lengths) around the
     pulse, the pulse interval shaded and its edges drawn.

@@ -72,6 +72,7 @@ def read_photometry(path: str | Path) -> Photometry:
     i_t = _one(path, header, tuple(TIME_COLUMNS), 'time', True)
     i_m = _one(path, header, MAGNITUDE_COLUMNS, 'magnitude', True)
     i_e = _one(path, header, ERROR_COLUMNS, 'error', False)
+    assert i_t is not None   # (required: _one raised otherwise)
     columns = [i for i in (i_t, i_m, i_e) if i is not None]
     values = []
     for line, row in rows[1:]:

@@ -51,8 +51,8 @@ from tumble_ros.core.torques.component import TorqueComponent
 from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
 
-__all__ = ['GravityField', 'regular_solid_harmonics', 'principal_frame', 'FRAME_TOLERANCE',
-           'MAX_DEGREE', 'G_KM3']
+__all__ = ['GravityField', 'regular_solid_harmonics', 'stokes_normalisation', 'principal_frame',
+           'FRAME_TOLERANCE', 'MAX_DEGREE', 'G_KM3']
 
 #: Relative tolerance of a field's frame (centre of mass, principal axes) and of its moments'
 #: agreement with C_20, C_22: relative to the second moment (A + B + C) / (M a^2).
@@ -89,8 +89,13 @@ def regular_solid_harmonics(positions: ArrayLike, degree: int,
     return v, w
 
 
-def _normalisation(degree: int) -> FloatArray:
-    """Return (2 - delta_m0) (n-m)!/(n+m)! as a (degree + 1, degree + 1) array (0 for m > n)."""
+def stokes_normalisation(degree: int) -> FloatArray:
+    """
+    Return (2 - delta_m0) (n-m)!/(n+m)! as a (degree + 1, degree + 1) array (0 for m > n).
+
+    The factor of the unnormalised Stokes coefficients over the sums of solid harmonics
+    (the mass models' quadratures with signed weights use it too).
+    """
     f = np.zeros((degree + 1, degree + 1))
     for n in range(degree + 1):
         for m in range(n + 1):
@@ -250,7 +255,7 @@ class GravityField:
         total = float(m.sum())
         v, w = regular_solid_harmonics(p, int(degree))
         scale = (float(reference_radius) ** np.arange(degree + 1))[:, None]
-        norm = _normalisation(int(degree)) / (total * scale)
+        norm = stokes_normalisation(int(degree)) / (total * scale)
         c = norm * np.einsum('i,inm->nm', m, v)
         s = norm * np.einsum('i,inm->nm', m, w)
         c[0, 0] = 1.0

@@ -46,7 +46,8 @@ import numpy as np
 from scipy.special import roots_jacobi
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
-from tumble_ros.core.model.gravity_field import GravityField, regular_solid_harmonics
+from tumble_ros.core.model.gravity_field import (GravityField, regular_solid_harmonics,
+                                                 stokes_normalisation)
 from tumble_ros.core.model.limits import ScenarioError
 
 __all__ = ['MassModelError', 'Reference', 'IDENTITY', 'MassModel', 'Ellipsoid', 'Polyhedron',
@@ -553,7 +554,8 @@ class Polyhedron:
             v, w = regular_solid_harmonics(positions[k:k + CHUNK_POINTS], degree)
             C += np.einsum('i,inm->nm', masses[k:k + CHUNK_POINTS], v)
             S += np.einsum('i,inm->nm', masses[k:k + CHUNK_POINTS], w)
-        norm = _normalisation(degree) / (self.mass * radius ** np.arange(degree + 1)[:, None])
+        scale = self.mass * radius ** np.arange(degree + 1)[:, None]
+        norm = stokes_normalisation(degree) / scale
         C, S = C * norm, S * norm
         C[0, 0], S[:, 0] = 1.0, 0.0
         return _field(self.mass, radius, C, S, self.principal_moments)
@@ -665,15 +667,6 @@ def _field(mass: float, radius: float, C: FloatArray, S: FloatArray,
     return GravityField(mass=mass, reference_radius=radius, C=C, S=S,
                         principal_moments=(float(moments[0]), float(moments[1]),
                                            float(moments[2])))
-
-
-def _normalisation(degree: int) -> FloatArray:
-    """Return (2 - delta_m0) (n - m)! / (n + m)!, (degree + 1, degree + 1), 0 for m > n."""
-    f = np.zeros((degree + 1, degree + 1))
-    for n in range(degree + 1):
-        for m in range(n + 1):
-            f[n, m] = (2.0 - (m == 0)) * math.factorial(n - m) / math.factorial(n + m)
-    return f
 
 
 #: The mass models by name (``body.model`` in a params file; ``inertia`` is no mass model).
