@@ -39,3 +39,26 @@ def test_the_perturbers_parameters_are_declared_and_the_first_is_published(ros):
     sun = sim.scenario.perturber_in_body(t, ref.quaternion)          # the first: the Sun
     np.testing.assert_allclose([[m.vector.x, m.vector.y, m.vector.z] for m in perturber], sun,
                                rtol=1e-12)
+
+
+def test_a_body_given_by_its_mass_model_runs_in_the_node_with_the_derived_inertia(ros):
+    """
+    ``body.*`` without ``inertia``: the node's declared default inertia does not refuse it.
+
+    (The node holds every declared parameter, the default inertia (1, 1, 1.5) too; a params
+    file with a polyhedron and no inertia was refused as "disagreeing" with it.)
+    """
+    from tumble_ros.core import Scenario
+    from tumble_ros.core.model.body import BodySpec
+
+    body = {'body.model': 'polyhedron', 'body.density': 2600.0,
+            'body.shape_file': 'config/shapes/apophis.obj', 'lightcurve.enabled': False,
+            'orbit_rate': 1.0, 'duration': 0.01, 'output_interval': 0.002,
+            'real_time_factor': 0.0}
+    status = ros.collect(SimStatus, topics.STATUS, latched=True)
+    sim = ros.start(SimNode, **{k.replace('.', '__'): v for k, v in body.items()})
+    expected = Scenario(body=BodySpec(model='polyhedron', density=2600.0,
+                                      shape_file='config/shapes/apophis.obj'))
+    np.testing.assert_allclose(sim.scenario.inertia, (0.64, 0.97, 1.0), rtol=1e-9)
+    assert sim.scenario.inertia == expected.inertia
+    assert ros.spin_until(lambda: status and status[-1].state == SimStatus.FINISHED, 20.0)

@@ -712,8 +712,12 @@ class Scenario:
         plain['perturbers'] = perturbers
         plain['gravity_degree'] = params.get('gravity.degree', 2)
         plain['body'] = body = BodySpec.from_parameters(params, params_file)
-        if body.inertia is not None and 'inertia' in params:
-            _check_body_inertia(params['inertia'], body)    # (even if it is the default)
+        stated = params.get('inertia')
+        if body.inertia is not None and stated is not None and tuple(
+                float(v) for v in stated) != Scenario.__dataclass_fields__['inertia'].default:
+            # (the default counts as not given, as in the dataclass: a node holds every declared
+            # parameter, so the simulator's parameters always carry an inertia)
+            _check_body_inertia(stated, body)
         plain['lightcurve'] = LightcurveSettings.from_parameters(params)
         return cls(**plain)
 
