@@ -52,7 +52,7 @@ from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
 
 __all__ = ['GravityField', 'regular_solid_harmonics', 'stokes_normalisation', 'principal_frame',
-           'FRAME_TOLERANCE', 'MAX_DEGREE', 'G_KM3']
+           'principal_axes', 'PRINCIPAL_TOLERANCE', 'FRAME_TOLERANCE', 'MAX_DEGREE', 'G_KM3']
 
 #: Relative tolerance of a field's frame (centre of mass, principal axes) and of its moments'
 #: agreement with C_20, C_22: relative to the second moment (A + B + C) / (M a^2).
@@ -103,6 +103,34 @@ def stokes_normalisation(degree: int) -> FloatArray:
     return f
 
 
+#: Relative size below which an off-diagonal product of inertia (of the trace), or a centre of
+#: mass' offset, counts as zero: the body is already in principal axes (its axes kept, sorted).
+PRINCIPAL_TOLERANCE = 1e-12
+
+
+def principal_axes(inertia: ArrayLike) -> FloatArray:
+    """
+    Return the principal axes of an inertia tensor as the rows of a proper rotation.
+
+    ``inertia``: (3, 3) about the centre of mass [any unit]. Rows ordered by increasing moment,
+    each of the first two rows' largest component positive, the third their cross product. A
+    tensor already diagonal (to :data:`PRINCIPAL_TOLERANCE` of its trace) keeps its axes, only
+    sorted. The one convention of the point-mass sums (:func:`principal_frame`) and of the mass
+    models (``mass_models.principal_frame``).
+    """
+    tensor = np.asarray(inertia, dtype=float)
+    off = tensor - np.diag(np.diag(tensor))
+    if np.max(np.abs(off)) <= PRINCIPAL_TOLERANCE * float(np.trace(tensor)):
+        axes: FloatArray = np.eye(3)[np.argsort(np.diag(tensor), kind='stable')]
+    else:
+        axes = np.linalg.eigh(tensor)[1].T.copy()
+    for k in range(2):
+        if axes[k, np.argmax(np.abs(axes[k]))] < 0.0:
+            axes[k] = -axes[k]
+    axes[2] = np.cross(axes[0], axes[1])
+    return axes
+
+
 def principal_frame(masses: ArrayLike, positions_km: ArrayLike,
                     ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """
@@ -118,11 +146,9 @@ def principal_frame(masses: ArrayLike, positions_km: ArrayLike,
     centred = p - (m[:, None] * p).sum(axis=0) / m.sum()
     second = np.einsum('i,ij,ik->jk', m, centred, centred)
     inertia = np.trace(second) * np.eye(3) - second
-    moments, axes = np.linalg.eigh(inertia)
-    if np.linalg.det(axes) < 0.0:
-        axes[:, 2] = -axes[:, 2]
-    rotation = axes.T
-    rotated: FloatArray = centred @ axes
+    rotation = principal_axes(inertia)
+    moments: FloatArray = np.einsum('ij,jk,ik->i', rotation, inertia, rotation)
+    rotated: FloatArray = centred @ rotation.T
     return rotated, moments, rotation
 
 

@@ -46,8 +46,8 @@ import numpy as np
 from scipy.special import roots_jacobi
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
-from tumble_ros.core.model.gravity_field import (GravityField, regular_solid_harmonics,
-                                                 stokes_normalisation)
+from tumble_ros.core.model.gravity_field import (GravityField, principal_axes,
+                                                 regular_solid_harmonics, stokes_normalisation)
 from tumble_ros.core.model.limits import ScenarioError
 
 __all__ = ['MassModelError', 'Reference', 'IDENTITY', 'MassModel', 'Ellipsoid', 'Polyhedron',
@@ -61,9 +61,6 @@ CHUNK_POINTS = 20_000
 #: Accepted densities [kg/m^3]: from below a comet's (~500) to above osmium's (22,590); a
 #: value under the minimum is most likely in g/cm^3.
 MIN_DENSITY, MAX_DENSITY = 100.0, 30000.0
-#: Relative size below which an off-diagonal product of inertia, or the centre of mass' offset,
-#: counts as zero: the body is taken as already in principal axes (its own axes kept).
-PRINCIPAL_TOLERANCE = 1e-12
 
 
 class MassModelError(ScenarioError):
@@ -137,21 +134,9 @@ def principal_frame(inertia: ArrayLike, offset: ArrayLike) -> Reference:
     ``inertia``: (3, 3) about the centre of mass [any unit]; ``offset``: the centre of mass [km].
     The axes are ordered by increasing moment, each row's largest component positive (the third
     row the cross product of the first two: a proper rotation). A tensor already diagonal (to
-    :data:`PRINCIPAL_TOLERANCE` of its trace) keeps its axes, only sorted.
+    :data:`~.gravity_field.PRINCIPAL_TOLERANCE` of its trace) keeps its axes, only sorted.
     """
-    tensor = np.asarray(inertia, dtype=float)
-    scale = float(np.trace(tensor))
-    off = tensor - np.diag(np.diag(tensor))
-    if np.max(np.abs(off)) <= PRINCIPAL_TOLERANCE * scale:
-        order = np.argsort(np.diag(tensor), kind='stable')
-        axes = np.eye(3)[order]
-    else:
-        _, vectors = np.linalg.eigh(tensor)
-        axes = vectors.T.copy()
-    for k in range(2):
-        if axes[k, np.argmax(np.abs(axes[k]))] < 0.0:
-            axes[k] = -axes[k]
-    axes[2] = np.cross(axes[0], axes[1])
+    axes = principal_axes(inertia)
     return Reference(_triple(offset), tuple(_triple(row) for row in axes))
 
 
