@@ -51,7 +51,7 @@ from tumble_ros.errors import NodeError
 from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.recorder import default_output, RecorderNode
-from tumble_ros.nodes.runner import close_node, EXECUTORS, init_rclpy
+from tumble_ros.nodes.runner import EXECUTORS, init_rclpy, tear_down
 from tumble_ros.nodes.shutdown import StopSignals
 from tumble_ros.nodes.sim import SimNode
 from tumble_ros.runs.offline import record_offline
@@ -259,11 +259,7 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
                              wall_seconds=time.monotonic() - started, signal=stop.signum,
                              error=recorder.error, warnings=list(recorder.warnings))
     finally:
-        for node in reversed(nodes):
-            executor.remove_node(node)
-            close_node(node)
-        executor.shutdown()
-        rclpy.try_shutdown(context=context)
+        tear_down(executor, list(reversed(nodes)), context)
 
 
 def shipped_scenarios() -> dict[str, Path]:

@@ -1,6 +1,7 @@
 """The one ``main()`` of every node executable (the demo_nodes_py pattern, written once)."""
 from __future__ import annotations
 
+import faulthandler
 import os
 import re
 import sys
@@ -21,8 +22,15 @@ from tumble_ros.errors import NodeError
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.shutdown import spin_until_stopped, StopSignals
 
-__all__ = ['run_node', 'close_node', 'init_rclpy', 'wants_help', 'EXECUTORS', 'EXECUTOR_ENV',
-           'chosen_executor']
+__all__ = ['run_node', 'close_node', 'tear_down', 'init_rclpy', 'wants_help', 'EXECUTORS',
+           'EXECUTOR_ENV', 'chosen_executor', 'TEARDOWN_TIMEOUT']
+
+#: Seconds the ROS side of a node process's teardown (executor shutdown, node destruction,
+#: context shutdown) may take once every node's ``close()`` has run (files finalised, goodbyes
+#: sent). Past it the process prints every thread's stack and exits with status 1: a hang
+#: there is a deadlock inside rclpy/rmw (seen once in ~1300 node stops, main thread blocked
+#: in an event's destruction inside the EventsExecutor's shutdown), and nothing is left to lose.
+TEARDOWN_TIMEOUT = 15.0
 
 
 def _events_executor(context: Context | None = None):
@@ -104,6 +112,35 @@ def close_node(node: Node) -> None:
     node.destroy_node()
 
 
+def tear_down(executor, nodes: list[Node], context: Context | None = None,
+              watchdog: bool = False) -> None:
+    """
+    Close every node, shut the executor down, then destroy the nodes and the context.
+
+    The order matters: ``close()`` (finalise a file, say goodbye) needs only a valid context;
+    the executor must let go of the nodes' entities *before* they are destroyed. Destroyed
+    first, their last reference was the executor's, and the rcl/rmw destruction then ran
+    inside rclpy's EventsExecutor shutdown, where it once blocked for good (CI, a sim stopped
+    by SIGINT right after a consumer left). ``watchdog`` (a node process's own teardown only):
+    if the ROS part takes over :data:`TEARDOWN_TIMEOUT`, print every thread's stack and exit
+    with status 1 from a C thread (the blocked main thread may hold the GIL).
+    """
+    for node in nodes:
+        close = getattr(node, 'close', None)
+        if close is not None:
+            close()
+    if watchdog:
+        faulthandler.dump_traceback_later(TEARDOWN_TIMEOUT, exit=True)
+    try:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+        rclpy.try_shutdown(context=context)
+    finally:
+        if watchdog:
+            faulthandler.cancel_dump_traceback_later()
+
+
 def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
              needs_params_section: bool = False) -> int:
     """
@@ -155,8 +192,5 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
             print(f'{name}: cannot start: {err}', file=sys.stderr, flush=True)
             return 1
         finally:
-            if node is not None:
-                close_node(node)
-            executor.shutdown()
-            rclpy.try_shutdown()
+            tear_down(executor, [node] if node is not None else [], watchdog=True)
     return 0
