@@ -557,33 +557,50 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
     messages = tuple(failure_message(states[b], method.name) if failed[b] else ''
                      for b in range(n))
     nfev = (states[:, K.ST.NFEV_DONE] + states[:, K.ST.NFEV]).astype(np.int64)
-    return _result(scenario, times, y_out, e_out, k_out, failed, messages, steps, nfev, wall)
+    return _result(scenario, times, y_out, e_out, k_out, failed, messages, steps, nfev, wall,
+                   threads)
 
 
 def _result(scenario: Scenario, times: FloatArray, y_out: FloatArray, e_out: FloatArray,
             k_out: npt.NDArray[np.int64], failed: npt.NDArray[np.bool_],
             messages: tuple[str, ...], steps: npt.NDArray[np.int64],
-            nfev: npt.NDArray[np.int64], wall: float) -> EnsembleResult:
-    """Post-process the loops' samples (quaternions made continuous, Jacobi integral)."""
+            nfev: npt.NDArray[np.int64], wall: float, threads: int = 1) -> EnsembleResult:
+    """
+    Post-process the loops' samples (quaternions made continuous, Jacobi integral).
+
+    In groups of bodies of at most :data:`POST_SAMPLES` samples (bounded memory for their
+    (bodies, n, 3, 3) matrices), on ``threads`` threads (numpy lets go of the GIL); each body's
+    numbers do not depend on the groups.
+    """
     n, m = y_out.shape[:2]
     success = (k_out == m) & ~failed
     omega = y_out[:, :, :3].copy()
     quat = np.full((n, m, 4), np.nan)
     jac = np.full((n, m), np.nan)
-    for b0 in range(0, n, 1024):  # bounded memory for the (chunk, n, 3, 3) matrices
-        b1 = min(n, b0 + 1024)
+    size = max(1, POST_SAMPLES // max(1, m))
+
+    def group(b0: int) -> None:
+        b1 = min(n, b0 + size)
         for kk in np.unique(k_out[b0:b1]):
-            rows = np.arange(b0, b1)[k_out[b0:b1] == kk]
             if kk == 0:
                 continue
+            rows = np.arange(b0, b1)[k_out[b0:b1] == kk]
             q = y_out[rows, :kk, 3:]
             quat[rows, :kk] = continuous_quaternions(q)
             matrices = quaternions_to_matrices(q)
             jac[rows, :kk] = jacobi_integral(times[:kk], omega[rows, :kk], matrices,
                                              scenario.inertia,
                                              scenario.orbit_rate)
+
+    starts = range(0, n, size)
+    with ThreadPoolExecutor(threads) if threads > 1 and len(starts) > 1 else _NoPool() as pool:
+        list(pool.map(group, starts))
     return EnsembleResult(times, omega, e_out, quat, jac, success, messages, steps, nfev, wall,
                           True)
+
+
+#: Most samples (bodies x times) post-processed at once by :func:`_result`.
+POST_SAMPLES = 2**16
 
 
 #: Bodies per block of the lockstep loop: its buffers, (2 x 13 + 6 + 8) x 8 bytes a body, stay
@@ -626,9 +643,9 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
     cols[:n] = y0
     cols[n:] = y0[0]      # padding columns: copies of body 0, never written out
     soa[:, 0, K.BK.Y:K.BK.Y + K.N, :] = cols.reshape(n_blocks, size, K.N).transpose(0, 2, 1)
-    tracks = np.zeros((padded, 3))
-    tracks[:n] = tracks0
-    tracks = tracks.reshape(n_blocks, size, 3)
+    flat_tracks = np.zeros((padded, 3))
+    flat_tracks[:n] = tracks0
+    tracks = flat_tracks.reshape(n_blocks, size, 3)
     tmp = np.zeros((n_blocks, K.BT.SIZE, size))
     bodies = np.zeros((n_blocks, K.BB.SIZE, size))
     counters = np.zeros((n_blocks, K.LI.SIZE), dtype=np.int64)
@@ -674,7 +691,8 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
                     bst[every, K.ST.NFEV_DONE] + bst[every, K.ST.NFEV]).astype(np.int64)
     messages = tuple(_lockstep_message(per_body[b], bst[every[b]], method.name) if failed[b]
                      else '' for b in range(n)) if failed.any() else ('',) * n
-    return _result(scenario, times, y_out, e_out, k_out, failed, messages, steps, nfev, wall)
+    return _result(scenario, times, y_out, e_out, k_out, failed, messages, steps, nfev, wall,
+                   threads)
 
 
 def _lockstep_steps(counters: npt.NDArray[np.int64], bodies: FloatArray,
