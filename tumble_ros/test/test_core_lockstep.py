@@ -50,14 +50,16 @@ def per_body(monkeypatch):
 
 def test_which_ensembles_are_stepped_in_lockstep():
     sc = fig9()
-    splitting, rk4 = INTEGRATORS['splitting'], INTEGRATORS['rk4']
+    splitting, dop853 = INTEGRATORS['splitting'], INTEGRATORS['dop853']
     assert E._lockstep_refusal(sc, None, splitting) == ''
     assert E._lockstep_refusal(sc, [(), ()], splitting) == ''
     assert E._lockstep_refusal(fig9('splitting6'), None, INTEGRATORS['splitting6']) == ''
     hit = Impact(0.2, 3e-7, (1e6, 0.0, 0.0))
     assert 'impacts' in E._lockstep_refusal(sc, [(), (hit,)], splitting)
     assert 'impacts' in E._lockstep_refusal(sc.replace(impacts=(hit,)), None, splitting)
-    assert "'rk4'" in E._lockstep_refusal(fig9('rk4'), None, rk4)
+    assert E._lockstep_refusal(fig9('rk4'), None, INTEGRATORS['rk4']) == ''
+    # adaptive: every body its own steps
+    assert "'dop853'" in E._lockstep_refusal(fig9('dop853'), None, dop853)
     assert list(E.ENSEMBLE_LOOPS) == ['lockstep', 'per-body']
 
 
@@ -67,6 +69,9 @@ def test_which_ensembles_are_stepped_in_lockstep():
     ('splitting6', 1e-2, None),             # 9 stages
     ('splitting', 2e-3, (1.0, 1.5, 2.2)),   # triaxial: two axis pieces (B_1 B_2 B_1)
     ('splitting', 5e-2, None),              # ~1.5 rad a step: the Euler track in pieces
+    ('rk4', 2e-3, None),
+    ('rk4', 2e-3, (1.0, 1.5, 2.2)),
+    ('rk4', 3e-2, None),                    # ~1.2 rad a step: f evaluated per body (dense)
 ])
 def test_each_body_is_bit_for_bit_its_single_run(method, step, inertia, monkeypatch):
     sc = fig9(method, step)
@@ -92,11 +97,12 @@ def test_each_body_is_bit_for_bit_its_single_run(method, step, inertia, monkeypa
 
 
 @needs_numba
-def test_segments_and_extra_torques_of_a_flyby_are_stepped_in_lockstep():
+@pytest.mark.parametrize('method', ['splitting', 'rk4'])
+def test_segments_and_extra_torques_of_a_flyby_are_stepped_in_lockstep(method):
     # Apophis 2029: three segments (the encounter window), a Kepler perturber (extra torque),
     # a triaxial body
     sc = load_scenario(CONFIG / 'apophis_2029.yaml')
-    sc = sc.replace(integrator=IntegratorSettings(method='splitting', step=4e-5))
+    sc = sc.replace(integrator=IntegratorSettings(method=method, step=4e-5))
     assert len(sc.segment_cuts) == 2 and sc.extra_torques
     n = 5
     omega0, euler0 = spread(sc, n, seed=4, size=10.0)
@@ -112,12 +118,13 @@ def test_segments_and_extra_torques_of_a_flyby_are_stepped_in_lockstep():
 
 
 @needs_numba
-def test_results_do_not_depend_on_blocks_threads_or_checkpoints():
-    sc = fig9()
+@pytest.mark.parametrize('method', ['splitting', 'rk4'])
+def test_results_do_not_depend_on_blocks_threads_or_checkpoints(method):
+    sc = fig9(method)
     n = 23
     omega0, euler0 = spread(sc, n, seed=2)
     times = sc.output_times
-    method = INTEGRATORS['splitting']
+    method = INTEGRATORS[method]
     runs = [E._ensemble_lockstep(sc, times, n, None, omega0, euler0, method, None, checkpoints,
                                  threads, block=block)
             for block, threads, checkpoints in [(256, 1, 1), (1, 1, 1), (7, 2, 3), (16, 2, 1)]]
@@ -131,13 +138,14 @@ def test_results_do_not_depend_on_blocks_threads_or_checkpoints():
 
 
 @needs_numba
-def test_a_failing_body_fails_alone_as_in_the_per_body_loop(monkeypatch):
-    sc = fig9(duration=0.2)
+@pytest.mark.parametrize('method', ['splitting', 'rk4'])
+def test_a_failing_body_fails_alone_as_in_the_per_body_loop(method):
+    sc = fig9(method, duration=0.2)
     omega0, euler0 = spread(sc, 5, seed=3)
     omega0[1] = 1e200          # |omega|^2 overflows at the first step (past the inputs' check)
     omega0[3] = 1e154          # |pi|^2 finite at first, not after the torque's kick
     times = sc.output_times
-    method = INTEGRATORS['splitting']
+    method = INTEGRATORS[method]
     lock = E._ensemble_lockstep(sc, times, 5, None, omega0, euler0, method, None, 1, 2, block=2)
     ref = E._ensemble_compiled(sc, times, 5, None, omega0, euler0, method, None, 1, 2)
     assert lock.success.tolist() == [True, False, True, False, True]

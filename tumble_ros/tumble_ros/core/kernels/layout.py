@@ -137,6 +137,7 @@ BK = layout('BlockState', [
     ('Y', N, 'omega [rad/yr], quaternion'),
     ('PI', 3, 'splitting: angular momentum I w, carried'),
     ('TORQUE', 3, 'splitting: body torque at (t, y)'),
+    ('F', N, 'rk4: f(t, y), computed at the start of each step'),
 ])
 
 #: Scratch rows of a block ``(BT.SIZE, B)``: the libm sin/cos are taken in a pass of their own,
@@ -148,6 +149,9 @@ BT = layout('BlockScratch', [
     ('SIN', 1, 'its sine'),
     ('INC', 1, "Euler tracking: the step's angle bound [rad]"),
     ('ACC', 1, '|y|^2 after the step (the finite check)'),
+    ('K2', N, 'rk4: second stage'),
+    ('K3', N, 'rk4: third stage'),
+    ('K4', N, 'rk4: fourth stage'),
 ])
 
 #: Per-body rows of a block ``(BB.SIZE, B)``: what is not shared by the block.
@@ -160,6 +164,8 @@ BB = layout('BlockBodies', [
     ('STEPS', 1, 'its accepted steps when it failed'),
     ('NFEV', 1, 'its evaluations when it failed'),
     ('K', 1, 'its outputs written when it failed'),
+    ('F_VALID', 1, 'rk4: 1 if its F holds f(t, y) (a dense output computed it)'),
+    ('NFEV_ADJ', 1, 'its evaluations beyond the block count (rk4: dense output, minus skipped)'),
 ])
 
 #: A block's shared counters (int64): segment, outputs written, current buffer, steps.

@@ -33,7 +33,7 @@ from tumble_ros.core.kernels.tracking import refresh_track, track_rate, UNWRAP_S
 __all__ = ['block_init', 'block_advance', 'LOOP_FUNCTIONS', 'BIGGEST']
 
 #: The functions :mod:`.methods` copies per method (each after those it calls).
-LOOP_FUNCTIONS = ('block_seg_init', 'block_emit', 'block_step', 'block_track', 'block_refresh',
+LOOP_FUNCTIONS = ('load_body', 'store_body', 'block_seg_init', 'block_emit', 'block_step', 'block_track', 'block_refresh',
                   'block_init', 'block_advance')
 
 #: The largest finite float: |y|^2 <= BIGGEST is finite_norm's test (NaN compares False).
@@ -47,7 +47,7 @@ def method_block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Arra
 
 
 def method_block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: Array,
-                      tmp: Array, m: int) -> None:
+                      tmp: Array, bodies: Array, m: int) -> None:
     """Step m bodies from buffer old to new (bound per method by :mod:`.methods`)."""
     raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
 
@@ -55,6 +55,31 @@ def method_block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array
 def method_block_load(bst: Array, old: Array, new: Array, i: int) -> None:
     """Copy body i into bst for the single-body functions (bound by :mod:`.methods`)."""
     raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+def method_block_store(bst: Array, new: Array, i: int) -> None:
+    """Copy back what a single-body function computed for body i (bound by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+@jit
+def load_body(bst: Array, old: Array, cur: Array, bodies: Array, i: int) -> float:
+    """Copy body i into bst before a single-body call; return bst's evaluation count."""
+    method_block_load(bst, old, cur, i)
+    bst[ST.BUDGET] = bodies[BB.BUDGET, i]
+    bst[ST.F_VALID] = bodies[BB.F_VALID, i]
+    return bst[ST.NFEV]
+
+
+@jit
+def store_body(bst: Array, cur: Array, bodies: Array, i: int, nfev: float) -> None:
+    """After a single-body call on body i: keep its track budget, its F, its evaluations."""
+    method_block_store(bst, cur, i)
+    bodies[BB.BUDGET, i] = bst[ST.BUDGET]
+    bodies[BB.F_VALID, i] = bst[ST.F_VALID]
+    bodies[BB.NFEV_ADJ, i] += bst[ST.NFEV] - nfev
+    bst[ST.NFEV] = nfev
+    bst[ST.F_VALID] = 0.0
 
 
 def seg_init(p: Array, extra: Extra, cfg: Array, st: Array, t0: float, t_bound: float) -> None:
@@ -75,7 +100,7 @@ def track_update(p: Array, extra: Extra, cfg: Array, st: Array, track: Array,
 
 
 @jit
-def block_seg_init(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array,
+def block_seg_init(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, bodies: Array,
                    counters: npt.NDArray[np.int64], t0: float, t_bound: float, m: int) -> None:
     """
     Start a segment [t0, t_bound] for the block: ``seg_init`` on the shared times, per body.
@@ -90,6 +115,8 @@ def block_seg_init(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array,
         bst[ST.Y + c] = cur[BK.Y + c, 0]
     seg_init(p, extra, cfg, bst, t0, t_bound)
     method_block_start(p, extra, cfg, bst, cur, m)
+    for i in range(m):
+        bodies[BB.F_VALID, i] = 0.0
     for r in range(BK.SIZE):
         for i in range(m):
             other[r, i] = cur[r, i]
@@ -109,8 +136,9 @@ def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, bodie
     for i in range(m):
         if bodies[BB.FAILED, i] != 0.0:
             continue
-        method_block_load(bst, old, cur, i)
+        nfev = load_body(bst, old, cur, bodies, i)
         k_new = emit(p, extra, cfg, bst, tracks[i], t_out, y_out[body0 + i], e_out[body0 + i], k)
+        store_body(bst, cur, bodies, i, nfev)
     counters[LI.K] = k_new
 
 
@@ -135,7 +163,7 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
         code = FAIL.BUDGET
         bst[ST.FAIL_DT] = bst[ST.T] - bst[ST.WIN_T]
     else:
-        method_block_step(p, extra, cfg, bst, old, new, tmp, m)
+        method_block_step(p, extra, cfg, bst, old, new, tmp, bodies, m)
         if (bst[ST.TAU] - tau_good <= bst[ST.COLLAPSE]
                 and collapsed(tau_good, bst[ST.TAU], bst[ST.TAU_BOUND])):
             code = FAIL.COLLAPSE
@@ -158,7 +186,7 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
         bodies[BB.FAIL_T, i] = t_good
         bodies[BB.FAIL_DT, i] = bst[ST.FAIL_DT] if code == FAIL.COLLAPSE else 0.0
         bodies[BB.STEPS, i] = counters[LI.STEPS]
-        bodies[BB.NFEV, i] = bst[ST.NFEV_DONE] + bst[ST.NFEV]
+        bodies[BB.NFEV, i] = bst[ST.NFEV_DONE] + bst[ST.NFEV] + bodies[BB.NFEV_ADJ, i]
         bodies[BB.K, i] = counters[LI.K]
         for r in range(BK.SIZE):
             new[r, i] = old[r, i]
@@ -205,10 +233,9 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
         return
     for i in range(m):
         if tmp[BT.INC, i] >= 0.0 and bodies[BB.FAILED, i] == 0.0:
-            method_block_load(bst, old, cur, i)
-            bst[ST.BUDGET] = bodies[BB.BUDGET, i]
+            nfev = load_body(bst, old, cur, bodies, i)
             track_update(p, extra, cfg, bst, tracks[i], tmp[BT.INC, i])
-            bodies[BB.BUDGET, i] = bst[ST.BUDGET]
+            store_body(bst, cur, bodies, i, nfev)
 
 
 @jit
@@ -219,17 +246,17 @@ def block_refresh(bst: Array, soa: Array, bodies: Array, counters: npt.NDArray[n
     old = soa[1 - counters[LI.PAR]]
     for i in range(m):
         if bodies[BB.BUDGET, i] > 0.0 and bodies[BB.FAILED, i] == 0.0:
-            method_block_load(bst, old, cur, i)
-            bst[ST.BUDGET] = bodies[BB.BUDGET, i]
+            nfev = load_body(bst, old, cur, bodies, i)
             refresh_track(bst, tracks[i])
-            bodies[BB.BUDGET, i] = bst[ST.BUDGET]
+            store_body(bst, cur, bodies, i, nfev)
 
 
 @jit
 def block_init(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Array,
-               counters: npt.NDArray[np.int64], bst: Array, m: int) -> None:
+               bodies: Array, counters: npt.NDArray[np.int64], bst: Array, m: int) -> None:
     """Start the first segment of a block whose current buffer holds every body's y0."""
-    block_seg_init(probs[0], extra, cfg, bst, soa, counters, seg_t[0, 0], seg_t[0, 1], m)
+    block_seg_init(probs[0], extra, cfg, bst, soa, bodies, counters, seg_t[0, 0], seg_t[0, 1],
+                   m)
 
 
 @jit
@@ -257,7 +284,7 @@ def block_advance(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Arr
             if cur + 1 >= n_seg:
                 break
             counters[LI.SEG] = cur + 1
-            block_seg_init(probs[cur + 1], extra, cfg, bst, soa, counters, bst[ST.T],
+            block_seg_init(probs[cur + 1], extra, cfg, bst, soa, bodies, counters, bst[ST.T],
                            seg_t[cur + 1, 1], m)
             continue
         while bst[ST.STATUS] == STATUS.RUNNING and bst[ST.T] < t_stop:

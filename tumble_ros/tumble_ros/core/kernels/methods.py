@@ -34,8 +34,9 @@ __all__ = ['KERNELS', 'Loops', 'loops', 'kernel_id', 'kernel_name', 'loops_for',
            'BLOCK_FUNCTIONS']
 
 #: The functions a method's module defines to be stepped in lockstep (:mod:`.lockstep`):
-#: ``block_start``, ``block_step``, ``block_load`` (see :mod:`.splitting`); optional.
-BLOCK_FUNCTIONS = ('block_start', 'block_step', 'block_load')
+#: ``block_start``, ``block_step``, ``block_load``, ``block_store`` (see :mod:`.splitting`,
+#: :mod:`.rk4`); optional.
+BLOCK_FUNCTIONS = ('block_start', 'block_step', 'block_load', 'block_store')
 
 #: The compiled methods: registry key (``Stepper.kernel``) -> module with start, step, dense.
 KERNELS: dict[str, ModuleType] = {
@@ -123,6 +124,7 @@ def loops_for(module: ModuleType, suffix: str) -> Loops:
                     {'method_block_start': module.block_start,
                      'method_block_step': module.block_step,
                      'method_block_load': module.block_load,
+                     'method_block_store': module.block_store,
                      **{name: single[name] for name in ('seg_init', 'emit', 'track_update')}},
                     suffix, cache)
     return Loops(single['seg_init'], single['step'], single['dense'], single['emit'],

@@ -17,7 +17,7 @@ from tumble_ros.core.torques.frames import orbital_to_body
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane, tidal_torque
 from tumble_ros.core.torques.pulses import pulse_torque
 
-__all__ = ['body_torque', 'torque_given_sun', 'rhs', 'rhs_called', 'free_flow', 'axis_rotation',
+__all__ = ['body_torque', 'torque_given_sun', 'rhs', 'derivatives', 'rhs_called', 'free_flow', 'axis_rotation',
            'axis_turn', 'pi_turn', 'flow_pieces']
 
 
@@ -78,13 +78,22 @@ def rhs(p: Array, extra: Extra, t: float, st: Array, yo: int, oo: int) -> None:
     q2 = st[yo + 5]
     q3 = st[yo + 6]
     tx, ty, tz = body_torque(p, extra, t, q0, q1, q2, q3)
-    st[oo] = p[PR.EULER] * wy * wz + tx * p[PR.INV_INERTIA]
-    st[oo + 1] = p[PR.EULER + 1] * wz * wx + ty * p[PR.INV_INERTIA + 1]
-    st[oo + 2] = p[PR.EULER + 2] * wx * wy + tz * p[PR.INV_INERTIA + 2]
-    st[oo + 3] = 0.5 * (-q1 * wx - q2 * wy - q3 * wz)
-    st[oo + 4] = 0.5 * (q0 * wx + q2 * wz - q3 * wy)
-    st[oo + 5] = 0.5 * (q0 * wy - q1 * wz + q3 * wx)
-    st[oo + 6] = 0.5 * (q0 * wz + q1 * wy - q2 * wx)
+    (st[oo], st[oo + 1], st[oo + 2], st[oo + 3], st[oo + 4], st[oo + 5],
+     st[oo + 6]) = derivatives(p, wx, wy, wz, q0, q1, q2, q3, tx, ty, tz)
+
+
+@jit_inline
+def derivatives(p: Array, wx: float, wy: float, wz: float, q0: float, q1: float, q2: float,
+                q3: float, tx: float, ty: float, tz: float
+                ) -> tuple[float, float, float, float, float, float, float]:
+    """Return f(t, y) of :func:`rhs` given the total torque (tx, ty, tz) at (t, y)."""
+    return (p[PR.EULER] * wy * wz + tx * p[PR.INV_INERTIA],
+            p[PR.EULER + 1] * wz * wx + ty * p[PR.INV_INERTIA + 1],
+            p[PR.EULER + 2] * wx * wy + tz * p[PR.INV_INERTIA + 2],
+            0.5 * (-q1 * wx - q2 * wy - q3 * wz),
+            0.5 * (q0 * wx + q2 * wz - q3 * wy),
+            0.5 * (q0 * wy - q1 * wz + q3 * wx),
+            0.5 * (q0 * wz + q1 * wy - q2 * wx))
 
 
 #: :func:`rhs` compiled on its own, for cold paths and for the reference steppers.

@@ -19,11 +19,12 @@ import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core.jit import jit, jit_inline
-from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST
-from tumble_ros.core.kernels.physics import rhs, rhs_called
+from tumble_ros.core.kernels.layout import Array, BB, BK, BT, CF, Extra, FAIL, N, PR, ST
+from tumble_ros.core.kernels.physics import derivatives, rhs, rhs_called, torque_given_sun
+from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
 
 __all__ = ['step_count', 'stage', 'combine', 'next_tau', 'hermite', 'start', 'step', 'dense',
-           'V']
+           'V', 'block_start', 'block_rhs', 'block_step', 'block_load', 'block_store']
 
 #: A component (compiled loop) or a whole state vector (reference stepper).
 V = TypeVar('V', float, npt.NDArray[np.float64])
@@ -124,3 +125,89 @@ def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
     for i in range(N):
         st[ST.SCRATCH + i] = (h00 * st[ST.Y_OLD + i] + (h10 * h) * st[ST.F_OLD + i]
                               + h01 * st[ST.Y + i] + (h11 * h) * st[ST.F + i])
+
+
+# ---------------------------------------------------------------------------------------
+# A block of bodies in lockstep (kernels.lockstep): buffers (BK.SIZE, B), one body a column
+# ---------------------------------------------------------------------------------------
+@jit
+def block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array, m: int) -> None:
+    """Do nothing per body: :func:`start` sets the shared step count only (bst)."""
+
+
+@jit
+def block_rhs(p: Array, extra: Extra, t: float, y: Array, k: Array, kr: int, a: float,
+              out: Array, outr: int, m: int) -> None:
+    """
+    Write f(t, y + a k) of m bodies to rows outr.. of out (vectorised; a = 0: f(t, y)).
+
+    y's rows BK.Y.., k's kr..; the Sun's direction at t once for all (:func:`rhs`'s torque).
+    """
+    sx, sy = sun_in_orbit_plane(p[PR.ORBIT_RATE], t)
+    for i in range(m):
+        if a == 0.0:
+            wx = y[BK.Y, i]
+            wy = y[BK.Y + 1, i]
+            wz = y[BK.Y + 2, i]
+            q0 = y[BK.Y + 3, i]
+            q1 = y[BK.Y + 4, i]
+            q2 = y[BK.Y + 5, i]
+            q3 = y[BK.Y + 6, i]
+        else:
+            wx = stage(y[BK.Y, i], k[kr, i], a)
+            wy = stage(y[BK.Y + 1, i], k[kr + 1, i], a)
+            wz = stage(y[BK.Y + 2, i], k[kr + 2, i], a)
+            q0 = stage(y[BK.Y + 3, i], k[kr + 3, i], a)
+            q1 = stage(y[BK.Y + 4, i], k[kr + 4, i], a)
+            q2 = stage(y[BK.Y + 5, i], k[kr + 5, i], a)
+            q3 = stage(y[BK.Y + 6, i], k[kr + 6, i], a)
+        tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, q0, q1, q2, q3)
+        (out[outr, i], out[outr + 1, i], out[outr + 2, i], out[outr + 3, i], out[outr + 4, i],
+         out[outr + 5, i], out[outr + 6, i]) = derivatives(p, wx, wy, wz, q0, q1, q2, q3, tx,
+                                                           ty, tz)
+
+
+@jit
+def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: Array,
+               tmp: Array, bodies: Array, m: int) -> None:
+    """
+    Take :func:`step` for m bodies at once: buffer old -> new, the shared times in bst.
+
+    f(t, y) is evaluated for every body (a body whose dense output already took it gets the
+    same bits again; its count is one less: bodies[BB.NFEV_ADJ]); then the stages, each a
+    vectorised pass with the Sun's direction once.
+    """
+    h = bst[ST.H]
+    tau = bst[ST.TAU]
+    t0 = bst[ST.T0]
+    block_rhs(p, extra, t0 + tau, old, old, BK.F, 0.0, old, BK.F, m)
+    block_rhs(p, extra, t0 + (tau + 0.5 * h), old, old, BK.F, 0.5 * h, tmp, BT.K2, m)
+    block_rhs(p, extra, t0 + (tau + 0.5 * h), old, tmp, BT.K2, 0.5 * h, tmp, BT.K3, m)
+    block_rhs(p, extra, t0 + (tau + h), old, tmp, BT.K3, h, tmp, BT.K4, m)
+    for c in range(N):
+        for i in range(m):
+            new[BK.Y + c, i] = combine(old[BK.Y + c, i], old[BK.F + c, i], tmp[BT.K2 + c, i],
+                                       tmp[BT.K3 + c, i], tmp[BT.K4 + c, i], h)
+    for i in range(m):
+        bodies[BB.NFEV_ADJ, i] -= bodies[BB.F_VALID, i]
+        bodies[BB.F_VALID, i] = 0.0
+    bst[ST.NFEV] += 4.0
+    bst[ST.TAU_OLD] = tau
+    bst[ST.TAU] = next_tau(bst[ST.N_STEPS], bst[ST.N_TOTAL], h, bst[ST.TAU_BOUND])
+
+
+@jit
+def block_load(bst: Array, old: Array, new: Array, i: int) -> None:
+    """Copy body i (state and f before and after the step) into bst for :func:`dense`."""
+    for c in range(N):
+        bst[ST.Y + c] = new[BK.Y + c, i]
+        bst[ST.Y_OLD + c] = old[BK.Y + c, i]
+        bst[ST.F + c] = new[BK.F + c, i]
+        bst[ST.F_OLD + c] = old[BK.F + c, i]
+
+
+@jit
+def block_store(bst: Array, new: Array, i: int) -> None:
+    """Copy back f(t, y) that :func:`dense` may have evaluated for body i."""
+    for c in range(N):
+        new[BK.F + c, i] = bst[ST.F + c]

@@ -19,7 +19,8 @@ from tumble_ros.core.kernels.rk4 import step_count
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
 
 __all__ = ['flow', 'flow_called', 'pulse_step_count', 'start', 'step', 'dense',
-           'MAX_PULSE_SUBSTEPS', 'block_start', 'block_step', 'block_load', 'block_sincos',
+           'MAX_PULSE_SUBSTEPS', 'block_start', 'block_step', 'block_load', 'block_store',
+           'block_sincos',
            'block_axis']
 
 #: Most steps the pulse rule (:func:`pulse_step_count`) adds to a segment's own count.
@@ -225,7 +226,7 @@ def block_axis(new: Array, tmp: Array, axis: int, m: int, next_axis: int, c_next
 
 @jit
 def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: Array,
-               tmp: Array, m: int) -> None:
+               tmp: Array, bodies: Array, m: int) -> None:
     """
     Take :func:`step` for m bodies at once: buffer old -> new, the shared times in bst.
 
@@ -239,7 +240,7 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
     t0 = bst[ST.T0]
     inv_ref = p[PR.INV_REF]
     first, second = flow_pieces(p)
-    for r in range(BK.Y + 3, BK.SIZE):
+    for r in range(BK.Y + 3, BK.TORQUE + 3):
         for i in range(m):
             new[r, i] = old[r, i]
     for j in range(int(cfg[CF.N_STAGES])):
@@ -320,3 +321,8 @@ def block_load(bst: Array, old: Array, new: Array, i: int) -> None:
         bst[ST.PI_OLD + c] = old[BK.PI + c, i]
         bst[ST.TORQUE + c] = new[BK.TORQUE + c, i]
         bst[ST.TORQUE_OLD + c] = old[BK.TORQUE + c, i]
+
+
+@jit
+def block_store(bst: Array, new: Array, i: int) -> None:
+    """Copy nothing back: the splitting's dense output leaves the body's state as it was."""

@@ -661,7 +661,7 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
     assert block_init is not None and block_advance is not None
 
     def init(i: int) -> None:
-        block_init(extra, cfg, probs, seg_t, soa[i], counters[i], bst[i], counts[i])
+        block_init(extra, cfg, probs, seg_t, soa[i], bodies[i], counters[i], bst[i], counts[i])
 
     def advance(i: int, t_stop: float) -> None:
         block_advance(extra, cfg, probs, seg_t, soa[i], tmp[i], bodies[i], counters[i], bst[i],
@@ -688,7 +688,8 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
     steps = np.where(failed, per_body[:, K.BB.STEPS], counters[every, K.LI.STEPS]).astype(np.int64)
     k_out = np.where(failed, per_body[:, K.BB.K], counters[every, K.LI.K]).astype(np.int64)
     nfev = np.where(failed, per_body[:, K.BB.NFEV],
-                    bst[every, K.ST.NFEV_DONE] + bst[every, K.ST.NFEV]).astype(np.int64)
+                    bst[every, K.ST.NFEV_DONE] + bst[every, K.ST.NFEV]
+                    + per_body[:, K.BB.NFEV_ADJ]).astype(np.int64)
     messages = tuple(_lockstep_message(per_body[b], bst[every[b]], method.name) if failed[b]
                      else '' for b in range(n)) if failed.any() else ('',) * n
     return _result(scenario, times, y_out, e_out, k_out, failed, messages, steps, nfev, wall,
