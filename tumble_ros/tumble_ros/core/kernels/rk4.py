@@ -24,7 +24,8 @@ from tumble_ros.core.kernels.physics import derivatives, rhs, rhs_called, torque
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
 
 __all__ = ['step_count', 'stage', 'combine', 'next_tau', 'hermite', 'start', 'step', 'dense',
-           'V', 'block_start', 'block_rhs', 'block_step', 'block_load', 'block_store']
+           'V', 'block_start', 'block_rhs', 'block_stage', 'block_step', 'block_load',
+           'block_store']
 
 #: A component (compiled loop) or a whole state vector (reference stepper).
 V = TypeVar('V', float, npt.NDArray[np.float64])
@@ -136,35 +137,39 @@ def block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array, m: i
 
 
 @jit
-def block_rhs(p: Array, extra: Extra, t: float, y: Array, k: Array, kr: int, a: float,
-              out: Array, outr: int, m: int) -> None:
+def block_rhs(p: Array, extra: Extra, t: float, y: Array, tq: Array, out: Array,
+              m: int) -> None:
     """
-    Write f(t, y + a k) of m bodies to rows outr.. of out (vectorised; a = 0: f(t, y)).
+    Write f(t, y) of m bodies, y in rows 0-6 of ``y``, to rows 0-6 of ``out`` (vectorised).
 
-    y's rows BK.Y.., k's kr..; the Sun's direction at t once for all (:func:`rhs`'s torque).
+    Two passes, the torque (to rows 0-2 of ``tq``, the Sun's direction at t once for all)
+    then the derivatives: LLVM vectorises each, not the two in one loop.
     """
     sx, sy = sun_in_orbit_plane(p[PR.ORBIT_RATE], t)
     for i in range(m):
-        if a == 0.0:
-            wx = y[BK.Y, i]
-            wy = y[BK.Y + 1, i]
-            wz = y[BK.Y + 2, i]
-            q0 = y[BK.Y + 3, i]
-            q1 = y[BK.Y + 4, i]
-            q2 = y[BK.Y + 5, i]
-            q3 = y[BK.Y + 6, i]
-        else:
-            wx = stage(y[BK.Y, i], k[kr, i], a)
-            wy = stage(y[BK.Y + 1, i], k[kr + 1, i], a)
-            wz = stage(y[BK.Y + 2, i], k[kr + 2, i], a)
-            q0 = stage(y[BK.Y + 3, i], k[kr + 3, i], a)
-            q1 = stage(y[BK.Y + 4, i], k[kr + 4, i], a)
-            q2 = stage(y[BK.Y + 5, i], k[kr + 5, i], a)
-            q3 = stage(y[BK.Y + 6, i], k[kr + 6, i], a)
-        tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, q0, q1, q2, q3)
-        (out[outr, i], out[outr + 1, i], out[outr + 2, i], out[outr + 3, i], out[outr + 4, i],
-         out[outr + 5, i], out[outr + 6, i]) = derivatives(p, wx, wy, wz, q0, q1, q2, q3, tx,
-                                                           ty, tz)
+        tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, y[3, i], y[4, i], y[5, i], y[6, i])
+        tq[0, i] = tx
+        tq[1, i] = ty
+        tq[2, i] = tz
+    for i in range(m):
+        f0, f1, f2, f3, f4, f5, f6 = derivatives(p, y[0, i], y[1, i], y[2, i], y[3, i],
+                                                 y[4, i], y[5, i], y[6, i], tq[0, i], tq[1, i],
+                                                 tq[2, i])
+        out[0, i] = f0
+        out[1, i] = f1
+        out[2, i] = f2
+        out[3, i] = f3
+        out[4, i] = f4
+        out[5, i] = f5
+        out[6, i] = f6
+
+
+@jit
+def block_stage(y: Array, k: Array, kr: int, a: float, tmp: Array, m: int) -> None:
+    """Write the stage argument y + a k of m bodies to tmp[BT.STAGE:] (:func:`stage`)."""
+    for c in range(N):
+        for i in range(m):
+            tmp[BT.STAGE + c, i] = stage(y[BK.Y + c, i], k[kr + c, i], a)
 
 
 @jit
@@ -180,10 +185,15 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
     h = bst[ST.H]
     tau = bst[ST.TAU]
     t0 = bst[ST.T0]
-    block_rhs(p, extra, t0 + tau, old, old, BK.F, 0.0, old, BK.F, m)
-    block_rhs(p, extra, t0 + (tau + 0.5 * h), old, old, BK.F, 0.5 * h, tmp, BT.K2, m)
-    block_rhs(p, extra, t0 + (tau + 0.5 * h), old, tmp, BT.K2, 0.5 * h, tmp, BT.K3, m)
-    block_rhs(p, extra, t0 + (tau + h), old, tmp, BT.K3, h, tmp, BT.K4, m)
+    args = tmp[BT.STAGE:BT.STAGE + N]
+    tq = tmp[BT.TQ:BT.TQ + 3]
+    block_rhs(p, extra, t0 + tau, old[BK.Y:BK.Y + N], tq, old[BK.F:BK.F + N], m)
+    block_stage(old, old, BK.F, 0.5 * h, tmp, m)
+    block_rhs(p, extra, t0 + (tau + 0.5 * h), args, tq, tmp[BT.K2:BT.K2 + N], m)
+    block_stage(old, tmp, BT.K2, 0.5 * h, tmp, m)
+    block_rhs(p, extra, t0 + (tau + 0.5 * h), args, tq, tmp[BT.K3:BT.K3 + N], m)
+    block_stage(old, tmp, BT.K3, h, tmp, m)
+    block_rhs(p, extra, t0 + (tau + h), args, tq, tmp[BT.K4:BT.K4 + N], m)
     for c in range(N):
         for i in range(m):
             new[BK.Y + c, i] = combine(old[BK.Y + c, i], old[BK.F + c, i], tmp[BT.K2 + c, i],
