@@ -33,7 +33,8 @@ from tumble_ros.core.kernels.tracking import refresh_track, track_rate, UNWRAP_S
 __all__ = ['block_init', 'block_advance', 'LOOP_FUNCTIONS', 'BIGGEST']
 
 #: The functions :mod:`.methods` copies per method (each after those it calls).
-LOOP_FUNCTIONS = ('load_body', 'store_body', 'block_seg_init', 'block_emit', 'block_step', 'block_track', 'block_refresh',
+LOOP_FUNCTIONS = ('load_body', 'store_body', 'block_seg_init', 'block_emit', 'block_step',
+                  'block_track', 'block_refresh',
                   'block_init', 'block_advance')
 
 #: The largest finite float: |y|^2 <= BIGGEST is finite_norm's test (NaN compares False).
@@ -68,7 +69,8 @@ def load_body(bst: Array, old: Array, cur: Array, bodies: Array, i: int) -> floa
     method_block_load(bst, old, cur, i)
     bst[ST.BUDGET] = bodies[BB.BUDGET, i]
     bst[ST.F_VALID] = bodies[BB.F_VALID, i]
-    return bst[ST.NFEV]
+    nfev: float = bst[ST.NFEV]
+    return nfev
 
 
 @jit

@@ -17,8 +17,8 @@ from tumble_ros.core.torques.frames import orbital_to_body
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane, tidal_torque
 from tumble_ros.core.torques.pulses import pulse_torque
 
-__all__ = ['body_torque', 'torque_given_sun', 'rhs', 'derivatives', 'rhs_called', 'free_flow', 'axis_rotation',
-           'axis_turn', 'pi_turn', 'flow_pieces']
+__all__ = ['body_torque', 'torque_given_sun', 'rhs', 'derivatives', 'rhs_called', 'free_flow',
+           'axis_rotation', 'axis_turn', 'pi_turn', 'flow_pieces']
 
 
 @jit_inline
