@@ -20,7 +20,7 @@ One module per concern, every arrow downward:
 * :mod:`.stepping`: the stepping loop of one body on one segment (set-up, step + checks,
   Euler tracking, output sampling); :mod:`.ensemble`: the loop over bodies and segments;
   :mod:`.lockstep`: a block of bodies sharing one time grid stepped together, structure of
-  arrays (the methods that define ``block_step``: :mod:`.splitting`);
+  arrays (the methods that define ``block_step``: :mod:`.splitting`, :mod:`.rk4`);
 * :mod:`.methods`: the registry of the compiled methods (:data:`KERNELS`, one line each) and
   each method's copy of those two loops with its step inlined (:func:`loops`).
 
