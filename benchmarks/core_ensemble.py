@@ -61,3 +61,97 @@ def ensemble_section(ctx):
     ctx.print(f"  target (>= {TARGET:.0e} body-steps/s at N = 10,000): {verdict}: best {best[0]} "
               f"{best[7]:.3g}/s (" + ", ".join(f"{r[0]} {r[7]:.3g}" for r in rows if r[2] == 10_000) + ")")
     return results
+
+
+# ---------------------------------------------------------------------------------------------
+# Issue 30: bodies sharing one time grid stepped in lockstep, vectorised across bodies
+# ---------------------------------------------------------------------------------------------
+BEFORE = 3.37e7  # splitting, N = 10,000, per-body loop: issue 30's "before" (make bench, load 0.5)
+TARGET_30 = 1e8  # issue 30: splitting at N = 10,000 and N = 1,000,000, end to end
+TRIPLE = 3.0  # issue 30: rk4, splitting6, dop853 at >= 3x their per-body loop
+LOCKSTEP = [("splitting", 1e-3, 10_000, 1.0), ("splitting", 1e-3, 1_000_000, 0.2),
+            ("rk4", 1e-3, 10_000, 1.0), ("splitting6", 1e-2, 10_000, 5.0)]
+
+
+def _per_body_loop():
+    """A context in which simulate_ensemble takes the per-body loop (the lockstep one removed)."""
+    import contextlib
+
+    from tumble_ros.core.propagation import ensemble
+
+    @contextlib.contextmanager
+    def patched():
+        saved = ensemble.ENSEMBLE_LOOPS
+        ensemble.ENSEMBLE_LOOPS = {k: v for k, v in saved.items() if k != "lockstep"}
+        try:
+            yield
+        finally:
+            ensemble.ENSEMBLE_LOOPS = saved
+
+    return patched()
+
+
+@section("Ensembles in lockstep, vectorised across bodies (issue 30)", order=20)
+def lockstep_section(ctx):
+    import os
+
+    import numpy as np
+
+    base = load_scenario(CONFIG)
+    if not kernels.COMPILED:
+        ctx.note("numba not available: skipped")
+        return None
+    ctx.note("Fig 9 bodies without impacts (omega0 spread by 0.01 rad/yr: one time grid for all),\n"
+             "11 samples a body; 'end to end' = the whole simulate_ensemble call (set-up, loop,\n"
+             "quaternion/Jacobi post-processing); 'per-body loop' = the same call with the lockstep\n"
+             "loop taken out of core.propagation.ensemble.ENSEMBLE_LOOPS (before this issue).")
+    rows, results = [], {}
+    for method, step, n, span in LOCKSTEP:
+        if ctx.quick:
+            n, span = min(n, 1000), span / 10
+        sc = base.replace(integrator=IntegratorSettings(method=method, step=step),
+                          duration=span, output_interval=span / 10)
+        simulate_ensemble(sc.replace(duration=0.01, output_interval=0.01), n_bodies=2)  # compile
+        with _per_body_loop():
+            simulate_ensemble(sc.replace(duration=0.01, output_interval=0.01), n_bodies=2)
+        omega0 = np.array(sc.omega0) + 0.01 * np.random.default_rng(n).normal(size=(n, 3))
+        figures = {}
+        for loop in ("lockstep", "per-body loop"):
+            if loop == "per-body loop" and n > 10_000:
+                continue
+            load = os.getloadavg()[0]
+            if loop == "lockstep":
+                with Timer() as tm:
+                    r = simulate_ensemble(sc, omega0=omega0)
+            else:
+                with _per_body_loop(), Timer() as tm:
+                    r = simulate_ensemble(sc, omega0=omega0)
+            steps = int(r.n_steps.sum())
+            figures[loop] = steps / tm.seconds
+            rows.append([method, n, span, loop, steps, r.wall_time, r.body_steps_per_second,
+                         tm.seconds, steps / tm.seconds, f"{load:.2f}", "all" if r.success.all()
+                         else f"{int((~r.success).sum())} failed"])
+        ratio = figures["lockstep"] / figures.get("per-body loop", BEFORE)
+        results[f"{method} N={n}"] = dict(span=span, end_to_end_per_s=figures["lockstep"],
+                                          per_body_loop_per_s=figures.get("per-body loop"),
+                                          ratio=ratio)
+    ctx.table(["method", "N", "span [yr]", "loop", "body-steps", "integration [s]",
+               "integration /s", "end to end [s]", "end to end /s", "load", "succeeded"], rows)
+    for key, res in results.items():
+        before = res["per_body_loop_per_s"]
+        ctx.print(f"  {key}: {res['end_to_end_per_s']:.3g} body-steps/s end to end, "
+                  + (f"{res['ratio']:.2f}x the per-body loop measured here ({before:.3g}/s); "
+                     if before else "")
+                  + f"{res['end_to_end_per_s'] / BEFORE:.2f}x issue 30's before ({BEFORE:.3g}/s)")
+    for key in ("splitting N=10000", "splitting N=1000000"):
+        if key in results:
+            got = results[key]["end_to_end_per_s"]
+            verdict = ctx.verdict(got >= TARGET_30, f"MISSED by {TARGET_30 / got:.2g}x")
+            ctx.print(f"  target (>= {TARGET_30:.0e} body-steps/s end to end, {key}): {verdict}")
+    for key in ("rk4 N=10000", "splitting6 N=10000"):
+        if key in results and results[key]["per_body_loop_per_s"]:
+            got = results[key]["ratio"]
+            verdict = ctx.verdict(got >= TRIPLE, f"MISSED by {TRIPLE / got:.2g}x")
+            ctx.print(f"  target (>= {TRIPLE:g}x the per-body loop, {key}): {verdict} ({got:.2f}x)")
+    ctx.print("  dop853: adaptive, every body its own steps: no lockstep loop (the per-body loop runs)")
+    return results

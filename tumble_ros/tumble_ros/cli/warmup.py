@@ -1,7 +1,8 @@
 """
 Compile the integration loops ahead (build tooling): ``python -m tumble_ros.cli.warmup``.
 
-numba compiles the single-body and the ensemble loops of each compiled method
+numba compiles the single-body and the ensemble loops (per body, and in lockstep for the methods
+that have one) of each compiled method
 (``core.kernels.KERNELS``) on their first use (then cached beside the sources): a run compiles
 only the loops it uses (``core.jit.first_use`` says so on stderr). This optional step
 (``make warmup``; ``make test`` runs it first) compiles them all ahead. It also compiles the
@@ -18,8 +19,8 @@ import os
 import sys
 import time
 
-from tumble_ros.core import (IntegratorSettings, kernels, Scenario, simulate, simulate_ensemble,
-                             torque_function, TorqueComponent)
+from tumble_ros.core import (Impact, IntegratorSettings, kernels, Scenario, simulate,
+                             simulate_ensemble, torque_function, TorqueComponent)
 from tumble_ros.core.integrators import INTEGRATORS
 
 __all__ = ['warm_up', 'main']
@@ -45,7 +46,9 @@ def _warm_method(name: str) -> float:
     for extra in (False, True):
         run = _tiny(extra).replace(integrator=IntegratorSettings(method=name, step=1e-4))
         simulate(run)
-        simulate_ensemble(run, n_bodies=2)
+        simulate_ensemble(run, n_bodies=2)   # the lockstep loop (methods with one)
+        # bodies with their own impacts: the per-body loop
+        simulate_ensemble(run, impacts=[(), (Impact(0.0, 5e-4, (1.0, 0.0, 0.0)),)])
     return time.perf_counter() - started
 
 

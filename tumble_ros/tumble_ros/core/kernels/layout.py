@@ -19,8 +19,8 @@ from typing import Any, NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['layout', 'describe', 'ST', 'PR', 'CF', 'N', 'MAX_STAGES', 'STATUS', 'FAIL',
-           'Array', 'Extra']
+__all__ = ['layout', 'describe', 'ST', 'PR', 'CF', 'BK', 'BT', 'BB', 'LI', 'N', 'MAX_STAGES',
+           'STATUS', 'FAIL', 'Array', 'Extra']
 
 #: The kernels' arrays: flat float64 (a state, a problem, a config, outputs).
 Array = npt.NDArray[np.float64]
@@ -128,6 +128,54 @@ CF = layout('Config', [
     ('ORDER', 1, 'order of the method (splitting: the pulse sub-step rule)'),
     ('WINDOW', 1, 'work budget: window of simulated time [yr] (inf: no budget)'),
     ('WINDOW_STEPS', 1, 'work budget: most accepted steps within one window (inf: no budget)'),
+])
+
+#: Bodies stepped in lockstep (``kernels.lockstep``), structure of arrays: the rows of one
+#: buffer ``(BK.SIZE, B)``, column i = body i of the block (two buffers: the state before and
+#: after a step, swapped every step).
+BK = layout('BlockState', [
+    ('Y', N, 'omega [rad/yr], quaternion'),
+    ('PI', 3, 'splitting: angular momentum I w, carried'),
+    ('TORQUE', 3, 'splitting: body torque at (t, y)'),
+    ('F', N, 'rk4: f(t, y), computed at the start of each step'),
+])
+
+#: Scratch rows of a block ``(BT.SIZE, B)``: the libm sin/cos are taken in a pass of their own,
+#: between vectorised passes.
+BT = layout('BlockScratch', [
+    ('NORM', 1, 'splitting: |pi|'),
+    ('ANGLE', 1, 'the angle of the next sin/cos pass [rad]'),
+    ('COS', 1, 'its cosine'),
+    ('SIN', 1, 'its sine'),
+    ('INC', 1, "Euler tracking: the step's angle bound [rad]"),
+    ('ACC', 1, '|y|^2 after the step (the finite check)'),
+    ('STAGE', N, "rk4: a stage's argument y + a k"),
+    ('TQ', 3, 'rk4: the torque at a stage'),
+    ('K2', N, 'rk4: second stage'),
+    ('K3', N, 'rk4: third stage'),
+    ('K4', N, 'rk4: fourth stage'),
+])
+
+#: Per-body rows of a block ``(BB.SIZE, B)``: what is not shared by the block.
+BB = layout('BlockBodies', [
+    ('BUDGET', 1, 'Euler tracking: angle bound accumulated since the last update [rad]'),
+    ('FAILED', 1, '1 once the body failed (its steps and outputs stop there)'),
+    ('FAIL', 1, 'why it failed: a FAIL code'),
+    ('FAIL_T', 1, 'time of its last good state [yr]'),
+    ('FAIL_DT', 1, 'the collapsed step [yr] (FAIL.COLLAPSE)'),
+    ('STEPS', 1, 'its accepted steps when it failed'),
+    ('NFEV', 1, 'its evaluations when it failed'),
+    ('K', 1, 'its outputs written when it failed'),
+    ('F_VALID', 1, 'rk4: 1 if its F holds f(t, y) (a dense output computed it)'),
+    ('NFEV_ADJ', 1, 'its evaluations beyond the block count (rk4: dense output, minus skipped)'),
+])
+
+#: A block's shared counters (int64): segment, outputs written, current buffer, steps.
+LI = layout('BlockCounters', [
+    ('SEG', 1, 'the current segment (index into the shared segment table)'),
+    ('K', 1, 'outputs written (every body still running)'),
+    ('PAR', 1, 'which of the two buffers holds the current state (0 or 1)'),
+    ('STEPS', 1, 'steps taken by the block'),
 ])
 
 

@@ -26,11 +26,17 @@ from types import ModuleType
 from typing import Any, Callable, NamedTuple
 
 from tumble_ros.core.jit import COMPILED_SOURCES, specialise
-from tumble_ros.core.kernels import dop853, ensemble, rk4, splitting, stepping
+from tumble_ros.core.kernels import dop853, ensemble, lockstep, rk4, splitting, stepping
 from tumble_ros.core.kernels.layout import Array, CF, Extra
 
 __all__ = ['KERNELS', 'Loops', 'loops', 'kernel_id', 'kernel_name', 'loops_for', 'cached',
-           'ensemble_init', 'ensemble_advance']
+           'ensemble_init', 'ensemble_advance', 'has_lockstep', 'has_lockstep_module',
+           'BLOCK_FUNCTIONS']
+
+#: The functions a method's module defines to be stepped in lockstep (:mod:`.lockstep`):
+#: ``block_start``, ``block_step``, ``block_load``, ``block_store`` (see :mod:`.splitting`,
+#: :mod:`.rk4`); optional.
+BLOCK_FUNCTIONS = ('block_start', 'block_step', 'block_load', 'block_store')
 
 #: The compiled methods: registry key (``Stepper.kernel``) -> module with start, step, dense.
 KERNELS: dict[str, ModuleType] = {
@@ -50,6 +56,8 @@ class Loops(NamedTuple):
     advance: Callable[..., tuple[int, int, int]]
     ensemble_init: Callable[..., None]
     ensemble_advance: Callable[..., None]
+    block_init: Callable[..., None] | None = None
+    block_advance: Callable[..., None] | None = None
 
 
 _BUILT: dict[str, tuple[ModuleType, Loops]] = {}
@@ -109,8 +117,29 @@ def loops_for(module: ModuleType, suffix: str) -> Loops:
     many = _copies(ensemble, ensemble.LOOP_FUNCTIONS,
                    {name: single[name] for name in ('seg_init', 'emit', 'advance')}, suffix,
                    cache)
+    if not has_lockstep_module(module):
+        return Loops(single['seg_init'], single['step'], single['dense'], single['emit'],
+                     single['advance'], many['ensemble_init'], many['ensemble_advance'])
+    block = _copies(lockstep, lockstep.LOOP_FUNCTIONS,
+                    {'method_block_start': module.block_start,
+                     'method_block_step': module.block_step,
+                     'method_block_load': module.block_load,
+                     'method_block_store': module.block_store,
+                     **{name: single[name] for name in ('seg_init', 'emit', 'track_update')}},
+                    suffix, cache)
     return Loops(single['seg_init'], single['step'], single['dense'], single['emit'],
-                 single['advance'], many['ensemble_init'], many['ensemble_advance'])
+                 single['advance'], many['ensemble_init'], many['ensemble_advance'],
+                 block['block_init'], block['block_advance'])
+
+
+def has_lockstep_module(module: ModuleType) -> bool:
+    """Return whether a method's module can step a block of bodies in lockstep."""
+    return all(callable(getattr(module, name, None)) for name in BLOCK_FUNCTIONS)
+
+
+def has_lockstep(name: str) -> bool:
+    """Return whether method ``name`` of :data:`KERNELS` can be stepped in :mod:`.lockstep`."""
+    return name in KERNELS and has_lockstep_module(KERNELS[name])
 
 
 def ensemble_init(extra: Extra, cfg: Array, *args: Any) -> None:

@@ -13,10 +13,12 @@ import math
 
 from tumble_ros.core.jit import called, jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, Extra, PR
-from tumble_ros.core.torques.gravity_gradient import sun_direction_body, tidal_torque
+from tumble_ros.core.torques.frames import orbital_to_body
+from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane, tidal_torque
 from tumble_ros.core.torques.pulses import pulse_torque
 
-__all__ = ['body_torque', 'rhs', 'rhs_called', 'free_flow', 'axis_rotation']
+__all__ = ['body_torque', 'torque_given_sun', 'rhs', 'derivatives', 'rhs_called', 'free_flow',
+           'axis_rotation', 'axis_turn', 'pi_turn', 'flow_pieces']
 
 
 @jit_inline
@@ -28,7 +30,20 @@ def body_torque(p: Array, extra: Extra, t: float, q0: float, q1: float, q2: floa
     The sum of the components: the circular-orbit gravity gradient, the segment's pulse, and
     every extra torque (each called with its own parameter row).
     """
-    ux, uy, uz = sun_direction_body(p[PR.ORBIT_RATE], t, q0, q1, q2, q3)
+    sx, sy = sun_in_orbit_plane(p[PR.ORBIT_RATE], t)
+    return torque_given_sun(p, extra, t, sx, sy, q0, q1, q2, q3)
+
+
+@jit_inline
+def torque_given_sun(p: Array, extra: Extra, t: float, sx: float, sy: float, q0: float,
+                     q1: float, q2: float, q3: float) -> tuple[float, float, float]:
+    """
+    :func:`body_torque` given the Sun's direction (sx, sy, 0) in the orbital frame at t.
+
+    (sx, sy) = ``sun_in_orbit_plane(p[PR.ORBIT_RATE], t)``: the same for every body at t, so
+    an ensemble stepped in lockstep computes it once per stage (``kernels.lockstep``).
+    """
+    ux, uy, uz = orbital_to_body(sx, sy, 0.0, q0, q1, q2, q3)
     tx, ty, tz = tidal_torque(p[PR.TIDAL], p[PR.TIDAL + 1], p[PR.TIDAL + 2], ux, uy, uz)
     bx, by, bz = pulse_torque(p[PR.PULSE_BODY], p[PR.PULSE_BODY + 1], p[PR.PULSE_BODY + 2],
                               p[PR.HAS_ORBITAL], p[PR.PULSE_ORBITAL], p[PR.PULSE_ORBITAL + 1],
@@ -63,13 +78,22 @@ def rhs(p: Array, extra: Extra, t: float, st: Array, yo: int, oo: int) -> None:
     q2 = st[yo + 5]
     q3 = st[yo + 6]
     tx, ty, tz = body_torque(p, extra, t, q0, q1, q2, q3)
-    st[oo] = p[PR.EULER] * wy * wz + tx * p[PR.INV_INERTIA]
-    st[oo + 1] = p[PR.EULER + 1] * wz * wx + ty * p[PR.INV_INERTIA + 1]
-    st[oo + 2] = p[PR.EULER + 2] * wx * wy + tz * p[PR.INV_INERTIA + 2]
-    st[oo + 3] = 0.5 * (-q1 * wx - q2 * wy - q3 * wz)
-    st[oo + 4] = 0.5 * (q0 * wx + q2 * wz - q3 * wy)
-    st[oo + 5] = 0.5 * (q0 * wy - q1 * wz + q3 * wx)
-    st[oo + 6] = 0.5 * (q0 * wz + q1 * wy - q2 * wx)
+    (st[oo], st[oo + 1], st[oo + 2], st[oo + 3], st[oo + 4], st[oo + 5],
+     st[oo + 6]) = derivatives(p, wx, wy, wz, q0, q1, q2, q3, tx, ty, tz)
+
+
+@jit_inline
+def derivatives(p: Array, wx: float, wy: float, wz: float, q0: float, q1: float, q2: float,
+                q3: float, tx: float, ty: float, tz: float
+                ) -> tuple[float, float, float, float, float, float, float]:
+    """Return f(t, y) of :func:`rhs` given the total torque (tx, ty, tz) at (t, y)."""
+    return (p[PR.EULER] * wy * wz + tx * p[PR.INV_INERTIA],
+            p[PR.EULER + 1] * wz * wx + ty * p[PR.INV_INERTIA + 1],
+            p[PR.EULER + 2] * wx * wy + tz * p[PR.INV_INERTIA + 2],
+            0.5 * (-q1 * wx - q2 * wy - q3 * wz),
+            0.5 * (q0 * wx + q2 * wz - q3 * wy),
+            0.5 * (q0 * wy - q1 * wz + q3 * wx),
+            0.5 * (q0 * wz + q1 * wy - q2 * wx))
 
 
 #: :func:`rhs` compiled on its own, for cold paths and for the reference steppers.
@@ -80,8 +104,15 @@ rhs_called = called(rhs)
 def axis_rotation(axis: int, beta: float, px: float, py: float, pz: float, q0: float, q1: float,
                   q2: float, q3: float) -> tuple[float, float, float, float, float, float, float]:
     """Exact flow of 1/2 c pi_axis^2 (beta = c pi_axis a): pi turns by -beta, q by +beta."""
-    c2 = math.cos(0.5 * beta)
-    s2 = math.sin(0.5 * beta)
+    return axis_turn(axis, math.cos(0.5 * beta), math.sin(0.5 * beta), px, py, pz, q0, q1, q2,
+                     q3)
+
+
+@jit_inline
+def axis_turn(axis: int, c2: float, s2: float, px: float, py: float, pz: float, q0: float,
+              q1: float, q2: float, q3: float
+              ) -> tuple[float, float, float, float, float, float, float]:
+    """:func:`axis_rotation` given c2 = cos(beta / 2), s2 = sin(beta / 2): no libm call."""
     v = 2.0 * s2 * s2      # 1 - cos(beta), accurate for small beta
     sb = 2.0 * s2 * c2     # sin(beta)
     # pi' = pi - (v pi_perp -/+ sb ...): the rounding of cos(beta/2) near 1 does not scale |pi|
@@ -103,6 +134,43 @@ def axis_rotation(axis: int, beta: float, px: float, py: float, pz: float, q0: f
 
 
 @jit_inline
+def pi_turn(c: float, s: float, px: float, py: float, pz: float, q0: float, q1: float,
+            q2: float, q3: float) -> tuple[float, float, float, float]:
+    """
+    Turn q about pi: the |pi|^2 part of the free flow, given c = cos(half), s = sin(half) / |pi|.
+
+    half = |pi| a / (2 I_ref) (:func:`free_flow`); no libm call.
+    """
+    r1 = s * px
+    r2 = s * py
+    r3 = s * pz
+    n0 = q0 * c - q1 * r1 - q2 * r2 - q3 * r3
+    n1 = q0 * r1 + q1 * c + q2 * r3 - q3 * r2
+    n2 = q0 * r2 - q1 * r3 + q2 * c + q3 * r1
+    n3 = q0 * r3 + q1 * r2 - q2 * r1 + q3 * c
+    return n0, n1, n2, n3
+
+
+@jit_inline
+def flow_pieces(p: Array) -> tuple[int, int]:
+    """
+    Return the (first, second) axes of the free flow's axis pieces (-1: none).
+
+    The axes i with c_i = p[PR.FLOW + i] != 0, at most two (c_ref is 0): :func:`free_flow`
+    composes B_first(a/2) B_second(a) B_first(a/2), or B_first(a) alone.
+    """
+    first = -1
+    second = -1
+    for axis in range(3):
+        if p[PR.FLOW + axis] != 0.0:
+            if first < 0:
+                first = axis
+            else:
+                second = axis
+    return first, second
+
+
+@jit_inline
 def free_flow(p: Array, a: float, px: float, py: float, pz: float, q0: float, q1: float,
               q2: float, q3: float) -> tuple[float, float, float, float, float, float, float]:
     """
@@ -114,24 +182,9 @@ def free_flow(p: Array, a: float, px: float, py: float, pz: float, q0: float, q1
     n = math.sqrt(px * px + py * py + pz * pz)
     if n > 0.0:
         half = 0.5 * (n * a * p[PR.INV_REF])
-        c = math.cos(half)
-        s = math.sin(half) / n
-        r1 = s * px
-        r2 = s * py
-        r3 = s * pz
-        n0 = q0 * c - q1 * r1 - q2 * r2 - q3 * r3
-        n1 = q0 * r1 + q1 * c + q2 * r3 - q3 * r2
-        n2 = q0 * r2 - q1 * r3 + q2 * c + q3 * r1
-        n3 = q0 * r3 + q1 * r2 - q2 * r1 + q3 * c
-        q0, q1, q2, q3 = n0, n1, n2, n3
-    first = -1
-    second = -1
-    for axis in range(3):
-        if p[PR.FLOW + axis] != 0.0:
-            if first < 0:
-                first = axis
-            else:
-                second = axis
+        q0, q1, q2, q3 = pi_turn(math.cos(half), math.sin(half) / n, px, py, pz, q0, q1, q2,
+                                 q3)
+    first, second = flow_pieces(p)
     if second >= 0:  # Strang: B_first(a/2) B_second(a) B_first(a/2)
         cf = p[PR.FLOW + first]
         cs = p[PR.FLOW + second]

@@ -19,11 +19,13 @@ import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core.jit import jit, jit_inline
-from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST
-from tumble_ros.core.kernels.physics import rhs, rhs_called
+from tumble_ros.core.kernels.layout import Array, BB, BK, BT, CF, Extra, FAIL, N, PR, ST
+from tumble_ros.core.kernels.physics import derivatives, rhs, rhs_called, torque_given_sun
+from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
 
 __all__ = ['step_count', 'stage', 'combine', 'next_tau', 'hermite', 'start', 'step', 'dense',
-           'V']
+           'V', 'block_start', 'block_rhs', 'block_stage', 'block_step', 'block_load',
+           'block_store']
 
 #: A component (compiled loop) or a whole state vector (reference stepper).
 V = TypeVar('V', float, npt.NDArray[np.float64])
@@ -124,3 +126,98 @@ def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
     for i in range(N):
         st[ST.SCRATCH + i] = (h00 * st[ST.Y_OLD + i] + (h10 * h) * st[ST.F_OLD + i]
                               + h01 * st[ST.Y + i] + (h11 * h) * st[ST.F + i])
+
+
+# ---------------------------------------------------------------------------------------
+# A block of bodies in lockstep (kernels.lockstep): buffers (BK.SIZE, B), one body a column
+# ---------------------------------------------------------------------------------------
+@jit
+def block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array, m: int) -> None:
+    """Do nothing per body: :func:`start` sets the shared step count only (bst)."""
+
+
+@jit
+def block_rhs(p: Array, extra: Extra, t: float, y: Array, tq: Array, out: Array,
+              m: int) -> None:
+    """
+    Write f(t, y) of m bodies, y in rows 0-6 of ``y``, to rows 0-6 of ``out`` (vectorised).
+
+    Two passes, the torque (to rows 0-2 of ``tq``, the Sun's direction at t once for all)
+    then the derivatives: LLVM vectorises each, not the two in one loop.
+    """
+    sx, sy = sun_in_orbit_plane(p[PR.ORBIT_RATE], t)
+    for i in range(m):
+        tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, y[3, i], y[4, i], y[5, i], y[6, i])
+        tq[0, i] = tx
+        tq[1, i] = ty
+        tq[2, i] = tz
+    for i in range(m):
+        f0, f1, f2, f3, f4, f5, f6 = derivatives(p, y[0, i], y[1, i], y[2, i], y[3, i],
+                                                 y[4, i], y[5, i], y[6, i], tq[0, i], tq[1, i],
+                                                 tq[2, i])
+        out[0, i] = f0
+        out[1, i] = f1
+        out[2, i] = f2
+        out[3, i] = f3
+        out[4, i] = f4
+        out[5, i] = f5
+        out[6, i] = f6
+
+
+@jit
+def block_stage(y: Array, k: Array, kr: int, a: float, tmp: Array, m: int) -> None:
+    """Write the stage argument y + a k of m bodies to tmp[BT.STAGE:] (:func:`stage`)."""
+    for c in range(N):
+        for i in range(m):
+            tmp[BT.STAGE + c, i] = stage(y[BK.Y + c, i], k[kr + c, i], a)
+
+
+@jit
+def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: Array,
+               tmp: Array, bodies: Array, m: int) -> None:
+    """
+    Take :func:`step` for m bodies at once: buffer old -> new, the shared times in bst.
+
+    f(t, y) is evaluated for every body (a body whose dense output already took it gets the
+    same bits again; its count is one less: bodies[BB.NFEV_ADJ]); then the stages, each a
+    vectorised pass with the Sun's direction once.
+    """
+    h = bst[ST.H]
+    tau = bst[ST.TAU]
+    t0 = bst[ST.T0]
+    args = tmp[BT.STAGE:BT.STAGE + N]
+    tq = tmp[BT.TQ:BT.TQ + 3]
+    block_rhs(p, extra, t0 + tau, old[BK.Y:BK.Y + N], tq, old[BK.F:BK.F + N], m)
+    block_stage(old, old, BK.F, 0.5 * h, tmp, m)
+    block_rhs(p, extra, t0 + (tau + 0.5 * h), args, tq, tmp[BT.K2:BT.K2 + N], m)
+    block_stage(old, tmp, BT.K2, 0.5 * h, tmp, m)
+    block_rhs(p, extra, t0 + (tau + 0.5 * h), args, tq, tmp[BT.K3:BT.K3 + N], m)
+    block_stage(old, tmp, BT.K3, h, tmp, m)
+    block_rhs(p, extra, t0 + (tau + h), args, tq, tmp[BT.K4:BT.K4 + N], m)
+    for c in range(N):
+        for i in range(m):
+            new[BK.Y + c, i] = combine(old[BK.Y + c, i], old[BK.F + c, i], tmp[BT.K2 + c, i],
+                                       tmp[BT.K3 + c, i], tmp[BT.K4 + c, i], h)
+    for i in range(m):
+        bodies[BB.NFEV_ADJ, i] -= bodies[BB.F_VALID, i]
+        bodies[BB.F_VALID, i] = 0.0
+    bst[ST.NFEV] += 4.0
+    bst[ST.TAU_OLD] = tau
+    bst[ST.TAU] = next_tau(bst[ST.N_STEPS], bst[ST.N_TOTAL], h, bst[ST.TAU_BOUND])
+
+
+@jit
+def block_load(bst: Array, old: Array, new: Array, i: int) -> None:
+    """Copy body i (state and f before and after the step) into bst for :func:`dense`."""
+    for c in range(N):
+        bst[ST.Y + c] = new[BK.Y + c, i]
+        bst[ST.Y_OLD + c] = old[BK.Y + c, i]
+        bst[ST.F + c] = new[BK.F + c, i]
+        bst[ST.F_OLD + c] = old[BK.F + c, i]
+
+
+@jit
+def block_store(bst: Array, new: Array, i: int) -> None:
+    """Copy back f(t, y) that :func:`dense` may have evaluated for body i."""
+    for c in range(N):
+        new[BK.F + c, i] = bst[ST.F + c]

@@ -12,12 +12,16 @@ import math
 import numpy as np
 
 from tumble_ros.core.jit import called, jit, jit_inline
-from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, PR, ST
-from tumble_ros.core.kernels.physics import body_torque, free_flow
+from tumble_ros.core.kernels.layout import Array, BK, BT, CF, Extra, FAIL, N, PR, ST
+from tumble_ros.core.kernels.physics import (axis_turn, body_torque, flow_pieces, free_flow,
+                                             pi_turn, torque_given_sun)
 from tumble_ros.core.kernels.rk4 import step_count
+from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
 
 __all__ = ['flow', 'flow_called', 'pulse_step_count', 'start', 'step', 'dense',
-           'MAX_PULSE_SUBSTEPS']
+           'MAX_PULSE_SUBSTEPS', 'block_start', 'block_step', 'block_load', 'block_store',
+           'block_sincos',
+           'block_axis']
 
 #: Most steps the pulse rule (:func:`pulse_step_count`) adds to a segment's own count.
 MAX_PULSE_SUBSTEPS = 1000
@@ -168,3 +172,157 @@ def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
     tau_old = st[ST.TAU_OLD]
     flow_called(p, extra, cfg, st, ST.Y_OLD, ST.PI_OLD, ST.TORQUE_OLD, st[ST.T0], tau_old,
                 tau - tau_old, ST.SCRATCH, ST.TMP, ST.TMP + 3)
+
+
+# ---------------------------------------------------------------------------------------
+# A block of bodies in lockstep (kernels.lockstep): buffers (BK.SIZE, B), one body a column
+# ---------------------------------------------------------------------------------------
+@jit
+def block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array, m: int) -> None:
+    """:func:`start` per body (momentum, opening torque); bst holds the shared step count."""
+    for i in range(m):
+        for c in range(3):
+            cur[BK.PI + c, i] = p[PR.INERTIA + c] * cur[BK.Y + c, i]
+        tx, ty, tz = body_torque(p, extra, bst[ST.T0] + 0.0, cur[BK.Y + 3, i], cur[BK.Y + 4, i],
+                                 cur[BK.Y + 5, i], cur[BK.Y + 6, i])
+        cur[BK.TORQUE, i] = tx
+        cur[BK.TORQUE + 1, i] = ty
+        cur[BK.TORQUE + 2, i] = tz
+
+
+@jit
+def block_sincos(tmp: Array, m: int) -> None:
+    """tmp[BT.COS], tmp[BT.SIN] = cos, sin of tmp[BT.ANGLE]: the libm pass (not vectorised)."""
+    for i in range(m):
+        x = tmp[BT.ANGLE, i]
+        tmp[BT.COS, i] = math.cos(x)
+        tmp[BT.SIN, i] = math.sin(x)
+
+
+@jit
+def block_axis(new: Array, tmp: Array, axis: int, m: int, next_axis: int, c_next: float,
+               factor_a: float) -> None:
+    """
+    Turn m bodies by the axis piece of :func:`~.physics.free_flow` about ``axis`` (vectorised).
+
+    Its half angle's cos/sin in tmp; then the next piece's half angle 0.5 beta, beta =
+    c_next pi_next factor_a, to tmp[BT.ANGLE] (next_axis < 0: none).
+    """
+    for i in range(m):
+        px, py, pz, q0, q1, q2, q3 = axis_turn(
+            axis, tmp[BT.COS, i], tmp[BT.SIN, i], new[BK.PI, i], new[BK.PI + 1, i],
+            new[BK.PI + 2, i], new[BK.Y + 3, i], new[BK.Y + 4, i], new[BK.Y + 5, i],
+            new[BK.Y + 6, i])
+        new[BK.PI, i] = px
+        new[BK.PI + 1, i] = py
+        new[BK.PI + 2, i] = pz
+        new[BK.Y + 3, i] = q0
+        new[BK.Y + 4, i] = q1
+        new[BK.Y + 5, i] = q2
+        new[BK.Y + 6, i] = q3
+        if next_axis >= 0:
+            tmp[BT.ANGLE, i] = 0.5 * (c_next * new[BK.PI + next_axis, i] * factor_a)
+
+
+@jit
+def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: Array,
+               tmp: Array, bodies: Array, m: int) -> None:
+    """
+    Take :func:`step` for m bodies at once: buffer old -> new, the shared times in bst.
+
+    :func:`flow`'s operations in its order, cut into passes over the bodies at the libm
+    sin/cos (each pass but those vectorised by LLVM): kick and the |pi| angle; sin/cos; the turn
+    about pi and the first axis angle; per axis piece sin/cos and the turn; the torque (the
+    Sun's direction once for all bodies) and the second kick.
+    """
+    h = bst[ST.H]
+    tau = bst[ST.TAU]
+    t0 = bst[ST.T0]
+    inv_ref = p[PR.INV_REF]
+    first, second = flow_pieces(p)
+    for r in range(BK.Y + 3, BK.TORQUE + 3):
+        for i in range(m):
+            new[r, i] = old[r, i]
+    for j in range(int(cfg[CF.N_STAGES])):
+        a = cfg[CF.GAMMA + j] * h
+        half = 0.5 * a
+        for i in range(m):
+            px = new[BK.PI, i] + half * new[BK.TORQUE, i]
+            py = new[BK.PI + 1, i] + half * new[BK.TORQUE + 1, i]
+            pz = new[BK.PI + 2, i] + half * new[BK.TORQUE + 2, i]
+            new[BK.PI, i] = px
+            new[BK.PI + 1, i] = py
+            new[BK.PI + 2, i] = pz
+            n = math.sqrt(px * px + py * py + pz * pz)
+            tmp[BT.NORM, i] = n
+            tmp[BT.ANGLE, i] = 0.5 * (n * a * inv_ref)
+        block_sincos(tmp, m)
+        # the first axis piece: B_first(a/2) of B_first(a/2) B_second(a) B_first(a/2), or
+        # B_first(a) alone (physics.free_flow)
+        factor = 0.5 * a if second >= 0 else a
+        c_first = p[PR.FLOW + first] if first >= 0 else 0.0
+        for i in range(m):
+            n = tmp[BT.NORM, i]
+            px = new[BK.PI, i]
+            py = new[BK.PI + 1, i]
+            pz = new[BK.PI + 2, i]
+            q0 = new[BK.Y + 3, i]
+            q1 = new[BK.Y + 4, i]
+            q2 = new[BK.Y + 5, i]
+            q3 = new[BK.Y + 6, i]
+            if n > 0.0:
+                q0, q1, q2, q3 = pi_turn(tmp[BT.COS, i], tmp[BT.SIN, i] / n, px, py, pz, q0,
+                                         q1, q2, q3)
+            new[BK.Y + 3, i] = q0
+            new[BK.Y + 4, i] = q1
+            new[BK.Y + 5, i] = q2
+            new[BK.Y + 6, i] = q3
+            if first >= 0:
+                tmp[BT.ANGLE, i] = 0.5 * (c_first * new[BK.PI + first, i] * factor)
+        if second >= 0:
+            block_sincos(tmp, m)
+            block_axis(new, tmp, first, m, second, p[PR.FLOW + second], a)
+            block_sincos(tmp, m)
+            block_axis(new, tmp, second, m, first, c_first, 0.5 * a)
+            block_sincos(tmp, m)
+            block_axis(new, tmp, first, m, -1, 0.0, 0.0)
+        elif first >= 0:
+            block_sincos(tmp, m)
+            block_axis(new, tmp, first, m, -1, 0.0, 0.0)
+        t = t0 + (tau + cfg[CF.CUM + j] * h)
+        sx, sy = sun_in_orbit_plane(p[PR.ORBIT_RATE], t)
+        for i in range(m):
+            tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, new[BK.Y + 3, i],
+                                          new[BK.Y + 4, i], new[BK.Y + 5, i], new[BK.Y + 6, i])
+            new[BK.TORQUE, i] = tx
+            new[BK.TORQUE + 1, i] = ty
+            new[BK.TORQUE + 2, i] = tz
+            new[BK.PI, i] += half * tx
+            new[BK.PI + 1, i] += half * ty
+            new[BK.PI + 2, i] += half * tz
+    for i in range(m):
+        new[BK.Y, i] = new[BK.PI, i] / p[PR.INERTIA]
+        new[BK.Y + 1, i] = new[BK.PI + 1, i] / p[PR.INERTIA + 1]
+        new[BK.Y + 2, i] = new[BK.PI + 2, i] / p[PR.INERTIA + 2]
+    bst[ST.TAU_OLD] = tau
+    bst[ST.TAU] = (bst[ST.TAU_BOUND] if bst[ST.N_STEPS] + 1.0 >= bst[ST.N_TOTAL]
+                   else (bst[ST.N_STEPS] + 1.0) * h)
+    bst[ST.NFEV] += cfg[CF.N_STAGES]
+
+
+@jit
+def block_load(bst: Array, old: Array, new: Array, i: int) -> None:
+    """Copy body i (its state before and after the step) into bst for :func:`dense`."""
+    for c in range(N):
+        bst[ST.Y + c] = new[BK.Y + c, i]
+        bst[ST.Y_OLD + c] = old[BK.Y + c, i]
+    for c in range(3):
+        bst[ST.PI + c] = new[BK.PI + c, i]
+        bst[ST.PI_OLD + c] = old[BK.PI + c, i]
+        bst[ST.TORQUE + c] = new[BK.TORQUE + c, i]
+        bst[ST.TORQUE_OLD + c] = old[BK.TORQUE + c, i]
+
+
+@jit
+def block_store(bst: Array, new: Array, i: int) -> None:
+    """Copy nothing back: the splitting's dense output leaves the body's state as it was."""

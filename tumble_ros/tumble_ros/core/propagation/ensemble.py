@@ -421,8 +421,10 @@ def simulate_ensemble(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *
         if checkpoints is None:
             checkpoints = 1 if progress is None else 100
         threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
-        return _ensemble_compiled(scenario, times, n, impacts, omega0, euler0, method, progress,
-                                  max(1, int(checkpoints)), threads)
+        run = next(runner for refusal, runner in ENSEMBLE_LOOPS.values()
+                   if not refusal(scenario, impacts, method))
+        return run(scenario, times, n, impacts, omega0, euler0, method, progress,
+                   max(1, int(checkpoints)), threads)
     return _ensemble_reference(scenario, times, n, impacts, omega0, euler0, progress)
 
 
@@ -454,12 +456,8 @@ def _ensemble_reference(scenario: Scenario, times: FloatArray, n: int,
                           wall, False)
 
 
-def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
-                       impacts: list[tuple[Impact, ...]] | None, omega0: FloatArray | None,
-                       euler0: FloatArray | None, method: type[Stepper],
-                       progress: Progress | None, checkpoints: int, threads: int
-                       ) -> EnsembleResult:
-    """Run the bodies in blocks of the compiled ensemble loop, on ``threads`` threads."""
+def _config(scenario: Scenario, omega0: FloatArray | None, method: type[Stepper]) -> FloatArray:
+    """Return the config array (layout ``K.CF``) of the method, its work budget included."""
     settings = scenario.integrator
     gammas = method.composition() if hasattr(method, 'composition') else ()
     # the work budget at the fastest body's rate (limits.step_budget; adaptive methods only)
@@ -469,7 +467,46 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
                           settings.max_step) if method.adaptive else (math.inf, math.inf))
     if method.kernel is None:
         raise ValueError(f'method {method.name!r} has no compiled loop')
-    cfg = K.config_array(method.kernel, settings, gammas, method.order or 0, budget)
+    return K.config_array(method.kernel, settings, gammas, method.order or 0, budget)
+
+
+def _segment_tables(scenario: Scenario, per_body: list[list[Any]]
+                    ) -> tuple[FloatArray, FloatArray]:
+    """Return (seg_t (S, 2) [yr], problems (S, K.PR.SIZE)) of the bodies' segments, in order."""
+    total = sum(len(s) for s in per_body)
+    seg_t = np.empty((total, 2))
+    torques = np.zeros((total, 6))
+    j = 0
+    for segs in per_body:
+        for t0, t1, body, orbital in segs:
+            seg_t[j] = t0, t1
+            torques[j, :3], torques[j, 3:] = body, orbital
+            j += 1
+    return seg_t, K.problem_arrays(scenario.inertia, scenario.orbit_rate, torques)
+
+
+def _initial_states(scenario: Scenario, n: int, omega0: FloatArray | None,
+                    euler0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+    """Return y0 (n, 7) (omega [rad/yr], quaternion) and the Euler tracks (n, 3) [rad]."""
+    model = ATTITUDE_MODELS[scenario.attitude]
+    y0 = np.zeros((n, K.N))
+    y0[:, :3] = scenario.omega0 if omega0 is None else omega0
+    if euler0 is None:
+        y0[:, 3:] = model.from_euler(*scenario.euler0)
+        tracks = np.tile(np.array(scenario.euler0, dtype=float), (n, 1))
+    else:
+        y0[:, 3:] = [model.from_euler(*e) for e in euler0]
+        tracks = np.array(euler0, dtype=float)
+    return y0, tracks
+
+
+def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
+                       impacts: list[tuple[Impact, ...]] | None, omega0: FloatArray | None,
+                       euler0: FloatArray | None, method: type[Stepper],
+                       progress: Progress | None, checkpoints: int, threads: int
+                       ) -> EnsembleResult:
+    """Run the bodies in blocks of the compiled ensemble loop, on ``threads`` threads."""
+    cfg = _config(scenario, omega0, method)
     # segment tables
     if impacts is None:
         per_body = [split_at_impacts(scenario.duration, scenario.impacts,
@@ -479,27 +516,12 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
                     for body in impacts]
     seg_ptr = np.zeros(n + 1, dtype=np.int64)
     seg_ptr[1:] = np.cumsum([len(s) for s in per_body])
-    total = int(seg_ptr[-1])
-    seg_t = np.empty((total, 2))
-    torques = np.zeros((total, 6))
-    j = 0
-    for segs in per_body:
-        for t0, t1, body, orbital in segs:
-            seg_t[j] = t0, t1
-            torques[j, :3], torques[j, 3:] = body, orbital
-            j += 1
-    probs = K.problem_arrays(scenario.inertia, scenario.orbit_rate, torques)
+    seg_t, probs = _segment_tables(scenario, per_body)
     extra = extra_torque_arrays(scenario.extra_torques)
     # initial states
-    model = ATTITUDE_MODELS[scenario.attitude]
+    y0, tracks = _initial_states(scenario, n, omega0, euler0)
     states = np.zeros((n, K.ST.SIZE))
-    states[:, K.ST.Y:K.ST.Y + 3] = scenario.omega0 if omega0 is None else omega0
-    if euler0 is None:
-        states[:, K.ST.Y + 3:K.ST.Y + 7] = model.from_euler(*scenario.euler0)
-        tracks = np.tile(np.array(scenario.euler0, dtype=float), (n, 1))
-    else:
-        states[:, K.ST.Y + 3:K.ST.Y + 7] = [model.from_euler(*e) for e in euler0]
-        tracks = np.array(euler0, dtype=float)
+    states[:, K.ST.Y:K.ST.Y + K.N] = y0
     m = times.size
     times = np.ascontiguousarray(times, dtype=float)
     y_out = np.full((n, m, K.N), np.nan)
@@ -532,27 +554,171 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
     wall = time.perf_counter() - start
 
     failed = states[:, K.ST.STATUS] == K.STATUS.FAILED
-    success = (k_out == m) & ~failed
     messages = tuple(failure_message(states[b], method.name) if failed[b] else ''
                      for b in range(n))
     nfev = (states[:, K.ST.NFEV_DONE] + states[:, K.ST.NFEV]).astype(np.int64)
+    return _result(scenario, times, y_out, e_out, k_out, failed, messages, steps, nfev, wall,
+                   threads)
+
+
+def _result(scenario: Scenario, times: FloatArray, y_out: FloatArray, e_out: FloatArray,
+            k_out: npt.NDArray[np.int64], failed: npt.NDArray[np.bool_],
+            messages: tuple[str, ...], steps: npt.NDArray[np.int64],
+            nfev: npt.NDArray[np.int64], wall: float, threads: int = 1) -> EnsembleResult:
+    """
+    Post-process the loops' samples (quaternions made continuous, Jacobi integral).
+
+    In groups of bodies of at most :data:`POST_SAMPLES` samples (bounded memory for their
+    (bodies, n, 3, 3) matrices), on ``threads`` threads (numpy lets go of the GIL); each body's
+    numbers do not depend on the groups.
+    """
+    n, m = y_out.shape[:2]
+    success = (k_out == m) & ~failed
     omega = y_out[:, :, :3].copy()
     quat = np.full((n, m, 4), np.nan)
     jac = np.full((n, m), np.nan)
-    for b0 in range(0, n, 1024):  # bounded memory for the (chunk, n, 3, 3) matrices
-        b1 = min(n, b0 + 1024)
+    size = max(1, POST_SAMPLES // max(1, m))
+
+    def group(b0: int) -> None:
+        b1 = min(n, b0 + size)
         for kk in np.unique(k_out[b0:b1]):
-            rows = np.arange(b0, b1)[k_out[b0:b1] == kk]
             if kk == 0:
                 continue
+            rows = np.arange(b0, b1)[k_out[b0:b1] == kk]
             q = y_out[rows, :kk, 3:]
             quat[rows, :kk] = continuous_quaternions(q)
             matrices = quaternions_to_matrices(q)
             jac[rows, :kk] = jacobi_integral(times[:kk], omega[rows, :kk], matrices,
                                              scenario.inertia,
                                              scenario.orbit_rate)
+
+    starts = range(0, n, size)
+    with ThreadPoolExecutor(threads) if threads > 1 and len(starts) > 1 else _NoPool() as pool:
+        list(pool.map(group, starts))
     return EnsembleResult(times, omega, e_out, quat, jac, success, messages, steps, nfev, wall,
                           True)
+
+
+#: Most samples (bodies x times) post-processed at once by :func:`_result`.
+POST_SAMPLES = 2**16
+
+
+#: Bodies per block of the lockstep loop: its buffers, (2 x 13 + 6 + 8) x 8 bytes a body, stay
+#: in the core's L2 cache.
+BLOCK_BODIES = 256
+
+
+def _lockstep_refusal(scenario: Scenario, impacts: list[tuple[Impact, ...]] | None,
+                      method: type[Stepper]) -> str:
+    """Empty if the bodies can be stepped in lockstep (:mod:`.kernels.lockstep`), else why not."""
+    if method.kernel is None or not K.has_lockstep(method.kernel):
+        return f'method {method.name!r} has no lockstep loop'
+    if scenario.impacts or (impacts is not None and any(impacts)):
+        return ('impacts: the bodies do not share one time grid (a pulse segment takes '
+                'steps that depend on the body)')
+    return ''
+
+
+def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
+                       impacts: list[tuple[Impact, ...]] | None, omega0: FloatArray | None,
+                       euler0: FloatArray | None, method: type[Stepper],
+                       progress: Progress | None, checkpoints: int, threads: int,
+                       block: int | None = None) -> EnsembleResult:
+    """
+    Run blocks of ``block`` bodies (default :data:`BLOCK_BODIES`) in lockstep, on ``threads``.
+
+    The bodies share their segments (no impact: :func:`_lockstep_refusal`), so every block
+    steps through one time grid; each body gets the bits of its own run whatever the blocks.
+    """
+    size = BLOCK_BODIES if block is None else int(block)
+    cfg = _config(scenario, omega0, method)
+    seg_t, probs = _segment_tables(
+        scenario, [split_at_impacts(scenario.duration, (), scenario.segment_cuts)])
+    extra = extra_torque_arrays(scenario.extra_torques)
+    y0, tracks0 = _initial_states(scenario, n, omega0, euler0)
+    n_blocks = -(-n // size)
+    padded = n_blocks * size
+    soa = np.zeros((n_blocks, 2, K.BK.SIZE, size))
+    cols = np.zeros((padded, K.N))
+    cols[:n] = y0
+    cols[n:] = y0[0]      # padding columns: copies of body 0, never written out
+    soa[:, 0, K.BK.Y:K.BK.Y + K.N, :] = cols.reshape(n_blocks, size, K.N).transpose(0, 2, 1)
+    flat_tracks = np.zeros((padded, 3))
+    flat_tracks[:n] = tracks0
+    tracks = flat_tracks.reshape(n_blocks, size, 3)
+    tmp = np.zeros((n_blocks, K.BT.SIZE, size))
+    bodies = np.zeros((n_blocks, K.BB.SIZE, size))
+    counters = np.zeros((n_blocks, K.LI.SIZE), dtype=np.int64)
+    bst = np.zeros((n_blocks, K.ST.SIZE))
+    m = times.size
+    times = np.ascontiguousarray(times, dtype=float)
+    y_out = np.full((n, m, K.N), np.nan)
+    e_out = np.full((n, m, 3), np.nan)
+    counts = [min(size, n - i * size) for i in range(n_blocks)]
+    kernel = K.kernel_name(cfg)
+    lp = K.loops(kernel)
+    block_init, block_advance = lp.block_init, lp.block_advance
+    assert block_init is not None and block_advance is not None
+
+    def init(i: int) -> None:
+        block_init(extra, cfg, probs, seg_t, soa[i], bodies[i], counters[i], bst[i], counts[i])
+
+    def advance(i: int, t_stop: float) -> None:
+        block_advance(extra, cfg, probs, seg_t, soa[i], tmp[i], bodies[i], counters[i], bst[i],
+                      tracks[i], t_stop, times, y_out, e_out, i * size, counts[i])
+
+    start = time.perf_counter()
+    threads = min(threads, n_blocks)
+    with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool, \
+            first_use(block_advance, f'{kernel} lockstep loops'):
+        list(pool.map(init, range(n_blocks)))
+        t_end = float(times[-1])
+        stops = [t_end * (c + 1) / checkpoints for c in range(checkpoints - 1)] + [t_end]
+        for c, t_stop in enumerate(stops):
+            list(pool.map(lambda i: advance(i, t_stop), range(n_blocks)))
+            if progress is not None:
+                done = sum(_lockstep_steps(counters[i], bodies[i], counts[i]).sum()
+                           for i in range(n_blocks))
+                progress((c + 1) / len(stops), t_stop, int(done))
+    wall = time.perf_counter() - start
+
+    per_body = bodies.transpose(0, 2, 1).reshape(padded, K.BB.SIZE)[:n]
+    failed = per_body[:, K.BB.FAILED] != 0.0
+    every = np.repeat(np.arange(n_blocks), size)[:n]
+    steps = np.where(failed, per_body[:, K.BB.STEPS], counters[every, K.LI.STEPS]).astype(np.int64)
+    k_out = np.where(failed, per_body[:, K.BB.K], counters[every, K.LI.K]).astype(np.int64)
+    nfev = np.where(failed, per_body[:, K.BB.NFEV],
+                    bst[every, K.ST.NFEV_DONE] + bst[every, K.ST.NFEV]
+                    + per_body[:, K.BB.NFEV_ADJ]).astype(np.int64)
+    messages = tuple(_lockstep_message(per_body[b], bst[every[b]], method.name) if failed[b]
+                     else '' for b in range(n)) if failed.any() else ('',) * n
+    return _result(scenario, times, y_out, e_out, k_out, failed, messages, steps, nfev, wall,
+                   threads)
+
+
+def _lockstep_steps(counters: npt.NDArray[np.int64], bodies: FloatArray,
+                    count: int) -> npt.NDArray[np.int64]:
+    """Return the steps of a block's ``count`` bodies so far (a failed body's stop there)."""
+    failed = bodies[K.BB.FAILED, :count] != 0.0
+    return np.where(failed, bodies[K.BB.STEPS, :count], counters[K.LI.STEPS]).astype(np.int64)
+
+
+def _lockstep_message(body: FloatArray, bst: FloatArray, method_name: str) -> str:
+    """Return the message of a body that failed in a lockstep block (its row of ``K.BB``)."""
+    st = bst.copy()
+    st[K.ST.FAIL] = body[K.BB.FAIL]
+    st[K.ST.FAIL_T] = body[K.BB.FAIL_T]
+    st[K.ST.FAIL_DT] = body[K.BB.FAIL_DT]
+    return failure_message(st, method_name)
+
+
+#: The compiled ensemble loops, by name: (refusal, runner); the first whose refusal is empty
+#: runs. ``lockstep`` steps blocks of bodies sharing one time grid together; ``per-body`` steps
+#: each body through its own segments (impacts), the general case.
+ENSEMBLE_LOOPS: dict[str, tuple[Callable[..., str], Callable[..., EnsembleResult]]] = {
+    'lockstep': (_lockstep_refusal, _ensemble_lockstep),
+    'per-body': (lambda *args: '', _ensemble_compiled),
+}
 
 
 # ---------------------------------------------------------------------------------------

@@ -22,8 +22,9 @@ import numpy.typing as npt
 from tumble_ros.core.jit import jit_inline, python_source
 from tumble_ros.core.torques.frames import orbital_to_body
 
-__all__ = ['sun_direction_orbital', 'sun_direction_body', 'tidal_torque', 'tidal_coefficients',
-           'point_mass_torque', 'gravity_gradient_torque', 'gravity_gradient_potential']
+__all__ = ['sun_direction_orbital', 'sun_direction_body', 'sun_in_orbit_plane', 'tidal_torque',
+           'tidal_coefficients', 'point_mass_torque', 'gravity_gradient_torque',
+           'gravity_gradient_potential']
 
 
 @jit_inline
@@ -35,8 +36,19 @@ def sun_direction_body(orbit_rate: float, t: float, q0: float, q1: float, q2: fl
     s(t) = (sin ws t, cos ws t, 0) in the orbital frame (the paper's R0(t)/R0: it starts on +Y'
     and turns clockwise about Z'), C(q) the body -> orbital matrix of the quaternion q.
     """
-    return orbital_to_body(math.sin(orbit_rate * t), math.cos(orbit_rate * t), 0.0,
-                           q0, q1, q2, q3)
+    sx, sy = sun_in_orbit_plane(orbit_rate, t)
+    return orbital_to_body(sx, sy, 0.0, q0, q1, q2, q3)
+
+
+@jit_inline
+def sun_in_orbit_plane(orbit_rate: float, t: float) -> tuple[float, float]:
+    """
+    Return (sin ws t, cos ws t): the X' and Y' components of the Sun's direction s(t).
+
+    The attitude-free part of :func:`sun_direction_body` (its Z' component is 0): one sin/cos
+    pair per time, shared by every body of an ensemble stepped in lockstep.
+    """
+    return math.sin(orbit_rate * t), math.cos(orbit_rate * t)
 
 
 @jit_inline

@@ -1,0 +1,154 @@
+"""
+Ensembles stepped in lockstep (core/kernels/lockstep.py): the bits of each body's own run.
+
+Bodies sharing one time grid (no impacts, a fixed-step method with a lockstep loop) are stepped
+by blocks, structure of arrays, vectorised across bodies. Each body must give exactly the
+samples, step and evaluation counts of its single-body run (``simulate``) and of the per-body
+ensemble loop, whatever the blocks, threads and checkpoints; a failing body fails alone with
+the per-body loop's message.
+"""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tumble_ros.core import (ensemble_scenarios, Impact, IntegratorSettings, kernels,
+                             load_scenario, simulate, simulate_ensemble)
+from tumble_ros.core.integrators import INTEGRATORS
+from tumble_ros.core.propagation import ensemble as E
+
+needs_numba = pytest.mark.skipif(not kernels.COMPILED,
+                                 reason='numba not available: only the reference path runs')
+CONFIG = Path(__file__).resolve().parents[1] / 'config'
+FIELDS = ('omega', 'euler', 'quaternion', 'jacobi', 'success', 'n_steps', 'nfev')
+
+
+def fig9(method='splitting', step=2e-3, **changes):
+    base = {'duration': 0.6, 'output_interval': 0.1,
+            'integrator': IntegratorSettings(method=method, step=step)}
+    return load_scenario(CONFIG / 'fig9.yaml').replace(**{**base, **changes})
+
+
+def spread(sc, n, seed=1, size=0.5):
+    rng = np.random.default_rng(seed)
+    return (np.array(sc.omega0) + size * rng.normal(size=(n, 3)),
+            np.array(sc.euler0) + 0.3 * rng.normal(size=(n, 3)))
+
+
+def assert_identical(a, b):
+    for name in FIELDS:
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.shape == y.shape and np.array_equal(x, y, equal_nan=True), name
+    assert a.messages == b.messages
+
+
+def per_body(monkeypatch):
+    """Take the lockstep loop out of the registry: the per-body ensemble loop runs."""
+    monkeypatch.setattr(E, 'ENSEMBLE_LOOPS',
+                        {k: v for k, v in E.ENSEMBLE_LOOPS.items() if k != 'lockstep'})
+
+
+def test_which_ensembles_are_stepped_in_lockstep():
+    sc = fig9()
+    splitting, dop853 = INTEGRATORS['splitting'], INTEGRATORS['dop853']
+    assert E._lockstep_refusal(sc, None, splitting) == ''
+    assert E._lockstep_refusal(sc, [(), ()], splitting) == ''
+    assert E._lockstep_refusal(fig9('splitting6'), None, INTEGRATORS['splitting6']) == ''
+    hit = Impact(0.2, 3e-7, (1e6, 0.0, 0.0))
+    assert 'impacts' in E._lockstep_refusal(sc, [(), (hit,)], splitting)
+    assert 'impacts' in E._lockstep_refusal(sc.replace(impacts=(hit,)), None, splitting)
+    assert E._lockstep_refusal(fig9('rk4'), None, INTEGRATORS['rk4']) == ''
+    # adaptive: every body its own steps
+    assert "'dop853'" in E._lockstep_refusal(fig9('dop853'), None, dop853)
+    assert list(E.ENSEMBLE_LOOPS) == ['lockstep', 'per-body']
+
+
+@needs_numba
+@pytest.mark.parametrize('method, step, inertia', [
+    ('splitting', 2e-3, None),              # fig9: symmetric, one axis piece
+    ('splitting6', 1e-2, None),             # 9 stages
+    ('splitting', 2e-3, (1.0, 1.5, 2.2)),   # triaxial: two axis pieces (B_1 B_2 B_1)
+    ('splitting', 5e-2, None),              # ~1.5 rad a step: the Euler track in pieces
+    ('rk4', 2e-3, None),
+    ('rk4', 2e-3, (1.0, 1.5, 2.2)),
+    ('rk4', 3e-2, None),                    # ~1.2 rad a step: f evaluated per body (dense)
+])
+def test_each_body_is_bit_for_bit_its_single_run(method, step, inertia, monkeypatch):
+    sc = fig9(method, step)
+    if inertia is not None:
+        sc = sc.replace(inertia=inertia)
+    n = 9
+    omega0, euler0 = spread(sc, n)
+    # off the step grid (dense output), on it, and the end
+    t_eval = np.array([0.0, 0.0123, 0.1, 0.33333, 0.6])
+    ens = simulate_ensemble(sc, t_eval, omega0=omega0, euler0=euler0, threads=2)
+    assert ens.compiled and ens.success.all()
+    for b, body in enumerate(ensemble_scenarios(sc, omega0=omega0, euler0=euler0)):
+        one = simulate(body, t_eval)
+        assert np.array_equal(ens.omega[b], one.omega)
+        assert np.array_equal(ens.euler[b], one.euler)
+        assert np.array_equal(ens.quaternion[b], one.quaternion)
+        assert np.array_equal(ens.jacobi[b], one.jacobi)
+        assert ens.n_steps[b] == one.n_steps and ens.nfev[b] == one.nfev
+    # the bodies really differ, and the per-body ensemble loop gives the same bits
+    assert np.ptp(ens.omega[:, -1, 2]) > 1e-3
+    per_body(monkeypatch)
+    assert_identical(ens, simulate_ensemble(sc, t_eval, omega0=omega0, euler0=euler0))
+
+
+@needs_numba
+@pytest.mark.parametrize('method', ['splitting', 'rk4'])
+def test_segments_and_extra_torques_of_a_flyby_are_stepped_in_lockstep(method):
+    # Apophis 2029: three segments (the encounter window), a Kepler perturber (extra torque),
+    # a triaxial body
+    sc = load_scenario(CONFIG / 'apophis_2029.yaml')
+    sc = sc.replace(integrator=IntegratorSettings(method=method, step=4e-5))
+    assert len(sc.segment_cuts) == 2 and sc.extra_torques
+    n = 5
+    omega0, euler0 = spread(sc, n, seed=4, size=10.0)
+    t_eval = np.linspace(0.0, sc.duration, 13)
+    ens = simulate_ensemble(sc, t_eval, omega0=omega0, euler0=euler0)
+    for b, body in enumerate(ensemble_scenarios(sc, omega0=omega0, euler0=euler0)):
+        one = simulate(body, t_eval)
+        assert np.array_equal(ens.omega[b], one.omega)
+        assert np.array_equal(ens.euler[b], one.euler)
+        assert ens.n_steps[b] == one.n_steps and ens.nfev[b] == one.nfev
+    # the flyby turned the bodies
+    assert np.max(np.abs(ens.omega[:, -1] - omega0)) > 1.0
+
+
+@needs_numba
+@pytest.mark.parametrize('method', ['splitting', 'rk4'])
+def test_results_do_not_depend_on_blocks_threads_or_checkpoints(method):
+    sc = fig9(method)
+    n = 23
+    omega0, euler0 = spread(sc, n, seed=2)
+    times = sc.output_times
+    method = INTEGRATORS[method]
+    runs = [E._ensemble_lockstep(sc, times, n, None, omega0, euler0, method, None, checkpoints,
+                                 threads, block=block)
+            for block, threads, checkpoints in [(256, 1, 1), (1, 1, 1), (7, 2, 3), (16, 2, 1)]]
+    for other in runs[1:]:
+        assert_identical(runs[0], other)
+    # a chunk of the ensemble gives the rows of the whole
+    part = E._ensemble_lockstep(sc, times, 10, None, omega0[5:15], euler0[5:15], method, None,
+                                1, 1, block=4)
+    assert np.array_equal(part.euler, runs[0].euler[5:15])
+    assert np.array_equal(part.omega, runs[0].omega[5:15])
+
+
+@needs_numba
+@pytest.mark.parametrize('method', ['splitting', 'rk4'])
+def test_a_failing_body_fails_alone_as_in_the_per_body_loop(method):
+    sc = fig9(method, duration=0.2)
+    omega0, euler0 = spread(sc, 5, seed=3)
+    omega0[1] = 1e200          # |omega|^2 overflows at the first step (past the inputs' check)
+    omega0[3] = 1e154          # |pi|^2 finite at first, not after the torque's kick
+    times = sc.output_times
+    method = INTEGRATORS[method]
+    lock = E._ensemble_lockstep(sc, times, 5, None, omega0, euler0, method, None, 1, 2, block=2)
+    ref = E._ensemble_compiled(sc, times, 5, None, omega0, euler0, method, None, 1, 2)
+    assert lock.success.tolist() == [True, False, True, False, True]
+    assert 'non-finite' in lock.messages[1]
+    assert_identical(lock, ref)
+    assert np.isnan(lock.omega[1, -1]).all() and np.isfinite(lock.omega[1, 0]).all()

@@ -1,0 +1,300 @@
+"""
+The lockstep loop: a block of bodies sharing one time grid, stepped together.
+
+When every body of an ensemble has the same segments and a fixed-step method takes the same
+steps on them (no per-body impact, no pulse: ``propagation.ensemble`` decides), the times of
+every step and stage are the same for all bodies. A block of B bodies is then stepped together:
+the shared part of a step (its times, the checks of :func:`~.stepping.step` on the local time,
+the Sun's direction at each stage) is computed once per step, and the per-body part
+(``method_block_step`` of the method's module, e.g. :func:`~.splitting.block_step`) runs as
+loops over the block's bodies on a structure of arrays, row r of a buffer ``(BK.SIZE, B)`` the
+component r of all B bodies (layout :data:`~.layout.BK`): loops LLVM vectorises across bodies.
+
+Each body gets exactly the bits of its own run (``stepping.advance`` on one body): the same
+operations in the same order, vector lanes or not (no FMA contraction: numba does not allow it
+without ``fastmath``). The rare per-body work (output samples, Euler-track updates) is done by
+the single-body functions (:func:`~.stepping.emit`, :func:`~.stepping.track_update`) on a
+scratch state ``bst`` (layout :data:`~.layout.ST`) into which the method's ``block_load`` copies
+the body (``bst`` also holds the block's shared times and counters, as a single body's state
+holds them). A template like :mod:`.stepping`: :mod:`.methods` binds ``method_block_*`` per
+method.
+"""
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from tumble_ros.core.jit import jit
+from tumble_ros.core.kernels.checks import collapsed
+from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, Extra, FAIL, LI, N, ST,
+                                            STATUS)
+from tumble_ros.core.kernels.tracking import refresh_track, track_rate, UNWRAP_STEP
+
+__all__ = ['block_init', 'block_advance', 'LOOP_FUNCTIONS', 'BIGGEST']
+
+#: The functions :mod:`.methods` copies per method (each after those it calls).
+LOOP_FUNCTIONS = ('load_body', 'store_body', 'block_seg_init', 'block_emit', 'block_step',
+                  'block_track', 'block_refresh',
+                  'block_init', 'block_advance')
+
+#: The largest finite float: |y|^2 <= BIGGEST is finite_norm's test (NaN compares False).
+BIGGEST = float(np.finfo(np.float64).max)
+
+
+def method_block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array,
+                       m: int) -> None:
+    """Run the per-body part of the method's ``start`` (bound per method by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+def method_block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: Array,
+                      tmp: Array, bodies: Array, m: int) -> None:
+    """Step m bodies from buffer old to new (bound per method by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+def method_block_load(bst: Array, old: Array, new: Array, i: int) -> None:
+    """Copy body i into bst for the single-body functions (bound by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+def method_block_store(bst: Array, new: Array, i: int) -> None:
+    """Copy back what a single-body function computed for body i (bound by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+@jit
+def load_body(bst: Array, old: Array, cur: Array, bodies: Array, i: int) -> float:
+    """Copy body i into bst before a single-body call; return bst's evaluation count."""
+    method_block_load(bst, old, cur, i)
+    bst[ST.BUDGET] = bodies[BB.BUDGET, i]
+    bst[ST.F_VALID] = bodies[BB.F_VALID, i]
+    nfev: float = bst[ST.NFEV]
+    return nfev
+
+
+@jit
+def store_body(bst: Array, cur: Array, bodies: Array, i: int, nfev: float) -> None:
+    """After a single-body call on body i: keep its track budget, its F, its evaluations."""
+    method_block_store(bst, cur, i)
+    bodies[BB.BUDGET, i] = bst[ST.BUDGET]
+    bodies[BB.F_VALID, i] = bst[ST.F_VALID]
+    bodies[BB.NFEV_ADJ, i] += bst[ST.NFEV] - nfev
+    bst[ST.NFEV] = nfev
+    bst[ST.F_VALID] = 0.0
+
+
+def seg_init(p: Array, extra: Extra, cfg: Array, st: Array, t0: float, t_bound: float) -> None:
+    """Start a segment: the single-body ``stepping.seg_init`` (bound by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+def emit(p: Array, extra: Extra, cfg: Array, st: Array, track: Array, t_out: Array,
+         y_out: Array, e_out: Array, k: int) -> int:
+    """Write outputs: the single-body ``stepping.emit`` (bound by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+def track_update(p: Array, extra: Extra, cfg: Array, st: Array, track: Array,
+                 increment: float) -> int:
+    """Update the track: the single-body ``stepping.track_update`` (bound by :mod:`.methods`)."""
+    raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+@jit
+def block_seg_init(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, bodies: Array,
+                   counters: npt.NDArray[np.int64], t0: float, t_bound: float, m: int) -> None:
+    """
+    Start a segment [t0, t_bound] for the block: ``seg_init`` on the shared times, per body.
+
+    The shared part is the single body's ``seg_init`` on bst (holding body 0: the step count
+    of a segment without pulse does not depend on the body); the per-body part is the method's
+    ``block_start`` on the current buffer, copied to the other one.
+    """
+    cur = soa[counters[LI.PAR]]
+    other = soa[1 - counters[LI.PAR]]
+    for c in range(N):
+        bst[ST.Y + c] = cur[BK.Y + c, 0]
+    seg_init(p, extra, cfg, bst, t0, t_bound)
+    method_block_start(p, extra, cfg, bst, cur, m)
+    for i in range(m):
+        bodies[BB.F_VALID, i] = 0.0
+    for r in range(BK.SIZE):
+        for i in range(m):
+            other[r, i] = cur[r, i]
+
+
+@jit
+def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, bodies: Array,
+               counters: npt.NDArray[np.int64], tracks: Array, t_out: Array, y_out: Array,
+               e_out: Array, body0: int, m: int) -> None:
+    """Write the outputs t_out[k:] <= t of every running body (``stepping.emit`` each)."""
+    k = counters[LI.K]
+    if k >= t_out.shape[0] or t_out[k] > bst[ST.T]:
+        return
+    cur = soa[counters[LI.PAR]]
+    old = soa[1 - counters[LI.PAR]]
+    k_new = k
+    for i in range(m):
+        if bodies[BB.FAILED, i] != 0.0:
+            continue
+        nfev = load_body(bst, old, cur, bodies, i)
+        k_new = emit(p, extra, cfg, bst, tracks[i], t_out, y_out[body0 + i], e_out[body0 + i], k)
+        store_body(bst, cur, bodies, i, nfev)
+    counters[LI.K] = k_new
+
+
+@jit
+def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
+               bodies: Array, counters: npt.NDArray[np.int64], m: int) -> bool:
+    """
+    One step of the block with the checks of ``stepping.step``; False when no body is left.
+
+    The shared checks (work budget, collapse of the local time) fail every running body; the
+    finite check fails a body alone: its state stays at its last good step (both buffers) and
+    its counters are kept in ``bodies``. Swaps the buffers.
+    """
+    par = counters[LI.PAR]
+    old = soa[par]
+    new = soa[1 - par]
+    t_good = bst[ST.T]
+    tau_good = bst[ST.TAU]
+    tau_old_good = bst[ST.TAU_OLD]
+    code = FAIL.NONE
+    if bst[ST.WIN_STEPS] >= cfg[CF.WINDOW_STEPS]:
+        code = FAIL.BUDGET
+        bst[ST.FAIL_DT] = bst[ST.T] - bst[ST.WIN_T]
+    else:
+        method_block_step(p, extra, cfg, bst, old, new, tmp, bodies, m)
+        if (bst[ST.TAU] - tau_good <= bst[ST.COLLAPSE]
+                and collapsed(tau_good, bst[ST.TAU], bst[ST.TAU_BOUND])):
+            code = FAIL.COLLAPSE
+            bst[ST.FAIL_DT] = bst[ST.TAU] - tau_good
+    alive = 0
+    if code == FAIL.NONE:
+        for i in range(m):   # finite_norm of every body's y, as stepping.step (vectorised)
+            acc = 0.0
+            for c in range(N):
+                acc += new[BK.Y + c, i] * new[BK.Y + c, i]
+            tmp[BT.ACC, i] = acc
+    for i in range(m):
+        if bodies[BB.FAILED, i] != 0.0:
+            continue
+        if code == FAIL.NONE and tmp[BT.ACC, i] <= BIGGEST:
+            alive += 1
+            continue
+        bodies[BB.FAILED, i] = 1.0
+        bodies[BB.FAIL, i] = FAIL.NONFINITE if code == FAIL.NONE else code
+        bodies[BB.FAIL_T, i] = t_good
+        bodies[BB.FAIL_DT, i] = bst[ST.FAIL_DT] if code == FAIL.COLLAPSE else 0.0
+        bodies[BB.STEPS, i] = counters[LI.STEPS]
+        bodies[BB.NFEV, i] = bst[ST.NFEV_DONE] + bst[ST.NFEV] + bodies[BB.NFEV_ADJ, i]
+        bodies[BB.K, i] = counters[LI.K]
+        for r in range(BK.SIZE):
+            new[r, i] = old[r, i]
+    if alive == 0:
+        bst[ST.T] = t_good
+        bst[ST.TAU] = tau_good
+        bst[ST.TAU_OLD] = tau_old_good
+        bst[ST.STATUS] = STATUS.FAILED
+        bst[ST.FAIL] = code
+        bst[ST.FAIL_T] = t_good
+        return False
+    bst[ST.N_STEPS] += 1.0
+    bst[ST.T_OLD] = t_good
+    bst[ST.T] = (bst[ST.T_BOUND] if bst[ST.TAU] >= bst[ST.TAU_BOUND]
+                 else bst[ST.T0] + bst[ST.TAU])
+    bst[ST.WIN_STEPS] += 1.0
+    if bst[ST.T] - bst[ST.WIN_T] >= cfg[CF.WINDOW]:
+        bst[ST.WIN_T] = bst[ST.T]
+        bst[ST.WIN_STEPS] = 0.0
+    if bst[ST.TAU] >= bst[ST.TAU_BOUND]:
+        bst[ST.STATUS] = STATUS.FINISHED
+    counters[LI.PAR] = 1 - par
+    counters[LI.STEPS] += 1
+    return True
+
+
+@jit
+def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
+                bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, m: int) -> None:
+    """``stepping.track_euler`` for every running body: the bound vectorised, updates rare."""
+    cur = soa[counters[LI.PAR]]
+    old = soa[1 - counters[LI.PAR]]
+    dt = bst[ST.T] - bst[ST.T_OLD]
+    due = 0
+    for i in range(m):
+        inc = track_rate(cur[BK.Y, i], cur[BK.Y + 1, i], cur[BK.Y + 2, i], cur[BK.Y + 3, i],
+                         cur[BK.Y + 4, i], cur[BK.Y + 5, i], cur[BK.Y + 6, i]) * dt
+        total = bodies[BB.BUDGET, i] + inc
+        late = total >= UNWRAP_STEP
+        tmp[BT.INC, i] = inc if late else -1.0
+        bodies[BB.BUDGET, i] = bodies[BB.BUDGET, i] if late else total
+        due += 1 if late else 0
+    if due == 0:
+        return
+    for i in range(m):
+        if tmp[BT.INC, i] >= 0.0 and bodies[BB.FAILED, i] == 0.0:
+            nfev = load_body(bst, old, cur, bodies, i)
+            track_update(p, extra, cfg, bst, tracks[i], tmp[BT.INC, i])
+            store_body(bst, cur, bodies, i, nfev)
+
+
+@jit
+def block_refresh(bst: Array, soa: Array, bodies: Array, counters: npt.NDArray[np.int64],
+                  tracks: Array, m: int) -> None:
+    """``tracking.refresh_track`` for every running body (the end of ``stepping.advance``)."""
+    cur = soa[counters[LI.PAR]]
+    old = soa[1 - counters[LI.PAR]]
+    for i in range(m):
+        if bodies[BB.BUDGET, i] > 0.0 and bodies[BB.FAILED, i] == 0.0:
+            nfev = load_body(bst, old, cur, bodies, i)
+            refresh_track(bst, tracks[i])
+            store_body(bst, cur, bodies, i, nfev)
+
+
+@jit
+def block_init(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Array,
+               bodies: Array, counters: npt.NDArray[np.int64], bst: Array, m: int) -> None:
+    """Start the first segment of a block whose current buffer holds every body's y0."""
+    block_seg_init(probs[0], extra, cfg, bst, soa, bodies, counters, seg_t[0, 0], seg_t[0, 1],
+                   m)
+
+
+@jit
+def block_advance(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Array,
+                  tmp: Array, bodies: Array, counters: npt.NDArray[np.int64], bst: Array,
+                  tracks: Array, t_stop: float, t_out: Array, y_out: Array, e_out: Array,
+                  body0: int, m: int) -> None:
+    """
+    Advance a block of m bodies through the shared segments until t >= t_stop.
+
+    ``ensemble.body_advance`` and ``stepping.advance`` for all of them at once: body i of the
+    block is body ``body0 + i`` of the outputs y_out, e_out and column i of the block's arrays
+    soa (2, BK.SIZE, B), tmp (BT.SIZE, B), bodies (BB.SIZE, B), tracks (B, 3). Releases the GIL.
+    """
+    n_seg = probs.shape[0]
+    n_out = t_out.shape[0]
+    while True:
+        cur = counters[LI.SEG]
+        p = probs[cur]
+        block_emit(p, extra, cfg, bst, soa, bodies, counters, tracks, t_out, y_out, e_out, body0,
+                   m)
+        if bst[ST.T] >= t_stop or bst[ST.STATUS] == STATUS.FAILED:
+            break
+        if bst[ST.STATUS] == STATUS.FINISHED:
+            if cur + 1 >= n_seg:
+                break
+            counters[LI.SEG] = cur + 1
+            block_seg_init(probs[cur + 1], extra, cfg, bst, soa, bodies, counters, bst[ST.T],
+                           seg_t[cur + 1, 1], m)
+            continue
+        while bst[ST.STATUS] == STATUS.RUNNING and bst[ST.T] < t_stop:
+            if not block_step(p, extra, cfg, bst, soa, tmp, bodies, counters, m):
+                break
+            block_track(p, extra, cfg, bst, soa, tmp, bodies, counters, tracks, m)
+            k = counters[LI.K]
+            if k < n_out and t_out[k] <= bst[ST.T]:
+                block_emit(p, extra, cfg, bst, soa, bodies, counters, tracks, t_out, y_out,
+                           e_out, body0, m)
+        block_refresh(bst, soa, bodies, counters, tracks, m)
