@@ -12,17 +12,25 @@ BENCH = Path(__file__).resolve().parents[2] / 'benchmarks'
 def bench(monkeypatch):
     monkeypatch.syspath_prepend(str(BENCH))
     import common
-    import issue12_summary
-    yield common, issue12_summary
-    for name in ('common', 'issue12_summary'):
+    import targets
+    yield common, targets
+    for name in ('common', 'targets'):
         sys.modules.pop(name, None)
 
 
 def _far_from_the_targets(summary) -> dict:
     """Return section results of a small run: every figure far from its target."""
+    node = {'visible_s': 4.0}
     return {summary.MAIN_JOB: {'wall_s': [40.0]}, summary.READING: {'columnar_per_s': 2e4},
-            summary.STANDALONE: {'events': {'samples_per_s': 900.0, 'lost': {}}},
-            summary.ENSEMBLE: {'splitting N=10000': {'body_steps_per_s': 1e6}}}
+            summary.STANDALONE: {'events': {'samples_per_s': 900.0, 'lost': {}},
+                                 summary.UNDER_LOAD: {'lost': {'/attitude': 3}}},
+            summary.ENSEMBLE: {'splitting N=10000': {'body_steps_per_s': 1e6}},
+            summary.LOCKSTEP: {'splitting N=10000': {'end_to_end_per_s': 1e6},
+                               'splitting N=1000000': {'end_to_end_per_s': 1e6},
+                               'rk4 N=10000': {'ratio': 1.1}, 'splitting6 N=10000': {'ratio': 1.1}},
+            summary.STARTUP: {'sim': node, 'comparator': node, 'recorder': node},
+            summary.IMPACTS: {0: {'cpu_s': 1.0}, 10_000: {'cpu_s': 9.0}},
+            summary.IMPACTS_LIVE: {0: {'cpu_s': 1.0}, 10_000: {'cpu_s': 9.0}}}
 
 
 @pytest.mark.parametrize('quick', [True, False])
@@ -30,12 +38,25 @@ def test_a_quick_run_gives_no_verdict_the_full_run_does(bench, quick):
     common, summary = bench
     out = io.StringIO()
     ctx = common.Context(quick=quick, out=out, results=_far_from_the_targets(summary))
-    summary.issue12_section(ctx)
+    summary.targets_section(ctx)
     text = out.getvalue()
     if quick:
         assert 'MISSED' not in text and 'MET' not in text, text
         assert 'no verdict' in text
         assert ctx.verdict(False) == ctx.verdict(True) != 'MET'
     else:
-        assert text.count('MISSED') == 4, text
+        assert text.count('MISSED') == len(summary.ISSUE_12) + len(summary.ISSUE_30), text
         assert ctx.verdict(True) == 'MET' and ctx.verdict(False, 'MISSED by 2x') == 'MISSED by 2x'
+
+
+def test_a_target_met_says_met_with_its_gain(bench):
+    """Issue 30's main-job row: 6.0 s before, 2.5 s now: MET, gain 2.4x; a missing section."""
+    common, summary = bench
+    out = io.StringIO()
+    ctx = common.Context(out=out, results={summary.MAIN_JOB: {'wall_s': [2.5, 2.7]}})
+    results = summary.targets_section(ctx)
+    entry = results['issue 30: Fig 9 main job, wall']
+    assert entry['met'] is True and abs(entry['gain'] - 6.0 / 2.5) < 1e-12
+    assert results['issue 12: Fig 9 main job, wall']['met'] is True
+    assert 'issue 30: node on the ROS graph after its start (slowest)' not in results
+    assert 'not measured' in out.getvalue()
