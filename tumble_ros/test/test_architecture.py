@@ -25,7 +25,7 @@ ALLOWED = {
     'analysis': {'errors', 'topics', 'core', 'io'},
     'cli': {'errors', 'topics', 'core', 'runs', 'ensembles', 'analysis'},
     'nodes': {'errors', 'topics', 'core', 'io', 'runs'},
-    '__main__': {'nodes', 'analysis', 'cli', 'runs'},
+    '__main__': {'nodes', 'analysis', 'cli', 'runs', 'io'},
     '__init__': set(),
 }
 

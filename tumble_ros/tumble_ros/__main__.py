@@ -27,6 +27,7 @@ import os
 from pathlib import Path
 import signal
 import sys
+from typing import Any
 
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
 EXECUTABLES = {
@@ -46,8 +47,12 @@ NODES = frozenset({'sim', 'comparator', 'recorder'})
 BROKEN_PIPE_EXIT = 128 + signal.SIGPIPE
 
 
-def run_executable(name: str, args: list[str]) -> int:
-    """Run an executable's ``main`` with ``args`` (its sys.argv without the program name)."""
+def run_executable(name: str, args: list[str], **options: Any) -> int:
+    """
+    Run an executable's ``main`` with ``args`` (its sys.argv without the program name).
+
+    ``options``: keyword arguments of that ``main`` (the main job's ``keep`` for bringup).
+    """
     try:
         from tumble_ros.nodes.shutdown import StopSignals   # light: no rclpy, no numba
     except KeyboardInterrupt:       # a SIGINT before the handler (Python's own start-up)
@@ -61,7 +66,7 @@ def run_executable(name: str, args: list[str]) -> int:
         if early.requested:         # stopped while importing: nothing was started
             return 0 if name in NODES else early.exit_code
         try:
-            code = target(args if name in BARE_ARGV else [name, *args]) or 0
+            code = target(args if name in BARE_ARGV else [name, *args], **options) or 0
             sys.stdout.flush()    # a closed pipe is seen here, not in the interpreter's exit
             return code
         except BrokenPipeError:
@@ -92,17 +97,20 @@ def main_job(argv: list[str]) -> int:
         print(f'python -m tumble_ros: unknown arguments {argv}; executables: '
               f"{', '.join(EXECUTABLES)} (python -m tumble_ros --help)", file=sys.stderr)
         return 2
+    from tumble_ros.io import WrittenMessages
     from tumble_ros.nodes.recorder import default_output
 
     output = default_output(Path(argv[0]).stem if argv else 'default')
     mode = [] if live else ['--offline']
-    code = run_executable('bringup', [*argv, *mode, '--output', str(output)])
+    # offline, the messages written stay in memory for the analysis (not read back)
+    written = None if live else WrittenMessages()
+    code = run_executable('bringup', [*argv, *mode, '--output', str(output)], keep=written)
     if code == BROKEN_PIPE_EXIT:
         return code
     if code != 0 or not output.exists() or output.stat().st_size == 0:
         _release(output)
         return code or 1
-    return analyse(output)
+    return analyse(output, written)
 
 
 def _release(claimed: Path) -> None:
@@ -114,14 +122,20 @@ def _release(claimed: Path) -> None:
         pass
 
 
-def analyse(recording: Path) -> int:
-    """Summary and figures of a recording (figures beside it, in <name>_figures/)."""
+def analyse(recording: Path, written: Any = None) -> int:
+    """
+    Summary and figures of a recording (figures beside it, in <name>_figures/).
+
+    ``written``: its messages as the writer kept them (:class:`tumble_ros.io.WrittenMessages`),
+    analysed instead of reading the file back (the same Recording).
+    """
     try:
         cli = importlib.import_module('tumble_ros.analysis.cli')
     except ImportError:
         print(f'recorded {recording} (no analysis available)')
         return 0
-    return cli.command([str(recording), '--figures', str(recording.with_suffix('')) + '_figures'])
+    return cli.command([str(recording), '--figures', str(recording.with_suffix('')) + '_figures'],
+                       written=written)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -34,7 +34,7 @@ import sys
 from typing import NoReturn
 
 from tumble_ros.errors import AnalysisError
-from tumble_ros.io import McapError
+from tumble_ros.io import McapError, WrittenMessages
 from tumble_ros.topics import MARKERS
 
 from .recording import load_recording, normalize_namespace, stderr_progress
@@ -174,8 +174,13 @@ def _check_options(args) -> str | None:
     return None
 
 
-def command(argv: Iterable[str] | None = None) -> int:
-    """Run the command on ``argv`` (without the program name); returns the exit status."""
+def command(argv: Iterable[str] | None = None, written: WrittenMessages | None = None) -> int:
+    """
+    Run the command on ``argv`` (without the program name); returns the exit status.
+
+    ``written``: the messages of FILE.mcap as its writer in this process kept them (the main
+    job): :func:`~.recording.load_recording` takes them instead of reading the file back.
+    """
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
         args = _parser().parse_args(argv)
@@ -191,7 +196,7 @@ def command(argv: Iterable[str] | None = None) -> int:
     try:
         progress = None if args.quiet else stderr_progress()
         rec = load_recording(args.file, namespace=args.namespace, run=args.run,
-                             progress=progress)
+                             progress=progress, written=written)
         for line in rec.left_out:
             print(f'WARNING: {line}', file=sys.stderr)
         summary = analyze(rec, n_peaks=args.peaks)

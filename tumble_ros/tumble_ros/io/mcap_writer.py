@@ -43,6 +43,7 @@ from a timer in a multi-threaded executor.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass, field
 import fcntl
 import math
 import operator
@@ -53,6 +54,7 @@ import threading
 import time
 from typing import Any, BinaryIO, Sequence
 
+from mcap.records import Channel, Schema
 from mcap.writer import CompressionType, LIBRARY_IDENTIFIER, Writer
 import numpy as np
 import numpy.typing as npt
@@ -61,7 +63,7 @@ import yaml
 from .mcap_bulk import append_block, bulk_supported
 from .msgdefs import message_definition, normalize_type_name, type_hash
 
-__all__ = ['COMPRESSIONS', 'McapWriter', 'offered_qos_yaml']
+__all__ = ['COMPRESSIONS', 'McapWriter', 'offered_qos_yaml', 'WrittenBlock', 'WrittenMessages']
 
 #: Accepted values of ``compression``.
 COMPRESSIONS = {'zstd': CompressionType.ZSTD, 'lz4': CompressionType.LZ4,
@@ -185,6 +187,62 @@ def open_new(path: Path) -> BinaryIO:
     return os.fdopen(fd, 'wb')
 
 
+@dataclass(frozen=True)
+class WrittenBlock:
+    """
+    One call's messages, as written: for each sample k, one message per channel, in that order.
+
+    ``channel_ids`` (J,); ``rows``: J arrays (n, size_j) of uint8, row k the CDR bytes of the
+    channel's k-th message; ``log_time_ns``, ``publish_time_ns``: (n,) int64 [ns]. A
+    :meth:`McapWriter.write` is a block of one channel and one message.
+    """
+
+    channel_ids: tuple[int, ...]
+    rows: tuple[npt.NDArray[np.uint8], ...]
+    log_time_ns: npt.NDArray[np.int64]
+    publish_time_ns: npt.NDArray[np.int64]
+
+    def __len__(self) -> int:
+        """Return the number of messages of the block (all channels)."""
+        return len(self.log_time_ns) * len(self.channel_ids)
+
+
+@dataclass
+class WrittenMessages:
+    """
+    What a :class:`McapWriter` wrote (``McapWriter(path, keep=WrittenMessages())``), in memory.
+
+    The schemas and channels registered (the mcap records, by id: the file's) and every message,
+    its bytes as written, in the file's order (:class:`WrittenBlock` per write call). A reader in
+    the same process takes them instead of reading the file back
+    (:func:`tumble_ros.io.columns.written_columns`: the same columns and messages as
+    :func:`~tumble_ros.io.columns.read_columns` gives of the file). ``closed``: the writer
+    finished the file (its summary and footer written); until then, and if a write failed,
+    the messages may not be the file's. The rows are kept as given to
+    :meth:`McapWriter.write_rows`, not copied: the caller must not modify them afterwards. Memory:
+    the messages' bytes (the Fig 9 run: 1.4 M messages, ~110 MB).
+    """
+
+    path: Path | None = None
+    schemas: dict[int, Schema] = field(default_factory=dict)
+    channels: dict[int, Channel] = field(default_factory=dict)
+    blocks: list[WrittenBlock] = field(default_factory=list)
+    closed: bool = False
+
+    @property
+    def message_count(self) -> int:
+        """Return the number of messages kept."""
+        return sum(len(block) for block in self.blocks)
+
+    def counts(self) -> dict[str, int]:
+        """Return the messages kept per topic (every channel's topic, 0 included)."""
+        out = dict.fromkeys((c.topic for c in self.channels.values()), 0)
+        for block in self.blocks:
+            for channel_id in block.channel_ids:
+                out[self.channels[channel_id].topic] += len(block.log_time_ns)
+        return out
+
+
 class McapWriter:
     """
     A rosbag2-compatible MCAP file being written (see the module docstring).
@@ -194,11 +252,14 @@ class McapWriter:
     never overwritten.
     ``chunk_bytes`` (> 0): finalise and flush the chunk in progress once it holds that many bytes
     of message data. ``chunk_seconds`` (> 0, may be ``math.inf``): ... once its first message is
-    that old. ``compression``: ``'zstd'`` (default), ``'lz4'`` or ``'none'``.
+    that old. ``compression``: ``'zstd'`` (default), ``'lz4'`` or ``'none'``. ``keep``: a
+    :class:`WrittenMessages` that receives the schemas, channels and messages as they are
+    written (for a reader in the same process); the file is the same with or without it.
     """
 
     def __init__(self, path: str | os.PathLike[str], *, chunk_bytes: int = 1_000_000,
-                 chunk_seconds: float = 1.0, compression: str = 'zstd') -> None:
+                 chunk_seconds: float = 1.0, compression: str = 'zstd',
+                 keep: WrittenMessages | None = None) -> None:
         if isinstance(chunk_bytes, bool) or not isinstance(chunk_bytes, int) or chunk_bytes <= 0:
             raise ValueError(f'chunk_bytes must be a positive int, got {chunk_bytes!r}')
         if (isinstance(chunk_seconds, bool) or not isinstance(chunk_seconds, (int, float))
@@ -227,6 +288,9 @@ class McapWriter:
         self._pending_since: float | None = None
         self._chunks_written = 0
         self._messages_flushed = 0
+        self._keep = keep
+        if keep is not None:
+            keep.path, keep.closed = self._path, False
         # refuse to overwrite an existing recording (a claimed empty name is taken: open_new)
         self._stream = open_new(self._path)
         try:
@@ -297,9 +361,16 @@ class McapWriter:
                 data = message_definition(schema_name).encode('utf-8')
                 schema_id = self._writer.register_schema(schema_name, 'ros2msg', data)
                 self._schemas[schema_name] = schema_id
+                if self._keep is not None:
+                    self._keep.schemas[schema_id] = Schema(
+                        id=schema_id, name=schema_name, encoding='ros2msg', data=data)
             metadata = {'offered_qos_profiles': offered_qos_profiles,
                         'topic_type_hash': type_hash(schema_name)}
             channel_id = self._writer.register_channel(topic, 'cdr', schema_id, metadata)
+            if self._keep is not None:
+                self._keep.channels[channel_id] = Channel(
+                    id=channel_id, topic=topic, message_encoding='cdr', schema_id=schema_id,
+                    metadata=metadata)
             self._channels[topic] = (channel_id, schema_name)
             self._topics[channel_id] = topic
             self._counts[topic] = 0
@@ -330,6 +401,9 @@ class McapWriter:
             self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, data=data,
                                      publish_time=publish_time_ns)
             self._counts[topic] += 1
+            if self._keep is not None:
+                self._kept((channel_id,), (np.frombuffer(data, dtype=np.uint8).reshape(1, -1),),
+                           [log_time_ns], [publish_time_ns])
             if self._pending_messages == 0:
                 self._pending_since = time.monotonic()
             self._pending_messages += 1
@@ -369,6 +443,7 @@ class McapWriter:
                 self._write_blocks(list(channel_ids), rows, logs, sent)
                 for topic in named:
                     self._counts[topic] += n
+                self._kept(tuple(channel_ids), tuple(rows), logs, sent)
                 return
             blobs = [(c, r.tobytes(), r.shape[1]) for c, r in zip(channel_ids, rows)]
             sample_bytes = sum(size for _, _, size in blobs)
@@ -385,6 +460,22 @@ class McapWriter:
                     self._flush_locked()
             for topic in named:
                 self._counts[topic] += n
+            self._kept(tuple(channel_ids), tuple(rows), logs, sent)
+
+    def _kept(self, channel_ids: tuple[int, ...], rows: tuple[npt.NDArray[np.uint8], ...],
+              logs: list[int], sent: list[int]) -> None:
+        """Hand a written block to ``keep`` (times beyond int64 keep nothing more: the file)."""
+        keep = self._keep
+        if keep is None:
+            return
+        try:
+            block = WrittenBlock(channel_ids, rows, np.array(logs, dtype=np.int64),
+                                 np.array(sent, dtype=np.int64))
+        except OverflowError:     # a time >= 2**63 ns: readers take the file instead
+            self._keep = None
+            keep.path = None
+            return
+        keep.blocks.append(block)
 
     def _write_blocks(self, channel_ids: list[int], rows: list[np.ndarray], logs: list[int],
                       sent: list[int]) -> None:
@@ -443,6 +534,8 @@ class McapWriter:
                 if self._pending_messages:
                     self._chunks_written += 1
                 self._writer.finish()  # type: ignore[no-untyped-call]  # unannotated in mcap
+                if self._keep is not None:
+                    self._keep.closed = True
                 self._messages_flushed += self._pending_messages
                 self._pending_messages = 0
                 self._pending_bytes = 0
