@@ -22,6 +22,8 @@ recording finalised.
 """
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 import importlib
 import os
 from pathlib import Path
@@ -104,13 +106,30 @@ def main_job(argv: list[str]) -> int:
     mode = [] if live else ['--offline']
     # offline, the messages written stay in memory for the analysis (not read back)
     written = None if live else WrittenMessages()
-    code = run_executable('bringup', [*argv, *mode, '--output', str(output)], keep=written)
-    if code == BROKEN_PIPE_EXIT:
-        return code
-    if code != 0 or not output.exists() or output.stat().st_size == 0:
-        _release(output)
-        return code or 1
-    return analyse(output, written)
+    with _figure_pool() as pool:    # workers warm up for the figures while the run records
+        code = run_executable('bringup', [*argv, *mode, '--output', str(output)], keep=written)
+        if code == BROKEN_PIPE_EXIT:
+            return code
+        if code != 0 or not output.exists() or output.stat().st_size == 0:
+            _release(output)
+            return code or 1
+        return analyse(output, written, pool)
+
+
+@contextmanager
+def _figure_pool() -> Iterator[Any]:
+    """Yield a started FigurePool (tumble_ros.analysis.figure_pool), or None; close it after."""
+    try:
+        from tumble_ros.analysis.figure_pool import FigurePool
+    except ImportError:             # no analysis available: the recording alone
+        yield None
+        return
+    pool = FigurePool.start()
+    if pool is None:
+        yield None
+        return
+    with pool:
+        yield pool
 
 
 def _release(claimed: Path) -> None:
@@ -122,12 +141,13 @@ def _release(claimed: Path) -> None:
         pass
 
 
-def analyse(recording: Path, written: Any = None) -> int:
+def analyse(recording: Path, written: Any = None, pool: Any = None) -> int:
     """
     Summary and figures of a recording (figures beside it, in <name>_figures/).
 
     ``written``: its messages as the writer kept them (:class:`tumble_ros.io.WrittenMessages`),
-    analysed instead of reading the file back (the same Recording).
+    analysed instead of reading the file back (the same Recording); ``pool``: a started
+    :class:`tumble_ros.analysis.figure_pool.FigurePool` that draws the figures.
     """
     try:
         cli = importlib.import_module('tumble_ros.analysis.cli')
@@ -135,7 +155,7 @@ def analyse(recording: Path, written: Any = None) -> int:
         print(f'recorded {recording} (no analysis available)')
         return 0
     return cli.command([str(recording), '--figures', str(recording.with_suffix('')) + '_figures'],
-                       written=written)
+                       written=written, pool=pool)
 
 
 def main(argv: list[str] | None = None) -> int:

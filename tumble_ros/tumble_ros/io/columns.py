@@ -281,9 +281,23 @@ def _distinct_strings(buf: np.ndarray, offsets: np.ndarray, lengths: np.ndarray)
 
 
 def _gather(buf: np.ndarray, starts: np.ndarray, at: int, dtype: str) -> np.ndarray:
-    """Return the values of type ``dtype`` at ``starts + at`` in ``buf``."""
+    """
+    Return the values of type ``dtype`` at ``starts + at`` in ``buf``.
+
+    Positions at a constant step (the same messages written sample after sample, in a chunk
+    or in a writer's rows) are read through a strided view, the others by an index array.
+    """
     width = np.dtype(dtype).itemsize
-    index = (starts + at)[:, None] + np.arange(width)
+    where = starts + at
+    if len(where) > 1:
+        step = int(where[1] - where[0])
+        last = int(where[0]) + step * (len(where) - 1)
+        if step >= width and last + width <= len(buf) and (np.diff(where) == step).all():
+            view = np.lib.stride_tricks.as_strided(buf[int(where[0]):], (len(where), width),
+                                                   (step * buf.strides[0], buf.strides[0]),
+                                                   writeable=False)
+            return np.ascontiguousarray(view).view(dtype).reshape(-1)
+    index = where[:, None] + np.arange(width)
     return np.ascontiguousarray(buf[index]).view(dtype).reshape(-1)
 
 

@@ -89,6 +89,28 @@ def _check_time(name: str, value: object) -> int:
     return value
 
 
+#: Checked times [ns]: a list of ints, or (the common case) an int64 array.
+_Times = list[int] | npt.NDArray[np.int64]
+
+
+def _check_times(name: str, values: npt.ArrayLike) -> _Times:
+    """
+    Return ``values`` checked as :func:`_check_time` checks each (the same errors).
+
+    An integer array of int64 range is checked at once and returned as int64; anything else
+    (floats, bools, objects, uint64 beyond int64) value by value, as a list of ints.
+    """
+    array = np.asarray(values)
+    if array.ndim == 1 and array.dtype.kind in 'iu':
+        if not len(array) or (array.min() >= 0 and array.max() <= np.iinfo(np.int64).max):
+            return array.astype(np.int64, copy=False)
+    return [_check_time(name, v) for v in array.tolist()]
+
+
+def _as_list(times: _Times) -> list[int]:
+    return times if isinstance(times, list) else times.tolist()
+
+
 # Keys of one QoS profile in rosbag2's offered_qos_profiles YAML (metadata version 9, Jazzy), in
 # the order rosbag2 writes them; third-party readers (rosbags) need every one of them.
 QOS_KEYS = ('history', 'depth', 'reliability', 'durability', 'deadline', 'lifespan', 'liveliness',
@@ -424,9 +446,9 @@ class McapWriter:
         once for the block).
         """
         rows = [np.ascontiguousarray(r, dtype=np.uint8) for r in rows]
-        logs = [_check_time('log_time_ns', v) for v in np.asarray(log_time_ns).tolist()]
-        sent = logs if publish_time_ns is None else [
-            _check_time('publish_time_ns', v) for v in np.asarray(publish_time_ns).tolist()]
+        logs = _check_times('log_time_ns', log_time_ns)
+        sent = (logs if publish_time_ns is None
+                else _check_times('publish_time_ns', publish_time_ns))
         n = len(logs)
         if len(rows) != len(channel_ids) or any(r.ndim != 2 or len(r) != n for r in rows):
             raise ValueError(f'rows must be {len(channel_ids)} arrays of {n} rows, one per '
@@ -445,6 +467,7 @@ class McapWriter:
                     self._counts[topic] += n
                 self._kept(tuple(channel_ids), tuple(rows), logs, sent)
                 return
+            logs, sent = _as_list(logs), _as_list(sent)
             blobs = [(c, r.tobytes(), r.shape[1]) for c, r in zip(channel_ids, rows)]
             sample_bytes = sum(size for _, _, size in blobs)
             add = self._writer.add_message
@@ -463,7 +486,7 @@ class McapWriter:
             self._kept(tuple(channel_ids), tuple(rows), logs, sent)
 
     def _kept(self, channel_ids: tuple[int, ...], rows: tuple[npt.NDArray[np.uint8], ...],
-              logs: list[int], sent: list[int]) -> None:
+              logs: _Times, sent: _Times) -> None:
         """Hand a written block to ``keep`` (times beyond int64 keep nothing more: the file)."""
         keep = self._keep
         if keep is None:
@@ -477,8 +500,8 @@ class McapWriter:
             return
         keep.blocks.append(block)
 
-    def _write_blocks(self, channel_ids: list[int], rows: list[np.ndarray], logs: list[int],
-                      sent: list[int]) -> None:
+    def _write_blocks(self, channel_ids: list[int], rows: list[np.ndarray], logs: _Times,
+                      sent: _Times) -> None:
         """
         Append rows in blocks that end where the per-message path would finalise a chunk.
 
