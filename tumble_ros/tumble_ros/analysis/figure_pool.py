@@ -42,7 +42,8 @@ WORKERS = 2
 #: drawing time of the Fig 9 run: omega 0.45 s and error 0.25 s against the windows 0.35 s,
 #: wy-vs-wx 0.2 s, the spectrum 0.2 s and the impacts (CPU, warm workers, 2026-12-04). A pool
 #: of one worker draws them all; a figure in no share is drawn by a third task.
-SHARES = (('omega', 'error', 'impacts'), ('omega_windows', 'wy_vs_wx', 'spectrum'))
+SHARES: tuple[tuple[str, ...], ...] = (('omega', 'error', 'impacts'),
+                                       ('omega_windows', 'wy_vs_wx', 'spectrum'))
 
 
 def _warm() -> None:
@@ -118,7 +119,8 @@ class FigurePool:
     def draw(self, rec: Recording, summary: AnalysisSummary) -> list[Drawing]:
         """Draw every figure in the workers; return the drawings in the files' order."""
         futures: list[tuple[tuple[str, ...], Future[_Drawn] | None]] = []
-        shares = SHARES + (('*',),) if self.workers > 1 else (('**',),)
+        shares: tuple[tuple[str, ...], ...] = (SHARES + (('*',),) if self.workers > 1
+                                               else (('**',),))
         for share in shares:
             try:
                 futures.append((share, self._executor.submit(_draw, rec, summary, share)))
@@ -126,13 +128,13 @@ class FigurePool:
                 futures.append((share, None))
         drawn: dict[str, list[Drawing]] = {}
         order: tuple[str, ...] = ()
-        for share, future in futures:
+        for done, future in futures:
             try:
                 if future is None:
                     raise BrokenProcessPool('not submitted')
                 part, order = future.result()
             except BrokenProcessPool:
-                part, order = _draw(rec, summary, share)
+                part, order = _draw(rec, summary, done)
             drawn.update(part)
         return [drawing for name in order for drawing in drawn.get(name, [])]
 
