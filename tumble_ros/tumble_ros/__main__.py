@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+import gc
 import importlib
 import os
 from pathlib import Path
@@ -124,6 +125,7 @@ def _figure_pool() -> Iterator[Any]:
     except ImportError:             # no analysis available: the recording alone
         yield None
         return
+    gc.freeze()     # what is loaded stays shared with the workers (no collector writes on it)
     pool = FigurePool.start()
     if pool is None:
         yield None
