@@ -1,9 +1,10 @@
 """
 The figures drawn in a FigurePool's workers (the main job's) against the figures drawn here.
 
-The same files, byte for byte (names, order, PNG bytes), with two workers and with one, after
-the workers' warm-up figure, and when a worker has died; the errors of the in-process path
-(existing files); and the main job's process never imports matplotlib.
+The same files, byte for byte (names, order, PNG bytes), drawn by two processes (the worker
+and a helper it forks) and by the worker alone, after the worker's warm-up figure, and when the
+worker or a helper has died; the errors of the in-process path (existing files, an error raised
+in a helper); and the main job's process never imports matplotlib.
 """
 import os
 from pathlib import Path
@@ -15,9 +16,11 @@ import pytest
 
 from tumble_ros.analysis import analyze, load_recording
 from tumble_ros.analysis.figure_files import FigureExistsError
+from tumble_ros.analysis import figure_pool
 from tumble_ros.analysis.figure_pool import FigurePool, SHARES
 from tumble_ros.analysis.figures import FIGURES, write_figures
 from tumble_ros.core import load_scenario
+from tumble_ros.errors import AnalysisError
 from tumble_ros.runs.offline import record_offline
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
@@ -78,6 +81,43 @@ def test_the_figures_of_a_dead_worker_are_drawn_here(tmp_path, recordings):
     finally:
         pool.close()
     assert _files(there) == _files(write_figures(rec, tmp_path / 'here', summary))
+
+
+def _in_a_helper(then):
+    """Patch figure_pool._draw so that a helper (a child of the worker) runs ``then``."""
+    main, real = os.getpid(), figure_pool._draw
+
+    def draw(rec, summary, share):
+        if os.getppid() != main and os.getpid() != main:      # a helper, not the worker
+            then()
+        return real(rec, summary, share)
+    return draw
+
+
+def test_the_share_of_a_dead_helper_is_drawn_by_the_worker(tmp_path, recordings, monkeypatch):
+    rec = recordings[1]
+    summary = analyze(rec)
+    died = tmp_path / 'a helper died'
+
+    def die():
+        died.write_text('')
+        os._exit(3)
+    monkeypatch.setattr(figure_pool, '_draw', _in_a_helper(die))
+    with FigurePool.start(2) as pool:           # the worker inherits the patched module
+        there = pool.write_figures(rec, tmp_path / 'pool', summary)
+    monkeypatch.undo()
+    assert died.exists()
+    assert _files(there) == _files(write_figures(rec, tmp_path / 'here', summary))
+
+
+def test_an_error_in_a_helper_is_raised_as_in_the_process(tmp_path, recordings, monkeypatch):
+    def fail():
+        raise AnalysisError('cannot draw this share')
+    monkeypatch.setattr(figure_pool, '_draw', _in_a_helper(fail))
+    with FigurePool.start(2) as pool:
+        with pytest.raises(AnalysisError, match='cannot draw this share'):
+            pool.write_figures(recordings[1], tmp_path, analyze(recordings[1]))
+    assert not list(tmp_path.glob('*.png'))
 
 
 def test_the_main_job_never_imports_matplotlib(tmp_path):
