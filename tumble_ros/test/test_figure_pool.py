@@ -14,9 +14,8 @@ import sys
 
 import pytest
 
-from tumble_ros.analysis import analyze, load_recording
+from tumble_ros.analysis import analyze, figure_pool, load_recording
 from tumble_ros.analysis.figure_files import FigureExistsError
-from tumble_ros.analysis import figure_pool
 from tumble_ros.analysis.figure_pool import FigurePool, SHARES
 from tumble_ros.analysis.figures import FIGURES, write_figures
 from tumble_ros.core import load_scenario

@@ -13,9 +13,10 @@ everything to ``recordings/<scenario>_<UTC time>.mcap`` (``bringup --offline``: 
 written straight from the simulation; ``--live`` runs the three nodes over the ROS graph
 instead, as ``bringup`` does), then analyses the file. Offline, the analysis takes the messages
 from memory (the writer kept them: :class:`tumble_ros.io.WrittenMessages`, the same Recording as
-reading the file back), and the figures are drawn in two worker processes forked before the
-recording, which load matplotlib while it runs (:mod:`tumble_ros.analysis.figure_pool`, the
-same PNG bytes); this process never imports matplotlib.
+reading the file back), and the figures are drawn by a worker process forked before the
+recording, which loads matplotlib while it runs, and a helper it forks
+(:mod:`tumble_ros.analysis.figure_pool`, the same PNG bytes); this process never imports
+matplotlib.
 
 Every executable, here and as installed for ``ros2 run`` (setup.py points them all to
 :func:`entry`), starts under :class:`~tumble_ros.nodes.shutdown.StopSignals`: a SIGINT, SIGTERM
