@@ -19,9 +19,12 @@ version (``make bench BENCH_ARGS=--quick``); ``ctx.full`` for the long one.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import platform
+import signal
+import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
@@ -106,6 +109,26 @@ class Timer:
     def __exit__(self, *exc):
         self.seconds = time.perf_counter() - self.start
         return False
+
+
+@contextlib.contextmanager
+def busy_processes(n: int = 2):
+    """
+    Within: ``n`` processes spinning a CPU each (``while True: pass``), killed on the way out.
+
+    The "under load" rows of the ROS sections: on this 2-core machine two busy processes take
+    both cores, as a test suite or a second run beside the nodes would.
+    """
+    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"],
+                             start_new_session=True) for _ in range(n)]
+    try:
+        time.sleep(0.5)     # they are running before the measurement starts
+        yield
+    finally:
+        for hog in hogs:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(hog.pid, signal.SIGKILL)
+            hog.wait()
 
 
 def machine_description() -> list[str]:

@@ -9,7 +9,9 @@ anything imports rclpy (the RMW reads these variables when a context is initiali
   (a second `make test`, CI, a developer's running simulator), so every test process gets its own
   domain, derived from its pid, in 1..101 (0 is the default domain everybody else uses; with the
   default DDS port mapping, 101 is the highest id whose ports stay below Linux's ephemeral range).
-  A caller who sets ROS_DOMAIN_ID (even to 0) keeps it.
+  A caller who sets ROS_DOMAIN_ID (even to 0) keeps it. Under ``pytest -n N`` (pytest-xdist,
+  as ``make test`` runs) each worker takes its own domain: derived from the controller's pid and
+  the worker's number, so two workers of one run never share one.
 - ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST: discovery never leaves this machine, so tests send no
   multicast traffic to the network and see no other host's nodes.
 """
@@ -18,9 +20,25 @@ import time
 
 import pytest
 
-DOMAIN_ID_FROM_CALLER = bool(os.environ.get('ROS_DOMAIN_ID', '').strip())
+#: Set beside ROS_DOMAIN_ID by this file: an xdist worker inherits both from its controller,
+#: and must not take the controller's domain for the caller's.
+OURS = 'TUMBLE_ROS_TEST_DOMAIN_ID'
+
+
+def _own_domain_id() -> int:
+    """Return this test process's domain, in 1..101 (see the module docstring)."""
+    worker = os.environ.get('PYTEST_XDIST_WORKER', '')     # 'gw0', 'gw1', ... under pytest -n
+    if not worker.startswith('gw'):
+        return 1 + os.getpid() % 101
+    count = max(1, int(os.environ.get('PYTEST_XDIST_WORKER_COUNT', '1')))
+    base = os.getppid() % max(1, 101 // count)               # the controller's pid
+    return 1 + (base * count + int(worker[2:])) % 101
+
+
+_given = os.environ.get('ROS_DOMAIN_ID', '').strip()
+DOMAIN_ID_FROM_CALLER = bool(_given) and _given != os.environ.get(OURS)
 if not DOMAIN_ID_FROM_CALLER:
-    os.environ['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 101)
+    os.environ['ROS_DOMAIN_ID'] = os.environ[OURS] = str(_own_domain_id())
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
 

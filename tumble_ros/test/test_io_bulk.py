@@ -1,5 +1,7 @@
 """
-McapWriter.write_rows' bulk path (io/mcap_bulk.py) against one mcap add_message per message.
+McapWriter's bulk paths (io/mcap_bulk.py) against one mcap add_message per message.
+
+write_rows (fixed-size samples of several channels) and write_many (messages of any sizes).
 
 The same rows, single messages around them and chunk sizes that cut the blocks anywhere: the
 two files must be the same bytes (records, chunks, message indexes, statistics, summary), and
@@ -33,6 +35,13 @@ def _write(path, bulk: bool, chunk_bytes: int, compression: str) -> None:
             w.write_rows([a, b], rows, logs, logs - 3)
             w.write(a, b'x' * 40, int(logs[-1]) + 1, int(logs[-1]))   # same channel, single
             t = int(logs[-1]) + 100
+            # messages of any sizes, on every channel, some sharing a log time
+            many = [(int(rng.choice([a, b, c])), bytes(rng.integers(0, 256, int(size),
+                                                                    dtype=np.uint8)),
+                     t + k // 2, t + k)
+                    for k, size in enumerate(rng.integers(0, 700, block))]
+            w.write_many(many)
+            t += block + 100
 
 
 @pytest.mark.parametrize('chunk_bytes, compression', [
@@ -46,7 +55,7 @@ def test_the_bulk_path_writes_the_same_bytes(tmp_path, chunk_bytes, compression)
     with open(tmp_path / 'bulk.mcap', 'rb') as f:
         reader = make_reader(f)
         stats = reader.get_summary().statistics
-        assert stats.message_count == 2 * (1 + 7 + 250 + 3 + 1000) + 10
+        assert stats.message_count == 3 * (1 + 7 + 250 + 3 + 1000) + 10
         times = [m.log_time for _, _, m in reader.iter_messages(log_time_order=True)]
     assert len(times) == stats.message_count and times == sorted(times)
 
@@ -67,3 +76,15 @@ def test_write_rows_refuses_the_times_write_refuses(tmp_path, times, message):
             w.write_rows([a], [np.zeros((3, 8), dtype=np.uint8)], [1, 2, 3], times)
         w.write_rows([a], [np.zeros((3, 8), dtype=np.uint8)], np.array([1, 2, 3]))
         assert w.counts == {'/a': 3}
+
+
+def test_write_many_refuses_what_write_refuses_and_writes_nothing_then(tmp_path):
+    """A bad message in a batch (unknown channel, negative time, not bytes): nothing written."""
+    with McapWriter(tmp_path / 'bad.mcap', chunk_seconds=float('inf')) as w:
+        a = w.add_channel('/a', 'std_msgs/msg/String')
+        for bad, words in [((a + 7, b'x', 1, 1), 'not returned by add_channel'),
+                           ((a, b'x', -1, 1), 'log_time_ns must be in'),
+                           ((a, 'text', 1, 1), 'must be bytes')]:
+            with pytest.raises(ValueError, match=words):
+                w.write_many([(a, b'fine', 1, 1), bad])
+        assert w.counts == {'/a': 0}

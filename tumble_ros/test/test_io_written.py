@@ -23,7 +23,7 @@ CONFIG = Path(__file__).resolve().parents[1] / 'config'
 
 
 def _write(path, keep=None):
-    """Write rows blocks, single messages (flat, big-endian), a topic not read, to ``path``."""
+    """Write rows blocks, single messages (flat, big-endian, write_many), a topic not read."""
     rng = np.random.default_rng(5)
     with McapWriter(path, chunk_bytes=900, chunk_seconds=float('inf'), keep=keep) as w:
         v = w.add_channel('/v', 'geometry_msgs/msg/Vector3Stamped')
@@ -33,6 +33,8 @@ def _write(path, keep=None):
         t = 100
         for block in (1, 9, 40, 3):
             w.write(s, b'\x00\x01\x00\x00\x06\x00\x00\x00hello\x00', t, t + 1)
+            w.write_many([(s, b'\x00\x01\x00\x00\x04\x00\x00\x00abc\x00', t + 2, t + 3),
+                          (skipped, b'\x00\x01\x00\x00\x01\x00\x00\x00\x00', t + 4, t + 4)])
             rows = [np.frombuffer(b''.join(_vector3_stamped(k, k, 'body', *rng.normal(size=3))
                                            for k in range(block)), dtype=np.uint8
                                   ).reshape(block, -1),
@@ -55,7 +57,7 @@ def test_keeping_the_messages_changes_no_byte_of_the_file(tmp_path):
     assert keep.closed and keep.path == tmp_path / 'kept.mcap'
     assert keep.counts() == {name: t.message_count
                              for name, t in summarize(tmp_path / 'kept.mcap').topics.items()}
-    assert keep.message_count == summarize(tmp_path / 'kept.mcap').message_count == 2 * 53 + 12
+    assert keep.message_count == summarize(tmp_path / 'kept.mcap').message_count == 2 * 53 + 20
 
 
 def _assert_same_tables(a, b):
@@ -87,7 +89,7 @@ def test_written_columns_are_the_files_columns(tmp_path, as_messages):
         (m.topic, m.type_name, m.log_time_ns, m.publish_time_ns, repr(m.message))
         for m in from_memory[1]]
     # decoded one by one, in file order: the rows blocks' messages interleaved sample by sample
-    assert len(from_memory[1]) == {0: 0, 1: 53 + 4, 3: 53 + 4 + 53 + 4}[len(as_messages)]
+    assert len(from_memory[1]) == {0: 0, 1: 53 + 4, 3: 53 + 4 + 53 + 8}[len(as_messages)]
     if not as_messages:
         q = from_memory[0]['/q']
         assert q.generic == 7 and q.columnar == 46        # the big-endian ones, decoded alike

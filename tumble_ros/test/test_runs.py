@@ -340,3 +340,25 @@ def test_the_norms_of_rows_are_each_rows_norms_bit_for_bit():
     assert np.isinf(relative[:3]).all() and np.isinf(relative[3])
     empty = error_norms_of_rows(np.empty((0, 3)), np.empty((0, 3)))
     assert empty[0].shape == empty[1].shape == (0,)
+
+
+def test_the_described_scenarios_are_what_their_texts_parse_to():
+    """
+    An in-process comparison takes SimulationSession.described instead of parsing the text.
+
+    Each text its segment starts carry must parse to the scenario given for it, and a
+    Comparison given them anchors exactly as one that parses (the offline run's shortcut).
+    """
+    from tumble_ros.core import parse_scenario
+
+    scenario = SHORT.replace(impacts=(IMPACT,))
+    session, records = run(scenario)
+    starts = [r for r in records if isinstance(r, SegmentStart)]
+    assert len({s.parameters_yaml for s in starts}) == 2 == len(session.described)
+    for text, described in session.described.items():
+        assert parse_scenario(text) == described
+    assert {s.parameters_yaml for s in starts} == set(session.described)
+    told, parsing = Comparison('paper', described=session.described), Comparison('paper')
+    for start in starts:
+        assert told.anchor(start) == parsing.anchor(start)
+    assert told._parsed is None and parsing._parsed is not None   # told parsed nothing

@@ -124,9 +124,39 @@ def test_dds_isolation_env_vars_are_set(domain_id_from_caller):
     domain_id = int(os.environ['ROS_DOMAIN_ID'])
     if domain_id_from_caller:
         assert 0 <= domain_id <= 232
+    elif os.environ.get('PYTEST_XDIST_WORKER', '').startswith('gw'):
+        # a worker of pytest -n N: the controller's pid picks a block of N domains, the
+        # worker's number its own in it (two workers of one run never share a domain)
+        count = int(os.environ['PYTEST_XDIST_WORKER_COUNT'])
+        worker = int(os.environ['PYTEST_XDIST_WORKER'][2:])
+        assert domain_id == 1 + ((os.getppid() % (101 // count)) * count + worker) % 101
+        assert 1 <= domain_id <= 101
     else:
         assert domain_id == 1 + os.getpid() % 101
         assert 1 <= domain_id <= 101
+
+
+def test_two_xdist_workers_of_one_run_get_two_domains(tmp_path):
+    """The conftest run in two workers of one controller: different domains, not the caller's."""
+    import subprocess
+    import sys
+
+    probe = ('import os, sys; sys.path.insert(0, sys.argv[1]); import conftest; '
+             'print(os.environ["ROS_DOMAIN_ID"], conftest.DOMAIN_ID_FROM_CALLER)')
+    here = str(Path(__file__).resolve().parent)
+    seen = []
+    for worker in ('gw0', 'gw1'):
+        # as xdist starts them: the controller's ROS_DOMAIN_ID (and marker) inherited
+        env = dict(os.environ, PYTEST_XDIST_WORKER=worker, PYTEST_XDIST_WORKER_COUNT='2')
+        done = subprocess.run([sys.executable, '-c', probe, here], env=env, capture_output=True,
+                              text=True, check=True)
+        seen.append(done.stdout.split())
+    if os.environ.get('TUMBLE_ROS_TEST_DOMAIN_ID') != os.environ['ROS_DOMAIN_ID']:
+        # the caller chose the domain: every worker keeps it
+        assert seen == [[os.environ['ROS_DOMAIN_ID'], 'True']] * 2, seen
+        return
+    assert seen[0][1] == seen[1][1] == 'False'
+    assert seen[0][0] != seen[1][0], seen
 
 
 def test_rclpy_context_uses_the_test_domain():

@@ -20,10 +20,10 @@ matplotlib.
 
 Every executable, here and as installed for ``ros2 run`` (setup.py points them all to
 :func:`entry`), starts under :class:`~tumble_ros.nodes.shutdown.StopSignals`: a SIGINT, SIGTERM
-or SIGHUP while it is still importing (numba compiling) ends it quietly, with the exit code it
-gives when stopped later (0 for a node, 128 + the signal otherwise). A closed stdout or stderr
-(``bringup | head -1``) ends it quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the
-recording finalised.
+or SIGHUP while it is still importing ends it quietly (nothing is compiled at import: numba
+compiles a loop on its first use), with the exit code it gives when stopped later (0 for a
+node, 128 + the signal otherwise). A closed stdout or stderr (``bringup | head -1``) ends it
+quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the recording finalised.
 """
 from __future__ import annotations
 

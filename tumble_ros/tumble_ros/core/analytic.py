@@ -58,7 +58,6 @@ from typing import Any, ClassVar, NamedTuple, Sequence
 
 import numpy as np
 import numpy.typing as npt
-from scipy.special import ellipj, ellipk, ellipkinc
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.model.rotation import quaternion_to_euler
@@ -701,6 +700,9 @@ class TorqueFreeExactModel(AnalyticModel):
         sigma = 1.0 if _is_cyclic(r, q, p) else -1.0
         nu = sigma * math.copysign(1.0, w[p]) * math.copysign(1.0, i_p - i_q) * math.sqrt(
             (i_p - i_q) * e_r / (i_r * i_q * i_p))
+        # scipy.special on first use, not with the module (~0.15-0.3 s: docs/performance.md,
+        # "Node start-up")
+        from scipy.special import ellipk, ellipkinc
         u0 = float(ellipkinc(math.atan2(w[q] / a_q, w[r] / a_r), m))
         period = 4.0 * float(ellipk(m))
         mode = 'short-axis' if p == hi else 'long-axis'
@@ -745,6 +747,7 @@ class TorqueFreeExactModel(AnalyticModel):
         else:
             p, q, r, a_p, a_q, a_r, m, nu, u0, period, _ = self.params
             u = np.mod(u0 + nu * tau, period)
+            from scipy.special import ellipj
             sn, cn, dn, _ = ellipj(u, m)
             out[:, p], out[:, q], out[:, r] = a_p * dn, a_q * sn, a_r * cn
         return out

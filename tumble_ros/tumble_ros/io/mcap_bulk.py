@@ -17,6 +17,7 @@ This fills the ``Writer``'s private chunk builder and statistics (mcap 1.x,
 from __future__ import annotations
 
 from dataclasses import dataclass
+import struct
 from typing import Any, Sequence
 
 from mcap.data_stream import RecordBuilder
@@ -25,7 +26,7 @@ from mcap.records import MessageIndex
 from mcap.writer import Writer
 import numpy as np
 
-__all__ = ['bulk_supported', 'append_block']
+__all__ = ['bulk_supported', 'append_block', 'append_messages']
 
 #: A Message record's bytes before its data: opcode, length, channel, sequence, log and publish
 #: time (mcap spec: 1 + 8 + 2 + 4 + 8 + 8).
@@ -135,3 +136,53 @@ def append_block(writer: Writer, channel_ids: Sequence[int], rows: Sequence[np.n
         stats.message_start_time = min(stats.message_start_time, first)
     stats.message_end_time = max(stats.message_end_time, last)
     stats.message_count += n * len(rows)
+
+
+#: A Message record's header (see _HEADER), packed by struct.
+_MESSAGE_HEADER = struct.Struct('<BQHIQQ')
+
+
+def append_messages(writer: Writer, messages: Sequence[tuple[int, bytes, int, int]]) -> int:
+    """
+    Append messages of any sizes to ``writer``'s chunk in progress (one chunk, no flush).
+
+    ``messages``: (channel id, data, log time [ns], publish time [ns]) each, in write order.
+    The same bytes, index entries and statistics as one ``writer.add_message`` each (~3 us a
+    message instead of ~20). Returns the bytes of data appended.
+    """
+    if not messages:
+        return 0
+    builder = _private(writer, 'chunk_builder')
+    stats = _private(writer, 'statistics')
+    offset = builder.record_writer.count
+    parts: list[bytes] = []
+    data_bytes = 0
+    counts = stats.channel_message_counts
+    for channel, data, log, pub in messages:
+        index = builder.message_indices.get(channel)
+        if not index:   # (as add_message: a new MessageIndex for a channel without entries)
+            index = builder.message_indices[channel] = MessageIndex(channel_id=channel,
+                                                                    records=[])
+        index.records.append((log, offset))
+        header = _MESSAGE_HEADER.pack(int(Opcode.MESSAGE), _HEADER - 9 + len(data), channel, 0,
+                                      log, pub)
+        parts += (header, data)
+        offset += _HEADER + len(data)
+        data_bytes += len(data)
+        counts[channel] += 1
+    logs = [m[2] for m in messages]
+    first, last = min(logs), max(logs)
+    if builder.num_messages == 0:
+        builder.message_start_time = first
+    else:
+        builder.message_start_time = min(builder.message_start_time, first)
+    builder.message_end_time = max(builder.message_end_time, last)
+    builder.num_messages += len(messages)
+    builder.record_writer.write(b''.join(parts))
+    if stats.message_count == 0:
+        stats.message_start_time = first
+    else:
+        stats.message_start_time = min(stats.message_start_time, first)
+    stats.message_end_time = max(stats.message_end_time, last)
+    stats.message_count += len(messages)
+    return data_bytes

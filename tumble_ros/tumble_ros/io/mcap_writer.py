@@ -60,7 +60,7 @@ import numpy as np
 import numpy.typing as npt
 import yaml
 
-from .mcap_bulk import append_block, bulk_supported
+from .mcap_bulk import append_block, append_messages, bulk_supported
 from .msgdefs import message_definition, normalize_type_name, type_hash
 
 __all__ = ['COMPRESSIONS', 'McapWriter', 'offered_qos_yaml', 'WrittenBlock', 'WrittenMessages']
@@ -420,18 +420,73 @@ class McapWriter:
             topic = self._topics.get(channel_id) if isinstance(channel_id, int) else None
             if topic is None:
                 raise ValueError(f'channel_id {channel_id!r} was not returned by add_channel')
-            self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, data=data,
-                                     publish_time=publish_time_ns)
-            self._counts[topic] += 1
-            if self._keep is not None:
-                self._kept((channel_id,), (np.frombuffer(data, dtype=np.uint8).reshape(1, -1),),
-                           [log_time_ns], [publish_time_ns])
+            self._append_locked(channel_id, data, log_time_ns, publish_time_ns)
+
+    def _append_locked(self, channel_id: int, data: bytes, log_time_ns: int,
+                       publish_time_ns: int) -> None:
+        """Append one checked message through mcap's add_message; flush by the policy."""
+        self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, data=data,
+                                 publish_time=publish_time_ns)
+        self._counts[self._topics[channel_id]] += 1
+        if self._keep is not None:
+            self._kept((channel_id,), (np.frombuffer(data, dtype=np.uint8).reshape(1, -1),),
+                       [log_time_ns], [publish_time_ns])
+        if self._pending_messages == 0:
+            self._pending_since = time.monotonic()
+        self._pending_messages += 1
+        self._pending_bytes += len(data)
+        if self._pending_bytes >= self._chunk_bytes or self._too_old():
+            self._flush_locked()
+
+    def write_many(self, messages: Sequence[tuple[int, bytes, int, int]]) -> None:
+        """
+        Append messages of any sizes: (channel id, CDR bytes, log time, publish time [ns]) each.
+
+        The same records and chunks as one :meth:`write` per message, in that order, for ~15 us
+        less a message (an offline run's per-impact messages: three per impact).
+        """
+        checked = []
+        for channel_id, data, log_time_ns, publish_time_ns in messages:
+            if not isinstance(data, (bytes, bytearray, memoryview)):
+                raise ValueError('data must be bytes (serialized CDR), got '
+                                 f'{type(data).__name__}')
+            checked.append((channel_id, bytes(data), _check_time('log_time_ns', log_time_ns),
+                            _check_time('publish_time_ns', publish_time_ns)))
+        with self._lock:
+            self._check_open()
+            unknown = {c for c, *_ in checked if not isinstance(c, int) or c not in self._topics}
+            if unknown:
+                raise ValueError(f'channel ids {sorted(unknown, key=repr)!r} were not returned '
+                                 'by add_channel')
+            if self._chunk_seconds == math.inf and self._bulk:
+                self._append_runs(checked)
+                return
+            for channel_id, data, log, sent in checked:
+                self._append_locked(channel_id, data, log, sent)
+
+    def _append_runs(self, messages: list[tuple[int, bytes, int, int]]) -> None:
+        """Append checked messages (.mcap_bulk) in runs that end where write() would flush."""
+        k = 0
+        while k < len(messages):
+            stop, pending = k, self._pending_bytes
+            while stop < len(messages) and pending < self._chunk_bytes:
+                pending += len(messages[stop][1])
+                stop += 1
+            run = messages[k:stop]
+            append_messages(self._writer, run)
+            for channel_id, data, log, sent in run:
+                self._counts[self._topics[channel_id]] += 1
+                if self._keep is not None:
+                    self._kept((channel_id,),
+                               (np.frombuffer(data, dtype=np.uint8).reshape(1, -1),),
+                               [log], [sent])
             if self._pending_messages == 0:
                 self._pending_since = time.monotonic()
-            self._pending_messages += 1
-            self._pending_bytes += len(data)
-            if self._pending_bytes >= self._chunk_bytes or self._too_old():
+            self._pending_messages += len(run)
+            self._pending_bytes = pending
+            if self._pending_bytes >= self._chunk_bytes:
                 self._flush_locked()
+            k = stop
 
     def write_rows(self, channel_ids: Sequence[int], rows: Sequence[np.ndarray],
                    log_time_ns: npt.ArrayLike, publish_time_ns: npt.ArrayLike | None = None,

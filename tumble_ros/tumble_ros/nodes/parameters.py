@@ -4,6 +4,10 @@ Declaring and reading ROS 2 parameters with descriptors (description, unit, rang
 The scenario's parameters come from :data:`tumble_ros.core.model.scenario.PARAMETER_DOCS` and are
 validated by :class:`tumble_ros.core.Scenario` itself: the node adds no rules of its own.
 They are read-only: a scenario is fixed for the life of a run.
+
+``tumble_ros.core`` (numba, the kernels: ~0.3 s) is imported by the functions that need it, not
+with this module: the recorder, which declares no scenario, never imports it (docs/performance.md,
+"Node start-up"; tests/test_node_startup.py).
 """
 from __future__ import annotations
 
@@ -14,10 +18,6 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from tumble_ros.core import check_params_file, PARAMETER_DOCS, Scenario, ScenarioError
-from tumble_ros.core.model.params_file import section_applies
-from tumble_ros.core.model.scenario import (PERTURBER_DEFAULTS, PERTURBER_DOCS,
-                                            perturber_parameter_names)
 from tumble_ros.errors import NodeError
 
 __all__ = ['EMPTY_ARRAY_TYPES', 'declare_node_parameters', 'declare_scenario_parameters',
@@ -56,6 +56,7 @@ def declare_scenario_parameters(node: Node) -> None:
     array, from the default or from a file (where rcl reads ``[]`` as not set), is given its
     element type (:data:`EMPTY_ARRAY_TYPES`).
     """
+    from tumble_ros.core import PARAMETER_DOCS, Scenario
     for name, default in Scenario().to_parameters().items():
         unit, description = PARAMETER_DOCS[name]
         descriptor = ParameterDescriptor(
@@ -87,6 +88,9 @@ def _declare_perturbers(node: Node) -> None:
     Their names depend on that list, so they are declared once it is read; the Scenario checks
     the names and every value.
     """
+    from tumble_ros.core import ScenarioError
+    from tumble_ros.core.model.scenario import (PERTURBER_DEFAULTS, PERTURBER_DOCS,
+                                                perturber_parameter_names)
     try:
         names = perturber_parameter_names(
             {'perturbers.names': list(node.get_parameter('perturbers.names').value)})
@@ -143,12 +147,24 @@ def read_parameters(node: Node, names: Iterable[str]) -> dict[str, Any]:
 
 def read_scenario_parameters(node: Node) -> dict[str, Any]:
     """Return the scenario parameters' values (see :func:`declare_scenario_parameters`)."""
+    from tumble_ros.core import PARAMETER_DOCS, ScenarioError
+    from tumble_ros.core.model.scenario import perturber_parameter_names
     values = read_parameters(node, PARAMETER_DOCS)
     try:
         perturbers = perturber_parameter_names(values)
     except ScenarioError:
         return values   # (refused, naming perturbers.names, by Scenario.from_parameters)
     return {**values, **read_parameters(node, perturbers)}
+
+
+def section_applies(key: str, node_fqn: str) -> bool:
+    """
+    Tell whether a params-file node key applies to the node ``node_fqn``, by rcl's rules.
+
+    :func:`tumble_ros.core.model.params_file.section_applies` (imported when called).
+    """
+    from tumble_ros.core.model.params_file import section_applies as applies
+    return applies(key, node_fqn)
 
 
 def refuse_unknown_parameters(nodes: Iterable[Node]) -> None:
@@ -202,6 +218,7 @@ def params_file_problem(args: list[str] | None, node_fqn: str | None = None) -> 
     otherwise run silently with the defaults.
     """
     for name in _params_files(args):
+        from tumble_ros.core import check_params_file, ScenarioError
         try:
             check_params_file(name, node_fqn)
         except ScenarioError as err:

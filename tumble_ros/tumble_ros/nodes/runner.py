@@ -17,7 +17,6 @@ from rclpy.logging import LoggingSeverity, set_logger_level
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
-from tumble_ros.core import ScenarioError
 from tumble_ros.errors import NodeError
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.shutdown import spin_until_stopped, StopSignals
@@ -185,7 +184,7 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
             refuse_unknown_parameters([node])
             executor.add_node(node)
             spin_until_stopped(executor, lambda: stop.requested)
-        except (ParameterException, ScenarioError, ValueError) as err:
+        except (ParameterException, ValueError) as err:   # ScenarioError is a ValueError
             print(f'{name}: invalid parameters: {err}', file=sys.stderr, flush=True)
             return 1
         except OSError as err:  # e.g. the recorder cannot create its file

@@ -152,8 +152,8 @@ class _Channels:
     def flush(self) -> None:
         """Write the queued messages, by log time (stable); publish time = now (wall clock)."""
         now = time.time_ns()
-        for stamp_ns, topic, data in sorted(self._pending, key=lambda m: m[0]):
-            self.writer.write(self.ids[topic], data, stamp_ns, now)
+        self.writer.write_many([(self.ids[topic], data, stamp_ns, now) for stamp_ns, topic, data
+                                in sorted(self._pending, key=lambda m: m[0])])
         self._pending.clear()
 
 
@@ -181,7 +181,7 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
     output.parent.mkdir(parents=True, exist_ok=True)
     # the recording's run id, in every description
     session = SimulationSession(scenario, grid, run_id=new_run_id())
-    comparison = Comparison(model_name)
+    comparison = Comparison(model_name, described=session.described)
     scene = _Scene(MarkerScene(scenario), marker_every(marker_decimation, grid.count),
                    grid) if markers else None
     slicer = Slicer()

@@ -83,6 +83,17 @@ class SimulationSession:
 
     # -- state ----------------------------------------------------------------------------
     @property
+    def described(self) -> dict[str, Scenario]:
+        """
+        Return {description text: its scenario} for the texts this session's segment starts carry.
+
+        ``parse_scenario(text) == scenario`` for each (tested): an in-process reader takes the
+        scenario instead of parsing the text back.
+        """
+        return {self._scenario_yaml: self.scenario,
+                self._segment_yaml: self.scenario.replace(impacts=())}
+
+    @property
     def state(self) -> int:
         """Return the state: RUNNING, PAUSED, FINISHED or DIVERGED (:mod:`.records`)."""
         return self._state

@@ -12,13 +12,18 @@ multistep solvers of ODEPACK and VODE (lsoda, adams) keep their own clock as the
 t = fl(t + h) while their state moves by exactly h; holding one step size for millions of
 steps, that rounding adds up (:class:`Adams`), so their time is taken as the compensated sum
 of the steps they report instead (:class:`_StepClock`).
+
+``scipy.integrate`` is imported when a stepper of this module is first built, not with the
+module: it costs ~0.2-0.5 s (it pulls in scipy.optimize, linalg, sparse), which every process
+importing ``tumble_ros.core`` paid, the nodes included, though the compiled path never uses it
+(docs/performance.md, "Node start-up").
 """
 from __future__ import annotations
 
+import functools
 from typing import Any, Callable
 
 import numpy as np
-from scipy import integrate
 
 from tumble_ros.core.integrators.base import (SegmentProblem, step_nan_message, Stepper,
                                               StepSettings)
@@ -61,50 +66,67 @@ class _StepClock:
         return solver_t + ((tau - self.hi) - self.lo)
 
 
-class _CompensatedLSODA(integrate.LSODA):  # type: ignore[misc]  # scipy is untyped
-    """
-    scipy's LSODA whose time is the exact sum of its steps (:class:`_StepClock`).
+def _integrate() -> Any:
+    """Return ``scipy.integrate`` (imported on the first stepper built, see the docstring)."""
+    from scipy import integrate
+    return integrate
 
-    LSODA's own clock stays the one it steps and stops by (tcrit, the segment's end, is
-    converted to it before every step); ``t``, ``t_old`` and the dense output (centred on
-    ``t``) are in exact time, and the right-hand side gets the exact time.
-    """
 
-    def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
-                 t_bound: float, **options: Any) -> None:
-        if t0 != 0.0:
-            raise ValueError('_CompensatedLSODA starts at t0 = 0 (local time)')
-        self.clock = _StepClock()
-        super().__init__(lambda t, y: fun(t + self.clock.shift, y), t0, y0, t_bound,
-                         **options)
+@functools.lru_cache(maxsize=None)
+def _solver_class(name: str) -> type:
+    """Return the scipy ``OdeSolver`` class ``name`` (``_CompensatedLSODA``: ours, built once)."""
+    integrate = _integrate()
+    if name != '_CompensatedLSODA':
+        solver: type = getattr(integrate, name)
+        return solver
 
-    def _step_impl(self) -> tuple[bool, str | None]:
-        # scipy's LSODA._step_impl (one step, itask 5: never past tcrit) on LSODA's clock
-        solver = self._lsoda_solver
-        integrator = solver._integrator
-        rwork = integrator.rwork
-        rwork[0] = tcrit = self.t_bound - self.clock.shift  # the end, on LSODA's clock
-        itask = integrator.call_args[2]
-        integrator.call_args[2] = 5
-        solver._y, solver.t = integrator.run(
-            solver.f, solver.jac or (lambda: None), solver._y, solver.t, tcrit,
-            solver.f_params, solver.jac_params)
-        integrator.call_args[2] = itask
-        if not solver.successful():
-            return False, 'Unexpected istate in LSODA.'
-        self.clock.add(float(rwork[10]), solver.t)
-        # landed on tcrit: exactly the segment's end (scipy's step() then finishes)
-        self.t = self.t_bound if solver.t >= tcrit else min(self.clock.time, self.t_bound)
-        self.y = solver._y.copy()
-        self.njev = self.nlu = integrator.iwork[12]
-        return True, None
+    class _CompensatedLSODA(integrate.LSODA):  # type: ignore[misc,name-defined]  # (scipy)
+        """
+        scipy's LSODA whose time is the exact sum of its steps (:class:`_StepClock`).
+
+        LSODA's own clock stays the one it steps and stops by (tcrit, the segment's end, is
+        converted to it before every step); ``t``, ``t_old`` and the dense output (centred on
+        ``t``) are in exact time, and the right-hand side gets the exact time.
+        """
+
+        def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float,
+                     y0: np.ndarray, t_bound: float, **options: Any) -> None:
+            if t0 != 0.0:
+                raise ValueError('_CompensatedLSODA starts at t0 = 0 (local time)')
+            self.clock = _StepClock()
+            super().__init__(lambda t, y: fun(t + self.clock.shift, y), t0, y0, t_bound,
+                             **options)
+
+        def _step_impl(self) -> tuple[bool, str | None]:
+            # scipy's LSODA._step_impl (one step, itask 5: never past tcrit) on LSODA's clock
+            solver = self._lsoda_solver
+            integrator = solver._integrator
+            rwork = integrator.rwork
+            rwork[0] = tcrit = self.t_bound - self.clock.shift  # the end, on LSODA's clock
+            itask = integrator.call_args[2]
+            integrator.call_args[2] = 5
+            solver._y, solver.t = integrator.run(
+                solver.f, solver.jac or (lambda: None), solver._y, solver.t, tcrit,
+                solver.f_params, solver.jac_params)
+            integrator.call_args[2] = itask
+            if not solver.successful():
+                return False, 'Unexpected istate in LSODA.'
+            self.clock.add(float(rwork[10]), solver.t)
+            # landed on tcrit: exactly the segment's end (scipy's step() then finishes)
+            self.t = self.t_bound if solver.t >= tcrit else min(self.clock.time, self.t_bound)
+            self.y = solver._y.copy()
+            self.njev = self.nlu = integrator.iwork[12]
+            return True, None
+
+    return _CompensatedLSODA
 
 
 class _ScipyStepper(Stepper):
     """Adapter from a ``scipy.integrate.OdeSolver`` class to :class:`Stepper`."""
 
     adaptive = True
-    solver_class: type
+    #: The name of its ``scipy.integrate`` solver class (resolved by :func:`_solver_class`).
+    solver_name: str
 
     def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], t0: float, y0: np.ndarray,
                  t_bound: float, settings: StepSettings,
@@ -112,7 +134,7 @@ class _ScipyStepper(Stepper):
         super().__init__(fun, t0, y0, t_bound, settings, problem=problem)
         self._solver: Any = None  # a scipy OdeSolver (untyped)
         if self.status == 'running':
-            self._solver = self.solver_class(
+            self._solver = _solver_class(self.solver_name)(
                 self.local_fun, 0.0, self.y, self.tau_bound,
                 rtol=settings.rtol, atol=settings.atol, max_step=_max_step(settings),
             )
@@ -144,26 +166,26 @@ class _ScipyStepper(Stepper):
 
 
 class RK45(_ScipyStepper):
-    name, solver_class = 'rk45', integrate.RK45
+    name, solver_name = 'rk45', 'RK45'
     order = 5
 
 
 class DOP853(_ScipyStepper):
-    name, solver_class = 'dop853', integrate.DOP853
+    name, solver_name = 'dop853', 'DOP853'
     order = 8
     kernel = 'dop853'  # core/kernels/dop853.py transcribes scipy's DOP853 step by step
 
 
 class Radau(_ScipyStepper):
-    name, solver_class = 'radau', integrate.Radau
+    name, solver_name = 'radau', 'Radau'
 
 
 class BDF(_ScipyStepper):
-    name, solver_class = 'bdf', integrate.BDF
+    name, solver_name = 'bdf', 'BDF'
 
 
 class LSODA(_ScipyStepper):
-    name, solver_class = 'lsoda', _CompensatedLSODA
+    name, solver_name = 'lsoda', '_CompensatedLSODA'
 
 
 class Adams(Stepper):
@@ -203,7 +225,7 @@ class Adams(Stepper):
             self._nfev += 1
             return fun(t0 + (tau + self._shift), y)
 
-        self._ode = integrate.ode(counted).set_integrator(
+        self._ode = _integrate().ode(counted).set_integrator(
             'vode', method='adams', rtol=settings.rtol, atol=settings.atol,
             max_step=settings.max_step, nsteps=100_000,
         )

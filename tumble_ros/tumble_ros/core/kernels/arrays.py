@@ -6,6 +6,7 @@ layout CF) and ``new_state`` (a zeroed state, layout ST).
 """
 from __future__ import annotations
 
+import functools
 from typing import Any, Iterable, Sequence
 
 import numpy as np
@@ -39,28 +40,44 @@ def problem_arrays(inertia: Iterable[float], orbit_rate: float,
     ``torques`` (n, 6): each segment's body pulse torque then orbital pulse torque
     [inertia units * rad/yr^2]. Used by the single-body path and the ensembles alike.
     """
-    ix, iy, iz = (float(v) for v in inertia)
     pulses = np.asarray(torques, dtype=float).reshape(-1, 6)
-    p = np.zeros((len(pulses), PR.SIZE))
-    p[:, PR.INERTIA:PR.INERTIA + 3] = ix, iy, iz
-    p[:, PR.INV_INERTIA:PR.INV_INERTIA + 3] = 1.0 / ix, 1.0 / iy, 1.0 / iz
-    p[:, PR.EULER:PR.EULER + 3] = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
-    p[:, PR.ORBIT_RATE] = float(orbit_rate)
-    p[:, PR.TIDAL:PR.TIDAL + 3] = tidal_coefficients((ix, iy, iz), orbit_rate)
+    p = np.repeat(_body_row(tuple(float(v) for v in inertia), float(orbit_rate))[None, :],
+                  len(pulses), axis=0)
     p[:, PR.PULSE_BODY:PR.PULSE_BODY + 3] = pulses[:, :3]
     p[:, PR.PULSE_ORBITAL:PR.PULSE_ORBITAL + 3] = pulses[:, 3:]
     p[:, PR.HAS_ORBITAL] = np.where(np.any(pulses[:, 3:] != 0.0, axis=1), 1.0, 0.0)
+    return p
+
+
+@functools.lru_cache(maxsize=64)
+def _body_row(inertia: tuple[float, float, float], orbit_rate: float) -> Array:
+    """
+    Return the problem row's body part (no pulse): read-only, shared by a body's segments.
+
+    Cached: a run with 10,000 impacts starts 20,001 segments of the same body (25 us each).
+    """
+    ix, iy, iz = inertia
+    p = np.zeros(PR.SIZE)
+    p[PR.INERTIA:PR.INERTIA + 3] = ix, iy, iz
+    p[PR.INV_INERTIA:PR.INV_INERTIA + 3] = 1.0 / ix, 1.0 / iy, 1.0 / iz
+    p[PR.EULER:PR.EULER + 3] = (iy - iz) / ix, (iz - ix) / iy, (ix - iy) / iz
+    p[PR.ORBIT_RATE] = orbit_rate
+    p[PR.TIDAL:PR.TIDAL + 3] = tidal_coefficients((ix, iy, iz), orbit_rate)
     inv_ref, coeffs = free_flow_split((ix, iy, iz))
-    p[:, PR.INV_REF] = inv_ref
-    p[:, PR.FLOW:PR.FLOW + 3] = coeffs
+    p[PR.INV_REF] = inv_ref
+    p[PR.FLOW:PR.FLOW + 3] = coeffs
+    p.flags.writeable = False
     return p
 
 
 def problem_array(inertia: Iterable[float], orbit_rate: float,
                   torque_body: Sequence[float] = (0.0, 0.0, 0.0),
                   torque_orbital: Sequence[float] = (0.0, 0.0, 0.0)) -> Array:
-    """Return the problem array of one segment (see :func:`problem_arrays`)."""
-    row: Array = problem_arrays(inertia, orbit_rate, [*torque_body, *torque_orbital])[0]
+    """Return the problem array of one segment (see :func:`problem_arrays`; the same row)."""
+    row: Array = _body_row(tuple(float(v) for v in inertia), float(orbit_rate)).copy()
+    row[PR.PULSE_BODY:PR.PULSE_BODY + 3] = torque_body
+    row[PR.PULSE_ORBITAL:PR.PULSE_ORBITAL + 3] = torque_orbital
+    row[PR.HAS_ORBITAL] = 1.0 if any(float(v) != 0.0 for v in torque_orbital) else 0.0
     return row
 
 

@@ -7,16 +7,43 @@ sees it (``integrators.adaptive``). Each function works on one body's state ``st
 """
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import math
+from pathlib import Path
+import types
 
 import numpy as np
-from scipy.integrate._ivp import dop853_coefficients as _dop
 
 from tumble_ros.core.jit import jit
 from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST, STATUS
 from tumble_ros.core.kernels.physics import rhs, rhs_called
 
-__all__ = ['start', 'step', 'dense', 'MAX_REJECTIONS']
+__all__ = ['start', 'step', 'dense', 'MAX_REJECTIONS', 'scipy_tables']
+
+
+def scipy_tables() -> types.ModuleType:
+    """
+    Return scipy's DOP853 tables, the module ``scipy/integrate/_ivp/dop853_coefficients.py``.
+
+    Read from its file, without importing the ``scipy.integrate`` package around it: that
+    import costs ~0.2-0.5 s (scipy.optimize, linalg, sparse) in every process that imports the
+    kernels, the nodes included, and the tables need only numpy (docs/performance.md, "Node
+    start-up"). Where the file is not found (another layout of scipy), the ordinary import.
+    """
+    spec = importlib.util.find_spec('scipy')
+    origin = Path(spec.origin) if spec is not None and spec.origin else None
+    path = origin.parent / 'integrate' / '_ivp' / 'dop853_coefficients.py' if origin else None
+    if path is None or not path.is_file():  # pragma: no cover - scipy's layout since 1.4
+        return importlib.import_module('scipy.integrate._ivp.dop853_coefficients')
+    located = importlib.util.spec_from_file_location(f'{__name__}._scipy_coefficients', path)
+    assert located is not None and located.loader is not None
+    tables = importlib.util.module_from_spec(located)
+    located.loader.exec_module(tables)
+    return tables
+
+
+_dop = scipy_tables()
 
 _A = np.ascontiguousarray(_dop.A, dtype=np.float64)
 _B = np.ascontiguousarray(_dop.B, dtype=np.float64)

@@ -43,7 +43,6 @@ import math
 from typing import Any, Mapping, Protocol
 
 import numpy as np
-from scipy.special import roots_jacobi
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.model.gravity_field import (GravityField, principal_axes,
@@ -169,6 +168,9 @@ class MassModel(Protocol):
 
 def _gauss_jacobi_01(n: int, alpha: float) -> tuple[FloatArray, FloatArray]:
     """Return n nodes and weights on [0, 1] for the weight (1 - x)^alpha."""
+    # scipy.special when a mass model is integrated, not with the module (every process
+    # importing tumble_ros.core paid ~0.15 s: docs/performance.md, "Node start-up")
+    from scipy.special import roots_jacobi
     x, w = roots_jacobi(n, alpha, 0.0)
     return (x + 1.0) / 2.0, w / 2.0 ** (alpha + 1.0)
 

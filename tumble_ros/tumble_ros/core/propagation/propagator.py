@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
+import functools
 import heapq
 import math
 from typing import Callable, NamedTuple, Sequence
@@ -41,6 +42,7 @@ from tumble_ros.core.model.rotation import (continuous_quaternions, matrix_to_qu
                                             quaternions_to_matrices)
 from tumble_ros.core.model.scenario import Impact, Scenario, ScenarioError
 from tumble_ros.core.propagation.segments import Segment, split_at_impacts, split_span
+from tumble_ros.core.torques.component import TorqueComponent
 from tumble_ros.errors import CoreError
 
 __all__ = ['Propagator', 'IntegrationError', 'Sample',
@@ -420,10 +422,14 @@ class Propagator:
             self._nfev_done += self._stepper.nfev
         sc = self.scenario
         problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
-                                 segment.torque_orbital, sc.attitude, sc.extra_torques,
-                                 sc.step_budget)
+                                 segment.torque_orbital, sc.attitude, *self._segment_constants)
         self._stepper = self._runner.new_stepper(
             segment, t0, y0, problem, self.scenario, None if self._split else self._switching_rhs)
+
+    @functools.cached_property
+    def _segment_constants(self) -> tuple[tuple[TorqueComponent, ...], tuple[float, float]]:
+        """Return the scenario's (extra_torques, step_budget): the same for every segment."""
+        return self.scenario.extra_torques, self.scenario.step_budget
 
     def _switching_rhs(self) -> Rhs:
         """Pulses as a time switch inside one smooth-looking RHS (demonstration only)."""

@@ -29,6 +29,7 @@ Units: GM [km^3/s^2] in the dataclass (as every table states it), km^3/yr^2 insi
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
 import math
 from typing import Any, Callable, Protocol, Sequence
 
@@ -85,14 +86,14 @@ def perturber_torque(par: npt.NDArray[np.float64], x: float, y: float, z: float,
     return tx, ty, tz
 
 
-@torque_function
 def kepler_perturber_torque(par: npt.NDArray[np.float64], t: float, q0: float, q1: float,
                             q2: float, q3: float) -> tuple[float, float, float]:
     """
     Return the torque of a perturber on a Kepler orbit, body axes.
 
     par[9:17] = (a, e, t_p, lambda_p, cos i, sin i, cos node, sin node): :func:`~.orbits.
-    orbit_state` with the GM par[0] and :func:`~.orbits.plane_to_orbital`.
+    orbit_state` with the GM par[0] and :func:`~.orbits.plane_to_orbital`. The Python law;
+    the kernels call its compiled form, ``SOURCE_KINDS[KeplerOrbit].function``.
     """
     distance, angle = orbit_state(t, par[0], par[9], par[10], par[11], par[12])
     sx, sy, sz = plane_to_orbital(math.sin(angle), math.cos(angle), par[13], par[14], par[15],
@@ -100,10 +101,13 @@ def kepler_perturber_torque(par: npt.NDArray[np.float64], t: float, q0: float, q
     return perturber_torque(par, distance * sx, distance * sy, distance * sz, q0, q1, q2, q3)
 
 
-@torque_function
 def ephemeris_perturber_torque(par: npt.NDArray[np.float64], t: float, q0: float, q1: float,
                                q2: float, q3: float) -> tuple[float, float, float]:
-    """Return the torque of a perturber on a tabulated ephemeris (par[9:]: its block)."""
+    """
+    Return the torque of a perturber on a tabulated ephemeris (par[9:]: its block).
+
+    The Python law; the kernels call its compiled form, ``SOURCE_KINDS[Ephemeris].function``.
+    """
     x, y, z = ephemeris_position(par, LAW_WIDTH, t)
     return perturber_torque(par, x, y, z, q0, q1, q2, q3)
 
@@ -154,13 +158,31 @@ def _ephemeris_block(ephemeris: Ephemeris) -> tuple[float, ...]:
     return ephemeris.parameters()
 
 
+@functools.lru_cache(maxsize=None)
+def _compiled(law: Callable[..., Any]) -> Callable[..., Any]:
+    return torque_function(law)
+
+
 @dataclass(frozen=True)
 class SourceKind:
-    """How one kind of source is run: its torque function and its parameter block."""
+    """
+    How one kind of source is run: its torque law and its parameter block.
+
+    ``law`` is the Python function; :attr:`function`, the :func:`~.component.torque_function`
+    the kernels call, is made from it on first use, not when this module is imported: numba
+    loading two C callbacks from its cache (and the typing machinery they need, ~0.2 s) was
+    paid by every process importing ``tumble_ros.core``, the nodes included, with perturbers
+    or without (docs/performance.md, "Node start-up").
+    """
 
     name: str
-    function: Callable[..., Any]
+    law: Callable[..., Any]
     block: Callable[[Any], tuple[float, ...]]
+
+    @property
+    def function(self) -> Callable[..., Any]:
+        """Return the compiled torque function of :attr:`law` (compiled once a process)."""
+        return _compiled(self.law)
 
 
 #: The kinds of source, by type (a registry: a new kind of source is a new row).
