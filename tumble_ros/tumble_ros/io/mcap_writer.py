@@ -242,7 +242,7 @@ class WrittenMessages:
     finished the file (its summary and footer written); until then, and if a write failed,
     the messages may not be the file's. The rows are kept as given to
     :meth:`McapWriter.write_rows`, not copied: the caller must not modify them afterwards. Memory:
-    the messages' bytes (the Fig 9 run: 1.4 M messages, ~110 MB).
+    the messages' bytes (the Fig 9 run: 1.4 M messages, 86 MB; its file 53 MB).
     """
 
     path: Path | None = None
