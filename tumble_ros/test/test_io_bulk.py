@@ -60,6 +60,24 @@ def test_the_bulk_path_writes_the_same_bytes(tmp_path, chunk_bytes, compression)
     assert len(times) == stats.message_count and times == sorted(times)
 
 
+@pytest.mark.parametrize('times, message', [
+    (np.array([5, -1, 7]), r'log_time_ns must be in \[0, 2\*\*64\), got -1'),
+    (np.array([5.0, 6.0, 7.0]), 'log_time_ns must be an int number of nanoseconds, got 5.0'),
+    (np.array([True, False, True]), 'log_time_ns must be an int number of nanoseconds, got True'),
+    ([5, 6, -3], r'log_time_ns must be in \[0, 2\*\*64\), got -3'),
+])
+def test_write_rows_refuses_the_times_write_refuses(tmp_path, times, message):
+    """Integer arrays are checked at once (write_rows' fast path), the rest one by one: alike."""
+    with McapWriter(tmp_path / 'bad.mcap', chunk_seconds=float('inf')) as w:
+        a = w.add_channel('/a', 'std_msgs/msg/String')
+        with pytest.raises(ValueError, match=message):
+            w.write_rows([a], [np.zeros((3, 8), dtype=np.uint8)], times)
+        with pytest.raises(ValueError, match=message.replace('log_', 'publish_')):
+            w.write_rows([a], [np.zeros((3, 8), dtype=np.uint8)], [1, 2, 3], times)
+        w.write_rows([a], [np.zeros((3, 8), dtype=np.uint8)], np.array([1, 2, 3]))
+        assert w.counts == {'/a': 3}
+
+
 def test_write_many_refuses_what_write_refuses_and_writes_nothing_then(tmp_path):
     """A bad message in a batch (unknown channel, negative time, not bytes): nothing written."""
     with McapWriter(tmp_path / 'bad.mcap', chunk_seconds=float('inf')) as w:

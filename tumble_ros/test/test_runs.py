@@ -14,7 +14,7 @@ from test_no_ros import _assert_loads_none
 
 from tumble_ros.core import (departure_text, Impact, IntegratorSettings, make_model, Scenario,
                              simulate, TimeBase)
-from tumble_ros.runs.comparison import Comparison, WAITING
+from tumble_ros.runs.comparison import Comparison, error_norms, error_norms_of_rows, WAITING
 from tumble_ros.runs.records import (ComparisonBlock, DIVERGED, FINISHED, ImpactEnded, OK,
                                      RUNNING, SampleBlock, SegmentStart, StatusChange, WARN)
 from tumble_ros.runs.session import output_grid, SimulationSession
@@ -323,6 +323,23 @@ def test_descriptions_do_not_repeat_the_scheduled_impacts_and_are_parsed_once(mo
     statuses = [comparison.anchor(s) for s in starts]
     assert all(s.level == OK for s in statuses), statuses[0]
     assert len(parsed) == 2
+
+
+def test_the_norms_of_rows_are_each_rows_norms_bit_for_bit():
+    """error_norms_of_rows (the offline comparison's) against error_norms (the live one's)."""
+    rng = np.random.default_rng(4)
+    numeric = rng.normal(size=(500, 3)) * 10.0 ** rng.integers(-300, 300, size=(500, 1))
+    error = rng.normal(size=(500, 3)) * 10.0 ** rng.integers(-300, 300, size=(500, 1))
+    numeric[:3] = 0.0                                    # |numeric| = 0: relative inf
+    numeric[3] = [np.nan, 1.0, 2.0]
+    error[4] = [np.inf, 0.0, 0.0]
+    norm, relative = error_norms_of_rows(numeric, error)
+    each = [error_norms(a, b) for a, b in zip(numeric.tolist(), error.tolist())]
+    assert norm.tolist() == [n for n, _ in each]
+    assert np.array_equal(relative, [r for _, r in each], equal_nan=True)
+    assert np.isinf(relative[:3]).all() and np.isinf(relative[3])
+    empty = error_norms_of_rows(np.empty((0, 3)), np.empty((0, 3)))
+    assert empty[0].shape == empty[1].shape == (0,)
 
 
 def test_the_described_scenarios_are_what_their_texts_parse_to():

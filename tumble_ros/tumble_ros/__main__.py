@@ -11,7 +11,12 @@ params file or the name of a shipped one (``fig10``: config/fig10.yaml).
 The main job simulates the scenario, compares it with the paper's analytic solution and records
 everything to ``recordings/<scenario>_<UTC time>.mcap`` (``bringup --offline``: the recording is
 written straight from the simulation; ``--live`` runs the three nodes over the ROS graph
-instead, as ``bringup`` does), then analyses the file.
+instead, as ``bringup`` does), then analyses the file. Offline, the analysis takes the messages
+from memory (the writer kept them: :class:`tumble_ros.io.WrittenMessages`, the same Recording as
+reading the file back), and the figures are drawn by a worker process forked before the
+recording, which loads matplotlib while it runs, and a helper it forks
+(:mod:`tumble_ros.analysis.figure_pool`, the same PNG bytes); this process never imports
+matplotlib.
 
 Every executable, here and as installed for ``ros2 run`` (setup.py points them all to
 :func:`entry`), starts under :class:`~tumble_ros.nodes.shutdown.StopSignals`: a SIGINT, SIGTERM
@@ -22,11 +27,15 @@ quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the recording finalised
 """
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+import gc
 import importlib
 import os
 from pathlib import Path
 import signal
 import sys
+from typing import Any
 
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
 EXECUTABLES = {
@@ -46,8 +55,12 @@ NODES = frozenset({'sim', 'comparator', 'recorder'})
 BROKEN_PIPE_EXIT = 128 + signal.SIGPIPE
 
 
-def run_executable(name: str, args: list[str]) -> int:
-    """Run an executable's ``main`` with ``args`` (its sys.argv without the program name)."""
+def run_executable(name: str, args: list[str], **options: Any) -> int:
+    """
+    Run an executable's ``main`` with ``args`` (its sys.argv without the program name).
+
+    ``options``: keyword arguments of that ``main`` (the main job's ``keep`` for bringup).
+    """
     try:
         from tumble_ros.nodes.shutdown import StopSignals   # light: no rclpy, no numba
     except KeyboardInterrupt:       # a SIGINT before the handler (Python's own start-up)
@@ -61,7 +74,7 @@ def run_executable(name: str, args: list[str]) -> int:
         if early.requested:         # stopped while importing: nothing was started
             return 0 if name in NODES else early.exit_code
         try:
-            code = target(args if name in BARE_ARGV else [name, *args]) or 0
+            code = target(args if name in BARE_ARGV else [name, *args], **options) or 0
             sys.stdout.flush()    # a closed pipe is seen here, not in the interpreter's exit
             return code
         except BrokenPipeError:
@@ -92,17 +105,38 @@ def main_job(argv: list[str]) -> int:
         print(f'python -m tumble_ros: unknown arguments {argv}; executables: '
               f"{', '.join(EXECUTABLES)} (python -m tumble_ros --help)", file=sys.stderr)
         return 2
+    from tumble_ros.io import WrittenMessages
     from tumble_ros.nodes.recorder import default_output
 
     output = default_output(Path(argv[0]).stem if argv else 'default')
     mode = [] if live else ['--offline']
-    code = run_executable('bringup', [*argv, *mode, '--output', str(output)])
-    if code == BROKEN_PIPE_EXIT:
-        return code
-    if code != 0 or not output.exists() or output.stat().st_size == 0:
-        _release(output)
-        return code or 1
-    return analyse(output)
+    # offline, the messages written stay in memory for the analysis (not read back)
+    written = None if live else WrittenMessages()
+    with _figure_pool() as pool:    # workers warm up for the figures while the run records
+        code = run_executable('bringup', [*argv, *mode, '--output', str(output)], keep=written)
+        if code == BROKEN_PIPE_EXIT:
+            return code
+        if code != 0 or not output.exists() or output.stat().st_size == 0:
+            _release(output)
+            return code or 1
+        return analyse(output, written, pool)
+
+
+@contextmanager
+def _figure_pool() -> Iterator[Any]:
+    """Yield a started FigurePool (tumble_ros.analysis.figure_pool), or None; close it after."""
+    try:
+        from tumble_ros.analysis.figure_pool import FigurePool
+    except ImportError:             # no analysis available: the recording alone
+        yield None
+        return
+    gc.freeze()     # what is loaded stays shared with the workers (no collector writes on it)
+    pool = FigurePool.start()
+    if pool is None:
+        yield None
+        return
+    with pool:
+        yield pool
 
 
 def _release(claimed: Path) -> None:
@@ -114,14 +148,21 @@ def _release(claimed: Path) -> None:
         pass
 
 
-def analyse(recording: Path) -> int:
-    """Summary and figures of a recording (figures beside it, in <name>_figures/)."""
+def analyse(recording: Path, written: Any = None, pool: Any = None) -> int:
+    """
+    Summary and figures of a recording (figures beside it, in <name>_figures/).
+
+    ``written``: its messages as the writer kept them (:class:`tumble_ros.io.WrittenMessages`),
+    analysed instead of reading the file back (the same Recording); ``pool``: a started
+    :class:`tumble_ros.analysis.figure_pool.FigurePool` that draws the figures.
+    """
     try:
         cli = importlib.import_module('tumble_ros.analysis.cli')
     except ImportError:
         print(f'recorded {recording} (no analysis available)')
         return 0
-    return cli.command([str(recording), '--figures', str(recording.with_suffix('')) + '_figures'])
+    return cli.command([str(recording), '--figures', str(recording.with_suffix('')) + '_figures'],
+                       written=written, pool=pool)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -34,9 +34,11 @@ import sys
 from typing import NoReturn
 
 from tumble_ros.errors import AnalysisError
-from tumble_ros.io import McapError
+from tumble_ros.io import McapError, WrittenMessages
 from tumble_ros.topics import MARKERS
 
+from .figure_files import FigureExistsError
+from .figure_pool import FigurePool
 from .recording import load_recording, normalize_namespace, stderr_progress
 from .report import format_summary, summary_to_dict
 from .summary import analyze
@@ -124,10 +126,12 @@ def _error(text: object) -> int:
     return 1
 
 
-def _figures(rec, summary, args) -> list:
-    """Write the figures; any failure is an AnalysisError with a one-line message."""
-    from .figures import FigureExistsError, write_figures   # matplotlib only when asked for
+def _figures(rec, summary, args, pool: FigurePool | None = None) -> list:
+    """Write the figures (in ``pool``'s workers if given); failures are one-line AnalysisErrors."""
     try:
+        if pool is not None:        # no matplotlib here: the workers have it
+            return pool.write_figures(rec, args.figures, summary, overwrite=args.overwrite)
+        from .figures import write_figures   # matplotlib only when asked for
         return write_figures(rec, args.figures, summary, overwrite=args.overwrite)
     except FigureExistsError as err:
         raise AnalysisError(f'{err} (--overwrite replaces existing figures)') from None
@@ -174,8 +178,15 @@ def _check_options(args) -> str | None:
     return None
 
 
-def command(argv: Iterable[str] | None = None) -> int:
-    """Run the command on ``argv`` (without the program name); returns the exit status."""
+def command(argv: Iterable[str] | None = None, written: WrittenMessages | None = None,
+            pool: FigurePool | None = None) -> int:
+    """
+    Run the command on ``argv`` (without the program name); returns the exit status.
+
+    For the main job: ``written``, the messages of FILE.mcap as its writer in this process kept
+    them (:func:`~.recording.load_recording` takes them instead of reading the file back);
+    ``pool``, worker processes started earlier that draw the figures (:mod:`.figure_pool`).
+    """
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
         args = _parser().parse_args(argv)
@@ -191,12 +202,12 @@ def command(argv: Iterable[str] | None = None) -> int:
     try:
         progress = None if args.quiet else stderr_progress()
         rec = load_recording(args.file, namespace=args.namespace, run=args.run,
-                             progress=progress)
+                             progress=progress, written=written)
         for line in rec.left_out:
             print(f'WARNING: {line}', file=sys.stderr)
         summary = analyze(rec, n_peaks=args.peaks)
         periods = _recorded_periods(rec, args)      # before the figures: its check first
-        figures = [] if args.figures is None else _figures(rec, summary, args)
+        figures = [] if args.figures is None else _figures(rec, summary, args, pool)
         extra = _pictures(rec, args)
     except (McapError, AnalysisError) as err:
         return _error(err)
@@ -292,6 +303,8 @@ def _partial(summary) -> int:
 
 def _pictures(rec, args) -> dict[str, tuple]:
     """Write the animation and the still asked for: {'animation'|'still': (path, what)}."""
+    if args.animate is None and args.still is None:
+        return {}
     from . import animation   # matplotlib only when asked for
     out = {}
     if args.animate is not None:

@@ -35,24 +35,27 @@ taken (:class:`FigureExistsError` names them) or a symbolic link (:class:`Figure
 they written. The output directory itself must not be a symbolic link. Files are created with
 O_CREAT | O_EXCL | O_NOFOLLOW relative to the directory's descriptor; with ``overwrite=True`` a
 figure is written to a new temporary file and renamed over the old one (a rename replaces a
-link, never what it points to).
+link, never what it points to): :mod:`.figure_files`, which needs no matplotlib.
+
+:data:`FIGURES` names the figures :func:`write_figures` draws, in order; the main job draws them
+in worker processes started before its recording (:mod:`.figure_pool`: the same bytes).
 """
 from __future__ import annotations
 
-import errno
+from collections.abc import Callable, Iterable
 import io
 import os
 from pathlib import Path
-import stat
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MaxNLocator
 import numpy as np
-from tumble_ros.errors import AnalysisError
 
 from .comparator import comparator_errors
 from .display import DisplayUnits, is_flyby, recording_units
+from .figure_files import (check_outputs, Drawing, FigureExistsError, FigurePathError,
+                           write_files)
 from .impacts import impact_intervals
 from .recording import Recording, ROOT_NAMESPACE
 from .spectrum import spectrum
@@ -61,9 +64,11 @@ from .summary import AnalysisSummary, analyze
 from .theory import theory_lines
 from .timeaxis import runs
 
+
 __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
            'plot_impacts', 'plot_omega_windows', 'plot_spectrum', 'plot_wy_vs_wx',
-           'write_figures', 'numeric_limits', 'check_outputs', 'write_files']
+           'write_figures', 'numeric_limits', 'check_outputs', 'write_files', 'FIGURES',
+           'draw_figures', 'warm_up']
 
 DPI = 110
 #: Above this many samples the wy-vs-wx path is drawn as a density image (_draw_path_density).
@@ -141,146 +146,10 @@ def _t(value: float, unit: DisplayUnits, digits: int = 4) -> str:
     return unit.time_text(value, digits)
 
 
-#: A drawn figure: (file name, PNG bytes).
-Drawing = tuple[str, bytes]
-
-
-class FigurePathError(AnalysisError):
-    """A figure path that is refused: a symbolic link, or not a regular file (an AnalysisError)."""
-
-
-class FigureExistsError(FigurePathError):
-    """Figure files that already exist and are not overwritten (``overwrite=False``)."""
-
-
 def _png(fig: Figure, name: str) -> Drawing:
     buffer = io.BytesIO()
     fig.savefig(buffer, format='png')
     return name, buffer.getvalue()
-
-
-def _link_refused(path: Path) -> FigurePathError:
-    return FigurePathError(f'{path}: is a symbolic link: figures are not written through links')
-
-
-def _open_dir(out_dir: Path) -> int:
-    """Open ``out_dir`` (created if needed) as a descriptor; refuse a symbolic link."""
-    if out_dir.is_symlink():
-        raise _link_refused(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    try:
-        return os.open(out_dir, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
-    except OSError as err:
-        if err.errno == errno.ELOOP:            # replaced by a link since the check
-            raise _link_refused(out_dir) from None
-        raise
-
-
-def _check_names(out_dir: Path, dir_fd: int, names: list[str], overwrite: bool) -> None:
-    """
-    Refuse links and non-regular files at the figure paths.
-
-    Without ``overwrite``, refuse any existing file too.
-    """
-    taken = []
-    for name in names:
-        try:
-            mode = os.stat(name, dir_fd=dir_fd, follow_symlinks=False).st_mode
-        except FileNotFoundError:
-            continue
-        if stat.S_ISLNK(mode):
-            raise _link_refused(out_dir / name)
-        if not stat.S_ISREG(mode):
-            raise FigurePathError(f'{out_dir / name}: exists and is not a regular file')
-        taken.append(name)
-    if taken and not overwrite:
-        raise FigureExistsError(f'{", ".join(str(out_dir / n) for n in taken)}: '
-                                f'{"exists" if len(taken) == 1 else "exist"}, not overwritten')
-
-
-_CREATE = os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | getattr(os, 'O_CLOEXEC', 0)
-
-
-def _create(dir_fd: int, name: str, data: bytes) -> None:
-    """Write a new file ``name`` (never an existing one, never through a link)."""
-    fd = os.open(name, _CREATE, 0o666, dir_fd=dir_fd)
-    try:
-        with os.fdopen(fd, 'wb') as stream:
-            stream.write(data)
-    except BaseException:
-        os.unlink(name, dir_fd=dir_fd)
-        raise
-
-
-def _write_one(out_dir: Path, dir_fd: int, name: str, data: bytes, overwrite: bool) -> Path:
-    if overwrite:
-        temporary = f'.{name}.{os.getpid()}-{os.urandom(4).hex()}.tmp'
-        _create(dir_fd, temporary, data)
-        try:
-            os.replace(temporary, name, src_dir_fd=dir_fd, dst_dir_fd=dir_fd)
-        except BaseException:
-            os.unlink(temporary, dir_fd=dir_fd)
-            raise
-        return out_dir / name
-    try:
-        _create(dir_fd, name, data)
-    except FileExistsError:        # created since the check
-        raise FigureExistsError(f'{out_dir / name}: exists, not overwritten') from None
-    return out_dir / name
-
-
-def _write(drawings: list[Drawing], out_dir, overwrite: bool) -> list[Path]:
-    """Write the drawn figures into ``out_dir`` if none of their paths is refused."""
-    if not drawings:
-        return []
-    out_dir = Path(out_dir)
-    dir_fd = _open_dir(out_dir)
-    try:
-        _check_names(out_dir, dir_fd, [name for name, _ in drawings], overwrite)
-        return [_write_one(out_dir, dir_fd, name, data, overwrite) for name, data in drawings]
-    finally:
-        os.close(dir_fd)
-
-
-def check_outputs(out_dir: str | os.PathLike[str], names: list[str], overwrite: bool) -> None:
-    """
-    Refuse before any work what :func:`write_files` would refuse at the end (FigurePathError).
-
-    ``out_dir`` a symbolic link or not a directory, a name that is a link or not a regular
-    file, an existing name without ``overwrite`` (FigureExistsError), or a directory that
-    cannot be written or created.
-    """
-    out_dir = Path(out_dir)
-    if out_dir.is_symlink():
-        raise _link_refused(out_dir)
-    if out_dir.exists():
-        if not out_dir.is_dir():
-            raise FigurePathError(f'{out_dir}: exists and is not a directory')
-        dir_fd = os.open(out_dir, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
-        try:
-            _check_names(out_dir, dir_fd, names, overwrite)
-        finally:
-            os.close(dir_fd)
-        if not os.access(out_dir, os.W_OK | os.X_OK):
-            raise FigurePathError(f'{out_dir}: cannot write into it (permission denied)')
-        return
-    parent = out_dir.parent
-    while not parent.exists() and parent != parent.parent:
-        parent = parent.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
-        raise FigurePathError(f'{out_dir}: cannot be created ({parent} is not a writable '
-                              'directory)')
-
-
-def write_files(files: list[Drawing], out_dir: str | os.PathLike[str],
-                overwrite: bool) -> list[Path]:
-    """
-    Write ``files`` ((name, bytes) pairs) into ``out_dir``, created if needed.
-
-    Never through a symbolic link, never over an existing file unless ``overwrite`` (then
-    each is replaced atomically); nothing is written if any path is refused.
-    """
-    return _write(files, out_dir, overwrite)
 
 
 def _label(rec: Recording) -> str:
@@ -336,7 +205,7 @@ def _mark_impacts(ax, rec: Recording) -> None:
 def plot_angular_velocity(rec: Recording, out_dir: str | os.PathLike[str], *,
                           overwrite: bool = False) -> list[Path]:
     """``omega.png``: the three components against t, the model's overlaid if recorded."""
-    return _write(_draw_angular_velocity(rec, _departure(rec)), out_dir, overwrite)
+    return write_files(_draw_angular_velocity(rec, _departure(rec)), out_dir, overwrite)
 
 
 def _departure(rec: Recording) -> float | None:
@@ -397,7 +266,7 @@ def _draw_angular_velocity(rec: Recording, departure: float | None = None) -> li
 def plot_omega_windows(rec: Recording, out_dir: str | os.PathLike[str], *,
                        overwrite: bool = False) -> list[Path]:
     """``omega_windows.png``: w at full resolution at the start, each impact and the end."""
-    return _write(_draw_omega_windows(rec), out_dir, overwrite)
+    return write_files(_draw_omega_windows(rec), out_dir, overwrite)
 
 
 def _windows(rec: Recording) -> list[tuple[str, float, float]]:
@@ -452,7 +321,7 @@ def _draw_omega_windows(rec: Recording) -> list[Drawing]:
 def plot_wy_vs_wx(rec: Recording, out_dir: str | os.PathLike[str], *,
                   overwrite: bool = False) -> list[Path]:
     """``wy_vs_wx.png``: the transverse angular velocity's path (paper Fig 9, bottom)."""
-    return _write(_draw_wy_vs_wx(rec), out_dir, overwrite)
+    return write_files(_draw_wy_vs_wx(rec), out_dir, overwrite)
 
 
 def _draw_wy_vs_wx(rec: Recording) -> list[Drawing]:
@@ -542,7 +411,7 @@ def _draw_path_density(ax, x: np.ndarray, y: np.ndarray) -> None:
 def plot_error(rec: Recording, out_dir: str | os.PathLike[str], *,
                overwrite: bool = False) -> list[Path]:
     """``error.png``: error components and |error| against t; nothing without a comparator."""
-    return _write(_draw_error(rec), out_dir, overwrite)
+    return write_files(_draw_error(rec), out_dir, overwrite)
 
 
 def _draw_error(rec: Recording) -> list[Drawing]:
@@ -588,7 +457,7 @@ def plot_impacts(rec: Recording, out_dir: str | os.PathLike[str], *, samples: in
     Each shows w over +-``samples`` sampling intervals (at least +-10 pulse lengths) around the
     pulse, the pulse interval shaded and its edges drawn.
     """
-    return _write(_draw_impacts(rec, samples), out_dir, overwrite)
+    return write_files(_draw_impacts(rec, samples), out_dir, overwrite)
 
 
 def _draw_impacts(rec: Recording, samples: int = 25) -> list[Drawing]:
@@ -639,7 +508,7 @@ def plot_spectrum(rec: Recording, out_dir: str | os.PathLike[str],
     The theory's lines are dashed, the Nyquist rate pi/dt marked; nothing is drawn for fewer
     than 8 samples.
     """
-    return _write(_draw_spectrum(rec, summary), out_dir, overwrite)
+    return write_files(_draw_spectrum(rec, summary), out_dir, overwrite)
 
 
 def _draw_spectrum(rec: Recording, summary: AnalysisSummary | None) -> list[Drawing]:
@@ -691,6 +560,49 @@ def _line_style(k: int) -> tuple[str, str]:
     return _LINE_COLORS[k % len(_LINE_COLORS)], _LINE_STYLES[k % len(_LINE_STYLES)]
 
 
+def _departure_of(summary: AnalysisSummary) -> float | None:
+    return summary.comparator.t_departure if summary.comparator is not None else None
+
+
+#: The figures :func:`write_figures` draws, in the order they are written: name -> drawer of
+#: (recording, its summary) -> the drawings (none when the recording lacks what it needs).
+FIGURES: dict[str, Callable[[Recording, AnalysisSummary], list[Drawing]]] = {
+    'omega': lambda rec, summary: _draw_angular_velocity(rec, _departure_of(summary)),
+    'omega_windows': lambda rec, summary: _draw_omega_windows(rec),
+    'wy_vs_wx': lambda rec, summary: _draw_wy_vs_wx(rec),
+    'error': lambda rec, summary: _draw_error(rec),
+    'impacts': lambda rec, summary: _draw_impacts(rec),
+    'spectrum': _draw_spectrum,
+}
+
+
+def draw_figures(rec: Recording, summary: AnalysisSummary,
+                 names: Iterable[str] = tuple(FIGURES)) -> dict[str, list[Drawing]]:
+    """Draw the figures ``names`` (keys of :data:`FIGURES`); return name -> its drawings."""
+    return {name: FIGURES[name](rec, summary) for name in names}
+
+
+def figure_order() -> tuple[str, ...]:
+    """Return the names of :data:`FIGURES` in the order their files are written."""
+    return tuple(FIGURES)
+
+
+def warm_up() -> None:
+    """
+    Draw and encode a small figure with text and mathematics, to throw away.
+
+    The first figure of a process loads the fonts and the mathtext parser (~0.15 s); a
+    :class:`~.figure_pool.FigurePool` worker does it while it waits. Only matplotlib's caches
+    change (the same figures after it, byte for byte: tests/test_figure_pool.py).
+    """
+    fig, (ax,) = _new(1, 1.0, 2.0)
+    ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.6)
+    ax.set_ylabel(f'{_LABELS[0]} [rad/yr]')
+    ax.set_xlabel('t [yr]')
+    ax.set_title('$\\theta_0$ = 0.9 rad, $\\omega_0$', fontsize='small')
+    _png(fig, 'warm-up.png')
+
+
 def write_figures(rec: Recording, out_dir: str | os.PathLike[str],
                   summary: AnalysisSummary | None = None, *,
                   overwrite: bool = False) -> list[Path]:
@@ -698,12 +610,11 @@ def write_figures(rec: Recording, out_dir: str | os.PathLike[str],
     Write every figure the recording supports; return the paths written.
 
     All are drawn before any is written: an existing file (without ``overwrite``) or a link
-    refuses them all.
+    refuses them all. (:meth:`.figure_pool.FigurePool.write_figures`: the same, drawn in
+    worker processes.)
     """
     if summary is None:
         summary = analyze(rec)
-    departure = summary.comparator.t_departure if summary.comparator is not None else None
-    drawings = (_draw_angular_velocity(rec, departure) + _draw_omega_windows(rec)
-                + _draw_wy_vs_wx(rec) + _draw_error(rec) + _draw_impacts(rec)
-                + _draw_spectrum(rec, summary))
-    return _write(drawings, out_dir, overwrite)
+    drawn = draw_figures(rec, summary)
+    return write_files([drawing for name in FIGURES for drawing in drawn[name]], out_dir,
+                       overwrite)

@@ -54,7 +54,8 @@ import numpy as np
 
 from tumble_ros.core import parse_scenario, Scenario, ScenarioError, TimeBase
 from tumble_ros.errors import AnalysisError
-from tumble_ros.io import read_columns, sample_values, summarize
+from tumble_ros.io import (McapSummary, read_columns, sample_values, summarize,
+                           written_columns, WrittenMessages)
 from tumble_ros.topics import (ANGULAR_VELOCITY, ATTITUDE, COMPARISON_STATUS, ERROR, ERROR_NORM,
                                EULER_ANGLES, FRAME_BODY, FRAME_ORBITAL, IMPACT_EVENTS,
                                in_namespace, LIGHTCURVE, MODEL_ANGULAR_VELOCITY, PERTURBER,
@@ -359,11 +360,29 @@ def _own_run(path: Path, topic: str, scenarios: list, run: str | None
     return own, [d for d, r in zip(scenarios, ids) if r == own], lines, any(others.keys() - {''})
 
 
+def _same_file(written: WrittenMessages | None, info: McapSummary) -> bool:
+    """Whether ``written`` holds every message of the finalised file ``info`` summarises."""
+    if written is None or not written.closed or written.path is None or not info.finalised:
+        return False
+    try:
+        if not os.path.samefile(written.path, info.path):
+            return False
+    except OSError:
+        return False
+    return written.counts() == {name: t.message_count for name, t in info.topics.items()}
+
+
 def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None,
-                   run: str | None = None,
-                   progress: Progress | None = None) -> Recording:
+                   run: str | None = None, progress: Progress | None = None,
+                   written: WrittenMessages | None = None) -> Recording:
     """
     Read ``path`` once and return its :class:`Recording`.
+
+    ``written``: the messages the writer of ``path`` kept in this process
+    (:class:`tumble_ros.io.WrittenMessages`, ``McapWriter(..., keep=written)``); when it holds
+    every message of the finalised file (per topic), the columns are gathered from it instead of
+    reading the file back (:func:`tumble_ros.io.written_columns`): the same Recording
+    (tests/test_io_written.py), a second faster. Otherwise the file is read.
 
     ``namespace``: the ROS namespace of the topics to read (``'/ast1'``, ``'/'`` for the root);
     None: the only namespace in the file that has an ``angular_velocity`` topic. ``run``: the
@@ -392,8 +411,15 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
         if progress is not None:
             progress(min(done, total), total)
 
-    columns, messages = read_columns(info.path, sorted(per_sample),
-                                     as_messages=sorted(set(wanted) - per_sample), progress=report)
+    if _same_file(written, info):
+        assert written is not None
+        columns, messages = written_columns(written, sorted(per_sample),
+                                            as_messages=sorted(set(wanted) - per_sample),
+                                            progress=report)
+    else:
+        columns, messages = read_columns(info.path, sorted(per_sample),
+                                         as_messages=sorted(set(wanted) - per_sample),
+                                         progress=report)
     for full, table in columns.items():
         topic = wanted[full]
         raw[topic] = sample_values(table, sample_topic(topic))

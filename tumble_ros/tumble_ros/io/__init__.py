@@ -9,11 +9,12 @@ also under ``sys.prefix``. Ensemble results go to labelled xarray/Zarr stores
 reads them).
 """  # noqa: A005 (tumble_ros.io is a subpackage: absolute imports never confuse it with io)
 
-from .columns import FlatLayout, MessageTemplate, read_columns, sample_values, TopicColumns
+from .columns import (FlatLayout, MessageTemplate, read_columns, sample_values, TopicColumns,
+                      written_columns)
 from .ensemble_store import EnsembleStore, EnsembleStoreError, open_ensemble
 from .mcap_reader import (McapError, McapSummary, read_messages, RecordedMessage, summarize,
                           TopicSummary)
-from .mcap_writer import McapWriter, offered_qos_yaml
+from .mcap_writer import McapWriter, offered_qos_yaml, WrittenMessages
 from .msgdefs import message_definition, MessageDefinitionError, normalize_type_name, type_hash
 
 __all__ = [
@@ -25,6 +26,8 @@ __all__ = [
     'read_columns',
     'sample_values',
     'TopicColumns',
+    'written_columns',
+    'WrittenMessages',
     'McapError',
     'McapSummary',
     'McapWriter',

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
-import io
 import os
 from pathlib import Path
 import struct
@@ -32,11 +31,12 @@ import numpy.typing as npt
 from tumble_ros.topics import SampleTopic
 
 from .mcap_reader import (chunk_records, Decoders, McapError, open_recording, RecordedMessage,
-                          RecordScan, split_sections)
+                          RecordScan, Registry, split_sections)
+from .mcap_writer import WrittenBlock, WrittenMessages
 from .msgdefs import MessageDefinitionError, parse_msg, SEPARATOR
 
 __all__ = ['FlatLayout', 'FlatEncoder', 'MessageTemplate', 'TopicColumns', 'read_columns',
-           'encode_rows', 'sample_values']
+           'written_columns', 'encode_rows', 'sample_values']
 
 #: numpy types of the primitive types a flat layout may hold (strings apart), little-endian.
 _DTYPES = {'bool': '<u1', 'byte': '<u1', 'char': '<u1', 'int8': '<i1', 'uint8': '<u1',
@@ -281,9 +281,23 @@ def _distinct_strings(buf: np.ndarray, offsets: np.ndarray, lengths: np.ndarray)
 
 
 def _gather(buf: np.ndarray, starts: np.ndarray, at: int, dtype: str) -> np.ndarray:
-    """Return the values of type ``dtype`` at ``starts + at`` in ``buf``."""
+    """
+    Return the values of type ``dtype`` at ``starts + at`` in ``buf``.
+
+    Positions at a constant step (the same messages written sample after sample, in a chunk
+    or in a writer's rows) are read through a strided view, the others by an index array.
+    """
     width = np.dtype(dtype).itemsize
-    index = (starts + at)[:, None] + np.arange(width)
+    where = starts + at
+    if len(where) > 1:
+        step = int(where[1] - where[0])
+        last = int(where[0]) + step * (len(where) - 1)
+        if step >= width and last + width <= len(buf) and (np.diff(where) == step).all():
+            view = np.lib.stride_tricks.as_strided(buf[int(where[0]):], (len(where), width),
+                                                   (step * buf.strides[0], buf.strides[0]),
+                                                   writeable=False)
+            return np.ascontiguousarray(view).view(dtype).reshape(-1)
+    index = where[:, None] + np.arange(width)
     return np.ascontiguousarray(buf[index]).view(dtype).reshape(-1)
 
 
@@ -339,14 +353,40 @@ def read_columns(path: str | os.PathLike[str], topics: Iterable[str],
     complete chunks; McapError for a file that cannot be read or a message that cannot be
     decoded.
     """
+    wanted = _wanted(topics, as_messages)
+    path, stream = open_recording(path)
+    with stream:
+        scan = RecordScan(path, stream)
+        reader = _ColumnReader(path, scan, wanted, set(as_messages), progress)
+        reader.read_file(scan)
+    return reader.results()
+
+
+def written_columns(written: WrittenMessages, topics: Iterable[str],
+                    as_messages: Iterable[str] = (),
+                    progress: Callable[[int], None] | None = None
+                    ) -> tuple[dict[str, TopicColumns], list[RecordedMessage]]:
+    """
+    Return what :func:`read_columns` gives of a file, from the messages its writer kept.
+
+    ``written``: the :class:`~.mcap_writer.WrittenMessages` a :class:`~.mcap_writer.McapWriter`
+    filled while writing the file (``keep=``), in the same process: the same messages' bytes,
+    gathered into columns by the same code (:class:`_Builder`) and decoded by the same decoders,
+    without compressing, reading back and locating the records (tests/test_io_written.py
+    compares both, array for array). ``progress(messages_read)`` after every written block.
+    McapError as :func:`read_columns` for a message that cannot be decoded.
+    """
+    wanted = _wanted(topics, as_messages)
+    reader = _ColumnReader(written.path or Path(), written, wanted, set(as_messages), progress)
+    reader.read_written(written.blocks)
+    return reader.results()
+
+
+def _wanted(topics: Iterable[str], as_messages: Iterable[str]) -> set[str]:
     wanted = set(topics) | set(as_messages)
     if not all(isinstance(t, str) for t in wanted):
         raise McapError(f'topics must be topic names (str), got {sorted(map(repr, wanted))}')
-    path, stream = open_recording(path)
-    with stream:
-        reader = _ColumnReader(path, stream, wanted, set(as_messages), progress)
-        reader.run()
-    return reader.results()
+    return wanted
 
 
 def sample_values(table: TopicColumns, topic: SampleTopic
@@ -367,12 +407,17 @@ def sample_values(table: TopicColumns, topic: SampleTopic
 
 
 class _ColumnReader:
-    """One pass over a file: chunks located and gathered, other messages decoded."""
+    """
+    One pass over a recording's messages: flat topics gathered, other messages decoded.
 
-    def __init__(self, path: Path, stream: io.BufferedReader, wanted: set[str],
+    The messages come from a file (:meth:`read_file`: chunks located and gathered) or from its
+    writer's memory (:meth:`read_written`); ``scan``: their schemas and channels.
+    """
+
+    def __init__(self, path: Path, scan: Registry, wanted: set[str],
                  as_messages: set[str], progress: Callable[[int], None] | None):
         self.progress = progress
-        self.scan = RecordScan(path, stream)
+        self.scan = scan
         self.as_messages = as_messages
         self.decoders = Decoders(path)
         self.wanted = wanted
@@ -380,27 +425,72 @@ class _ColumnReader:
         self.others: list[RecordedMessage] = []
         self.count = 0
 
-    def run(self) -> None:
-        for item in self.scan.items(self._locate):
+    def read_file(self, scan: RecordScan) -> None:
+        """Read the file ``scan`` walks (``scan`` is :attr:`scan`)."""
+        def locate(chunk: Any, data: bytes) -> Iterator[tuple[bytes, _Located]]:
+            return self._locate(scan, chunk, data)
+
+        for item in scan.items(locate):
             if isinstance(item, tuple):
                 self._chunk(*item)
                 if self.progress is not None:
                     self.progress(self.count)
             else:                               # a message outside chunks
                 self._one(item.channel_id, item.log_time, item.publish_time, bytes(item.data))
-        self.scan.check_recoverable(self.count)
+        scan.check_recoverable(self.count)
+
+    def read_written(self, blocks: Iterable[WrittenBlock]) -> None:
+        """
+        Read the blocks a writer kept, as :meth:`read_file` reads the file they made.
+
+        A block's messages lie in the file sample by sample (for each k, one per channel): its
+        flat channels are gathered from their rows, the others decoded in that order.
+        """
+        for block in blocks:
+            n, width = len(block.log_time_ns), len(block.channel_ids)
+            first = self.count
+            pending: list[tuple[int, RecordedMessage]] = []
+            for j, (channel_id, rows) in enumerate(zip(block.channel_ids, block.rows)):
+                channel = self.scan.channels.get(channel_id)
+                if channel is not None and channel.topic not in self.wanted:
+                    continue
+                builder = self._builder(channel_id)
+                if builder is None:
+                    for k in range(n):
+                        record = _Record(channel_id, int(block.log_time_ns[k]),
+                                         int(block.publish_time_ns[k]), rows[k].tobytes())
+                        at = k * width + j          # its place in the file
+                        pending.append((at, self.decoders.decode(self.scan, record, first + at)))
+                    continue
+
+                def decode_one(raw: bytes, channel_id: int = channel_id,
+                               index: int = first + j) -> Any:
+                    return self.decoders.decode(self.scan, _Record(channel_id, 0, 0, raw),
+                                                index).message
+
+                size = rows.shape[1]
+                builder.add_block(np.ascontiguousarray(rows).reshape(-1),
+                                  np.arange(n, dtype=np.int64) * size,
+                                  np.full(n, size, dtype=np.int64), block.log_time_ns,
+                                  decode_one)
+            self.count += n * width
+            if pending:
+                self.others.extend(m for _, m in sorted(pending, key=lambda item: item[0]))
+            if self.progress is not None:
+                self.progress(self.count)
 
     def results(self) -> tuple[dict[str, TopicColumns], list[RecordedMessage]]:
         return ({b.result.topic: b.finish() for b in self.builders.values() if b is not None},
                 self.others)
 
-    def _locate(self, chunk: Any, data: bytes) -> Iterator[tuple[bytes, _Located]]:
+    @staticmethod
+    def _locate(scan: RecordScan, chunk: Any, data: bytes) -> Iterator[tuple[bytes, _Located]]:
         """Find the chunk's messages (parsing only); keep its schemas and channels."""
         located = _chunk_messages(data)
         if located[4]:
             for record in chunk_records(chunk, data):
                 if not isinstance(record, Message):
-                    self.scan.add(record)
+                    scan.add(record)
         yield (data, located)
 
     def _builder(self, channel_id: int) -> _Builder | None:

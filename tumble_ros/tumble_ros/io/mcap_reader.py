@@ -51,7 +51,7 @@ import os
 from pathlib import Path
 import stat
 import struct
-from typing import Any
+from typing import Any, Protocol
 import zlib
 
 from mcap.exceptions import EndOfFile
@@ -81,7 +81,8 @@ except ImportError:  # pragma: no cover
 __all__ = ['MAX_CHUNK_BYTES', 'MAX_CHUNK_RATIO', 'McapError', 'McapSummary', 'RecordedMessage',
            'TopicSummary', 'read_messages', 'summarize',
            # for io.columns, which reads the same files by chunks
-           'chunk_records', 'Decoders', 'open_recording', 'RecordScan', 'split_sections']
+           'chunk_records', 'Decoders', 'open_recording', 'RecordScan', 'Registry',
+           'split_sections']
 
 MAGIC = b'\x89MCAP0\r\n'
 _RECORD_HEADER = 9            # opcode (1) + length (8)
@@ -379,6 +380,13 @@ def chunk_records(chunk: Chunk, data: bytes) -> list[Any]:
 
 # -- scanning -------------------------------------------------------------------------------------
 
+class Registry(Protocol):
+    """The schemas and channels of a recording, by id: a file's (RecordScan), or a writer's."""
+
+    schemas: dict[int, Schema]
+    channels: dict[int, Channel]
+
+
 class RecordScan:
     """Walks a file's records; collects header, schemas, channels and chunks on the way."""
 
@@ -540,7 +548,7 @@ class Decoders:
         self.factory = DecoderFactory()
         self.by_channel: dict[int, Any] = {}
 
-    def decode(self, scan: RecordScan, message: Any, index: int) -> RecordedMessage:
+    def decode(self, scan: Registry, message: Any, index: int) -> RecordedMessage:
         """Decode ``message`` (a record with channel_id, log_time, publish_time, data)."""
         channel = scan.channels.get(message.channel_id)
         if channel is None:

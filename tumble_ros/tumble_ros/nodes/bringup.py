@@ -48,6 +48,7 @@ from rclpy.parameter import Parameter
 from tumble_ros import topics
 from tumble_ros.core import ScenarioError
 from tumble_ros.errors import NodeError
+from tumble_ros.io import WrittenMessages
 from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.recorder import default_output, RecorderNode
@@ -121,7 +122,7 @@ def run_bringup(params_file: str | os.PathLike[str] | None = None, output: str |
                 model: str | None = None, ros_args: list[str] | None = None,
                 progress: TextIO | None = sys.stderr, executor_name: str = 'events',
                 visible: bool = False, offline: bool = False,
-                markers: bool = True) -> BringupResult:
+                markers: bool = True, keep: WrittenMessages | None = None) -> BringupResult:
     """
     Run sim + comparator + recorder until the scenario ends; return what was recorded.
 
@@ -130,7 +131,8 @@ def run_bringup(params_file: str | os.PathLike[str] | None = None, output: str |
     (:mod:`tumble_ros.runs.offline`), no ROS graph (the nodes are only built to read their
     parameters);
     ``markers``: the simulator's 3D scene on ``markers`` (on unless False; it sets the sim's
-    ``markers`` parameter, whatever the params file says).
+    ``markers`` parameter, whatever the params file says); ``keep``: with ``offline``, receives
+    the messages as written (:func:`~tumble_ros.runs.offline.record_offline`).
     SIGINT and SIGTERM stop the run early with the file finalised (``BringupResult.signal``).
     Raises ScenarioError / ParameterException / ValueError for invalid parameters or params
     files, an unknown executor; OSError when the recording cannot be created (nothing is left
@@ -146,12 +148,12 @@ def run_bringup(params_file: str | os.PathLike[str] | None = None, output: str |
         raise NodeError(problem)
     with StopSignals('bringup') as stop, _isolated(visible and not offline):
         if offline:
-            return _run_offline(args, output, model, progress, stop, markers)
+            return _run_offline(args, output, model, progress, stop, markers, keep)
         return _run(args, output, model, progress, executor_name, stop, markers)
 
 
 def _run_offline(args, output, model, progress, stop: StopSignals,
-                 markers: bool) -> BringupResult:
+                 markers: bool, keep: WrittenMessages | None = None) -> BringupResult:
     """Build the simulator and comparator for their parameters only; record offline."""
     context = Context()
     init_rclpy(args, context)
@@ -191,7 +193,7 @@ def _run_offline(args, output, model, progress, stop: StopSignals,
     result = record_offline(scenario, path, timebase=timebase, model_name=model_name,
                             publish_clock=publish_clock, markers=markers,
                             marker_decimation=marker_decimation, stop=lambda: stop.requested,
-                            progress=show)
+                            progress=show, keep=keep)
     show(result.t, result.samples, last=True)
     if progress:
         progress.write('\n')
@@ -309,8 +311,12 @@ def format_result(result: BringupResult) -> str:
     return '\n'.join(lines)
 
 
-def main(args: list[str] | None = None) -> int:
-    """Entry point of ``ros2 run tumble_ros bringup``; ``args``: sys.argv, program name first."""
+def main(args: list[str] | None = None, keep: WrittenMessages | None = None) -> int:
+    """
+    Entry point of ``ros2 run tumble_ros bringup``; ``args``: sys.argv, program name first.
+
+    ``keep``: for the main job (``python -m tumble_ros``), receives an offline run's messages.
+    """
     argv = list(sys.argv if args is None else args)[1:]
     ros_args = []
     if '--ros-args' in argv:
@@ -349,7 +355,7 @@ def main(args: list[str] | None = None) -> int:
                              progress=None if options.quiet else sys.stderr,
                              executor_name=options.executor,
                              visible=options.visible, offline=options.offline,
-                             markers=not options.no_markers)
+                             markers=not options.no_markers, keep=keep)
     except (ScenarioError, ValueError, ParameterException) as err:
         print(f"ERROR: {' '.join(str(err).split())}", file=sys.stderr)
         return 1

@@ -33,8 +33,8 @@ from tumble_ros.core.propagation.timebase import SampleGrid
 from .records import (ComparedSample, ComparisonBlock, ComparisonStatus, Floats, OK,
                       SampleBlock, SegmentStart, WARN)
 
-__all__ = ['Comparison', 'anchor_model', 'GridModelValues', 'error_norms', 'LOOKAHEAD',
-           'WAITING']
+__all__ = ['Comparison', 'anchor_model', 'GridModelValues', 'error_norms', 'error_norms_of_rows',
+           'LOOKAHEAD', 'WAITING']
 
 #: Grid samples whose model value is computed in one vectorised call: the model's fixed numpy
 #: cost (~50 us a call) is then shared by this many samples.
@@ -69,32 +69,53 @@ def error_norms(numeric: Sequence[float], error: Sequence[float]) -> tuple[float
     return norm, norm / magnitude if magnitude > 0 else math.inf
 
 
+def error_norms_of_rows(numeric: Floats, error: Floats) -> tuple[Floats, Floats]:
+    """
+    Return (|error|, |error| / |numeric|) of (n, 3) rows [rad/yr]: :func:`error_norms` of each.
+
+    The same numbers bit for bit (``math.hypot`` of each row, the quotient correctly rounded
+    either way; tests/test_runs.py), without a Python call per sample.
+    """
+    norm = np.array(list(map(math.hypot, *error.T.tolist())), dtype=np.float64)
+    magnitude = np.array(list(map(math.hypot, *numeric.T.tolist())), dtype=np.float64)
+    relative = np.full(len(norm), math.inf)
+    with np.errstate(over='ignore', invalid='ignore'):     # inf and nan, as Python's / gives
+        np.divide(norm, magnitude, out=relative, where=magnitude > 0)
+    return norm, relative
+
+
 class GridModelValues:
     """A model's omega [rad/yr] on the output grid, :data:`LOOKAHEAD` samples computed at once."""
 
     def __init__(self) -> None:
         self._model: AnalyticModel | None = None
         self._first = 0
-        self._values: list[list[float]] = []
+        self._array: Floats = np.empty((0, 3))
+        self._values: list[list[float]] | None = None    # _array as lists, when asked for
+
+    def _fill(self, model: AnalyticModel, grid: SampleGrid, k: int) -> None:
+        """Evaluate the look-ahead from k unless it holds k already."""
+        if model is not self._model or not 0 <= k - self._first < len(self._array):
+            times = grid.times(k, min(k + LOOKAHEAD, grid.count))
+            self._model, self._first = model, k
+            self._array, self._values = model.omega(times), None
 
     def at(self, model: AnalyticModel, grid: SampleGrid, k: int) -> list[float]:
         """Return ``model``'s omega [rad/yr] at grid sample k."""
-        if model is not self._model or not 0 <= k - self._first < len(self._values):
-            times = grid.times(k, min(k + LOOKAHEAD, grid.count))
-            self._model, self._first = model, k
-            self._values = model.omega(times).tolist()
+        self._fill(model, grid, k)
+        if self._values is None:
+            self._values = self._array.tolist()
         return self._values[k - self._first]
 
-    def span(self, model: AnalyticModel, grid: SampleGrid, k: int,
-             stop: int) -> list[list[float]]:
-        """Return ``model``'s omega at grid samples k .. stop - 1: what :meth:`at` gives each."""
-        out: list[list[float]] = []
+    def span(self, model: AnalyticModel, grid: SampleGrid, k: int, stop: int) -> Floats:
+        """Return ``model``'s omega at grid samples k .. stop - 1 (n, 3): what :meth:`at` gives."""
+        parts: list[Floats] = []
         while k < stop:
-            self.at(model, grid, k)       # (re)fills the look-ahead from k if needed
-            end = min(stop, self._first + len(self._values))
-            out += self._values[k - self._first:end - self._first]
+            self._fill(model, grid, k)
+            end = min(stop, self._first + len(self._array))
+            parts.append(self._array[k - self._first:end - self._first])
             k = end
-        return out
+        return np.concatenate(parts) if parts else np.empty((0, 3))
 
 
 @dataclass
@@ -244,9 +265,8 @@ class Comparison:
         error: Floats = np.where(compared[:, None], omega - model, 0.0)
         norm: Floats = np.zeros(n)
         relative: Floats = np.zeros(n)
-        numeric, errors = omega.tolist(), error.tolist()   # (numeric - model: elementwise)
-        for j in np.flatnonzero(compared).tolist():
-            norm[j], relative[j] = error_norms(numeric[j], errors[j])
+        rows = np.flatnonzero(compared)
+        norm[rows], relative[rows] = error_norms_of_rows(omega[rows], error[rows])
         model[~compared] = 0.0
         beyond = compared & (relative > DEPARTURE)
         departures = []

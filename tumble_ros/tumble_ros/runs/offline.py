@@ -46,7 +46,7 @@ from tumble_ros import topics
 from tumble_ros.core import Scenario, TimeBase
 from tumble_ros.core.propagation.propagator import FAST_WORK_BUDGET
 from tumble_ros.core.propagation.timebase import SampleGrid
-from tumble_ros.io import McapWriter, offered_qos_yaml
+from tumble_ros.io import McapWriter, offered_qos_yaml, WrittenMessages
 from tumble_ros.runs.messages.builders import new_run_id, SampleEncoder
 from tumble_ros.runs.messages.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.runs.messages.qos import as_discovered, publisher_qos, qos_dict
@@ -161,7 +161,8 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
                    model_name: str = 'paper', publish_clock: bool = True,
                    markers: bool = True, marker_decimation: int = 0,
                    stop: Callable[[], bool] = lambda: False,
-                   progress: Callable[[float, int], None] | None = None) -> OfflineResult:
+                   progress: Callable[[float, int], None] | None = None,
+                   keep: WrittenMessages | None = None) -> OfflineResult:
     """
     Simulate ``scenario``, compare it with ``model_name`` and write the recording ``output``.
 
@@ -169,7 +170,9 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
     ``publish_clock``, ``markers``, ``marker_decimation``: the simulator's parameters.
     ``stop()`` is checked between slices of the integration (:class:`Slicer`, about
     :data:`SLICE_SECONDS` of wall each): a stopped run keeps what it wrote (the file is
-    finalised). ``progress(t [yr], samples)`` is called after each batch. Raises OSError when
+    finalised). ``progress(t [yr], samples)`` is called after each batch. ``keep``: receives
+    the messages as written (:class:`~tumble_ros.io.WrittenMessages`: the main job's analysis
+    takes them instead of reading the file back). Raises OSError when
     the file cannot be created or written, ScenarioError for a grid ROS stamps cannot carry.
     """
     started = time.monotonic()
@@ -183,7 +186,7 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
                    grid) if markers else None
     slicer = Slicer()
     ended: StatusChange | None = None   # the run's end (finished or diverged)
-    with McapWriter(output, chunk_seconds=math.inf) as writer:
+    with McapWriter(output, chunk_seconds=math.inf, keep=keep) as writer:
         channels = _Channels(writer, publish_clock, session.optional_topics, markers=markers)
         writer_of = _Writer(channels, comparison, scene, publish_clock)
         channels.comparison_status(comparison.waiting(), model_name)

@@ -1,0 +1,134 @@
+"""
+The figures drawn in a FigurePool's workers (the main job's) against the figures drawn here.
+
+The same files, byte for byte (names, order, PNG bytes), drawn by two processes (the worker
+and a helper it forks) and by the worker alone, after the worker's warm-up figure, and when the
+worker or a helper has died; the errors of the in-process path (existing files, an error raised
+in a helper); and the main job's process never imports matplotlib.
+"""
+import os
+from pathlib import Path
+import signal
+import subprocess
+import sys
+
+import pytest
+
+from tumble_ros.analysis import analyze, figure_pool, load_recording
+from tumble_ros.analysis.figure_files import FigureExistsError
+from tumble_ros.analysis.figure_pool import FigurePool, SHARES
+from tumble_ros.analysis.figures import FIGURES, write_figures
+from tumble_ros.core import load_scenario
+from tumble_ros.errors import AnalysisError
+from tumble_ros.runs.offline import record_offline
+
+CONFIG = Path(__file__).resolve().parents[1] / 'config'
+
+
+@pytest.fixture(scope='module')
+def recordings(tmp_path_factory):
+    """fig9 over 200 yr (20,001 samples: the zoomed windows, a departing model), fig10."""
+    tmp = tmp_path_factory.mktemp('pool')
+    fig9 = record_offline(load_scenario(CONFIG / 'fig9.yaml').replace(duration=200.0),
+                          tmp / 'fig9.mcap').output
+    fig10 = record_offline(load_scenario(CONFIG / 'fig10.yaml'), tmp / 'fig10.mcap').output
+    return [load_recording(fig9), load_recording(fig10)]
+
+
+def _files(paths):
+    return [(Path(p).name, Path(p).read_bytes()) for p in paths]
+
+
+def test_every_figure_is_in_a_share_once():
+    names = [n for share in SHARES for n in share]
+    assert len(names) == len(set(names)) and set(names) == set(FIGURES)
+
+
+@pytest.mark.parametrize('workers', [2, 1])
+def test_the_pool_writes_the_same_files(tmp_path, recordings, workers):
+    with FigurePool.start(workers) as pool:
+        for k, rec in enumerate(recordings):
+            summary = analyze(rec)
+            here = write_figures(rec, tmp_path / f'here{k}', summary)
+            there = pool.write_figures(rec, tmp_path / f'pool{k}', summary)
+            assert [p.name for p in there] == [p.name for p in here]
+            assert _files(there) == _files(here)
+    names = [p.name for p in here]
+    assert 'omega_windows.png' not in names and 'impact_0_id0.png' in names   # fig10
+    assert len(list((tmp_path / 'here0').glob('*.png'))) == 5          # fig9: 5, windows too
+
+
+def test_existing_files_are_refused_as_in_the_process(tmp_path, recordings):
+    rec = recordings[1]
+    summary = analyze(rec)
+    write_figures(rec, tmp_path, summary)
+    with FigurePool.start(2) as pool:
+        with pytest.raises(FigureExistsError, match='not overwritten'):
+            pool.write_figures(rec, tmp_path, summary)
+        assert len(pool.write_figures(rec, tmp_path, summary, overwrite=True)) >= 5
+
+
+def test_the_figures_of_a_dead_worker_are_drawn_here(tmp_path, recordings):
+    rec = recordings[1]
+    summary = analyze(rec)
+    pool = FigurePool.start(2)
+    try:
+        pool.write_figures(rec, tmp_path / 'before', summary)       # the workers are up
+        for pid in list(pool._executor._processes):
+            os.kill(pid, signal.SIGKILL)
+        there = pool.write_figures(rec, tmp_path / 'after', summary)
+    finally:
+        pool.close()
+    assert _files(there) == _files(write_figures(rec, tmp_path / 'here', summary))
+
+
+def _in_a_helper(then):
+    """Patch figure_pool._draw so that a helper (a child of the worker) runs ``then``."""
+    main, real = os.getpid(), figure_pool._draw
+
+    def draw(rec, summary, share):
+        if os.getppid() != main and os.getpid() != main:      # a helper, not the worker
+            then()
+        return real(rec, summary, share)
+    return draw
+
+
+def test_the_share_of_a_dead_helper_is_drawn_by_the_worker(tmp_path, recordings, monkeypatch):
+    rec = recordings[1]
+    summary = analyze(rec)
+    died = tmp_path / 'a helper died'
+
+    def die():
+        died.write_text('')
+        os._exit(3)
+    monkeypatch.setattr(figure_pool, '_draw', _in_a_helper(die))
+    with FigurePool.start(2) as pool:           # the worker inherits the patched module
+        there = pool.write_figures(rec, tmp_path / 'pool', summary)
+    monkeypatch.undo()
+    assert died.exists()
+    assert _files(there) == _files(write_figures(rec, tmp_path / 'here', summary))
+
+
+def test_an_error_in_a_helper_is_raised_as_in_the_process(tmp_path, recordings, monkeypatch):
+    def fail():
+        raise AnalysisError('cannot draw this share')
+    monkeypatch.setattr(figure_pool, '_draw', _in_a_helper(fail))
+    with FigurePool.start(2) as pool:
+        with pytest.raises(AnalysisError, match='cannot draw this share'):
+            pool.write_figures(recordings[1], tmp_path, analyze(recordings[1]))
+    assert not list(tmp_path.glob('*.png'))
+
+
+def test_the_main_job_never_imports_matplotlib(tmp_path):
+    scenario = tmp_path / 'short.yaml'
+    scenario.write_text('sim:\n  ros__parameters:\n    duration: 0.2\n'
+                        '    output_interval: 0.002\n')
+    code = ('import sys\nfrom tumble_ros.__main__ import main\n'
+            f'code = main([{str(scenario)!r}])\n'
+            "print('matplotlib loaded:', 'matplotlib' in sys.modules)\nsys.exit(code)\n")
+    done = subprocess.run([sys.executable, '-c', code], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert 'matplotlib loaded: False' in done.stdout
+    figures = sorted(p.name for p in tmp_path.glob('recordings/short_*_figures/*.png'))
+    assert 'omega.png' in figures and 'error.png' in figures

@@ -1,0 +1,203 @@
+"""
+The figures drawn in a worker process started ahead of time (the main job's figures).
+
+Drawing the five figures of the Fig 9 run costs ~1.7 s of CPU in one process, 0.6 s of which
+is importing matplotlib and the first use of its fonts and mathtext parser. The main job
+(``python -m tumble_ros``) knows from the start that it will draw them: it starts a
+:class:`FigurePool` before the recording, whose worker (forked from the main process, so
+numpy, numba, scipy and the analysis are already loaded) imports the figures module and draws
+a throw-away figure (:func:`~.figures.warm_up`) on the other core while the main process
+simulates and records. :meth:`FigurePool.write_figures` then hands the worker the recording
+and its summary (pickled once, ~40 MB and ~0.05 s for Fig 9); the worker forks one helper per
+further share of :data:`SHARES` (each inherits the warm matplotlib and the recording: no
+second warm-up, no second copy sent), draws the first share itself, collects the helpers'
+drawings through pipes, and the main process writes the PNG bytes in the usual order: the same
+bytes as drawn in one process (tests/test_figure_pool.py). Two shares, two cores drawing.
+
+This module imports no matplotlib: the main process never loads it. Without ``fork`` (not
+POSIX) :meth:`FigurePool.start` returns None and the figures are drawn in the process. If the
+worker dies (:class:`~concurrent.futures.process.BrokenProcessPool`) the figures are drawn in
+the process; a helper that dies has its share drawn by the worker. Exceptions raised while
+drawing are raised by :meth:`FigurePool.write_figures`, as in the process. The worker and its
+helpers ignore SIGINT (the main process handles it and ends the pool).
+"""
+from __future__ import annotations
+
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+import multiprocessing
+import os
+from pathlib import Path
+import pickle
+import signal
+from typing import Any, TYPE_CHECKING
+
+from .figure_files import Drawing, write_files
+
+if TYPE_CHECKING:
+    from .recording import Recording
+    from .summary import AnalysisSummary
+
+__all__ = ['FigurePool', 'SHARES', 'WORKERS']
+
+#: Processes drawing at once (the machine measured has two cores; the main process waits).
+WORKERS = 2
+#: The figures of each drawing process (names of :data:`~.figures.FIGURES`), about equal
+#: shares of the drawing time of the Fig 9 run: the windows, wy-vs-wx and the spectrum 1.1 s
+#: against omega, error and the impacts 0.85 s (CPU, warm, 2026-12-04). The worker draws the
+#: first, a helper each other; a figure in no share gets a helper of its own; with one
+#: drawing process the worker draws them all.
+SHARES: tuple[tuple[str, ...], ...] = (('omega_windows', 'wy_vs_wx', 'spectrum'),
+                                       ('omega', 'error', 'impacts'))
+
+
+def _warm() -> None:
+    """Initialise a worker: SIGINT ignored, the figures module imported, fonts loaded."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    from . import figures
+    figures.warm_up()
+
+
+def _ready() -> bool:
+    return True
+
+
+#: What a worker returns: name -> drawings of its share, and the files' order of all figures.
+_Drawn = tuple[dict[str, list['Drawing']], tuple[str, ...]]
+
+
+def _draw(rec: Recording, summary: AnalysisSummary, share: tuple[str, ...]) -> _Drawn:
+    """
+    Draw the figures of ``share`` in this worker.
+
+    ``share``: names of :data:`~.figures.FIGURES`, ``('*',)`` for those in no share of
+    :data:`SHARES`, ``('**',)`` for all.
+    """
+    from .figures import draw_figures, figure_order
+    return draw_figures(rec, summary, _names(share)), figure_order()
+
+
+def _names(share: tuple[str, ...]) -> tuple[str, ...]:
+    """Return the figure names of a share (see :func:`_draw`), in the files' order."""
+    from .figures import figure_order
+    order = figure_order()
+    if share == ('**',):
+        return order
+    if share == ('*',):
+        return tuple(n for n in order if not any(n in s for s in SHARES))
+    return tuple(n for n in order if n in share)
+
+
+def _helper(rec: Recording, summary: AnalysisSummary, share: tuple[str, ...]
+            ) -> tuple[int, int]:
+    """Fork a helper that draws ``share`` and writes (ok, drawn or error) pickled to a pipe."""
+    read_fd, write_fd = os.pipe()
+    pid = os.fork()
+    if pid:
+        os.close(write_fd)
+        return pid, read_fd
+    try:                            # the helper: never returns into the worker's loop
+        os.close(read_fd)
+        try:
+            payload = pickle.dumps((True, _draw(rec, summary, share)))
+        except BaseException as err:  # noqa: BLE001 - handed to the worker, raised there
+            try:
+                payload = pickle.dumps((False, err))
+            except Exception:  # noqa: BLE001 - an error that does not pickle: its text
+                payload = pickle.dumps((False, RuntimeError(f'{type(err).__name__}: {err}')))
+        with os.fdopen(write_fd, 'wb') as out:
+            out.write(payload)
+    finally:
+        os._exit(0)
+
+
+def _collect(pid: int, read_fd: int) -> tuple[bool, Any] | None:
+    """Return what the helper ``pid`` sent (None if it died before sending it); reap it."""
+    with os.fdopen(read_fd, 'rb') as pipe:
+        data = pipe.read()
+    os.waitpid(pid, 0)
+    return pickle.loads(data) if data else None
+
+
+def _draw_shares(rec: Recording, summary: AnalysisSummary,
+                 shares: tuple[tuple[str, ...], ...]) -> _Drawn:
+    """In the worker: a forked helper per share but the first, which is drawn here."""
+    shares = tuple(share for share in shares if _names(share))
+    if not shares:
+        return {}, _names(('**',))
+    helpers = []
+    try:
+        for share in shares[1:]:
+            helpers.append((share, *_helper(rec, summary, share)))
+        drawn, order = _draw(rec, summary, shares[0])
+    finally:
+        sent = [(share, _collect(pid, read_fd)) for share, pid, read_fd in helpers]
+    for share, result in sent:
+        if result is None:          # the helper died: its share is drawn here
+            part, _ = _draw(rec, summary, share)
+        elif not result[0]:
+            raise result[1]
+        else:
+            part, _ = result[1]
+        drawn.update(part)
+    return drawn, order
+
+
+class FigurePool:
+    """A worker process that draws figures (see the module docstring); a context manager."""
+
+    def __init__(self, executor: ProcessPoolExecutor, workers: int) -> None:
+        self._executor = executor
+        self.workers = workers
+
+    @classmethod
+    def start(cls, workers: int = WORKERS) -> FigurePool | None:
+        """
+        Fork the worker now (it warms up at once); None where fork is unavailable.
+
+        ``workers``: processes drawing at once (1: the worker alone; more: the shares of
+        :data:`SHARES`). Call it before any thread that must not be forked starts (rclpy's
+        context, DDS).
+        """
+        if workers < 1:
+            raise ValueError(f'workers: must be >= 1, got {workers}')
+        try:
+            context = multiprocessing.get_context('fork')
+        except ValueError:
+            return None
+        executor = ProcessPoolExecutor(max_workers=1, mp_context=context, initializer=_warm)
+        executor.submit(_ready)     # starts the worker now
+        return cls(executor, workers)
+
+    def write_figures(self, rec: Recording, out_dir: str | os.PathLike[str],
+                      summary: AnalysisSummary, *, overwrite: bool = False) -> list[Path]:
+        """
+        :func:`~.figures.write_figures`, the figures drawn in the worker: the same files.
+
+        Drawn in shares (:data:`SHARES`) by the worker and its helpers, written here in order
+        (:func:`~.figure_files.write_files`: all drawn before any is written). Exceptions
+        raised while drawing (AnalysisError, ...) are raised here, as in the process; the
+        figures of a worker that died are drawn here.
+        """
+        return write_files(self.draw(rec, summary), out_dir, overwrite)
+
+    def draw(self, rec: Recording, summary: AnalysisSummary) -> list[Drawing]:
+        """Draw every figure in the worker and its helpers; return them in the files' order."""
+        shares: tuple[tuple[str, ...], ...] = (SHARES + (('*',),) if self.workers > 1
+                                               else (('**',),))
+        try:
+            future = self._executor.submit(_draw_shares, rec, summary, shares)
+            drawn, order = future.result()
+        except BrokenProcessPool:   # the worker died: drawn here
+            drawn, order = _draw(rec, summary, ('**',))
+        return [drawing for name in order for drawing in drawn.get(name, [])]
+
+    def close(self) -> None:
+        """End the workers (those drawing finish first); pending work is cancelled."""
+        self._executor.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self) -> FigurePool:
+        return self
+
+    def __exit__(self, *exc_info: Any) -> None:
+        self.close()
