@@ -164,7 +164,8 @@ def fit_series(t: np.ndarray, y: np.ndarray, w: np.ndarray, f1: float, f2: float
 
 
 def _powers(f: np.ndarray, t: np.ndarray, top: int) -> np.ndarray:
-    """exp(2 pi i a f t) for a = 0..top, shape (f.size, top + 1, t.size).
+    """
+    Return exp(2 pi i a f t) for a = 0..top, shape (f.size, top + 1, t.size).
 
     One complex exponential per (f, t); the powers by the recurrence z^a = z^(a-1) z (angle
     addition: cos and sin of a x from those of (a - 1) x and x), rounding ~a eps.
