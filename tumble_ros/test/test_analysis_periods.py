@@ -92,6 +92,22 @@ def test_the_fast_grid_equals_lstsq_at_every_order_and_skips_only_degenerate_pai
     assert every[0, 4] == pytest.approx(direct_rss(t, y, w, 0.2, 0.2071, order), rel=1e-6)
 
 
+def test_the_grid_falls_back_to_lu_when_cholesky_fails(monkeypatch):
+    # a chunk whose factorisation fails is solved by LU: the same RSS as lstsq
+    rng = np.random.default_rng(4)
+    t = campaign_times(rng, 9)
+    y = doubly_periodic(t, 1 / 5.0, 1 / 13.7, TERMS) + rng.normal(0.0, 0.01, t.size)
+    w = rng.uniform(0.5, 2.0, t.size)
+    f1s, f2s = np.array([0.2, 0.31]), np.array([1 / 13.7, 0.0655])
+
+    def refuse(matrix):
+        raise np.linalg.LinAlgError('refused by the test')
+    monkeypatch.setattr(np.linalg, 'cholesky', refuse)
+    grid = _grid_rss(t, y, w, f1s, f2s, 2)
+    for i, j in np.ndindex(grid.shape):
+        assert grid[i, j] == pytest.approx(direct_rss(t, y, w, f1s[i], f2s[j], 2), rel=1e-6)
+
+
 def test_two_known_periods_are_recovered_through_noise_and_gaps_within_their_uncertainty():
     rng = np.random.default_rng(7)
     t = campaign_times(rng, 12)

@@ -296,13 +296,12 @@ def _grid_rss(t: np.ndarray, y: np.ndarray, w: np.ndarray, f1s: np.ndarray, f2s:
         g[:-1] += np.take(x, i_plus, axis=0) * c_plus[:, None]
         g[diag] += 1e-10 * g[diag].max(axis=0)
         g[-1] = yy
-        g = g.reshape(size, size, -1).transpose(2, 0, 1)
+        normal = g.reshape(size, size, -1).transpose(2, 0, 1)
         try:
-            rss = np.linalg.cholesky(g)[:, -1, -1] ** 2
+            rss = np.linalg.cholesky(normal)[:, -1, -1] ** 2
         except np.linalg.LinAlgError:        # not numerically positive definite: LU
-            full = np.tril(g) + np.swapaxes(np.tril(g, -1), 1, 2)
-            b = full[:, -1, :-1]
-            coef = np.linalg.solve(full[:, :-1, :-1], b[..., None])[..., 0]
+            b = normal[:, -1, :-1]
+            coef = np.linalg.solve(normal[:, :-1, :-1], b[..., None])[..., 0]
             rss = yy - np.einsum('...i,...i->...', coef, b)
         found = np.full(n1 * n2, np.inf)
         found[keep] = rss
