@@ -92,6 +92,24 @@ def test_the_fast_grid_equals_lstsq_at_every_order_and_skips_only_degenerate_pai
     assert every[0, 4] == pytest.approx(direct_rss(t, y, w, 0.2, 0.2071, order), rel=1e-6)
 
 
+def test_the_grid_is_the_same_in_chunks_of_one_f2(monkeypatch):
+    # every chunk on its own (its own degenerate mask, products and factorisations)
+    from tumble_ros.analysis import periods
+    rng = np.random.default_rng(6)
+    t = campaign_times(rng, 9)
+    y = doubly_periodic(t, 1 / 5.0, 1 / 13.7, TERMS) + rng.normal(0.0, 0.01, t.size)
+    w = np.ones(t.size)
+    span = float(t.max() - t.min())
+    f1s, f2s = np.array([0.2, 0.1, 0.31]), np.linspace(0.02, 0.4, 23)
+    whole = _grid_rss(t, y, w, f1s, f2s, 3, span)
+    monkeypatch.setattr(periods, '_CHUNK', 1)
+    one_by_one = _grid_rss(t, y, w, f1s, f2s, 3, span)
+    assert np.isinf(whole).sum() > 0 and np.isfinite(whole).sum() > 40
+    np.testing.assert_array_equal(np.isinf(one_by_one), np.isinf(whole))
+    finite = np.isfinite(whole)
+    np.testing.assert_allclose(one_by_one[finite], whole[finite], rtol=1e-6)   # rounding / cond
+
+
 def test_the_grid_falls_back_to_lu_when_cholesky_fails(monkeypatch):
     # a chunk whose factorisation fails is solved by LU: the same RSS as lstsq
     rng = np.random.default_rng(4)

@@ -264,7 +264,8 @@ def _grid_rss(t: np.ndarray, y: np.ndarray, w: np.ndarray, f1s: np.ndarray, f2s:
     yy = float(np.sum(w * y * y))
     n1 = f1s.size
     out = np.full((n1, f2s.size), np.inf)
-    step = max(1, _CHUNK // (n1 * size * size))
+    # a chunk holds at most _CHUNK matrix entries and _CHUNK of the f2 exponentials' parts
+    step = max(1, min(_CHUNK // (n1 * size * size), _CHUNK // (2 * (2 * m + 1) * t.size)))
     for lo in range(0, f2s.size, step):
         f2 = f2s[lo:lo + step]
         n2 = f2.size
