@@ -200,8 +200,8 @@ def _normal_tables(m: int) -> tuple[np.ndarray, ...]:
 
     S(-a, -b) = conj S(a, b), so only a >= 0 is summed. The sums of a chunk of trials are held
     as rows of a real array: Re then Im, each over (row r, b + 2m), r = a for S (a = 0..2m),
-    r = 2m + 1 + j for R (j = 0..m). Returns (position p P + q, index and factor of the first
-    term, of the second, the diagonal's positions, P).
+    r = 2m + 1 + j for R (j = 0..m). Returns (position p P + q of the lower triangle, q <= p,
+    index and factor of the first term, of the second, the diagonal's positions, P).
     """
     terms = _terms(m, True)
     jk = np.vstack([[0, 0], np.repeat(terms, 2, axis=0)])
@@ -230,8 +230,6 @@ def _normal_tables(m: int) -> tuple[np.ndarray, ...]:
         r_index = (int(is_sin[q]) * width + (2 * m + 1 + int(jk[q, 0])) * cols
                    + int(jk[q, 1]) + 2 * m)
         rows.append(((size - 1) * size + q, r_index, 1.0, 0, 0.0))
-    rows += [((p % size) * size + p // size, a, ca, b, cb) for p, a, ca, b, cb in rows
-             if p % size != p // size]
     table = np.array(sorted(rows))
     return (table[:, 0].astype(int), table[:, 1].astype(int), table[:, 2],
             table[:, 3].astype(int), table[:, 4], np.arange(size - 1) * (size + 1),
@@ -290,17 +288,20 @@ def _grid_rss(t: np.ndarray, y: np.ndarray, w: np.ndarray, f1s: np.ndarray, f2s:
             x[0, cut, neg_b] = (rr + ii).transpose(1, 2, 0, 3)
             x[1, cut, neg_b] = (ir - ri).transpose(1, 2, 0, 3)
         x = x.reshape(2 * rows * cols, n1 * n2)[:, keep]
-        # the matrices, trials last (whole rows gathered), read by Cholesky as (trial, P, P)
+        # the lower triangles, trials last (whole rows gathered), read by Cholesky as (trial,
+        # P, P): it uses only the lower triangle and the diagonal (numpy.linalg.cholesky)
+        lower = np.take(x, i_minus, axis=0)
+        lower *= c_minus[:, None]
+        lower += np.take(x, i_plus, axis=0) * c_plus[:, None]
         g = np.empty((size * size, x.shape[1]))
-        np.take(x, i_minus, axis=0, out=g[:-1])
-        g[:-1] *= c_minus[:, None]
-        g[:-1] += np.take(x, i_plus, axis=0) * c_plus[:, None]
+        g[pos] = lower
         g[diag] += 1e-10 * g[diag].max(axis=0)
         g[-1] = yy
         normal = g.reshape(size, size, -1).transpose(2, 0, 1)
         try:
             rss = np.linalg.cholesky(normal)[:, -1, -1] ** 2
         except np.linalg.LinAlgError:        # not numerically positive definite: LU
+            normal = np.tril(normal) + np.swapaxes(np.tril(normal, -1), 1, 2)
             b = normal[:, -1, :-1]
             coef = np.linalg.solve(normal[:, :-1, :-1], b[..., None])[..., 0]
             rss = yy - np.einsum('...i,...i->...', coef, b)
