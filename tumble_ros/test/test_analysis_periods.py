@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tumble_ros.analysis.periods import (_grid_rss, campaign_times, combination, harmonics,
-                                         search_periods)
+from tumble_ros.analysis.periods import (_degenerate, _grid_rss, campaign_times, combination,
+                                         harmonics, search_periods)
 from tumble_ros.core import load_scenario, simulate
 from tumble_ros.core.model.rotation import quaternion_to_euler
 from tumble_ros.core.model.spinstate import spin_state
@@ -53,6 +53,77 @@ def test_the_grid_equals_a_direct_least_squares_fit_at_every_trial():
             coef = np.linalg.lstsq(design * sw[:, None], y * sw, rcond=None)[0]
             rss = float(np.sum(w * (y - design @ coef) ** 2))
             assert grid[i, j] == pytest.approx(rss, rel=1e-6, abs=1e-9)
+
+
+def direct_rss(t, y, w, f1, f2, order):
+    """Return the weighted RSS of the series at (f1, f2) by np.linalg.lstsq (design matrix)."""
+    sw = np.sqrt(w)
+    cols = [np.ones_like(t)]
+    for jj, kk in harmonics(order):
+        phase = 2 * np.pi * (jj * f1 + kk * f2) * t
+        cols += [np.cos(phase), np.sin(phase)]
+    design = np.column_stack(cols)
+    coef = np.linalg.lstsq(design * sw[:, None], y * sw, rcond=None)[0]
+    return float(np.sum(w * (y - design @ coef) ** 2))
+
+
+@pytest.mark.parametrize('order', [1, 2, 3])
+def test_the_fast_grid_equals_lstsq_at_every_order_and_skips_only_degenerate_pairs(order):
+    # the Cholesky pivot of the augmented normal matrix, from one real matrix product of the
+    # recurrence-built exponentials, against lstsq on np.cos / np.sin columns
+    rng = np.random.default_rng(11 + order)
+    t = campaign_times(rng, 9) + 3.7          # not from 0: the phases are not trivial
+    y = doubly_periodic(t, 1 / 5.0, 1 / 13.7, TERMS) + rng.normal(0.0, 0.01, t.size)
+    w = rng.uniform(0.5, 2.0, t.size)
+    span = float(t.max() - t.min())
+    f1s = np.array([0.2, 0.2071, 0.31])
+    f2s = np.array([1 / 13.7, 0.0655, 0.1, 0.1035, 0.2071])   # 0.1 = f1/2, 0.2071 = f1
+    fast = _grid_rss(t, y, w, f1s, f2s, order, span)
+    degenerate = _degenerate(f1s[:, None], f2s[None, :], order, span)
+    assert degenerate[1, 4] and degenerate[0, 2] == (order >= 2) and not degenerate[0, 0]
+    assert np.all(np.isinf(fast[degenerate])) and np.all(np.isfinite(fast[~degenerate]))
+    for i, j in zip(*np.nonzero(~degenerate)):
+        assert fast[i, j] == pytest.approx(direct_rss(t, y, w, f1s[i], f2s[j], order),
+                                           rel=1e-6, abs=1e-12), (order, f1s[i], f2s[j])
+    # without the span every pair is computed (a degenerate one too: ridge, else LU)
+    every = _grid_rss(t, y, w, f1s, f2s, order)
+    assert np.all(np.isfinite(every))
+    np.testing.assert_allclose(every[~degenerate], fast[~degenerate], rtol=1e-12)
+    assert every[0, 4] == pytest.approx(direct_rss(t, y, w, 0.2, 0.2071, order), rel=1e-6)
+
+
+def test_the_grid_is_the_same_in_chunks_of_one_f2(monkeypatch):
+    # every chunk on its own (its own degenerate mask, products and factorisations)
+    from tumble_ros.analysis import periods
+    rng = np.random.default_rng(6)
+    t = campaign_times(rng, 9)
+    y = doubly_periodic(t, 1 / 5.0, 1 / 13.7, TERMS) + rng.normal(0.0, 0.01, t.size)
+    w = np.ones(t.size)
+    span = float(t.max() - t.min())
+    f1s, f2s = np.array([0.2, 0.1, 0.31]), np.linspace(0.02, 0.4, 23)
+    whole = _grid_rss(t, y, w, f1s, f2s, 3, span)
+    monkeypatch.setattr(periods, '_CHUNK', 1)
+    one_by_one = _grid_rss(t, y, w, f1s, f2s, 3, span)
+    assert np.isinf(whole).sum() > 0 and np.isfinite(whole).sum() > 40
+    np.testing.assert_array_equal(np.isinf(one_by_one), np.isinf(whole))
+    finite = np.isfinite(whole)
+    np.testing.assert_allclose(one_by_one[finite], whole[finite], rtol=1e-6)   # rounding / cond
+
+
+def test_the_grid_falls_back_to_lu_when_cholesky_fails(monkeypatch):
+    # a chunk whose factorisation fails is solved by LU: the same RSS as lstsq
+    rng = np.random.default_rng(4)
+    t = campaign_times(rng, 9)
+    y = doubly_periodic(t, 1 / 5.0, 1 / 13.7, TERMS) + rng.normal(0.0, 0.01, t.size)
+    w = rng.uniform(0.5, 2.0, t.size)
+    f1s, f2s = np.array([0.2, 0.31]), np.array([1 / 13.7, 0.0655])
+
+    def refuse(matrix):
+        raise np.linalg.LinAlgError('refused by the test')
+    monkeypatch.setattr(np.linalg, 'cholesky', refuse)
+    grid = _grid_rss(t, y, w, f1s, f2s, 2)
+    for i, j in np.ndindex(grid.shape):
+        assert grid[i, j] == pytest.approx(direct_rss(t, y, w, f1s[i], f2s[j], 2), rel=1e-6)
 
 
 def test_two_known_periods_are_recovered_through_noise_and_gaps_within_their_uncertainty():

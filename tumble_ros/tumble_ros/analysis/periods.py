@@ -19,8 +19,10 @@ The search (docs/analysis.md, "Periods from a lightcurve"):
   strongest signal of an elongated body is the second harmonic);
 * the 2-period grid: f1 within +-WINDOW steps of each candidate, f2 over the whole range; the
   normal equations of every trial are assembled from the sums sum_i w_i exp(2 pi i (a f1 +
-  b f2) t_i), |a|, |b| <= 2m, computed for the whole grid by one matrix product (no design
-  matrix per trial);
+  b f2) t_i), |a|, |b| <= 2m, computed for a chunk of the grid by one real matrix product
+  (the powers of exp(2 pi i f t) by recurrence, b and -b from the same four real products; no
+  design matrix per trial); each trial's RSS is the last Cholesky pivot of its augmented
+  normal matrix (no solve), degenerate trials (:func:`_degenerate`) are not computed;
 * refinement: Nelder-Mead on the exact least-squares RMS from the best grid point;
 * the order m minimises the BIC N ln(RSS/N) + p ln N (p: the coefficients and the
   frequencies): the grid is searched at the orders 1 to ``start_order`` (3), the pair of least
@@ -41,6 +43,7 @@ Times in any unit (hours for the command line), frequencies in its inverse.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 import math
 
 import numpy as np
@@ -160,57 +163,151 @@ def fit_series(t: np.ndarray, y: np.ndarray, w: np.ndarray, f1: float, f2: float
     return float(r @ r), coef
 
 
-def _column_algebra(terms: np.ndarray, m: int):
-    """Index and sign tables that build the normal matrix from the trigonometric sums."""
-    # columns: 0 the constant (a cos at (0, 0)), then cos/sin of each term
+def _powers(f: np.ndarray, t: np.ndarray, top: int) -> np.ndarray:
+    """
+    Return exp(2 pi i a f t) for a = 0..top, shape (f.size, top + 1, t.size).
+
+    One complex exponential per (f, t); the powers by the recurrence z^a = z^(a-1) z (angle
+    addition: cos and sin of a x from those of (a - 1) x and x), rounding ~a eps.
+    """
+    z = np.exp(2j * np.pi * np.outer(f, t))
+    out = np.empty((f.size, top + 1, t.size), dtype=complex)
+    out[:, 0] = 1.0
+    for a in range(1, top + 1):
+        out[:, a] = z if a == 1 else out[:, a - 1] * z
+    return out
+
+
+def _stack_parts(values: np.ndarray) -> np.ndarray:
+    """Real and imaginary parts stacked on a new first axis, contiguous."""
+    return np.stack([values.real, values.imag])
+
+
+@lru_cache(maxsize=8)
+def _normal_tables(m: int) -> tuple[np.ndarray, ...]:
+    """
+    Where each lower-triangle entry of a trial's augmented normal matrix comes from.
+
+    The design's columns: 1, then cos and sin of 2 pi v.(f1, f2) t for each term v = (j, k);
+    the augmented matrix [[A^T W A, A^T W y], [y^T W A, y^T W y]] has P = 2K + 2 rows. Its
+    entries are linear in S(a, b) = sum_i w_i exp(2 pi i (a f1 + b f2) t_i) (|a|, |b| <= 2m)
+    and R(j, k) = sum_i w_i y_i exp(2 pi i (j f1 + k f2) t_i):
+
+        cos_p cos_q = (Re S(p - q) + Re S(p + q)) / 2
+        sin_p sin_q = (Re S(p - q) - Re S(p + q)) / 2
+        cos_p sin_q = (Im S(p + q) - Im S(p - q)) / 2
+        sin_p cos_q = (Im S(p + q) + Im S(p - q)) / 2
+
+    S(-a, -b) = conj S(a, b), so only a >= 0 is summed. The sums of a chunk of trials are held
+    as rows of a real array: Re then Im, each over (row r, b + 2m), r = a for S (a = 0..2m),
+    r = 2m + 1 + j for R (j = 0..m). Returns (position p P + q of the lower triangle, q <= p,
+    index and factor of the first term, of the second, the diagonal's positions, P).
+    """
+    terms = _terms(m, True)
     jk = np.vstack([[0, 0], np.repeat(terms, 2, axis=0)])
     is_sin = np.r_[False, np.tile([False, True], len(terms))]
-    sp = is_sin[:, None]
-    sq = is_sin[None, :]
-    plus = jk[:, None, :] + jk[None, :, :] + 2 * m
-    minus = jk[:, None, :] - jk[None, :, :] + 2 * m
-    # cc = (Re S- + Re S+)/2, ss = (Re S- - Re S+)/2, cos p sin q = (Im S+ - Im S-)/2,
-    # sin p cos q = (Im S+ + Im S-)/2
-    re_minus = np.where(sp == sq, 0.5, 0.0)
-    re_plus = np.where(~sp & ~sq, 0.5, np.where(sp & sq, -0.5, 0.0))
-    im_minus = np.where(~sp & sq, -0.5, np.where(sp & ~sq, 0.5, 0.0))
-    im_plus = np.where(sp != sq, 0.5, 0.0)
-    return jk, is_sin, plus, minus, (re_minus, re_plus, im_minus, im_plus)
+    cols, width = 4 * m + 1, (3 * m + 2) * (4 * m + 1)
+
+    def s_index(v: np.ndarray, imag: bool) -> tuple[int, float]:
+        a, b, sign = int(v[0]), int(v[1]), 1.0
+        if a < 0 or (a == 0 and b < 0):
+            a, b, sign = -a, -b, (-1.0 if imag else 1.0)
+        return int(imag) * width + a * cols + b + 2 * m, sign
+
+    size = jk.shape[0] + 1
+    rows: list[tuple[int, int, float, int, float]] = []
+    for p in range(size - 1):
+        for q in range(p + 1):
+            sin_p, sin_q = bool(is_sin[p]), bool(is_sin[q])
+            (i_minus, s_minus), (i_plus, s_plus) = (s_index(jk[p] - jk[q], sin_p != sin_q),
+                                                    s_index(jk[p] + jk[q], sin_p != sin_q))
+            if sin_p == sin_q:
+                c_minus, c_plus = 0.5, (-0.5 if sin_p else 0.5)
+            else:
+                c_minus, c_plus = (0.5 if sin_p else -0.5), 0.5
+            rows.append((p * size + q, i_minus, c_minus * s_minus, i_plus, c_plus * s_plus))
+    for q in range(size - 1):        # the last row: A^T W y
+        r_index = (int(is_sin[q]) * width + (2 * m + 1 + int(jk[q, 0])) * cols
+                   + int(jk[q, 1]) + 2 * m)
+        rows.append(((size - 1) * size + q, r_index, 1.0, 0, 0.0))
+    table = np.array(sorted(rows))
+    return (table[:, 0].astype(int), table[:, 1].astype(int), table[:, 2],
+            table[:, 3].astype(int), table[:, 4], np.arange(size - 1) * (size + 1),
+            np.array(size))
 
 
 def _grid_rss(t: np.ndarray, y: np.ndarray, w: np.ndarray, f1s: np.ndarray, f2s: np.ndarray,
-              order: int) -> np.ndarray:
-    """Weighted RSS at every (f1s[i], f2s[j]) by the normal equations, shape (n1, n2)."""
+              order: int, span: float | None = None) -> np.ndarray:
+    """
+    Weighted RSS at every (f1s[i], f2s[j]) by the normal equations, shape (n1, n2).
+
+    The sums S, R of a chunk of trials come from real matrix products of the parts of
+    w e^(2 pi i a f1 t) (shared by every f2) and of e^(2 pi i b f2 t), b >= 0: (Lr + i Li)
+    (Er +- i Ei) gives b and -b from the same four products. Each trial's augmented normal
+    matrix (:func:`_normal_tables`) is factored by Cholesky, whose last pivot squared is the
+    Schur complement y^T W y - b^T N^-1 b: the RSS, no solve. A ridge of 1e-10 of the largest
+    diagonal entry keeps near-degenerate trials solvable (it raises their RSS by ~ridge |x|^2:
+    up to ~20 % at condition numbers 1e10-1e14, parts in 1e9 at well-determined ones); a chunk
+    whose factorisation still fails is solved by LU. With ``span`` [time], trials where two
+    terms share a frequency within 1/span (:func:`_degenerate`) are not computed: +inf.
+    """
     m = order
-    terms = _terms(m, True)
-    jk, is_sin, plus, minus, (a, b, c, d) = _column_algebra(terms, m)
-    span = 4 * m + 1
-    powers = np.arange(-2 * m, 2 * m + 1)
-    e1 = np.exp(2j * np.pi * (f1s[:, None, None] * powers[None, :, None]) * t)   # n1, A, N
-    e1w = (e1 * w).reshape(-1, t.size)
-    e1wy = (e1[:, m:3 * m + 1] * (w * y)).reshape(-1, t.size)
+    pos, i_minus, c_minus, i_plus, c_plus, diag, size_arr = _normal_tables(m)
+    size = int(size_arr)
+    rows, cols = 3 * m + 2, 4 * m + 1
+    e1 = _powers(f1s, t, 2 * m)                                          # n1, a, N
+    # real and imaginary parts of w e^(a f1) (a = 0..2m) and w y e^(j f1) (j = 0..m)
+    left_s = _stack_parts(e1 * w)                                        # 2, n1, 2m+1, N
+    left_r = _stack_parts(e1[:, :m + 1] * (w * y))                       # 2, n1, m+1, N
     yy = float(np.sum(w * y * y))
     n1 = f1s.size
-    out = np.empty((n1, f2s.size))
-    step = max(1, _CHUNK // (n1 * span * max(t.size, 1)))
+    out = np.full((n1, f2s.size), np.inf)
+    # a chunk holds at most _CHUNK matrix entries and _CHUNK of the f2 exponentials' parts
+    step = max(1, min(_CHUNK // (n1 * size * size), _CHUNK // (2 * (2 * m + 1) * t.size)))
     for lo in range(0, f2s.size, step):
         f2 = f2s[lo:lo + step]
-        e2 = np.exp(2j * np.pi * (f2[:, None, None] * powers[None, :, None]) * t)  # n2, A, N
         n2 = f2.size
-        s = (e1w @ e2.reshape(-1, t.size).T).reshape(n1, span, n2, span)
-        s = s.transpose(0, 2, 1, 3)                                       # n1, n2, A, A
-        rhs_sum = (e1wy @ e2[:, m:3 * m + 1].reshape(-1, t.size).T)
-        rhs_sum = rhs_sum.reshape(n1, 2 * m + 1, n2, 2 * m + 1).transpose(0, 2, 1, 3)
-        s_minus = s[:, :, minus[..., 0], minus[..., 1]]
-        s_plus = s[:, :, plus[..., 0], plus[..., 1]]
-        normal = (a * s_minus.real + b * s_plus.real + c * s_minus.imag + d * s_plus.imag)
-        r = rhs_sum[:, :, jk[:, 0] + m, jk[:, 1] + m]
-        rhs = np.where(is_sin, r.imag, r.real)
-        diag = np.einsum('...ii->...i', normal)
-        ridge = 1e-10 * diag.max(axis=-1, keepdims=True)
-        normal = normal + ridge[..., None] * np.eye(normal.shape[-1])
-        x = np.linalg.solve(normal, rhs[..., None])[..., 0]
-        out[:, lo:lo + n2] = yy - np.einsum('...i,...i->...', x, rhs)
+        keep = (np.ones(n1 * n2, dtype=bool) if span is None
+                else ~_degenerate(f1s[:, None], f2[None, :], m, span).ravel())
+        if not keep.any():
+            continue
+        right = _stack_parts(_powers(f2, t, 2 * m).transpose(1, 0, 2))     # 2, b, n2, N
+        right = np.ascontiguousarray(right.transpose(1, 0, 2, 3))          # b, 2, n2, N
+        x = np.empty((2, rows, cols, n1, n2))
+        for first, block, top in ((0, left_s, 2 * m), (2 * m + 1, left_r, m)):
+            # (Lr + i Li)(Er +- i Ei) from the four real products: b and -b in one
+            prod = (block.reshape(-1, t.size) @ right[:top + 1].reshape(-1, t.size).T)
+            prod = prod.reshape(2, n1, block.shape[2], top + 1, 2, n2)
+            rr, ii = prod[0, ..., 0, :], prod[1, ..., 1, :]
+            ri, ir = prod[0, ..., 1, :], prod[1, ..., 0, :]
+            cut = slice(first, first + block.shape[2])
+            pos_b = slice(2 * m, 2 * m + top + 1)
+            neg_b = slice(2 * m, 2 * m - top - 1 if 2 * m - top - 1 >= 0 else None, -1)
+            x[0, cut, pos_b] = (rr - ii).transpose(1, 2, 0, 3)
+            x[1, cut, pos_b] = (ri + ir).transpose(1, 2, 0, 3)
+            x[0, cut, neg_b] = (rr + ii).transpose(1, 2, 0, 3)
+            x[1, cut, neg_b] = (ir - ri).transpose(1, 2, 0, 3)
+        x = x.reshape(2 * rows * cols, n1 * n2)[:, keep]
+        # the lower triangles, trials last (whole rows gathered), read by Cholesky as (trial,
+        # P, P): it uses only the lower triangle and the diagonal (numpy.linalg.cholesky)
+        lower = np.take(x, i_minus, axis=0)
+        lower *= c_minus[:, None]
+        lower += np.take(x, i_plus, axis=0) * c_plus[:, None]
+        g = np.empty((size * size, x.shape[1]))
+        g[pos] = lower
+        g[diag] += 1e-10 * g[diag].max(axis=0)
+        g[-1] = yy
+        normal = g.reshape(size, size, -1).transpose(2, 0, 1)
+        try:
+            rss = np.linalg.cholesky(normal)[:, -1, -1] ** 2
+        except np.linalg.LinAlgError:        # not numerically positive definite: LU
+            normal = np.tril(normal) + np.swapaxes(np.tril(normal, -1), 1, 2)
+            b = normal[:, -1, :-1]
+            coef = np.linalg.solve(normal[:, :-1, :-1], b[..., None])[..., 0]
+            rss = yy - np.einsum('...i,...i->...', coef, b)
+        found = np.full(n1 * n2, np.inf)
+        found[keep] = rss
+        out[:, lo:lo + n2] = found.reshape(n1, n2)
     return np.maximum(out, 0.0)
 
 
@@ -379,8 +476,7 @@ def search_periods(t, magnitude, sigma=None, period_min: float | None = None,
                                         for c in candidates]))
         f1s = f1s[(f1s >= f_lo) & (f1s <= f_hi)]
         f2s = np.arange(f_lo, f_hi + step, step)
-        rss = _grid_rss(t, y, w, f1s, f2s, order)
-        rss[_degenerate(f1s[:, None], f2s[None, :], order, span)] = np.inf
+        rss = _grid_rss(t, y, w, f1s, f2s, order, span)
         i, j = np.unravel_index(np.argmin(rss), rss.shape)
         return np.array([f1s[i], f2s[j]])
 
