@@ -77,9 +77,11 @@ $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 # Test paths come from pytest.ini (testpaths) unless PYTEST_ARGS names some.
 # The tests use every loop: compile them all ahead, in parallel (about a second once cached).
 # PYTEST_WORKERS: pytest-xdist workers (auto: one per core; 0 runs the tests in this process).
+# One BLAS thread per worker: the workers already take every core, and OpenBLAS's second thread
+# spins between the period search's many small calls (twice the CPU, docs/performance.md).
 PYTEST_WORKERS ?= auto
 test: setup warmup
-	$(ENV) pytest -q -ra --durations=15 -n $(PYTEST_WORKERS) $(PYTEST_ARGS)
+	OPENBLAS_NUM_THREADS=1 $(ENV) pytest -q -ra --durations=15 -n $(PYTEST_WORKERS) $(PYTEST_ARGS)
 
 run: setup
 	$(ENV) python -m tumble_ros $(CONFIG)
