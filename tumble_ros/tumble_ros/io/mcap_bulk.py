@@ -85,6 +85,12 @@ def _record_dtype(sizes: Sequence[int]) -> tuple[np.dtype[np.void], list[int]]:
     return np.dtype(fields), offsets
 
 
+def _widen(span: Any, empty: bool, first: int, last: int) -> None:
+    """Widen a chunk builder's or the statistics' message time span [ns] as add_message does."""
+    span.message_start_time = first if empty else min(span.message_start_time, first)
+    span.message_end_time = max(span.message_end_time, last)
+
+
 def append_block(writer: Writer, channel_ids: Sequence[int], rows: Sequence[np.ndarray],
                  log_times: np.ndarray,
                  publish_times: np.ndarray) -> None:
@@ -114,11 +120,7 @@ def append_block(writer: Writer, channel_ids: Sequence[int], rows: Sequence[np.n
         records[f'data{j}'] = data
     base = builder.record_writer.count
     first, last = int(log.min()), int(log.max())
-    if builder.num_messages == 0:
-        builder.message_start_time = first
-    else:
-        builder.message_start_time = min(builder.message_start_time, first)
-    builder.message_end_time = max(builder.message_end_time, last)
+    _widen(builder, builder.num_messages == 0, first, last)
     sample = np.arange(n, dtype=np.uint64) * np.uint64(dtype.itemsize) + np.uint64(base)
     for j, channel in enumerate(channel_ids):
         index = builder.message_indices.get(channel)
@@ -130,11 +132,7 @@ def append_block(writer: Writer, channel_ids: Sequence[int], rows: Sequence[np.n
         stats.channel_message_counts[channel] += n
     builder.num_messages += n * len(rows)
     builder.record_writer.write(records.tobytes())
-    if stats.message_count == 0:
-        stats.message_start_time = first
-    else:
-        stats.message_start_time = min(stats.message_start_time, first)
-    stats.message_end_time = max(stats.message_end_time, last)
+    _widen(stats, stats.message_count == 0, first, last)
     stats.message_count += n * len(rows)
 
 
@@ -172,17 +170,9 @@ def append_messages(writer: Writer, messages: Sequence[tuple[int, bytes, int, in
         counts[channel] += 1
     logs = [m[2] for m in messages]
     first, last = min(logs), max(logs)
-    if builder.num_messages == 0:
-        builder.message_start_time = first
-    else:
-        builder.message_start_time = min(builder.message_start_time, first)
-    builder.message_end_time = max(builder.message_end_time, last)
+    _widen(builder, builder.num_messages == 0, first, last)
     builder.num_messages += len(messages)
     builder.record_writer.write(b''.join(parts))
-    if stats.message_count == 0:
-        stats.message_start_time = first
-    else:
-        stats.message_start_time = min(stats.message_start_time, first)
-    stats.message_end_time = max(stats.message_end_time, last)
+    _widen(stats, stats.message_count == 0, first, last)
     stats.message_count += len(messages)
     return data_bytes
