@@ -30,6 +30,7 @@ Results bigger than memory go to a labelled store chunk by chunk instead of bein
 from __future__ import annotations
 
 from contextlib import contextmanager
+import functools
 import logging
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence, TypeVar
@@ -168,18 +169,34 @@ def _workers_ignore_sigint() -> Iterator[None]:
     workers with SIGTERM). Restarts of killed workers during the run are covered too.
     """
     import multiprocessing.spawn as mp_spawn
+
+    previous = mp_spawn.get_executable()
+    mp_spawn.set_executable(str(_sigint_ignoring_python()))
+    try:
+        yield
+    finally:
+        mp_spawn.set_executable(previous)
+
+
+@functools.lru_cache(maxsize=1)
+def _sigint_ignoring_python() -> Path:
+    """
+    Return a shell wrapper that runs this Python with SIGINT ignored (made once per process).
+
+    It stays until the interpreter exits: a Ctrl-C while the cluster starts ends the ``with``
+    of :func:`_workers_ignore_sigint` while a nanny may still be spawning through it, and a
+    wrapper removed then printed "/bin/sh: 0: cannot open .../python" (and the resource
+    tracker it failed to start warned it died).
+    """
+    import atexit
     import shlex
+    import shutil
     import sys
     import tempfile
 
-    previous = mp_spawn.get_executable()
-    with tempfile.TemporaryDirectory(prefix='tumble-dask-') as folder:
-        wrapper = Path(folder) / 'python'
-        wrapper.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(sys.executable)} "
-                           '"$@"\n')
-        wrapper.chmod(0o700)
-        mp_spawn.set_executable(str(wrapper))
-        try:
-            yield
-        finally:
-            mp_spawn.set_executable(previous)
+    folder = tempfile.mkdtemp(prefix='tumble-dask-')
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    wrapper = Path(folder) / 'python'
+    wrapper.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(sys.executable)} \"$@\"\n")
+    wrapper.chmod(0o700)
+    return wrapper
