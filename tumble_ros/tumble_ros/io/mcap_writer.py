@@ -428,9 +428,7 @@ class McapWriter:
         self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, data=data,
                                  publish_time=publish_time_ns)
         self._counts[self._topics[channel_id]] += 1
-        if self._keep is not None:
-            self._kept((channel_id,), (np.frombuffer(data, dtype=np.uint8).reshape(1, -1),),
-                       [log_time_ns], [publish_time_ns])
+        self._kept_one(channel_id, data, log_time_ns, publish_time_ns)
         if self._pending_messages == 0:
             self._pending_since = time.monotonic()
         self._pending_messages += 1
@@ -476,10 +474,7 @@ class McapWriter:
             append_messages(self._writer, run)
             for channel_id, data, log, sent in run:
                 self._counts[self._topics[channel_id]] += 1
-                if self._keep is not None:
-                    self._kept((channel_id,),
-                               (np.frombuffer(data, dtype=np.uint8).reshape(1, -1),),
-                               [log], [sent])
+                self._kept_one(channel_id, data, log, sent)
             if self._pending_messages == 0:
                 self._pending_since = time.monotonic()
             self._pending_messages += len(run)
@@ -539,6 +534,13 @@ class McapWriter:
             for topic in named:
                 self._counts[topic] += n
             self._kept(tuple(channel_ids), tuple(rows), logs, sent)
+
+    def _kept_one(self, channel_id: int, data: bytes, log_time_ns: int,
+                  publish_time_ns: int) -> None:
+        """Hand one written message to ``keep`` (a block of one channel and one message)."""
+        if self._keep is not None:
+            self._kept((channel_id,), (np.frombuffer(data, dtype=np.uint8).reshape(1, -1),),
+                       [log_time_ns], [publish_time_ns])
 
     def _kept(self, channel_ids: tuple[int, ...], rows: tuple[npt.NDArray[np.uint8], ...],
               logs: _Times, sent: _Times) -> None:

@@ -103,11 +103,16 @@ def init_rclpy(args: list[str], context: Context | None = None) -> None:
         set_logger_level('rcl', LoggingSeverity.UNSET)
 
 
-def close_node(node: Node) -> None:
-    """Run the node's ``close()`` if it has one (finalise a file, say goodbye), then destroy it."""
+def _close(node: Node) -> None:
+    """Run the node's ``close()`` if it has one (finalise a file, say goodbye)."""
     close = getattr(node, 'close', None)
     if close is not None:
         close()
+
+
+def close_node(node: Node) -> None:
+    """Close a node no executor holds (:func:`_close`), then destroy it."""
+    _close(node)
     node.destroy_node()
 
 
@@ -125,9 +130,7 @@ def tear_down(executor, nodes: list[Node], context: Context | None = None,
     with status 1 from a C thread (the blocked main thread may hold the GIL).
     """
     for node in nodes:
-        close = getattr(node, 'close', None)
-        if close is not None:
-            close()
+        _close(node)
     if watchdog:
         faulthandler.dump_traceback_later(TEARDOWN_TIMEOUT, exit=True)
     try:

@@ -69,7 +69,8 @@ class SimulationSession:
         # the later ones the same without the impacts list (each is on impact_events when it
         # ends): a description per impact would otherwise repeat every impact (quadratic).
         self._scenario_yaml = dump_scenario(scenario)
-        self._segment_yaml = (dump_scenario(scenario.replace(impacts=())) if scenario.impacts
+        self._segment_scenario = scenario.replace(impacts=()) if scenario.impacts else scenario
+        self._segment_yaml = (dump_scenario(self._segment_scenario) if scenario.impacts
                               else self._scenario_yaml)
         self._next_k = 0        # index of the next sample
         self._revision = 0      # of the next segment start
@@ -90,8 +91,7 @@ class SimulationSession:
         ``parse_scenario(text) == scenario`` for each (tested): an in-process reader takes the
         scenario instead of parsing the text back.
         """
-        return {self._scenario_yaml: self.scenario,
-                self._segment_yaml: self.scenario.replace(impacts=())}
+        return {self._scenario_yaml: self.scenario, self._segment_yaml: self._segment_scenario}
 
     @property
     def state(self) -> int:
