@@ -140,8 +140,8 @@ BK = layout('BlockState', [
     ('F', N, 'rk4: f(t, y), computed at the start of each step'),
 ])
 
-#: Scratch rows of a block ``(BT.SIZE, B)``: the libm sin/cos are taken in a pass of their own,
-#: between vectorised passes.
+#: Scratch rows of a block ``(BT.SIZE, B)``: the sin/cos are taken in a pass of their own
+#: (``splitting.block_sincos``: vectorised, then libm for angles beyond its range).
 BT = layout('BlockScratch', [
     ('NORM', 1, 'splitting: |pi|'),
     ('ANGLE', 1, 'the angle of the next sin/cos pass [rad]'),

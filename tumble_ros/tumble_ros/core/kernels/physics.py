@@ -13,6 +13,7 @@ import math
 
 from tumble_ros.core.jit import called, jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, Extra, PR
+from tumble_ros.core.kernels.trig import sin_cos
 from tumble_ros.core.torques.frames import orbital_to_body
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane, tidal_torque
 from tumble_ros.core.torques.pulses import pulse_torque
@@ -104,8 +105,8 @@ rhs_called = called(rhs)
 def axis_rotation(axis: int, beta: float, px: float, py: float, pz: float, q0: float, q1: float,
                   q2: float, q3: float) -> tuple[float, float, float, float, float, float, float]:
     """Exact flow of 1/2 c pi_axis^2 (beta = c pi_axis a): pi turns by -beta, q by +beta."""
-    return axis_turn(axis, math.cos(0.5 * beta), math.sin(0.5 * beta), px, py, pz, q0, q1, q2,
-                     q3)
+    s2, c2 = sin_cos(0.5 * beta)
+    return axis_turn(axis, c2, s2, px, py, pz, q0, q1, q2, q3)
 
 
 @jit_inline
@@ -182,8 +183,8 @@ def free_flow(p: Array, a: float, px: float, py: float, pz: float, q0: float, q1
     n = math.sqrt(px * px + py * py + pz * pz)
     if n > 0.0:
         half = 0.5 * (n * a * p[PR.INV_REF])
-        q0, q1, q2, q3 = pi_turn(math.cos(half), math.sin(half) / n, px, py, pz, q0, q1, q2,
-                                 q3)
+        s, c = sin_cos(half)
+        q0, q1, q2, q3 = pi_turn(c, s / n, px, py, pz, q0, q1, q2, q3)
     first, second = flow_pieces(p)
     if second >= 0:  # Strang: B_first(a/2) B_second(a) B_first(a/2)
         cf = p[PR.FLOW + first]

@@ -16,6 +16,7 @@ from tumble_ros.core.kernels.layout import Array, BK, BT, CF, Extra, FAIL, N, PR
 from tumble_ros.core.kernels.physics import (axis_turn, body_torque, flow_pieces, free_flow,
                                              pi_turn, torque_given_sun)
 from tumble_ros.core.kernels.rk4 import step_count
+from tumble_ros.core.kernels.trig import REDUCED_LIMIT, sin_cos_reduced
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
 
 __all__ = ['flow', 'flow_called', 'pulse_step_count', 'start', 'step', 'dense',
@@ -192,11 +193,21 @@ def block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array, m: i
 
 @jit
 def block_sincos(tmp: Array, m: int) -> None:
-    """tmp[BT.COS], tmp[BT.SIN] = cos, sin of tmp[BT.ANGLE]: the libm pass (not vectorised)."""
+    """
+    tmp[BT.COS], tmp[BT.SIN] = cos, sin of tmp[BT.ANGLE]: :func:`~.trig.sin_cos`'s bits.
+
+    A vectorised pass of :func:`~.trig.sin_cos_reduced` over all, then libm for the angles
+    beyond its range (none in practice: a check a body).
+    """
+    for i in range(m):
+        s, c = sin_cos_reduced(tmp[BT.ANGLE, i])
+        tmp[BT.SIN, i] = s
+        tmp[BT.COS, i] = c
     for i in range(m):
         x = tmp[BT.ANGLE, i]
-        tmp[BT.COS, i] = math.cos(x)
-        tmp[BT.SIN, i] = math.sin(x)
+        if not abs(x) < REDUCED_LIMIT:
+            tmp[BT.SIN, i] = math.sin(x)
+            tmp[BT.COS, i] = math.cos(x)
 
 
 @jit
@@ -230,10 +241,10 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
     """
     Take :func:`step` for m bodies at once: buffer old -> new, the shared times in bst.
 
-    :func:`flow`'s operations in its order, cut into passes over the bodies at the libm
-    sin/cos (each pass but those vectorised by LLVM): kick and the |pi| angle; sin/cos; the turn
-    about pi and the first axis angle; per axis piece sin/cos and the turn; the torque (the
-    Sun's direction once for all bodies) and the second kick.
+    :func:`flow`'s operations in its order, cut into passes over the bodies, each vectorised
+    by LLVM: kick and the |pi| angle; sin/cos (:func:`block_sincos`); the turn about pi and the
+    first axis angle; per axis piece sin/cos and the turn; the torque (the Sun's direction once
+    for all bodies) and the second kick.
     """
     h = bst[ST.H]
     tau = bst[ST.TAU]

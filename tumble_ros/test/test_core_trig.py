@@ -1,0 +1,83 @@
+"""
+The kernels' sin and cos (core/kernels/trig.py): within 1 ulp of libm's, the same bits vectorised.
+
+libm (glibc) is the independent reference: its sin and cos are accurate to within an ulp.
+Every kernel that turns a body calls ``trig.sin_cos``; the lockstep loop's vectorised pass
+(``splitting.block_sincos``) must give exactly its bits, or an ensemble body would drift from
+its own run (test_core_lockstep.py checks whole trajectories).
+"""
+import math
+
+import numpy as np
+import pytest
+
+from tumble_ros.core import kernels
+from tumble_ros.core.jit import called, python_source
+from tumble_ros.core.kernels import trig
+from tumble_ros.core.kernels.layout import BT
+
+needs_numba = pytest.mark.skipif(not kernels.COMPILED,
+                                 reason='numba not available: only the reference path runs')
+
+#: The scalar function compiled on its own, and its Python source (the reference path).
+SIN_COS = {'compiled': called(trig.sin_cos), 'python': python_source(trig.sin_cos)}
+
+
+def arguments(seed=1, n=4000):
+    """Arguments from 1e-12 rad to the reduced range's limit, both signs, k pi/2 +- 1 ulp."""
+    rng = np.random.default_rng(seed)
+    scales = 10.0 ** rng.uniform(-12, math.log10(trig.REDUCED_LIMIT), n)
+    x = scales * rng.choice([-1.0, 1.0], n)
+    k = np.arange(-2000, 2001) * (math.pi / 2)
+    edge = np.linspace(-1.0, 1.0, 2001) * trig.SMALL * 1.02   # both sides of the short path
+    return np.concatenate([x, k, np.nextafter(k, np.inf), np.nextafter(k, -np.inf), edge,
+                           [0.0, -0.0, math.pi / 4, -math.pi / 4, 5e-324, 1e-300,
+                            trig.SMALL, np.nextafter(trig.SMALL, 0.0)]])
+
+
+def ulps(got, want):
+    """|got - want| in units of the last place of want (of 5e-324 at 0)."""
+    return np.abs(got - want) / np.spacing(np.maximum(np.abs(want), 5e-324))
+
+
+@pytest.mark.parametrize('path', sorted(SIN_COS))
+def test_sin_and_cos_are_within_one_ulp_of_libm(path):
+    if path == 'compiled' and not kernels.COMPILED:
+        pytest.skip('numba not available')
+    x = arguments()
+    pairs = np.array([SIN_COS[path](float(v)) for v in x])
+    assert ulps(pairs[:, 0], np.sin(x)).max() <= 1.0
+    assert ulps(pairs[:, 1], np.cos(x)).max() <= 1.0
+    # (and most are libm's own bits: the polynomials are fdlibm's)
+    assert np.mean(pairs[:, 0] == np.sin(x)) > 0.9
+
+
+def test_signs_of_zero_and_exact_values():
+    f = SIN_COS['python']
+    assert f(0.0) == (0.0, 1.0) and math.copysign(1.0, f(0.0)[0]) == 1.0
+    assert math.copysign(1.0, f(-0.0)[0]) == -1.0  # sin(-0) = -0, as libm
+    assert f(1e-20) == (1e-20, 1.0)
+
+
+@pytest.mark.parametrize('path', sorted(SIN_COS))
+def test_huge_and_non_finite_arguments_are_libms(path):
+    if path == 'compiled' and not kernels.COMPILED:
+        pytest.skip('numba not available')
+    for v in (trig.REDUCED_LIMIT, -trig.REDUCED_LIMIT * 3, 1e10, 1e300):
+        assert SIN_COS[path](v) == (math.sin(v), math.cos(v))
+    for v in (math.inf, -math.inf, math.nan):
+        assert all(math.isnan(r) for r in SIN_COS['compiled'](v))
+
+
+@needs_numba
+def test_the_vectorised_block_pass_gives_the_scalar_bits():
+    from tumble_ros.core.kernels.splitting import block_sincos
+    x = np.concatenate([arguments(seed=2, n=1000), [1e7, -1e12, math.inf, math.nan]])
+    tmp = np.zeros((BT.SIZE, x.size))
+    tmp[BT.ANGLE] = x
+    block_sincos(tmp, x.size)
+    scalar = np.array([SIN_COS['compiled'](float(v)) for v in x])
+    np.testing.assert_array_equal(tmp[BT.SIN], scalar[:, 0])
+    np.testing.assert_array_equal(tmp[BT.COS], scalar[:, 1])
+    # signed zeros too
+    assert np.array_equal(np.signbit(tmp[BT.SIN]), np.signbit(scalar[:, 0]))
