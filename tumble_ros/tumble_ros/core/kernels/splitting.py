@@ -62,9 +62,9 @@ def flow(p: Array, extra: Extra, cfg: Array, st: Array, yo: int, po: int, to: in
     st[pd] = px
     st[pd + 1] = py
     st[pd + 2] = pz
-    st[yd] = px / p[PR.INERTIA]
-    st[yd + 1] = py / p[PR.INERTIA + 1]
-    st[yd + 2] = pz / p[PR.INERTIA + 2]
+    st[yd] = px * p[PR.INV_INERTIA]        # (not / I: a multiply vectorises 4x cheaper)
+    st[yd + 1] = py * p[PR.INV_INERTIA + 1]
+    st[yd + 2] = pz * p[PR.INV_INERTIA + 2]
     st[yd + 3] = q0
     st[yd + 4] = q1
     st[yd + 5] = q2
@@ -312,9 +312,9 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
             new[BK.PI + 1, i] += half * ty
             new[BK.PI + 2, i] += half * tz
     for i in range(m):
-        new[BK.Y, i] = new[BK.PI, i] / p[PR.INERTIA]
-        new[BK.Y + 1, i] = new[BK.PI + 1, i] / p[PR.INERTIA + 1]
-        new[BK.Y + 2, i] = new[BK.PI + 2, i] / p[PR.INERTIA + 2]
+        new[BK.Y, i] = new[BK.PI, i] * p[PR.INV_INERTIA]   # as flow
+        new[BK.Y + 1, i] = new[BK.PI + 1, i] * p[PR.INV_INERTIA + 1]
+        new[BK.Y + 2, i] = new[BK.PI + 2, i] * p[PR.INV_INERTIA + 2]
     bst[ST.TAU_OLD] = tau
     bst[ST.TAU] = (bst[ST.TAU_BOUND] if bst[ST.N_STEPS] + 1.0 >= bst[ST.N_TOTAL]
                    else (bst[ST.N_STEPS] + 1.0) * h)

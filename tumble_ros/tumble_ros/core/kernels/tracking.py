@@ -25,6 +25,7 @@ UNWRAP_MIN_SIN = 0.1
 #: far too long for the spin, or a state running away, is followed in this many pieces).
 MAX_TRACK_PIECES = 100_000
 _TWO_PI = 2.0 * math.pi
+_MIN_SIN_SQUARED = UNWRAP_MIN_SIN * UNWRAP_MIN_SIN
 
 
 @jit
@@ -82,11 +83,13 @@ def set_track(st: Array, o: int, track: Array) -> None:
 def track_rate(wx: float, wy: float, wz: float, q0: float, q1: float, q2: float,
                q3: float) -> float:
     """Return the bound |w| / max(UNWRAP_MIN_SIN, sin theta) on how fast phi, psi turn [rad/yr]."""
-    w = math.sqrt(wx ** 2 + wy ** 2 + wz ** 2)
-    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    cos_theta = 1.0 - s * (q1 * q1 + q2 * q2)
-    sin_theta = math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta))
-    return w / max(UNWRAP_MIN_SIN, sin_theta)
+    # one square root and one division (they were most of the bound's cost in a vectorised
+    # pass): with n = |q|^2 and a = q1^2 + q2^2, cos theta = 1 - 2 a / n, so
+    # n^2 sin^2 theta = 4 a (n - a) and |w| / max(m, sin theta) = |w| n / max(m n, n sin theta)
+    w2 = wx * wx + wy * wy + wz * wz
+    n = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3
+    a = q1 * q1 + q2 * q2
+    return math.sqrt(w2 * (n * n) / max(_MIN_SIN_SQUARED * (n * n), 4.0 * a * (n - a)))
 
 
 @jit
