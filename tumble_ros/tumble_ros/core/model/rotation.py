@@ -160,10 +160,15 @@ def continuous_quaternions(q: np.ndarray, previous: np.ndarray | None = None) ->
     Along the sample axis (-2), as :meth:`Propagator.sample` does one at a time; ``previous``
     (one body, (4,)) is the last quaternion handed out before these. (B, n, 4): B bodies.
     """
-    q = q / np.sqrt(np.sum(q * q, axis=-1, keepdims=True))
+    # (components written out: numpy's reductions over 4 cost a loop's set-up per sample; the
+    # same bits, summed in their order)
+    q = q / np.sqrt((q[..., 0] * q[..., 0] + q[..., 1] * q[..., 1] + q[..., 2] * q[..., 2]
+                     + q[..., 3] * q[..., 3])[..., None])
     if q.shape[-2] == 0:
         return q
-    dots = np.einsum('...ij,...ij->...i', q[..., 1:, :], q[..., :-1, :])
+    after, before = q[..., 1:, :], q[..., :-1, :]
+    dots = (after[..., 0] * before[..., 0] + after[..., 1] * before[..., 1]
+            + after[..., 2] * before[..., 2] + after[..., 3] * before[..., 3])
     first = -1.0 if previous is not None and np.dot(q[..., 0, :], previous) < 0.0 else 1.0
     flips = np.concatenate([np.full(q.shape[:-2] + (1,), first), np.where(dots < 0.0, -1.0, 1.0)],
                            axis=-1)

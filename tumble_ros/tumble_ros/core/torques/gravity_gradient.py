@@ -125,5 +125,8 @@ def gravity_gradient_potential(u_body: npt.ArrayLike, inertia: npt.ArrayLike,
     """
     u = np.asarray(u_body, dtype=float)
     i = np.asarray(inertia, dtype=float)
-    potential: npt.NDArray[np.float64] = 1.5 * orbit_rate**2 * np.sum(u * u * i, axis=-1)
+    uu = u * u * i
+    # (written out: np.sum over 3 components costs a reduction's set-up per sample; same bits)
+    weighted = uu[..., 0] + uu[..., 1] + uu[..., 2]
+    potential: npt.NDArray[np.float64] = 1.5 * orbit_rate**2 * weighted
     return potential
