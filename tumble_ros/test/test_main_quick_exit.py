@@ -16,13 +16,13 @@ import pytest
 from test_main_job import short_scenario
 from tumble_ros.__main__ import BROKEN_PIPE_EXIT, is_main_job
 
-HANDLER = '''
+HANDLER = """
 import atexit, sys
 from tumble_ros.__main__ import quick_exit
 atexit.register(lambda: open(sys.argv[1], 'a').write('handler ran\\n'))
 sys.stdout.write('buffered out')     # no newline: still in the buffer
 sys.stderr.write('buffered err')
-'''
+"""
 
 
 #: The children's environment: stdout and stderr buffered (not so under PYTHONUNBUFFERED).

@@ -31,9 +31,9 @@ modules and collecting what they hold: 0.2-0.35 s of a 4-s Fig 9 run) is left to
 """
 from __future__ import annotations
 
+import atexit
 from collections.abc import Iterator
 from contextlib import contextmanager
-import atexit
 import gc
 import importlib
 import os
