@@ -155,8 +155,11 @@ def test_the_check_sees_relative_and_nested_imports():
 
 #: Private attributes of third-party objects that some modules must reach (scipy's solvers,
 #: numba's dispatchers and cache, rclpy's node), and the standard library's os._exit (how a
-#: forked child ends without the parent's clean-up): (module, expression).
+#: forked child ends without the parent's clean-up; the main job's end without the interpreter's
+#: teardown, after atexit._run_exitfuncs): (module, expression).
 THIRD_PARTY_PRIVATE = {
+    ('tumble_ros.__main__', 'atexit._run_exitfuncs'),
+    ('tumble_ros.__main__', 'os._exit'),
     ('tumble_ros.analysis.figure_pool', 'os._exit'),
     ('tumble_ros.core.integrators.adaptive', 'solver._integrator'),
     ('tumble_ros.core.integrators.adaptive', 'solver._y'),

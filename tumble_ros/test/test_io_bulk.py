@@ -5,22 +5,29 @@ write_rows (fixed-size samples of several channels) and write_many (messages of 
 
 The same rows, single messages around them and chunk sizes that cut the blocks anywhere: the
 two files must be the same bytes (records, chunks, message indexes, statistics, summary), and
-the bulk file must read back with mcap's own seeking reader through its indexes.
+the bulk file must read back with mcap's own seeking reader through its indexes. The chunks
+finalised in a thread (``background=True``, mcap_bulk.ChunkFinisher): the same bytes again, the
+file flushed as far as the thread has written it, an error of the thread raised by the writer.
 """
+import threading
+
 from mcap.reader import make_reader
 import numpy as np
 import pytest
 
 from tumble_ros.io import McapWriter
-from tumble_ros.io.mcap_bulk import bulk_supported
+from tumble_ros.io.mcap_bulk import bulk_supported, ChunkFinisher
 
 RNG = np.random.default_rng(7)
 
 
-def _write(path, bulk: bool, chunk_bytes: int, compression: str) -> None:
+def _write(path, bulk: bool, chunk_bytes: int, compression: str,
+           background: bool = False) -> None:
     with McapWriter(path, chunk_bytes=chunk_bytes, chunk_seconds=float('inf'),
-                    compression=compression) as w:
+                    compression=compression, background=background) as w:
         assert bulk_supported(w._writer)
+        # the finisher is used where asked for, except with lz4 (left to mcap's Writer)
+        assert (w._finisher is not None) == (background and compression != 'lz4')
         w._bulk = bulk                                  # the reference: one add_message each
         a = w.add_channel('/a', 'geometry_msgs/msg/Vector3Stamped')
         b = w.add_channel('/b', 'geometry_msgs/msg/QuaternionStamped')
@@ -58,6 +65,50 @@ def test_the_bulk_path_writes_the_same_bytes(tmp_path, chunk_bytes, compression)
         assert stats.message_count == 3 * (1 + 7 + 250 + 3 + 1000) + 10
         times = [m.log_time for _, _, m in reader.iter_messages(log_time_order=True)]
     assert len(times) == stats.message_count and times == sorted(times)
+
+
+@pytest.mark.parametrize('chunk_bytes, compression', [
+    (1, 'none'), (1000, 'zstd'), (4096, 'lz4'), (30_000, 'zstd'), (10_000_000, 'zstd')])
+@pytest.mark.parametrize('bulk', [True, False])
+def test_chunks_finalised_in_a_thread_are_the_same_bytes(tmp_path, chunk_bytes, compression,
+                                                         bulk):
+    _write(tmp_path / 'thread.mcap', bulk, chunk_bytes, compression, background=True)
+    _write(tmp_path / 'each.mcap', False, chunk_bytes, compression)
+    thread, each = (tmp_path / 'thread.mcap').read_bytes(), (tmp_path / 'each.mcap').read_bytes()
+    assert len(thread) > 10_000
+    assert thread == each
+
+
+def test_a_flush_waits_for_the_thread_and_the_file_is_read_as_far(tmp_path):
+    """The durability contract with background=True: after flush() the chunks are in the file."""
+    path = tmp_path / 'open.mcap'
+    w = McapWriter(path, chunk_bytes=500, chunk_seconds=float('inf'), background=True)
+    try:
+        a = w.add_channel('/a', 'std_msgs/msg/String')
+        for k in range(300):
+            w.write(a, b'\x00\x01\x00\x00\x04\x00\x00\x00abc\x00' + bytes(40), 1000 + k)
+        w.flush()
+        assert w.chunks_written > 10
+        from tumble_ros.io import read_messages
+        assert sum(1 for _ in read_messages(path)) == 300     # unfinished file, streamed
+    finally:
+        w.close()
+    assert not any(t.name.startswith('mcap-chunks') for t in threading.enumerate())
+
+
+def test_an_error_in_the_thread_is_raised_by_the_writer(tmp_path, monkeypatch):
+    w = McapWriter(tmp_path / 'x.mcap', chunk_bytes=100, chunk_seconds=float('inf'),
+                   background=True)
+    a = w.add_channel('/a', 'std_msgs/msg/String')
+
+    def fail(*args):
+        raise OSError(28, 'No space left on device')
+    monkeypatch.setattr(ChunkFinisher, '_write', fail)
+    w.write(a, bytes(200), 1)               # a chunk handed over: the thread fails
+    with pytest.raises(OSError, match='No space left'):
+        w.close()
+    assert w.closed
+    assert not any(t.name.startswith('mcap-chunks') for t in threading.enumerate())
 
 
 @pytest.mark.parametrize('times, message', [

@@ -24,9 +24,14 @@ or SIGHUP while it is still importing ends it quietly (nothing is compiled at im
 compiles a loop on its first use), with the exit code it gives when stopped later (0 for a
 node, 128 + the signal otherwise). A closed stdout or stderr (``bringup | head -1``) ends it
 quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the recording finalised.
+
+The main job ends its process as soon as it is done (:func:`quick_exit`): the atexit handlers
+run and the standard streams are flushed, but the interpreter's teardown (clearing ~1,200
+modules and collecting what they hold: 0.2-0.35 s of a 4-s Fig 9 run) is left to the OS.
 """
 from __future__ import annotations
 
+import atexit
 from collections.abc import Iterator
 from contextlib import contextmanager
 import gc
@@ -35,6 +40,7 @@ import os
 from pathlib import Path
 import signal
 import sys
+import threading
 from typing import Any
 
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
@@ -165,6 +171,33 @@ def analyse(recording: Path, written: Any = None, pool: Any = None) -> int:
                        written=written, pool=pool)
 
 
+def is_main_job(argv: list[str]) -> bool:
+    """Tell whether :func:`main` runs the main job on ``argv`` (not an executable, not --help)."""
+    return not (argv and (argv[0] in EXECUTABLES or argv[0] in ('-h', '--help')))
+
+
+def quick_exit(code: int) -> None:
+    """
+    End the process with ``code`` without the interpreter's teardown; return if it cannot.
+
+    The atexit handlers run (coverage's, multiprocessing's) and stdout and stderr are flushed
+    (a closed pipe: exit 141, as :func:`run_executable`), then ``os._exit``: the modules are
+    not cleared nor their objects collected one by one, the OS frees the memory at once. It
+    returns (the caller exits as usual) while another thread runs, which teardown would join.
+    """
+    if threading.active_count() > 1:
+        return
+    atexit._run_exitfuncs()     # as the interpreter's exit does, first
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+    except (BrokenPipeError, ValueError):
+        code = BROKEN_PIPE_EXIT
+    except OSError:
+        code = code or 1
+    os._exit(code)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``python -m tumble_ros``: an executable, the main job, or this usage (--help)."""
     argv = sys.argv[1:] if argv is None else argv
@@ -177,4 +210,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == '__main__':
-    raise SystemExit(main())
+    _code = main()
+    if is_main_job(sys.argv[1:]):
+        quick_exit(_code)
+    raise SystemExit(_code)

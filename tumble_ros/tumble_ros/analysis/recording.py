@@ -294,8 +294,11 @@ def _level(value) -> str:
 
 
 def _sorted(ns, rows, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Return copies of the stamps and the (n, k) values, ordered by stamp (stable)."""
     stamps = np.asarray(ns, dtype=np.int64)
     values = np.asarray(rows, dtype=float).reshape(-1, k) if len(rows) else _empty(k)
+    if not len(stamps) or bool((stamps[1:] >= stamps[:-1]).all()):
+        return stamps.copy(), values.copy()     # in order already (recordings are): no sort
     order = np.argsort(stamps, kind='stable')
     return stamps[order], values[order]
 

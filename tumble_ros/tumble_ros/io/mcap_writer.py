@@ -60,7 +60,8 @@ import numpy as np
 import numpy.typing as npt
 import yaml
 
-from .mcap_bulk import append_block, append_messages, bulk_supported
+from .mcap_bulk import (append_block, append_messages, bulk_supported, ChunkFinisher,
+                        finisher_supported)
 from .msgdefs import message_definition, normalize_type_name, type_hash
 
 __all__ = ['COMPRESSIONS', 'McapWriter', 'offered_qos_yaml', 'WrittenBlock', 'WrittenMessages']
@@ -277,11 +278,16 @@ class McapWriter:
     that old. ``compression``: ``'zstd'`` (default), ``'lz4'`` or ``'none'``. ``keep``: a
     :class:`WrittenMessages` that receives the schemas, channels and messages as they are
     written (for a reader in the same process); the file is the same with or without it.
+    ``background``: finalise the chunks (compress, write) in a thread
+    (:class:`~.mcap_bulk.ChunkFinisher`) while the caller goes on writing: the same file; a
+    chunk is then handed to the OS when the thread has written it (at the latest by the next
+    chunk's finalisation, :meth:`flush` or :meth:`close`), and an error writing it is raised
+    by the next of these. Ignored with ``lz4`` or an mcap whose Writer lacks what it needs.
     """
 
     def __init__(self, path: str | os.PathLike[str], *, chunk_bytes: int = 1_000_000,
                  chunk_seconds: float = 1.0, compression: str = 'zstd',
-                 keep: WrittenMessages | None = None) -> None:
+                 keep: WrittenMessages | None = None, background: bool = False) -> None:
         if isinstance(chunk_bytes, bool) or not isinstance(chunk_bytes, int) or chunk_bytes <= 0:
             raise ValueError(f'chunk_bytes must be a positive int, got {chunk_bytes!r}')
         if (isinstance(chunk_seconds, bool) or not isinstance(chunk_seconds, (int, float))
@@ -319,6 +325,8 @@ class McapWriter:
             self._writer = Writer(self._stream, chunk_size=_NEVER,
                                   compression=COMPRESSIONS[compression])
             self._bulk = bulk_supported(self._writer)   # write_rows' fast path (.mcap_bulk)
+            self._finisher = (ChunkFinisher(self._writer)
+                              if background and finisher_supported(self._writer) else None)
             self._writer.start(profile='ros2', library=_LIBRARY)
             self._stream.flush()
         except BaseException:
@@ -599,6 +607,8 @@ class McapWriter:
         with self._lock:
             self._check_open()
             self._flush_locked()
+            if self._finisher is not None:
+                self._finisher.wait()
 
     def close(self) -> None:
         """
@@ -611,6 +621,8 @@ class McapWriter:
                 return
             self._closed = True
             try:
+                if self._finisher is not None:
+                    self._finisher.close()      # the chunks handed over, written first
                 if self._pending_messages:
                     self._chunks_written += 1
                 self._writer.finish()  # type: ignore[no-untyped-call]  # unannotated in mcap
@@ -647,9 +659,12 @@ class McapWriter:
     def _flush_locked(self) -> None:
         if self._pending_messages:
             self._chunks_written += 1
-        # mcap's Writer.flush(): finalise the chunk in progress (if it holds messages), write
-        # what is buffered and flush the stream.
-        self._writer.flush()  # type: ignore[no-untyped-call]  # unannotated in mcap
+        if self._finisher is not None:    # the same, in the finisher's thread
+            self._finisher.finalize()
+        else:
+            # mcap's Writer.flush(): finalise the chunk in progress (if it holds messages),
+            # write what is buffered and flush the stream.
+            self._writer.flush()  # type: ignore[no-untyped-call]  # unannotated in mcap
         self._messages_flushed += self._pending_messages
         self._pending_messages = 0
         self._pending_bytes = 0

@@ -186,7 +186,8 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
                    grid) if markers else None
     slicer = Slicer()
     ended: StatusChange | None = None   # the run's end (finished or diverged)
-    with McapWriter(output, chunk_seconds=math.inf, keep=keep) as writer:
+    # chunks compressed and written in a thread while the next batch is simulated: the same file
+    with McapWriter(output, chunk_seconds=math.inf, keep=keep, background=True) as writer:
         channels = _Channels(writer, publish_clock, session.optional_topics, markers=markers)
         writer_of = _Writer(channels, comparison, scene, publish_clock)
         channels.comparison_status(comparison.waiting(), model_name)

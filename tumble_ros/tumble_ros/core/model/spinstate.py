@@ -40,7 +40,6 @@ from dataclasses import dataclass
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 from scipy.special import ellipkm1, elliprf, elliprj
 
 from tumble_ros.core.array_types import ArrayLike, Vector3
@@ -196,6 +195,9 @@ def omega_for_periods(inertia: ArrayLike, precession_period: float,
         raise ValueError(f'omega_for_periods: no short-axis mode of these moments has '
                          f'P_psi / P_phi = {target:.6g} (the SAMs have ratios above '
                          f'{limit.rotation_period / limit.precession_period:.6g})')
+    # scipy.optimize here, not at import: it costs 0.2-0.4 s, and the analysis of every
+    # recording imports this module (docs/performance.md, the Fig 9 main job)
+    from scipy.optimize import brentq
     d = brentq(mismatch, low, high, xtol=1e-15 * i3, rtol=1e-14)
     unit = periods(d)
     return polhode_point(d, unit.precession_period / precession_period)
