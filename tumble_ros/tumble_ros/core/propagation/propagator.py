@@ -424,7 +424,8 @@ class Propagator:
         problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
                                  segment.torque_orbital, sc.attitude, *self._segment_constants)
         self._stepper = self._runner.new_stepper(
-            segment, t0, y0, problem, self.scenario, None if self._split else self._switching_rhs)
+            segment, t0, y0, problem, self.scenario, None if self._split else self._switching_rhs,
+            self._stepper)
 
     @functools.cached_property
     def _segment_constants(self) -> tuple[tuple[TorqueComponent, ...], tuple[float, float]]:
@@ -593,12 +594,14 @@ class _ReferenceRunner:
         return None
 
     def new_stepper(self, segment: Segment, t0: float, y0: FloatArray, problem: SegmentProblem,
-                    scenario: Scenario, switching: Callable[[], Rhs] | None) -> Stepper:
+                    scenario: Scenario, switching: Callable[[], Rhs] | None,
+                    previous: Stepper | None = None) -> Stepper:
         """
         Return the method's stepper for ``segment``, from ``t0``, ``y0``.
 
         ``switching``: None (the segment's own smooth right-hand side), or what builds the
-        time-switched one of ``split_impacts=False``.
+        time-switched one of ``split_impacts=False``. ``previous`` (the last segment's
+        stepper) is not used: a new one is built.
         """
         rhs = (self._model.make_rhs(scenario.inertia, scenario.orbit_rate, segment.torque_body,
                                     segment.torque_orbital, problem.extra_torques)
@@ -654,8 +657,19 @@ class _CompiledRunner:
         return np.empty((n, 7))
 
     def new_stepper(self, segment: Segment, t0: float, y0: FloatArray, problem: SegmentProblem,
-                    scenario: Scenario, switching: Callable[[], Rhs] | None) -> Stepper:
-        """Return a compiled stepper of the method for ``segment``, from ``t0``, ``y0``."""
+                    scenario: Scenario, switching: Callable[[], Rhs] | None,
+                    previous: Stepper | None = None) -> Stepper:
+        """
+        Return a compiled stepper of the method for ``segment``, from ``t0``, ``y0``.
+
+        ``previous``: the last segment's stepper, restarted on this segment when it is a
+        compiled stepper of the same body (:meth:`CompiledStepper.restart`: the same stepper a
+        new one would be, without building its arrays again); else a new one.
+        """
+        if (isinstance(previous, CompiledStepper) and previous.method is self._method
+                and previous.settings is scenario.integrator and previous.is_same_body(problem)):
+            previous.restart(t0, y0, segment.t1, problem)
+            return previous
         # no right-hand side: the compiled loop evaluates its own (problem)
         return CompiledStepper(self._method, None,  # type: ignore[arg-type]
                                t0, y0, segment.t1, scenario.integrator, problem=problem)
