@@ -180,15 +180,18 @@ class AnchorState:
         if euler is not None and quaternion is not None:
             raise ScenarioError('quaternion: give the attitude as euler or as quaternion, '
                                 'not both')
+        # (the checks on Python floats: a comparator anchors once per impact)
         w = np.array(scenario.omega0 if omega is None else omega, dtype=float)
-        if w.shape != (3,) or not np.all(np.isfinite(w)):
+        if w.shape != (3,) or not all(map(math.isfinite, w.tolist())):
             raise ScenarioError(f'omega: must be 3 finite numbers, got {omega!r}')
         if quaternion is not None:
             q = np.asarray(quaternion, dtype=float)
-            if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.linalg.norm(q) > 0.0:
+            norm = (np.linalg.norm(q) if q.shape == (4,) and all(map(math.isfinite, q.tolist()))
+                    else math.nan)
+            if not norm > 0.0:
                 raise ScenarioError(f'quaternion: must be 4 finite numbers, not all 0, '
                                     f'got {quaternion!r}')
-            e = np.array(quaternion_to_euler(q / np.linalg.norm(q)))
+            e = np.array(quaternion_to_euler(q / norm))
         else:
             e = np.array(scenario.euler0 if euler is None else euler, dtype=float)
             if e.shape != (3,) or not np.all(np.isfinite(e)):

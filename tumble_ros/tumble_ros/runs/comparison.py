@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
+import functools
 import math
 from typing import Mapping, Sequence
 
@@ -54,12 +55,22 @@ def anchor_model(model_name: str, start: SegmentStart,
     """
     if scenario is None:
         scenario = parse_scenario(start.parameters_yaml)
-    grid = TimeBase(start.seconds_per_year).grid(scenario.output_interval, scenario.duration)
+    grid = _output_grid(start.seconds_per_year, scenario.output_interval, scenario.duration)
     model = make_model(model_name, scenario, t0=start.t0, omega=start.omega,
                        quaternion=start.quaternion)
     text = (f'model {model_name!r} ({model.label}) anchored at t = '
             f'{start.t0:.9g} yr (segment {start.revision})')
     return model, grid, text
+
+
+@functools.lru_cache(maxsize=16)
+def _output_grid(seconds_per_year: float, interval: float, duration: float) -> SampleGrid:
+    """Return the run's output grid (the same for every segment of a run: made once)."""
+    return TimeBase(seconds_per_year).grid(interval, duration)
+
+
+def _start(segment: _Segment) -> float:
+    return segment.start
 
 
 def error_norms(numeric: Sequence[float], error: Sequence[float]) -> tuple[float, float]:
@@ -209,7 +220,7 @@ class Comparison:
         """Return the segment ``t`` [yr] falls in (None before the first kept)."""
         if self._segments and t >= self._segments[-1].start:
             return self._segments[-1]   # (the latest: nearly every sample)
-        i = bisect.bisect_right([s.start for s in self._segments], t) - 1
+        i = bisect.bisect_right(self._segments, t, key=_start) - 1
         return self._segments[i] if i >= 0 else None
 
     def _departure(self, segment: _Segment, t: float, stamp_ns: int) -> ComparisonStatus | None:
@@ -252,8 +263,11 @@ class Comparison:
         times, omega = block.times, block.omega
         model: Floats = np.zeros((n, 3))
         has = np.zeros(n, dtype=bool)
-        starts = np.array([s.start for s in self._segments])
-        which = np.searchsorted(starts, times, side='right') - 1
+        # the segments from the one the block's first sample falls in (the earlier ones kept for
+        # the live comparator's trailing samples are not looked at: offline, one per impact)
+        first = max(0, bisect.bisect_right(self._segments, times[0], key=_start) - 1) if n else 0
+        starts = np.array([s.start for s in self._segments[first:]])
+        which = np.searchsorted(starts, times, side='right') - 1 + first
         edges = [0, *(np.flatnonzero(np.diff(which)) + 1).tolist(), n]
         runs = list(zip(edges[:-1], edges[1:]))
         for a, b in runs:
