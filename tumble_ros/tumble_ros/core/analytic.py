@@ -71,6 +71,7 @@ __all__ = [
     'DEPARTURE',
     'departure_text',
     'make_model',
+    'omega_many',
     'applicability',
     'PaperModel',
     'FastSpinModel',
@@ -309,7 +310,9 @@ def _forced_rotator(tau: FloatArray, lam: float, w_anchor: complex, b: float,
     Solution of dw/dt = i lam w + b sum_k C_k exp(i W_k tau), w(0) = w_anchor.
 
     Variation of constants; the sinc form covers resonant terms (W_k = lam) exactly and
-    does not lose precision near them.
+    does not lose precision near them. The parameters are one model's numbers, or (n,) arrays
+    of each sample's model (``coeffs`` and ``freqs``: (k, n)): the same operations element by
+    element, hence the same bits (:func:`omega_many`).
     """
     w: ComplexArray = np.exp(1j * lam * tau) * w_anchor
     for c, om in zip(coeffs, freqs):
@@ -381,6 +384,34 @@ class _LinearSymmetric(AnalyticModel):
         self.freqs = (-self.psi_dot, -self.psi_dot + 2.0 * self.beta_dot,
                       -self.psi_dot - 2.0 * self.beta_dot)
         self.w_anchor = complex(self.state.omega[0], self.state.omega[1])
+
+    @property
+    def joint(self) -> bool:
+        """Return whether :meth:`omega_joint` evaluates this model (no modulated free phase)."""
+        return type(self)._free_phase is _LinearSymmetric._free_phase
+
+    @staticmethod
+    def omega_joint(models: Sequence[_LinearSymmetric],
+                    times: Sequence[FloatArray]) -> list[FloatArray]:
+        """
+        Return each model's omega at its times (1-D) [rad/yr], in one vectorised evaluation.
+
+        Models whose :attr:`joint` holds: :meth:`omega`'s numbers bit for bit (each sample
+        with its model's parameters, the same operations).
+        """
+        counts = [len(t) for t in times]
+        if not counts:
+            return []
+        which = np.repeat(np.arange(len(models)), counts)
+        t = np.concatenate([np.asarray(v, dtype=float).reshape(-1) for v in times])
+        tau = t - np.array([m.state.t0 for m in models])[which]
+        w = _forced_rotator(tau, np.array([m.lam for m in models])[which],
+                            np.array([m.w_anchor for m in models])[which],
+                            np.array([m.b for m in models])[which],
+                            np.array([m.coeffs for m in models]).T[:, which],
+                            np.array([m.freqs for m in models]).T[:, which])
+        values = np.stack([w.real, w.imag, np.array([m.w0 for m in models])[which]], axis=-1)
+        return np.split(values, np.cumsum(counts)[:-1])
 
     def _omega(self, tau: FloatArray) -> FloatArray:
         w = _forced_rotator(tau, self.lam, self.w_anchor, self.b, self.coeffs, self.freqs)
@@ -754,6 +785,33 @@ class TorqueFreeExactModel(AnalyticModel):
             sn, cn, dn, _ = ellipj(u, m)
             out[:, p], out[:, q], out[:, r] = a_p * dn, a_q * sn, a_r * cn
         return out
+
+
+def omega_many(models: Sequence[AnalyticModel], times: Sequence[FloatArray]) -> list[FloatArray]:
+    """
+    Return ``[m.omega(t) for m, t in zip(models, times)]``, bit for bit, evaluated together.
+
+    ``times``: 1-D arrays [yr]. The linearised models without a modulated free phase
+    (``paper``, ``fast_spin``, ``fast_spin_precessing``) of one class are evaluated in one
+    vectorised call, each sample with its own model's parameters (:func:`_forced_rotator`:
+    the same operations element by element; tests/test_core_analytic.py compares the bits):
+    a run with an impact every few samples anchors a model per impact, and one call per model
+    costs ~40 us of numpy overhead. The others, one model at a time.
+    """
+    out: list[FloatArray | None] = [None] * len(models)
+    groups: dict[type[AnalyticModel], list[int]] = {}
+    for j, model in enumerate(models):
+        if isinstance(model, _LinearSymmetric) and model.joint:
+            groups.setdefault(type(model), []).append(j)
+        else:
+            out[j] = model.omega(times[j])
+    for members in groups.values():
+        group = [models[j] for j in members]
+        assert all(isinstance(m, _LinearSymmetric) for m in group)
+        values = _LinearSymmetric.omega_joint(group, [times[j] for j in members])  # type: ignore[arg-type]
+        for j, v in zip(members, values):
+            out[j] = v
+    return out  # type: ignore[return-value]
 
 
 # --------------------------------------------------------------------------------------

@@ -29,6 +29,7 @@ import numpy as np
 
 from tumble_ros.core import (AnalyticModel, DEPARTURE, departure_text, make_model, parse_scenario,
                              Scenario, ScenarioError, TimeBase)
+from tumble_ros.core.analytic import omega_many
 from tumble_ros.core.propagation.timebase import SampleGrid
 
 from .records import (ComparedSample, ComparisonBlock, ComparisonStatus, Floats, OK,
@@ -270,10 +271,16 @@ class Comparison:
         which = np.searchsorted(starts, times, side='right') - 1 + first
         edges = [0, *(np.flatnonzero(np.diff(which)) + 1).tolist(), n]
         runs = list(zip(edges[:-1], edges[1:]))
-        for a, b in runs:
-            m = self._segments[which[a]].model if which[a] >= 0 else None
-            if m is not None and self.grid is not None:
-                model[a:b] = self._values.span(m, self.grid, block.start + a, block.start + b)
+        spans = [(a, b, self._segments[which[a]].model) for a, b in runs if which[a] >= 0]
+        modelled = [(a, b, m) for a, b, m in spans if m is not None]
+        if modelled and self.grid is not None:
+            # every segment's model on its samples of the grid, in one evaluation (a segment
+            # per impact): the numbers GridModelValues gives compare_one, bit for bit
+            grid_times = self.grid.times(block.start, block.start + n)
+            values = omega_many([m for *_, m in modelled],
+                                [grid_times[a:b] for a, b, _ in modelled])
+            for (a, b, _), v in zip(modelled, values):
+                model[a:b] = v
                 has[a:b] = True
         compared = has & np.isfinite(model).all(axis=1)
         error: Floats = np.where(compared[:, None], omega - model, 0.0)

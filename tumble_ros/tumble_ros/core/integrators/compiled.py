@@ -19,7 +19,7 @@ import numpy.typing as npt
 from tumble_ros.core import kernels as K
 from tumble_ros.core.integrators.base import (FAILED, FINISHED, RUNNING, SegmentProblem,
                                               step_nan_message, Stepper)
-from tumble_ros.core.jit import first_use
+from tumble_ros.core.jit import first_use, needs_compiling
 from tumble_ros.core.model.limits import budget_message
 from tumble_ros.core.torques import extra_torque_arrays
 
@@ -127,7 +127,7 @@ class CompiledStepper(Stepper):
         st.fill(0.0)   # (K.new_state())
         st[K.ST.Y:K.ST.Y + K.N] = self.y
         self._loops.seg_init(self._p, self._extra, self._cfg, st, self.t, self.t_bound)
-        self._sync()
+        # (no _sync: seg_init sets t, tau, y, the step count and the status Stepper.__init__ set)
 
     def is_same_body(self, problem: SegmentProblem) -> bool:
         """Return whether ``problem`` differs from this stepper's in its pulse torques only."""
@@ -184,11 +184,15 @@ class CompiledStepper(Stepper):
         if self.status != RUNNING:
             k, steps, work = self._loops.emit(self._p, self._extra, self._cfg, self._st, track,
                                               t_out, y_out, e_out, k), 0, 0
-        else:
+        elif needs_compiling(self._loops.advance):
             with first_use(self._loops.advance, f'{self.kernel} loop'):
                 k, steps, work = self._loops.advance(self._p, self._extra, self._cfg, self._st,
                                                      track, float(t_target), t_out, y_out, e_out,
                                                      k, float(budget))
+        else:
+            k, steps, work = self._loops.advance(self._p, self._extra, self._cfg, self._st,
+                                                 track, float(t_target), t_out, y_out, e_out, k,
+                                                 float(budget))
         self.work = int(work)
         self._sync()
         return int(k), int(steps)
