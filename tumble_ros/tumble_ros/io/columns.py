@@ -755,6 +755,9 @@ class MessageTemplate:
 _NUMBERS, _STRING, _MESSAGES = 0, 1, 2
 #: CDR alignment phases of a run of numbers: its offset modulo the largest primitive size.
 _PHASES = 8
+#: Strings MessageEncoder keeps encoded (their CDR bytes, by text): a run's repeated ones.
+_STRINGS_KEPT = 64
+_ZEROS = tuple(bytes(n) for n in range(4))
 #: struct codes of MessageEncoder's values: rclpy's Python types (a ``byte`` is a bytes of one).
 _VALUE_CODES = {**_STRUCT_CODES, 'byte': 'c'}
 
@@ -786,6 +789,7 @@ class MessageEncoder:
         names: list[str] = []
         self._plan = self._compile(specs, _short(type_name), '', names, 0)
         self.fields = tuple(names)
+        self._strings: dict[str, bytes] = {}
 
     def _compile(self, specs: dict[str, Any], type_name: str, prefix: str, names: list[str],
                  depth: int) -> list[tuple[Any, ...]]:
@@ -863,9 +867,17 @@ class MessageEncoder:
                 out += step[1][(len(out) - _ENCAPSULATION) % _PHASES].pack(*values[i:i + n])
                 i += n
             elif kind == _STRING:
-                text = values[i].encode() + b'\x00'
-                out += bytes(-len(out) % 4) + len(text).to_bytes(4, 'little') + text
+                text = values[i]
                 i += 1
+                encoded = self._strings.get(text)
+                if encoded is None:   # (a run's descriptions repeat one scenario text of ~1 kB)
+                    raw = text.encode() + b'\x00'
+                    encoded = len(raw).to_bytes(4, 'little') + raw
+                    if len(self._strings) >= _STRINGS_KEPT:
+                        self._strings.clear()
+                    self._strings[text] = encoded
+                out += _ZEROS[-len(out) % 4]
+                out += encoded
             else:
                 _, fixed, bound, element, name = step
                 items = values[i]
@@ -873,7 +885,8 @@ class MessageEncoder:
                 if fixed is None:
                     if bound is not None and len(items) > bound:
                         raise ValueError(f'{name}: at most {bound} elements, got {len(items)}')
-                    out += bytes(-len(out) % 4) + len(items).to_bytes(4, 'little')
+                    out += _ZEROS[-len(out) % 4]
+                    out += len(items).to_bytes(4, 'little')
                 elif len(items) != fixed:
                     raise ValueError(f'{name}: {fixed} elements, got {len(items)}')
                 for item in items:

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import functools
 import heapq
 import math
+import operator
 from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
@@ -56,6 +57,8 @@ __all__ = ['Propagator', 'IntegrationError', 'Sample',
 FAST_WORK_BUDGET = 50_000
 REFERENCE_WORK_BUDGET = 1_000
 _NO_OMEGA = np.zeros(3)
+#: A Segment's start t0 (its first field): the key of the bisections over the segments.
+_SEGMENT_T0 = operator.itemgetter(0)
 
 FloatArray = npt.NDArray[np.float64]
 #: A right-hand side f(t, y) of the equations of motion.
@@ -416,7 +419,7 @@ class Propagator:
     def _start_segment(self, t0: float, y0: FloatArray) -> None:
         if t0 in self._cuts or t0 in self._edges:
             self._edge_state[t0] = np.array(y0)
-        k = bisect.bisect_right(self._segments, t0, key=lambda s: s.t0) - 1
+        k = bisect.bisect_right(self._segments, t0, key=_SEGMENT_T0) - 1
         segment = self._segments[max(0, k)]
         if self._stepper is not None:
             self._nfev_done += self._stepper.nfev
