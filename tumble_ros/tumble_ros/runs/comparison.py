@@ -184,7 +184,8 @@ class Comparison:
         else:
             self._segments.pop()   # the latest segment described again
         self.latest = start
-        self.timebase = TimeBase(start.seconds_per_year)
+        if self.timebase.seconds_per_year != start.seconds_per_year:
+            self.timebase = TimeBase(start.seconds_per_year)
         self._segments.append(_Segment(start.t0, None))
         if self.history is not None:
             del self._segments[:-self.history]
