@@ -117,8 +117,9 @@ def _sampled(scenario, late, budget):
         stop = half if k < half else len(times)
         done, arrays, message = prop.sample_many(times[k:stop], budget=budget)
         assert not message
-        parts.append(np.concatenate([arrays[name][:done].reshape(done, arrays[name][0].size) for name in
-                                     ('omega', 'quaternion', 'euler', 'matrix')], axis=1))
+        parts.append(np.concatenate([arrays[name][:done].reshape(done, arrays[name][0].size)
+                                     for name in ('omega', 'quaternion', 'euler', 'matrix')],
+                                    axis=1))
         k += done
     return np.concatenate(parts), (prop.nfev, prop.n_steps, len(prop.segments))
 
@@ -155,9 +156,8 @@ def test_a_stepper_kept_across_segments_gives_fresh_steppers_trajectory_bit_for_
 def test_a_restarted_stepper_holds_what_a_new_one_holds():
     settings = IntegratorSettings(method='dop853', rtol=1e-10, atol=1e-12)
     first = SegmentProblem((1.0, 1.0, 4.0), 1.0, (1e3, 0.0, 0.0), (0.0, 0.0, 0.0))
-    stepper = CompiledStepper(INTEGRATORS['dop853'], None, 0.0, np.array([0.1, 0.1, 30.0, 1.0, 0.0,
-                                                                        0.0, 0.0]), 0.5, settings,
-                              problem=first)
+    y0 = np.array([0.1, 0.1, 30.0, 1.0, 0.0, 0.0, 0.0])
+    stepper = CompiledStepper(INTEGRATORS['dop853'], None, 0.0, y0, 0.5, settings, problem=first)
     stepper.advance(0.5, np.zeros(3))
     assert stepper.status == 'finished' and stepper.nfev > 0
     second = SegmentProblem((1.0, 1.0, 4.0), 1.0, (0.0, 0.0, 0.0), (0.0, 2e3, -1.0))

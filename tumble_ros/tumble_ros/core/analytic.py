@@ -304,8 +304,9 @@ class AnalyticModel(ABC):
 # --------------------------------------------------------------------------------------
 # Linearised symmetric-body models (paper eqs 16-19 and beyond)
 # --------------------------------------------------------------------------------------
-def _forced_rotator(tau: FloatArray, lam: float, w_anchor: complex, b: float,
-                    coeffs: Sequence[complex], freqs: Sequence[float]) -> ComplexArray:
+def _forced_rotator(tau: FloatArray, lam: float | FloatArray, w_anchor: complex | ComplexArray,
+                    b: float | FloatArray, coeffs: Sequence[complex] | ComplexArray,
+                    freqs: Sequence[float] | FloatArray) -> ComplexArray:
     """
     Solution of dw/dt = i lam w + b sum_k C_k exp(i W_k tau), w(0) = w_anchor.
 
@@ -326,8 +327,11 @@ class _LinearSymmetric(AnalyticModel):
     dw/dt = i lam w + b F(t) with F along prescribed kinematics (theta constant).
 
     Subclasses give the free frequency lam and the rates of psi and phi (``_rates``), and
-    may modulate the phase of the free term (``_free_phase``).
+    may modulate the phase of the free term (``_free_phase``; they then set ``joint`` False).
     """
+
+    #: :meth:`omega_joint` evaluates the model (its free phase is not modulated).
+    joint: ClassVar[bool] = True
 
     @classmethod
     def _reason(cls, scenario: Scenario, state: AnchorState) -> str | None:
@@ -384,11 +388,6 @@ class _LinearSymmetric(AnalyticModel):
         self.freqs = (-self.psi_dot, -self.psi_dot + 2.0 * self.beta_dot,
                       -self.psi_dot - 2.0 * self.beta_dot)
         self.w_anchor = complex(self.state.omega[0], self.state.omega[1])
-
-    @property
-    def joint(self) -> bool:
-        """Return whether :meth:`omega_joint` evaluates this model (no modulated free phase)."""
-        return type(self)._free_phase is _LinearSymmetric._free_phase
 
     @staticmethod
     def omega_joint(models: Sequence[_LinearSymmetric],
@@ -565,6 +564,7 @@ class FastSpinAdiabaticModel(_Precessing):
     """
 
     name = 'fast_spin_adiabatic'
+    joint = False   # (its free phase is modulated along the orbit: one model at a time)
     label = ('beyond the paper: fast_spin_precessing with the first-order nutation-frequency '
              'shift S[(3cos^2 theta-1)/2 - (3/2) sin^2 theta cos 2 beta(t)], '
              'S = (3/2) ws^2 a/((1+a) w0)')
@@ -808,7 +808,8 @@ def omega_many(models: Sequence[AnalyticModel], times: Sequence[FloatArray]) -> 
     for members in groups.values():
         group = [models[j] for j in members]
         assert all(isinstance(m, _LinearSymmetric) for m in group)
-        values = _LinearSymmetric.omega_joint(group, [times[j] for j in members])  # type: ignore[arg-type]
+        values = _LinearSymmetric.omega_joint(group,  # type: ignore[arg-type]
+                                              [times[j] for j in members])
         for j, v in zip(members, values):
             out[j] = v
     return out  # type: ignore[return-value]

@@ -10,7 +10,8 @@ comparator's) go to the MCAP file without DDS: the per-sample messages encoded a
 by the encoder the live simulator publishes with (:class:`~tumble_ros.runs.messages.builders.
 SampleEncoder`), the others (descriptions, impact events, statuses) encoded from their
 records without rclpy's message classes (:class:`~tumble_ros.runs.messages.records.
-RecordEncoder`: the fields and length of rclpy's serialisation, zero padding). Channels, schemas and the offered QoS metadata are those the live recorder writes
+RecordEncoder`: the fields and length of rclpy's serialisation, zero padding). Channels,
+schemas and the offered QoS metadata are those the live recorder writes
 (:func:`~tumble_ros.runs.messages.qos.as_discovered` of each publisher's profile).
 
 Log times are simulated time on the ROS clock, as the live recorder's (its default ``log_time``

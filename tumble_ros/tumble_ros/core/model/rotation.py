@@ -87,7 +87,7 @@ def quaternion_to_matrix(q: FloatSequence) -> np.ndarray:
 
 
 def _matrix_rows(q: FloatSequence) -> tuple[tuple[float, float, float], ...]:
-    """The rows of :func:`quaternion_to_matrix` as floats (the same arithmetic)."""
+    """Return the rows of :func:`quaternion_to_matrix` as floats (the same arithmetic)."""
     q0, q1, q2, q3 = q
     s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
     return (

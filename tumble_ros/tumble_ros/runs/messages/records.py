@@ -58,10 +58,12 @@ def comparison_status_message(status: ComparisonStatus, node_name: str,
 
 class RecordEncoder:
     """
-    The messages of :func:`description_message`, :func:`impact_message`,
-    :func:`status_message` and :func:`comparison_status_message` as CDR bytes, built from the
-    records' numbers and strings (:class:`~tumble_ros.io.MessageEncoder`) without rclpy's
-    message classes: ~3 us a message instead of ~10-18 us for building and serialising one.
+    The records' messages as CDR bytes, without rclpy's message classes.
+
+    Those of :func:`description_message`, :func:`impact_message`, :func:`status_message` and
+    :func:`comparison_status_message`, built from the records' numbers and strings
+    (:class:`~tumble_ros.io.MessageEncoder`): ~3 us a message instead of ~10-18 us for building
+    and serialising one.
 
     The same fields and length as rclpy's serialisation of those messages, zero padding
     (tests/test_record_messages.py).
