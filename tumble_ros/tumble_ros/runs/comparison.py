@@ -9,7 +9,8 @@ when the model leaves the numeric solution (relative error above
 :data:`tumble_ros.core.DEPARTURE`). Each sample takes the model of the segment its time falls in
 (the latest start at or before it): samples that trail a newer segment's start keep the
 previous model. The model is evaluated on the run's output grid :data:`LOOKAHEAD` samples at a
-time (:class:`GridModelValues`).
+time (:class:`GridModelValues`) one sample at a time, and for a block every segment's model on its
+samples in one call (:func:`~tumble_ros.core.analytic.omega_many`): the same numbers.
 
 Two entry points on the same state and arithmetic: :meth:`Comparison.compare_one` for one
 sample (the live comparator, which receives samples one by one) and
@@ -118,16 +119,6 @@ class GridModelValues:
         if self._values is None:
             self._values = self._array.tolist()
         return self._values[k - self._first]
-
-    def span(self, model: AnalyticModel, grid: SampleGrid, k: int, stop: int) -> Floats:
-        """Return ``model``'s omega at grid samples k .. stop - 1 (n, 3): what :meth:`at` gives."""
-        parts: list[Floats] = []
-        while k < stop:
-            self._fill(model, grid, k)
-            end = min(stop, self._first + len(self._array))
-            parts.append(self._array[k - self._first:end - self._first])
-            k = end
-        return np.concatenate(parts) if parts else np.empty((0, 3))
 
 
 @dataclass
