@@ -96,6 +96,7 @@ def test_quaternion_to_euler_is_the_matrix_paths_floats_bit_for_bit():
     quaternions[::7, 1:3] = 0.0     # theta = 0: gimbal lock
     quaternions[::11, 0] = quaternions[::11, 3] = 0.0   # theta = pi
     quaternions[::13] = quaternions[::13] * 1e-100       # not normalised, tiny
+    quaternions[~quaternions.any(axis=1), 0] = 1.0     # (no zero quaternion: no rotation)
     for q in quaternions:
         expected = matrix_to_euler(quaternion_to_matrix(q).T)
         assert np.array(quaternion_to_euler(q)).tobytes() == np.array(expected).tobytes()
