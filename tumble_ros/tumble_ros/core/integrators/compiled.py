@@ -116,8 +116,7 @@ class CompiledStepper(Stepper):
         run with n impacts starts 2n + 1 segments, ~15 us each when built anew). ``problem``
         must differ from this stepper's in its pulse torques only (ValueError otherwise).
         """
-        old = self.problem
-        if old is None or not self.is_same_body(problem):
+        if not self.is_same_body(problem):
             raise ValueError('CompiledStepper.restart: the problem differs in more than its '
                              'pulse torques; build a new stepper')
         Stepper.__init__(self, self.fun, t0, y0, t_bound, self.settings, problem=problem)
@@ -130,13 +129,17 @@ class CompiledStepper(Stepper):
         # (no _sync: seg_init sets t, tau, y, the step count and the status Stepper.__init__ set)
 
     def is_same_body(self, problem: SegmentProblem) -> bool:
-        """Return whether ``problem`` differs from this stepper's in its pulse torques only."""
+        """
+        Return whether ``problem`` differs from this stepper's in its pulse torques only.
+
+        The extra torques must be the same objects (the Propagator hands every segment the
+        scenario's tuple): components holding arrays are not compared by value.
+        """
         old = self.problem
         return (old is not None and old.inertia == problem.inertia
                 and old.orbit_rate == problem.orbit_rate and old.attitude == problem.attitude
                 and old.step_budget == problem.step_budget
-                and (old.extra_torques is problem.extra_torques
-                     or old.extra_torques == problem.extra_torques))
+                and old.extra_torques is problem.extra_torques)
 
     @property
     def nfev(self) -> int:
