@@ -87,3 +87,16 @@ def test_euler_kinematics_match_matrix_kinematics():
     dr = (euler_to_matrix(*(e + h * de)) - euler_to_matrix(*(e - h * de))) / (2 * h)
     wx = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
     np.testing.assert_allclose(dr, -wx @ euler_to_matrix(*e), atol=1e-8)
+
+
+def test_quaternion_to_euler_is_the_matrix_paths_floats_bit_for_bit():
+    """quaternion_to_euler (no arrays: a comparator's anchor per impact) = matrix_to_euler(C.T)."""
+    rng = np.random.default_rng(23)
+    quaternions = rng.normal(size=(20_000, 4))
+    quaternions[::7, 1:3] = 0.0     # theta = 0: gimbal lock
+    quaternions[::11, 0] = quaternions[::11, 3] = 0.0   # theta = pi
+    quaternions[::13] = quaternions[::13] * 1e-100       # not normalised, tiny
+    quaternions[~quaternions.any(axis=1), 0] = 1.0     # (no zero quaternion: no rotation)
+    for q in quaternions:
+        expected = matrix_to_euler(quaternion_to_matrix(q).T)
+        assert np.array(quaternion_to_euler(q)).tobytes() == np.array(expected).tobytes()

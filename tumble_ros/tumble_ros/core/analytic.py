@@ -71,6 +71,7 @@ __all__ = [
     'DEPARTURE',
     'departure_text',
     'make_model',
+    'omega_many',
     'applicability',
     'PaperModel',
     'FastSpinModel',
@@ -180,15 +181,18 @@ class AnchorState:
         if euler is not None and quaternion is not None:
             raise ScenarioError('quaternion: give the attitude as euler or as quaternion, '
                                 'not both')
+        # (the checks on Python floats: a comparator anchors once per impact)
         w = np.array(scenario.omega0 if omega is None else omega, dtype=float)
-        if w.shape != (3,) or not np.all(np.isfinite(w)):
+        if w.shape != (3,) or not all(map(math.isfinite, w.tolist())):
             raise ScenarioError(f'omega: must be 3 finite numbers, got {omega!r}')
         if quaternion is not None:
             q = np.asarray(quaternion, dtype=float)
-            if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.linalg.norm(q) > 0.0:
+            norm = (np.linalg.norm(q) if q.shape == (4,) and all(map(math.isfinite, q.tolist()))
+                    else math.nan)
+            if not norm > 0.0:
                 raise ScenarioError(f'quaternion: must be 4 finite numbers, not all 0, '
                                     f'got {quaternion!r}')
-            e = np.array(quaternion_to_euler(q / np.linalg.norm(q)))
+            e = np.array(quaternion_to_euler(q / norm))
         else:
             e = np.array(scenario.euler0 if euler is None else euler, dtype=float)
             if e.shape != (3,) or not np.all(np.isfinite(e)):
@@ -300,13 +304,16 @@ class AnalyticModel(ABC):
 # --------------------------------------------------------------------------------------
 # Linearised symmetric-body models (paper eqs 16-19 and beyond)
 # --------------------------------------------------------------------------------------
-def _forced_rotator(tau: FloatArray, lam: float, w_anchor: complex, b: float,
-                    coeffs: Sequence[complex], freqs: Sequence[float]) -> ComplexArray:
+def _forced_rotator(tau: FloatArray, lam: float | FloatArray, w_anchor: complex | ComplexArray,
+                    b: float | FloatArray, coeffs: Sequence[complex] | ComplexArray,
+                    freqs: Sequence[float] | FloatArray) -> ComplexArray:
     """
     Solution of dw/dt = i lam w + b sum_k C_k exp(i W_k tau), w(0) = w_anchor.
 
     Variation of constants; the sinc form covers resonant terms (W_k = lam) exactly and
-    does not lose precision near them.
+    does not lose precision near them. The parameters are one model's numbers, or (n,) arrays
+    of each sample's model (``coeffs`` and ``freqs``: (k, n)): the same operations element by
+    element, hence the same bits (:func:`omega_many`).
     """
     w: ComplexArray = np.exp(1j * lam * tau) * w_anchor
     for c, om in zip(coeffs, freqs):
@@ -320,8 +327,11 @@ class _LinearSymmetric(AnalyticModel):
     dw/dt = i lam w + b F(t) with F along prescribed kinematics (theta constant).
 
     Subclasses give the free frequency lam and the rates of psi and phi (``_rates``), and
-    may modulate the phase of the free term (``_free_phase``).
+    may modulate the phase of the free term (``_free_phase``; they then set ``joint`` False).
     """
+
+    #: :meth:`omega_joint` evaluates the model (its free phase is not modulated).
+    joint: ClassVar[bool] = True
 
     @classmethod
     def _reason(cls, scenario: Scenario, state: AnchorState) -> str | None:
@@ -378,6 +388,29 @@ class _LinearSymmetric(AnalyticModel):
         self.freqs = (-self.psi_dot, -self.psi_dot + 2.0 * self.beta_dot,
                       -self.psi_dot - 2.0 * self.beta_dot)
         self.w_anchor = complex(self.state.omega[0], self.state.omega[1])
+
+    @staticmethod
+    def omega_joint(models: Sequence[_LinearSymmetric],
+                    times: Sequence[FloatArray]) -> list[FloatArray]:
+        """
+        Return each model's omega at its times (1-D) [rad/yr], in one vectorised evaluation.
+
+        Models whose :attr:`joint` holds: :meth:`omega`'s numbers bit for bit (each sample
+        with its model's parameters, the same operations).
+        """
+        counts = [len(t) for t in times]
+        if not counts:
+            return []
+        which = np.repeat(np.arange(len(models)), counts)
+        t = np.concatenate([np.asarray(v, dtype=float).reshape(-1) for v in times])
+        tau = t - np.array([m.state.t0 for m in models])[which]
+        w = _forced_rotator(tau, np.array([m.lam for m in models])[which],
+                            np.array([m.w_anchor for m in models])[which],
+                            np.array([m.b for m in models])[which],
+                            np.array([m.coeffs for m in models]).T[:, which],
+                            np.array([m.freqs for m in models]).T[:, which])
+        values = np.stack([w.real, w.imag, np.array([m.w0 for m in models])[which]], axis=-1)
+        return np.split(values, np.cumsum(counts)[:-1])
 
     def _omega(self, tau: FloatArray) -> FloatArray:
         w = _forced_rotator(tau, self.lam, self.w_anchor, self.b, self.coeffs, self.freqs)
@@ -531,6 +564,7 @@ class FastSpinAdiabaticModel(_Precessing):
     """
 
     name = 'fast_spin_adiabatic'
+    joint = False   # (its free phase is modulated along the orbit: one model at a time)
     label = ('beyond the paper: fast_spin_precessing with the first-order nutation-frequency '
              'shift S[(3cos^2 theta-1)/2 - (3/2) sin^2 theta cos 2 beta(t)], '
              'S = (3/2) ws^2 a/((1+a) w0)')
@@ -751,6 +785,34 @@ class TorqueFreeExactModel(AnalyticModel):
             sn, cn, dn, _ = ellipj(u, m)
             out[:, p], out[:, q], out[:, r] = a_p * dn, a_q * sn, a_r * cn
         return out
+
+
+def omega_many(models: Sequence[AnalyticModel], times: Sequence[FloatArray]) -> list[FloatArray]:
+    """
+    Return ``[m.omega(t) for m, t in zip(models, times)]``, bit for bit, evaluated together.
+
+    ``times``: 1-D arrays [yr]. The linearised models without a modulated free phase
+    (``paper``, ``fast_spin``, ``fast_spin_precessing``) of one class are evaluated in one
+    vectorised call, each sample with its own model's parameters (:func:`_forced_rotator`:
+    the same operations element by element; tests/test_core_analytic.py compares the bits):
+    a run with an impact every few samples anchors a model per impact, and one call per model
+    costs ~40 us of numpy overhead. The others, one model at a time.
+    """
+    out: list[FloatArray | None] = [None] * len(models)
+    groups: dict[type[AnalyticModel], list[int]] = {}
+    for j, model in enumerate(models):
+        if isinstance(model, _LinearSymmetric) and model.joint:
+            groups.setdefault(type(model), []).append(j)
+        else:
+            out[j] = model.omega(times[j])
+    for members in groups.values():
+        group = [models[j] for j in members]
+        assert all(isinstance(m, _LinearSymmetric) for m in group)
+        values = _LinearSymmetric.omega_joint(group,  # type: ignore[arg-type]
+                                              [times[j] for j in members])
+        for j, v in zip(members, values):
+            out[j] = v
+    return out  # type: ignore[return-value]
 
 
 # --------------------------------------------------------------------------------------

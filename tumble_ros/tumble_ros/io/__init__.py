@@ -9,8 +9,8 @@ also under ``sys.prefix``. Ensemble results go to labelled xarray/Zarr stores
 reads them).
 """  # noqa: A005 (tumble_ros.io is a subpackage: absolute imports never confuse it with io)
 
-from .columns import (FlatLayout, MessageTemplate, read_columns, sample_values, TopicColumns,
-                      written_columns)
+from .columns import (FlatLayout, MessageEncoder, MessageTemplate, read_columns, sample_values,
+                      TopicColumns, written_columns)
 from .ensemble_store import EnsembleStore, EnsembleStoreError, open_ensemble
 from .mcap_reader import (McapError, McapSummary, read_messages, RecordedMessage, summarize,
                           TopicSummary)
@@ -22,6 +22,7 @@ __all__ = [
     'EnsembleStoreError',
     'open_ensemble',
     'FlatLayout',
+    'MessageEncoder',
     'MessageTemplate',
     'read_columns',
     'sample_values',

@@ -9,7 +9,8 @@ when the model leaves the numeric solution (relative error above
 :data:`tumble_ros.core.DEPARTURE`). Each sample takes the model of the segment its time falls in
 (the latest start at or before it): samples that trail a newer segment's start keep the
 previous model. The model is evaluated on the run's output grid :data:`LOOKAHEAD` samples at a
-time (:class:`GridModelValues`).
+time (:class:`GridModelValues`) one sample at a time, and for a block every segment's model on its
+samples in one call (:func:`~tumble_ros.core.analytic.omega_many`): the same numbers.
 
 Two entry points on the same state and arithmetic: :meth:`Comparison.compare_one` for one
 sample (the live comparator, which receives samples one by one) and
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
+import functools
 import math
 from typing import Mapping, Sequence
 
@@ -28,6 +30,7 @@ import numpy as np
 
 from tumble_ros.core import (AnalyticModel, DEPARTURE, departure_text, make_model, parse_scenario,
                              Scenario, ScenarioError, TimeBase)
+from tumble_ros.core.analytic import omega_many
 from tumble_ros.core.propagation.timebase import SampleGrid
 
 from .records import (ComparedSample, ComparisonBlock, ComparisonStatus, Floats, OK,
@@ -54,12 +57,22 @@ def anchor_model(model_name: str, start: SegmentStart,
     """
     if scenario is None:
         scenario = parse_scenario(start.parameters_yaml)
-    grid = TimeBase(start.seconds_per_year).grid(scenario.output_interval, scenario.duration)
+    grid = _output_grid(start.seconds_per_year, scenario.output_interval, scenario.duration)
     model = make_model(model_name, scenario, t0=start.t0, omega=start.omega,
                        quaternion=start.quaternion)
     text = (f'model {model_name!r} ({model.label}) anchored at t = '
             f'{start.t0:.9g} yr (segment {start.revision})')
     return model, grid, text
+
+
+@functools.lru_cache(maxsize=16)
+def _output_grid(seconds_per_year: float, interval: float, duration: float) -> SampleGrid:
+    """Return the run's output grid (the same for every segment of a run: made once)."""
+    return TimeBase(seconds_per_year).grid(interval, duration)
+
+
+def _start(segment: _Segment) -> float:
+    return segment.start
 
 
 def error_norms(numeric: Sequence[float], error: Sequence[float]) -> tuple[float, float]:
@@ -106,16 +119,6 @@ class GridModelValues:
         if self._values is None:
             self._values = self._array.tolist()
         return self._values[k - self._first]
-
-    def span(self, model: AnalyticModel, grid: SampleGrid, k: int, stop: int) -> Floats:
-        """Return ``model``'s omega at grid samples k .. stop - 1 (n, 3): what :meth:`at` gives."""
-        parts: list[Floats] = []
-        while k < stop:
-            self._fill(model, grid, k)
-            end = min(stop, self._first + len(self._array))
-            parts.append(self._array[k - self._first:end - self._first])
-            k = end
-        return np.concatenate(parts) if parts else np.empty((0, 3))
 
 
 @dataclass
@@ -172,7 +175,8 @@ class Comparison:
         else:
             self._segments.pop()   # the latest segment described again
         self.latest = start
-        self.timebase = TimeBase(start.seconds_per_year)
+        if self.timebase.seconds_per_year != start.seconds_per_year:
+            self.timebase = TimeBase(start.seconds_per_year)
         self._segments.append(_Segment(start.t0, None))
         if self.history is not None:
             del self._segments[:-self.history]
@@ -209,7 +213,7 @@ class Comparison:
         """Return the segment ``t`` [yr] falls in (None before the first kept)."""
         if self._segments and t >= self._segments[-1].start:
             return self._segments[-1]   # (the latest: nearly every sample)
-        i = bisect.bisect_right([s.start for s in self._segments], t) - 1
+        i = bisect.bisect_right(self._segments, t, key=_start) - 1
         return self._segments[i] if i >= 0 else None
 
     def _departure(self, segment: _Segment, t: float, stamp_ns: int) -> ComparisonStatus | None:
@@ -252,14 +256,23 @@ class Comparison:
         times, omega = block.times, block.omega
         model: Floats = np.zeros((n, 3))
         has = np.zeros(n, dtype=bool)
-        starts = np.array([s.start for s in self._segments])
-        which = np.searchsorted(starts, times, side='right') - 1
+        # the segments from the one the block's first sample falls in (the earlier ones kept for
+        # the live comparator's trailing samples are not looked at: offline, one per impact)
+        first = max(0, bisect.bisect_right(self._segments, times[0], key=_start) - 1) if n else 0
+        starts = np.array([s.start for s in self._segments[first:]])
+        which = np.searchsorted(starts, times, side='right') - 1 + first
         edges = [0, *(np.flatnonzero(np.diff(which)) + 1).tolist(), n]
         runs = list(zip(edges[:-1], edges[1:]))
-        for a, b in runs:
-            m = self._segments[which[a]].model if which[a] >= 0 else None
-            if m is not None and self.grid is not None:
-                model[a:b] = self._values.span(m, self.grid, block.start + a, block.start + b)
+        spans = [(a, b, self._segments[which[a]].model) for a, b in runs if which[a] >= 0]
+        modelled = [(a, b, m) for a, b, m in spans if m is not None]
+        if modelled and self.grid is not None:
+            # every segment's model on its samples of the grid, in one evaluation (a segment
+            # per impact): the numbers GridModelValues gives compare_one, bit for bit
+            grid_times = self.grid.times(block.start, block.start + n)
+            values = omega_many([m for *_, m in modelled],
+                                [grid_times[a:b] for a, b, _ in modelled])
+            for (a, b, _), v in zip(modelled, values):
+                model[a:b] = v
                 has[a:b] = True
         compared = has & np.isfinite(model).all(axis=1)
         error: Floats = np.where(compared[:, None], omega - model, 0.0)

@@ -8,8 +8,10 @@ states (:class:`~.session.SimulationSession`, the live simulator's session) and 
 comparator's model, error and error norm (:class:`~.comparison.Comparison`, the live
 comparator's) go to the MCAP file without DDS: the per-sample messages encoded as numpy columns
 by the encoder the live simulator publishes with (:class:`~tumble_ros.runs.messages.builders.
-SampleEncoder`), the others built by :mod:`tumble_ros.runs.messages.records` and serialised by
-rclpy. Channels, schemas and the offered QoS metadata are those the live recorder writes
+SampleEncoder`), the others (descriptions, impact events, statuses) encoded from their
+records without rclpy's message classes (:class:`~tumble_ros.runs.messages.records.
+RecordEncoder`: the fields and length of rclpy's serialisation, zero padding). Channels,
+schemas and the offered QoS metadata are those the live recorder writes
 (:func:`~tumble_ros.runs.messages.qos.as_discovered` of each publisher's profile).
 
 Log times are simulated time on the ROS clock, as the live recorder's (its default ``log_time``
@@ -27,9 +29,9 @@ the latest stamp it received, later by as much as the simulator runs ahead of th
 simulator's 1-Hz status heartbeats are absent (a live run has one per wall second while running;
 the state changes are the same), the first messages of the depth-1 latched topics (``status``,
 ``comparison/status``) are always there (a live recorder that subscribes after them gets only the
-latest), and messages of different topics may be interleaved differently. The CDR padding bytes no
-longer differ: the per-sample messages are the same encoder's bytes in both (zero padding), the
-others are serialised by rclpy in both.
+latest), and messages of different topics may be interleaved differently; the per-sample messages
+are the same encoder's bytes in both (zero padding), the others' padding bytes may differ (rclpy
+leaves its own as they were, the offline recording's are zero).
 """
 from __future__ import annotations
 
@@ -37,10 +39,9 @@ from dataclasses import dataclass, field
 import math
 from pathlib import Path
 import time
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
-from rclpy.serialization import serialize_message
 
 from tumble_ros import topics
 from tumble_ros.core import Scenario, TimeBase
@@ -50,8 +51,7 @@ from tumble_ros.io import McapWriter, offered_qos_yaml, WrittenMessages
 from tumble_ros.runs.messages.builders import new_run_id, SampleEncoder
 from tumble_ros.runs.messages.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.runs.messages.qos import as_discovered, publisher_qos, qos_dict
-from tumble_ros.runs.messages.records import (comparison_status_message, description_message,
-                                              impact_message, status_message)
+from tumble_ros.runs.messages.records import RecordEncoder
 
 from .comparison import Comparison
 from .records import (ComparisonStatus, DIVERGED, ImpactEnded, RUNNING, SampleBlock,
@@ -125,6 +125,7 @@ class _Channels:
         self.ids: dict[str, int] = {}
         self._pending: list[tuple[int, str, bytes]] = []
         self.encoder = SampleEncoder()
+        self.records = RecordEncoder()
         for topic in topics.recorded():
             if (topic == topics.CLOCK and not publish_clock
                     or not optional.get(topic, True)
@@ -135,19 +136,20 @@ class _Channels:
             offered = offered_qos_yaml(qos_dict(as_discovered(publisher_qos(topic))))
             self.ids[topic] = writer.add_channel(name, type_name, offered)
 
-    def one(self, topic: str, msg: Any, stamp_ns: int) -> None:
+    def one(self, topic: str, data: bytes, stamp_ns: int) -> None:
         """
-        Queue one message (serialised by rclpy) logged at ``stamp_ns`` [ns, ROS time].
+        Queue one message (CDR bytes) logged at ``stamp_ns`` [ns, ROS time].
 
         Queued messages are written by :meth:`flush` in the order of their log times, so each
         channel's log times never decrease (a batch's departures may precede its anchorings).
         """
-        self._pending.append((stamp_ns, topic, serialize_message(msg)))
+        self._pending.append((stamp_ns, topic, data))
 
     def comparison_status(self, status: ComparisonStatus, model_name: str) -> None:
         """Queue a ``comparison/status`` of the comparator, logged at its stamp."""
         self.one(topics.COMPARISON_STATUS,
-                 comparison_status_message(status, COMPARATOR_NAME, model_name), status.stamp_ns)
+                 self.records.comparison_status(status, COMPARATOR_NAME, model_name),
+                 status.stamp_ns)
 
     def flush(self) -> None:
         """Write the queued messages, by log time (stable); publish time = now (wall clock)."""
@@ -225,18 +227,18 @@ class _Writer:
         A segment start anchors the comparison (its status queued too); samples are written
         with their comparison and markers.
         """
-        final = None
+        final, encode = None, self.channels.records
         for record in records:
             if isinstance(record, SampleBlock):
                 self.samples(record)
             elif isinstance(record, SegmentStart):
-                self.channels.one(topics.SCENARIO, description_message(record), record.stamp_ns)
+                self.channels.one(topics.SCENARIO, encode.description(record), record.stamp_ns)
                 self.channels.comparison_status(self.comparison.anchor(record),
                                                 self.comparison.model_name)
             elif isinstance(record, ImpactEnded):
-                self.channels.one(topics.IMPACT_EVENTS, impact_message(record), record.stamp_ns)
+                self.channels.one(topics.IMPACT_EVENTS, encode.impact(record), record.stamp_ns)
             else:
-                self.channels.one(topics.STATUS, status_message(record), record.stamp_ns)
+                self.channels.one(topics.STATUS, encode.status(record), record.stamp_ns)
                 final = record if record.state != RUNNING else None
         return final
 

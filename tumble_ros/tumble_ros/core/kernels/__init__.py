@@ -28,7 +28,7 @@ Quaternion attitude only. ``python -m tumble_ros.core.kernels`` prints the array
 """
 from tumble_ros.core.jit import COMPILED, NUMBA_VERSION
 from tumble_ros.core.kernels.arrays import (config_array, free_flow_split, new_state,
-                                            problem_array, problem_arrays)
+                                            problem_array, problem_arrays, set_pulses)
 from tumble_ros.core.kernels.checks import collapsed, finite_norm, MIN_STEP_ULPS
 from tumble_ros.core.kernels.dop853 import MAX_REJECTIONS
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, describe, Extra, FAIL, LI, N,
@@ -45,7 +45,8 @@ __all__ = ['COMPILED', 'NUMBA_VERSION', 'ST', 'PR', 'CF', 'BK', 'BT', 'BB', 'LI'
            'FAIL', 'Array', 'Extra', 'has_lockstep', 'KERNELS', 'Loops', 'loops', 'kernel_id',
            'kernel_name', 'describe',
            'config_array', 'free_flow_split', 'new_state',
-           'problem_array', 'problem_arrays', 'collapsed', 'finite_norm', 'MIN_STEP_ULPS',
+           'problem_array', 'problem_arrays', 'set_pulses', 'collapsed', 'finite_norm',
+           'MIN_STEP_ULPS',
            'MAX_REJECTIONS', 'ensemble_advance', 'ensemble_init', 'body_torque', 'free_flow',
            'rhs', 'rhs_called', 'flow_called', 'MAX_PULSE_SUBSTEPS', 'pulse_step_count',
            'MAX_TRACK_PIECES', 'set_track',

@@ -16,7 +16,8 @@ from tumble_ros.core.kernels.layout import Array, CF, MAX_STAGES, PR, ST
 from tumble_ros.core.kernels.methods import kernel_id
 from tumble_ros.core.torques.gravity_gradient import tidal_coefficients
 
-__all__ = ['free_flow_split', 'problem_arrays', 'problem_array', 'config_array', 'new_state']
+__all__ = ['free_flow_split', 'problem_arrays', 'problem_array', 'set_pulses', 'config_array',
+           'new_state']
 
 
 def free_flow_split(inertia: Iterable[float]) -> tuple[float, tuple[float, float, float]]:
@@ -75,10 +76,24 @@ def problem_array(inertia: Iterable[float], orbit_rate: float,
                   torque_orbital: Sequence[float] = (0.0, 0.0, 0.0)) -> Array:
     """Return the problem array of one segment (see :func:`problem_arrays`; the same row)."""
     row: Array = _body_row(tuple(float(v) for v in inertia), float(orbit_rate)).copy()
-    row[PR.PULSE_BODY:PR.PULSE_BODY + 3] = torque_body
-    row[PR.PULSE_ORBITAL:PR.PULSE_ORBITAL + 3] = torque_orbital
-    row[PR.HAS_ORBITAL] = 1.0 if any(float(v) != 0.0 for v in torque_orbital) else 0.0
+    set_pulses(row, torque_body, torque_orbital)
     return row
+
+
+def set_pulses(row: Array, torque_body: Sequence[float],
+               torque_orbital: Sequence[float]) -> None:
+    """
+    Write a segment's pulse torques into its problem row (layout PR), in place.
+
+    ``torque_body``, ``torque_orbital`` [inertia units * rad/yr^2]; the rest of the row (the
+    body) is left as it is: a stepper kept across a body's segments rewrites only these.
+    """
+    # (element by element: numpy converts no tuple, ~4 us less per segment)
+    bx, by, bz = torque_body
+    ox, oy, oz = torque_orbital
+    row[PR.PULSE_BODY], row[PR.PULSE_BODY + 1], row[PR.PULSE_BODY + 2] = bx, by, bz
+    row[PR.PULSE_ORBITAL], row[PR.PULSE_ORBITAL + 1], row[PR.PULSE_ORBITAL + 2] = ox, oy, oz
+    row[PR.HAS_ORBITAL] = 1.0 if ox != 0.0 or oy != 0.0 or oz != 0.0 else 0.0
 
 
 def config_array(kernel: str, settings: Any, gammas: Iterable[float] = (), order: int = 0,

@@ -20,6 +20,7 @@ All angles are in radians. Nothing here depends on ROS.
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 
@@ -59,13 +60,20 @@ def matrix_to_euler(r: np.ndarray) -> tuple[float, float, float]:
     phi and psi are returned in (-pi, pi]. At theta = 0 or pi only phi + psi (or
     phi - psi) is defined; psi is then set to 0.
     """
-    st = math.hypot(r[0, 2], r[1, 2])
-    theta = math.atan2(st, r[2, 2])
+    return _euler_of(r[0, 2], r[1, 2], r[2, 2], r[2, 0], r[2, 1], lambda: (r[0, 1], r[0, 0]))
+
+
+def _euler_of(r02: float, r12: float, r22: float, r20: float, r21: float,
+              locked: Callable[[], tuple[float, float]]) -> tuple[float, float, float]:
+    """:func:`matrix_to_euler` from the entries it reads (``locked()``: r01, r00, if needed)."""
+    st = math.hypot(r02, r12)
+    theta = math.atan2(st, r22)
     if st < 1e-300:
         # Gimbal lock: R = Rz(phi + psi) (theta = 0) or similar; put everything in phi.
-        return math.atan2(r[0, 1], r[0, 0]), 0.0, theta
-    psi = math.atan2(r[0, 2], r[1, 2])
-    phi = math.atan2(r[2, 0], -r[2, 1])
+        r01, r00 = locked()
+        return math.atan2(r01, r00), 0.0, theta
+    psi = math.atan2(r02, r12)
+    phi = math.atan2(r20, -r21)
     return phi, psi, theta
 
 
@@ -75,14 +83,17 @@ def quaternion_to_matrix(q: FloatSequence) -> np.ndarray:
 
     The quaternion need not be normalised: C is built from q / |q|.
     """
+    return np.array(_matrix_rows(q))
+
+
+def _matrix_rows(q: FloatSequence) -> tuple[tuple[float, float, float], ...]:
+    """Return the rows of :func:`quaternion_to_matrix` as floats (the same arithmetic)."""
     q0, q1, q2, q3 = q
     s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    return np.array(
-        [
-            [1.0 - s * (q2 * q2 + q3 * q3), s * (q1 * q2 - q0 * q3), s * (q1 * q3 + q0 * q2)],
-            [s * (q1 * q2 + q0 * q3), 1.0 - s * (q1 * q1 + q3 * q3), s * (q2 * q3 - q0 * q1)],
-            [s * (q1 * q3 - q0 * q2), s * (q2 * q3 + q0 * q1), 1.0 - s * (q1 * q1 + q2 * q2)],
-        ]
+    return (
+        (1.0 - s * (q2 * q2 + q3 * q3), s * (q1 * q2 - q0 * q3), s * (q1 * q3 + q0 * q2)),
+        (s * (q1 * q2 + q0 * q3), 1.0 - s * (q1 * q1 + q3 * q3), s * (q2 * q3 - q0 * q1)),
+        (s * (q1 * q3 - q0 * q2), s * (q2 * q3 + q0 * q1), 1.0 - s * (q1 * q1 + q2 * q2)),
     )
 
 
@@ -119,7 +130,10 @@ def euler_to_quaternion(phi: float, psi: float, theta: float) -> np.ndarray:
 
 def quaternion_to_euler(q: FloatSequence) -> tuple[float, float, float]:
     """Return the paper's Euler angles (phi, psi, theta) of a body -> orbital quaternion."""
-    return matrix_to_euler(quaternion_to_matrix(q).T)
+    # matrix_to_euler(quaternion_to_matrix(q).T) without the arrays (a comparator anchors its
+    # model once per impact): the same entries, the same arithmetic, the same floats
+    (c00, _, c02), (c10, _, c12), (c20, c21, c22) = _matrix_rows(q)
+    return _euler_of(c20, c21, c22, c02, c12, lambda: (c10, c00))
 
 
 def quaternion_multiply(p: FloatSequence, q: FloatSequence) -> np.ndarray:

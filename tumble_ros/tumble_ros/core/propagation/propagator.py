@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import functools
 import heapq
 import math
+import operator
 from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
@@ -56,6 +57,8 @@ __all__ = ['Propagator', 'IntegrationError', 'Sample',
 FAST_WORK_BUDGET = 50_000
 REFERENCE_WORK_BUDGET = 1_000
 _NO_OMEGA = np.zeros(3)
+#: A Segment's start t0 (its first field): the key of the bisections over the segments.
+_SEGMENT_T0 = operator.itemgetter(0)
 
 FloatArray = npt.NDArray[np.float64]
 #: A right-hand side f(t, y) of the equations of motion.
@@ -416,7 +419,7 @@ class Propagator:
     def _start_segment(self, t0: float, y0: FloatArray) -> None:
         if t0 in self._cuts or t0 in self._edges:
             self._edge_state[t0] = np.array(y0)
-        k = bisect.bisect_right(self._segments, t0, key=lambda s: s.t0) - 1
+        k = bisect.bisect_right(self._segments, t0, key=_SEGMENT_T0) - 1
         segment = self._segments[max(0, k)]
         if self._stepper is not None:
             self._nfev_done += self._stepper.nfev
@@ -424,7 +427,8 @@ class Propagator:
         problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
                                  segment.torque_orbital, sc.attitude, *self._segment_constants)
         self._stepper = self._runner.new_stepper(
-            segment, t0, y0, problem, self.scenario, None if self._split else self._switching_rhs)
+            segment, t0, y0, problem, self.scenario, None if self._split else self._switching_rhs,
+            self._stepper)
 
     @functools.cached_property
     def _segment_constants(self) -> tuple[tuple[TorqueComponent, ...], tuple[float, float]]:
@@ -593,12 +597,14 @@ class _ReferenceRunner:
         return None
 
     def new_stepper(self, segment: Segment, t0: float, y0: FloatArray, problem: SegmentProblem,
-                    scenario: Scenario, switching: Callable[[], Rhs] | None) -> Stepper:
+                    scenario: Scenario, switching: Callable[[], Rhs] | None,
+                    previous: Stepper | None = None) -> Stepper:
         """
         Return the method's stepper for ``segment``, from ``t0``, ``y0``.
 
         ``switching``: None (the segment's own smooth right-hand side), or what builds the
-        time-switched one of ``split_impacts=False``.
+        time-switched one of ``split_impacts=False``. ``previous`` (the last segment's
+        stepper) is not used: a new one is built.
         """
         rhs = (self._model.make_rhs(scenario.inertia, scenario.orbit_rate, segment.torque_body,
                                     segment.torque_orbital, problem.extra_torques)
@@ -654,8 +660,19 @@ class _CompiledRunner:
         return np.empty((n, 7))
 
     def new_stepper(self, segment: Segment, t0: float, y0: FloatArray, problem: SegmentProblem,
-                    scenario: Scenario, switching: Callable[[], Rhs] | None) -> Stepper:
-        """Return a compiled stepper of the method for ``segment``, from ``t0``, ``y0``."""
+                    scenario: Scenario, switching: Callable[[], Rhs] | None,
+                    previous: Stepper | None = None) -> Stepper:
+        """
+        Return a compiled stepper of the method for ``segment``, from ``t0``, ``y0``.
+
+        ``previous``: the last segment's stepper, restarted on this segment when it is a
+        compiled stepper of the same body (:meth:`CompiledStepper.restart`: the same stepper a
+        new one would be, without building its arrays again); else a new one.
+        """
+        if (isinstance(previous, CompiledStepper) and previous.method is self._method
+                and previous.settings is scenario.integrator and previous.is_same_body(problem)):
+            previous.restart(t0, y0, segment.t1, problem)
+            return previous
         # no right-hand side: the compiled loop evaluates its own (problem)
         return CompiledStepper(self._method, None,  # type: ignore[arg-type]
                                t0, y0, segment.t1, scenario.integrator, problem=problem)

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 from typing import NamedTuple, Sequence, TYPE_CHECKING
 
-import numpy as np
-
 if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Impact
 
@@ -32,12 +30,14 @@ def segment_torques(impacts: Sequence[Impact], t0: float,
                     t1: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """Return the (body, orbital) torques of the pulses active on [t0, t1], summed in order."""
     mid = 0.5 * (t0 + t1)
-    body, orbital = np.zeros(3), np.zeros(3)
+    b0 = b1 = b2 = o0 = o1 = o2 = 0.0
     for impact in impacts:
         if impact.start <= mid < impact.end:
-            (body if impact.frame == 'body' else orbital)[:] += impact.torque
-    b0, b1, b2 = body
-    o0, o1, o2 = orbital
+            x, y, z = impact.torque
+            if impact.frame == 'body':
+                b0, b1, b2 = b0 + x, b1 + y, b2 + z
+            else:
+                o0, o1, o2 = o0 + x, o1 + y, o2 + z
     return (b0, b1, b2), (o0, o1, o2)
 
 
