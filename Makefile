@@ -1,7 +1,8 @@
 # tumble_ros workspace: `make run` runs the main job, `make test` runs the tests.
 # `make setup` (a prerequisite of both) is idempotent and cheap when nothing changed:
 #   1. .venv from python3 -m venv, then pip install -r requirements.txt   (only when it changed)
-#   2. colcon build --symlink-install of tumble_ros_interfaces and tumble_ros
+#   2. at once, on both cores: the venv's bytecode compiled (after 1), and
+#      colcon build --symlink-install of tumble_ros_interfaces and tumble_ros
 #      (only when a package file that matters for the build changed)
 # The environment logic (venv + install/setup.bash) lives in scripts/env.sh.
 
@@ -22,6 +23,7 @@ STAMPS := .stamps
 # Inside the venv: deleting .venv also forgets that requirements were installed.
 VENV_STAMP := $(VENV)/.requirements.stamp
 BUILD_STAMP := $(STAMPS)/colcon-build
+BYTECODE_STAMP := $(VENV)/.bytecode.stamp
 
 # What colcon's output depends on. Python modules are not listed: with --symlink-install they are
 # live. Directories are listed so that adding, renaming or deleting a file in them rebuilds.
@@ -52,24 +54,33 @@ help:
 	@echo 'make clean-recordings          remove recordings/ (figure runs, walks: tens to hundreds of MB)'
 	@echo 'make distclean                 clean, and remove .venv'
 
-setup: $(BUILD_STAMP)
+# The venv's bytecode and the colcon build need only the venv: they run at once (make -j 2
+# here, whatever the caller's -j), each announcing itself.
+setup:
+	@$(MAKE) --no-print-directory -j 2 $(BUILD_STAMP) $(BYTECODE_STAMP)
 
 $(VENV_STAMP): requirements.txt
 	@test -x $(VENV)/bin/python || { echo '== creating $(VENV)'; $(PYTHON) -m venv $(VENV); }
 	@# colcon must not crawl the venv (its share/ holds many package.xml files).
 	@touch $(VENV)/COLCON_IGNORE
-	@echo '== pip install -r requirements.txt'
+	@echo "== pip install -r requirements.txt ($$(grep -c '==' requirements.txt) pinned packages, ~25 s)"
 	@# The lock is complete (pip freeze of a full install): no resolution needed (--no-deps),
-	@# and pip check says if it ever is not. The bytecode is compiled on every core afterwards
-	@# (pip compiles on one): needed, as Python may be told not to write it at import
-	@# (PYTHONDONTWRITEBYTECODE: imports then took 2.8 s instead of 1.0 s). 53 s -> 26 + 11 s.
+	@# and pip check says if it ever is not. pip compiles no bytecode (it would on one core):
+	@# $(BYTECODE_STAMP) does, beside the colcon build.
 	$(VENV)/bin/python -m pip install --quiet --no-deps --no-compile -r requirements.txt
 	$(VENV)/bin/python -m pip check
-	$(VENV)/bin/python -m compileall -q -j 0 $(VENV)/lib
+	touch $@
+
+# The bytecode of the venv, compiled on every core, tests of the installed packages left out
+# (a third of the sources; nothing imports them). Needed: Python may be told not to write it at
+# import (PYTHONDONTWRITEBYTECODE: a run's imports then took 2.8 s instead of 1.0 s).
+$(BYTECODE_STAMP): $(VENV_STAMP)
+	@echo '== compiling the bytecode of $(VENV) (beside the colcon build)'
+	$(VENV)/bin/python -m compileall -q -j 0 -x '/tests?/' $(VENV)/lib
 	touch $@
 
 $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
-	@echo '== colcon build'
+	@echo '== colcon build (the interface package: C and Python code generated and compiled)'
 	$(ENV) --build colcon build --symlink-install --base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
 	@# No warm-up here: numba compiles a loop on its first use, only the loops a run uses
 	@# (the default scenario: the dop853 loop), once, then loads it from its cache.
