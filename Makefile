@@ -81,7 +81,10 @@ $(BYTECODE_STAMP): $(VENV_STAMP)
 
 $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 	@echo '== colcon build (the interface package: C and Python code generated and compiled)'
-	$(ENV) --build colcon build --symlink-install --base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
+	@# Without make's MAKEFLAGS: colcon then gives CMake's make -j (one job a core); inheriting
+	@# the jobserver of the make -j 2 above, it built with one job (make said so on stderr).
+	env -u MAKEFLAGS -u MFLAGS $(ENV) --build colcon build --symlink-install \
+		--base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
 	@# No warm-up here: numba compiles a loop on its first use, only the loops a run uses
 	@# (the default scenario: the dop853 loop), once, then loads it from its cache.
 	@mkdir -p $(STAMPS)
