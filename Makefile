@@ -56,18 +56,23 @@ help:
 
 # The venv's bytecode and the colcon build need only the venv: they run at once (make -j 2
 # here, whatever the caller's -j), each announcing itself.
+SETUP_STAMPS = $(BUILD_STAMP) $(BYTECODE_STAMP)
 setup:
-	@$(MAKE) --no-print-directory -j 2 $(BUILD_STAMP) $(BYTECODE_STAMP)
+	@$(MAKE) --no-print-directory -j 2 $(SETUP_STAMPS)
 
 $(VENV_STAMP): requirements.txt
 	@test -x $(VENV)/bin/python || { echo '== creating $(VENV)'; $(PYTHON) -m venv $(VENV); }
 	@# colcon must not crawl the venv (its share/ holds many package.xml files).
 	@touch $(VENV)/COLCON_IGNORE
-	@echo "== pip install -r requirements.txt ($$(grep -c '==' requirements.txt) pinned packages, ~25 s)"
+	@echo "== installing requirements.txt ($$(grep -c '==' requirements.txt) pinned packages) with uv"
+	@# uv, pinned in the lock, installed first by pip; then the lock by uv: the same wheels from
+	@# PyPI, looked up and downloaded in parallel (pip took 26 s, one package at a time; uv ~8 s).
 	@# The lock is complete (pip freeze of a full install): no resolution needed (--no-deps),
-	@# and pip check says if it ever is not. pip compiles no bytecode (it would on one core):
-	@# $(BYTECODE_STAMP) does, beside the colcon build.
-	$(VENV)/bin/python -m pip install --quiet --no-deps --no-compile -r requirements.txt
+	@# and pip check says if it ever is not. No bytecode here: $(BYTECODE_STAMP) compiles it,
+	@# beside the colcon build.
+	$(VENV)/bin/python -m pip install --quiet --no-deps --no-compile "$$(grep -m1 '^uv==' requirements.txt)"
+	$(VENV)/bin/uv pip install --quiet --python $(VENV)/bin/python --link-mode copy --no-deps \
+		-r requirements.txt
 	$(VENV)/bin/python -m pip check
 	touch $@
 
@@ -81,9 +86,10 @@ $(BYTECODE_STAMP): $(VENV_STAMP)
 
 $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 	@echo '== colcon build (the interface package: C and Python code generated and compiled)'
-	@# Without make's MAKEFLAGS: colcon then gives CMake's make -j (one job a core); inheriting
-	@# the jobserver of the make -j 2 above, it built with one job (make said so on stderr).
-	env -u MAKEFLAGS -u MFLAGS $(ENV) --build colcon build --symlink-install \
+	@# CMake's make runs one job a core. Not colcon's default (-j N -l N: no new job while the
+	@# load average is above N, so on a busy machine, or beside the bytecode compiling, one job),
+	@# nor the jobserver of the make -j above (it built with one job: make said so on stderr).
+	env -u MFLAGS MAKEFLAGS=-j$$(getconf _NPROCESSORS_ONLN) $(ENV) --build colcon build --symlink-install \
 		--base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
 	@# No warm-up here: numba compiles a loop on its first use, only the loops a run uses
 	@# (the default scenario: the dop853 loop), once, then loads it from its cache.
@@ -91,20 +97,24 @@ $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 	touch $@
 
 # Test paths come from pytest.ini (testpaths) unless PYTEST_ARGS names some.
-# The tests use every loop: compile them all ahead, in parallel (about a second once cached).
+# The tests use every loop: compile them all ahead, in parallel (about a second once cached),
+# beside the set-up's bytecode and colcon build (the loops need only the venv).
 # PYTEST_WORKERS: pytest-xdist workers (auto: one per core; 0 runs the tests in this process).
 # One BLAS thread per worker: the workers already take every core, and OpenBLAS's second thread
 # spins between the period search's many small calls (twice the CPU, docs/performance.md).
 PYTEST_WORKERS ?= auto
-test: setup warmup
+test:
+	@$(MAKE) --no-print-directory -j 3 $(SETUP_STAMPS) warmup
 	OPENBLAS_NUM_THREADS=1 $(ENV) pytest -q -ra --durations=15 -n $(PYTEST_WORKERS) $(PYTEST_ARGS)
 
 run: setup
 	$(ENV) python -m tumble_ros $(CONFIG)
 
-# Optional: compile (or load) every integration loop now, one process per method.
-warmup: setup
-	$(ENV) python -m tumble_ros.cli.warmup
+# Optional: compile (or load) every integration loop now, one process per method. The numerical
+# core imports no ROS: it needs the venv only, and is imported from the source tree (the same
+# files colcon's --symlink-install installs, so the same numba cache).
+warmup: $(VENV_STAMP)
+	$(ENV) --build env PYTHONPATH=$(CURDIR)/tumble_ros python -m tumble_ros.cli.warmup
 
 # Untracked by default: a figure run leaves a clean clone clean (docs/figures is the published copy).
 FIGURES_OUT ?= build/figures
