@@ -54,11 +54,19 @@ help:
 	@echo 'make clean-recordings          remove recordings/ (figure runs, walks: tens to hundreds of MB)'
 	@echo 'make distclean                 clean, and remove .venv'
 
-# The venv's bytecode and the colcon build need only the venv: they run at once (make -j 2
-# here, whatever the caller's -j), each announcing itself.
-SETUP_STAMPS = $(BUILD_STAMP) $(BYTECODE_STAMP)
+# The venv's bytecode and the colcon build need only the venv: they run at once (make -j here,
+# whatever the caller's -j), each announcing itself, beside the loops the target that asked for
+# the set-up will use (SETUP_EXTRA, set by run and test below: the loops need only the venv).
+# Nothing runs when both are up to date, but SETUP_ALWAYS (test: the warm-up, which also
+# recompiles what an edit of a compiled source made stale).
+SETUP_EXTRA =
+SETUP_ALWAYS =
 setup:
-	@$(MAKE) --no-print-directory -j 2 $(SETUP_STAMPS)
+	@if ! $(MAKE) -q $(BUILD_STAMP) $(BYTECODE_STAMP) 2>/dev/null; then \
+		$(MAKE) --no-print-directory -j 3 $(BUILD_STAMP) $(BYTECODE_STAMP) $(SETUP_EXTRA); \
+	elif [[ -n '$(SETUP_ALWAYS)' ]]; then \
+		$(MAKE) --no-print-directory $(SETUP_ALWAYS); \
+	fi
 
 $(VENV_STAMP): requirements.txt
 	@test -x $(VENV)/bin/python || { echo '== creating $(VENV)'; $(PYTHON) -m venv $(VENV); }
@@ -103,18 +111,27 @@ $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 # One BLAS thread per worker: the workers already take every core, and OpenBLAS's second thread
 # spins between the period search's many small calls (twice the CPU, docs/performance.md).
 PYTEST_WORKERS ?= auto
-test:
-	@$(MAKE) --no-print-directory -j 3 $(SETUP_STAMPS) warmup
+test: SETUP_EXTRA = warmup
+test: SETUP_ALWAYS = warmup
+test: setup
 	OPENBLAS_NUM_THREADS=1 $(ENV) pytest -q -ra --durations=15 -n $(PYTEST_WORKERS) $(PYTEST_ARGS)
 
+# The loops the scenario's run uses compile beside the set-up (the run then loads them).
+run: SETUP_EXTRA = warmup-scenario
 run: setup
 	$(ENV) python -m tumble_ros $(CONFIG)
 
 # Optional: compile (or load) every integration loop now, one process per method. The numerical
 # core imports no ROS: it needs the venv only, and is imported from the source tree (the same
 # files colcon's --symlink-install installs, so the same numba cache).
+WARMUP = $(ENV) --build env PYTHONPATH=$(CURDIR)/tumble_ros python -m tumble_ros.cli.warmup
 warmup: $(VENV_STAMP)
-	$(ENV) --build env PYTHONPATH=$(CURDIR)/tumble_ros python -m tumble_ros.cli.warmup
+	$(WARMUP)
+
+# Only what a run of $(CONFIG) uses (the default scenario: the dop853 loop); never fails.
+.PHONY: warmup-scenario
+warmup-scenario: $(VENV_STAMP)
+	@$(WARMUP) --scenario $(CONFIG)
 
 # Untracked by default: a figure run leaves a clean clone clean (docs/figures is the published copy).
 FIGURES_OUT ?= build/figures
