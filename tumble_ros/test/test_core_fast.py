@@ -154,12 +154,13 @@ def test_warm_up_compiles_the_single_body_and_ensemble_loops():
 
 @needs_numba
 def test_the_warm_up_of_a_scenario_compiles_what_its_run_uses_and_nothing_else():
-    """make run: --scenario compiles (or loads) the default scenario's dop853 loop, no other."""
+    """What make run warms beside the set-up: the default scenario's dop853 loop, no other."""
     probe = (
         'from tumble_ros.cli.warmup import warm_up_scenario\n'
         'from tumble_ros.core import kernels\n'
         'assert warm_up_scenario("") > 0.0\n'
-        'print(sorted(name for name in kernels.KERNELS if kernels.loops(name).advance.signatures))\n'
+        'print(sorted(name for name in kernels.KERNELS\n'
+        '             if kernels.loops(name).advance.signatures))\n'
     )
     done = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
                           timeout=600)

@@ -125,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f'   not compiled ahead ({type(err).__name__}: {err}): the run compiles what '
                   'it uses', flush=True)
             return 0
-        print(f"== the loops of {label} ready ({seconds:.1f} s)", flush=True)
+        print(f'== the loops of {label} ready ({seconds:.1f} s)', flush=True)
         return 0
     if kernels.COMPILED:
         print('== compiling the integration loops (numba; once per build, then cached)',
