@@ -1,6 +1,6 @@
 # tumble_ros workspace: `make run` runs the main job, `make test` runs the tests.
 # `make setup` (a prerequisite of both) is idempotent and cheap when nothing changed:
-#   1. .venv from python3 -m venv, then pip install -r requirements.txt   (only when it changed)
+#   1. .venv from python3 -m venv, then requirements.txt installed by uv   (only when it changed)
 #   2. at once, on both cores: the venv's bytecode compiled (after 1), and
 #      colcon build --symlink-install of tumble_ros_interfaces and tumble_ros
 #      (only when a package file that matters for the build changed)
@@ -79,8 +79,11 @@ $(VENV_STAMP): requirements.txt
 	@# and pip check says if it ever is not. No bytecode here: $(BYTECODE_STAMP) compiles it,
 	@# beside the colcon build.
 	$(VENV)/bin/python -m pip install --quiet --no-deps --no-compile "$$(grep -m1 '^uv==' requirements.txt)"
+	@# uv reads no pip configuration (a mirror set for pip only: UV_INDEX_URL tells uv): if it
+	@# fails, pip installs the lock instead, as before (~26 s).
 	$(VENV)/bin/uv pip install --quiet --python $(VENV)/bin/python --link-mode copy --no-deps \
-		-r requirements.txt
+		-r requirements.txt || { echo '== uv failed: installing with pip instead'; \
+		$(VENV)/bin/python -m pip install --quiet --no-deps --no-compile -r requirements.txt; }
 	$(VENV)/bin/python -m pip check
 	touch $@
 
@@ -99,8 +102,8 @@ $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 	@# nor the jobserver of the make -j above (it built with one job: make said so on stderr).
 	env -u MFLAGS MAKEFLAGS=-j$$(getconf _NPROCESSORS_ONLN) $(ENV) --build colcon build --symlink-install \
 		--base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
-	@# No warm-up here: numba compiles a loop on its first use, only the loops a run uses
-	@# (the default scenario: the dop853 loop), once, then loads it from its cache.
+	@# No warm-up in this step: numba compiles a loop on its first use, once, then loads it
+	@# from its cache; run and test compile the loops they use beside this step (SETUP_EXTRA).
 	@mkdir -p $(STAMPS)
 	touch $@
 
