@@ -1,7 +1,8 @@
 # tumble_ros workspace: `make run` runs the main job, `make test` runs the tests.
 # `make setup` (a prerequisite of both) is idempotent and cheap when nothing changed:
-#   1. .venv from python3 -m venv, then pip install -r requirements.txt   (only when it changed)
-#   2. colcon build --symlink-install of tumble_ros_interfaces and tumble_ros
+#   1. .venv from python3 -m venv, then requirements.txt installed by uv   (only when it changed)
+#   2. at once, on both cores: the venv's bytecode compiled (after 1), and
+#      colcon build --symlink-install of tumble_ros_interfaces and tumble_ros
 #      (only when a package file that matters for the build changed)
 # The environment logic (venv + install/setup.bash) lives in scripts/env.sh.
 
@@ -22,6 +23,7 @@ STAMPS := .stamps
 # Inside the venv: deleting .venv also forgets that requirements were installed.
 VENV_STAMP := $(VENV)/.requirements.stamp
 BUILD_STAMP := $(STAMPS)/colcon-build
+BYTECODE_STAMP := $(VENV)/.bytecode.stamp
 
 # What colcon's output depends on. Python modules are not listed: with --symlink-install they are
 # live. Directories are listed so that adding, renaming or deleting a file in them rebuilds.
@@ -52,7 +54,19 @@ help:
 	@echo 'make clean-recordings          remove recordings/ (figure runs, walks: tens to hundreds of MB)'
 	@echo 'make distclean                 clean, and remove .venv'
 
-setup: $(BUILD_STAMP)
+# The venv's bytecode and the colcon build need only the venv: they run at once (make -j here,
+# whatever the caller's -j), each announcing itself, beside the loops the target that asked for
+# the set-up will use (SETUP_EXTRA, set by run and test below: the loops need only the venv).
+# Nothing runs when both are up to date, but SETUP_ALWAYS (test: the warm-up, which also
+# recompiles what an edit of a compiled source made stale).
+SETUP_EXTRA =
+SETUP_ALWAYS =
+setup:
+	@if ! $(MAKE) -q $(BUILD_STAMP) $(BYTECODE_STAMP) 2>/dev/null; then \
+		$(MAKE) --no-print-directory -j 3 $(BUILD_STAMP) $(BYTECODE_STAMP) $(SETUP_EXTRA); \
+	elif [[ -n '$(SETUP_ALWAYS)' ]]; then \
+		$(MAKE) --no-print-directory $(SETUP_ALWAYS); \
+	fi
 	@# The package's bytecode, refreshed at every make (0.1 s when fresh): the modules are
 	@# live (--symlink-install), and where Python is told not to write bytecode
 	@# (PYTHONDONTWRITEBYTECODE) every process compiled ~110 of them from source: ~0.2 s of
@@ -63,39 +77,69 @@ $(VENV_STAMP): requirements.txt
 	@test -x $(VENV)/bin/python || { echo '== creating $(VENV)'; $(PYTHON) -m venv $(VENV); }
 	@# colcon must not crawl the venv (its share/ holds many package.xml files).
 	@touch $(VENV)/COLCON_IGNORE
-	@echo '== pip install -r requirements.txt'
+	@echo "== installing requirements.txt ($$(grep -c '==' requirements.txt) pinned packages) with uv"
+	@# uv, pinned in the lock, installed first by pip; then the lock by uv: the same wheels from
+	@# PyPI, looked up and downloaded in parallel (pip took 26 s, one package at a time; uv ~8 s).
 	@# The lock is complete (pip freeze of a full install): no resolution needed (--no-deps),
-	@# and pip check says if it ever is not. The bytecode is compiled on every core afterwards
-	@# (pip compiles on one): needed, as Python may be told not to write it at import
-	@# (PYTHONDONTWRITEBYTECODE: imports then took 2.8 s instead of 1.0 s). 53 s -> 26 + 11 s.
-	$(VENV)/bin/python -m pip install --quiet --no-deps --no-compile -r requirements.txt
+	@# and pip check says if it ever is not. No bytecode here: $(BYTECODE_STAMP) compiles it,
+	@# beside the colcon build.
+	$(VENV)/bin/python -m pip install --quiet --no-deps --no-compile "$$(grep -m1 '^uv==' requirements.txt)"
+	@# uv reads no pip configuration (a mirror set for pip only: UV_INDEX_URL tells uv): if it
+	@# fails, pip installs the lock instead, as before (~26 s).
+	$(VENV)/bin/uv pip install --quiet --python $(VENV)/bin/python --link-mode copy --no-deps \
+		-r requirements.txt || { echo '== uv failed: installing with pip instead'; \
+		$(VENV)/bin/python -m pip install --quiet --no-deps --no-compile -r requirements.txt; }
 	$(VENV)/bin/python -m pip check
-	$(VENV)/bin/python -m compileall -q -j 0 $(VENV)/lib
+	touch $@
+
+# The bytecode of the venv, compiled on every core, tests of the installed packages left out
+# (a third of the sources; nothing imports them). Needed: Python may be told not to write it at
+# import (PYTHONDONTWRITEBYTECODE: a run's imports then took 2.8 s instead of 1.0 s).
+$(BYTECODE_STAMP): $(VENV_STAMP)
+	@echo '== compiling the bytecode of $(VENV) (beside the colcon build)'
+	$(VENV)/bin/python -m compileall -q -j 0 -x '/tests?/' $(VENV)/lib
 	touch $@
 
 $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
-	@echo '== colcon build'
-	$(ENV) --build colcon build --symlink-install --base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
-	@# No warm-up here: numba compiles a loop on its first use, only the loops a run uses
-	@# (the default scenario: the dop853 loop), once, then loads it from its cache.
+	@echo '== colcon build (the interface package: C and Python code generated and compiled)'
+	@# CMake's make runs one job a core. Not colcon's default (-j N -l N: no new job while the
+	@# load average is above N, so on a busy machine, or beside the bytecode compiling, one job),
+	@# nor the jobserver of the make -j above (it built with one job: make said so on stderr).
+	env -u MFLAGS MAKEFLAGS=-j$$(getconf _NPROCESSORS_ONLN) $(ENV) --build colcon build --symlink-install \
+		--base-paths $(COLCON_PACKAGES) $(COLCON_ARGS)
+	@# No warm-up in this step: numba compiles a loop on its first use, once, then loads it
+	@# from its cache; run and test compile the loops they use beside this step (SETUP_EXTRA).
 	@mkdir -p $(STAMPS)
 	touch $@
 
 # Test paths come from pytest.ini (testpaths) unless PYTEST_ARGS names some.
-# The tests use every loop: compile them all ahead, in parallel (about a second once cached).
+# The tests use every loop: compile them all ahead, in parallel (about a second once cached),
+# beside the set-up's bytecode and colcon build (the loops need only the venv).
 # PYTEST_WORKERS: pytest-xdist workers (auto: one per core; 0 runs the tests in this process).
 # One BLAS thread per worker: the workers already take every core, and OpenBLAS's second thread
 # spins between the period search's many small calls (twice the CPU, docs/performance.md).
 PYTEST_WORKERS ?= auto
-test: setup warmup
+test: SETUP_EXTRA = warmup
+test: SETUP_ALWAYS = warmup
+test: setup
 	OPENBLAS_NUM_THREADS=1 $(ENV) pytest -q -ra --durations=15 -n $(PYTEST_WORKERS) $(PYTEST_ARGS)
 
+# The loops the scenario's run uses compile beside the set-up (the run then loads them).
+run: SETUP_EXTRA = warmup-scenario
 run: setup
 	$(ENV) python -m tumble_ros $(CONFIG)
 
-# Optional: compile (or load) every integration loop now, one process per method.
-warmup: setup
-	$(ENV) python -m tumble_ros.cli.warmup
+# Optional: compile (or load) every integration loop now, one process per method. The numerical
+# core imports no ROS: it needs the venv only, and is imported from the source tree (the same
+# files colcon's --symlink-install installs, so the same numba cache).
+WARMUP = $(ENV) --build env PYTHONPATH=$(CURDIR)/tumble_ros python -m tumble_ros.cli.warmup
+warmup: $(VENV_STAMP)
+	$(WARMUP)
+
+# Only what a run of $(CONFIG) uses (the default scenario: the dop853 loop); never fails.
+.PHONY: warmup-scenario
+warmup-scenario: $(VENV_STAMP)
+	@$(WARMUP) --scenario $(CONFIG)
 
 # Untracked by default: a figure run leaves a clean clone clean (docs/figures is the published copy).
 FIGURES_OUT ?= build/figures

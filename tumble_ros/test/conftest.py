@@ -97,3 +97,27 @@ def spawn(tmp_path):
     finally:
         for process in started:
             process.kill_group()
+
+
+#: The test files that took longest (the sum of their tests' times, longest first; measured
+#: 2026-12-04, docs/performance.md, "The first run"). They are collected first, each
+#: file's tests in their own order: pytest-xdist hands the first quarter of the tests out one at
+#: a time, alternately, and the rest as workers free up, so the long tests are spread over the
+#: workers and the run ends on short ones, not on one worker finishing a long test alone. A file
+#: missing here only runs later; a name that no longer exists changes nothing.
+LONGEST_FIRST = (
+    'test_trust_processes.py', 'test_analysis_robustness.py', 'test_core_perturbers.py',
+    'test_figure_pool.py', 'test_readme_commands.py', 'test_mypy.py',
+    'test_analysis_periods.py', 'test_apophis_depth.py', 'test_core_divergence.py',
+    'test_analysis_cli.py', 'test_flake8.py', 'test_apophis.py', 'test_make_figures.py',
+    'test_ensemble_dask.py', 'test_trust_ensembles.py', 'test_core_boundaries.py',
+    'test_core_ensemble.py', 'test_node_recorder.py', 'test_node_sim.py',
+    'test_process_sim.py', 'test_node_startup.py', 'test_animation.py',
+    'test_trust_nodes.py', 'test_main_job.py',
+)
+
+
+def pytest_collection_modifyitems(config, items):
+    """Collect the files of LONGEST_FIRST first (stable: every file keeps its tests' order)."""
+    rank = {name: position for position, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))

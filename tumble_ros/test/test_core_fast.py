@@ -153,6 +153,36 @@ def test_warm_up_compiles_the_single_body_and_ensemble_loops():
 
 
 @needs_numba
+def test_the_warm_up_of_a_scenario_compiles_what_its_run_uses_and_nothing_else():
+    """What make run warms beside the set-up: the default scenario's dop853 loop, no other."""
+    probe = (
+        'from tumble_ros.cli.warmup import warm_up_scenario\n'
+        'from tumble_ros.core import kernels\n'
+        'assert warm_up_scenario("") > 0.0\n'
+        'print(sorted(name for name in kernels.KERNELS\n'
+        '             if kernels.loops(name).advance.signatures))\n'
+    )
+    done = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split('\n')[-2] == "['dop853']", done.stdout
+
+
+def test_a_scenario_the_warm_up_cannot_read_is_left_to_the_run(tmp_path, capsys):
+    from tumble_ros.cli.warmup import main, warm_up_scenario
+    from tumble_ros.core import ScenarioError
+
+    missing = tmp_path / 'missing.yaml'
+    with pytest.raises(ScenarioError, match='missing.yaml'):
+        warm_up_scenario(str(missing))
+    with pytest.raises(ScenarioError, match='no_such_scenario.yaml'):
+        warm_up_scenario('no_such_scenario')       # a name: the shipped config/ folder's file
+    assert main(['--scenario', str(missing)]) == 0   # make run goes on: the run says why
+    if kernels.COMPILED:
+        assert 'not compiled ahead (ScenarioError' in capsys.readouterr().out
+
+
+@needs_numba
 def test_a_first_use_that_compiles_says_so_and_a_compiled_loop_says_nothing():
     """The notice of jit.first_use (make run compiles only the loops it uses, on first use)."""
     import io

@@ -10,20 +10,27 @@ loops' variant for one extra torque (``core.torques.TorqueComponent``: every sin
 torque shares it, whatever its function) and the reference path's calls. The methods compile in
 parallel, one process each on up to as many cores as there are (each method's loops are its own
 copies, so the compilations share nothing), and each says when it is ready.
+
+``python -m tumble_ros.cli.warmup --scenario SCENARIO`` compiles (or loads) only what a run of
+that scenario uses, by simulating its first output interval: ``make run`` does it beside the
+set-up's colcon build, so that the run finds its loop compiled. SCENARIO is a params file or a
+shipped scenario's name (``fig10``), as ``python -m tumble_ros`` takes it; a scenario this
+cannot read or run is left to the run, which says why (this exits 0 either way).
 """
 from __future__ import annotations
 
 from concurrent.futures import as_completed, ProcessPoolExecutor
 import multiprocessing
 import os
+from pathlib import Path
 import sys
 import time
 
-from tumble_ros.core import (Impact, IntegratorSettings, kernels, Scenario, simulate,
-                             simulate_ensemble, torque_function, TorqueComponent)
+from tumble_ros.core import (Impact, IntegratorSettings, kernels, load_scenario, Scenario,
+                             simulate, simulate_ensemble, torque_function, TorqueComponent)
 from tumble_ros.core.integrators import INTEGRATORS
 
-__all__ = ['warm_up', 'main']
+__all__ = ['warm_up', 'warm_up_scenario', 'main']
 
 
 @torque_function
@@ -81,8 +88,45 @@ def warm_up(report: bool = False) -> float:
     return time.perf_counter() - started
 
 
+#: The shipped scenarios, in the source tree (colcon installs the same files).
+CONFIG_DIR = Path(__file__).resolve().parents[2] / 'config'
+
+
+def warm_up_scenario(name: str) -> float:
+    """
+    Compile (or load) the loops a run of scenario ``name`` uses; return the seconds taken.
+
+    ``name``: a params file, or a shipped scenario's name (``fig10``: config/fig10.yaml), or
+    ``''`` for the default scenario. The scenario's first output interval is simulated (the
+    same method, torques and body: the same compiled loop). Raises what reading or running it
+    raises (a ScenarioError for a file it refuses).
+    """
+    started = time.perf_counter()
+    path = Path(name or 'default')
+    if not path.is_file() and path.parent == Path('.') and path.suffix in ('', '.yaml'):
+        path = CONFIG_DIR / f'{path.stem}.yaml'
+    scenario = load_scenario(path)
+    simulate(scenario.replace(duration=scenario.output_interval))
+    return time.perf_counter() - started
+
+
 def main(argv: list[str] | None = None) -> int:
     """Warm up, and say how long it took."""
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ['--scenario']:
+        name = argv[1] if len(argv) > 1 else ''
+        label = name or 'the default scenario'
+        if not kernels.COMPILED:
+            return 0
+        print(f"== compiling the loops {label}'s run uses (numba; beside the set-up)", flush=True)
+        try:
+            seconds = warm_up_scenario(name)
+        except Exception as err:     # the run itself reports it, in its own words
+            print(f'   not compiled ahead ({type(err).__name__}: {err}): the run compiles what '
+                  'it uses', flush=True)
+            return 0
+        print(f'== the loops of {label} ready ({seconds:.1f} s)', flush=True)
+        return 0
     if kernels.COMPILED:
         print('== compiling the integration loops (numba; once per build, then cached)',
               flush=True)
