@@ -177,6 +177,27 @@ def test_the_sigint_ignoring_python_outlives_the_cluster_start():
     assert done.stdout.strip() == 'True', done.stderr
 
 
+def test_the_sigint_ignoring_python_outlives_the_process_that_made_it(tmp_path):
+    """
+    A Ctrl-C at the cluster's start ends the driver while a nanny still spawns through it.
+
+    Removed at the driver's exit (atexit), the wrapper was gone under that spawn: "/bin/sh: 0:
+    cannot open .../python" (CI of 2026-12-04, twice). Made in a process that then exits, it
+    must still run this Python with SIGINT ignored; a second process finds the same file.
+    """
+    make = ('from tumble_ros.runs.ensembles import dask_engine; '
+            'print(dask_engine._sigint_ignoring_python())')
+    env = {**os.environ, 'XDG_CACHE_HOME': str(tmp_path / 'cache')}
+    paths = [subprocess.run([sys.executable, '-c', make], capture_output=True, text=True,
+                            timeout=120, env=env, check=True).stdout.strip() for _ in range(2)]
+    assert paths[0] == paths[1] and Path(paths[0]).parent == tmp_path / 'cache' / 'tumble_ros'
+    probe = 'import signal; print(signal.getsignal(signal.SIGINT) is signal.SIG_IGN)'
+    done = subprocess.run([paths[0], '-c', probe], capture_output=True, text=True, timeout=60)
+    assert done.stdout.strip() == 'True', done.stderr
+    assert sorted(p.name for p in (tmp_path / 'cache' / 'tumble_ros').iterdir()) == [
+        Path(paths[0]).name]    # no scratch file left
+
+
 def test_the_dashboard_is_served_on_loopback_only_when_asked(tmp_path):
     from tumble_ros.ensembles import dask_client
 

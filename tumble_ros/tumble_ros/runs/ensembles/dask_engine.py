@@ -181,22 +181,40 @@ def _workers_ignore_sigint() -> Iterator[None]:
 @functools.lru_cache(maxsize=1)
 def _sigint_ignoring_python() -> Path:
     """
-    Return a shell wrapper that runs this Python with SIGINT ignored (made once per process).
+    Return a shell wrapper that runs this Python with SIGINT ignored (made once, then kept).
 
-    It stays until the interpreter exits: a Ctrl-C while the cluster starts ends the ``with``
-    of :func:`_workers_ignore_sigint` while a nanny may still be spawning through it, and a
-    wrapper removed then printed "/bin/sh: 0: cannot open .../python" (and the resource
-    tracker it failed to start warned it died).
+    It is never removed: a Ctrl-C while the cluster starts ends this process while a nanny
+    (its child) may still be spawning a worker through it, and a wrapper removed then, even at
+    the interpreter's exit, printed "/bin/sh: 0: cannot open .../python" (and the resource
+    tracker it failed to start warned it died). Its text depends only on ``sys.executable``, so
+    one file per interpreter serves every run: in the user's cache folder
+    (``$XDG_CACHE_HOME/tumble_ros``, else ``~/.cache/tumble_ros``, made private), written
+    whole then renamed into place (concurrent runs never see half a file); where that folder
+    cannot be written, in a private temporary folder.
     """
-    import atexit
+    import hashlib
+    import os
     import shlex
-    import shutil
     import sys
     import tempfile
 
-    folder = tempfile.mkdtemp(prefix='tumble-dask-')
-    atexit.register(shutil.rmtree, folder, ignore_errors=True)
-    wrapper = Path(folder) / 'python'
-    wrapper.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(sys.executable)} \"$@\"\n")
-    wrapper.chmod(0o700)
+    text = f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(sys.executable)} \"$@\"\n"
+    name = 'python-sigint-ignored-' + hashlib.sha256(sys.executable.encode()).hexdigest()[:16]
+    cache = Path(os.environ.get('XDG_CACHE_HOME') or Path.home() / '.cache') / 'tumble_ros'
+    try:
+        cache.mkdir(mode=0o700, parents=True, exist_ok=True)
+        folder = cache
+    except OSError:
+        folder = Path(tempfile.mkdtemp(prefix='tumble-dask-'))
+    wrapper = folder / name
+    try:
+        if wrapper.read_text() == text and os.access(wrapper, os.X_OK):
+            return wrapper
+    except OSError:
+        pass
+    handle, scratch = tempfile.mkstemp(dir=folder, prefix=name + '.')
+    with os.fdopen(handle, 'w') as file:
+        file.write(text)
+    os.chmod(scratch, 0o700)
+    os.replace(scratch, wrapper)
     return wrapper
