@@ -15,7 +15,8 @@ from std_srvs.srv import Trigger
 from tumble_ros import topics
 from tumble_ros.core import TimeBase
 from tumble_ros.io import read_messages, summarize
-from tumble_ros.nodes.bringup import main as bringup_main, run_bringup
+from tumble_ros.nodes.bringup import (BringupResult, format_result, main as bringup_main,
+                                      run_bringup)
 from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.parameters import params_file_problem, section_applies
 from tumble_ros.nodes.recorder import RecorderNode
@@ -332,3 +333,13 @@ def test_bringup_into_an_unwritable_place_says_so_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert (len(err) == 1 and err[0].startswith('ERROR: cannot record: ')
             and '/proc/tumble' in err[0])
+
+
+def test_a_recording_whose_consumers_did_not_drain_says_so(tmp_path):
+    """The summary of a run whose consumers had not taken every sample carries a WARNING."""
+    base = BringupResult(output=tmp_path / 'x.mcap', state=SimStatus.FINISHED, message='done',
+                         samples=3)
+    assert 'had not taken every sample' not in format_result(base)
+    base.undrained = True
+    assert 'bringup: WARNING: the comparator and recorder had not taken every sample' \
+        in format_result(base)
