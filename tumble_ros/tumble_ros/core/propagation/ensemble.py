@@ -524,8 +524,7 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
     states[:, K.ST.Y:K.ST.Y + K.N] = y0
     m = times.size
     times = np.ascontiguousarray(times, dtype=float)
-    y_out = np.full((n, m, K.N), np.nan)
-    e_out = np.full((n, m, 3), np.nan)
+    y_out, e_out = _outputs(n, m)
     k_out = np.zeros(n, dtype=np.int64)
     steps = np.zeros(n, dtype=np.int64)
     cur = seg_ptr[:-1].copy()
@@ -561,6 +560,30 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
                    threads)
 
 
+def _outputs(n: int, m: int) -> tuple[FloatArray, FloatArray]:
+    """
+    Return the loops' outputs y_out (n, m, K.N) and e_out (n, m, 3), not initialised.
+
+    The loops write every sample a body reaches; :func:`_result` blanks the others (NaN). Not
+    filled first: at N = 10^6 filling them took seconds of page faults on one thread, which the
+    loops' threads now take as they write.
+    """
+    return np.empty((n, m, K.N)), np.empty((n, m, 3))
+
+
+def _blank_unreached(k_out: npt.NDArray[np.int64], *outputs: FloatArray) -> None:
+    """Set the samples outputs[b, k_out[b]:] that body b did not reach to NaN."""
+    m = outputs[0].shape[1]
+    short = np.flatnonzero(k_out < m)
+    if short.size == 0:
+        return
+    unreached = np.arange(m)[None, :] >= k_out[short, None]      # (bodies, m)
+    for out in outputs:
+        rows = out[short]
+        rows[unreached] = np.nan
+        out[short] = rows
+
+
 def _result(scenario: Scenario, times: FloatArray, y_out: FloatArray, e_out: FloatArray,
             k_out: npt.NDArray[np.int64], failed: npt.NDArray[np.bool_],
             messages: tuple[str, ...], steps: npt.NDArray[np.int64],
@@ -570,33 +593,36 @@ def _result(scenario: Scenario, times: FloatArray, y_out: FloatArray, e_out: Flo
 
     In groups of bodies of at most :data:`POST_SAMPLES` samples (bounded memory for their
     (bodies, n, 3, 3) matrices), on ``threads`` threads (numpy lets go of the GIL); each body's
-    numbers do not depend on the groups.
+    numbers do not depend on the groups. The result's omega and quaternion are views of
+    ``y_out`` (its columns 0-2 and 3-6, the quaternions made continuous in place): no copy of
+    the biggest output.
     """
     n, m = y_out.shape[:2]
+    _blank_unreached(k_out, y_out, e_out)
     success = (k_out == m) & ~failed
-    omega = y_out[:, :, :3].copy()
-    quat = np.full((n, m, 4), np.nan)
+    omega = y_out[:, :, :3]
     jac = np.full((n, m), np.nan)
     size = max(1, POST_SAMPLES // max(1, m))
 
     def group(b0: int) -> None:
         b1 = min(n, b0 + size)
-        for kk in np.unique(k_out[b0:b1]):
+        ks = k_out[b0:b1]
+        for kk in np.unique(ks):
             if kk == 0:
                 continue
-            rows = np.arange(b0, b1)[k_out[b0:b1] == kk]
+            rows = slice(b0, b1) if (ks == kk).all() else np.arange(b0, b1)[ks == kk]
             q = y_out[rows, :kk, 3:]
-            quat[rows, :kk] = continuous_quaternions(q)
             matrices = quaternions_to_matrices(q)
             jac[rows, :kk] = jacobi_integral(times[:kk], omega[rows, :kk], matrices,
                                              scenario.inertia,
                                              scenario.orbit_rate)
+            y_out[rows, :kk, 3:] = continuous_quaternions(q)
 
     starts = range(0, n, size)
     with ThreadPoolExecutor(threads) if threads > 1 and len(starts) > 1 else _NoPool() as pool:
         list(pool.map(group, starts))
-    return EnsembleResult(times, omega, e_out, quat, jac, success, messages, steps, nfev, wall,
-                          True)
+    return EnsembleResult(times, omega, e_out, y_out[:, :, 3:], jac, success, messages, steps,
+                          nfev, wall, True)
 
 
 #: Most samples (bodies x times) post-processed at once by :func:`_result`.
@@ -646,14 +672,12 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
     flat_tracks = np.zeros((padded, 3))
     flat_tracks[:n] = tracks0
     tracks = flat_tracks.reshape(n_blocks, size, 3)
-    tmp = np.zeros((n_blocks, K.BT.SIZE, size))
     bodies = np.zeros((n_blocks, K.BB.SIZE, size))
     counters = np.zeros((n_blocks, K.LI.SIZE), dtype=np.int64)
     bst = np.zeros((n_blocks, K.ST.SIZE))
     m = times.size
     times = np.ascontiguousarray(times, dtype=float)
-    y_out = np.full((n, m, K.N), np.nan)
-    e_out = np.full((n, m, 3), np.nan)
+    y_out, e_out = _outputs(n, m)
     counts = [min(size, n - i * size) for i in range(n_blocks)]
     kernel = K.kernel_name(cfg)
     lp = K.loops(kernel)
@@ -664,7 +688,8 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
         block_init(extra, cfg, probs, seg_t, soa[i], bodies[i], counters[i], bst[i], counts[i])
 
     def advance(i: int, t_stop: float) -> None:
-        block_advance(extra, cfg, probs, seg_t, soa[i], tmp[i], bodies[i], counters[i], bst[i],
+        tmp = np.empty((K.BT.SIZE, size))   # scratch of a step: a call's own, not a block's
+        block_advance(extra, cfg, probs, seg_t, soa[i], tmp, bodies[i], counters[i], bst[i],
                       tracks[i], t_stop, times, y_out, e_out, i * size, counts[i])
 
     start = time.perf_counter()
