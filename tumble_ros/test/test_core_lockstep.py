@@ -152,3 +152,29 @@ def test_a_failing_body_fails_alone_as_in_the_per_body_loop(method):
     assert 'non-finite' in lock.messages[1]
     assert_identical(lock, ref)
     assert np.isnan(lock.omega[1, -1]).all() and np.isfinite(lock.omega[1, 0]).all()
+
+
+@needs_numba
+@pytest.mark.parametrize('method', ['splitting', 'rk4', 'dop853'])
+@pytest.mark.parametrize('loop', ['lockstep', 'per-body', 'impacts', 'reference'])
+def test_without_euler_angles_every_other_output_keeps_its_bits(monkeypatch, method, loop):
+    """euler_angles=False: the same samples, steps and states; euler NaN; the track skipped."""
+    sc = fig9(method, step=5e-3, duration=0.3, output_interval=0.05,
+              integrator=IntegratorSettings(method=method, step=5e-3, rtol=1e-8, atol=1e-8))
+    omega0, euler0 = spread(sc, 5, seed=4)
+    impacts = None
+    if loop == 'per-body':
+        per_body(monkeypatch)
+    if loop == 'impacts':
+        impacts = [(), (Impact(0.1, 3e-4, (3e3, 0.0, 0.0)),), (), (), ()]
+    fast = loop != 'reference'
+    runs = [simulate_ensemble(sc, omega0=omega0, euler0=euler0, impacts=impacts, fast=fast,
+                              threads=2, euler_angles=euler) for euler in (True, False)]
+    full, bare = runs
+    assert full.compiled == bare.compiled == fast
+    for name in ('omega', 'quaternion', 'jacobi', 'success', 'n_steps'):
+        assert np.array_equal(getattr(full, name), getattr(bare, name), equal_nan=True), name
+    assert np.isfinite(full.euler).all() and full.success.all()
+    assert bare.euler.shape == full.euler.shape and np.isnan(bare.euler).all()
+    # the track's dense outputs are evaluations too: rk4's and dop853's counts may only drop
+    assert (bare.nfev <= full.nfev).all()

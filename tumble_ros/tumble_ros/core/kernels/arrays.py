@@ -97,14 +97,17 @@ def set_pulses(row: Array, torque_body: Sequence[float],
 
 
 def config_array(kernel: str, settings: Any, gammas: Iterable[float] = (), order: int = 0,
-                 step_budget: tuple[float, float] = (np.inf, np.inf)) -> Array:
+                 step_budget: tuple[float, float] = (np.inf, np.inf),
+                 euler_angles: bool = True) -> Array:
     """
     Return the config array (layout CF): method, step, tolerances, order, composition.
 
     ``step_budget``: (window [yr], most steps within it), the work budget of an adaptive
-    method (``limits.step_budget``; (inf, inf): none).
+    method (``limits.step_budget``; (inf, inf): none). ``euler_angles`` False: the loops
+    neither follow nor write out the Euler angles (the same steps and states otherwise).
     """
     cfg = np.zeros(CF.SIZE)
+    cfg[CF.EULER] = 1.0 if euler_angles else 0.0
     cfg[CF.WINDOW], cfg[CF.WINDOW_STEPS] = (float(v) for v in step_budget)
     cfg[CF.METHOD] = kernel_id(kernel)
     cfg[CF.ORDER] = float(order)

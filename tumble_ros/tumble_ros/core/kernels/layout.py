@@ -128,6 +128,8 @@ CF = layout('Config', [
     ('ORDER', 1, 'order of the method (splitting: the pulse sub-step rule)'),
     ('WINDOW', 1, 'work budget: window of simulated time [yr] (inf: no budget)'),
     ('WINDOW_STEPS', 1, 'work budget: most accepted steps within one window (inf: no budget)'),
+    ('EULER', 1, '1: follow the Euler angles and write them out; 0: neither (an ensemble that '
+                 'asks for no Euler angles)'),
 ])
 
 #: Bodies stepped in lockstep (``kernels.lockstep``), structure of arrays: the rows of one

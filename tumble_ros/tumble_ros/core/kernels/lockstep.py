@@ -219,6 +219,8 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
 def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                 bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, m: int) -> None:
     """``stepping.track_euler`` for every running body: the bound vectorised, updates rare."""
+    if cfg[CF.EULER] == 0.0:
+        return
     cur = soa[counters[LI.PAR]]
     old = soa[1 - counters[LI.PAR]]
     dt = bst[ST.T] - bst[ST.T_OLD]

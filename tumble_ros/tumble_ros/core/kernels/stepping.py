@@ -188,7 +188,11 @@ def track_euler(p: Array, extra: Extra, cfg: Array, st: Array, track: Array) -> 
 @jit
 def emit(p: Array, extra: Extra, cfg: Array, st: Array, track: Array, t_out: Array,
          y_out: Array, e_out: Array, k: int) -> int:
-    """Write every output t_out[k:] <= t (state and unwrapped Euler angles); returns the new k."""
+    """
+    Write every output t_out[k:] <= t (state and unwrapped Euler angles); returns the new k.
+
+    Without Euler angles (cfg[CF.EULER] 0) e_out is not written (it may hold no sample).
+    """
     n_out = t_out.shape[0]
     while k < n_out and t_out[k] <= st[ST.T]:
         tk = t_out[k]
@@ -199,10 +203,11 @@ def emit(p: Array, extra: Extra, cfg: Array, st: Array, track: Array, t_out: Arr
             o = ST.SCRATCH
         for i in range(N):
             y_out[k, i] = st[o + i]
-        phi, psi, theta = unwrapped_euler(st, o, track)
-        e_out[k, 0] = phi
-        e_out[k, 1] = psi
-        e_out[k, 2] = theta
+        if cfg[CF.EULER] != 0.0:
+            phi, psi, theta = unwrapped_euler(st, o, track)
+            e_out[k, 0] = phi
+            e_out[k, 1] = psi
+            e_out[k, 2] = theta
         k += 1
     return k
 
@@ -231,7 +236,9 @@ def advance(p: Array, extra: Extra, cfg: Array, st: Array, track: Array, t_targe
         if not ok:
             break
         steps += 1
-        work += 1 + track_euler(p, extra, cfg, st, track)
+        work += 1
+        if cfg[CF.EULER] != 0.0:
+            work += track_euler(p, extra, cfg, st, track)
         if k < n_out and t_out[k] <= st[ST.T]:  # (no call otherwise)
             k = emit(p, extra, cfg, st, track, t_out, y_out, e_out, k)
     refresh_track(st, track)
