@@ -40,8 +40,8 @@ def test_the_order_is_the_stable_argsorts(stamps, k, owned):
     assert got_v.flags.c_contiguous and got_v.shape == (len(stamps), k)
     in_order = bool((stamps[1:] >= stamps[:-1]).all())
     # arrays of their own, unless the caller owns its columns and they are in order (no copy)
-    assert np.shares_memory(got_t, stamps) == np.shares_memory(got_v, rows) == (owned
-                                                                               and in_order)
+    shared = owned and in_order
+    assert np.shares_memory(got_t, stamps) == np.shares_memory(got_v, rows) == shared
 
 
 def test_no_samples():
