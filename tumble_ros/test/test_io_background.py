@@ -7,8 +7,12 @@ background gather is what reading the file back returns (columns bit for bit, th
 strings, generic fall-backs and other messages in file order), whichever topics are asked for
 and whichever as messages; load_recording gives the same Recording on an offline run with
 impacts; an error in the thread is raised by the reader, not lost; a WrittenMessages already
-written to or followed is refused; close() ends the thread and stops following the writer.
+written to or followed is refused; close() ends the thread and stops following the writer; and
+the main job stopped by SIGTERM while it records (the thread gathering) still finalises its
+file and ends.
 """
+from pathlib import Path
+import signal
 import threading
 
 import pytest
@@ -16,7 +20,7 @@ import pytest
 from test_io_written import _assert_same_recording, _assert_same_tables, _write, CONFIG
 from tumble_ros.analysis import load_recording
 from tumble_ros.io import (BackgroundColumns, columns, gather_in_background, read_columns,
-                           written_columns, WrittenMessages)
+                           summarize, written_columns, WrittenMessages)
 
 
 def _threads():
@@ -102,3 +106,18 @@ def test_a_recording_gathered_while_writing_is_the_recording_read_back(tmp_path)
     from_file = load_recording(output)
     _assert_same_recording(from_file, from_memory)
     assert from_file.n > 100 and len(from_file.impacts) >= 1 and len(from_file.segments) >= 2
+
+
+def test_the_main_job_stopped_while_recording_finalises_its_file(spawn, tmp_path):
+    """SIGTERM to `python -m tumble_ros` on a 20,000-yr Fig 9 run, mid-recording."""
+    scenario = tmp_path / 'fig9_long.yaml'
+    text = (Path(CONFIG) / 'fig9.yaml').read_text()
+    assert 'duration: 2000.0' in text
+    scenario.write_text(text.replace('duration: 2000.0', 'duration: 20000.0'))
+    run = spawn('', scenario, module=True, cwd=tmp_path)
+    assert run.wait_for('samples/s', 120), run.output
+    run.signal(signal.SIGTERM)
+    assert run.wait(60) == 128 + signal.SIGTERM, run.output
+    assert 'stopped by SIGTERM' in run.output and 'Traceback' not in run.output
+    (recording,) = (tmp_path / 'recordings').glob('fig9_long_*.mcap')
+    assert summarize(recording).finalised and summarize(recording).message_count > 1000
