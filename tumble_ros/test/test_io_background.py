@@ -6,7 +6,8 @@ written, on the other core while it simulates. Here: what written_columns return
 background gather is what reading the file back returns (columns bit for bit, the same
 strings, generic fall-backs and other messages in file order), whichever topics are asked for
 and whichever as messages; load_recording gives the same Recording on an offline run with
-impacts; an error in the thread is raised by the reader, not lost; a WrittenMessages already
+impacts; an error in the thread is raised by the reader, not lost (a message that cannot be
+decoded: the same error as without the thread); a WrittenMessages already
 written to or followed is refused; close() ends the thread and stops following the writer; and
 the main job stopped by SIGTERM while it records (the thread gathering) still finalises its
 file and ends.
@@ -19,8 +20,9 @@ import pytest
 
 from test_io_written import _assert_same_recording, _assert_same_tables, _write, CONFIG
 from tumble_ros.analysis import load_recording
-from tumble_ros.io import (BackgroundColumns, columns, gather_in_background, read_columns,
-                           summarize, written_columns, WrittenMessages)
+from tumble_ros.io import (BackgroundColumns, columns, gather_in_background, McapError,
+                           McapWriter, read_columns, summarize, written_columns,
+                           WrittenMessages)
 
 
 def _threads():
@@ -73,6 +75,32 @@ def test_an_error_in_the_thread_is_raised_by_the_reader(tmp_path, monkeypatch):
     assert not _threads()
     monkeypatch.undo()                          # (the thread may gather after the writer)
     assert len(read_columns(tmp_path / 'kept.mcap', ['/v'])[0]['/v']) == 53 + 4
+
+
+def test_a_message_that_cannot_be_decoded_is_the_same_error_as_without_the_thread(tmp_path):
+    """
+    Raised by the reader, naming the file and the message, as written_columns without it.
+
+    (Reading the file back numbers that message 0, not 1: left as it was.)
+    """
+    from test_io_columns import _vector3_stamped
+
+    def write(path, keep):
+        with McapWriter(path, chunk_seconds=float('inf'), keep=keep) as w:
+            v = w.add_channel('/v', 'geometry_msgs/msg/Vector3Stamped')
+            w.write(v, _vector3_stamped(1, 2, 'body', 1.0, 2.0, 3.0), 5)
+            w.write(v, b'\x00\x01\x00\x00\x07', 6)    # CDR, little-endian, cut short
+    errors = []
+    for background in (True, False):
+        keep = WrittenMessages()
+        if background:
+            gather_in_background(keep)
+        write(tmp_path / f'{background}.mcap', keep)
+        with pytest.raises(McapError) as raised:
+            written_columns(keep, ['/v'])
+        errors.append(str(raised.value).replace(f'{background}.mcap', 'x.mcap'))
+    assert errors[0] == errors[1]
+    assert errors[0].startswith(f"{tmp_path / 'x.mcap'}: cannot decode message 1 on topic '/v'")
 
 
 def test_only_a_new_written_messages_is_followed(tmp_path):

@@ -416,8 +416,7 @@ class BackgroundColumns:
                              f'other follower), got {len(written.blocks)} block(s) kept and '
                              f'on_block={written.on_block!r}')
         self._written = written
-        self._reader = _ColumnReader(written.path or Path(), written, _Everything(), set(),
-                                     None, flat_only=True)
+        self._reader: _ColumnReader | None = None   # made at the first block: the path known
         self._blocks: queue.SimpleQueue[WrittenBlock | None] = queue.SimpleQueue()
         self._error: BaseException | None = None
         self._thread = threading.Thread(target=self._run, name='tumble_ros-columns',
@@ -429,6 +428,9 @@ class BackgroundColumns:
     def _run(self) -> None:
         try:
             while (block := self._blocks.get()) is not None:
+                if self._reader is None:    # its errors name the file, as written_columns'
+                    self._reader = _ColumnReader(self._written.path or Path(), self._written,
+                                                 _Everything(), set(), None, flat_only=True)
                 self._reader.read_written((block,))
         except BaseException as err:  # noqa: BLE001 - raised by finish(), in the caller
             self._error = err
@@ -448,7 +450,7 @@ class BackgroundColumns:
         self.close()
         if self._error is not None:
             raise self._error
-        return self._reader.builders
+        return {} if self._reader is None else self._reader.builders
 
 
 def gather_in_background(written: WrittenMessages) -> BackgroundColumns:
