@@ -3,8 +3,9 @@ The figures drawn in a FigurePool's workers (the main job's) against the figures
 
 The same files, byte for byte (names, order, PNG bytes), drawn by two processes (the worker
 and a helper it forks) and by the worker alone, after the worker's warm-up figure, and when the
-worker or a helper has died; the errors of the in-process path (existing files, an error raised
-in a helper); and the main job's process never imports matplotlib.
+worker or a helper has died, with the recording handed over through shared memory or the pipe;
+the errors of the in-process path (existing files, an error raised in a helper); and the main
+job's process never imports matplotlib.
 """
 import os
 from pathlib import Path
@@ -56,6 +57,33 @@ def test_the_pool_writes_the_same_files(tmp_path, recordings, workers):
     names = [p.name for p in here]
     assert 'omega_windows.png' not in names and 'impact_0_id0.png' in names   # fig10
     assert len(list((tmp_path / 'here0').glob('*.png'))) == 5          # fig9: 5, windows too
+
+
+@pytest.mark.parametrize('shared_bytes, way', [(figure_pool.SHARED_BYTES, '_draw_shared'),
+                                               (0, '_draw_shares'), (4096, '_draw_shares')])
+def test_the_recording_goes_through_shared_memory_when_it_fits(tmp_path, recordings,
+                                                               shared_bytes, way):
+    """Shared memory (the default), none, too small (the pipe): the same files."""
+    rec = recordings[0]
+    summary = analyze(rec)
+    with FigurePool.start(2, shared_bytes) as pool:
+        submitted = []
+        submit = pool._executor.submit
+
+        def spy(function, *args):
+            submitted.append(function.__name__)
+            return submit(function, *args)
+        pool._executor.submit = spy
+        there = pool.write_figures(rec, tmp_path / 'pool', summary)
+        again = pool.write_figures(recordings[1], tmp_path / 'again', analyze(recordings[1]))
+    assert submitted == [way, way]
+    assert _files(there) == _files(write_figures(rec, tmp_path / 'here', summary))
+    assert _files(again) == _files(write_figures(recordings[1], tmp_path / 'here1'))
+
+
+def test_the_pool_refuses_a_negative_shared_size():
+    with pytest.raises(ValueError, match='shared_bytes: must be >= 0, got -1'):
+        FigurePool.start(2, -1)
 
 
 def test_existing_files_are_refused_as_in_the_process(tmp_path, recordings):

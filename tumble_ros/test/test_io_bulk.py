@@ -7,7 +7,8 @@ The same rows, single messages around them and chunk sizes that cut the blocks a
 two files must be the same bytes (records, chunks, message indexes, statistics, summary), and
 the bulk file must read back with mcap's own seeking reader through its indexes. The chunks
 finalised in a thread (``background=True``, mcap_bulk.ChunkFinisher): the same bytes again, the
-file flushed as far as the thread has written it, an error of the thread raised by the writer.
+file flushed as far as the thread has written it, several chunks handed over while the thread is
+busy, an error of the thread raised by the writer and no chunk written after a failed one.
 """
 import threading
 
@@ -16,7 +17,7 @@ import numpy as np
 import pytest
 
 from tumble_ros.io import McapWriter
-from tumble_ros.io.mcap_bulk import bulk_supported, ChunkFinisher
+from tumble_ros.io.mcap_bulk import bulk_supported, ChunkFinisher, IN_FLIGHT
 
 RNG = np.random.default_rng(7)
 
@@ -109,6 +110,51 @@ def test_an_error_in_the_thread_is_raised_by_the_writer(tmp_path, monkeypatch):
         w.close()
     assert w.closed
     assert not any(t.name.startswith('mcap-chunks') for t in threading.enumerate())
+
+
+def _chunks(w, n):
+    """Write n messages of 200 bytes to a writer of 100-byte chunks: n chunks handed over."""
+    a = w.add_channel('/a', 'std_msgs/msg/String')
+    for k in range(n):
+        w.write(a, b'\x00\x01\x00\x00\x04\x00\x00\x00abc\x00' + bytes(188), 1000 + k)
+
+
+def test_chunks_are_handed_over_without_waiting_for_the_thread(tmp_path, monkeypatch):
+    """IN_FLIGHT chunks wait for a busy thread; then in order, the same bytes as without it."""
+    go, real, written = threading.Event(), ChunkFinisher._write, []
+
+    def slow(self, data, *args):
+        assert go.wait(60), 'the thread was never let go'
+        written.append(data)
+        real(self, data, *args)
+    monkeypatch.setattr(ChunkFinisher, '_write', slow)
+    with McapWriter(tmp_path / 'thread.mcap', chunk_bytes=100, chunk_seconds=float('inf'),
+                    background=True) as w:
+        _chunks(w, IN_FLIGHT)       # the thread blocked on the first: none of them waited
+        assert len(w._finisher._pending) == IN_FLIGHT and written == []
+        go.set()
+    with McapWriter(tmp_path / 'each.mcap', chunk_bytes=100, chunk_seconds=float('inf')) as w:
+        _chunks(w, IN_FLIGHT)
+    assert len(written) == IN_FLIGHT
+    assert (tmp_path / 'thread.mcap').read_bytes() == (tmp_path / 'each.mcap').read_bytes()
+
+
+def test_no_chunk_is_written_after_one_that_failed(tmp_path, monkeypatch):
+    calls, real = [], ChunkFinisher._write
+
+    def fail_second(self, *args):
+        calls.append(len(calls))
+        if len(calls) == 2:
+            raise OSError(28, 'No space left on device')
+        real(self, *args)
+    monkeypatch.setattr(ChunkFinisher, '_write', fail_second)
+    w = McapWriter(tmp_path / 'x.mcap', chunk_bytes=100, chunk_seconds=float('inf'),
+                   background=True)
+    with pytest.raises(OSError, match='No space left'):
+        _chunks(w, IN_FLIGHT + 3)   # raised by a later hand-over, or by close()
+        w.close()
+    w.close()
+    assert calls == [0, 1] and w.closed
 
 
 @pytest.mark.parametrize('times, message', [

@@ -111,7 +111,7 @@ def main_job(argv: list[str]) -> int:
         print(f'python -m tumble_ros: unknown arguments {argv}; executables: '
               f"{', '.join(EXECUTABLES)} (python -m tumble_ros --help)", file=sys.stderr)
         return 2
-    from tumble_ros.io import WrittenMessages
+    from tumble_ros.io import gather_in_background, WrittenMessages
     from tumble_ros.nodes.recorder import default_output
 
     output = default_output(Path(argv[0]).stem if argv else 'default')
@@ -119,13 +119,21 @@ def main_job(argv: list[str]) -> int:
     # offline, the messages written stay in memory for the analysis (not read back)
     written = None if live else WrittenMessages()
     with _figure_pool() as pool:    # workers warm up for the figures while the run records
-        code = run_executable('bringup', [*argv, *mode, '--output', str(output)], keep=written)
-        if code == BROKEN_PIPE_EXIT:
-            return code
-        if code != 0 or not output.exists() or output.stat().st_size == 0:
-            _release(output)
-            return code or 1
-        return analyse(output, written, pool)
+        # the columns gathered in a thread as they are written (the other core, while the
+        # run simulates): none left to gather after the recording
+        background = None if written is None else gather_in_background(written)
+        try:
+            code = run_executable('bringup', [*argv, *mode, '--output', str(output)],
+                                  keep=written)
+            if code == BROKEN_PIPE_EXIT:
+                return code
+            if code != 0 or not output.exists() or output.stat().st_size == 0:
+                _release(output)
+                return code or 1
+            return analyse(output, written, pool)
+        finally:
+            if background is not None:
+                background.close()
 
 
 @contextmanager

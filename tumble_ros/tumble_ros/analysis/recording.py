@@ -293,12 +293,19 @@ def _level(value) -> str:
         return str(value)
 
 
-def _sorted(ns, rows, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Return copies of the stamps and the (n, k) values, ordered by stamp (stable)."""
+def _sorted(ns, rows, k: int, *, owned: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the stamps and the (n, k) values, ordered by stamp (stable).
+
+    Copies, unless ``owned`` (``ns`` and ``rows`` are arrays no one else holds, as
+    :func:`load_recording`'s columns: in order, they are returned as they are).
+    """
     stamps = np.asarray(ns, dtype=np.int64)
     values = np.asarray(rows, dtype=float).reshape(-1, k) if len(rows) else _empty(k)
     if not len(stamps) or bool((stamps[1:] >= stamps[:-1]).all()):
-        return stamps.copy(), values.copy()     # in order already (recordings are): no sort
+        if owned:                               # in order already (recordings are): no sort
+            return stamps, values
+        return stamps.copy(), values.copy()
     order = np.argsort(stamps, kind='stable')
     return stamps[order], values[order]
 
@@ -457,7 +464,7 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
         return ns.astype(np.float64) / timebase.ns_per_year
 
     stamp_ns, rows = raw.get(ANGULAR_VELOCITY, ([], []))
-    stamps, omega = _sorted(stamp_ns, rows, 3)
+    stamps, omega = _sorted(stamp_ns, rows, 3, owned=True)
     if mixed:   # another run chosen away: its samples are on the same topic, not separable
         shared = len(stamps) - len(np.unique(stamps))
         left_out.append(f'{in_namespace(namespace, ANGULAR_VELOCITY)}: the samples of the other '
@@ -478,25 +485,25 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
                     t=years(stamps), omega=omega, stamp_ns=stamps, skipped=skipped,
                     namespace=namespace, left_out=left_out, run_id=run_id)
     if EULER_ANGLES in raw:
-        ns, rec.euler = _sorted(*raw[EULER_ANGLES], 3)
+        ns, rec.euler = _sorted(*raw[EULER_ANGLES], 3, owned=True)
         rec.euler_t = years(ns)
     if ATTITUDE in raw:
-        ns, rec.quaternion = _sorted(*raw[ATTITUDE], 4)
+        ns, rec.quaternion = _sorted(*raw[ATTITUDE], 4, owned=True)
         rec.quaternion_t = years(ns)
     if PERTURBER in raw:
-        ns, rec.perturber = _sorted(*raw[PERTURBER], 3)
+        ns, rec.perturber = _sorted(*raw[PERTURBER], 3, owned=True)
         rec.perturber_t = years(ns)
     if LIGHTCURVE in raw:
-        ns, rec.lightcurve = _sorted(*raw[LIGHTCURVE], len(_COLUMNS[LIGHTCURVE]))
+        ns, rec.lightcurve = _sorted(*raw[LIGHTCURVE], len(_COLUMNS[LIGHTCURVE]), owned=True)
         rec.lightcurve_t = years(ns)
     if MODEL_ANGULAR_VELOCITY in raw:
-        ns, rec.model_omega = _sorted(*raw[MODEL_ANGULAR_VELOCITY], 3)
+        ns, rec.model_omega = _sorted(*raw[MODEL_ANGULAR_VELOCITY], 3, owned=True)
         rec.model_t = years(ns)
     if ERROR in raw:
-        ns, rec.error = _sorted(*raw[ERROR], 3)
+        ns, rec.error = _sorted(*raw[ERROR], 3, owned=True)
         rec.error_t = years(ns)
     if ERROR_NORM in raw:
-        ns, values = _sorted(*raw[ERROR_NORM], 2)
+        ns, values = _sorted(*raw[ERROR_NORM], 2, owned=True)
         rec.norm_t = years(ns)
         rec.error_norm, rec.error_relative = values[:, 0].copy(), values[:, 1].copy()
         rec.error_models = tuple(norm_models)

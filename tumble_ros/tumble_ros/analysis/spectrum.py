@@ -68,6 +68,21 @@ def _uniform(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, float, bool]:
     return np.interp(grid, t, x), dt, True
 
 
+def _local_maxima(amp: np.ndarray) -> list[int]:
+    """
+    Return the bins k >= 1 above the bin before and not below the next, strongest first.
+
+    The last bin has no next. Equal amplitudes keep the order of their bins (a stable sort),
+    as sorting the bins by ``-amp[k]`` in Python does (tests/test_analysis_spectrum_peaks.py).
+    """
+    if len(amp) < 2:
+        return []
+    rising = amp[1:] > amp[:-1]
+    rising[:-1] &= amp[1:-1] >= amp[2:]
+    k = np.flatnonzero(rising) + 1
+    return k[np.argsort(-amp[k], kind='stable')].tolist()
+
+
 def spectrum(t: np.ndarray, x: np.ndarray, lines: Sequence[TheoryLine] = (), *,
              component: str = 'wx', n_peaks: int = 5,
              threshold: float = PEAK_THRESHOLD) -> Spectrum | None:
@@ -91,9 +106,7 @@ def spectrum(t: np.ndarray, x: np.ndarray, lines: Sequence[TheoryLine] = (), *,
     amp = 2.0 * np.abs(spec) / window.sum()
     omega_axis = 2 * math.pi * np.fft.rfftfreq(n, dt)
     resolution = 2 * math.pi / (n * dt)
-    candidates = [k for k in range(1, len(amp))
-                  if amp[k] > amp[k - 1] and (k + 1 == len(amp) or amp[k] >= amp[k + 1])]
-    candidates.sort(key=lambda k: -amp[k])
+    candidates = _local_maxima(amp)
     chosen: list[int] = []
     top = amp[candidates[0]] if candidates else 0.0
     for k in candidates:

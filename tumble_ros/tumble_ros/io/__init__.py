@@ -9,8 +9,9 @@ also under ``sys.prefix``. Ensemble results go to labelled xarray/Zarr stores
 reads them).
 """  # noqa: A005 (tumble_ros.io is a subpackage: absolute imports never confuse it with io)
 
-from .columns import (FlatLayout, MessageEncoder, MessageTemplate, read_columns, sample_values,
-                      TopicColumns, written_columns)
+from .columns import (BackgroundColumns, FlatLayout, gather_in_background, MessageEncoder,
+                      MessageTemplate, read_columns, sample_values, TopicColumns,
+                      written_columns)
 from .ensemble_store import EnsembleStore, EnsembleStoreError, open_ensemble
 from .mcap_reader import (McapError, McapSummary, read_messages, RecordedMessage, summarize,
                           TopicSummary)
@@ -21,7 +22,9 @@ __all__ = [
     'EnsembleStore',
     'EnsembleStoreError',
     'open_ensemble',
+    'BackgroundColumns',
     'FlatLayout',
+    'gather_in_background',
     'MessageEncoder',
     'MessageTemplate',
     'read_columns',

@@ -20,9 +20,13 @@ filling the next, while the thread compresses it (zstd releases the GIL), comput
 writes the Chunk and MessageIndex records and the chunk index as ``Writer.flush`` does, in the
 same order: the same file byte for byte (``test_io_written.py``). The offline recording uses
 it: ~0.2-0.4 s of the Fig 9 main job's critical path on the other core (docs/performance.md).
+Up to :data:`IN_FLIGHT` chunks wait for the thread (one write of the Fig 9 run fills about
+three: with one, the caller waited for each compression in turn, 0.1-0.17 s of that run);
+after a chunk failed to be written the thread writes no later one.
 """
 from __future__ import annotations
 
+from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 import struct
@@ -36,7 +40,11 @@ from mcap.writer import CompressionType, IndexType, Writer
 import numpy as np
 import zstandard
 
-__all__ = ['bulk_supported', 'append_block', 'append_messages', 'ChunkFinisher']
+__all__ = ['bulk_supported', 'append_block', 'append_messages', 'ChunkFinisher', 'IN_FLIGHT']
+
+#: Most chunks handed to a :class:`ChunkFinisher` and not yet written (memory: ``chunk_bytes``
+#: each, uncompressed).
+IN_FLIGHT = 8
 
 #: A Message record's bytes before its data: opcode, length, channel, sequence, log and publish
 #: time (mcap spec: 1 + 8 + 2 + 4 + 8 + 8).
@@ -223,14 +231,17 @@ class ChunkFinisher:
                              f'needs ({", ".join(_FINISHER_FIELDS)}) or compresses with lz4')
         self._writer = writer
         self._thread = ThreadPoolExecutor(max_workers=1, thread_name_prefix='mcap-chunks')
-        self._pending: Future[None] | None = None
+        self._pending: deque[Future[None]] = deque()
+        self._failed = False        # a chunk failed to be written: no later one is
 
     def finalize(self) -> bool:
         """Hand the chunk in progress to the thread (none without messages); True if handed."""
         builder = _private(self._writer, 'chunk_builder')
         if builder.num_messages == 0:
             return False
-        self.wait()         # one chunk in flight at most (memory), errors raised in order
+        # at most IN_FLIGHT chunks waiting (memory); errors raised in order, at the latest here
+        while self._pending and (self._pending[0].done() or len(self._pending) >= IN_FLIGHT):
+            self._pending.popleft().result()
         _private(self._writer, 'statistics').chunk_count += 1
         data = builder.end()
         indexes = list(builder.message_indices.items())
@@ -239,14 +250,25 @@ class ChunkFinisher:
         builder.message_indices = {}
         builder.message_start_time = builder.message_end_time = 0
         builder.num_messages = 0
-        self._pending = self._thread.submit(self._write, data, indexes, start, end)
+        self._pending.append(self._thread.submit(self._write_unless_failed, data, indexes,
+                                                 start, end))
         return True
 
     def wait(self) -> None:
         """Return when every chunk handed over is written; raise what writing one raised."""
-        pending, self._pending = self._pending, None
-        if pending is not None:
-            pending.result()
+        while self._pending:
+            self._pending.popleft().result()
+
+    def _write_unless_failed(self, data: bytes, indexes: list[tuple[int, MessageIndex]],
+                             start: int, end: int) -> None:
+        """:meth:`_write`, unless an earlier chunk failed (the file ends with what was written)."""
+        if self._failed:
+            return
+        try:
+            self._write(data, indexes, start, end)
+        except BaseException:
+            self._failed = True
+            raise
 
     def close(self) -> None:
         """Wait for the chunks handed over, then end the thread (also when writing failed)."""

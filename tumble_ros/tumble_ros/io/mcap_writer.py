@@ -42,7 +42,7 @@ from a timer in a multi-threaded executor.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 import fcntl
 import math
@@ -251,6 +251,13 @@ class WrittenMessages:
     channels: dict[int, Channel] = field(default_factory=dict)
     blocks: list[WrittenBlock] = field(default_factory=list)
     closed: bool = False
+    #: Called with each block once it is kept, in the writer's thread (after its channel and
+    #: schema are registered): how :func:`tumble_ros.io.columns.gather_in_background` follows.
+    on_block: Callable[[WrittenBlock], None] | None = field(default=None, repr=False,
+                                                            compare=False)
+    #: The columns being gathered while the file is written
+    #: (:class:`tumble_ros.io.columns.BackgroundColumns`), or None.
+    background: Any = field(default=None, repr=False, compare=False)
 
     @property
     def message_count(self) -> int:
@@ -564,6 +571,8 @@ class McapWriter:
             keep.path = None
             return
         keep.blocks.append(block)
+        if keep.on_block is not None:
+            keep.on_block(block)
 
     def _write_blocks(self, channel_ids: list[int], rows: list[np.ndarray], logs: _Times,
                       sent: _Times) -> None:
