@@ -135,13 +135,18 @@ class Comparison:
     The comparison of one run with the model ``model_name``; see the module docstring.
 
     ``history``: the segments kept for trailing samples (the newest included; None: all). The
-    live comparator keeps as many as its description subscription holds.
+    live comparator keeps as many as its description subscription holds. ``in_order``: the
+    blocks given to :meth:`compare` come in time order, none trailing an earlier one (the
+    offline recording): a block forgets the segments before its last sample's (a segment and
+    its model per impact would otherwise be held to the end of the run).
     """
 
     def __init__(self, model_name: str, history: int | None = None,
-                 described: Mapping[str, Scenario] | None = None) -> None:
+                 described: Mapping[str, Scenario] | None = None, *,
+                 in_order: bool = False) -> None:
         self.model_name = model_name
         self.history = history
+        self.in_order = in_order
         self.grid: SampleGrid | None = None   # the run's output grid (None: not known yet)
         self.timebase = TimeBase()            # the run's, from its latest segment start
         self.latest: SegmentStart | None = None
@@ -290,5 +295,7 @@ class Comparison:
                 said = self._departure(self._segments[which[a]], float(times[j]),
                                        int(block.stamps[j]))
                 departures += [said] if said else []
+        if self.in_order and n and which[-1] > 0:
+            del self._segments[:which[-1]]   # (no later sample falls before the last one's)
         return ComparisonBlock(block.stamps, compared, model, error, norm, relative,
                                tuple(departures))

@@ -70,18 +70,34 @@ def split_span(a: float, b: float, ordered: Sequence[Impact],
     edges, the same impacts summed in the same order): :class:`~.propagator.Propagator`
     re-splits only the span an impact scheduled late overlaps.
     """
+    starts = [impact.start for impact in ordered]
+    ends = [impact.end for impact in ordered]
     edges = {b, *(t for t in cuts if a < t < b)}
-    for impact in ordered:
-        edges.update(t for t in (impact.start, impact.end) if a < t < b)
-    bounds = [a] + sorted(edges)
-    segments, active, nxt = [], [], 0
-    for t0, t1 in zip(bounds[:-1], bounds[1:]):
+    edges.update(t for t in starts if a < t < b)
+    edges.update(t for t in ends if a < t < b)
+    # each impact's torque and whether it is a body torque, looked up once (not per segment)
+    pulses = [(impact.torque, impact.frame == 'body') for impact in ordered]
+    segments: list[Segment] = []
+    active: list[int] = []
+    nxt, count, t0 = 0, len(ordered), a
+    for t1 in sorted(edges):
         mid = 0.5 * (t0 + t1)
-        while nxt < len(ordered) and ordered[nxt].start <= mid:
+        while nxt < count and starts[nxt] <= mid:
             active.append(nxt)
             nxt += 1
-        active = [k for k in active if mid < ordered[k].end]
-        torques = (segment_torques([ordered[k] for k in active], t0, t1) if active
-                   else _ZERO_TORQUES)
-        segments.append(Segment(t0, t1, *torques))
+        if active:
+            active = [k for k in active if mid < ends[k]]
+        if active:
+            # segment_torques of the active impacts: the same sums in the same order
+            b0 = b1 = b2 = o0 = o1 = o2 = 0.0
+            for k in active:
+                (x, y, z), body = pulses[k]
+                if body:
+                    b0, b1, b2 = b0 + x, b1 + y, b2 + z
+                else:
+                    o0, o1, o2 = o0 + x, o1 + y, o2 + z
+            segments.append(Segment(t0, t1, (b0, b1, b2), (o0, o1, o2)))
+        else:
+            segments.append(Segment(t0, t1, *_ZERO_TORQUES))
+        t0 = t1
     return segments
