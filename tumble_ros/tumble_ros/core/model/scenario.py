@@ -149,7 +149,7 @@ def _check_step(name: str, step: float, duration: float) -> None:
               f'use a step >= {duration / MAX_STEPS:.3g} yr', step)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Impact:
     """
     A short torque pulse (paper Fig. 10): constant torque on [start, start + duration).

@@ -59,6 +59,8 @@ REFERENCE_WORK_BUDGET = 1_000
 _NO_OMEGA = np.zeros(3)
 #: A Segment's start t0 (its first field): the key of the bisections over the segments.
 _SEGMENT_T0 = operator.itemgetter(0)
+#: An impact's start: the key its lists are sorted by.
+_START = operator.attrgetter('start')
 
 FloatArray = npt.NDArray[np.float64]
 #: A right-hand side f(t, y) of the equations of motion.
@@ -209,31 +211,43 @@ class Propagator:
         else (:func:`~.segments.split_span`): scheduling n impacts costs O(n log n) plus the
         segments they overlap, not a re-split of the whole run per impact.
         """
-        for impact in impacts:
-            if impact.start < self.t:
-                raise ScenarioError(f'impact.start: must be >= the current time {self.t!r} yr, '
+        starts = [impact.start for impact in impacts]
+        ends = [impact.end for impact in impacts]
+        now, t_end = self.t, self.t_end
+        for impact, start, end in zip(impacts, starts, ends):
+            if start < now:
+                raise ScenarioError(f'impact.start: must be >= the current time {now!r} yr, '
                                     f'got {impact.start!r}')
-            if impact.end > self.t_end:
+            if end > t_end:
                 raise ScenarioError(f'impact: must end by the end of the scenario '
-                                    f'({self.t_end!r} yr), ends at {impact.end!r}')
+                                    f'({t_end!r} yr), ends at {impact.end!r}')
         if not impacts:
             return
-        new = sorted(impacts, key=lambda i: i.start)   # stable: ties in the order given
+        new = sorted(impacts, key=_START)   # stable: ties in the order given
         affects_segment = (self._stepper is not None
                            and new[0].start < self._stepper.t_bound)
-        for impact in impacts:
-            heapq.heappush(self._unreported, (impact.end, self._scheduled, impact))
-            self._scheduled += 1
-            self._edges.update((impact.start, impact.end))
-            self._longest = max(self._longest, impact.duration)
+        # (end, order of scheduling, impact): a heap pops them in that total order whether
+        # pushed one by one or heapified at once
+        entries = [(end, self._scheduled + j, impact)
+                   for j, (impact, end) in enumerate(zip(impacts, ends))]
+        self._scheduled += len(entries)
+        if self._unreported:
+            for entry in entries:
+                heapq.heappush(self._unreported, entry)
+        else:
+            heapq.heapify(entries)
+            self._unreported = entries
+        self._edges.update(starts)
+        self._edges.update(ends)
+        self._longest = max(self._longest, max(impact.duration for impact in impacts))
         if len(new) > 1 and len(self._impacts) < len(new):
             # (the earlier ones first among equal starts, as bisect.insort puts them)
-            self._impacts = sorted(self._impacts + new, key=lambda i: i.start)
-            if self._split:
-                self._segments = split_at_impacts(self.t_end, self._impacts, self._cuts)
+            self._impacts = sorted(self._impacts + new, key=_START)
+            if self._split:   # (split_at_impacts of impacts already in its order)
+                self._segments = split_span(0.0, self.t_end, self._impacts, self._cuts)
         else:
             for impact in new:
-                bisect.insort(self._impacts, impact, key=lambda i: i.start)
+                bisect.insort(self._impacts, impact, key=_START)
                 if self._split:
                     self._resplit(impact.start, impact.end)
         if affects_segment or not self._split:
@@ -251,8 +265,8 @@ class Propagator:
         a, b = segments[i0].t0, segments[min(i1, len(segments) - 1)].t1
         # the impacts that may overlap [a, b]: those starting in [a - 2 longest pulses, b)
         # (twice the longest: an end is start + duration rounded)
-        lo = bisect.bisect_left(self._impacts, a - 2.0 * self._longest, key=lambda i: i.start)
-        hi = bisect.bisect_left(self._impacts, b, key=lambda i: i.start)
+        lo = bisect.bisect_left(self._impacts, a - 2.0 * self._longest, key=_START)
+        hi = bisect.bisect_left(self._impacts, b, key=_START)
         overlapping = [i for i in self._impacts[lo:hi] if i.end > a]
         segments[i0:i1 + 1] = split_span(a, b, overlapping, self._cuts)
 
