@@ -140,7 +140,7 @@ class Frequency:
     meaning: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class AnchorState:
     """
     The state a model starts from.

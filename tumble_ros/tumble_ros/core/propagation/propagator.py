@@ -42,7 +42,7 @@ from tumble_ros.core.model.dynamics import ATTITUDE_MODELS, AttitudeModel, jacob
 from tumble_ros.core.model.rotation import (continuous_quaternions, matrix_to_quaternion,
                                             quaternions_to_matrices)
 from tumble_ros.core.model.scenario import Impact, Scenario, ScenarioError
-from tumble_ros.core.propagation.segments import Segment, split_at_impacts, split_span
+from tumble_ros.core.propagation.segments import Segment, SegmentRow, split_rows
 from tumble_ros.core.torques.component import TorqueComponent
 from tumble_ros.errors import CoreError
 
@@ -57,8 +57,9 @@ __all__ = ['Propagator', 'IntegrationError', 'Sample',
 FAST_WORK_BUDGET = 50_000
 REFERENCE_WORK_BUDGET = 1_000
 _NO_OMEGA = np.zeros(3)
-#: A Segment's start t0 (its first field): the key of the bisections over the segments.
+#: A segment's start t0 and end t1 (its first fields): the keys of the bisections over them.
 _SEGMENT_T0 = operator.itemgetter(0)
+_SEGMENT_T1 = operator.itemgetter(1)
 #: An impact's start: the key its lists are sorted by.
 _START = operator.attrgetter('start')
 
@@ -156,7 +157,8 @@ class Propagator:
                                                                              self._model))
         self._impacts: list[Impact] = []
         self._cuts = scenario.segment_cuts    # the encounter window's edges (a flyby)
-        self._segments = split_at_impacts(scenario.duration, (), self._cuts)
+        # (t0, t1, torque_body, torque_orbital) each: Segment's fields (segments.split_rows)
+        self._segments: list[SegmentRow] = split_rows(0.0, scenario.duration, (), self._cuts)
         self.t = 0.0
         self.y = np.concatenate([scenario.omega0, self._model.from_euler(*scenario.euler0)])
         self.status = RUNNING
@@ -170,7 +172,9 @@ class Propagator:
         self._edges: set[float] = set()   # every scheduled impact's start and end [yr]
         self._longest = 0.0                # the longest scheduled pulse [yr]
         # the impacts not reported ended yet: (end, order of scheduling, impact), a heap
-        self._unreported: list[tuple[float, int, Impact]] = []
+        # (numbers only: tuples the garbage collector stops tracking; the impacts by order)
+        self._unreported: list[tuple[float, int]] = []
+        self._unreported_impacts: dict[int, Impact] = {}
         self._scheduled = 0                # impacts scheduled so far
         self._reported_cuts: set[float] = set()
         self._stepper: Stepper | None = None
@@ -196,7 +200,7 @@ class Propagator:
     @property
     def segments(self) -> tuple[Segment, ...]:
         """Return the integration segments of the whole run (:mod:`~.segments`) so far."""
-        return tuple(self._segments)
+        return tuple(map(Segment._make, self._segments))
 
     def schedule(self, impact: Impact) -> None:
         """Add an impact; its start must not lie before the current time ``t``."""
@@ -226,10 +230,11 @@ class Propagator:
         new = sorted(impacts, key=_START)   # stable: ties in the order given
         affects_segment = (self._stepper is not None
                            and new[0].start < self._stepper.t_bound)
-        # (end, order of scheduling, impact): a heap pops them in that total order whether
+        # (end, order of scheduling): a heap pops them in that total order whether
         # pushed one by one or heapified at once
-        entries = [(end, self._scheduled + j, impact)
-                   for j, (impact, end) in enumerate(zip(impacts, ends))]
+        entries = [(end, self._scheduled + j) for j, end in enumerate(ends)]
+        self._unreported_impacts.update(zip(range(self._scheduled, self._scheduled + len(ends)),
+                                            impacts))
         self._scheduled += len(entries)
         if self._unreported:
             for entry in entries:
@@ -244,7 +249,7 @@ class Propagator:
             # (the earlier ones first among equal starts, as bisect.insort puts them)
             self._impacts = sorted(self._impacts + new, key=_START)
             if self._split:   # (split_at_impacts of impacts already in its order)
-                self._segments = split_span(0.0, self.t_end, self._impacts, self._cuts)
+                self._segments = split_rows(0.0, self.t_end, self._impacts, self._cuts)
         else:
             for impact in new:
                 bisect.insort(self._impacts, impact, key=_START)
@@ -260,15 +265,15 @@ class Propagator:
     def _resplit(self, start: float, end: float) -> None:
         """Split again the segments [start, end] [yr] overlaps (a pulse just scheduled)."""
         segments = self._segments
-        i0 = max(0, bisect.bisect_right(segments, start, key=lambda s: s.t0) - 1)
-        i1 = bisect.bisect_left(segments, end, key=lambda s: s.t1)
-        a, b = segments[i0].t0, segments[min(i1, len(segments) - 1)].t1
+        i0 = max(0, bisect.bisect_right(segments, start, key=_SEGMENT_T0) - 1)
+        i1 = bisect.bisect_left(segments, end, key=_SEGMENT_T1)
+        a, b = segments[i0][0], segments[min(i1, len(segments) - 1)][1]
         # the impacts that may overlap [a, b]: those starting in [a - 2 longest pulses, b)
         # (twice the longest: an end is start + duration rounded)
         lo = bisect.bisect_left(self._impacts, a - 2.0 * self._longest, key=_START)
         hi = bisect.bisect_left(self._impacts, b, key=_START)
         overlapping = [i for i in self._impacts[lo:hi] if i.end > a]
-        segments[i0:i1 + 1] = split_span(a, b, overlapping, self._cuts)
+        segments[i0:i1 + 1] = split_rows(a, b, overlapping, self._cuts)
 
     def advance_to(self, t: float) -> FloatArray:
         """
@@ -363,7 +368,7 @@ class Propagator:
         done, waiting = [], []
         while self._unreported and self._unreported[0][0] <= self.t:
             entry = heapq.heappop(self._unreported)
-            impact = entry[2]
+            impact = self._unreported_impacts.pop(entry[1])
             y_end = self._edge_state.get(impact.end)
             if y_end is None and self.t == impact.end:
                 y_end = self.y.copy()  # the segment after the pulse has not started yet
@@ -372,6 +377,7 @@ class Propagator:
                              y_end))
             elif impact.end == self.t:
                 waiting.append(entry)   # its edge states may still come (else: never will)
+                self._unreported_impacts[entry[1]] = impact
         for entry in waiting:
             heapq.heappush(self._unreported, entry)
         # in the order of the impacts (by start, ties in their order of scheduling)
@@ -437,7 +443,7 @@ class Propagator:
         if t0 in self._cuts or t0 in self._edges:
             self._edge_state[t0] = np.array(y0)
         k = bisect.bisect_right(self._segments, t0, key=_SEGMENT_T0) - 1
-        segment = self._segments[max(0, k)]
+        segment = Segment._make(self._segments[max(0, k)])
         if self._stepper is not None:
             self._nfev_done += self._stepper.nfev
         sc = self.scenario
