@@ -42,7 +42,7 @@ from tumble_ros.core.model.dynamics import ATTITUDE_MODELS, AttitudeModel, jacob
 from tumble_ros.core.model.rotation import (continuous_quaternions, matrix_to_quaternion,
                                             quaternions_to_matrices)
 from tumble_ros.core.model.scenario import Impact, Scenario, ScenarioError
-from tumble_ros.core.propagation.segments import Segment, SegmentRow, split_rows
+from tumble_ros.core.propagation.segments import NO_PULSE, Segment, SegmentRow, split_rows
 from tumble_ros.core.torques.component import TorqueComponent
 from tumble_ros.errors import CoreError
 
@@ -446,12 +446,22 @@ class Propagator:
         segment = Segment._make(self._segments[max(0, k)])
         if self._stepper is not None:
             self._nfev_done += self._stepper.nfev
-        sc = self.scenario
-        problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
-                                 segment.torque_orbital, sc.attitude, *self._segment_constants)
+        problem = self._free_problem
+        if segment.torque_body is not NO_PULSE[0] or segment.torque_orbital is not NO_PULSE[1]:
+            sc = self.scenario
+            problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
+                                     segment.torque_orbital, sc.attitude,
+                                     *self._segment_constants)
         self._stepper = self._runner.new_stepper(
             segment, t0, y0, problem, self.scenario, None if self._split else self._switching_rhs,
             self._stepper)
+
+    @functools.cached_property
+    def _free_problem(self) -> SegmentProblem:
+        """Return the problem of the segments without a pulse (one object for all of them)."""
+        sc = self.scenario
+        return SegmentProblem(sc.inertia, sc.orbit_rate, *NO_PULSE, sc.attitude,
+                              *self._segment_constants)
 
     @functools.cached_property
     def _segment_constants(self) -> tuple[tuple[TorqueComponent, ...], tuple[float, float]]:
@@ -488,7 +498,7 @@ class Propagator:
         work = 0
         while t > stepper.t:
             if stepper.status != RUNNING:
-                self._start_segment(stepper.t, stepper.y.copy())
+                self._start_segment(stepper.t, stepper.y)   # (kept as copies: edge, stepper)
                 stepper = self._current()
                 continue
             if work >= budget:
@@ -540,7 +550,7 @@ class Propagator:
         while k < k_stop:
             stepper = self._current()
             if stepper.status != RUNNING and t_view[k] > stepper.t:
-                self._start_segment(stepper.t, stepper.y.copy())
+                self._start_segment(stepper.t, stepper.y)   # (kept as copies: edge, stepper)
                 work += 1
                 continue
             if work >= budget:
@@ -694,7 +704,7 @@ class _CompiledRunner:
         """
         if (isinstance(previous, CompiledStepper) and previous.method is self._method
                 and previous.settings is scenario.integrator and previous.is_same_body(problem)):
-            previous.restart(t0, y0, segment.t1, problem)
+            previous.restart_same_body(t0, y0, segment.t1, problem)
             return previous
         # no right-hand side: the compiled loop evaluates its own (problem)
         return CompiledStepper(self._method, None,  # type: ignore[arg-type]

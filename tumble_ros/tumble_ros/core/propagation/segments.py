@@ -14,7 +14,7 @@ from typing import NamedTuple, Sequence, TYPE_CHECKING
 if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Impact
 
-__all__ = ['Segment', 'SegmentRow', 'segment_torques', 'split_at_impacts', 'split_span',
+__all__ = ['NO_PULSE', 'Segment', 'SegmentRow', 'segment_torques', 'split_at_impacts', 'split_span',
            'split_rows']
 
 
@@ -43,6 +43,8 @@ def segment_torques(impacts: Sequence[Impact], t0: float,
 
 
 _ZERO_TORQUES = segment_torques((), 0.0, 1.0)
+#: The (body, orbital) torques of every segment without a pulse: these very tuple objects.
+NO_PULSE = _ZERO_TORQUES
 #: A :class:`Segment`'s fields as a plain tuple: (t0, t1, torque_body, torque_orbital).
 SegmentRow = tuple[float, float, tuple[float, float, float], tuple[float, float, float]]
 
