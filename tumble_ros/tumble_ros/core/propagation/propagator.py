@@ -200,7 +200,7 @@ class Propagator:
     @property
     def segments(self) -> tuple[Segment, ...]:
         """Return the integration segments of the whole run (:mod:`~.segments`) so far."""
-        return tuple(map(Segment._make, self._segments))
+        return tuple(Segment(*row) for row in self._segments)
 
     def schedule(self, impact: Impact) -> None:
         """Add an impact; its start must not lie before the current time ``t``."""
@@ -443,7 +443,7 @@ class Propagator:
         if t0 in self._cuts or t0 in self._edges:
             self._edge_state[t0] = np.array(y0)
         k = bisect.bisect_right(self._segments, t0, key=_SEGMENT_T0) - 1
-        segment = Segment._make(self._segments[max(0, k)])
+        segment = Segment(*self._segments[max(0, k)])
         if self._stepper is not None:
             self._nfev_done += self._stepper.nfev
         problem = self._free_problem

@@ -14,8 +14,8 @@ from typing import NamedTuple, Sequence, TYPE_CHECKING
 if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Impact
 
-__all__ = ['NO_PULSE', 'Segment', 'SegmentRow', 'segment_torques', 'split_at_impacts', 'split_span',
-           'split_rows']
+__all__ = ['NO_PULSE', 'Segment', 'SegmentRow', 'segment_torques', 'split_at_impacts',
+           'split_rows', 'split_span']
 
 
 class Segment(NamedTuple):
@@ -75,7 +75,7 @@ def split_span(a: float, b: float, ordered: Sequence[Impact],
     edges, the same impacts summed in the same order): :class:`~.propagator.Propagator`
     re-splits only the span an impact scheduled late overlaps.
     """
-    return list(map(Segment._make, split_rows(a, b, ordered, cuts)))
+    return [Segment(*row) for row in split_rows(a, b, ordered, cuts)]
 
 
 def split_rows(a: float, b: float, ordered: Sequence[Impact],
