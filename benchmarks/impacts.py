@@ -6,7 +6,9 @@ compiled loop already cached by a first, short run). Before issue 30 the cost gr
 impacts 2.8 s, 300 25.7 s, 1,000 more than 180 s; 10^6 held 3.9 GB and wrote nothing. Target:
 10,000 impacts cost at most 2x the run without impacts; memory linear in the impacts, measured
 here as the tracemalloc peak of a 100-yr run with 1,000 and 10,000 impacts (bytes per impact =
-the difference of the peaks over the 9,000 impacts between them).
+the difference of the peaks over the 9,000 impacts between them). In ensembles too:
+``simulate_ensemble`` of 4 Fig 9 bodies over 2000 yr, one thread, without impacts and with
+5 random impacts a year a body (~10,000 each), CPU against CPU.
 """
 from __future__ import annotations
 
@@ -21,6 +23,8 @@ from common import section
 
 CONFIG = Path(__file__).resolve().parents[1] / "tumble_ros" / "config" / "fig9.yaml"
 TARGET_RATIO = 2.0
+#: Bodies of the ensemble rows (each with its own impacts: ~10,000 over 2000 yr).
+ENSEMBLE_BODIES = 4
 #: Issue 30's figures before: impacts -> wall [s] (1,000: more than 180 s, not finished).
 BEFORE_S = {100: 2.8, 300: 25.7, 1000: 180.0}
 
@@ -44,6 +48,20 @@ def _record(n: int, duration: float, folder: str) -> tuple[float, float]:
     if result.state != 2:   # FINISHED
         raise RuntimeError(result.message)
     return time.perf_counter() - wall, time.process_time() - cpu
+
+
+def _ensemble(n_bodies: int, rate: float, duration: float) -> float:
+    """Return the CPU [s] of ``simulate_ensemble`` of Fig 9 bodies, ``rate`` impacts/yr each."""
+    from tumble_ros.core import random_impacts, simulate_ensemble
+    from tumble_ros.core.model.scenario import load_scenario
+
+    scenario = load_scenario(CONFIG).replace(duration=duration)
+    impacts = (random_impacts(n_bodies, duration, rate=rate, torque=1e3, pulse=3e-7, seed=1)
+               if rate else None)
+    cpu = time.process_time()
+    simulate_ensemble(scenario, impacts=impacts, n_bodies=None if rate else n_bodies,
+                      threads=1)
+    return time.process_time() - cpu
 
 
 def _peak(n: int, duration: float, folder: str) -> int:
@@ -84,4 +102,16 @@ def impacts_section(ctx):
              f"{ctx.verdict(ratio <= TARGET_RATIO, f'MISSED by {ratio / TARGET_RATIO - 1:.0%}')}: "
              f"{ratio:.2f}x")
     out["bytes_per_impact"] = per_impact
+    # in ensembles: the same per-body ratio (the compiled loop starts each segment itself)
+    bodies, rate = ENSEMBLE_BODIES, counts[-1] / duration
+    _ensemble(2, rate, 2.0)   # the loops' variants loaded
+    cpu = {0: _ensemble(bodies, 0.0, duration), counts[-1]: _ensemble(bodies, rate, duration)}
+    ratio = cpu[counts[-1]] / cpu[0]
+    ctx.note(f"in ensembles (simulate_ensemble, {bodies} Fig 9 bodies over {duration:g} yr, "
+             f"one thread): none {cpu[0]:.2f} s CPU, "
+             f"{rate:g} impacts/yr a body (~{counts[-1]:,} each) {cpu[counts[-1]]:.2f} s: "
+             f"{ratio:.2f}x (target <= {TARGET_RATIO:g}x: "
+             f"{ctx.verdict(ratio <= TARGET_RATIO, f'MISSED by {ratio / TARGET_RATIO - 1:.0%}')})")
+    out["ensemble"] = {"bodies": bodies, 0: {"cpu_s": cpu[0]},
+                       counts[-1]: {"cpu_s": cpu[counts[-1]]}}
     return out

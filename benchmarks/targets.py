@@ -98,6 +98,8 @@ ISSUE_30 = [
     Target("Fig 9 main job, wall", MAIN_JOB, lambda r: min(r["wall_s"]), 6.0, 3.0, True, "s"),
     Target("10,000 impacts / none, offline, CPU", IMPACTS, _cpu_ratio, None, 2.0, True, "x",
            "quadratic: 1,000 > 70x"),
+    Target("10,000 impacts a body / none, ensembles, CPU", IMPACTS,
+           lambda r: _cpu_ratio(r["ensemble"]), None, 2.0, True, "x", "not measured"),
     Target("10,000 impacts / none, live service, sim CPU", IMPACTS_LIVE, _cpu_ratio, None, 2.0,
            True, "x", "not measured"),
     Target("standalone nodes beside 2 busy processes: lost", STANDALONE,

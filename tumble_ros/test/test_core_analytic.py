@@ -771,3 +771,17 @@ def test_models_evaluated_together_give_each_models_own_bits():
         for model, t, value in zip(models, times, together):
             assert value.shape == (len(t), 3)
             assert value.tobytes() == model.omega(t).tobytes(), model
+
+
+def test_an_anchor_quaternion_is_normalised_as_numpy_normalises_it():
+    """The anchor's Euler angles: those of q / np.linalg.norm(q), bit for bit, any scale of q."""
+    from tumble_ros.core.model.rotation import quaternion_to_euler
+
+    rng = np.random.default_rng(30)
+    sc = Scenario()
+    for q in rng.normal(size=(300, 4)) * rng.choice([1e-3, 1.0, 7.0, 1e5], size=(300, 1)):
+        state = AnchorState.build(sc, 1.5, omega=(0.1, -0.2, 30.0), quaternion=tuple(q))
+        expected = quaternion_to_euler(q / np.linalg.norm(q))
+        assert state.euler.tolist() == [float(v) for v in expected]
+    with pytest.raises(ScenarioError, match='^quaternion:'):
+        AnchorState.build(sc, 1.5, omega=(0.1, -0.2, 30.0), quaternion=(0.0, 0.0, 0.0, 0.0))

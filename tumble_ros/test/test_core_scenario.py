@@ -1,6 +1,7 @@
 """Scenario validation, parameter round trips and YAML loading."""
 import math
 from pathlib import Path
+import pickle
 import re
 
 import numpy as np
@@ -64,6 +65,24 @@ def test_invalid_impact_is_rejected_naming_it(changes, field):
     fields = {'start': 0.1, 'duration': 3e-7, 'torque': (1.0, 0.0, 0.0), 'frame': 'body'} | changes
     with pytest.raises(ScenarioError, match=f'^{re.escape(field)}'):
         Impact(**fields)
+
+
+def test_an_impact_is_held_as_floats_and_a_tuple_whatever_numbers_it_is_given():
+    given = Impact(np.float32(0.5), 1, [np.int64(2), 0.25, np.float64(-3.0)], 'orbital')
+    assert (given.start, given.duration, given.torque) == (0.5, 1.0, (2.0, 0.25, -3.0))
+    assert all(type(v) is float for v in (given.start, given.duration, *given.torque))
+    # fields already so pass unchanged; the scenario checks each impact again
+    same = Impact(0.5, 1.0, (2.0, 0.25, -3.0), 'orbital')
+    assert same == given and Scenario(duration=2.0, impacts=(given,)).impacts == (same,)
+    for bad, field in [({'start': True}, 'impact.start'), ({'duration': 1e-30}, 'impact.duration'),
+                       ({'torque': (1.0, 2.0)}, 'impact.torque'),
+                       ({'torque': (1.0, 2.0, math.inf)}, 'impact.torque[2]')]:
+        fields = {'start': 0.5, 'duration': 1.0, 'torque': (2.0, 0.25, -3.0)} | bad
+        with pytest.raises(ScenarioError, match=f'^{re.escape(field)}'):
+            Impact(**fields)
+    # a scenario and its impacts as Dask ships them to workers
+    sc = Scenario(duration=2.0, impacts=(given, Impact(1.0, 3e-7, (0.0, 1.0, 0.0))))
+    assert pickle.loads(pickle.dumps(sc)) == sc
 
 
 def test_unphysical_inertia_allowed_on_request():

@@ -208,6 +208,46 @@ def test_a_departure_is_said_once_per_segment_at_its_first_sample():
     assert said_live == [said]
 
 
+def _same_blocks(a, b):
+    """Assert two comparison blocks hold the same bits and say the same departures."""
+    for name in ('stamps', 'compared', 'model', 'error', 'norm', 'relative'):
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes()
+    assert a.departures == b.departures
+
+
+def test_an_in_order_comparison_gives_the_same_blocks_and_forgets_the_segments_behind():
+    # the offline recording's: a segment per impact, blocks in time order
+    sc = SHORT.replace(impacts=tuple(Impact(0.004 * k + 0.001, 3e-7, (0.0, 2e5, 1e5))
+                                     for k in range(1, 45)))
+    _, records = run(sc, batch=9)
+    kept, forgetting = Comparison('paper'), Comparison('paper', in_order=True)
+    for record in records:
+        if isinstance(record, SegmentStart):
+            assert kept.anchor(record) == forgetting.anchor(record)
+        elif isinstance(record, SampleBlock):
+            _same_blocks(kept.compare(record), forgetting.compare(record))
+            # only the segment of the block's last sample is left (none starts after it)
+            assert [s.start for s in forgetting._segments] == [kept._segments[-1].start]
+    assert len(kept._segments) == 45
+    # departures, in segments anchored one after the other (synthetic samples)
+    start = records[0]
+    kept, forgetting = Comparison('paper'), Comparison('paper', in_order=True)
+    said = []
+    for j, k0 in enumerate((0, 20, 40, 60)):
+        later = SegmentStart(start.run_id, start.parameters_yaml, 1.0, j, kept.grid.time(k0)
+                             if kept.grid else 0.0, k0 * 2_000_000, start.omega,
+                             start.quaternion)
+        kept.anchor(later)
+        forgetting.anchor(later)
+        scale = np.where(np.arange(20) % 7 < 3, 1.0, 0.4)
+        block = synthetic_block(kept, start, k0, 20, scale)
+        a = kept.compare(block)
+        _same_blocks(a, forgetting.compare(block))
+        said += a.departures
+    assert len(said) == 4
+
+
 def test_samples_before_a_segment_or_without_a_model_are_not_compared():
     _, records = run(SHORT)
     start, block = records[0], next(r for r in records if isinstance(r, SampleBlock))

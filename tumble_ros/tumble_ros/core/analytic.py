@@ -140,7 +140,7 @@ class Frequency:
     meaning: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class AnchorState:
     """
     The state a model starts from.
@@ -187,12 +187,14 @@ class AnchorState:
             raise ScenarioError(f'omega: must be 3 finite numbers, got {omega!r}')
         if quaternion is not None:
             q = np.asarray(quaternion, dtype=float)
-            norm = (np.linalg.norm(q) if q.shape == (4,) and all(map(math.isfinite, q.tolist()))
-                    else math.nan)
+            values = q.tolist() if q.shape == (4,) else [math.nan]
+            # np.linalg.norm's arithmetic (the square root of q.dot(q)) without its checks, and
+            # q / norm element by element on Python floats: the same bits
+            norm = math.sqrt(q.dot(q)) if all(map(math.isfinite, values)) else math.nan
             if not norm > 0.0:
                 raise ScenarioError(f'quaternion: must be 4 finite numbers, not all 0, '
                                     f'got {quaternion!r}')
-            e = np.array(quaternion_to_euler(q / norm))
+            e = np.array(quaternion_to_euler([v / norm for v in values]))
         else:
             e = np.array(scenario.euler0 if euler is None else euler, dtype=float)
             if e.shape != (3,) or not np.all(np.isfinite(e)):

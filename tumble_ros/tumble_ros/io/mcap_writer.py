@@ -459,7 +459,14 @@ class McapWriter:
         less a message (an offline run's per-impact messages: three per impact).
         """
         checked = []
-        for channel_id, data, log_time_ns, publish_time_ns in messages:
+        for message in messages:
+            channel_id, data, log_time_ns, publish_time_ns = message
+            if (type(data) is bytes and type(log_time_ns) is int
+                    and type(publish_time_ns) is int and 0 <= log_time_ns <= _UINT64_MAX
+                    and 0 <= publish_time_ns <= _UINT64_MAX):
+                # (what the checks below pass unchanged: ~1 us a message less)
+                checked.append((channel_id, data, log_time_ns, publish_time_ns))
+                continue
             if not isinstance(data, (bytes, bytearray, memoryview)):
                 raise ValueError('data must be bytes (serialized CDR), got '
                                  f'{type(data).__name__}')
@@ -487,9 +494,12 @@ class McapWriter:
                 stop += 1
             run = messages[k:stop]
             append_messages(self._writer, run)
-            for channel_id, data, log, sent in run:
-                self._counts[self._topics[channel_id]] += 1
-                self._kept_one(channel_id, data, log, sent)
+            counts, topics = self._counts, self._topics
+            for channel_id, *_ in run:
+                counts[topics[channel_id]] += 1
+            if self._keep is not None:
+                for channel_id, data, log, sent in run:
+                    self._kept_one(channel_id, data, log, sent)
             if self._pending_messages == 0:
                 self._pending_since = time.monotonic()
             self._pending_messages += len(run)

@@ -121,7 +121,7 @@ class GridModelValues:
         return self._values[k - self._first]
 
 
-@dataclass
+@dataclass(slots=True)
 class _Segment:
     """A segment's start [yr], its model (None: the model does not apply), whether it left."""
 
@@ -135,13 +135,18 @@ class Comparison:
     The comparison of one run with the model ``model_name``; see the module docstring.
 
     ``history``: the segments kept for trailing samples (the newest included; None: all). The
-    live comparator keeps as many as its description subscription holds.
+    live comparator keeps as many as its description subscription holds. ``in_order``: the
+    blocks given to :meth:`compare` come in time order, none trailing an earlier one (the
+    offline recording): a block forgets the segments before its last sample's (a segment and
+    its model per impact would otherwise be held to the end of the run).
     """
 
     def __init__(self, model_name: str, history: int | None = None,
-                 described: Mapping[str, Scenario] | None = None) -> None:
+                 described: Mapping[str, Scenario] | None = None, *,
+                 in_order: bool = False) -> None:
         self.model_name = model_name
         self.history = history
+        self.in_order = in_order
         self.grid: SampleGrid | None = None   # the run's output grid (None: not known yet)
         self.timebase = TimeBase()            # the run's, from its latest segment start
         self.latest: SegmentStart | None = None
@@ -271,9 +276,10 @@ class Comparison:
             grid_times = self.grid.times(block.start, block.start + n)
             values = omega_many([m for *_, m in modelled],
                                 [grid_times[a:b] for a, b, _ in modelled])
-            for (a, b, _), v in zip(modelled, values):
-                model[a:b] = v
+            # the modelled runs' rows, in order: one assignment rather than one per segment
+            for a, b, _ in modelled:
                 has[a:b] = True
+            model[has] = np.concatenate(values)
         compared = has & np.isfinite(model).all(axis=1)
         error: Floats = np.where(compared[:, None], omega - model, 0.0)
         norm: Floats = np.zeros(n)
@@ -283,12 +289,17 @@ class Comparison:
         model[~compared] = 0.0
         beyond = compared & (relative > DEPARTURE)
         departures = []
-        for a, b in runs:
-            hits = np.flatnonzero(beyond[a:b])
-            if which[a] >= 0 and len(hits):
-                j = a + int(hits[0])
-                said = self._departure(self._segments[which[a]], float(times[j]),
-                                       int(block.stamps[j]))
-                departures += [said] if said else []
+        hits = np.flatnonzero(beyond)
+        if hits.size:
+            # the first sample beyond of each run that has one, runs in order
+            run_of = np.searchsorted(np.array(edges[1:]), hits, side='right')
+            _, firsts = np.unique(run_of, return_index=True)
+            for j in hits[firsts].tolist():
+                if which[j] >= 0:
+                    said = self._departure(self._segments[which[j]], float(times[j]),
+                                           int(block.stamps[j]))
+                    departures += [said] if said else []
+        if self.in_order and n and which[-1] > 0:
+            del self._segments[:which[-1]]   # (no later sample falls before the last one's)
         return ComparisonBlock(block.stamps, compared, model, error, norm, relative,
                                tuple(departures))

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+import operator
 from pathlib import Path
 import time
 from typing import Callable
@@ -99,6 +100,8 @@ class Slicer:
         return records
 
 
+#: A queued message's log time (its first field): the key :meth:`_Channels.flush` sorts by.
+_LOG_TIME = operator.itemgetter(0)
 #: The live nodes' names (the comparator's DiagnosticStatus carries its node's name).
 COMPARATOR_NAME = '/comparator'
 
@@ -154,8 +157,9 @@ class _Channels:
     def flush(self) -> None:
         """Write the queued messages, by log time (stable); publish time = now (wall clock)."""
         now = time.time_ns()
-        self.writer.write_many([(self.ids[topic], data, stamp_ns, now) for stamp_ns, topic, data
-                                in sorted(self._pending, key=lambda m: m[0])])
+        ids = self.ids
+        self.writer.write_many([(ids[topic], data, stamp_ns, now) for stamp_ns, topic, data
+                                in sorted(self._pending, key=_LOG_TIME)])
         self._pending.clear()
 
 
@@ -183,7 +187,7 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
     output.parent.mkdir(parents=True, exist_ok=True)
     # the recording's run id, in every description
     session = SimulationSession(scenario, grid, run_id=new_run_id())
-    comparison = Comparison(model_name, described=session.described)
+    comparison = Comparison(model_name, described=session.described, in_order=True)
     scene = _Scene(MarkerScene(scenario), marker_every(marker_decimation, grid.count),
                    grid) if markers else None
     slicer = Slicer()

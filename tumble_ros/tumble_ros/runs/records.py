@@ -81,7 +81,7 @@ class SampleBlock:
         return np.arange(self.start, self.stop, dtype=np.int64)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class SegmentStart:
     """
     An integration segment's start: the run's description at it (a ``scenario`` message).
@@ -120,7 +120,7 @@ class SegmentStart:
     quaternion: tuple[float, float, float, float]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ImpactEnded:
     """
     An impact whose pulse has ended.
@@ -135,7 +135,7 @@ class ImpactEnded:
     delta_omega: tuple[float, float, float]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class StatusChange:
     """
     The simulator's state (:data:`RUNNING`, ...) at time ``t`` [yr], stamped ``stamp_ns``.
@@ -149,7 +149,7 @@ class StatusChange:
     message: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ComparisonStatus:
     """The comparison's status: ``level`` (:data:`OK`, ...), a line, logged at ``stamp_ns``."""
 

@@ -218,10 +218,10 @@ class SimulationSession:
         starts = dict(self._propagator.pop_window_edges())
         records: list[SessionRecord] = []
         for impact, y_start, y_end in self._propagator.pop_completed_impacts():
-            dw = y_end[:3] - y_start[:3]
+            (s0, s1, s2), (e0, e1, e2) = y_start[:3].tolist(), y_end[:3].tolist()
             records.append(ImpactEnded(impact, self._impact_ids.pop(id(impact), 0),
                                        self.grid.timebase.to_ns(impact.end),
-                                       (float(dw[0]), float(dw[1]), float(dw[2]))))
+                                       (e0 - s0, e1 - s1, e2 - s2)))
             starts[impact.end] = y_end
         records += [self._segment_start(t0, starts[t0]) for t0 in sorted(starts)]
         return records
@@ -229,9 +229,9 @@ class SimulationSession:
     def _segment_start(self, t0: float, y0: Floats) -> SegmentStart:
         """Describe the segment starting at ``t0`` [yr] in state ``y0``; count the revision."""
         revision, self._revision = self._revision, self._revision + 1
-        q = self._propagator.quaternion_of(y0)
+        q0, q1, q2, q3 = self._propagator.quaternion_of(y0).tolist()
+        w0, w1, w2 = y0[:3].tolist()
         text = self._segment_yaml if revision else self._scenario_yaml
         return SegmentStart(
             self.run_id, text, self.grid.timebase.seconds_per_year, revision,
-            t0, self.grid.timebase.to_ns(t0), (float(y0[0]), float(y0[1]), float(y0[2])),
-            (float(q[0]), float(q[1]), float(q[2]), float(q[3])))
+            t0, self.grid.timebase.to_ns(t0), (w0, w1, w2), (q0, q1, q2, q3))

@@ -120,6 +120,11 @@ class CompiledStepper(Stepper):
         if not self.is_same_body(problem):
             raise ValueError('CompiledStepper.restart: the problem differs in more than its '
                              'pulse torques; build a new stepper')
+        self.restart_same_body(t0, y0, t_bound, problem)
+
+    def restart_same_body(self, t0: float, y0: npt.NDArray[np.float64], t_bound: float,
+                          problem: SegmentProblem) -> None:
+        """:meth:`restart` for a caller that checked :meth:`is_same_body` itself."""
         Stepper.__init__(self, self.fun, t0, y0, t_bound, self.settings, problem=problem)
         K.set_pulses(self._p, problem.torque_body, problem.torque_orbital)
         self.work = 0

@@ -42,7 +42,7 @@ from tumble_ros.core.model.dynamics import ATTITUDE_MODELS, AttitudeModel, jacob
 from tumble_ros.core.model.rotation import (continuous_quaternions, matrix_to_quaternion,
                                             quaternions_to_matrices)
 from tumble_ros.core.model.scenario import Impact, Scenario, ScenarioError
-from tumble_ros.core.propagation.segments import Segment, split_at_impacts, split_span
+from tumble_ros.core.propagation.segments import NO_PULSE, Segment, SegmentRow, split_rows
 from tumble_ros.core.torques.component import TorqueComponent
 from tumble_ros.errors import CoreError
 
@@ -57,8 +57,11 @@ __all__ = ['Propagator', 'IntegrationError', 'Sample',
 FAST_WORK_BUDGET = 50_000
 REFERENCE_WORK_BUDGET = 1_000
 _NO_OMEGA = np.zeros(3)
-#: A Segment's start t0 (its first field): the key of the bisections over the segments.
+#: A segment's start t0 and end t1 (its first fields): the keys of the bisections over them.
 _SEGMENT_T0 = operator.itemgetter(0)
+_SEGMENT_T1 = operator.itemgetter(1)
+#: An impact's start: the key its lists are sorted by.
+_START = operator.attrgetter('start')
 
 FloatArray = npt.NDArray[np.float64]
 #: A right-hand side f(t, y) of the equations of motion.
@@ -154,7 +157,8 @@ class Propagator:
                                                                              self._model))
         self._impacts: list[Impact] = []
         self._cuts = scenario.segment_cuts    # the encounter window's edges (a flyby)
-        self._segments = split_at_impacts(scenario.duration, (), self._cuts)
+        # (t0, t1, torque_body, torque_orbital) each: Segment's fields (segments.split_rows)
+        self._segments: list[SegmentRow] = split_rows(0.0, scenario.duration, (), self._cuts)
         self.t = 0.0
         self.y = np.concatenate([scenario.omega0, self._model.from_euler(*scenario.euler0)])
         self.status = RUNNING
@@ -168,7 +172,9 @@ class Propagator:
         self._edges: set[float] = set()   # every scheduled impact's start and end [yr]
         self._longest = 0.0                # the longest scheduled pulse [yr]
         # the impacts not reported ended yet: (end, order of scheduling, impact), a heap
-        self._unreported: list[tuple[float, int, Impact]] = []
+        # (numbers only: tuples the garbage collector stops tracking; the impacts by order)
+        self._unreported: list[tuple[float, int]] = []
+        self._unreported_impacts: dict[int, Impact] = {}
         self._scheduled = 0                # impacts scheduled so far
         self._reported_cuts: set[float] = set()
         self._stepper: Stepper | None = None
@@ -194,7 +200,7 @@ class Propagator:
     @property
     def segments(self) -> tuple[Segment, ...]:
         """Return the integration segments of the whole run (:mod:`~.segments`) so far."""
-        return tuple(self._segments)
+        return tuple(Segment(*row) for row in self._segments)
 
     def schedule(self, impact: Impact) -> None:
         """Add an impact; its start must not lie before the current time ``t``."""
@@ -209,31 +215,44 @@ class Propagator:
         else (:func:`~.segments.split_span`): scheduling n impacts costs O(n log n) plus the
         segments they overlap, not a re-split of the whole run per impact.
         """
-        for impact in impacts:
-            if impact.start < self.t:
-                raise ScenarioError(f'impact.start: must be >= the current time {self.t!r} yr, '
+        starts = [impact.start for impact in impacts]
+        ends = [impact.end for impact in impacts]
+        now, t_end = self.t, self.t_end
+        for impact, start, end in zip(impacts, starts, ends):
+            if start < now:
+                raise ScenarioError(f'impact.start: must be >= the current time {now!r} yr, '
                                     f'got {impact.start!r}')
-            if impact.end > self.t_end:
+            if end > t_end:
                 raise ScenarioError(f'impact: must end by the end of the scenario '
-                                    f'({self.t_end!r} yr), ends at {impact.end!r}')
+                                    f'({t_end!r} yr), ends at {impact.end!r}')
         if not impacts:
             return
-        new = sorted(impacts, key=lambda i: i.start)   # stable: ties in the order given
+        new = sorted(impacts, key=_START)   # stable: ties in the order given
         affects_segment = (self._stepper is not None
                            and new[0].start < self._stepper.t_bound)
-        for impact in impacts:
-            heapq.heappush(self._unreported, (impact.end, self._scheduled, impact))
-            self._scheduled += 1
-            self._edges.update((impact.start, impact.end))
-            self._longest = max(self._longest, impact.duration)
+        # (end, order of scheduling): a heap pops them in that total order whether
+        # pushed one by one or heapified at once
+        entries = [(end, self._scheduled + j) for j, end in enumerate(ends)]
+        self._unreported_impacts.update(zip(range(self._scheduled, self._scheduled + len(ends)),
+                                            impacts))
+        self._scheduled += len(entries)
+        if self._unreported:
+            for entry in entries:
+                heapq.heappush(self._unreported, entry)
+        else:
+            heapq.heapify(entries)
+            self._unreported = entries
+        self._edges.update(starts)
+        self._edges.update(ends)
+        self._longest = max(self._longest, max(impact.duration for impact in impacts))
         if len(new) > 1 and len(self._impacts) < len(new):
             # (the earlier ones first among equal starts, as bisect.insort puts them)
-            self._impacts = sorted(self._impacts + new, key=lambda i: i.start)
-            if self._split:
-                self._segments = split_at_impacts(self.t_end, self._impacts, self._cuts)
+            self._impacts = sorted(self._impacts + new, key=_START)
+            if self._split:   # (split_at_impacts of impacts already in its order)
+                self._segments = split_rows(0.0, self.t_end, self._impacts, self._cuts)
         else:
             for impact in new:
-                bisect.insort(self._impacts, impact, key=lambda i: i.start)
+                bisect.insort(self._impacts, impact, key=_START)
                 if self._split:
                     self._resplit(impact.start, impact.end)
         if affects_segment or not self._split:
@@ -246,15 +265,15 @@ class Propagator:
     def _resplit(self, start: float, end: float) -> None:
         """Split again the segments [start, end] [yr] overlaps (a pulse just scheduled)."""
         segments = self._segments
-        i0 = max(0, bisect.bisect_right(segments, start, key=lambda s: s.t0) - 1)
-        i1 = bisect.bisect_left(segments, end, key=lambda s: s.t1)
-        a, b = segments[i0].t0, segments[min(i1, len(segments) - 1)].t1
+        i0 = max(0, bisect.bisect_right(segments, start, key=_SEGMENT_T0) - 1)
+        i1 = bisect.bisect_left(segments, end, key=_SEGMENT_T1)
+        a, b = segments[i0][0], segments[min(i1, len(segments) - 1)][1]
         # the impacts that may overlap [a, b]: those starting in [a - 2 longest pulses, b)
         # (twice the longest: an end is start + duration rounded)
-        lo = bisect.bisect_left(self._impacts, a - 2.0 * self._longest, key=lambda i: i.start)
-        hi = bisect.bisect_left(self._impacts, b, key=lambda i: i.start)
+        lo = bisect.bisect_left(self._impacts, a - 2.0 * self._longest, key=_START)
+        hi = bisect.bisect_left(self._impacts, b, key=_START)
         overlapping = [i for i in self._impacts[lo:hi] if i.end > a]
-        segments[i0:i1 + 1] = split_span(a, b, overlapping, self._cuts)
+        segments[i0:i1 + 1] = split_rows(a, b, overlapping, self._cuts)
 
     def advance_to(self, t: float) -> FloatArray:
         """
@@ -349,7 +368,7 @@ class Propagator:
         done, waiting = [], []
         while self._unreported and self._unreported[0][0] <= self.t:
             entry = heapq.heappop(self._unreported)
-            impact = entry[2]
+            impact = self._unreported_impacts.pop(entry[1])
             y_end = self._edge_state.get(impact.end)
             if y_end is None and self.t == impact.end:
                 y_end = self.y.copy()  # the segment after the pulse has not started yet
@@ -358,6 +377,7 @@ class Propagator:
                              y_end))
             elif impact.end == self.t:
                 waiting.append(entry)   # its edge states may still come (else: never will)
+                self._unreported_impacts[entry[1]] = impact
         for entry in waiting:
             heapq.heappush(self._unreported, entry)
         # in the order of the impacts (by start, ties in their order of scheduling)
@@ -386,7 +406,10 @@ class Propagator:
     def quaternion_of(self, y: FloatArray) -> FloatArray:
         """Return the unit quaternion (scalar first, body -> orbital) of a state vector."""
         if self._model.name == 'quaternion':
-            q: FloatArray = y[3:] / np.linalg.norm(y[3:])
+            attitude = y[3:]
+            # np.linalg.norm's arithmetic (the square root of the dot product), without its
+            # checks (~2 us; a segment start per impact): the same bits
+            q: FloatArray = attitude / math.sqrt(attitude.dot(attitude))
             return q
         return np.asarray(matrix_to_quaternion(self._model.to_matrix(y[3:])), dtype=float)
 
@@ -420,15 +443,25 @@ class Propagator:
         if t0 in self._cuts or t0 in self._edges:
             self._edge_state[t0] = np.array(y0)
         k = bisect.bisect_right(self._segments, t0, key=_SEGMENT_T0) - 1
-        segment = self._segments[max(0, k)]
+        segment = Segment(*self._segments[max(0, k)])
         if self._stepper is not None:
             self._nfev_done += self._stepper.nfev
-        sc = self.scenario
-        problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
-                                 segment.torque_orbital, sc.attitude, *self._segment_constants)
+        problem = self._free_problem
+        if segment.torque_body is not NO_PULSE[0] or segment.torque_orbital is not NO_PULSE[1]:
+            sc = self.scenario
+            problem = SegmentProblem(sc.inertia, sc.orbit_rate, segment.torque_body,
+                                     segment.torque_orbital, sc.attitude,
+                                     *self._segment_constants)
         self._stepper = self._runner.new_stepper(
             segment, t0, y0, problem, self.scenario, None if self._split else self._switching_rhs,
             self._stepper)
+
+    @functools.cached_property
+    def _free_problem(self) -> SegmentProblem:
+        """Return the problem of the segments without a pulse (one object for all of them)."""
+        sc = self.scenario
+        return SegmentProblem(sc.inertia, sc.orbit_rate, *NO_PULSE, sc.attitude,
+                              *self._segment_constants)
 
     @functools.cached_property
     def _segment_constants(self) -> tuple[tuple[TorqueComponent, ...], tuple[float, float]]:
@@ -465,7 +498,7 @@ class Propagator:
         work = 0
         while t > stepper.t:
             if stepper.status != RUNNING:
-                self._start_segment(stepper.t, stepper.y.copy())
+                self._start_segment(stepper.t, stepper.y)   # (kept as copies: edge, stepper)
                 stepper = self._current()
                 continue
             if work >= budget:
@@ -517,7 +550,7 @@ class Propagator:
         while k < k_stop:
             stepper = self._current()
             if stepper.status != RUNNING and t_view[k] > stepper.t:
-                self._start_segment(stepper.t, stepper.y.copy())
+                self._start_segment(stepper.t, stepper.y)   # (kept as copies: edge, stepper)
                 work += 1
                 continue
             if work >= budget:
@@ -671,7 +704,7 @@ class _CompiledRunner:
         """
         if (isinstance(previous, CompiledStepper) and previous.method is self._method
                 and previous.settings is scenario.integrator and previous.is_same_body(problem)):
-            previous.restart(t0, y0, segment.t1, problem)
+            previous.restart_same_body(t0, y0, segment.t1, problem)
             return previous
         # no right-hand side: the compiled loop evaluates its own (problem)
         return CompiledStepper(self._method, None,  # type: ignore[arg-type]

@@ -14,7 +14,8 @@ from typing import NamedTuple, Sequence, TYPE_CHECKING
 if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Impact
 
-__all__ = ['Segment', 'segment_torques', 'split_at_impacts', 'split_span']
+__all__ = ['NO_PULSE', 'Segment', 'SegmentRow', 'segment_torques', 'split_at_impacts',
+           'split_rows', 'split_span']
 
 
 class Segment(NamedTuple):
@@ -42,6 +43,10 @@ def segment_torques(impacts: Sequence[Impact], t0: float,
 
 
 _ZERO_TORQUES = segment_torques((), 0.0, 1.0)
+#: The (body, orbital) torques of every segment without a pulse: these very tuple objects.
+NO_PULSE = _ZERO_TORQUES
+#: A :class:`Segment`'s fields as a plain tuple: (t0, t1, torque_body, torque_orbital).
+SegmentRow = tuple[float, float, tuple[float, float, float], tuple[float, float, float]]
 
 
 def split_at_impacts(duration: float, impacts: Sequence[Impact],
@@ -70,18 +75,46 @@ def split_span(a: float, b: float, ordered: Sequence[Impact],
     edges, the same impacts summed in the same order): :class:`~.propagator.Propagator`
     re-splits only the span an impact scheduled late overlaps.
     """
+    return [Segment(*row) for row in split_rows(a, b, ordered, cuts)]
+
+
+def split_rows(a: float, b: float, ordered: Sequence[Impact],
+               cuts: Sequence[float] = ()) -> list[SegmentRow]:
+    """
+    Return :func:`split_span`'s segments as plain tuples (:data:`SegmentRow`), the same numbers.
+
+    What :class:`~.propagator.Propagator` keeps for a whole run (two segments per impact):
+    Python's garbage collector stops tracking a plain tuple of floats and such tuples, never a
+    named tuple, which every full collection would traverse again.
+    """
+    starts = [impact.start for impact in ordered]
+    ends = [impact.end for impact in ordered]
     edges = {b, *(t for t in cuts if a < t < b)}
-    for impact in ordered:
-        edges.update(t for t in (impact.start, impact.end) if a < t < b)
-    bounds = [a] + sorted(edges)
-    segments, active, nxt = [], [], 0
-    for t0, t1 in zip(bounds[:-1], bounds[1:]):
+    edges.update(t for t in starts if a < t < b)
+    edges.update(t for t in ends if a < t < b)
+    # each impact's torque and whether it is a body torque, looked up once (not per segment)
+    pulses = [(impact.torque, impact.frame == 'body') for impact in ordered]
+    segments: list[SegmentRow] = []
+    active: list[int] = []
+    nxt, count, t0 = 0, len(ordered), a
+    for t1 in sorted(edges):
         mid = 0.5 * (t0 + t1)
-        while nxt < len(ordered) and ordered[nxt].start <= mid:
+        while nxt < count and starts[nxt] <= mid:
             active.append(nxt)
             nxt += 1
-        active = [k for k in active if mid < ordered[k].end]
-        torques = (segment_torques([ordered[k] for k in active], t0, t1) if active
-                   else _ZERO_TORQUES)
-        segments.append(Segment(t0, t1, *torques))
+        if active:
+            active = [k for k in active if mid < ends[k]]
+        if active:
+            # segment_torques of the active impacts: the same sums in the same order
+            b0 = b1 = b2 = o0 = o1 = o2 = 0.0
+            for k in active:
+                (x, y, z), body = pulses[k]
+                if body:
+                    b0, b1, b2 = b0 + x, b1 + y, b2 + z
+                else:
+                    o0, o1, o2 = o0 + x, o1 + y, o2 + z
+            segments.append((t0, t1, (b0, b1, b2), (o0, o1, o2)))
+        else:
+            segments.append((t0, t1, *_ZERO_TORQUES))
+        t0 = t1
     return segments
