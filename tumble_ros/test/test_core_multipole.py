@@ -35,7 +35,8 @@ FLYBY_BODY_SEED = 28
 
 
 def solid_body(rng, n=300, axes=(0.6, 0.8, 1.0)):
-    """Return (masses [kg], positions [km]) of a random body in an ellipsoid, principal frame.
+    """
+    Return (masses [kg], positions [km]) of a random body in an ellipsoid, principal frame.
 
     ``rng`` is the calling test's own generator.
     """

@@ -11,6 +11,10 @@ from tumble_ros.core.model.rotation import (euler_to_matrix, euler_to_quaternion
 #: The seed of this file's random inputs: each test draws from a generator of its own, so its
 #: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).
 SEED = 7
+#: Euler angles (phi, psi, theta) [rad] of the parametrised tests: theta in (0, pi)
+MATRIX_ANGLES = np.random.default_rng(SEED).uniform([-3, -3, 0.01], [3, 3, 3.1], size=(20, 3))
+ROUND_TRIP_ANGLES = np.random.default_rng(SEED + 1).uniform(
+    [-3, -3, 1e-6], [3, 3, math.pi - 1e-6], size=(20, 3))
 
 
 def rz(a):
@@ -23,17 +27,14 @@ def rx(a):
     return np.array([[1.0, 0, 0], [0, c, s], [0, -s, c]])
 
 
-@pytest.mark.parametrize('angles', np.random.default_rng(SEED).uniform([-3, -3, 0.01], [3, 3, 3.1],
-                                                                     size=(20, 3)))
+@pytest.mark.parametrize('angles', MATRIX_ANGLES)
 def test_matrix_is_product_of_elementary_rotations(angles):
     phi, psi, theta = angles
     np.testing.assert_allclose(euler_to_matrix(phi, psi, theta), rz(psi) @ rx(theta) @ rz(phi),
                                atol=1e-15)
 
 
-@pytest.mark.parametrize('angles',
-                         np.random.default_rng(SEED + 1).uniform(
-                             [-3, -3, 1e-6], [3, 3, math.pi - 1e-6], size=(20, 3)))
+@pytest.mark.parametrize('angles', ROUND_TRIP_ANGLES)
 def test_euler_matrix_quaternion_round_trips(angles):
     r = euler_to_matrix(*angles)
     np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-14)

@@ -12,7 +12,8 @@ SEED = 11
 
 
 def point_cloud(rng, n=400):
-    """Random masses, centred, expressed in their principal axes; returns (m, r, I).
+    """
+    Random masses, centred, expressed in their principal axes; returns (m, r, I).
 
     ``rng`` is the calling test's own generator (other test files use this function too).
     """
