@@ -12,7 +12,9 @@ import pytest
 
 from tumble_ros.analysis.recording import _sorted
 
-RNG = np.random.default_rng(3)
+#: The seed of this file's random inputs: each test draws from a generator of its own, so its
+#: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).
+SEED = 3
 
 
 def _by_argsort(ns, rows, k):
@@ -25,14 +27,15 @@ def _by_argsort(ns, rows, k):
 @pytest.mark.parametrize('stamps', [
     np.arange(0, 5000, 5, dtype=np.int64),                          # in order
     np.repeat(np.arange(300, dtype=np.int64), 3),                    # in order, equal stamps
-    RNG.permutation(1000).astype(np.int64),                          # shuffled
+    np.random.default_rng(SEED).permutation(1000).astype(np.int64),  # shuffled
     np.r_[np.arange(500), np.arange(250, 750)].astype(np.int64),     # a late message
     np.array([7], dtype=np.int64),
 ])
 @pytest.mark.parametrize('k', [2, 3])
 @pytest.mark.parametrize('owned', [False, True])
 def test_the_order_is_the_stable_argsorts(stamps, k, owned):
-    rows = RNG.normal(size=(len(stamps), k))
+    rng = np.random.default_rng(SEED)
+    rows = rng.normal(size=(len(stamps), k))
     got_t, got_v = _sorted(stamps, rows, k, owned=owned)
     want_t, want_v = _by_argsort(stamps, rows, k)
     assert got_t.dtype == want_t.dtype and got_v.dtype == want_v.dtype

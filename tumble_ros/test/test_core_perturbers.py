@@ -21,7 +21,9 @@ from tumble_ros.core.model.units import GM_EARTH, SECONDS_PER_YEAR
 from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
 
-RNG = np.random.default_rng(280)
+#: The seed of this file's random inputs: each test draws from a generator of its own, so its
+#: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).
+SEED = 280
 YR2 = SECONDS_PER_YEAR ** 2
 
 
@@ -109,12 +111,13 @@ def complex_step_force(s, k, mu):
 
 @pytest.mark.parametrize('trial', range(4))
 def test_the_j2_torque_is_the_sum_of_the_j2_forces_on_the_bodys_point_masses(trial):
-    m, r, inertia = point_cloud(200)
+    rng = np.random.default_rng((SEED, trial))           # a body, pole and place per trial
+    m, r, inertia = point_cloud(rng, 200)
     m, r = np.concatenate([m, m]), np.concatenate([r, -r])      # centrally symmetric
     inertia = 2.0 * inertia                                      # (no octupole: error ~ (r/s)^2)
     radius, j2 = 6378.137, 1.0826e-3 * (1 + 30 * trial)          # J2 up to 0.1 (the limit)
-    pole = RNG.normal(size=3)
-    position = RNG.normal(size=3)
+    pole = rng.normal(size=3)
+    position = rng.normal(size=3)
     position *= 1.5 * radius / np.linalg.norm(position)          # the perturber, orbital frame
     orbit = KeplerOrbit(gm=GM_EARTH, a=1e9, e=0.0)               # (its source is not used)
     body = Perturber('earth', orbit, j2=j2, pole=tuple(pole))
@@ -123,7 +126,7 @@ def test_the_j2_torque_is_the_sum_of_the_j2_forces_on_the_bodys_point_masses(tri
     from tumble_ros.core.jit import python_source
     from tumble_ros.core.torques.perturbers import perturber_torque
     torque_of = python_source(perturber_torque)
-    q = RNG.normal(size=4)
+    q = rng.normal(size=4)
     q /= np.linalg.norm(q)
     j2_torque = (np.array(torque_of(np.array(law), *position, *q))
                  - np.array(torque_of(np.array(law_point), *position, *q)))
@@ -247,7 +250,8 @@ def test_with_the_bodys_field_the_torque_is_its_degree_n_torque():
     from tumble_ros.core.torques.perturbers import perturber_torque
 
     torque_of = python_source(perturber_torque)
-    m, r, _ = point_cloud(300)
+    rng = np.random.default_rng(SEED)
+    m, r, _ = point_cloud(rng, 300)
     m = m * 1e9                                              # kg
     r = r * 0.1                                              # km: a body ~0.3 km across
     r, moments, _ = principal_frame(m, r)
@@ -259,9 +263,9 @@ def test_with_the_bodys_field_the_torque_is_its_degree_n_torque():
     earth = Perturber('earth', orbit)
     point = np.array(earth.law(inertia))
     for distance in (3.0, 40000.0, 1.0e6):
-        position = RNG.normal(size=3)
+        position = rng.normal(size=3)
         position *= distance / np.linalg.norm(position)
-        q = RNG.normal(size=4)
+        q = rng.normal(size=4)
         q /= np.linalg.norm(q)
         law = torque_of(point, *position, *q)
         two = earth.torque_component(inertia, field2).parameters
@@ -272,9 +276,14 @@ def test_with_the_bodys_field_the_torque_is_its_degree_n_torque():
         d = s - r
         pull = GM_EARTH * YR2 * d / np.linalg.norm(d, axis=1)[:, None] ** 3
         brute = np.sum(np.cross(r, m[:, None] * pull), axis=0) / (moments[2] / inertia[2])
-        # degree 4 leaves (size / R)^3 ~ 1e-3 at 3 km, far below rounding beyond
-        np.testing.assert_allclose(torque_of(four, *position, *q), brute,
-                                   rtol=3e-3 if distance < 10 else 1e-6)
+        # degree 4 leaves (size / R)^3 ~ 1e-3 of the torque at 3 km, far below rounding beyond.
+        # At 3 km the bar is on |torque|, not on each component: the truncation's error is
+        # (size / R)^3 of the whole torque, so a small component (a direction nearly along a
+        # principal axis) can be off by more of itself (2.4e-2 seen over 60 draws, |error| /
+        # |torque| at most 1.5e-3 over them: 3e-3 is 2x that; 3.8e-5 with this seed)
+        near = distance < 10
+        np.testing.assert_allclose(torque_of(four, *position, *q), brute, rtol=0 if near else 1e-6,
+                                   atol=3e-3 * np.linalg.norm(brute) if near else 0)
 
 
 def test_the_earths_j2_through_the_apophis_flyby_is_small_and_linear_in_j2():

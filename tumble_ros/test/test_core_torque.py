@@ -6,13 +6,19 @@ from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.model.rotation import euler_to_matrix, quaternion_to_matrix
 from tumble_ros.core.torques import gravity_gradient_torque, sun_direction_orbital
 
-RNG = np.random.default_rng(11)
+#: The seed of this file's random inputs: each test draws from a generator of its own, so its
+#: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).
+SEED = 11
 
 
-def point_cloud(n=400):
-    """Random masses, centred, expressed in their principal axes; returns (m, r, I)."""
-    m = RNG.uniform(0.5, 1.5, n)
-    r = RNG.normal(size=(n, 3)) * np.array([1.0, 0.7, 0.4])
+def point_cloud(rng, n=400):
+    """
+    Random masses, centred, expressed in their principal axes; returns (m, r, I).
+
+    ``rng`` is the calling test's own generator (other test files use this function too).
+    """
+    m = rng.uniform(0.5, 1.5, n)
+    r = rng.normal(size=(n, 3)) * np.array([1.0, 0.7, 0.4])
     r -= (m[:, None] * r).sum(0) / m.sum()
     tensor = sum(mi * (ri @ ri * np.eye(3) - np.outer(ri, ri)) for mi, ri in zip(m, r))
     moments, axes = np.linalg.eigh(tensor)
@@ -21,11 +27,12 @@ def point_cloud(n=400):
 
 @pytest.mark.parametrize('trial', range(5))
 def test_eq12_equals_sum_of_point_mass_torques(trial):
-    m, r, inertia = point_cloud()
+    rng = np.random.default_rng((SEED, trial))           # a body and a direction per trial
+    m, r, inertia = point_cloud(rng)
     ws = 1.7
     distance = 1e5  # body size ~1: the quadrupole approximation holds to ~1e-5
     gm = ws**2 * distance**3  # GM / R0^3 = ws^2
-    u = RNG.normal(size=3)
+    u = rng.normal(size=3)
     u /= np.linalg.norm(u)
     sun = distance * u  # the Sun, seen from the centre of mass, in body axes
     d = sun - r

@@ -19,8 +19,6 @@ import pytest
 from tumble_ros.io import McapWriter
 from tumble_ros.io.mcap_bulk import bulk_supported, ChunkFinisher, IN_FLIGHT
 
-RNG = np.random.default_rng(7)
-
 
 def _write(path, bulk: bool, chunk_bytes: int, compression: str,
            background: bool = False) -> None:
