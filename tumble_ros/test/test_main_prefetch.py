@@ -19,7 +19,7 @@ import pytest
 
 from test_main_job import short_scenario
 from tumble_ros import __main__ as entry
-from tumble_ros.__main__ import main, Prefetch, PREFETCH
+from tumble_ros.__main__ import main, PREFETCH, Prefetch
 
 #: A module that records the thread importing it.
 RECORDER = ('import threading\n'
