@@ -149,30 +149,3 @@ def test_the_main_job_stopped_while_recording_finalises_its_file(spawn, tmp_path
     assert 'stopped by SIGTERM' in run.output and 'Traceback' not in run.output
     (recording,) = (tmp_path / 'recordings').glob('fig9_long_*.mcap')
     assert summarize(recording).finalised and summarize(recording).message_count > 1000
-
-
-def test_on_first_block_is_called_once_by_the_thread_before_it_gathers(tmp_path):
-    calls = []
-    keep = WrittenMessages()
-
-    def first():
-        calls.append((threading.current_thread().name, len(keep.blocks)))
-
-    background = gather_in_background(keep, on_first_block=first)
-    assert calls == []                                  # nothing written yet
-    _write(tmp_path / 'kept.mcap', keep)
-    builders = background.finish()
-    assert len(keep.blocks) > 1 and any(b is not None for b in builders.values())
-    assert len(calls) == 1 and calls[0][0] == 'tumble_ros-columns' and calls[0][1] >= 1
-
-
-def test_an_error_of_on_first_block_is_raised_by_finish(tmp_path):
-    def first():
-        raise RuntimeError('first block hook failed')
-
-    keep = WrittenMessages()
-    background = gather_in_background(keep, on_first_block=first)
-    _write(tmp_path / 'kept.mcap', keep)
-    with pytest.raises(RuntimeError, match='first block hook failed'):
-        background.finish()
-    assert not _threads()

@@ -59,11 +59,6 @@ BARE_ARGV = frozenset({'ensemble', 'encounter'})
 NODES = frozenset({'sim', 'comparator', 'recorder'})
 #: Exit code after a closed pipe, as a shell reports a process killed by SIGPIPE.
 BROKEN_PIPE_EXIT = 128 + signal.SIGPIPE
-#: Modules the main job's analysis imports that nothing before it does: scipy.special (the
-#: spin state's elliptic integrals; 0.1-0.16 s with numpy.f2py, which scipy's array-API copy of
-#: numpy's namespace pulls in). The main job imports them in a thread once the run records
-#: (:class:`Prefetch`), while the compiled loop leaves the GIL free, not after the recording.
-PREFETCH = ('scipy.special',)
 
 
 def run_executable(name: str, args: list[str], **options: Any) -> int:
@@ -108,45 +103,6 @@ def entry() -> int:
     return run_executable(Path(sys.argv[0]).name, sys.argv[1:])
 
 
-class Prefetch:
-    """
-    Import modules in a daemon thread from :meth:`start` on; :meth:`join` waits for it.
-
-    An import that fails here is left: the module is imported again where it is used, and the
-    error raised there. After :meth:`join`, :meth:`start` starts nothing (the caller has gone on
-    to the imports itself).
-    """
-
-    def __init__(self, names: tuple[str, ...]) -> None:
-        self.names = names
-        self._lock = threading.Lock()
-        self._thread: threading.Thread | None = None
-        self._joined = False
-
-    def start(self) -> None:
-        """Start the imports (once; not after :meth:`join`)."""
-        with self._lock:
-            if self._thread is None and not self._joined:
-                self._thread = threading.Thread(target=self._run, name='tumble_ros-prefetch',
-                                                daemon=True)
-                self._thread.start()
-
-    def _run(self) -> None:
-        for name in self.names:
-            try:
-                importlib.import_module(name)
-            except Exception:   # noqa: BLE001 - raised again where the module is used
-                pass
-
-    def join(self) -> None:
-        """Wait for the imports started, if any; no start after this."""
-        with self._lock:
-            self._joined = True
-            thread = self._thread
-        if thread is not None:
-            thread.join()
-
-
 def numba_without_coverage() -> None:
     """
     Import numba without ``coverage`` when no coverage is measured in this process (~0.05 s).
@@ -188,11 +144,8 @@ def main_job(argv: list[str]) -> int:
     written = None if live else WrittenMessages()
     with _figure_pool() as pool:    # workers warm up for the figures while the run records
         # the columns gathered in a thread as they are written (the other core, while the
-        # run simulates): none left to gather after the recording; from the first block on,
-        # the analysis's remaining imports in another (PREFETCH)
-        prefetch = Prefetch(PREFETCH)
-        background = (None if written is None
-                      else gather_in_background(written, on_first_block=prefetch.start))
+        # run simulates): none left to gather after the recording
+        background = None if written is None else gather_in_background(written)
         try:
             code = run_executable('bringup', [*argv, *mode, '--output', str(output)],
                                   keep=written)
@@ -201,12 +154,10 @@ def main_job(argv: list[str]) -> int:
             if code != 0 or not output.exists() or output.stat().st_size == 0:
                 _release(output)
                 return code or 1
-            prefetch.join()
             return analyse(output, written, pool)
         finally:
             if background is not None:
                 background.close()
-            prefetch.join()
 
 
 @contextmanager

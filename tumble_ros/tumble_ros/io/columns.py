@@ -410,14 +410,12 @@ class BackgroundColumns:
     (tests/test_io_background.py). An error of the thread is raised by :meth:`finish`.
     """
 
-    def __init__(self, written: WrittenMessages,
-                 on_first_block: Callable[[], None] | None = None) -> None:
+    def __init__(self, written: WrittenMessages) -> None:
         if written.blocks or written.on_block is not None:
             raise ValueError('gather_in_background: written must be new (nothing kept yet, no '
                              f'other follower), got {len(written.blocks)} block(s) kept and '
                              f'on_block={written.on_block!r}')
         self._written = written
-        self._on_first_block = on_first_block
         self._reader: _ColumnReader | None = None   # made at the first block: the path known
         self._blocks: queue.SimpleQueue[WrittenBlock | None] = queue.SimpleQueue()
         self._error: BaseException | None = None
@@ -431,8 +429,6 @@ class BackgroundColumns:
         try:
             while (block := self._blocks.get()) is not None:
                 if self._reader is None:    # its errors name the file, as written_columns'
-                    if self._on_first_block is not None:
-                        self._on_first_block()
                     self._reader = _ColumnReader(self._written.path or Path(), self._written,
                                                  _Everything(), set(), None, flat_only=True)
                 self._reader.read_written((block,))
@@ -457,19 +453,15 @@ class BackgroundColumns:
         return {} if self._reader is None else self._reader.builders
 
 
-def gather_in_background(written: WrittenMessages,
-                         on_first_block: Callable[[], None] | None = None) -> BackgroundColumns:
+def gather_in_background(written: WrittenMessages) -> BackgroundColumns:
     """
     Gather ``written``'s flat channels into columns in a thread as they are written.
 
     ``written``: a new :class:`~.mcap_writer.WrittenMessages`, before its writer writes;
     :func:`written_columns` of it then takes the columns gathered (:class:`BackgroundColumns`).
     Call :meth:`BackgroundColumns.close` when they will not be read (the thread is a daemon).
-    ``on_first_block``: called by the thread when the first block comes, before it gathers it
-    (the run is then recording: the main job starts its imports for the analysis there); an
-    error of it is the thread's, raised by :meth:`BackgroundColumns.finish`.
     """
-    return BackgroundColumns(written, on_first_block)
+    return BackgroundColumns(written)
 
 
 def _wanted(topics: Iterable[str], as_messages: Iterable[str]) -> set[str]:

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import math
 
 import numpy as np
+from scipy.special import ellipkm1, elliprf, elliprj
 
 from tumble_ros.core.array_types import ArrayLike, Vector3
 from tumble_ros.core.model.rotation import quaternion_to_matrix
@@ -125,10 +126,6 @@ def spin_state(omega: ArrayLike, inertia: ArrayLike,
         mode = 'LAM'
         scale = (i2 - i1) * (e2 * i3 - l2)
         m1 = (i3 - i1) * (e2 * i2 - l2) / scale if i3 > i2 else 1.0
-    # scipy.special here, not at import: 0.1-0.16 s (numpy.f2py with it, through scipy's
-    # array-API copy of numpy's namespace), which the main job imports in a thread while the
-    # run records (tumble_ros.__main__.PREFETCH), not on its path before the recording
-    from scipy.special import ellipkm1
     rotation = 4.0 * float(ellipkm1(m1)) * math.sqrt(i1 * i2 * i3 / scale)
     precession = _precession_period(mode, (i1, i2, i3), momentum, m1)
     return SpinState(mode, energy, momentum, d, rotation, precession, pole, lon, lat)
@@ -142,7 +139,6 @@ def _precession_period(mode: str, moments: tuple[float, float, float], momentum:
     ``mode`` 'SAM' or 'LAM', ``moments`` (I1, I2, I3) sorted, ``momentum`` |L|, ``m1`` = 1 - k^2
     of the polhode (the closed form of the module docstring).
     """
-    from scipy.special import elliprf, elliprj    # (see spin_state)
     i1, i2, i3 = moments
     if mode == 'SAM':
         n = -i3 * (i2 - i1) / (i1 * (i3 - i2)) if i2 > i1 else 0.0
