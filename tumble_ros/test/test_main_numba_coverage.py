@@ -1,0 +1,60 @@
+"""
+numba imported without coverage by the main job when none is measured (numba_without_coverage).
+
+In a fresh process each: without ``coverage`` imported, numba's coverage support is imported
+with it hidden (numba then reports no coverage, and does not import it), and a later
+``import coverage`` works; with ``coverage`` imported (a measured run), numba's support sees
+it as before. The main job calls it before its imports (tests/test_main_job.py runs the job).
+"""
+import os
+from pathlib import Path
+import subprocess
+import sys
+
+import pytest
+
+
+def _python(code):
+    env = {key: value for key, value in os.environ.items()
+           if not key.startswith('COV_CORE_')}          # no coverage started in the child
+    return subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                          timeout=300, env=env, cwd=Path(__file__).parent)
+
+
+def test_numba_is_imported_without_coverage_when_none_is_measured():
+    pytest.importorskip('coverage')                     # (installed with the test tools)
+    done = _python('import sys\n'
+                   'from tumble_ros.__main__ import numba_without_coverage\n'
+                   'numba_without_coverage()\n'
+                   'import numba.misc.coverage_support as support\n'
+                   'print("coverage" in sys.modules, support.coverage_available)\n'
+                   'import coverage\n'
+                   'print(coverage.Coverage is not None)\n')
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ['False', 'False', 'True']
+
+
+def test_a_measured_coverage_is_left_as_it_was():
+    pytest.importorskip('coverage')
+    done = _python('import sys, coverage\n'
+                   'from tumble_ros.__main__ import numba_without_coverage\n'
+                   'numba_without_coverage()\n'
+                   'import numba.misc.coverage_support as support\n'
+                   'print(sys.modules["coverage"] is coverage, support.coverage_available)\n')
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ['True', 'True']
+
+
+def test_the_main_job_imports_numba_without_coverage(tmp_path):
+    pytest.importorskip('coverage')
+    scenario = tmp_path / 'short.yaml'
+    scenario.write_text(
+        'sim:\n  ros__parameters:\n    duration: 0.2\n    output_interval: 0.002\n')
+    done = _python('import os, sys\n'
+                   f'os.chdir({str(tmp_path)!r})\n'
+                   'from tumble_ros.__main__ import main\n'
+                   f'code = main([{str(scenario)!r}])\n'
+                   'import numba.misc.coverage_support as support\n'
+                   'print(code, "coverage" in sys.modules, support.coverage_available)\n')
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split()[-3:] == ['0', 'False', 'False']
