@@ -405,9 +405,9 @@ def simulate_ensemble(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *
         ``first_body``, ``first_body + 1``, ... (how a chunk of a bigger run draws its own).
     euler_angles
         False: the compiled loops neither follow nor write out the continuous Euler angles
-        (~20 % of a lockstep body-step) and the result's ``euler`` is NaN (a read-only view
-        of one NaN, no memory); every other output, the steps and the states are the same
-        bits (``nfev`` counts no tracking evaluations).
+        (~30 % of a lockstep ``splitting`` body-step) and the result's ``euler`` is NaN (a
+        read-only view of one NaN, no memory); every other output, the steps and the states
+        are the same bits (``nfev`` counts no tracking evaluations).
 
     Notes
     -----
