@@ -9,13 +9,13 @@ inertia units x rad/yr^2 (body torques in body axes, orbital ones in the orbital
 """
 from __future__ import annotations
 
-from typing import NamedTuple, Sequence, TYPE_CHECKING
+from typing import Iterable, NamedTuple, Sequence, TYPE_CHECKING
 
 if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Impact
 
-__all__ = ['NO_PULSE', 'Segment', 'SegmentRow', 'segment_torques', 'split_at_impacts',
-           'split_rows', 'split_span']
+__all__ = ['NO_PULSE', 'Segment', 'SegmentRow', 'segment_torques', 'summed_torques',
+           'split_at_impacts', 'split_rows', 'split_span']
 
 
 class Segment(NamedTuple):
@@ -27,18 +27,27 @@ class Segment(NamedTuple):
     torque_orbital: tuple[float, float, float]
 
 
-def segment_torques(impacts: Sequence[Impact], t0: float,
-                    t1: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+#: The (body, orbital) pulse torques of a segment.
+Torques = tuple[tuple[float, float, float], tuple[float, float, float]]
+#: A pulse as the sums need it: its torque and whether it is fixed in the body.
+Pulse = tuple[tuple[float, float, float], bool]
+
+
+def segment_torques(impacts: Sequence[Impact], t0: float, t1: float) -> Torques:
     """Return the (body, orbital) torques of the pulses active on [t0, t1], summed in order."""
     mid = 0.5 * (t0 + t1)
+    return summed_torques((impact.torque, impact.frame == 'body') for impact in impacts
+                          if impact.start <= mid < impact.end)
+
+
+def summed_torques(pulses: Iterable[Pulse]) -> Torques:
+    """Return the (body, orbital) sums of the pulses' torques, in their order."""
     b0 = b1 = b2 = o0 = o1 = o2 = 0.0
-    for impact in impacts:
-        if impact.start <= mid < impact.end:
-            x, y, z = impact.torque
-            if impact.frame == 'body':
-                b0, b1, b2 = b0 + x, b1 + y, b2 + z
-            else:
-                o0, o1, o2 = o0 + x, o1 + y, o2 + z
+    for (x, y, z), body in pulses:
+        if body:
+            b0, b1, b2 = b0 + x, b1 + y, b2 + z
+        else:
+            o0, o1, o2 = o0 + x, o1 + y, o2 + z
     return (b0, b1, b2), (o0, o1, o2)
 
 
@@ -93,7 +102,7 @@ def split_rows(a: float, b: float, ordered: Sequence[Impact],
     edges.update(t for t in starts if a < t < b)
     edges.update(t for t in ends if a < t < b)
     # each impact's torque and whether it is a body torque, looked up once (not per segment)
-    pulses = [(impact.torque, impact.frame == 'body') for impact in ordered]
+    pulses: list[Pulse] = [(impact.torque, impact.frame == 'body') for impact in ordered]
     segments: list[SegmentRow] = []
     active: list[int] = []
     nxt, count, t0 = 0, len(ordered), a
@@ -104,16 +113,8 @@ def split_rows(a: float, b: float, ordered: Sequence[Impact],
             nxt += 1
         if active:
             active = [k for k in active if mid < ends[k]]
-        if active:
-            # segment_torques of the active impacts: the same sums in the same order
-            b0 = b1 = b2 = o0 = o1 = o2 = 0.0
-            for k in active:
-                (x, y, z), body = pulses[k]
-                if body:
-                    b0, b1, b2 = b0 + x, b1 + y, b2 + z
-                else:
-                    o0, o1, o2 = o0 + x, o1 + y, o2 + z
-            segments.append((t0, t1, (b0, b1, b2), (o0, o1, o2)))
+        if active:   # (segment_torques of the active impacts)
+            segments.append((t0, t1, *summed_torques(pulses[k] for k in active)))
         else:
             segments.append((t0, t1, *_ZERO_TORQUES))
         t0 = t1
