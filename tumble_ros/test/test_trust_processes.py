@@ -394,7 +394,7 @@ def test_the_three_nodes_beside_a_cpu_hog_lose_nothing_on_the_reliable_topics(ro
 
     from tumble_ros.io import read_columns
 
-    n = 10_000
+    n = 4_000    # four times the 1000 samples a late subscriber's history would replay
     interval = 1e-3
     output = tmp_path / 'loaded.mcap'
     hogs = [subprocess.Popen([sys.executable, '-c', 'while True: pass'],
