@@ -75,8 +75,9 @@ def _parser() -> argparse.ArgumentParser:
                         'every other output keeps its bits')
     p.add_argument('--out',
                    help='X.npz: write t, omega, euler (unless --no-euler-angles), '
-                        'quaternion, jacobi, success, n_steps (all in memory); X.zarr: a labelled xarray/Zarr store written chunk '
-                        'by chunk (memory does not grow with N), resumed when run again')
+                        'quaternion, jacobi, success, n_steps (all in memory); X.zarr: a '
+                        'labelled xarray/Zarr store written chunk by chunk (memory does not '
+                        'grow with N), resumed when run again')
     p.add_argument('--overwrite', action='store_true',
                    help='replace an existing .zarr store instead of resuming it')
     add_engine_arguments(p)
