@@ -22,6 +22,7 @@ A run may leave out the variables of :data:`OPTIONAL_VARIABLES` (``euler``: a ru
 angles): the store then has no such array, and ``attrs['left_out']`` maps each to how the run
 left it out; reading it (:meth:`EnsembleStore.read`, :func:`ensemble_variable`) raises an
 :class:`EnsembleStoreError` saying so. A store without that attribute has every variable.
+
 Rows of a failed body after its last good sample are NaN; rows of a pending body (a chunk not
 written yet) read as NaN with status 0. The store is Zarr format 2 (every Zarr and xarray
 reader opens it; the body axis is chunked as the run's chunks, the other axes whole). It is
