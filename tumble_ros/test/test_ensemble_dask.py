@@ -6,6 +6,7 @@ its end, with every process it started.
 """
 import os
 from pathlib import Path
+import pickle
 import signal
 
 import numpy as np
@@ -15,11 +16,16 @@ from tumble_ros.cli.ensemble import main
 from tumble_ros.core import (ensemble_scenarios, GaussianSpread, Impact, IntegratorSettings,
                              iter_chunks, load_scenario, parse_scenario, RandomImpacts,
                              ScenarioError, simulate_ensemble)
-from tumble_ros.ensembles import (dask_client, EnsembleRunError, EnsembleStoreError, open_ensemble,
-                                  run_ensemble, run_ensemble_to_store)
+from tumble_ros.core.propagation.simulate import sample_times
+from tumble_ros.ensembles import (dask_client, ensemble_variable, EnsembleRunError,
+                                  EnsembleStoreError, open_ensemble, run_ensemble,
+                                  run_ensemble_to_store, run_fingerprint)
+from tumble_ros.io.ensemble_store import EnsembleStore
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 FIELDS = ('omega', 'euler', 'quaternion', 'jacobi', 'success', 'n_steps', 'nfev')
+#: What a run without Euler angles keeps bit for bit (nfev counts no tracking evaluations).
+KEPT = ('omega', 'quaternion', 'jacobi', 'success', 'n_steps')
 
 
 def fig9(**changes):
@@ -34,8 +40,8 @@ def random_inputs(sc, n=13, seed=5):
             'euler0': GaussianSpread(sc.euler0, 0.1, seed=seed), 'n_bodies': n}
 
 
-def assert_same(a, b):
-    for name in FIELDS:
+def assert_same(a, b, fields=FIELDS):
+    for name in fields:
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
     assert a.messages == b.messages
 
@@ -263,3 +269,131 @@ def test_the_analysis_reads_the_store(tmp_path, capsys):
     assert (tmp_path / 'figs' / 'ensemble.png').read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
     assert analyse([str(tmp_path / 'nothing.zarr')]) == 1
     assert 'no ensemble store' in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------
+# Runs without Euler angles (euler_angles=False, the command's --no-euler-angles)
+# ---------------------------------------------------------------------------------------
+def assert_no_euler(result, n, m):
+    assert result.euler_angles is False
+    assert result.euler.shape == (n, m, 3) and np.isnan(result.euler).all()
+    assert result.euler.strides == (0, 0, 0)     # one NaN seen N x m x 3 times: no memory
+
+
+def test_without_euler_angles_the_same_bits_whatever_the_engine_and_the_chunking(client):
+    sc = fig9()
+    inputs = random_inputs(sc)
+    m = sc.output_times.size
+    full = simulate_ensemble(sc, **inputs)
+    bare = simulate_ensemble(sc, **inputs, euler_angles=False)
+    assert np.isfinite(full.euler).all() and full.success.all()
+    assert_same(bare, full, KEPT)
+    assert_no_euler(bare, 13, m)
+    # pickled (a Dask task's result) without its NaN euler, and back
+    assert len(pickle.dumps(full)) - len(pickle.dumps(bare)) >= full.euler.nbytes
+    again = pickle.loads(pickle.dumps(bare))
+    assert_same(again, bare)
+    assert_no_euler(again, 13, m)
+    # in-process chunks, each chunk's simulate_ensemble call without Euler angles
+    parts = list(iter_chunks(sc, **inputs, chunk_size=5, euler_angles=False))
+    assert [(c.start, c.stop) for c in parts] == [(0, 5), (5, 10), (10, 13)]
+    for c in parts:
+        np.testing.assert_array_equal(c.result.omega, full.omega[c.start:c.stop])
+        assert_no_euler(c.result, c.stop - c.start, m)
+    # the local cluster, chunks of 1, 4 and all 13 bodies: gathered without memory for euler
+    for size in (1, 4, 13):
+        on_cluster = run_ensemble(sc, **inputs, client=client, chunk_size=size,
+                                  euler_angles=False)
+        assert_same(on_cluster, bare)
+        assert_no_euler(on_cluster, 13, m)
+    # in process, gathered from chunks too (threads path: simulate_ensemble itself)
+    assert_same(run_ensemble(sc, **inputs, euler_angles=False), bare)
+
+
+def test_a_store_without_euler_angles_opens_and_says_why_it_has_none(client, tmp_path):
+    sc = fig9(duration=1.0)
+    inputs = random_inputs(sc, n=7)
+    full = simulate_ensemble(sc, **inputs)
+    path = tmp_path / 'bare.zarr'
+    summary = run_ensemble_to_store(sc, path, **inputs, chunk_size=3, client=client,
+                                    euler_angles=False)
+    assert (summary.chunks_run, summary.succeeded) == (3, 7)
+    ds = open_ensemble(path)
+    assert 'euler' not in ds.variables and 'euler0' in ds.variables
+    assert '--no-euler-angles' in ds.attrs['left_out']['euler']
+    for name in ('omega', 'quaternion', 'jacobi', 'n_steps'):
+        np.testing.assert_array_equal(ensemble_variable(ds, name).values,
+                                      getattr(full, name), err_msg=name)
+    # reading the Euler angles: one error naming the output and the option that left it out
+    refusal = (r"bare\.zarr: no 'euler' in this ensemble store: the run left out the Euler "
+               r"angles \(euler_angles=False, the ensemble command's --no-euler-angles\)")
+    with pytest.raises(EnsembleStoreError, match=refusal):
+        ensemble_variable(ds, 'euler')
+    with pytest.raises(EnsembleStoreError, match=refusal):
+        EnsembleStore(path).read('euler')
+    with pytest.raises(EnsembleStoreError, match="no variable 'eular' in this ensemble store"):
+        ensemble_variable(ds, 'eular')
+    # resumed only by the same choice: the choice is part of the run's fingerprint
+    assert run_ensemble_to_store(sc, path, **inputs, euler_angles=False).chunks_skipped == 3
+    with pytest.raises(EnsembleStoreError, match='holds another run'):
+        run_ensemble_to_store(sc, path, **inputs)
+    # a store with the Euler angles (as every store before the choice): all there, no
+    # left_out attribute, the same fingerprint as before the choice existed
+    with_euler = tmp_path / 'full.zarr'
+    run_ensemble_to_store(sc, with_euler, **inputs, chunk_size=3)
+    old = open_ensemble(with_euler)
+    assert 'left_out' not in old.attrs
+    np.testing.assert_array_equal(ensemble_variable(old, 'euler').values, full.euler)
+    n, prepared = 7, {'impacts': inputs['impacts'], 'omega0': inputs['omega0'],
+                      'euler0': inputs['euler0']}
+    times = sample_times(sc, None)
+    assert old.attrs['fingerprint'] == run_fingerprint(sc, times, prepared, n, 3)
+    assert ds.attrs['fingerprint'] == run_fingerprint(sc, times, prepared, n, 3,
+                                                      euler_angles=False)
+    assert ds.attrs['fingerprint'] != old.attrs['fingerprint']
+    # only the optional variables may be left out; a store that claims others is damaged
+    with pytest.raises(EnsembleStoreError, match=r"left_out: \['omega'\] cannot be left out"):
+        EnsembleStore.create(tmp_path / 'x.zarr', n_bodies=2, times=[0.0, 1.0], chunk_size=1,
+                             attrs={'scenario': ''}, left_out={'omega': 'no'})
+    import zarr
+    group = zarr.open_group(str(with_euler), mode='r+', zarr_format=2)
+    group.attrs['left_out'] = {'status': 'gone'}
+    zarr.consolidate_metadata(str(with_euler))
+    with pytest.raises(EnsembleStoreError, match="damaged ensemble store: attribute 'left_out'"):
+        open_ensemble(with_euler)
+
+
+def test_command_line_without_euler_angles_keeps_every_other_output(client, tmp_path, capsys):
+    from tumble_ros.analysis.ensemble import main as analyse
+    from tumble_ros.cli.ensemble import _parser
+
+    assert '--no-euler-angles' in _parser().format_help()
+    base = [str(CONFIG / 'fig9.yaml'), '--bodies', '9', '--duration', '0.5',
+            '--output-interval', '0.1', '--method', 'splitting', '--step', '0.005',
+            '--omega-spread', '0.01', '--seed', '1', '--chunk-size', '4', '--quiet']
+    # with impacts: the per-body loop; without: the lockstep loop
+    for loop, args in (('per-body', base + ['--impact-rate', '4']), ('lockstep', base)):
+        out = {}
+        for name, flag in (('full', []), ('bare', ['--no-euler-angles'])):
+            out[name] = tmp_path / f'{loop}-{name}.npz'
+            assert main(args + flag + ['--out', str(out[name])]) == 0, loop
+            assert main(args + flag + ['--scheduler', client.scheduler.address,
+                                       '--out', str(tmp_path / f'{loop}-{name}.zarr')]) == 0
+        full, bare = np.load(out['full']), np.load(out['bare'])
+        assert 'euler' in full.files and 'euler' not in bare.files, loop
+        assert sorted(full.files) == sorted(bare.files + ['euler'])
+        for name in bare.files:
+            np.testing.assert_array_equal(bare[name], full[name], err_msg=f'{loop} {name}')
+        stored = open_ensemble(tmp_path / f'{loop}-bare.zarr')
+        assert 'euler' not in stored.variables
+        for name in ('omega', 'quaternion', 'jacobi', 'n_steps'):
+            np.testing.assert_array_equal(stored[name].values, full[name], err_msg=name)
+        np.testing.assert_array_equal(
+            open_ensemble(tmp_path / f'{loop}-full.zarr').euler.values, full['euler'])
+    capsys.readouterr()
+    # the store's analysis needs no Euler angles: it runs on a store without them
+    assert analyse([str(tmp_path / 'lockstep-bare.zarr')]) == 0
+    assert 'omega_perp' in capsys.readouterr().out
+    # the same store resumed with the other choice: refused, one line, exit 2
+    assert main(base + ['--out', str(tmp_path / 'lockstep-bare.zarr')]) == 2
+    assert 'holds another run' in capsys.readouterr().err

@@ -12,7 +12,7 @@ reads them).
 from .columns import (BackgroundColumns, FlatLayout, gather_in_background, MessageEncoder,
                       MessageTemplate, read_columns, sample_values, TopicColumns,
                       written_columns)
-from .ensemble_store import EnsembleStore, EnsembleStoreError, open_ensemble
+from .ensemble_store import ensemble_variable, EnsembleStore, EnsembleStoreError, open_ensemble
 from .mcap_reader import (McapError, McapSummary, read_messages, RecordedMessage, summarize,
                           TopicSummary)
 from .mcap_writer import McapWriter, offered_qos_yaml, WrittenMessages
@@ -21,6 +21,7 @@ from .msgdefs import message_definition, MessageDefinitionError, normalize_type_
 __all__ = [
     'EnsembleStore',
     'EnsembleStoreError',
+    'ensemble_variable',
     'open_ensemble',
     'BackgroundColumns',
     'FlatLayout',

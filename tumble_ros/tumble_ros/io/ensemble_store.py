@@ -7,7 +7,7 @@ The layout (what :func:`open_ensemble` returns)::
             quaternion_component (w, x, y, z), chunk (the run's chunks of bodies)
     coords: body (0 ... N-1), time [yr], component, angle, quaternion_component
     omega       (body, time, component)            angular velocity [rad/yr], body axes
-    euler       (body, time, angle)                the paper's Euler angles [rad]
+    euler       (body, time, angle)                the paper's Euler angles [rad] (optional)
     quaternion  (body, time, quaternion_component) attitude, body -> orbital, scalar first
     jacobi      (body, time)                       Jacobi integral [I rad^2/yr^2]
     status      (body) int8                        0 pending, 1 succeeded, 2 failed
@@ -17,6 +17,11 @@ The layout (what :func:`open_ensemble` returns)::
     n_impacts   (body)                             the body's number of impacts
     chunk_done  (chunk) bool                       chunk written completely
     attrs: the scenario (a ROS 2 parameters file), the per-body inputs, N, chunk size, ...
+
+A run may leave out the variables of :data:`OPTIONAL_VARIABLES` (``euler``: a run without Euler
+angles): the store then has no such array, and ``attrs['left_out']`` maps each to how the run
+left it out; reading it (:meth:`EnsembleStore.read`, :func:`ensemble_variable`) raises an
+:class:`EnsembleStoreError` saying so. A store without that attribute has every variable.
 
 Rows of a failed body after its last good sample are NaN; rows of a pending body (a chunk not
 written yet) read as NaN with status 0. The store is Zarr format 2 (every Zarr and xarray
@@ -49,9 +54,10 @@ from tumble_ros.errors import IoError
 if TYPE_CHECKING:  # (xarray is imported where it is used: io users without it load this module)
     import xarray
 
-__all__ = ['EnsembleStore', 'EnsembleStoreError', 'EnsembleStoreLocked', 'lock_path',
-           'open_ensemble', 'store_lock', 'STATUS_FAILED', 'STATUS_PENDING', 'STATUS_SUCCEEDED',
-           'REASON_WIDTH', 'SCENARIO_ATTR']
+__all__ = ['EnsembleStore', 'EnsembleStoreError', 'EnsembleStoreLocked', 'ensemble_variable',
+           'lock_path', 'open_ensemble', 'store_lock', 'STATUS_FAILED', 'STATUS_PENDING',
+           'STATUS_SUCCEEDED', 'REASON_WIDTH', 'SCENARIO_ATTR', 'LEFT_OUT_ATTR',
+           'OPTIONAL_VARIABLES']
 
 FORMAT = 'tumble_ros ensemble'
 FORMAT_VERSION = 1
@@ -60,6 +66,8 @@ STATUS_PENDING, STATUS_SUCCEEDED, STATUS_FAILED = 0, 1, 2
 SCENARIO_ATTR = 'scenario'
 #: Longest stored failure reason [characters] (longer ones are cut, ending with '...').
 REASON_WIDTH = 160
+#: The attribute mapping each variable a run left out to how it was left out (absent: none).
+LEFT_OUT_ATTR = 'left_out'
 
 #: name -> (dims, dtype, attrs) of the per-body variables.
 VARIABLES = {
@@ -89,6 +97,8 @@ VARIABLES = {
                {'long_name': 'initial Euler angles (phi, psi, theta)', 'units': 'rad'}),
     'n_impacts': (('body',), 'i4', {'long_name': 'number of impacts on the body'}),
 }
+#: The variables a run may leave out (:meth:`EnsembleStore.create`'s ``left_out``).
+OPTIONAL_VARIABLES = ('euler',)
 
 
 class EnsembleStoreError(IoError):
@@ -163,6 +173,22 @@ def store_lock(path: str | Path) -> Iterator[Path]:
         os.close(fd)
 
 
+def _left_out(path: str | Path, attrs: Mapping[str, Any]) -> dict[str, str]:
+    """Return the variables a store's run left out, each with how (``attrs[LEFT_OUT_ATTR]``)."""
+    left_out = attrs.get(LEFT_OUT_ATTR, {})
+    if not isinstance(left_out, Mapping) or not all(
+            name in OPTIONAL_VARIABLES and isinstance(how, str) for name, how in left_out.items()):
+        raise EnsembleStoreError(f'{path}: damaged ensemble store: attribute {LEFT_OUT_ATTR!r} '
+                                 f'is {left_out!r}, not a map of some of {OPTIONAL_VARIABLES} '
+                                 'to texts')
+    return dict(left_out)
+
+
+def _left_out_error(path: str | Path, name: str, how: str) -> EnsembleStoreError:
+    """Return the error of reading variable ``name``, which the store's run left out."""
+    return EnsembleStoreError(f'{path}: no {name!r} in this ensemble store: {how}')
+
+
 def _check_layout(path: Path, attrs: Mapping[str, Any], names: Collection[str]) -> None:
     """Refuse a store that is not a tumble_ros ensemble of this format, or lacks a variable."""
     if attrs.get('format') != FORMAT:
@@ -171,7 +197,9 @@ def _check_layout(path: Path, attrs: Mapping[str, Any], names: Collection[str]) 
     if version != FORMAT_VERSION:
         raise EnsembleStoreError(f'{path}: ensemble store format version {version!r}; this '
                                  f'tumble_ros reads and resumes version {FORMAT_VERSION} only')
-    missing = [name for name in (*VARIABLES, 'chunk_done') if name not in names]
+    left_out = _left_out(path, attrs)
+    missing = [name for name in (*VARIABLES, 'chunk_done')
+               if name not in names and name not in left_out]
     if missing:
         raise EnsembleStoreError(f'{path}: damaged ensemble store: no variable '
                                  f"{', '.join(missing)}")
@@ -194,6 +222,7 @@ class EnsembleStore:
 
     Create with :meth:`create` (a new run) or :meth:`resume` (the same run again: its
     ``attrs['fingerprint']`` must match). Read results with :func:`open_ensemble`.
+    ``variables``: the VARIABLES it holds; ``left_out``: those its run left out, each with how.
     """
 
     def __init__(self, path: str | Path) -> None:
@@ -207,11 +236,13 @@ class EnsembleStore:
                                      f"({' '.join(str(err).split())})") from None
         self.attrs: dict[str, Any] = dict(self._group.attrs)
         _check_layout(self.path, self.attrs, set(self._group.array_keys()))
+        self.left_out = _left_out(self.path, self.attrs)
+        self.variables = tuple(name for name in VARIABLES if name not in self.left_out)
         try:
             self.n_bodies = int(self.attrs['n_bodies'])
             self.chunk_size = int(self.attrs['chunk_size'])
             self.n_chunks = -(-self.n_bodies // self.chunk_size)
-            shapes = {name: self._array(name).shape for name in (*VARIABLES, 'chunk_done')}
+            shapes = {name: self._array(name).shape for name in (*self.variables, 'chunk_done')}
         except (TypeError, ValueError, ZeroDivisionError, KeyError) as err:
             raise EnsembleStoreError(f'{self.path}: damaged ensemble store ({err})') from None
         wrong = [name for name, shape in shapes.items()
@@ -226,13 +257,15 @@ class EnsembleStore:
 
     @classmethod
     def create(cls, path: str | Path, *, n_bodies: int, times: npt.ArrayLike,
-               chunk_size: int, attrs: Mapping[str, Any],
-               overwrite: bool = False) -> 'EnsembleStore':
+               chunk_size: int, attrs: Mapping[str, Any], overwrite: bool = False,
+               left_out: Mapping[str, str] | None = None) -> 'EnsembleStore':
         """
         Create the store at ``path`` for N bodies sampled at ``times`` [yr]; nothing written.
 
         ``attrs`` (JSON-serialisable: strings, numbers, lists) become the Dataset's attributes.
         An existing path is refused unless ``overwrite`` (then it is removed first).
+        ``left_out``: variables of :data:`OPTIONAL_VARIABLES` the run does not write, each
+        with how it left them out (the text of the error that reading them raises).
         """
         import dask.array as da
         import xarray as xr
@@ -243,6 +276,11 @@ class EnsembleStore:
             raise EnsembleStoreError(f'{path}: needs n_bodies >= 1, chunk_size >= 1 and '
                                      f'sample times, got {n_bodies}, {chunk_size}, '
                                      f'{t.shape}')
+        left_out = dict(left_out or {})
+        wrong = sorted(set(left_out) - set(OPTIONAL_VARIABLES))
+        if wrong:
+            raise EnsembleStoreError(f'{path}: left_out: {wrong} cannot be left out; a run '
+                                     f'may leave out {list(OPTIONAL_VARIABLES)} only')
         if path.exists() or path.is_symlink():
             if not overwrite:
                 raise EnsembleStoreError(f'{path}: exists (resume the same run, or overwrite)')
@@ -253,7 +291,8 @@ class EnsembleStore:
         sizes = {'body': n_bodies, 'time': t.size, 'component': 3, 'angle': 3,
                  'quaternion_component': 4}
         data: dict[str, Any] = {}
-        for name, (dims, dtype, var_attrs) in VARIABLES.items():
+        kept = {name: spec for name, spec in VARIABLES.items() if name not in left_out}
+        for name, (dims, dtype, var_attrs) in kept.items():
             shape = tuple(sizes[d] for d in dims)
             chunks = (chunk_size,) + shape[1:]
             data[name] = (dims, da.zeros(shape, dtype=dtype, chunks=chunks), var_attrs)
@@ -268,9 +307,11 @@ class EnsembleStore:
                   'quaternion_component': ['w', 'x', 'y', 'z']}
         all_attrs = {**attrs, 'format': FORMAT, 'format_version': FORMAT_VERSION,
                      'n_bodies': int(n_bodies), 'chunk_size': int(chunk_size)}
+        if left_out:
+            all_attrs[LEFT_OUT_ATTR] = left_out
         ds = xr.Dataset(data, coords=coords, attrs=all_attrs)
         encoding: dict[str, dict[str, Any]] = {'chunk_done': {'chunks': (1,)}}
-        for name, (dims, dtype, _) in VARIABLES.items():
+        for name, (dims, dtype, _) in kept.items():
             if dtype.startswith('f'):
                 encoding[name] = {'_FillValue': np.nan}
         try:
@@ -286,8 +327,9 @@ class EnsembleStore:
         store = cls(path)
         if store.attrs.get('fingerprint') != fingerprint:
             raise EnsembleStoreError(
-                f'{store.path}: holds another run (its scenario, inputs, bodies, sample times '
-                f'or chunk size differ from this one); write to a new path, or overwrite it')
+                f'{store.path}: holds another run (its scenario, inputs, bodies, sample times, '
+                f'chunk size or variables left out differ from this one); write to a new path, '
+                f'or overwrite it')
         return store
 
     def done(self) -> npt.NDArray[np.bool_]:
@@ -300,23 +342,26 @@ class EnsembleStore:
 
     def read(self, name: str, bodies: int | slice = slice(None)) -> npt.NDArray[Any]:
         """Return the stored values of variable ``name`` for ``bodies`` (an index or slice)."""
+        if name in self.left_out:
+            raise _left_out_error(self.path, name, self.left_out[name])
         return np.asarray(self._array(name)[bodies])
 
     def write_chunk(self, index: int, start: int, arrays: Mapping[str, Any]) -> None:
         """
-        Write chunk ``index`` (bodies ``start`` ...) from ``arrays`` (every VARIABLES name).
+        Write chunk ``index`` (bodies ``start`` ...) from ``arrays``.
 
-        The data first, then the chunk's ``chunk_done`` flag: a chunk is marked only once all
-        of it is on disk.
+        ``arrays`` holds every name of ``variables`` (others are not written). The data first,
+        then the chunk's ``chunk_done`` flag: a chunk is marked only once all of it is on disk.
         """
         if not 0 <= index < self.n_chunks or start != index * self.chunk_size:
             raise EnsembleStoreError(f'{self.path}: chunk {index} starts at body '
                                      f'{index * self.chunk_size}, not {start}')
-        missing = sorted(set(VARIABLES) - set(arrays))
+        missing = sorted(set(self.variables) - set(arrays))
         if missing:
             raise EnsembleStoreError(f'{self.path}: chunk {index} lacks {missing}')
         stop = min(self.n_bodies, start + self.chunk_size)
-        for name, (_, dtype, _) in VARIABLES.items():
+        for name in self.variables:
+            dtype = VARIABLES[name][1]
             values: npt.NDArray[Any] = _fit_reasons(arrays[name]) if name == 'reason' \
                 else np.asarray(arrays[name], dtype=dtype)
             if values.shape[0] != stop - start:
@@ -347,3 +392,20 @@ def open_ensemble(path: str | Path) -> xarray.Dataset:
     _check_layout(store, {str(k): v for k, v in ds.attrs.items()},
                   {str(name) for name in ds.variables})
     return ds
+
+
+def ensemble_variable(ds: xarray.Dataset, name: str) -> xarray.DataArray:
+    """
+    Return variable ``name`` of a store opened with :func:`open_ensemble`.
+
+    What analyses of a store read its variables through: a variable the run left out (see
+    :data:`OPTIONAL_VARIABLES`) raises an :class:`EnsembleStoreError` naming it and saying how
+    the run left it out, where ``ds[name]`` would raise a bare KeyError.
+    """
+    if name in ds.variables:
+        return ds[name]
+    where = ds.encoding.get('source', 'ensemble store')
+    how = _left_out(where, {str(k): v for k, v in ds.attrs.items()}).get(name)
+    if how is None:
+        raise EnsembleStoreError(f'{where}: no variable {name!r} in this ensemble store')
+    raise _left_out_error(where, name, how)

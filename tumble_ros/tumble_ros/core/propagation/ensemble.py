@@ -31,6 +31,7 @@ cluster) and where their results go (memory, a store) is the run layer's,
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+import dataclasses
 from dataclasses import dataclass, replace
 import math
 import os
@@ -88,6 +89,9 @@ class EnsembleResult:
     n_steps, nfev : (N,) integration steps and right-hand-side (torque) evaluations.
     wall_time : seconds spent integrating (set-up and post-processing excluded).
     compiled : whether the compiled ensemble loop ran (else one simulate() per body).
+    euler_angles : whether the run followed the Euler angles (``simulate_ensemble``'s
+        ``euler_angles``); False: ``euler`` is a read-only view of one NaN, left out when the
+        result is pickled (a Dask task's result) and joined without memory.
 
     """
 
@@ -102,6 +106,14 @@ class EnsembleResult:
     nfev: npt.NDArray[np.int64]
     wall_time: float
     compiled: bool
+    euler_angles: bool = True
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle the result; without Euler angles, without its (N, n, 3) NaN ``euler``."""
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        if not self.euler_angles:
+            fields['euler'] = None
+        return (_unpickled_result, (fields,))
 
     @property
     def n_bodies(self) -> int:
@@ -112,6 +124,13 @@ class EnsembleResult:
     def body_steps_per_second(self) -> float:
         """Integration steps of all bodies per wall-clock second."""
         return float(self.n_steps.sum()) / self.wall_time if self.wall_time > 0 else math.inf
+
+
+def _unpickled_result(fields: dict[str, Any]) -> EnsembleResult:
+    """Return the :class:`EnsembleResult` of pickled ``fields`` (``euler`` None: NaN view)."""
+    if fields['euler'] is None:
+        fields['euler'] = _no_euler(fields['success'].size, fields['t'].size)
+    return EnsembleResult(**fields)
 
 
 # ---------------------------------------------------------------------------------------
@@ -432,7 +451,8 @@ def simulate_ensemble(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *
         return run(scenario, times, n, impacts, omega0, euler0, method, progress,
                    max(1, int(checkpoints)), threads, euler_angles=euler_angles)
     result = _ensemble_reference(scenario, times, n, impacts, omega0, euler0, progress)
-    return result if euler_angles else replace(result, euler=_no_euler(n, times.size))
+    return result if euler_angles else replace(result, euler=_no_euler(n, times.size),
+                                               euler_angles=False)
 
 
 def _no_euler(n: int, m: int) -> FloatArray:
@@ -612,7 +632,8 @@ def _result(scenario: Scenario, times: FloatArray, y_out: FloatArray, e_out: Flo
     the biggest output.
     """
     n, m = y_out.shape[:2]
-    if e_out.shape[1] == m:
+    euler_angles = e_out.shape[1] == m
+    if euler_angles:
         _blank_unreached(k_out, y_out, e_out)
     else:       # no Euler angles asked for
         _blank_unreached(k_out, y_out)
@@ -640,7 +661,7 @@ def _result(scenario: Scenario, times: FloatArray, y_out: FloatArray, e_out: Flo
     with ThreadPoolExecutor(threads) if threads > 1 and len(starts) > 1 else _NoPool() as pool:
         list(pool.map(group, starts))
     return EnsembleResult(times, omega, e_out, y_out[:, :, 3:], jac, success, messages, steps,
-                          nfev, wall, True)
+                          nfev, wall, True, euler_angles)
 
 
 #: Most samples (bodies x times) post-processed at once by :func:`_result`.
@@ -908,18 +929,20 @@ def plan_chunks(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
 
 def run_chunk(scenario: Scenario, t_eval: npt.ArrayLike | None, inputs: Inputs, index: int,
               start: int, stop: int, fast: bool | None = None,
-              threads: int | None = 1) -> ChunkResult:
+              threads: int | None = 1, euler_angles: bool = True) -> ChunkResult:
     """
     Integrate bodies ``start`` ... ``stop - 1`` of an ensemble: the task of a chunk.
 
     ``inputs`` holds ``impacts``, ``omega0`` and ``euler0``, each None, the chunk's slice of
     an explicit per-body input, or a sampler (drawn here for bodies start ... stop - 1).
+    ``fast``, ``threads``, ``euler_angles``: as :func:`simulate_ensemble`.
     """
     n = stop - start
     impacts, omega0, euler0 = _resolve(scenario, inputs.get('impacts'), inputs.get('omega0'),
                                        inputs.get('euler0'), n, start)
     result = simulate_ensemble(scenario, t_eval, impacts=impacts, omega0=omega0,
-                               euler0=euler0, n_bodies=n, fast=fast, threads=threads)
+                               euler0=euler0, n_bodies=n, fast=fast, threads=threads,
+                               euler_angles=euler_angles)
     omega0 = np.tile(scenario.omega0, (n, 1)) if omega0 is None else np.asarray(omega0, float)
     euler0 = np.tile(scenario.euler0, (n, 1)) if euler0 is None else np.asarray(euler0, float)
     n_impacts = (np.full(n, len(scenario.impacts), dtype=np.int32) if impacts is None
@@ -931,8 +954,8 @@ def iter_chunks(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
                 impacts: ImpactsInput = None, omega0: VectorsInput = None,
                 euler0: VectorsInput = None, n_bodies: int | None = None,
                 chunk_size: int | None = None, fast: bool | None = None,
-                skip: Collection[int] = frozenset(),
-                threads: int | None = None) -> Iterator[ChunkResult]:
+                skip: Collection[int] = frozenset(), threads: int | None = None,
+                euler_angles: bool = True) -> Iterator[ChunkResult]:
     """
     Yield the results of the ensemble's chunks, one after the other, in this process.
 
@@ -944,7 +967,7 @@ def iter_chunks(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
                        n_bodies=n_bodies, chunk_size=chunk_size, skip=skip)
     for task in plan.tasks:
         yield run_chunk(scenario, plan.times, task.inputs, task.index, task.start, task.stop,
-                        fast, threads)
+                        fast, threads, euler_angles)
 
 
 def concatenate_results(parts: Iterable[EnsembleResult]) -> EnsembleResult:
@@ -952,7 +975,8 @@ def concatenate_results(parts: Iterable[EnsembleResult]) -> EnsembleResult:
     Join the results of consecutive groups of bodies (same times) into one, in the given order.
 
     ``wall_time`` is the sum of the parts' (the caller may replace it with
-    ``dataclasses.replace``); ``compiled`` holds if it holds for every part.
+    ``dataclasses.replace``); ``compiled`` holds if it holds for every part. Parts run without
+    Euler angles join into a result without them (the parts must agree: ValueError).
     """
     parts = list(parts)
     if not parts:
@@ -960,14 +984,19 @@ def concatenate_results(parts: Iterable[EnsembleResult]) -> EnsembleResult:
     t = parts[0].t
     if any(p.t.shape != t.shape or np.any(p.t != t) for p in parts):
         raise ValueError('concatenate_results: the parts have different sample times')
+    euler_angles = parts[0].euler_angles
+    if any(p.euler_angles != euler_angles for p in parts):
+        raise ValueError('concatenate_results: some parts have Euler angles, some not')
 
     def cat(name: str) -> Any:
         return np.concatenate([getattr(p, name) for p in parts])
 
-    return EnsembleResult(t, cat('omega'), cat('euler'), cat('quaternion'), cat('jacobi'),
-                          cat('success'), tuple(m for p in parts for m in p.messages),
+    success = cat('success')
+    euler = cat('euler') if euler_angles else _no_euler(success.size, t.size)
+    return EnsembleResult(t, cat('omega'), euler, cat('quaternion'), cat('jacobi'),
+                          success, tuple(m for p in parts for m in p.messages),
                           cat('n_steps'), cat('nfev'), float(sum(p.wall_time for p in parts)),
-                          all(p.compiled for p in parts))
+                          all(p.compiled for p in parts), euler_angles)
 
 
 class _NoPool:

@@ -16,12 +16,12 @@ Here:
 run: this process or Dask; :func:`run_ensemble` in memory), :mod:`.to_store` (a run into a
 store, chunk by chunk, resumable). ``tumble_ros.ensembles`` re-exports these names.
 """
-from tumble_ros.io.ensemble_store import EnsembleStoreError, open_ensemble
+from tumble_ros.io.ensemble_store import ensemble_variable, EnsembleStoreError, open_ensemble
 
 from .chunks import run_chunks, run_ensemble
 from .dask_engine import dask_client, EnsembleRunError
 from .to_store import EnsembleRunSummary, run_ensemble_to_store, run_fingerprint
 
 __all__ = ['EnsembleRunError', 'EnsembleRunSummary', 'EnsembleStoreError', 'dask_client',
-           'open_ensemble', 'run_chunks', 'run_ensemble', 'run_ensemble_to_store',
-           'run_fingerprint']
+           'ensemble_variable', 'open_ensemble', 'run_chunks', 'run_ensemble',
+           'run_ensemble_to_store', 'run_fingerprint']

@@ -38,11 +38,13 @@ def run_chunks(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
                euler0: VectorsInput = None, n_bodies: int | None = None,
                chunk_size: int | None = None, client: Any = None, fast: bool | None = None,
                skip: Collection[int] = frozenset(), threads: int | None = None,
-               max_in_flight: int | None = None) -> Iterator[ChunkResult]:
+               max_in_flight: int | None = None,
+               euler_angles: bool = True) -> Iterator[ChunkResult]:
     """
     Yield the results of the ensemble's chunks as they finish (in any order).
 
-    Inputs as :func:`tumble_ros.core.simulate_ensemble`. ``client``: a Dask
+    Inputs and ``euler_angles`` as :func:`tumble_ros.core.simulate_ensemble` (each chunk's
+    call gets them). ``client``: a Dask
     ``distributed.Client`` (None: the chunks run here one after the other, each on ``threads``
     threads, default all cores: :func:`tumble_ros.core.iter_chunks`). Chunks whose index is in
     ``skip`` are not run. With a client at most ``max_in_flight`` tasks (default: twice the
@@ -54,15 +56,15 @@ def run_chunks(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
     if client is None:
         yield from iter_chunks(scenario, t_eval, impacts=impacts, omega0=omega0, euler0=euler0,
                                n_bodies=n_bodies, chunk_size=chunk_size, fast=fast, skip=skip,
-                               threads=threads)
+                               threads=threads, euler_angles=euler_angles)
         return
     plan = plan_chunks(scenario, t_eval, impacts=impacts, omega0=omega0, euler0=euler0,
                        n_bodies=n_bodies, chunk_size=chunk_size, workers=workers_of(client),
                        skip=skip)
     yield from map_as_completed(
         client, run_chunk,
-        [(scenario, plan.times, task.inputs, task.index, task.start, task.stop, fast, 1)
-         for task in plan.tasks],
+        [(scenario, plan.times, task.inputs, task.index, task.start, task.stop, fast, 1,
+          euler_angles) for task in plan.tasks],
         names=[f'chunk-{task.index}' for task in plan.tasks], max_in_flight=max_in_flight)
 
 
@@ -71,11 +73,12 @@ def run_ensemble(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
                  euler0: VectorsInput = None, n_bodies: int | None = None,
                  fast: bool | None = None, progress: Progress | None = None,
                  threads: int | None = None, client: Any = None,
-                 chunk_size: int | None = None) -> EnsembleResult:
+                 chunk_size: int | None = None, euler_angles: bool = True) -> EnsembleResult:
     """
     Return an ensemble's result in memory, run in this process or as chunks on ``client``.
 
-    Inputs as :func:`tumble_ros.core.simulate_ensemble` (which this is, with ``client=None``).
+    Inputs and ``euler_angles`` as :func:`tumble_ros.core.simulate_ensemble` (which this is,
+    with ``client=None``).
     ``client``: a Dask ``distributed.Client`` (:func:`~.dask_engine.dask_client`): the bodies
     are cut into chunks of ``chunk_size`` (default
     :func:`tumble_ros.core.propagation.ensemble.default_chunk_size`), each integrated in a task
@@ -87,13 +90,13 @@ def run_ensemble(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *,
     if client is None:
         return simulate_ensemble(scenario, t_eval, impacts=impacts, omega0=omega0,
                                  euler0=euler0, n_bodies=n_bodies, fast=fast,
-                                 progress=progress, threads=threads)
+                                 progress=progress, threads=threads, euler_angles=euler_angles)
     start = time.perf_counter()
     parts: dict[int, EnsembleResult] = {}
     done, steps, total = 0, 0, None
     for chunk in run_chunks(scenario, t_eval, impacts=impacts, omega0=omega0, euler0=euler0,
                             n_bodies=n_bodies, chunk_size=chunk_size, client=client,
-                            fast=fast):
+                            fast=fast, euler_angles=euler_angles):
         parts[chunk.index] = chunk.result
         done += chunk.stop - chunk.start
         steps += int(chunk.result.n_steps.sum())

@@ -7,7 +7,8 @@ its full shape, every finished chunk is written into its region and marked done,
 holds only the chunks in flight, whatever N. Run again with the same store and the same run
 (checked by a fingerprint of the scenario, sample times, inputs, N and chunk size), it skips
 the chunks marked done. A body that fails (a diverging state, a collapsing step) is stored
-with status 'failed' and its reason; it does not stop the run.
+with status 'failed' and its reason; it does not stop the run. A run without Euler angles
+(``euler_angles=False``) writes no ``euler`` array and records why (:data:`EULER_LEFT_OUT`).
 """
 from __future__ import annotations
 
@@ -34,6 +35,9 @@ __all__ = ['EnsembleRunSummary', 'run_ensemble_to_store', 'run_fingerprint']
 
 #: Failed bodies listed by name in a summary.
 MAX_LISTED_FAILURES = 10
+#: How a run without Euler angles left them out: what reading them from its store says.
+EULER_LEFT_OUT = ('the run left out the Euler angles (euler_angles=False, the ensemble '
+                  "command's --no-euler-angles); run it again without that option to have them")
 
 
 @dataclass(frozen=True)
@@ -106,9 +110,13 @@ def _digest(value: object) -> str:
 
 
 def run_fingerprint(scenario: Scenario, times: npt.NDArray[np.float64], inputs: Inputs,
-                    n_bodies: int,
-                    chunk_size: int) -> str:
-    """Return the hash that identifies a run in its store (what a restart must match)."""
+                    n_bodies: int, chunk_size: int, euler_angles: bool = True) -> str:
+    """
+    Return the hash that identifies a run in its store (what a restart must match).
+
+    ``euler_angles`` False enters the hash; True does not (the hash of stores written before
+    the choice existed, which have the Euler angles).
+    """
     h = hashlib.sha256()
     h.update(dump_scenario(scenario).encode())
     h.update(np.ascontiguousarray(times, dtype=float).tobytes())
@@ -118,6 +126,8 @@ def run_fingerprint(scenario: Scenario, times: npt.NDArray[np.float64], inputs: 
         h.update((json.dumps(_describe(value), sort_keys=True) if value is None or is_dataclass(
             value) else _digest(value)).encode())
     h.update(f'{n_bodies}/{chunk_size}'.encode())
+    if not euler_angles:
+        h.update(b'without euler angles')
     return h.hexdigest()
 
 
@@ -135,14 +145,16 @@ def run_ensemble_to_store(scenario: Scenario, store: str | Path, *,
                           t_eval: npt.ArrayLike | None = None, chunk_size: int | None = None,
                           client: Any = None, fast: bool | None = None,
                           threads: int | None = None, overwrite: bool = False,
-                          progress: Progress | None = None) -> EnsembleRunSummary:
+                          progress: Progress | None = None,
+                          euler_angles: bool = True) -> EnsembleRunSummary:
     """
     Integrate an ensemble chunk by chunk into the Zarr store ``store``; return a summary.
 
     Parameters
     ----------
-    scenario, t_eval, n_bodies, impacts, omega0, euler0, fast
-        As :func:`tumble_ros.core.simulate_ensemble`: ``impacts`` a :class:`RandomImpacts` or
+    scenario, t_eval, n_bodies, impacts, omega0, euler0, fast, euler_angles
+        As :func:`tumble_ros.core.simulate_ensemble` (``euler_angles`` False: the store gets
+        no ``euler``, and says why when it is read): ``impacts`` a :class:`RandomImpacts` or
         per-body Impact sequences, ``omega0`` [rad/yr, body axes] and ``euler0`` [rad] a
         :class:`GaussianSpread` or (N, 3) arrays; samples at ``t_eval`` [yr] (default the
         scenario's output grid).
@@ -171,20 +183,20 @@ def run_ensemble_to_store(scenario: Scenario, store: str | Path, *,
     path = Path(store)
     with store_lock(path):
         return _run_locked(scenario, path, times, n, inputs, chunk_size, client, fast, threads,
-                           overwrite, progress, start)
+                           overwrite, progress, start, euler_angles)
 
 
 def _run_locked(scenario: Scenario, path: Path, times: npt.NDArray[np.float64], n: int,
                 inputs: Inputs, chunk_size: int | None, client: Any, fast: bool | None,
                 threads: int | None, overwrite: bool, progress: Progress | None,
-                start: float) -> EnsembleRunSummary:
+                start: float, euler_angles: bool) -> EnsembleRunSummary:
     """:func:`run_ensemble_to_store` once it holds the store's lock."""
     resuming = path.exists() and not overwrite
     if resuming:
         existing = EnsembleStore(path)
         size = existing.chunk_size if chunk_size is None else int(chunk_size)
         out = EnsembleStore.resume(path, fingerprint=run_fingerprint(scenario, times, inputs, n,
-                                                                     size))
+                                                                     size, euler_angles))
     else:
         size = default_chunk_size(n, times.size, workers_of(client)) if chunk_size is None \
             else int(chunk_size)
@@ -193,10 +205,11 @@ def _run_locked(scenario: Scenario, path: Path, times: npt.NDArray[np.float64], 
                  'inputs': json.dumps({k: _describe(v) for k, v in inputs.items()}),
                  'duration_yr': float(scenario.duration),
                  'integrator': scenario.integrator.method,
-                 'fingerprint': run_fingerprint(scenario, times, inputs, n, size),
+                 'fingerprint': run_fingerprint(scenario, times, inputs, n, size, euler_angles),
                  'created_utc': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}
         out = EnsembleStore.create(path, n_bodies=n, times=times, chunk_size=size, attrs=attrs,
-                                   overwrite=overwrite)
+                                   overwrite=overwrite,
+                                   left_out=None if euler_angles else {'euler': EULER_LEFT_OUT})
     done = out.done()
     skip = frozenset(np.flatnonzero(done).tolist())
     written = int(sum(min(n, (i + 1) * size) - i * size for i in skip))
@@ -204,7 +217,7 @@ def _run_locked(scenario: Scenario, path: Path, times: npt.NDArray[np.float64], 
     for chunk in run_chunks(scenario, times, impacts=inputs['impacts'],
                             omega0=inputs['omega0'], euler0=inputs['euler0'], n_bodies=n,
                             chunk_size=size, client=client, fast=fast, skip=skip,
-                            threads=threads):
+                            threads=threads, euler_angles=euler_angles):
         r = chunk.result
         out.write_chunk(chunk.index, chunk.start, {
             'omega': r.omega, 'euler': r.euler, 'quaternion': r.quaternion, 'jacobi': r.jacobi,
