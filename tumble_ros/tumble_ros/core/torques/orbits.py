@@ -28,7 +28,8 @@ from a starter that converges for every e in range (Danby 1987 for the ellipse, 
 offset; for the hyperbola the smaller of the logarithmic starter and the root of the
 equation's cubic approximation, close to the solution near a parabola's pericentre) to a few
 ulp, or until the residual is rounding noise; the solvers are compiled (``core.jit``) and
-called by the torque function inside the integrators' loops (:func:`.perturbers.kepler_perturber_torque`: a Kepler orbit is a perturber's source).
+called by the torque function inside the integrators' loops
+(:func:`.perturbers.kepler_perturber_torque`: a Kepler orbit is a perturber's source).
 """
 from __future__ import annotations
 
