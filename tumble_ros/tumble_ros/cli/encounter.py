@@ -27,12 +27,9 @@ from typing import Sequence
 
 import numpy as np
 
-from tumble_ros.analysis.encounter import (draw_encounter, encounter_ensemble,
-                                           format_encounter)
-from tumble_ros.analysis.figures import check_outputs, write_files
+from tumble_ros.analysis.figure_files import check_outputs, write_files
 from tumble_ros.cli.engine import add_engine_arguments, engine, Interrupted, interrupts
 from tumble_ros.core import load_scenario, ScenarioError
-from tumble_ros.ensembles import run_ensemble
 from tumble_ros.errors import TumbleRosError
 from tumble_ros.topics import SIM_NODE_PARAMETERS
 
@@ -84,6 +81,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if sc.primary_orbit is None or sc.primary_orbit.e <= 1.0:
             raise ScenarioError(f'{args.config}: needs an orbit.kind: flyby (a hyperbolic '
                                 'orbit); this scenario has none')
+        # imported once the input is accepted: a refusal does not wait for matplotlib
+        from tumble_ros.analysis.encounter import (draw_encounter, encounter_ensemble,
+                                                   format_encounter)
+        from tumble_ros.ensembles import run_ensemble
         with interrupts():
             with engine(args) as client:
                 result = encounter_ensemble(sc, args.bodies, seed=args.seed,
