@@ -18,14 +18,15 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'tumble_ros'
 ALLOWED = {
     'errors': set(),
     'topics': set(),
+    'exits': set(),
     'core': {'errors'},
     'io': {'errors', 'topics'},
     'runs': {'errors', 'topics', 'core', 'io'},
     'ensembles': {'errors', 'core', 'io', 'runs'},
-    'analysis': {'errors', 'topics', 'core', 'io'},
-    'cli': {'errors', 'topics', 'core', 'runs', 'ensembles', 'analysis'},
+    'analysis': {'errors', 'topics', 'core', 'io', 'exits'},
+    'cli': {'errors', 'topics', 'core', 'runs', 'ensembles', 'analysis', 'exits'},
     'nodes': {'errors', 'topics', 'core', 'io', 'runs'},
-    '__main__': {'nodes', 'analysis', 'cli', 'runs', 'io'},
+    '__main__': {'nodes', 'analysis', 'cli', 'runs', 'io', 'exits'},
     '__init__': set(),
 }
 

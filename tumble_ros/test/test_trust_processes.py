@@ -263,6 +263,34 @@ def test_a_closed_pipe_ends_bringup_quietly_with_the_recording_finalised(tmp_pat
     assert summarize(output).finalised
 
 
+@pytest.mark.parametrize('module, args', [
+    ('tumble_ros.cli.ensemble', ['fig9.yaml', '--bodies', '30', '--duration', '0.01']),
+    ('tumble_ros.cli.encounter', ['apophis_2029.yaml', '--bodies', '4', '--inertia-draws', '1']),
+    ('tumble_ros.analysis', [Path(__file__).resolve().parent / 'data' / 'golden.mcap']),
+], ids=['ensemble', 'encounter', 'analysis'])
+def test_a_closed_pipe_ends_each_commands_module_entry_quietly(tmp_path, module, args):
+    """
+    ``python -m tumble_ros.cli.ensemble ... | head -1``: exit 141, no traceback.
+
+    The documented module entries called ``main`` directly and printed a BrokenPipeError
+    traceback (exit 1); the installed executables (``python -m tumble_ros ensemble``) did not.
+    """
+    import subprocess
+    import sys
+
+    args = [CONFIG / a if str(a).endswith('.yaml') else a for a in args]
+    read, write = os.pipe()
+    os.close(read)          # the reader has gone before anything is written
+    with open(tmp_path / 'stderr.log', 'w') as err:
+        run = subprocess.run([sys.executable, '-m', module, *map(str, args), '--quiet'],
+                             stdout=write, stderr=err, stdin=subprocess.DEVNULL, timeout=SLOW,
+                             start_new_session=True, cwd=tmp_path)
+    os.close(write)
+    stderr = (tmp_path / 'stderr.log').read_text()
+    assert run.returncode == 141, stderr
+    assert 'Traceback' not in stderr and 'BrokenPipeError' not in stderr, stderr
+
+
 @pytest.mark.parametrize('name', ['sim', 'bringup'])
 def test_an_option_after_ros_args_is_one_line_naming_it(spawn, name):
     run = spawn(name, '--ros-args', '-p', 'duration:=0.1', '--output', 'x.mcap', module=True)

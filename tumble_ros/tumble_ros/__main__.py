@@ -43,6 +43,8 @@ import sys
 import threading
 from typing import Any
 
+from tumble_ros.exits import BROKEN_PIPE_EXIT, call_closing_quietly
+
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
 EXECUTABLES = {
     'sim': 'tumble_ros.nodes.sim:main',
@@ -57,8 +59,6 @@ EXECUTABLES = {
 BARE_ARGV = frozenset({'ensemble', 'encounter'})
 #: The nodes: they exit 0 when a signal stops them.
 NODES = frozenset({'sim', 'comparator', 'recorder'})
-#: Exit code after a closed pipe, as a shell reports a process killed by SIGPIPE.
-BROKEN_PIPE_EXIT = 128 + signal.SIGPIPE
 
 
 def run_executable(name: str, args: list[str], **options: Any) -> int:
@@ -79,23 +79,8 @@ def run_executable(name: str, args: list[str], **options: Any) -> int:
             return 0 if name in NODES else 128 + signal.SIGINT
         if early.requested:         # stopped while importing: nothing was started
             return 0 if name in NODES else early.exit_code
-        try:
-            code = target(args if name in BARE_ARGV else [name, *args], **options) or 0
-            sys.stdout.flush()    # a closed pipe is seen here, not in the interpreter's exit
-            return code
-        except BrokenPipeError:
-            return _quiet_broken_pipe()
-
-
-def _quiet_broken_pipe() -> int:
-    """After EPIPE: no more output (the interpreter's last flush would raise again)."""
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            os.dup2(devnull, stream.fileno())
-        except (OSError, ValueError):
-            pass
-    return BROKEN_PIPE_EXIT
+        return call_closing_quietly(target, args if name in BARE_ARGV else [name, *args],
+                                    **options)
 
 
 def entry() -> int:

@@ -331,4 +331,6 @@ def main(args: list[str] | None = None) -> int:
 
 
 if __name__ == '__main__':
-    sys.exit(main())
+    from tumble_ros.exits import call_closing_quietly     # a closed pipe: 141, quietly
+
+    sys.exit(call_closing_quietly(main, sys.argv))

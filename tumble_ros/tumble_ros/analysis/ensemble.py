@@ -213,4 +213,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == '__main__':  # pragma: no cover
-    sys.exit(main())
+    from tumble_ros.exits import call_closing_quietly     # a closed pipe: 141, quietly
+
+    sys.exit(call_closing_quietly(main, sys.argv[1:]))

@@ -109,6 +109,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (TumbleRosError, ValueError) as err:
         print(f'error: {err}', file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        raise                   # stdout's reader has gone: the caller ends quietly (141)
     except OSError as err:
         print(f'error: cannot write to {args.out}: {err.strerror or err}', file=sys.stderr)
         return 2
@@ -133,4 +135,6 @@ def _arrays(result) -> bytes:
 
 
 if __name__ == '__main__':  # pragma: no cover
-    sys.exit(main())
+    from tumble_ros.exits import call_closing_quietly     # a closed pipe: 141, quietly
+
+    sys.exit(call_closing_quietly(main, sys.argv[1:]))
