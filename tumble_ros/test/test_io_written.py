@@ -122,9 +122,13 @@ def test_a_recording_from_memory_is_the_recording_read_back(tmp_path, config):
     result = run_bringup(str(CONFIG / f'{config}.yaml'), str(output), progress=None,
                          offline=True, keep=keep)
     assert result.ok, result
-    from_file = load_recording(output)
-    from_memory = load_recording(output, written=keep)
+    read, gathered = [], []
+    from_file = load_recording(output, progress=lambda *done: read.append(done))
+    from_memory = load_recording(output, written=keep,
+                                 progress=lambda *done: gathered.append(done))
     _assert_same_recording(from_file, from_memory)
+    # progress reports reading: none when nothing is read (the main job printed "reading: N%")
+    assert read and read[-1][0] == read[-1][1] and gathered == []
     assert from_file.n > 100 and from_file.has_comparator and from_file.scenario is not None
     assert len(from_file.quaternion_t) == from_file.n and len(from_file.error_t) > 100
     if config == 'fig10':
