@@ -30,8 +30,6 @@ from tumble_ros.core.torques.perturbers import Perturber
 #: The seed of this file's random inputs: each test draws from a generator of its own, so its
 #: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).
 SEED = 28
-#: The seed of the flyby tests' body.
-FLYBY_BODY_SEED = 28
 
 
 def solid_body(rng, n=300, axes=(0.6, 0.8, 1.0)):
@@ -249,7 +247,7 @@ def _flyby(degree, field=None, **changes):
     """Return a tumbler passed at 3 body radii by a point mass, its field to ``degree``."""
     if field is None:  # one body whatever the tests run before (the flyby's effect depends on
         # it: the energy changes by 3e-6 to 1e-3 of itself over seeds 0-9)
-        m, q = solid_body(np.random.default_rng(FLYBY_BODY_SEED), 300, axes=(0.5, 0.8, 1.0))
+        m, q = solid_body(np.random.default_rng(SEED), 300, axes=(0.5, 0.8, 1.0))
         field = GravityField.from_point_masses(m, q, 4, float(np.linalg.norm(q, axis=1).max()))
     inertia = tuple(np.array(field.principal_moments) / field.principal_moments[2])
     # GM 4e6 km^3/yr^2 (the orbit takes km^3/s^2), pericentre a (e - 1) = 3 body radii
