@@ -178,3 +178,49 @@ def test_without_euler_angles_every_other_output_keeps_its_bits(monkeypatch, met
     assert bare.euler.shape == full.euler.shape and np.isnan(bare.euler).all()
     # the track's dense outputs are evaluations too: rk4's and dop853's counts may only drop
     assert (bare.nfev <= full.nfev).all()
+
+
+class _Spy:
+    """A compiled loop whose loads (``compile``) and calls record numba's argument types."""
+
+    def __init__(self, loop):
+        self.loop, self.loaded, self.called = loop, set(), set()
+
+    def compile(self, signature):  # noqa: A003 - the name numba's dispatchers have
+        self.loaded.add(tuple(signature))
+        return self.loop.compile(signature)
+
+    def __call__(self, *args):
+        import numba
+
+        self.called.add(tuple(numba.typeof(a) for a in args))
+        return self.loop(*args)
+
+    def __getattr__(self, name):        # signatures, overloads: as the loop's
+        return getattr(self.loop, name)
+
+
+@needs_numba
+@pytest.mark.parametrize('loop', ['lockstep', 'per-body'])
+@pytest.mark.parametrize('threads', [1, 2])
+def test_the_loops_are_loaded_before_the_timing_for_the_types_they_are_called_with(
+        monkeypatch, loop, threads):
+    """
+    ``wall_time`` leaves out numba's first load of the loops.
+
+    That load took ~0.7 s at N = 100, and the ensemble command printed ~2e3 body-steps/s for
+    ~3e5. The loops are loaded (``jit.load_for``) for the argument types their calls then
+    dispatch on; another type would load or compile them again inside the timing.
+    """
+    if loop == 'per-body':
+        per_body(monkeypatch)
+    names = ('block_init', 'block_advance') if loop == 'lockstep' else (
+        'ensemble_init', 'ensemble_advance')
+    real = kernels.loops('splitting')
+    spies = {name: _Spy(getattr(real, name)) for name in names}
+    monkeypatch.setattr(kernels, 'loops', lambda name: real._replace(**spies))
+    sc = fig9('splitting', duration=0.1, output_interval=0.05)
+    omega0, euler0 = spread(sc, 7, seed=5)
+    simulate_ensemble(sc, omega0=omega0, euler0=euler0, threads=threads)
+    for name, spy in spies.items():
+        assert spy.called and spy.called == spy.loaded, (name, spy.called, spy.loaded)

@@ -46,7 +46,7 @@ from tumble_ros.core import kernels as K
 from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.integrators.base import Stepper
 from tumble_ros.core.integrators.compiled import failure_message, why_no_fast_path
-from tumble_ros.core.jit import first_use
+from tumble_ros.core.jit import first_use, load_for
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS, jacobi_integral
 from tumble_ros.core.model.limits import MAX_OMEGA, MAX_ROTATION, step_budget
 from tumble_ros.core.model.rotation import continuous_quaternions, quaternions_to_matrices
@@ -87,7 +87,8 @@ class EnsembleResult:
     success : (N,) bool; a failed body's rows after its last good sample are NaN.
     messages : N strings, why each failed body failed (empty on success).
     n_steps, nfev : (N,) integration steps and right-hand-side (torque) evaluations.
-    wall_time : seconds spent integrating (set-up and post-processing excluded).
+    wall_time : seconds spent integrating (set-up, numba's first load or compilation of the
+        loops and post-processing excluded).
     compiled : whether the compiled ensemble loop ran (else one simulate() per body).
     euler_angles : whether the run followed the Euler angles (``simulate_ensemble``'s
         ``euler_angles``); False: ``euler`` is a read-only view of one NaN, left out when the
@@ -569,18 +570,22 @@ def _ensemble_compiled(scenario: Scenario, times: FloatArray, n: int,
     edges = np.linspace(0, n, n_blocks + 1).astype(np.int64)
     blocks = list(zip(edges[:-1].tolist(), edges[1:].tolist()))
 
-    start = time.perf_counter()
     kernel = K.kernel_name(cfg)
-    with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool, \
-            first_use(K.loops(kernel).ensemble_advance, f'{kernel} ensemble loops'):
-        list(pool.map(lambda blk: K.ensemble_init(extra, cfg, probs, seg_t, seg_ptr, states, *blk),
-                      blocks))
-        t_end = float(times[-1])
+    lp = K.loops(kernel)
+    t_end = float(times[-1])
+    with first_use(lp.ensemble_advance, f'{kernel} ensemble loops'):   # outside the timing
+        load_for(lp.ensemble_init, extra, cfg, probs, seg_t, seg_ptr, states, *blocks[0])
+        load_for(lp.ensemble_advance, extra, cfg, probs, seg_t, seg_ptr, cur, states, tracks,
+                 t_end, times, y_out, e_out, k_out, steps, *blocks[0])
+    start = time.perf_counter()
+    with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool:
+        list(pool.map(lambda blk: lp.ensemble_init(extra, cfg, probs, seg_t, seg_ptr, states,
+                                                   *blk), blocks))
         stops = [t_end * (c + 1) / checkpoints for c in range(checkpoints - 1)] + [t_end]
         for c, t_stop in enumerate(stops):
-            list(pool.map(lambda blk: K.ensemble_advance(extra, cfg, probs, seg_t, seg_ptr, cur,
-                                                         states, tracks, t_stop, times, y_out,
-                                                         e_out, k_out, steps, *blk),
+            list(pool.map(lambda blk: lp.ensemble_advance(extra, cfg, probs, seg_t, seg_ptr, cur,
+                                                          states, tracks, t_stop, times, y_out,
+                                                          e_out, k_out, steps, *blk),
                           blocks))
             if progress is not None:
                 progress((c + 1) / len(stops), t_stop, int(steps.sum()))
@@ -732,12 +737,17 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
         block_advance(extra, cfg, probs, seg_t, soa[i], tmp, bodies[i], counters[i], bst[i],
                       tracks[i], t_stop, times, y_out, e_out, i * size, counts[i])
 
+    t_end = float(times[-1])
+    with first_use(block_advance, f'{kernel} lockstep loops'):      # outside the timing
+        load_for(block_init, extra, cfg, probs, seg_t, soa[0], bodies[0], counters[0], bst[0],
+                 counts[0])
+        load_for(block_advance, extra, cfg, probs, seg_t, soa[0], np.empty((K.BT.SIZE, size)),
+                 bodies[0], counters[0], bst[0], tracks[0], t_end, times, y_out, e_out, 0,
+                 counts[0])
     start = time.perf_counter()
     threads = min(threads, n_blocks)
-    with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool, \
-            first_use(block_advance, f'{kernel} lockstep loops'):
+    with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool:
         list(pool.map(init, range(n_blocks)))
-        t_end = float(times[-1])
         stops = [t_end * (c + 1) / checkpoints for c in range(checkpoints - 1)] + [t_end]
         for c, t_stop in enumerate(stops):
             list(pool.map(lambda i: advance(i, t_stop), range(n_blocks)))
