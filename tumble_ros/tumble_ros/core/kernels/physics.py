@@ -70,8 +70,9 @@ def plain_torque_given_sun(p: Array, sx: float, sy: float, q0: float, q1: float,
 
     p[PR.HAS_ORBITAL] 0 and ``extra`` None: the gravity gradient plus the body-fixed pulse,
     its operations in its order (the same bits), without its branches. For the loops over a
-    block of bodies (``rk4.block_rhs``): LLVM left torque_given_sun's test of
-    p[PR.HAS_ORBITAL] inside the vectorised loop, ~25 % of a right-hand side.
+    block of bodies (``rk4.block_rhs``, ``splitting.block_step``): LLVM left
+    torque_given_sun's test of p[PR.HAS_ORBITAL] inside the vectorised loop, ~20 % of an rk4
+    right-hand side.
     """
     ux, uy, uz = orbital_to_body(sx, sy, 0.0, q0, q1, q2, q3)
     tx, ty, tz = tidal_torque(p[PR.TIDAL], p[PR.TIDAL + 1], p[PR.TIDAL + 2], ux, uy, uz)
