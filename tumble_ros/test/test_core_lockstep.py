@@ -63,6 +63,31 @@ def test_which_ensembles_are_stepped_in_lockstep():
     assert list(E.ENSEMBLE_LOOPS) == ['lockstep', 'per-body']
 
 
+def test_the_plain_torque_is_the_torque_bit_for_bit():
+    """rk4.block_rhs's torque without branches: torque_given_sun's bits where it is used."""
+    from tumble_ros.core.kernels.physics import plain_torque_given_sun, torque_given_sun
+    from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
+
+    rng = np.random.default_rng(3)
+    # signed zeros: dropping the zero terms (the Sun has no Z' component) would change a sign
+    q = np.vstack([[1.0, 0.0, 0.0, 0.0], [-0.0, -0.0, 1.0, 0.0], rng.normal(size=(60, 4))])
+    times = np.concatenate([[0.25, 0.0], rng.uniform(-3.0, 3.0, size=60)])
+    inertia = (1.0, 1.5, 2.2)
+    for body_pulse in ((0.0, 0.0, 0.0), (3.0, -0.0, -2.5e6)):
+        p = kernels.problem_arrays(inertia, 2 * np.pi, [body_pulse + (0.0, 0.0, 0.0)])[0]
+        assert p[kernels.PR.HAS_ORBITAL] == 0.0
+        for t, (q0, q1, q2, q3) in zip(times, q):
+            sx, sy = sun_in_orbit_plane(2 * np.pi, t)
+            want = torque_given_sun(p, None, t, sx, sy, q0, q1, q2, q3)
+            got = plain_torque_given_sun(p, sx, sy, q0, q1, q2, q3)
+            assert np.array(got).tobytes() == np.array(want).tobytes(), (t, q0, q1, q2, q3)
+    # an orbital-frame pulse is not the plain torque's: block_rhs takes torque_given_sun then
+    p = kernels.problem_arrays(inertia, 2 * np.pi, [(0.0, 0.0, 0.0, 1e6, 0.0, 0.0)])[0]
+    sx, sy = sun_in_orbit_plane(2 * np.pi, 0.3)
+    assert (plain_torque_given_sun(p, sx, sy, *q[5])
+            != torque_given_sun(p, None, 0.3, sx, sy, *q[5]))
+
+
 @needs_numba
 @pytest.mark.parametrize('method, step, inertia', [
     ('splitting', 2e-3, None),              # fig9: symmetric, one axis piece

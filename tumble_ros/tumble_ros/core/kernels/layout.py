@@ -152,7 +152,6 @@ BT = layout('BlockScratch', [
     ('INC', 1, "Euler tracking: the step's angle bound [rad]"),
     ('ACC', 1, '|y|^2 after the step (the finite check)'),
     ('STAGE', N, "rk4: a stage's argument y + a k"),
-    ('TQ', 3, 'rk4: the torque at a stage'),
     ('K2', N, 'rk4: second stage'),
     ('K3', N, 'rk4: third stage'),
     ('K4', N, 'rk4: fourth stage'),

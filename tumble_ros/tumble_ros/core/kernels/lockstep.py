@@ -145,6 +145,34 @@ def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, bodie
 
 
 @jit
+def _fail_bodies(bst: Array, old: Array, new: Array, tmp: Array, bodies: Array,
+                 counters: npt.NDArray[np.int64], code: float, t_good: float, m: int) -> int:
+    """
+    Fail the running bodies whose step failed (all of them if ``code`` is a shared failure).
+
+    A failed body's state goes back to its last good step (``new`` = ``old``) and its
+    counters are kept in ``bodies``; returns how many bodies are still running.
+    """
+    alive = 0
+    for i in range(m):
+        if bodies[BB.FAILED, i] != 0.0:
+            continue
+        if code == FAIL.NONE and tmp[BT.ACC, i] <= BIGGEST:
+            alive += 1
+            continue
+        bodies[BB.FAILED, i] = 1.0
+        bodies[BB.FAIL, i] = FAIL.NONFINITE if code == FAIL.NONE else code
+        bodies[BB.FAIL_T, i] = t_good
+        bodies[BB.FAIL_DT, i] = bst[ST.FAIL_DT] if code == FAIL.COLLAPSE else 0.0
+        bodies[BB.STEPS, i] = counters[LI.STEPS]
+        bodies[BB.NFEV, i] = bst[ST.NFEV_DONE] + bst[ST.NFEV] + bodies[BB.NFEV_ADJ, i]
+        bodies[BB.K, i] = counters[LI.K]
+        for r in range(BK.SIZE):
+            new[r, i] = old[r, i]
+    return alive
+
+
+@jit
 def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                bodies: Array, counters: npt.NDArray[np.int64], m: int) -> bool:
     """
@@ -171,27 +199,18 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
             code = FAIL.COLLAPSE
             bst[ST.FAIL_DT] = bst[ST.TAU] - tau_good
     alive = 0
+    running = 0
     if code == FAIL.NONE:
         for i in range(m):   # finite_norm of every body's y, as stepping.step (vectorised)
             acc = 0.0
             for c in range(N):
                 acc += new[BK.Y + c, i] * new[BK.Y + c, i]
             tmp[BT.ACC, i] = acc
-    for i in range(m):
-        if bodies[BB.FAILED, i] != 0.0:
-            continue
-        if code == FAIL.NONE and tmp[BT.ACC, i] <= BIGGEST:
-            alive += 1
-            continue
-        bodies[BB.FAILED, i] = 1.0
-        bodies[BB.FAIL, i] = FAIL.NONFINITE if code == FAIL.NONE else code
-        bodies[BB.FAIL_T, i] = t_good
-        bodies[BB.FAIL_DT, i] = bst[ST.FAIL_DT] if code == FAIL.COLLAPSE else 0.0
-        bodies[BB.STEPS, i] = counters[LI.STEPS]
-        bodies[BB.NFEV, i] = bst[ST.NFEV_DONE] + bst[ST.NFEV] + bodies[BB.NFEV_ADJ, i]
-        bodies[BB.K, i] = counters[LI.K]
-        for r in range(BK.SIZE):
-            new[r, i] = old[r, i]
+            going = bodies[BB.FAILED, i] == 0.0
+            running += 1 if going else 0
+            alive += 1 if going and acc <= BIGGEST else 0
+    if code != FAIL.NONE or alive < running:   # a body failed: the rare per-body pass
+        alive = _fail_bodies(bst, old, new, tmp, bodies, counters, code, t_good, m)
     if alive == 0:
         bst[ST.T] = t_good
         bst[ST.TAU] = tau_good

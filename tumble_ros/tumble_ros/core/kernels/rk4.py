@@ -20,7 +20,8 @@ import numpy.typing as npt
 
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, BB, BK, BT, CF, Extra, FAIL, N, PR, ST
-from tumble_ros.core.kernels.physics import derivatives, rhs, rhs_called, torque_given_sun
+from tumble_ros.core.kernels.physics import (derivatives, plain_torque_given_sun, rhs, rhs_called,
+                                             torque_given_sun)
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
 
 __all__ = ['step_count', 'stage', 'combine', 'next_tau', 'hermite', 'start', 'step', 'dense',
@@ -137,27 +138,38 @@ def block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array, m: i
 
 
 @jit
-def block_rhs(p: Array, extra: Extra, t: float, y: Array, tq: Array, out: Array,
-              m: int) -> None:
+def block_rhs(p: Array, extra: Extra, t: float, y: Array, out: Array, m: int) -> None:
     """
     Write f(t, y) of m bodies, y in rows 0-6 of ``y``, to rows 0-6 of ``out`` (vectorised).
 
-    Two passes, the torque (to rows 0-2 of ``tq``, the Sun's direction at t once for all)
-    then the derivatives: LLVM vectorises each, not the two in one loop.
+    Two passes, each vectorised by LLVM: the torque (the Sun's direction at t once for all;
+    :func:`~.physics.plain_torque_given_sun` on a segment it covers) and d omega/dt, then
+    dq/dt, which needs no torque (:func:`~.physics.derivatives` in each,
+    the other components left unused: the same operations). All seven derivatives in one
+    pass, reading ten rows and writing seven, LLVM left scalar: too many rows to check for
+    overlap at run time (``inspect_asm``: ``vmulsd``, not ``vmulpd``).
     """
     sx, sy = sun_in_orbit_plane(p[PR.ORBIT_RATE], t)
+    if extra is None and p[PR.HAS_ORBITAL] == 0.0:     # the torque without its branches
+        for i in range(m):
+            tx, ty, tz = plain_torque_given_sun(p, sx, sy, y[3, i], y[4, i], y[5, i], y[6, i])
+            f0, f1, f2, _, _, _, _ = derivatives(p, y[0, i], y[1, i], y[2, i], y[3, i],
+                                                 y[4, i], y[5, i], y[6, i], tx, ty, tz)
+            out[0, i] = f0
+            out[1, i] = f1
+            out[2, i] = f2
+    else:
+        for i in range(m):
+            tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, y[3, i], y[4, i], y[5, i],
+                                          y[6, i])
+            f0, f1, f2, _, _, _, _ = derivatives(p, y[0, i], y[1, i], y[2, i], y[3, i],
+                                                 y[4, i], y[5, i], y[6, i], tx, ty, tz)
+            out[0, i] = f0
+            out[1, i] = f1
+            out[2, i] = f2
     for i in range(m):
-        tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, y[3, i], y[4, i], y[5, i], y[6, i])
-        tq[0, i] = tx
-        tq[1, i] = ty
-        tq[2, i] = tz
-    for i in range(m):
-        f0, f1, f2, f3, f4, f5, f6 = derivatives(p, y[0, i], y[1, i], y[2, i], y[3, i],
-                                                 y[4, i], y[5, i], y[6, i], tq[0, i], tq[1, i],
-                                                 tq[2, i])
-        out[0, i] = f0
-        out[1, i] = f1
-        out[2, i] = f2
+        _, _, _, f3, f4, f5, f6 = derivatives(p, y[0, i], y[1, i], y[2, i], y[3, i], y[4, i],
+                                              y[5, i], y[6, i], 0.0, 0.0, 0.0)
         out[3, i] = f3
         out[4, i] = f4
         out[5, i] = f5
@@ -186,14 +198,13 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
     tau = bst[ST.TAU]
     t0 = bst[ST.T0]
     args = tmp[BT.STAGE:BT.STAGE + N]
-    tq = tmp[BT.TQ:BT.TQ + 3]
-    block_rhs(p, extra, t0 + tau, old[BK.Y:BK.Y + N], tq, old[BK.F:BK.F + N], m)
+    block_rhs(p, extra, t0 + tau, old[BK.Y:BK.Y + N], old[BK.F:BK.F + N], m)
     block_stage(old, old, BK.F, 0.5 * h, tmp, m)
-    block_rhs(p, extra, t0 + (tau + 0.5 * h), args, tq, tmp[BT.K2:BT.K2 + N], m)
+    block_rhs(p, extra, t0 + (tau + 0.5 * h), args, tmp[BT.K2:BT.K2 + N], m)
     block_stage(old, tmp, BT.K2, 0.5 * h, tmp, m)
-    block_rhs(p, extra, t0 + (tau + 0.5 * h), args, tq, tmp[BT.K3:BT.K3 + N], m)
+    block_rhs(p, extra, t0 + (tau + 0.5 * h), args, tmp[BT.K3:BT.K3 + N], m)
     block_stage(old, tmp, BT.K3, h, tmp, m)
-    block_rhs(p, extra, t0 + (tau + h), args, tq, tmp[BT.K4:BT.K4 + N], m)
+    block_rhs(p, extra, t0 + (tau + h), args, tmp[BT.K4:BT.K4 + N], m)
     for c in range(N):
         for i in range(m):
             new[BK.Y + c, i] = combine(old[BK.Y + c, i], old[BK.F + c, i], tmp[BT.K2 + c, i],

@@ -14,7 +14,8 @@ import numpy as np
 from tumble_ros.core.jit import called, jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, BK, BT, CF, Extra, FAIL, N, PR, ST
 from tumble_ros.core.kernels.physics import (axis_turn, body_torque, flow_pieces, free_flow,
-                                             pi_turn, torque_given_sun)
+                                             pi_turn, plain_torque_given_sun,
+                                             torque_given_sun)
 from tumble_ros.core.kernels.rk4 import step_count
 from tumble_ros.core.kernels.trig import REDUCED_LIMIT, sin_cos_reduced
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
@@ -244,7 +245,8 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
     :func:`flow`'s operations in its order, cut into passes over the bodies, each vectorised
     by LLVM: kick and the |pi| angle; sin/cos (:func:`block_sincos`); the turn about pi and the
     first axis angle; per axis piece sin/cos and the turn; the torque (the Sun's direction once
-    for all bodies) and the second kick.
+    for all bodies; :func:`~.physics.plain_torque_given_sun` on a segment it covers) and the
+    second kick.
     """
     h = bst[ST.H]
     tau = bst[ST.TAU]
@@ -302,15 +304,28 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
             block_axis(new, tmp, first, m, -1, 0.0, 0.0)
         t = t0 + (tau + cfg[CF.CUM + j] * h)
         sx, sy = sun_in_orbit_plane(p[PR.ORBIT_RATE], t)
-        for i in range(m):
-            tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, new[BK.Y + 3, i],
-                                          new[BK.Y + 4, i], new[BK.Y + 5, i], new[BK.Y + 6, i])
-            new[BK.TORQUE, i] = tx
-            new[BK.TORQUE + 1, i] = ty
-            new[BK.TORQUE + 2, i] = tz
-            new[BK.PI, i] += half * tx
-            new[BK.PI + 1, i] += half * ty
-            new[BK.PI + 2, i] += half * tz
+        if extra is None and p[PR.HAS_ORBITAL] == 0.0:     # the torque without its branches
+            for i in range(m):
+                tx, ty, tz = plain_torque_given_sun(p, sx, sy, new[BK.Y + 3, i],
+                                                    new[BK.Y + 4, i], new[BK.Y + 5, i],
+                                                    new[BK.Y + 6, i])
+                new[BK.TORQUE, i] = tx
+                new[BK.TORQUE + 1, i] = ty
+                new[BK.TORQUE + 2, i] = tz
+                new[BK.PI, i] += half * tx
+                new[BK.PI + 1, i] += half * ty
+                new[BK.PI + 2, i] += half * tz
+        else:
+            for i in range(m):
+                tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, new[BK.Y + 3, i],
+                                              new[BK.Y + 4, i], new[BK.Y + 5, i],
+                                              new[BK.Y + 6, i])
+                new[BK.TORQUE, i] = tx
+                new[BK.TORQUE + 1, i] = ty
+                new[BK.TORQUE + 2, i] = tz
+                new[BK.PI, i] += half * tx
+                new[BK.PI + 1, i] += half * ty
+                new[BK.PI + 2, i] += half * tz
     for i in range(m):
         new[BK.Y, i] = new[BK.PI, i] * p[PR.INV_INERTIA]   # as flow
         new[BK.Y + 1, i] = new[BK.PI + 1, i] * p[PR.INV_INERTIA + 1]

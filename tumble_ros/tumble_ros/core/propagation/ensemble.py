@@ -673,8 +673,8 @@ def _result(scenario: Scenario, times: FloatArray, y_out: FloatArray, e_out: Flo
 POST_SAMPLES = 2**16
 
 
-#: Bodies per block of the lockstep loop: its buffers, (2 x 13 + 6 + 8) x 8 bytes a body, stay
-#: in the core's L2 cache.
+#: Bodies per block of the lockstep loop: its buffers, (2 K.BK.SIZE + K.BT.SIZE + K.BB.SIZE) x 8
+#: bytes a body (672: 168 KB a block), stay in the core's L2 cache.
 BLOCK_BODIES = 256
 
 
