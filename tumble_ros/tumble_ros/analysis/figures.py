@@ -47,6 +47,7 @@ import io
 import os
 from pathlib import Path
 
+import matplotlib
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MaxNLocator
@@ -148,8 +149,41 @@ def _t(value: float, unit: DisplayUnits, digits: int = 4) -> str:
 
 def _png(fig: Figure, name: str) -> Drawing:
     buffer = io.BytesIO()
+    _lay_out(fig)
     fig.savefig(buffer, format='png')
     return name, buffer.getvalue()
+
+
+def _lay_out(fig: Figure) -> None:
+    """
+    Place the axes of ``fig`` by its layout engine now, then turn the engine off.
+
+    ``savefig`` on a figure with a layout engine (our constrained layout) draws it twice: once
+    with the renderer's drawing methods disabled, to run the layout (the aspect of each axes
+    applied, the engine executed), then again for the pixels. The first draw also walks every
+    artist for nothing (ticks, texts, lines, the density image resampled): 0.1 s of the
+    windows figure. Here the aspect is applied and the engine executed as that first draw
+    does, in the same order and with the same renderer (the canvas's), and savefig then draws
+    once: the same PNG bytes, every figure of several runs (tests/test_figure_layout.py).
+    Left to savefig as before when the rc parameters make savefig crop the figure
+    (``savefig.bbox: tight``: it draws first anyway) or force a layout engine.
+    """
+    engine = fig.get_layout_engine()
+    if engine is None or not _single_draw_ok():
+        return
+    renderer = fig.canvas.get_renderer()
+    for ax in fig.axes:             # as Figure.draw does before its layout engine runs
+        locator = ax.get_axes_locator()
+        ax.apply_aspect(locator(ax, renderer) if locator else None)
+    engine.execute(fig)
+    fig.set_layout_engine(None)     # laid out: savefig's single draw applies the aspect again
+
+
+def _single_draw_ok() -> bool:
+    """Tell whether savefig draws once on a figure without layout engine (the rc defaults)."""
+    rc = matplotlib.rcParams
+    return (rc['savefig.bbox'] is None and not rc['figure.autolayout']
+            and not rc['figure.constrained_layout.use'])
 
 
 def _label(rec: Recording) -> str:
