@@ -61,7 +61,7 @@ from .impacts import impact_intervals
 from .recording import Recording, ROOT_NAMESPACE
 from .spectrum import spectrum
 from .spin import closest_approach
-from .summary import AnalysisSummary, analyze
+from .summary import AnalysisSummary, analyze, SummaryParts
 from .theory import theory_lines
 from .timeaxis import runs
 
@@ -545,7 +545,8 @@ def plot_spectrum(rec: Recording, out_dir: str | os.PathLike[str],
     return write_files(_draw_spectrum(rec, summary), out_dir, overwrite)
 
 
-def _draw_spectrum(rec: Recording, summary: AnalysisSummary | None) -> list[Drawing]:
+def _draw_spectrum(rec: Recording, summary: AnalysisSummary | SummaryParts | None
+                   ) -> list[Drawing]:
     if summary is not None:
         spec, lines = summary.spectrum, list(summary.theory)
     else:
@@ -594,13 +595,15 @@ def _line_style(k: int) -> tuple[str, str]:
     return _LINE_COLORS[k % len(_LINE_COLORS)], _LINE_STYLES[k % len(_LINE_STYLES)]
 
 
-def _departure_of(summary: AnalysisSummary) -> float | None:
+def _departure_of(summary: AnalysisSummary | SummaryParts) -> float | None:
     return summary.comparator.t_departure if summary.comparator is not None else None
 
 
 #: The figures :func:`write_figures` draws, in the order they are written: name -> drawer of
-#: (recording, its summary) -> the drawings (none when the recording lacks what it needs).
-FIGURES: dict[str, Callable[[Recording, AnalysisSummary], list[Drawing]]] = {
+#: (recording, its summary) -> the drawings (none when the recording lacks what it needs). The
+#: summary may be its :class:`~.summary.SummaryParts`: the same values (the main job's figures
+#: start before the analysis, :mod:`.figure_pool`).
+FIGURES: dict[str, Callable[[Recording, AnalysisSummary | SummaryParts], list[Drawing]]] = {
     'omega': lambda rec, summary: _draw_angular_velocity(rec, _departure_of(summary)),
     'omega_windows': lambda rec, summary: _draw_omega_windows(rec),
     'wy_vs_wx': lambda rec, summary: _draw_wy_vs_wx(rec),
@@ -610,7 +613,7 @@ FIGURES: dict[str, Callable[[Recording, AnalysisSummary], list[Drawing]]] = {
 }
 
 
-def draw_figures(rec: Recording, summary: AnalysisSummary,
+def draw_figures(rec: Recording, summary: AnalysisSummary | SummaryParts,
                  names: Iterable[str] = tuple(FIGURES)) -> dict[str, list[Drawing]]:
     """Draw the figures ``names`` (keys of :data:`FIGURES`); return name -> its drawings."""
     return {name: FIGURES[name](rec, summary) for name in names}
