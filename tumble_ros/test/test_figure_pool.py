@@ -8,6 +8,7 @@ the errors of the in-process path (existing files, an error raised in a helper);
 job's process never imports matplotlib.
 """
 import dataclasses
+import gc
 import os
 from pathlib import Path
 import signal
@@ -121,6 +122,22 @@ def test_the_figures_started_before_the_analysis_are_the_same(tmp_path, recordin
         assert _files(pool.finish(pending, tmp_path / 'pool')) == _files(here)
         assert _files(pool.finish(other, tmp_path / 'other')) == _files(
             write_figures(recordings[1], tmp_path / 'here1', analyze(recordings[1])))
+
+
+def test_the_worker_draws_with_its_warm_state_frozen_and_the_collector_off(tmp_path,
+                                                                          recordings):
+    """Its warm-up frozen, the collector off from its first drawing on (the same bytes)."""
+    rec = recordings[1]
+    summary = analyze(rec)
+    with FigurePool.start(2) as pool:
+        ask = pool._executor.submit
+        assert ask(gc.isenabled).result() and ask(gc.get_freeze_count).result() > 0
+        there = pool.write_figures(rec, tmp_path / 'pool', summary)
+        assert not ask(gc.isenabled).result()
+        again = pool.write_figures(rec, tmp_path / 'again', summary)
+    assert gc.isenabled()                       # this process: as it was
+    here = _files(write_figures(rec, tmp_path / 'here', summary))
+    assert _files(there) == here and _files(again) == here
 
 
 def test_the_pool_refuses_a_negative_shared_size():
