@@ -80,8 +80,7 @@ def _warm(shared: mmap.mmap | None = None) -> None:
     from . import figures
     figures.warm_up()
     _worker = True
-    gc.collect()
-    gc.freeze()         # the warm state: not traversed by the collector again
+    gc.freeze()         # the warm state: never traversed by the collector (no pass over it now)
 
 
 #: Whether this process is a worker (:func:`_warm` ran).
