@@ -109,7 +109,7 @@ def _same(a, b):
 
 
 def test_the_figures_started_before_the_analysis_are_the_same(tmp_path, recordings):
-    """begin with the summary's parts (the main job), finish after analyze: the same files."""
+    """Begun with the summary's parts (the main job), finished after analyze: the same files."""
     rec = recordings[0]
     peaks = 3                   # not analyze's default: the spectrum's markers differ
     summary = analyze(rec, n_peaks=peaks)
@@ -124,8 +124,8 @@ def test_the_figures_started_before_the_analysis_are_the_same(tmp_path, recordin
             write_figures(recordings[1], tmp_path / 'here1', analyze(recordings[1])))
 
 
-def test_the_worker_draws_with_its_warm_state_frozen_and_the_collector_off(tmp_path,
-                                                                          recordings):
+def test_the_worker_draws_with_its_warm_state_frozen_and_the_collector_off(
+        tmp_path, recordings):
     """Its warm-up frozen, the collector off from its first drawing on (the same bytes)."""
     rec = recordings[1]
     summary = analyze(rec)

@@ -303,7 +303,7 @@ class FigurePool:
 
     def finish(self, pending: PendingFigures, out_dir: str | os.PathLike[str], *,
                overwrite: bool = False) -> list[Path]:
-        """Wait for the figures :meth:`begin` started and write them (see :meth:`write_figures`)."""
+        """Wait for the figures :meth:`begin` started; write them (as :meth:`write_figures`)."""
         return write_files(self._drawn(pending), out_dir, overwrite)
 
     def draw(self, rec: Recording, summary: Summary) -> list[Drawing]:
@@ -311,7 +311,7 @@ class FigurePool:
         return self._drawn(self.begin(rec, summary))
 
     def _drawn(self, pending: PendingFigures) -> list[Drawing]:
-        """The drawings of ``pending`` in the files' order (drawn here if the worker died)."""
+        """Return the drawings of ``pending`` in the files' order (here if the worker died)."""
         try:
             if pending.future is None:
                 raise BrokenProcessPool('figure pool: the worker died before the drawing')

@@ -46,6 +46,7 @@ from collections.abc import Callable, Iterable
 import io
 import os
 from pathlib import Path
+from typing import cast
 
 import matplotlib
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -171,10 +172,10 @@ def _lay_out(fig: Figure) -> None:
     engine = fig.get_layout_engine()
     if engine is None or not _single_draw_ok():
         return
-    renderer = fig.canvas.get_renderer()
+    renderer = cast(FigureCanvasAgg, fig.canvas).get_renderer()
     for ax in fig.axes:             # as Figure.draw does before its layout engine runs
         locator = ax.get_axes_locator()
-        ax.apply_aspect(locator(ax, renderer) if locator else None)
+        ax.apply_aspect(locator(ax, renderer) if locator is not None else None)
     engine.execute(fig)
     fig.set_layout_engine(None)     # laid out: savefig's single draw applies the aspect again
 

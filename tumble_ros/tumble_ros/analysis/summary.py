@@ -33,8 +33,8 @@ from .theory import AliasingCheck, check_aliasing, theory_lines, TheoryLine
 from .timeaxis import Sampling, sampling
 
 __all__ = [
-    'AliasingCheck', 'AnalysisSummary', 'SummaryParts', 'ErrorStats', 'ImpactSummary', 'InvariantDrift',
-    'JacobiSegment', 'Peak', 'Sampling', 'Spectrum', 'TheoryLine',
+    'AliasingCheck', 'AnalysisSummary', 'ErrorStats', 'ImpactSummary', 'InvariantDrift',
+    'JacobiSegment', 'SummaryParts', 'Peak', 'Sampling', 'Spectrum', 'TheoryLine',
     'analyze', 'check_aliasing', 'comparator_errors', 'impact_intervals',
     'impact_summaries', 'jacobi_drift', 'sampling', 'spectrum',
     'theory_lines',
