@@ -25,6 +25,11 @@ compiles a loop on its first use), with the exit code it gives when stopped late
 node, 128 + the signal otherwise). A closed stdout or stderr (``bringup | head -1``) ends it
 quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the recording finalised.
 
+The main job imports with the garbage collector off until its figure worker is forked (the
+imports free nothing; :func:`_figure_pool`), numba without coverage and rosidl_generator_py
+without its code generator (:func:`numba_without_coverage`, :func:`rosidl_without_generator`),
+and its figures are drawn while it analyses the recording.
+
 The main job ends its process as soon as it is done (:func:`quick_exit`): the atexit handlers
 run and the standard streams are flushed, but the interpreter's teardown (clearing ~1,200
 modules and collecting what they hold: 0.2-0.35 s of a 4-s Fig 9 run) is left to the OS.

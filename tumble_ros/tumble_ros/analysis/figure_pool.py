@@ -19,7 +19,11 @@ POSIX) :meth:`FigurePool.start` returns None and the figures are drawn in the pr
 worker dies (:class:`~concurrent.futures.process.BrokenProcessPool`) the figures are drawn in
 the process; a helper that dies has its share drawn by the worker. Exceptions raised while
 drawing are raised by :meth:`FigurePool.write_figures`, as in the process. The worker and its
-helpers ignore SIGINT (the main process handles it and ends the pool).
+helpers ignore SIGINT (the main process handles it and ends the pool). :meth:`FigurePool.begin`
+starts the drawing and :meth:`FigurePool.finish` writes it: the main job begins with the
+summary's parts (:class:`~.summary.SummaryParts`, computed by the drawing processes) and
+analyses while the figures are drawn. The worker freezes its warm state and draws with the
+garbage collector off (:func:`_collector_off`).
 
 The recording and its summary reach the worker through memory shared since the fork
 (:data:`SHARED_BYTES` of an anonymous shared mapping, untouched until used): pickled with
@@ -57,10 +61,11 @@ __all__ = ['FigurePool', 'PendingFigures', 'SHARED_BYTES', 'SHARES', 'WORKERS']
 #: Processes drawing at once (the machine measured has two cores; the main process waits).
 WORKERS = 2
 #: The figures of each drawing process (names of :data:`~.figures.FIGURES`), about equal
-#: shares of the drawing time of the Fig 9 run: the windows, wy-vs-wx and the spectrum 1.1 s
-#: against omega, error and the impacts 0.85 s (CPU, warm, 2026-12-04). The worker draws the
-#: first, a helper each other; a figure in no share gets a helper of its own; with one
-#: drawing process the worker draws them all.
+#: shares of the drawing time of the Fig 9 run: the windows, wy-vs-wx and the spectrum
+#: 1.07-1.12 s against omega, error and the impacts 0.99-1.01 s (CPU, load 4.6-4.9,
+#: 2026-12-04 22:08; the most even split measured). The worker draws the first, a helper each
+#: other; a figure in no share gets a helper of its own; with one drawing process the worker
+#: draws them all.
 SHARES: tuple[tuple[str, ...], ...] = (('omega_windows', 'wy_vs_wx', 'spectrum'),
                                        ('omega', 'error', 'impacts'))
 
