@@ -7,18 +7,22 @@ worker or a helper has died, with the recording handed over through shared memor
 the errors of the in-process path (existing files, an error raised in a helper); and the main
 job's process never imports matplotlib.
 """
+import dataclasses
+import gc
 import os
 from pathlib import Path
 import signal
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from tumble_ros.analysis import analyze, figure_pool, load_recording
 from tumble_ros.analysis.figure_files import FigureExistsError
 from tumble_ros.analysis.figure_pool import FigurePool, SHARES
 from tumble_ros.analysis.figures import FIGURES, write_figures
+from tumble_ros.analysis.summary import SummaryParts
 from tumble_ros.core import load_scenario
 from tumble_ros.errors import AnalysisError
 from tumble_ros.runs.offline import record_offline
@@ -79,6 +83,61 @@ def test_the_recording_goes_through_shared_memory_when_it_fits(tmp_path, recordi
     assert submitted == [way, way]
     assert _files(there) == _files(write_figures(rec, tmp_path / 'here', summary))
     assert _files(again) == _files(write_figures(recordings[1], tmp_path / 'here1'))
+
+
+def test_summary_parts_are_the_summarys_values(recordings):
+    """What the figures take from the summary, computed alone, as analyze computes it."""
+    for rec in recordings:
+        summary = analyze(rec, n_peaks=3)
+        parts = SummaryParts(rec, 3)
+        assert parts.comparator is not None and parts.theory and parts.spectrum is not None
+        assert _same(parts.comparator, summary.comparator)
+        assert _same(parts.theory, summary.theory)
+        assert _same(parts.spectrum, summary.spectrum)
+
+
+def _same(a, b):
+    """Equal field by field, arrays bit for bit (NaN where NaN)."""
+    if dataclasses.is_dataclass(a):
+        return type(a) is type(b) and all(_same(getattr(a, f.name), getattr(b, f.name))
+                                          for f in dataclasses.fields(a))
+    if isinstance(a, (tuple, list)):
+        return type(a) is type(b) and len(a) == len(b) and all(map(_same, a, b))
+    if isinstance(a, np.ndarray):
+        return isinstance(b, np.ndarray) and np.array_equal(a, b, equal_nan=a.dtype.kind == 'f')
+    return a == b or (a != a and b != b)        # (NaN: equal here)
+
+
+def test_the_figures_started_before_the_analysis_are_the_same(tmp_path, recordings):
+    """Begun with the summary's parts (the main job), finished after analyze: the same files."""
+    rec = recordings[0]
+    peaks = 3                   # not analyze's default: the spectrum's markers differ
+    summary = analyze(rec, n_peaks=peaks)
+    here = write_figures(rec, tmp_path / 'here', summary)
+    default = write_figures(rec, tmp_path / 'default', analyze(rec))
+    assert _files(here) != _files(default)      # (else this test could not tell them apart)
+    with FigurePool.start(2) as pool:
+        pending = pool.begin(rec, SummaryParts(rec, peaks))
+        other = pool.begin(recordings[1], SummaryParts(recordings[1]))  # beside it: the pipe
+        assert _files(pool.finish(pending, tmp_path / 'pool')) == _files(here)
+        assert _files(pool.finish(other, tmp_path / 'other')) == _files(
+            write_figures(recordings[1], tmp_path / 'here1', analyze(recordings[1])))
+
+
+def test_the_worker_draws_with_its_warm_state_frozen_and_the_collector_off(
+        tmp_path, recordings):
+    """Its warm-up frozen, the collector off from its first drawing on (the same bytes)."""
+    rec = recordings[1]
+    summary = analyze(rec)
+    with FigurePool.start(2) as pool:
+        ask = pool._executor.submit
+        assert ask(gc.isenabled).result() and ask(gc.get_freeze_count).result() > 0
+        there = pool.write_figures(rec, tmp_path / 'pool', summary)
+        assert not ask(gc.isenabled).result()
+        again = pool.write_figures(rec, tmp_path / 'again', summary)
+    assert gc.isenabled()                       # this process: as it was
+    here = _files(write_figures(rec, tmp_path / 'here', summary))
+    assert _files(there) == here and _files(again) == here
 
 
 def test_the_pool_refuses_a_negative_shared_size():

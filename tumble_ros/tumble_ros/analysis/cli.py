@@ -38,10 +38,10 @@ from tumble_ros.io import McapError, WrittenMessages
 from tumble_ros.topics import MARKERS
 
 from .figure_files import FigureExistsError
-from .figure_pool import FigurePool
+from .figure_pool import FigurePool, PendingFigures
 from .recording import load_recording, normalize_namespace, stderr_progress
 from .report import format_summary, summary_to_dict
-from .summary import analyze
+from .summary import analyze, SummaryParts
 
 __all__ = ['command', 'main', 'EXIT_TRUNCATED']
 
@@ -126,9 +126,16 @@ def _error(text: object) -> int:
     return 1
 
 
-def _figures(rec, summary, args, pool: FigurePool | None = None) -> list:
-    """Write the figures (in ``pool``'s workers if given); failures are one-line AnalysisErrors."""
+def _figures(rec, summary, args, pool: FigurePool | None = None,
+             pending: PendingFigures | None = None) -> list:
+    """
+    Write the figures (in ``pool``'s workers if given); failures are one-line AnalysisErrors.
+
+    ``pending``: the figures ``pool`` started drawing (:meth:`FigurePool.begin`).
+    """
     try:
+        if pool is not None and pending is not None:
+            return pool.finish(pending, args.figures, overwrite=args.overwrite)
         if pool is not None:        # no matplotlib here: the workers have it
             return pool.write_figures(rec, args.figures, summary, overwrite=args.overwrite)
         from .figures import write_figures   # matplotlib only when asked for
@@ -185,7 +192,8 @@ def command(argv: Iterable[str] | None = None, written: WrittenMessages | None =
 
     For the main job: ``written``, the messages of FILE.mcap as its writer in this process kept
     them (:func:`~.recording.load_recording` takes them instead of reading the file back);
-    ``pool``, worker processes started earlier that draw the figures (:mod:`.figure_pool`).
+    ``pool``, worker processes started earlier that draw the figures (:mod:`.figure_pool`),
+    from the recording as soon as it is loaded, while this process analyses it.
     """
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
@@ -205,9 +213,13 @@ def command(argv: Iterable[str] | None = None, written: WrittenMessages | None =
                              progress=progress, written=written)
         for line in rec.left_out:
             print(f'WARNING: {line}', file=sys.stderr)
+        # the figures drawn in the pool while this process analyses: what they take from the
+        # summary the drawing processes compute as analyze does (the same bytes)
+        pending = (pool.begin(rec, SummaryParts(rec, args.peaks))
+                   if pool is not None and args.figures is not None else None)
         summary = analyze(rec, n_peaks=args.peaks)
-        periods = _recorded_periods(rec, args)      # before the figures: its check first
-        figures = [] if args.figures is None else _figures(rec, summary, args, pool)
+        periods = _recorded_periods(rec, args)      # before the figures are written: its check
+        figures = [] if args.figures is None else _figures(rec, summary, args, pool, pending)
         extra = _pictures(rec, args)
     except (McapError, AnalysisError) as err:
         return _error(err)

@@ -19,7 +19,11 @@ POSIX) :meth:`FigurePool.start` returns None and the figures are drawn in the pr
 worker dies (:class:`~concurrent.futures.process.BrokenProcessPool`) the figures are drawn in
 the process; a helper that dies has its share drawn by the worker. Exceptions raised while
 drawing are raised by :meth:`FigurePool.write_figures`, as in the process. The worker and its
-helpers ignore SIGINT (the main process handles it and ends the pool).
+helpers ignore SIGINT (the main process handles it and ends the pool). :meth:`FigurePool.begin`
+starts the drawing and :meth:`FigurePool.finish` writes it: the main job begins with the
+summary's parts (:class:`~.summary.SummaryParts`, computed by the drawing processes) and
+analyses while the figures are drawn. The worker freezes its warm state and draws with the
+garbage collector off (:func:`_collector_off`).
 
 The recording and its summary reach the worker through memory shared since the fork
 (:data:`SHARED_BYTES` of an anonymous shared mapping, untouched until used): pickled with
@@ -33,6 +37,8 @@ from __future__ import annotations
 
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+import gc
 import mmap
 import multiprocessing
 import os
@@ -45,17 +51,21 @@ from .figure_files import Drawing, write_files
 
 if TYPE_CHECKING:
     from .recording import Recording
-    from .summary import AnalysisSummary
+    from .summary import AnalysisSummary, SummaryParts
 
-__all__ = ['FigurePool', 'SHARED_BYTES', 'SHARES', 'WORKERS']
+    #: What the figures take their summary's values from.
+    Summary = AnalysisSummary | SummaryParts
+
+__all__ = ['FigurePool', 'PendingFigures', 'SHARED_BYTES', 'SHARES', 'WORKERS']
 
 #: Processes drawing at once (the machine measured has two cores; the main process waits).
 WORKERS = 2
 #: The figures of each drawing process (names of :data:`~.figures.FIGURES`), about equal
-#: shares of the drawing time of the Fig 9 run: the windows, wy-vs-wx and the spectrum 1.1 s
-#: against omega, error and the impacts 0.85 s (CPU, warm, 2026-12-04). The worker draws the
-#: first, a helper each other; a figure in no share gets a helper of its own; with one
-#: drawing process the worker draws them all.
+#: shares of the drawing time of the Fig 9 run: the windows, wy-vs-wx and the spectrum
+#: 1.07-1.12 s against omega, error and the impacts 0.99-1.01 s (CPU, load 4.6-4.9,
+#: 2026-12-04 22:08; the most even split measured). The worker draws the first, a helper each
+#: other; a figure in no share gets a helper of its own; with one drawing process the worker
+#: draws them all.
 SHARES: tuple[tuple[str, ...], ...] = (('omega_windows', 'wy_vs_wx', 'spectrum'),
                                        ('omega', 'error', 'impacts'))
 
@@ -68,12 +78,33 @@ _shared: mmap.mmap | None = None
 
 
 def _warm(shared: mmap.mmap | None = None) -> None:
-    """Initialise a worker: SIGINT ignored, the figures module imported, fonts loaded."""
-    global _shared
+    """Initialise a worker: SIGINT ignored, the figures module imported, fonts loaded, frozen."""
+    global _shared, _worker
     _shared = shared
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     from . import figures
     figures.warm_up()
+    _worker = True
+    gc.freeze()         # the warm state: never traversed by the collector (no pass over it now)
+
+
+#: Whether this process is a worker (:func:`_warm` ran).
+_worker = False
+
+
+def _collector_off() -> None:
+    """
+    In a worker: collect what an earlier drawing left, then turn the collector off.
+
+    Drawing makes ~10^5 objects in cycles (figures, axes, artists, texts): the collector's
+    passes over them took ~0.1 s of each drawing process's ~1 s for the Fig 9 run (the same
+    PNG bytes without them, tests/test_figure_pool.py). A drawing's garbage (tens of MB) is
+    then collected when the worker's next drawing starts; a helper, forked while the collector
+    is off, ends after its share. Elsewhere (a share drawn in the main process) nothing changes.
+    """
+    if _worker:
+        gc.collect()
+        gc.disable()
 
 
 def _ready() -> bool:
@@ -84,7 +115,7 @@ def _ready() -> bool:
 _Drawn = tuple[dict[str, list['Drawing']], tuple[str, ...]]
 
 
-def _draw(rec: Recording, summary: AnalysisSummary, share: tuple[str, ...]) -> _Drawn:
+def _draw(rec: Recording, summary: Summary, share: tuple[str, ...]) -> _Drawn:
     """
     Draw the figures of ``share`` in this worker.
 
@@ -106,7 +137,7 @@ def _names(share: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(n for n in order if n in share)
 
 
-def _helper(rec: Recording, summary: AnalysisSummary, share: tuple[str, ...]
+def _helper(rec: Recording, summary: Summary, share: tuple[str, ...]
             ) -> tuple[int, int]:
     """Fork a helper that draws ``share`` and writes (ok, drawn or error) pickled to a pipe."""
     read_fd, write_fd = os.pipe()
@@ -137,9 +168,10 @@ def _collect(pid: int, read_fd: int) -> tuple[bool, Any] | None:
     return pickle.loads(data) if data else None
 
 
-def _draw_shares(rec: Recording, summary: AnalysisSummary,
+def _draw_shares(rec: Recording, summary: Summary,
                  shares: tuple[tuple[str, ...], ...]) -> _Drawn:
     """In the worker: a forked helper per share but the first, which is drawn here."""
+    _collector_off()
     shares = tuple(share for share in shares if _names(share))
     if not shares:
         return {}, _names(('**',))
@@ -198,6 +230,15 @@ def _draw_shared(head: bytes, spans: _Spans, shares: tuple[tuple[str, ...], ...]
     return _draw_shares(rec, summary, shares)
 
 
+@dataclass(frozen=True)
+class PendingFigures:
+    """Figures being drawn (:meth:`FigurePool.begin`): what they are drawn from, their future."""
+
+    rec: Recording
+    summary: Summary
+    future: Future[_Drawn] | None     # None: the worker had died; drawn in the process
+
+
 class FigurePool:
     """A worker process that draws figures (see the module docstring); a context manager."""
 
@@ -206,6 +247,7 @@ class FigurePool:
         self._executor = executor
         self.workers = workers
         self._shared = shared
+        self._in_shared: Future[_Drawn] | None = None  # the drawing using the shared memory
 
     @classmethod
     def start(cls, workers: int = WORKERS, shared_bytes: int = SHARED_BYTES
@@ -236,35 +278,66 @@ class FigurePool:
         return cls(executor, workers, shared)
 
     def write_figures(self, rec: Recording, out_dir: str | os.PathLike[str],
-                      summary: AnalysisSummary, *, overwrite: bool = False) -> list[Path]:
+                      summary: Summary, *, overwrite: bool = False) -> list[Path]:
         """
         :func:`~.figures.write_figures`, the figures drawn in the worker: the same files.
 
         Drawn in shares (:data:`SHARES`) by the worker and its helpers, written here in order
         (:func:`~.figure_files.write_files`: all drawn before any is written). Exceptions
         raised while drawing (AnalysisError, ...) are raised here, as in the process; the
-        figures of a worker that died are drawn here.
+        figures of a worker that died are drawn here. :meth:`begin` and :meth:`finish` in
+        one call.
         """
-        return write_files(self.draw(rec, summary), out_dir, overwrite)
+        return self.finish(self.begin(rec, summary), out_dir, overwrite=overwrite)
 
-    def draw(self, rec: Recording, summary: AnalysisSummary) -> list[Drawing]:
-        """Draw every figure in the worker and its helpers; return them in the files' order."""
+    def begin(self, rec: Recording, summary: Summary) -> PendingFigures:
+        """
+        Start drawing every figure in the worker and its helpers; :meth:`finish` writes them.
+
+        ``summary``: the recording's :class:`~.summary.AnalysisSummary`, or its
+        :class:`~.summary.SummaryParts` (what the figures take from it, computed by the drawing
+        processes as :func:`~.summary.analyze` computes it): then the figures are drawn while
+        this process analyses (the main job), the same bytes (tests/test_figure_pool.py).
+        """
         shares: tuple[tuple[str, ...], ...] = (SHARES + (('*',),) if self.workers > 1
                                                else (('**',),))
         try:
-            future = self._submit(rec, summary, shares)
-            drawn, order = future.result()
+            return PendingFigures(rec, summary, self._submit(rec, summary, shares))
+        except BrokenProcessPool:   # the worker died: drawn here, by finish
+            return PendingFigures(rec, summary, None)
+
+    def finish(self, pending: PendingFigures, out_dir: str | os.PathLike[str], *,
+               overwrite: bool = False) -> list[Path]:
+        """Wait for the figures :meth:`begin` started; write them (as :meth:`write_figures`)."""
+        return write_files(self._drawn(pending), out_dir, overwrite)
+
+    def draw(self, rec: Recording, summary: Summary) -> list[Drawing]:
+        """Draw every figure in the worker and its helpers; return them in the files' order."""
+        return self._drawn(self.begin(rec, summary))
+
+    def _drawn(self, pending: PendingFigures) -> list[Drawing]:
+        """Return the drawings of ``pending`` in the files' order (here if the worker died)."""
+        try:
+            if pending.future is None:
+                raise BrokenProcessPool('figure pool: the worker died before the drawing')
+            drawn, order = pending.future.result()
         except BrokenProcessPool:   # the worker died: drawn here
-            drawn, order = _draw(rec, summary, ('**',))
+            drawn, order = _draw(pending.rec, pending.summary, ('**',))
         return [drawing for name in order for drawing in drawn.get(name, [])]
 
-    def _submit(self, rec: Recording, summary: AnalysisSummary,
+    def _submit(self, rec: Recording, summary: Summary,
                 shares: tuple[tuple[str, ...], ...]) -> Future[_Drawn]:
-        """Hand the drawing to the worker: through the shared memory if they fit, else the pipe."""
-        if self._shared is not None:
+        """
+        Hand the drawing to the worker: through the shared memory if they fit, else the pipe.
+
+        The shared memory holds one drawing's arrays: while an earlier drawing that uses it is
+        not done (:meth:`begin` twice before :meth:`finish`), the pipe.
+        """
+        if self._shared is not None and (self._in_shared is None or self._in_shared.done()):
             shared = _to_shared(self._shared, (rec, summary))
             if shared is not None:
-                return self._executor.submit(_draw_shared, *shared, shares)
+                self._in_shared = self._executor.submit(_draw_shared, *shared, shares)
+                return self._in_shared
         return self._executor.submit(_draw_shares, rec, summary, shares)
 
     def close(self) -> None:

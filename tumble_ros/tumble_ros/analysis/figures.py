@@ -46,7 +46,9 @@ from collections.abc import Callable, Iterable
 import io
 import os
 from pathlib import Path
+from typing import cast
 
+import matplotlib
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MaxNLocator
@@ -60,7 +62,7 @@ from .impacts import impact_intervals
 from .recording import Recording, ROOT_NAMESPACE
 from .spectrum import spectrum
 from .spin import closest_approach
-from .summary import AnalysisSummary, analyze
+from .summary import AnalysisSummary, analyze, SummaryParts
 from .theory import theory_lines
 from .timeaxis import runs
 
@@ -148,8 +150,41 @@ def _t(value: float, unit: DisplayUnits, digits: int = 4) -> str:
 
 def _png(fig: Figure, name: str) -> Drawing:
     buffer = io.BytesIO()
+    _lay_out(fig)
     fig.savefig(buffer, format='png')
     return name, buffer.getvalue()
+
+
+def _lay_out(fig: Figure) -> None:
+    """
+    Place the axes of ``fig`` by its layout engine now, then turn the engine off.
+
+    ``savefig`` on a figure with a layout engine (our constrained layout) draws it twice: once
+    with the renderer's drawing methods disabled, to run the layout (the aspect of each axes
+    applied, the engine executed), then again for the pixels. The first draw also walks every
+    artist for nothing (ticks, texts, lines, the density image resampled): 0.1 s of the
+    windows figure. Here the aspect is applied and the engine executed as that first draw
+    does, in the same order and with the same renderer (the canvas's), and savefig then draws
+    once: the same PNG bytes, every figure of several runs (tests/test_figure_layout.py).
+    Left to savefig as before when the rc parameters make savefig crop the figure
+    (``savefig.bbox: tight``: it draws first anyway) or force a layout engine.
+    """
+    engine = fig.get_layout_engine()
+    if engine is None or not _single_draw_ok():
+        return
+    renderer = cast(FigureCanvasAgg, fig.canvas).get_renderer()
+    for ax in fig.axes:             # as Figure.draw does before its layout engine runs
+        locator = ax.get_axes_locator()
+        ax.apply_aspect(locator(ax, renderer) if locator is not None else None)
+    engine.execute(fig)
+    fig.set_layout_engine(None)     # laid out: savefig's single draw applies the aspect again
+
+
+def _single_draw_ok() -> bool:
+    """Tell whether savefig draws once on a figure without layout engine (the rc defaults)."""
+    rc = matplotlib.rcParams
+    return (rc['savefig.bbox'] is None and not rc['figure.autolayout']
+            and not rc['figure.constrained_layout.use'])
 
 
 def _label(rec: Recording) -> str:
@@ -511,7 +546,8 @@ def plot_spectrum(rec: Recording, out_dir: str | os.PathLike[str],
     return write_files(_draw_spectrum(rec, summary), out_dir, overwrite)
 
 
-def _draw_spectrum(rec: Recording, summary: AnalysisSummary | None) -> list[Drawing]:
+def _draw_spectrum(rec: Recording, summary: AnalysisSummary | SummaryParts | None
+                   ) -> list[Drawing]:
     if summary is not None:
         spec, lines = summary.spectrum, list(summary.theory)
     else:
@@ -560,13 +596,15 @@ def _line_style(k: int) -> tuple[str, str]:
     return _LINE_COLORS[k % len(_LINE_COLORS)], _LINE_STYLES[k % len(_LINE_STYLES)]
 
 
-def _departure_of(summary: AnalysisSummary) -> float | None:
+def _departure_of(summary: AnalysisSummary | SummaryParts) -> float | None:
     return summary.comparator.t_departure if summary.comparator is not None else None
 
 
 #: The figures :func:`write_figures` draws, in the order they are written: name -> drawer of
-#: (recording, its summary) -> the drawings (none when the recording lacks what it needs).
-FIGURES: dict[str, Callable[[Recording, AnalysisSummary], list[Drawing]]] = {
+#: (recording, its summary) -> the drawings (none when the recording lacks what it needs). The
+#: summary may be its :class:`~.summary.SummaryParts`: the same values (the main job's figures
+#: start before the analysis, :mod:`.figure_pool`).
+FIGURES: dict[str, Callable[[Recording, AnalysisSummary | SummaryParts], list[Drawing]]] = {
     'omega': lambda rec, summary: _draw_angular_velocity(rec, _departure_of(summary)),
     'omega_windows': lambda rec, summary: _draw_omega_windows(rec),
     'wy_vs_wx': lambda rec, summary: _draw_wy_vs_wx(rec),
@@ -576,7 +614,7 @@ FIGURES: dict[str, Callable[[Recording, AnalysisSummary], list[Drawing]]] = {
 }
 
 
-def draw_figures(rec: Recording, summary: AnalysisSummary,
+def draw_figures(rec: Recording, summary: AnalysisSummary | SummaryParts,
                  names: Iterable[str] = tuple(FIGURES)) -> dict[str, list[Drawing]]:
     """Draw the figures ``names`` (keys of :data:`FIGURES`); return name -> its drawings."""
     return {name: FIGURES[name](rec, summary) for name in names}

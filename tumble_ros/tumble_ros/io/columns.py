@@ -258,8 +258,9 @@ class _Builder:
             if kind != 'string':
                 native = np.dtype(_DTYPES[kind]).newbyteorder('=')
                 parts = self.parts[name]
+                # (concatenate made a new array: cast, not copied again, when native already)
                 r.columns[name] = (np.concatenate(parts) if parts
-                                   else np.empty(0, native)).astype(native)
+                                   else np.empty(0, native)).astype(native, copy=False)
         r.strings = {name: list(values) for name, values in self.seen.items()}
         return r
 
@@ -483,7 +484,8 @@ def sample_values(table: TopicColumns, topic: SampleTopic
     c = table.columns
     stamps = (c['header.stamp.sec'].astype(np.int64) * 1_000_000_000
               + c['header.stamp.nanosec'].astype(np.int64))
-    values = np.column_stack([c[name].astype(np.float64) for name in topic.fields]).reshape(
+    values = np.column_stack([c[name].astype(np.float64, copy=False)      # (stacked: a copy)
+                              for name in topic.fields]).reshape(
         len(stamps), len(topic.fields))
     return stamps, values
 

@@ -149,7 +149,7 @@ def append_block(writer: Writer, channel_ids: Sequence[int], rows: Sequence[np.n
         index.add_block(log, sample + np.uint64(starts[j]))
         stats.channel_message_counts[channel] += n
     builder.num_messages += n * len(rows)
-    builder.record_writer.write(records.tobytes())
+    builder.record_writer.write(records.view(np.uint8).data)   # (not copied first)
     _widen(stats, stats.message_count == 0, first, last)
     stats.message_count += n * len(rows)
 
