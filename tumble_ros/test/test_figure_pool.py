@@ -44,29 +44,35 @@ def _files(paths):
     return [(Path(p).name, Path(p).read_bytes()) for p in paths]
 
 
+@pytest.fixture(scope='module')
+def drawn_here(recordings, tmp_path_factory):
+    """Return the files of each recording's figures drawn here (analyze's defaults), once."""
+    tmp = tmp_path_factory.mktemp('here')
+    return [_files(write_figures(rec, tmp / f'here{k}', analyze(rec)))
+            for k, rec in enumerate(recordings)]
+
+
 def test_every_figure_is_in_a_share_once():
     names = [n for share in SHARES for n in share]
     assert len(names) == len(set(names)) and set(names) == set(FIGURES)
 
 
 @pytest.mark.parametrize('workers', [2, 1])
-def test_the_pool_writes_the_same_files(tmp_path, recordings, workers):
+def test_the_pool_writes_the_same_files(tmp_path, recordings, drawn_here, workers):
     with FigurePool.start(workers) as pool:
         for k, rec in enumerate(recordings):
-            summary = analyze(rec)
-            here = write_figures(rec, tmp_path / f'here{k}', summary)
-            there = pool.write_figures(rec, tmp_path / f'pool{k}', summary)
-            assert [p.name for p in there] == [p.name for p in here]
-            assert _files(there) == _files(here)
-    names = [p.name for p in here]
+            there = pool.write_figures(rec, tmp_path / f'pool{k}', analyze(rec))
+            assert [p.name for p in there] == [name for name, _ in drawn_here[k]]
+            assert _files(there) == drawn_here[k]
+    names = [name for name, _ in drawn_here[1]]
     assert 'omega_windows.png' not in names and 'impact_0_id0.png' in names   # fig10
-    assert len(list((tmp_path / 'here0').glob('*.png'))) == 5          # fig9: 5, windows too
+    assert len([n for n, _ in drawn_here[0] if n.endswith('.png')]) == 5  # fig9: 5, windows too
 
 
 @pytest.mark.parametrize('shared_bytes, way', [(figure_pool.SHARED_BYTES, '_draw_shared'),
                                                (0, '_draw_shares'), (4096, '_draw_shares')])
 def test_the_recording_goes_through_shared_memory_when_it_fits(tmp_path, recordings,
-                                                               shared_bytes, way):
+                                                               drawn_here, shared_bytes, way):
     """Shared memory (the default), none, too small (the pipe): the same files."""
     rec = recordings[0]
     summary = analyze(rec)
@@ -81,8 +87,7 @@ def test_the_recording_goes_through_shared_memory_when_it_fits(tmp_path, recordi
         there = pool.write_figures(rec, tmp_path / 'pool', summary)
         again = pool.write_figures(recordings[1], tmp_path / 'again', analyze(recordings[1]))
     assert submitted == [way, way]
-    assert _files(there) == _files(write_figures(rec, tmp_path / 'here', summary))
-    assert _files(again) == _files(write_figures(recordings[1], tmp_path / 'here1'))
+    assert _files(there) == drawn_here[0] and _files(again) == drawn_here[1]
 
 
 def test_summary_parts_are_the_summarys_values(recordings):
@@ -108,24 +113,23 @@ def _same(a, b):
     return a == b or (a != a and b != b)        # (NaN: equal here)
 
 
-def test_the_figures_started_before_the_analysis_are_the_same(tmp_path, recordings):
+def test_the_figures_started_before_the_analysis_are_the_same(tmp_path, recordings,
+                                                              drawn_here):
     """Begun with the summary's parts (the main job), finished after analyze: the same files."""
     rec = recordings[0]
     peaks = 3                   # not analyze's default: the spectrum's markers differ
     summary = analyze(rec, n_peaks=peaks)
     here = write_figures(rec, tmp_path / 'here', summary)
-    default = write_figures(rec, tmp_path / 'default', analyze(rec))
-    assert _files(here) != _files(default)      # (else this test could not tell them apart)
+    assert _files(here) != drawn_here[0]        # (else this test could not tell them apart)
     with FigurePool.start(2) as pool:
         pending = pool.begin(rec, SummaryParts(rec, peaks))
         other = pool.begin(recordings[1], SummaryParts(recordings[1]))  # beside it: the pipe
         assert _files(pool.finish(pending, tmp_path / 'pool')) == _files(here)
-        assert _files(pool.finish(other, tmp_path / 'other')) == _files(
-            write_figures(recordings[1], tmp_path / 'here1', analyze(recordings[1])))
+        assert _files(pool.finish(other, tmp_path / 'other')) == drawn_here[1]
 
 
 def test_the_worker_draws_with_its_warm_state_frozen_and_the_collector_off(
-        tmp_path, recordings):
+        tmp_path, recordings, drawn_here):
     """Its warm-up frozen, the collector off from its first drawing on (the same bytes)."""
     rec = recordings[1]
     summary = analyze(rec)
@@ -136,8 +140,7 @@ def test_the_worker_draws_with_its_warm_state_frozen_and_the_collector_off(
         assert not ask(gc.isenabled).result()
         again = pool.write_figures(rec, tmp_path / 'again', summary)
     assert gc.isenabled()                       # this process: as it was
-    here = _files(write_figures(rec, tmp_path / 'here', summary))
-    assert _files(there) == here and _files(again) == here
+    assert _files(there) == drawn_here[1] and _files(again) == drawn_here[1]
 
 
 def test_the_pool_refuses_a_negative_shared_size():
@@ -155,7 +158,7 @@ def test_existing_files_are_refused_as_in_the_process(tmp_path, recordings):
         assert len(pool.write_figures(rec, tmp_path, summary, overwrite=True)) >= 5
 
 
-def test_the_figures_of_a_dead_worker_are_drawn_here(tmp_path, recordings):
+def test_the_figures_of_a_dead_worker_are_drawn_here(tmp_path, recordings, drawn_here):
     rec = recordings[1]
     summary = analyze(rec)
     pool = FigurePool.start(2)
@@ -166,7 +169,7 @@ def test_the_figures_of_a_dead_worker_are_drawn_here(tmp_path, recordings):
         there = pool.write_figures(rec, tmp_path / 'after', summary)
     finally:
         pool.close()
-    assert _files(there) == _files(write_figures(rec, tmp_path / 'here', summary))
+    assert _files(there) == drawn_here[1]
 
 
 def _in_a_helper(then):
@@ -180,7 +183,8 @@ def _in_a_helper(then):
     return draw
 
 
-def test_the_share_of_a_dead_helper_is_drawn_by_the_worker(tmp_path, recordings, monkeypatch):
+def test_the_share_of_a_dead_helper_is_drawn_by_the_worker(tmp_path, recordings, drawn_here,
+                                                           monkeypatch):
     rec = recordings[1]
     summary = analyze(rec)
     died = tmp_path / 'a helper died'
@@ -193,7 +197,7 @@ def test_the_share_of_a_dead_helper_is_drawn_by_the_worker(tmp_path, recordings,
         there = pool.write_figures(rec, tmp_path / 'pool', summary)
     monkeypatch.undo()
     assert died.exists()
-    assert _files(there) == _files(write_figures(rec, tmp_path / 'here', summary))
+    assert _files(there) == drawn_here[1]
 
 
 def test_an_error_in_a_helper_is_raised_as_in_the_process(tmp_path, recordings, monkeypatch):
