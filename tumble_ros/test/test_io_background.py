@@ -81,7 +81,8 @@ def test_a_message_that_cannot_be_decoded_is_the_same_error_as_without_the_threa
     """
     Raised by the reader, naming the file and the message, as written_columns without it.
 
-    (Reading the file back numbers that message 0, not 1: left as it was.)
+    And as reading the file back, which numbered that message 0 (the first of its channel in
+    the chunk) where it is message 1.
     """
     from test_io_columns import _vector3_stamped
 
@@ -99,8 +100,35 @@ def test_a_message_that_cannot_be_decoded_is_the_same_error_as_without_the_threa
         with pytest.raises(McapError) as raised:
             written_columns(keep, ['/v'])
         errors.append(str(raised.value).replace(f'{background}.mcap', 'x.mcap'))
-    assert errors[0] == errors[1]
+        with pytest.raises(McapError) as raised:
+            read_columns(tmp_path / f'{background}.mcap', ['/v'])
+        errors.append(str(raised.value).replace(f'{background}.mcap', 'x.mcap'))
+    assert errors[0] == errors[1] == errors[2] == errors[3]
     assert errors[0].startswith(f"{tmp_path / 'x.mcap'}: cannot decode message 1 on topic '/v'")
+
+
+def test_a_bad_message_inside_a_block_of_rows_is_named_by_its_place_in_the_file(tmp_path):
+    """Row 2 of /v in a block of /v and /w rows is the file's message 2 * 2 + 0 = 4, both ways."""
+    import numpy as np
+    from test_io_columns import _vector3_stamped
+
+    good = np.frombuffer(_vector3_stamped(1, 2, 'body', 1.0, 2.0, 3.0), dtype=np.uint8)
+    rows_v, rows_w = np.tile(good, (4, 1)), np.tile(good, (4, 1))
+    rows_v[2, 12:16] = 0xFF                     # frame_id's length: past the message's end
+    keep = WrittenMessages()
+    with McapWriter(tmp_path / 'rows.mcap', chunk_seconds=float('inf'), keep=keep) as w:
+        v = w.add_channel('/v', 'geometry_msgs/msg/Vector3Stamped')
+        u = w.add_channel('/w', 'geometry_msgs/msg/Vector3Stamped')
+        w.write_rows([v, u], [rows_v, rows_w], np.arange(4, dtype=np.int64) + 10)
+    errors = []
+    for read in (lambda: written_columns(keep, ['/v']),
+                 lambda: read_columns(tmp_path / 'rows.mcap', ['/v'])):
+        with pytest.raises(McapError) as raised:
+            read()
+        errors.append(str(raised.value))
+    assert errors[0] == errors[1], errors
+    assert errors[0].startswith(f"{tmp_path / 'rows.mcap'}: cannot decode message 4 on topic "
+                                "'/v'"), errors[0]
 
 
 def test_only_a_new_written_messages_is_followed(tmp_path):

@@ -188,9 +188,11 @@ class _Builder:
             name: {} for name, kind in layout.fields if kind == 'string'}
 
     def add_block(self, buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
-                  times: np.ndarray, decode_one: Callable[[bytes], Any]) -> None:
+                  times: np.ndarray, decode_one: Callable[[bytes, int], Any]) -> None:
         """
         Add the messages whose data (``lengths`` bytes) start at ``starts`` in the chunk ``buf``.
+
+        ``decode_one(data, k)`` decodes message k of them generically (k names it in an error).
 
         The CDR walk of :meth:`FlatLayout.offsets`, done for all messages at once (strings of any
         length); a message that is not little-endian CDR or ends early is decoded generically.
@@ -227,7 +229,7 @@ class _Builder:
                 self.parts[name].append(column)
         for k in np.flatnonzero(~ok).tolist():   # in place, so the file order is kept
             start = int(starts[k])
-            message = decode_one(buf[start:start + int(lengths[k])].tobytes())
+            message = decode_one(buf[start:start + int(lengths[k])].tobytes(), k)
             self._set(message, k)
         self.times.append(np.asarray(times, dtype=np.int64))
         self.result.columnar += len(good)
@@ -553,10 +555,11 @@ class _ColumnReader:
                         pending.append((at, self.decoders.decode(self.scan, record, first + at)))
                     continue
 
-                def decode_one(raw: bytes, channel_id: int = channel_id,
-                               index: int = first + j) -> Any:
+                def decode_one(raw: bytes, k: int, channel_id: int = channel_id,
+                               at: int = first + j, width: int = width) -> Any:
+                    # message k of this channel is the file's message first + k * width + j
                     return self.decoders.decode(self.scan, _Record(channel_id, 0, 0, raw),
-                                                index).message
+                                                at + k * width).message
 
                 size = rows.shape[1]
                 builder.add_block(np.ascontiguousarray(rows).reshape(-1),
@@ -636,11 +639,12 @@ class _ColumnReader:
                                      data[starts[k]:starts[k] + lengths[k]])
                     pending.append((k, self.decoders.decode(self.scan, record, first + k)))
                 continue
-            index = first + int(picked[0])
 
-            def decode_one(raw: bytes, channel_id: int = channel_id, index: int = index) -> Any:
+            def decode_one(raw: bytes, k: int, channel_id: int = channel_id,
+                           at: np.ndarray = first + picked) -> Any:
+                # message k of this channel is the chunk's message picked[k]
                 return self.decoders.decode(self.scan, _Record(channel_id, 0, 0, raw),
-                                            index).message
+                                            int(at[k])).message
 
             builder.add_block(buf, starts[picked], lengths[picked], times[picked], decode_one)
         self.count += len(ids)
