@@ -183,6 +183,36 @@ def test_a_constant_torque_on_a_sphere_gives_the_closed_form(method, fast):
     np.testing.assert_allclose(result.omega, expected, rtol=0, atol=1e-10)
 
 
+@pytest.mark.skipif(not kernels.COMPILED, reason='numba not available')
+def test_one_to_eight_extra_torques_share_one_compiled_variant():
+    """The kernels' ``extra`` is typed by its tuple's length: padded, 1 to 8 are one type."""
+    import numba
+
+    from tumble_ros.core.torques import extra_torque_arrays
+
+    def extra(n):
+        return extra_torque_arrays([TorqueComponent(f'c{j}', constant_body_torque, (j, 0, 0))
+                                    for j in range(n)])
+    types = {n: numba.typeof(extra(n)) for n in (1, 2, 3, 8, 9, 16)}
+    assert types[1] == types[2] == types[3] == types[8] != types[9] == types[16]
+    functions, parameters = extra(3)
+    assert len(functions) == 8 and parameters.shape == (3, 3)   # the rows say what is called
+
+
+@pytest.mark.parametrize('method, fast', [c for c in CASES if c[0] in ('dop853', 'splitting')])
+def test_three_extra_torques_through_the_padded_tuple_add_up(method, fast):
+    """Three constant torques on a sphere: w0 + (M1 + M2 + M3) t / I (the padding adds nothing)."""
+    parts = np.array([[3.0, 0.0, 1.0], [0.0, -4.0, 0.0], [0.0, 0.0, 0.5]])
+    sc = Scenario(inertia=(2.0, 2.0, 2.0), orbit_rate=0.0, omega0=(0.5, 1.0, 10.0),
+                  duration=0.5, output_interval=0.125,
+                  torques=tuple(TorqueComponent(f'part{j}', constant_body_torque, tuple(p))
+                                for j, p in enumerate(parts)),
+                  integrator=IntegratorSettings(method=method, step=0.01))
+    result = simulate(sc, fast=fast)
+    expected = np.array(sc.omega0) + np.outer(sc.output_times, parts.sum(axis=0)) / 2.0
+    np.testing.assert_allclose(result.omega, expected, rtol=0, atol=1e-10)
+
+
 @pytest.mark.parametrize('method, fast',
                          [c for c in CASES if c[0] in ('dop853', 'splitting6', 'rk4')])
 def test_a_plug_in_copy_of_the_tidal_torque_equals_the_built_in_one(method, fast):

@@ -6,10 +6,11 @@ that have one) of each compiled method
 (``core.kernels.KERNELS``) on their first use (then cached beside the sources): a run compiles
 only the loops it uses (``core.jit.first_use`` says so on stderr). This optional step
 (``make warmup``; ``make test`` runs it first) compiles them all ahead. It also compiles the
-loops' variant for one extra torque (``core.torques.TorqueComponent``: every single extra
-torque shares it, whatever its function) and the reference path's calls. The methods compile in
-parallel, one process each on up to as many cores as there are (each method's loops are its own
-copies, so the compilations share nothing), and each says when it is ready.
+loops' variant for extra torques (``core.torques.TorqueComponent``: every scenario with 1 to
+8 of them shares it, whatever their functions; ``core.torques.component.EXTRA_SLOTS``) and
+the reference path's calls. The methods compile in parallel, one process each on up to as
+many cores as there are (each method's loops are its own copies, so the compilations share
+nothing), and each says when it is ready.
 
 ``python -m tumble_ros.cli.warmup --scenario SCENARIO`` compiles (or loads) only what a run of
 that scenario uses, by simulating its first output interval: ``make run`` does it beside the

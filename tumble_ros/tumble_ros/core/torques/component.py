@@ -28,6 +28,7 @@ be an exact flow.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
 import math
 from typing import Any, Callable, Iterable, Sequence
 import warnings
@@ -37,7 +38,8 @@ import numpy.typing as npt
 
 from tumble_ros.core.jit import COMPILED
 
-__all__ = ['TorqueComponent', 'torque_function', 'extra_torque_arrays', 'NO_EXTRA']
+__all__ = ['TorqueComponent', 'torque_function', 'extra_torque_arrays', 'NO_EXTRA',
+           'EXTRA_SLOTS']
 
 if COMPILED:
     import numba
@@ -136,6 +138,9 @@ def extra_torque_arrays(components: Iterable[TorqueComponent],
     Return the kernels' ``extra`` argument: (functions, parameters) of the components.
 
     ``parameters`` is (n, width) float64, row j the parameters of function j (zero-padded).
+    ``functions`` holds the n components' functions, then a torque that is never called, up to
+    a multiple of :data:`EXTRA_SLOTS`: the kernels call functions 0 ... n - 1 (the rows of
+    ``parameters``), and their compiled variant depends on the tuple's length only.
     """
     listed = tuple(components)
     if not listed:
@@ -144,4 +149,25 @@ def extra_torque_arrays(components: Iterable[TorqueComponent],
     par = np.zeros((len(listed), width))
     for j, c in enumerate(listed):
         par[j, :len(c.parameters)] = c.parameters
-    return tuple(c.function for c in listed), par
+    padding = (_unused(),) * (-len(listed) % EXTRA_SLOTS)
+    return tuple(c.function for c in listed) + padding, par
+
+
+#: The functions of ``extra`` come in tuples of a multiple of this length. numba types a tuple
+#: by its length, and compiles each loop anew for each type (~10-20 s of CPU a method): with
+#: the tuple padded, every scenario with 1 to 8 extra torques (perturbers, a field's degrees,
+#: the user's own) runs the one variant ``make warmup`` compiles. Before, a flyby with the Moon
+#: and the Sun, or a table and a Kepler orbit, compiled its own variant on its first run.
+EXTRA_SLOTS = 8
+
+
+def _never_called(par: Any, t: float, q0: float, q1: float, q2: float,
+                  q3: float) -> tuple[float, float, float]:
+    """Return no torque: the padding of ``extra``'s functions, never called (no row for it)."""
+    return 0.0, 0.0, 0.0
+
+
+@functools.cache
+def _unused() -> Callable[..., Any]:
+    """Return :func:`_never_called` compiled (on first use; cached: a module-level function)."""
+    return torque_function(_never_called)
