@@ -90,17 +90,6 @@ def test_compiled_and_reference_ensembles_agree_and_failures_stay_per_body():
         assert np.isnan(out[1, reached:]).all() and np.isfinite(out[[0, 2]]).all()
 
 
-def test_the_samples_a_body_did_not_reach_are_nan_whatever_the_memory_held():
-    """The loops' outputs are allocated empty: every sample past a body's last is blanked."""
-    from tumble_ros.core.propagation.ensemble import _blank_unreached
-
-    y_out, e_out = np.full((3, 4, 7), 5.0), np.full((3, 4, 3), 5.0)
-    _blank_unreached(np.array([4, 1, 0]), y_out, e_out)
-    for out in (y_out, e_out):
-        assert (out[0] == 5.0).all() and (out[1, :1] == 5.0).all()
-        assert np.isnan(out[1, 1:]).all() and np.isnan(out[2]).all()
-
-
 def test_progress_is_reported_and_inputs_are_checked():
     sc = fig9('splitting', duration=1.0)
     calls = []
