@@ -11,7 +11,7 @@ RATE = 2 * np.pi * 1.37
 
 
 def same_bits(a, b):
-    """True if a and b hold the same float64 bits (NaN included)."""
+    """Return True if a and b hold the same float64 bits (NaN included)."""
     return np.array_equal(np.asarray(a).view(np.int64), np.asarray(b).view(np.int64))
 
 
@@ -26,7 +26,7 @@ def random_samples(n, m, seed):
 
 
 def numpy_post(y, e, k_out, times):
-    """The numpy post-processing body by body (the code before ``ensemble_samples``)."""
+    """Return the numpy post-processing, body by body (the code before ``ensemble_samples``)."""
     y, e, jac = y.copy(), e.copy(), np.full(y.shape[:2], np.nan)
     for b, kk in enumerate(k_out):
         y[b, kk:], e[b, kk:] = np.nan, np.nan
@@ -57,7 +57,8 @@ def test_ensemble_samples_give_numpys_bits(groups):
         assert same_bits(a, b), name
     # the case holds sign flips (q.q' < 0 between random samples), unreached samples, a body
     # that reached none, and quaternions away from unit norm: each path above is exercised
-    flips = (np.isfinite(ref[0][:, :, 3]) & (np.sign(ref[0][:, :, 3]) != np.sign(y[:, :, 3]))).sum()
+    continuous = ref[0][:, :, 3]
+    flips = (np.isfinite(continuous) & (np.sign(continuous) != np.sign(y[:, :, 3]))).sum()
     assert flips > 100 and (k_out == 0).any() and np.isnan(ref[2]).sum() > 100
 
 

@@ -28,6 +28,9 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+import numpy.typing as npt
+
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array
 
@@ -64,7 +67,8 @@ def jacobi_sample(sx: float, sy: float, w0: float, w1: float, w2: float,
 
 
 @jit
-def ensemble_samples(sun_x: Array, sun_y: Array, y_out: Array, e_out: Array, k_out: Array,
+def ensemble_samples(sun_x: Array, sun_y: Array, y_out: Array, e_out: Array,
+                     k_out: npt.NDArray[np.int64],
                      inertia: Array, orbit_rate: float, tidal: float, jac: Array,
                      b0: int, b1: int) -> None:
     """

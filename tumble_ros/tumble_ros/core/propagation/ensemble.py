@@ -47,12 +47,12 @@ from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.integrators.base import Stepper
 from tumble_ros.core.integrators.compiled import failure_message, why_no_fast_path
 from tumble_ros.core.jit import first_use, load_for
+from tumble_ros.core.kernels import samples
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.model.limits import MAX_OMEGA, MAX_ROTATION, step_budget
 from tumble_ros.core.model.scenario import Impact, IMPACT_FRAMES, Scenario, ScenarioError
 from tumble_ros.core.propagation.segments import split_at_impacts
 from tumble_ros.core.propagation.simulate import sample_times, simulate
-from tumble_ros.core.kernels import samples
 from tumble_ros.core.torques import extra_torque_arrays, tidal_potential_coefficient
 
 __all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts',
