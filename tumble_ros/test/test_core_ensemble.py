@@ -156,3 +156,36 @@ def test_a_simulators_params_file_with_its_node_parameters_is_read(tmp_path, cap
     params.write_text(params.read_text() + '    real_time_factr: 1.0\n')
     assert main([str(params), '--bodies', '2', '--quiet']) == 2
     assert 'real_time_factr: unknown scenario parameter' in capsys.readouterr().err
+
+
+def test_small_pages_switch_numpys_huge_pages_off_and_restore_them():
+    """Off inside (also nested and on two threads at once), numpy's own setting after."""
+    import threading
+
+    from tumble_ros.core.propagation.ensemble import small_pages
+
+    multiarray = np._core.multiarray
+    default = multiarray._get_madvise_hugepage()
+    for setting in (True, False):
+        multiarray._set_madvise_hugepage(setting)
+        inside = []
+        started, leave = threading.Barrier(2), threading.Event()
+
+        def other():
+            with small_pages():
+                started.wait()
+                leave.wait()
+                inside.append(multiarray._get_madvise_hugepage())
+
+        thread = threading.Thread(target=other)
+        thread.start()
+        with small_pages():
+            started.wait()
+            with small_pages():
+                inside.append(multiarray._get_madvise_hugepage())
+        inside.append(multiarray._get_madvise_hugepage())   # the other thread still inside
+        leave.set()
+        thread.join()
+        assert inside == [False, False, False]
+        assert multiarray._get_madvise_hugepage() is setting
+    multiarray._set_madvise_hugepage(default)

@@ -31,10 +31,12 @@ cluster) and where their results go (memory, a store) is the run layer's,
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+import contextlib
 import dataclasses
 from dataclasses import dataclass, replace
 import math
 import os
+import threading
 import time
 from typing import (Any, Callable, Collection, Iterable, Iterator, Literal, Sequence,
                     TypeAlias)
@@ -449,11 +451,47 @@ def simulate_ensemble(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *
         threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
         run = next(runner for refusal, runner in ENSEMBLE_LOOPS.values()
                    if not refusal(scenario, impacts, method))
-        return run(scenario, times, n, impacts, omega0, euler0, method, progress,
-                   max(1, int(checkpoints)), threads, euler_angles=euler_angles)
+        with small_pages():
+            return run(scenario, times, n, impacts, omega0, euler0, method, progress,
+                       max(1, int(checkpoints)), threads, euler_angles=euler_angles)
     result = _ensemble_reference(scenario, times, n, impacts, omega0, euler0, progress)
     return result if euler_angles else replace(result, euler=_no_euler(n, times.size),
                                                euler_angles=False)
+
+
+_PAGES_LOCK = threading.Lock()
+_pages_users: list[Any] = [0, None]      # calls inside small_pages, numpy's setting before them
+
+
+@contextlib.contextmanager
+def small_pages() -> Iterator[None]:
+    """
+    Let numpy allocate its arrays without transparent huge pages inside the block.
+
+    numpy advises the kernel to back every array of 4 MB or more with huge pages (``madvise``).
+    Where the kernel then compacts memory at the first touch of each
+    (``/sys/kernel/mm/transparent_hugepage/defrag`` = ``madvise``, this project's machine), a
+    fresh process's N = 10^6 ensemble spent ~1.4 s more outside its loop (docs/performance.md,
+    "The samples' post-processing compiled"). numpy's setting is the process's: it is switched
+    off by the first of concurrent callers and restored by the last. The arrays and their
+    values are the same either way; a no-op where numpy has no such switch.
+    """
+    multiarray = getattr(getattr(np, '_core', None), 'multiarray', None)
+    toggle = getattr(multiarray, '_set_madvise_hugepage', None)
+    if toggle is None:       # pragma: no cover - numpy without the switch
+        yield
+        return
+    with _PAGES_LOCK:
+        if _pages_users[0] == 0:
+            _pages_users[1] = toggle(False)
+        _pages_users[0] += 1
+    try:
+        yield
+    finally:
+        with _PAGES_LOCK:
+            _pages_users[0] -= 1
+            if _pages_users[0] == 0:
+                toggle(_pages_users[1])
 
 
 def _no_euler(n: int, m: int) -> FloatArray:
