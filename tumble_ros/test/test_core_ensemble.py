@@ -90,17 +90,6 @@ def test_compiled_and_reference_ensembles_agree_and_failures_stay_per_body():
         assert np.isnan(out[1, reached:]).all() and np.isfinite(out[[0, 2]]).all()
 
 
-def test_the_samples_a_body_did_not_reach_are_nan_whatever_the_memory_held():
-    """The loops' outputs are allocated empty: every sample past a body's last is blanked."""
-    from tumble_ros.core.propagation.ensemble import _blank_unreached
-
-    y_out, e_out = np.full((3, 4, 7), 5.0), np.full((3, 4, 3), 5.0)
-    _blank_unreached(np.array([4, 1, 0]), y_out, e_out)
-    for out in (y_out, e_out):
-        assert (out[0] == 5.0).all() and (out[1, :1] == 5.0).all()
-        assert np.isnan(out[1, 1:]).all() and np.isnan(out[2]).all()
-
-
 def test_progress_is_reported_and_inputs_are_checked():
     sc = fig9('splitting', duration=1.0)
     calls = []
@@ -167,3 +156,36 @@ def test_a_simulators_params_file_with_its_node_parameters_is_read(tmp_path, cap
     params.write_text(params.read_text() + '    real_time_factr: 1.0\n')
     assert main([str(params), '--bodies', '2', '--quiet']) == 2
     assert 'real_time_factr: unknown scenario parameter' in capsys.readouterr().err
+
+
+def test_small_pages_switch_numpys_huge_pages_off_and_restore_them():
+    """Off inside (also nested and on two threads at once), numpy's own setting after."""
+    import threading
+
+    from tumble_ros.core.propagation.ensemble import small_pages
+
+    multiarray = np._core.multiarray
+    default = multiarray._get_madvise_hugepage()
+    for setting in (True, False):
+        multiarray._set_madvise_hugepage(setting)
+        inside = []
+        started, leave = threading.Barrier(2), threading.Event()
+
+        def other():
+            with small_pages():
+                started.wait()
+                leave.wait()
+                inside.append(multiarray._get_madvise_hugepage())
+
+        thread = threading.Thread(target=other)
+        thread.start()
+        with small_pages():
+            started.wait()
+            with small_pages():
+                inside.append(multiarray._get_madvise_hugepage())
+        inside.append(multiarray._get_madvise_hugepage())   # the other thread still inside
+        leave.set()
+        thread.join()
+        assert inside == [False, False, False]
+        assert multiarray._get_madvise_hugepage() is setting
+    multiarray._set_madvise_hugepage(default)

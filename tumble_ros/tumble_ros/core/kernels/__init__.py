@@ -23,6 +23,8 @@ One module per concern, every arrow downward:
   arrays (the methods that define ``block_step``: :mod:`.splitting`, :mod:`.rk4`);
 * :mod:`.methods`: the registry of the compiled methods (:data:`KERNELS`, one line each) and
   each method's copy of those two loops with its step inlined (:func:`loops`).
+* :mod:`.samples`: an ensemble's samples post-processed (Jacobi integral, continuous
+  quaternions) in one pass, the formulas ``dynamics.jacobi_integral`` evaluates on arrays.
 
 Quaternion attitude only. ``python -m tumble_ros.core.kernels`` prints the array layouts.
 """

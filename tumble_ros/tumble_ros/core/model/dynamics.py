@@ -34,9 +34,11 @@ import numpy as np
 
 from tumble_ros.core import kernels
 from tumble_ros.core.array_types import ArrayLike, FloatArray, Vector3
+from tumble_ros.core.jit import python_source
+from tumble_ros.core.kernels import samples
 from tumble_ros.core.model.rotation import (euler_to_matrix, euler_to_quaternion, matrix_to_euler,
                                             quaternion_to_matrix)
-from tumble_ros.core.torques import (extra_torque_arrays, gravity_gradient_potential,
+from tumble_ros.core.torques import (extra_torque_arrays, tidal_potential_coefficient,
                                      TorqueComponent)
 
 __all__ = [
@@ -174,7 +176,7 @@ def _sum3(v: FloatArray) -> FloatArray:
     Sum of v's last axis (3 components) in numpy's order, (v0 + v1) + v2: np.sum's bits.
 
     Written out: ``np.sum(..., axis=-1)`` over 3 components costs a reduction loop's set-up
-    per sample (~30 ns), most of an ensemble's Jacobi integral.
+    per sample (~30 ns).
     """
     total: FloatArray = v[..., 0] + v[..., 1] + v[..., 2]
     return total
@@ -210,11 +212,12 @@ def jacobi_integral(t: ArrayLike, omega: ArrayLike, c_body_to_orbital: ArrayLike
     c = np.asarray(c_body_to_orbital, dtype=float)
     i = np.asarray(inertia, dtype=float)
     w = np.asarray(omega, dtype=float)
-    sun_x = np.sin(orbit_rate * t)[..., None]
-    sun_y = np.cos(orbit_rate * t)[..., None]
-    # body components of the orbital vector (sun_x, sun_y, 0) are C^T of it
-    u = c[..., 0, :] * sun_x + c[..., 1, :] * sun_y
-    z = c[..., 2, :]
-    jacobi: FloatArray = (kinetic_energy(w, i) + gravity_gradient_potential(u, i, orbit_rate)
-                          + orbit_rate * _sum3(i * w * z))
+    # the formula is kernels.samples.jacobi_sample's, here on arrays (an ensemble's compiled
+    # post-processing evaluates it one sample at a time: the same bits)
+    on_arrays: Callable[..., Any] = python_source(samples.jacobi_sample)
+    jacobi: FloatArray = on_arrays(
+        np.sin(orbit_rate * t), np.cos(orbit_rate * t), w[..., 0], w[..., 1], w[..., 2],
+        c[..., 0, 0], c[..., 0, 1], c[..., 0, 2], c[..., 1, 0], c[..., 1, 1], c[..., 1, 2],
+        c[..., 2, 0], c[..., 2, 1], c[..., 2, 2], i[0], i[1], i[2], orbit_rate,
+        tidal_potential_coefficient(orbit_rate))
     return jacobi

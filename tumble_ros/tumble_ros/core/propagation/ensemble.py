@@ -31,10 +31,12 @@ cluster) and where their results go (memory, a store) is the run layer's,
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+import contextlib
 import dataclasses
 from dataclasses import dataclass, replace
 import math
 import os
+import threading
 import time
 from typing import (Any, Callable, Collection, Iterable, Iterator, Literal, Sequence,
                     TypeAlias)
@@ -47,13 +49,13 @@ from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.integrators.base import Stepper
 from tumble_ros.core.integrators.compiled import failure_message, why_no_fast_path
 from tumble_ros.core.jit import first_use, load_for
-from tumble_ros.core.model.dynamics import ATTITUDE_MODELS, jacobi_integral
+from tumble_ros.core.kernels import samples
+from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.model.limits import MAX_OMEGA, MAX_ROTATION, step_budget
-from tumble_ros.core.model.rotation import continuous_quaternions, quaternions_to_matrices
 from tumble_ros.core.model.scenario import Impact, IMPACT_FRAMES, Scenario, ScenarioError
 from tumble_ros.core.propagation.segments import split_at_impacts
 from tumble_ros.core.propagation.simulate import sample_times, simulate
-from tumble_ros.core.torques import extra_torque_arrays
+from tumble_ros.core.torques import extra_torque_arrays, tidal_potential_coefficient
 
 __all__ = ['EnsembleResult', 'simulate_ensemble', 'ensemble_scenarios', 'random_impacts',
            'RandomImpacts', 'GaussianSpread', 'body_rng', 'concatenate_results', 'ChunkResult',
@@ -449,11 +451,47 @@ def simulate_ensemble(scenario: Scenario, t_eval: npt.ArrayLike | None = None, *
         threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
         run = next(runner for refusal, runner in ENSEMBLE_LOOPS.values()
                    if not refusal(scenario, impacts, method))
-        return run(scenario, times, n, impacts, omega0, euler0, method, progress,
-                   max(1, int(checkpoints)), threads, euler_angles=euler_angles)
+        with small_pages():
+            return run(scenario, times, n, impacts, omega0, euler0, method, progress,
+                       max(1, int(checkpoints)), threads, euler_angles=euler_angles)
     result = _ensemble_reference(scenario, times, n, impacts, omega0, euler0, progress)
     return result if euler_angles else replace(result, euler=_no_euler(n, times.size),
                                                euler_angles=False)
+
+
+_PAGES_LOCK = threading.Lock()
+_pages_users: list[Any] = [0, None]      # calls inside small_pages, numpy's setting before them
+
+
+@contextlib.contextmanager
+def small_pages() -> Iterator[None]:
+    """
+    Let numpy allocate its arrays without transparent huge pages inside the block.
+
+    numpy advises the kernel to back every array of 4 MB or more with huge pages (``madvise``).
+    Where the kernel then compacts memory at the first touch of each
+    (``/sys/kernel/mm/transparent_hugepage/defrag`` = ``madvise``, this project's machine), a
+    fresh process's N = 10^6 ensemble spent ~1.4 s more outside its loop (docs/performance.md,
+    "The samples' post-processing compiled"). numpy's setting is the process's: it is switched
+    off by the first of concurrent callers and restored by the last. The arrays and their
+    values are the same either way; a no-op where numpy has no such switch.
+    """
+    multiarray = getattr(getattr(np, '_core', None), 'multiarray', None)
+    toggle = getattr(multiarray, '_set_madvise_hugepage', None)
+    if toggle is None:       # pragma: no cover - numpy without the switch
+        yield
+        return
+    with _PAGES_LOCK:
+        if _pages_users[0] == 0:
+            _pages_users[1] = toggle(False)
+        _pages_users[0] += 1
+    try:
+        yield
+    finally:
+        with _PAGES_LOCK:
+            _pages_users[0] -= 1
+            if _pages_users[0] == 0:
+                toggle(_pages_users[1])
 
 
 def _no_euler(n: int, m: int) -> FloatArray:
@@ -610,19 +648,6 @@ def _outputs(n: int, m: int, euler_angles: bool = True) -> tuple[FloatArray, Flo
     return np.empty((n, m, K.N)), np.empty((n, m if euler_angles else 0, 3))
 
 
-def _blank_unreached(k_out: npt.NDArray[np.int64], *outputs: FloatArray) -> None:
-    """Set the samples outputs[b, k_out[b]:] that body b did not reach to NaN."""
-    m = outputs[0].shape[1]
-    short = np.flatnonzero(k_out < m)
-    if short.size == 0:
-        return
-    unreached = np.arange(m)[None, :] >= k_out[short, None]      # (bodies, m)
-    for out in outputs:
-        rows = out[short]
-        rows[unreached] = np.nan
-        out[short] = rows
-
-
 def _result(scenario: Scenario, times: FloatArray, y_out: FloatArray, e_out: FloatArray,
             k_out: npt.NDArray[np.int64], failed: npt.NDArray[np.bool_],
             messages: tuple[str, ...], steps: npt.NDArray[np.int64],
@@ -630,43 +655,33 @@ def _result(scenario: Scenario, times: FloatArray, y_out: FloatArray, e_out: Flo
     """
     Post-process the loops' samples (quaternions made continuous, Jacobi integral).
 
-    In groups of bodies of at most :data:`POST_SAMPLES` samples (bounded memory for their
-    (bodies, n, 3, 3) matrices), on ``threads`` threads (numpy lets go of the GIL); each body's
-    numbers do not depend on the groups. The result's omega and quaternion are views of
-    ``y_out`` (its columns 0-2 and 3-6, the quaternions made continuous in place): no copy of
-    the biggest output.
+    One compiled pass over each body's samples (``kernels.samples.ensemble_samples``: the bits
+    of ``rotation.continuous_quaternions`` and ``dynamics.jacobi_integral``, which a single
+    body's :func:`simulate` calls), in groups of :data:`POST_SAMPLES` samples on ``threads``
+    threads; each body's numbers do not depend on the groups. The samples a body did not reach
+    are NaN. The result's omega and quaternion are views of ``y_out`` (its columns 0-2 and
+    3-6, the quaternions made continuous in place): no copy of the biggest output.
     """
     n, m = y_out.shape[:2]
     euler_angles = e_out.shape[1] == m
-    if euler_angles:
-        _blank_unreached(k_out, y_out, e_out)
-    else:       # no Euler angles asked for
-        _blank_unreached(k_out, y_out)
-        e_out = _no_euler(n, m)
     success = (k_out == m) & ~failed
-    omega = y_out[:, :, :3]
-    jac = np.full((n, m), np.nan)
+    jac = np.empty((n, m))
+    inertia = np.ascontiguousarray(scenario.inertia, dtype=float)
+    rate = scenario.orbit_rate
+    sun_x, sun_y = np.sin(rate * times), np.cos(rate * times)   # (jacobi_integral's)
     size = max(1, POST_SAMPLES // max(1, m))
+    k_out = np.ascontiguousarray(k_out, dtype=np.int64)
 
     def group(b0: int) -> None:
-        b1 = min(n, b0 + size)
-        ks = k_out[b0:b1]
-        for kk in np.unique(ks):
-            if kk == 0:
-                continue
-            rows = slice(b0, b1) if (ks == kk).all() else np.arange(b0, b1)[ks == kk]
-            q = y_out[rows, :kk, 3:]
-            matrices = quaternions_to_matrices(q)
-            jac[rows, :kk] = jacobi_integral(times[:kk], omega[rows, :kk], matrices,
-                                             scenario.inertia,
-                                             scenario.orbit_rate)
-            y_out[rows, :kk, 3:] = continuous_quaternions(q)
+        samples.ensemble_samples(sun_x, sun_y, y_out, e_out, k_out, inertia, rate,
+                                 tidal_potential_coefficient(rate), jac, b0, min(n, b0 + size))
 
     starts = range(0, n, size)
     with ThreadPoolExecutor(threads) if threads > 1 and len(starts) > 1 else _NoPool() as pool:
         list(pool.map(group, starts))
-    return EnsembleResult(times, omega, e_out, y_out[:, :, 3:], jac, success, messages, steps,
-                          nfev, wall, True, euler_angles)
+    return EnsembleResult(times, y_out[:, :, :3], e_out if euler_angles else _no_euler(n, m),
+                          y_out[:, :, 3:], jac, success, messages, steps, nfev, wall, True,
+                          euler_angles)
 
 
 #: Most samples (bodies x times) post-processed at once by :func:`_result`.

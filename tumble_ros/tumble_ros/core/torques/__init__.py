@@ -15,10 +15,10 @@ from tumble_ros.core.torques.frames import orbital_to_body
 from tumble_ros.core.torques.gravity_gradient import (gravity_gradient_potential,
                                                       gravity_gradient_torque, sun_direction_body,
                                                       sun_direction_orbital, tidal_coefficients,
-                                                      tidal_torque)
+                                                      tidal_potential_coefficient, tidal_torque)
 from tumble_ros.core.torques.pulses import pulse_torque
 
 __all__ = ['TorqueComponent', 'torque_function', 'extra_torque_arrays', 'NO_EXTRA',
            'orbital_to_body', 'gravity_gradient_potential', 'gravity_gradient_torque',
            'sun_direction_body', 'sun_direction_orbital', 'tidal_coefficients', 'tidal_torque',
-           'pulse_torque']
+           'tidal_potential_coefficient', 'pulse_torque']

@@ -24,7 +24,7 @@ from tumble_ros.core.torques.frames import orbital_to_body
 
 __all__ = ['sun_direction_orbital', 'sun_direction_body', 'sun_in_orbit_plane', 'tidal_torque',
            'tidal_coefficients', 'point_mass_torque', 'gravity_gradient_torque',
-           'gravity_gradient_potential']
+           'gravity_gradient_potential', 'tidal_potential_coefficient']
 
 
 @jit_inline
@@ -128,5 +128,15 @@ def gravity_gradient_potential(u_body: npt.ArrayLike, inertia: npt.ArrayLike,
     uu = u * u * i
     # (written out: np.sum over 3 components costs a reduction's set-up per sample; same bits)
     weighted = uu[..., 0] + uu[..., 1] + uu[..., 2]
-    potential: npt.NDArray[np.float64] = 1.5 * orbit_rate**2 * weighted
+    potential: npt.NDArray[np.float64] = tidal_potential_coefficient(orbit_rate) * weighted
     return potential
+
+
+def tidal_potential_coefficient(orbit_rate: float) -> float:
+    """
+    Return (3/2) ws^2 [1/yr^2] of the tidal potential, as Python computes it: its one place.
+
+    ``dynamics.jacobi_integral`` and an ensemble's compiled post-processing multiply by this
+    number (``kernels.samples.jacobi_sample``), so both give the same bits.
+    """
+    return 1.5 * orbit_rate**2
