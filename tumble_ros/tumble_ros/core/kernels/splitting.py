@@ -309,23 +309,13 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
                 tx, ty, tz = plain_torque_given_sun(p, sx, sy, new[BK.Y + 3, i],
                                                     new[BK.Y + 4, i], new[BK.Y + 5, i],
                                                     new[BK.Y + 6, i])
-                new[BK.TORQUE, i] = tx
-                new[BK.TORQUE + 1, i] = ty
-                new[BK.TORQUE + 2, i] = tz
-                new[BK.PI, i] += half * tx
-                new[BK.PI + 1, i] += half * ty
-                new[BK.PI + 2, i] += half * tz
+                block_kick(new, i, half, tx, ty, tz)
         else:
             for i in range(m):
                 tx, ty, tz = torque_given_sun(p, extra, t, sx, sy, new[BK.Y + 3, i],
                                               new[BK.Y + 4, i], new[BK.Y + 5, i],
                                               new[BK.Y + 6, i])
-                new[BK.TORQUE, i] = tx
-                new[BK.TORQUE + 1, i] = ty
-                new[BK.TORQUE + 2, i] = tz
-                new[BK.PI, i] += half * tx
-                new[BK.PI + 1, i] += half * ty
-                new[BK.PI + 2, i] += half * tz
+                block_kick(new, i, half, tx, ty, tz)
     for i in range(m):
         new[BK.Y, i] = new[BK.PI, i] * p[PR.INV_INERTIA]   # as flow
         new[BK.Y + 1, i] = new[BK.PI + 1, i] * p[PR.INV_INERTIA + 1]
@@ -334,6 +324,17 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
     bst[ST.TAU] = (bst[ST.TAU_BOUND] if bst[ST.N_STEPS] + 1.0 >= bst[ST.N_TOTAL]
                    else (bst[ST.N_STEPS] + 1.0) * h)
     bst[ST.NFEV] += cfg[CF.N_STAGES]
+
+
+@jit_inline
+def block_kick(new: Array, i: int, half: float, tx: float, ty: float, tz: float) -> None:
+    """Keep body i's torque (tx, ty, tz) and kick its angular momentum by ``half`` times it."""
+    new[BK.TORQUE, i] = tx
+    new[BK.TORQUE + 1, i] = ty
+    new[BK.TORQUE + 2, i] = tz
+    new[BK.PI, i] += half * tx
+    new[BK.PI + 1, i] += half * ty
+    new[BK.PI + 2, i] += half * tz
 
 
 @jit
