@@ -54,7 +54,8 @@ _TWO_PI = 2.0 * math.pi
 #: (4 ulp): the solvers stop once the residual is that small, after applying that last step.
 #: Without it, they stopped only when Newton's step fell below 4e-16 (1 + |x|), which where the
 #: equation is ill-conditioned (e near 1 at pericentre, or a step dithering by an ulp) never
-#: came, and they ran all their iterations (64 or 200: ~10 us a call instead of ~0.3).
+#: came, and they ran all their iterations (64 or 200 instead of 2-6: a runaway flyby's
+#: ``simulate`` took 12.7 s instead of 1.2 s).
 _NOISE = 4.0 * 2.220446049250313e-16
 #: Largest eccentricity of an ellipse accepted (the solver is tested up to it), and the
 #: smallest of a hyperbola: 1 +- 1e-6 (parabolic orbits are not modelled).
