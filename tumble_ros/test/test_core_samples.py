@@ -104,3 +104,18 @@ def test_continuity_and_jacobi_by_an_independent_computation():
                 + 1.5 * RATE**2 * np.einsum('bki,i,bki->bk', u, INERTIA, u)
                 + RATE * np.einsum('i,bki,bki->bk', INERTIA, w, c[:, :, 2, :]))
     np.testing.assert_allclose(jac, expected, rtol=1e-12, atol=1e-9)
+
+
+@pytest.mark.parametrize('compiled', [False, True])
+def test_the_matrix_is_rotations_bit_for_bit(compiled):
+    """quaternion_matrix (one sample, compiled or its source) = quaternions_to_matrices, bits."""
+    from tumble_ros.core.jit import python_source
+
+    rng = np.random.default_rng(11)
+    q = rng.normal(size=(500, 4)) * rng.uniform(0.5, 2.0, size=(500, 1))
+    q[:5, 1:] = 0.0                                  # turns about nothing and one axis: zeros
+    q[5:10, 2:] = -0.0
+    expected = quaternions_to_matrices(q).reshape(-1, 9)
+    one = samples.quaternion_matrix if compiled else python_source(samples.quaternion_matrix)
+    got = np.array([one(*map(float, row)) for row in q])
+    assert same_bits(got, expected)

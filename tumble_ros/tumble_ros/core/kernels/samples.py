@@ -9,15 +9,16 @@ pass over memory per operation and a (n, 3, 3) array of rotation matrices (at N 
 bodies and 11 samples, 3.6 s of a 10-s ensemble call); :func:`ensemble_samples` takes one
 sample at a time in registers.
 
-One formula, two evaluations: :func:`quaternion_matrix` and :func:`jacobi_sample` are the
-formulas; numpy evaluates their Python source on whole arrays
-(``rotation.quaternions_to_matrices``, ``dynamics.jacobi_integral``: a single body's
-``simulate``), the compiled loop one sample at a time (an ensemble). Both give the same bits:
+One formula, two evaluations: :func:`jacobi_sample` is the formula; numpy evaluates its
+Python source on whole arrays (``dynamics.jacobi_integral``: a single body's ``simulate``), the
+compiled loop one sample at a time (an ensemble). :func:`quaternion_matrix` repeats
+``rotation.quaternions_to_matrices``' arithmetic for one sample (``core.model`` does not import
+the kernels), tied to it bit for bit by a test. Both give the same bits:
 the same operations in the same order and no fused multiply-add (numba does not contract
 without ``fastmath``: :data:`~tumble_ros.core.jit.JIT_OPTIONS`); sin and cos of the Sun's phase
 come from numpy, once per time, in both. The continuity is ``rotation.continuous_quaternions``'s
 rule written as a loop (its cumulative product of signs as a running sign).
-tests/test_core_samples.py compares them bit for bit.
+test_core_samples.py compares them bit for bit.
 
 * :func:`quaternion_matrix`, :func:`jacobi_sample`: one sample (inlined);
 * :func:`ensemble_samples`: an ensemble's bodies b0..b1 in place: J of each sample reached
