@@ -13,12 +13,12 @@ One formula, two evaluations: :func:`jacobi_sample` is the formula; numpy evalua
 Python source on whole arrays (``dynamics.jacobi_integral``: a single body's ``simulate``), the
 compiled loop one sample at a time (an ensemble). :func:`quaternion_matrix` repeats
 ``rotation.quaternions_to_matrices``' arithmetic for one sample (``core.model.rotation`` does
-not import the kernels: an import-cycle risk), tied to it bit for bit by a test. Both give the same bits:
-the same operations in the same order and no fused multiply-add (numba does not contract
-without ``fastmath``: :data:`~tumble_ros.core.jit.JIT_OPTIONS`); sin and cos of the Sun's phase
-come from numpy, once per time, in both. The continuity is ``rotation.continuous_quaternions``'s
-rule written as a loop (its cumulative product of signs as a running sign).
-test_core_samples.py compares them bit for bit.
+not import the kernels: an import-cycle risk), tied to it bit for bit by a test. Both give
+the same bits: the same operations in the same order and no fused multiply-add (numba does not
+contract without ``fastmath``: :data:`~tumble_ros.core.jit.JIT_OPTIONS`); sin and cos of the
+Sun's phase come from numpy, once per time, in both. The continuity is
+``rotation.continuous_quaternions``'s rule written as a loop (its cumulative product of signs
+as a running sign). test_core_samples.py compares them bit for bit.
 
 * :func:`quaternion_matrix`, :func:`jacobi_sample`: one sample (inlined);
 * :func:`ensemble_samples`: an ensemble's bodies b0..b1 in place: J of each sample reached
