@@ -1,5 +1,7 @@
 """`python -m tumble_ros` (make run): bringup, then the analysis of the recording."""
 from pathlib import Path
+import subprocess
+import sys
 
 from tumble_ros import topics
 from tumble_ros.__main__ import main
@@ -11,6 +13,21 @@ def short_scenario(tmp_path) -> Path:
     scenario.write_text(
         'sim:\n  ros__parameters:\n    duration: 0.2\n    output_interval: 0.002\n')
     return scenario
+
+
+def main_job_then(tmp_path, probe: str, env=None) -> subprocess.CompletedProcess:
+    """
+    Run the main job on :func:`short_scenario` in a fresh interpreter (in ``tmp_path``).
+
+    Then ``probe`` (Python source, with ``code`` the job's exit code and ``sys`` imported);
+    its output is the last of the process's stdout.
+    """
+    source = ('import os, sys\n'
+              f'os.chdir({str(tmp_path)!r})\n'
+              'from tumble_ros.__main__ import main\n'
+              f'code = main([{str(short_scenario(tmp_path))!r}])\n' + probe)
+    return subprocess.run([sys.executable, '-c', source], capture_output=True, text=True,
+                          timeout=300, env=env, cwd=Path(__file__).parent)
 
 
 def test_main_job_records_and_analyses(tmp_path, monkeypatch, capsys):

@@ -12,13 +12,17 @@ import subprocess
 import sys
 
 import pytest
+from test_main_job import main_job_then
+
+
+def _env():
+    """Return this environment without pytest-cov's: no coverage started in the child."""
+    return {key: value for key, value in os.environ.items() if not key.startswith('COV_CORE_')}
 
 
 def _python(code):
-    env = {key: value for key, value in os.environ.items()
-           if not key.startswith('COV_CORE_')}          # no coverage started in the child
     return subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
-                          timeout=300, env=env, cwd=Path(__file__).parent)
+                          timeout=300, env=_env(), cwd=Path(__file__).parent)
 
 
 def test_numba_is_imported_without_coverage_when_none_is_measured():
@@ -47,14 +51,8 @@ def test_a_measured_coverage_is_left_as_it_was():
 
 def test_the_main_job_imports_numba_without_coverage(tmp_path):
     pytest.importorskip('coverage')
-    scenario = tmp_path / 'short.yaml'
-    scenario.write_text(
-        'sim:\n  ros__parameters:\n    duration: 0.2\n    output_interval: 0.002\n')
-    done = _python('import os, sys\n'
-                   f'os.chdir({str(tmp_path)!r})\n'
-                   'from tumble_ros.__main__ import main\n'
-                   f'code = main([{str(scenario)!r}])\n'
-                   'import numba.misc.coverage_support as support\n'
-                   'print(code, "coverage" in sys.modules, support.coverage_available)\n')
+    done = main_job_then(tmp_path, 'import numba.misc.coverage_support as support\n'
+                                   'print(code, "coverage" in sys.modules, '
+                                   'support.coverage_available)\n', env=_env())
     assert done.returncode == 0, done.stderr
     assert done.stdout.split()[-3:] == ['0', 'False', 'False']

@@ -11,6 +11,8 @@ from pathlib import Path
 import subprocess
 import sys
 
+from test_main_job import main_job_then
+
 
 def _python(code):
     return subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
@@ -42,14 +44,8 @@ def test_an_imported_package_is_left_as_it_was():
 
 
 def test_the_main_job_records_without_the_generator(tmp_path):
-    scenario = tmp_path / 'short.yaml'
-    scenario.write_text(
-        'sim:\n  ros__parameters:\n    duration: 0.2\n    output_interval: 0.002\n')
-    done = _python('import os, sys\n'
-                   f'os.chdir({str(tmp_path)!r})\n'
-                   'from tumble_ros.__main__ import main\n'
-                   f'code = main([{str(scenario)!r}])\n'
-                   'print(code, "rosidl_generator_py" in sys.modules, "lark" in sys.modules)\n')
+    done = main_job_then(tmp_path, 'print(code, "rosidl_generator_py" in sys.modules, '
+                                   '"lark" in sys.modules)\n')
     assert done.returncode == 0, done.stderr
     assert done.stdout.split()[-3:] == ['0', 'True', 'False']
     assert len(list(tmp_path.glob('recordings/short_*.mcap'))) == 1
