@@ -129,7 +129,7 @@ run: SETUP_EXTRA = warmup-scenario
 run: setup
 	$(ENV) python -m tumble_ros $(CONFIG)
 
-# Optional: compile (or load) every integration loop now, one process per method. The numerical
+# Optional: compile (or load) every integration loop now, a process a core. The numerical
 # core imports no ROS: it needs the venv only, and is imported from the source tree (the same
 # files colcon's --symlink-install installs, so the same numba cache).
 WARMUP = $(ENV) --build env PYTHONPATH=$(CURDIR)/tumble_ros python -m tumble_ros.cli.warmup

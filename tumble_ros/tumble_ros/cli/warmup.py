@@ -8,9 +8,10 @@ only the loops it uses (``core.jit.first_use`` says so on stderr). This optional
 (``make warmup``; ``make test`` runs it first) compiles them all ahead. It also compiles the
 loops' variant for extra torques (``core.torques.TorqueComponent``: every scenario with 1 to
 8 of them shares it, whatever their functions; ``core.torques.component.EXTRA_SLOTS``) and
-the reference path's calls. The methods compile in parallel, one process each on up to as
-many cores as there are (each method's loops are its own copies, so the compilations share
-nothing), and each says when it is ready.
+the reference path's calls. The loops compile in parallel, on up to as many processes as there
+are cores (each method's loops are its own copies, so the compilations share nothing): one
+task per method and variant, without and with extra torques, and the reference path's in
+two more (:func:`_tasks`); each method says when its parts are ready.
 
 ``python -m tumble_ros.cli.warmup --scenario SCENARIO`` compiles (or loads) only what a run of
 that scenario uses, by simulating its first output interval: ``make run`` does it beside the
@@ -20,12 +21,15 @@ cannot read or run is left to the run, which says why (this exits 0 either way).
 """
 from __future__ import annotations
 
+from collections import Counter
+from collections.abc import Callable
 from concurrent.futures import as_completed, ProcessPoolExecutor
 import multiprocessing
 import os
 from pathlib import Path
 import sys
 import time
+from typing import Any
 
 from tumble_ros.core import (Impact, IntegratorSettings, kernels, load_scenario, Scenario,
                              simulate, simulate_ensemble, torque_function, TorqueComponent)
@@ -48,24 +52,60 @@ def _tiny(extra: bool) -> Scenario:
     return tiny.replace(torques=(TorqueComponent('warm-up', _no_torque),)) if extra else tiny
 
 
-def _warm_method(name: str) -> float:
-    """Compile (or load) one method's single-body and ensemble loops; return the seconds."""
+#: The label of the reference path's compilations (:func:`_warm_reference`) in the reports.
+REFERENCE = 'reference path'
+#: The methods whose reference path (``simulate(..., fast=False)``) calls compiled functions.
+REFERENCE_METHODS = ('splitting', 'rk4', 'dop853')
+
+
+def _warm_variant(name: str, extra: bool) -> float:
+    """
+    Compile (or load) one method's single-body and ensemble loops; return the seconds.
+
+    ``extra``: the variant for extra torques (else the one without).
+    """
     started = time.perf_counter()
-    for extra in (False, True):
-        run = _tiny(extra).replace(integrator=IntegratorSettings(method=name, step=1e-4))
-        simulate(run)
-        simulate_ensemble(run, n_bodies=2)   # the lockstep loop (methods with one)
-        # bodies with their own impacts: the per-body loop
-        simulate_ensemble(run, impacts=[(), (Impact(0.0, 5e-4, (1.0, 0.0, 0.0)),)])
+    run = _tiny(extra).replace(integrator=IntegratorSettings(method=name, step=1e-4))
+    simulate(run)
+    simulate_ensemble(run, n_bodies=2)   # the lockstep loop (methods with one)
+    # bodies with their own impacts: the per-body loop
+    simulate_ensemble(run, impacts=[(), (Impact(0.0, 5e-4, (1.0, 0.0, 0.0)),)])
     return time.perf_counter() - started
+
+
+def _warm_reference(extra: bool) -> float:
+    """Compile (or load) the reference path's compiled calls; return the seconds."""
+    started = time.perf_counter()
+    for method in REFERENCE_METHODS:
+        simulate(_tiny(extra).replace(integrator=IntegratorSettings(method=method, step=1e-4)),
+                 fast=False)
+    return time.perf_counter() - started
+
+
+#: One compilation of the warm-up: its function, arguments and label (a method's name).
+Task = tuple[Callable[..., float], tuple[Any, ...], str]
+
+
+def _tasks(names: list[str]) -> list[Task]:
+    """
+    Return the warm-up's compilations: each method's two variants apart, the reference path's.
+
+    As one task a method, the longest (the splitting's two variants, ~30 s of CPU) started
+    after another and ran alone for ~20 s of a fresh clone's warm-up, and the reference path
+    (~7 s) compiled after them all, in one process; in parts of 3 to 30 s the processes stay
+    busy to the end whatever their order (docs/performance.md, "The warm-up in parts").
+    """
+    return ([(_warm_reference, (extra,), REFERENCE) for extra in (False, True)]
+            + [(_warm_variant, (name, extra), name) for name in names for extra in (False, True)])
 
 
 def warm_up(report: bool = False) -> float:
     """
     Compile every method's single-body and ensemble loops now, or load them from the cache.
 
-    The methods compile in parallel processes (up to the CPU count); ``report`` prints a line
-    as each is ready. Returns the seconds taken (0 when numba is unavailable).
+    The parts compile in parallel processes (up to the CPU count, :func:`_tasks`); ``report``
+    prints a line as each method is ready, with the seconds its parts took. Returns the
+    seconds taken (0 when numba is unavailable).
     """
     if not kernels.COMPILED:
         return 0.0
@@ -73,19 +113,21 @@ def warm_up(report: bool = False) -> float:
     # one integrator name per compiled method (its loops serve every name sharing the kernel)
     compiled = sorted({cls.kernel: name for name, cls in INTEGRATORS.items()
                        if cls.kernel in kernels.KERNELS}.values())
-    workers = max(1, min(len(compiled), os.cpu_count() or 1))
+    tasks = _tasks(compiled)
+    workers = max(1, min(len(tasks), os.cpu_count() or 1))
+    left = Counter(label for _, _, label in tasks)
+    took: Counter[str] = Counter()
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context('spawn')) as pool:
-        futures = {pool.submit(_warm_method, name): name for name in compiled}
+        futures = {pool.submit(function, *args): label for function, args, label in tasks}
         for future in as_completed(futures):
-            seconds = future.result()
-            if report:
-                print(f'   {futures[future]} loops ready ({seconds:.1f} s)', flush=True)
-    for name in compiled:   # loaded here from the cache the workers wrote (milliseconds)
-        _warm_method(name)
-    for extra in (False, True):
-        for method in ('splitting', 'rk4', 'dop853'):   # the reference path's compiled calls
-            simulate(_tiny(extra).replace(
-                integrator=IntegratorSettings(method=method, step=1e-4)), fast=False)
+            label = futures[future]
+            took[label] += future.result()
+            left[label] -= 1
+            if report and not left[label]:
+                print(f'   {label} {"calls" if label == REFERENCE else "loops"} ready '
+                      f'({took[label]:.1f} s)', flush=True)
+    for function, args, _ in tasks:  # loaded here from the cache the workers wrote (ms)
+        function(*args)
     return time.perf_counter() - started
 
 
