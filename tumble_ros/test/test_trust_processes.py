@@ -532,11 +532,12 @@ def test_two_visible_bringups_in_one_domain_exit_1_and_their_recordings_are_refu
     from tumble_ros.analysis.cli import command
 
     outputs = [tmp_path / f'run{k}.mcap' for k in range(2)]
-    # paced over ~3 s each, so that each is alive when the other's recorder discovers it (its
+    # paced over ~10 s each, so that each is alive when the other's recorder discovers it (its
     # latched description reaches a late subscriber only while its publisher lives): as fast as
-    # possible, a run could end before the other's recorder had matched its /scenario
+    # possible, a run could end before the other's recorder had matched its /scenario, and
+    # paced over 3 s one did, at load 5-6, the other process starting that much later
     runs = [spawn('bringup', '--visible', '--quiet', '--no-markers', '--output', output,
-                  '--ros-args', '-p', 'duration:=6.0', '-p', 'real_time_factor:=2.0')
+                  '--ros-args', '-p', 'duration:=6.0', '-p', 'real_time_factor:=0.6')
             for output in outputs]
     for run in runs:
         assert run.wait(SLOW) == 1, run.output
