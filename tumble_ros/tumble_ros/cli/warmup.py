@@ -116,7 +116,7 @@ def warm_up(report: bool = False) -> float:
     tasks = _tasks(compiled)
     workers = max(1, min(len(tasks), os.cpu_count() or 1))
     left = Counter(label for _, _, label in tasks)
-    took: Counter[str] = Counter()
+    took = dict.fromkeys(left, 0.0)
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context('spawn')) as pool:
         futures = {pool.submit(function, *args): label for function, args, label in tasks}
         for future in as_completed(futures):
