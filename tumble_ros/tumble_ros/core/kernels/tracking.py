@@ -14,8 +14,9 @@ import math
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, ST
 
-__all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards',
-           'unwrapped_euler', 'set_track', 'track_rate', 'track_pieces', 'refresh_track']
+__all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of',
+           'unwrapped_euler', 'set_track', 'track_to', 'track_rate', 'track_pieces',
+           'refresh_track']
 
 #: Largest turn of phi or psi between two track updates [rad].
 UNWRAP_STEP = 1.0
@@ -34,18 +35,16 @@ def unwrap_towards(angle: float, reference: float) -> float:
     return angle + _TWO_PI * round((reference - angle) / _TWO_PI)
 
 
-@jit
-def unwrapped_euler(st: Array, o: int, track: Array) -> tuple[float, float, float]:
+@jit_inline
+def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
+             psi_ref: float) -> tuple[float, float, float]:
     """
-    Return the paper's (phi, psi, theta) of quaternion st[o+3:o+7].
+    Return the paper's (phi, psi, theta) [rad] of quaternion (q0, q1, q2, q3).
 
-    phi and psi are unwrapped towards track[0], track[1] (z-x-z, orbital -> body; the
-    rotation.matrix_to_euler of C^T).
+    phi and psi are unwrapped towards phi_ref, psi_ref (z-x-z, orbital -> body; the
+    rotation.matrix_to_euler of C^T). The one conversion: :func:`unwrapped_euler` (a state's
+    row) and the lockstep loop (a block's column, ``lockstep.block_emit``) inline it.
     """
-    q0 = st[o + 3]
-    q1 = st[o + 4]
-    q2 = st[o + 5]
-    q3 = st[o + 6]
     s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
     c00 = 1.0 - s * (q2 * q2 + q3 * q3)
     c02 = s * (q1 * q3 + q0 * q2)
@@ -62,7 +61,17 @@ def unwrapped_euler(st: Array, o: int, track: Array) -> tuple[float, float, floa
     else:
         psi = math.atan2(c20, c21)
         phi = math.atan2(c02, -c12)
-    return unwrap_towards(phi, track[0]), unwrap_towards(psi, track[1]), theta
+    return unwrap_towards(phi, phi_ref), unwrap_towards(psi, psi_ref), theta
+
+
+@jit
+def unwrapped_euler(st: Array, o: int, track: Array) -> tuple[float, float, float]:
+    """
+    Return the paper's (phi, psi, theta) of quaternion st[o+3:o+7] [rad].
+
+    phi and psi are unwrapped towards track[0], track[1] (:func:`euler_of`).
+    """
+    return euler_of(st[o + 3], st[o + 4], st[o + 5], st[o + 6], track[0], track[1])
 
 
 @jit
@@ -72,7 +81,13 @@ def set_track(st: Array, o: int, track: Array) -> None:
 
     Not finite: a dense output inside a step whose state ran away (skipped).
     """
-    phi, psi, theta = unwrapped_euler(st, o, track)
+    track_to(st[o + 3], st[o + 4], st[o + 5], st[o + 6], track)
+
+
+@jit_inline
+def track_to(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
+    """Set track to the unwrapped Euler angles of quaternion q (:func:`set_track`'s rule)."""
+    phi, psi, theta = euler_of(q0, q1, q2, q3, track[0], track[1])
     if math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta):
         track[0] = phi
         track[1] = psi
