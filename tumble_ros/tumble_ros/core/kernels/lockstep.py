@@ -28,7 +28,7 @@ from tumble_ros.core.jit import jit
 from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, Extra, FAIL, LI, N, ST,
                                             STATUS)
-from tumble_ros.core.kernels.tracking import (euler_of, track_pieces, track_rate, track_to,
+from tumble_ros.core.kernels.tracking import (euler_of, follow, track_pieces, track_rate,
                                               UNWRAP_STEP)
 
 __all__ = ['block_init', 'block_advance', 'no_block_dense', 'LOOP_FUNCTIONS', 'BIGGEST']
@@ -313,11 +313,10 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
         if track_pieces(inc) == 1:   # track_update without dense output, on the columns
             track = tracks[i]
             if bodies[BB.BUDGET, i] > 0.0:
-                track_to(old[BK.Y + 3, i], old[BK.Y + 4, i], old[BK.Y + 5, i],
-                         old[BK.Y + 6, i], track)
+                follow(old[BK.Y + 3, i], old[BK.Y + 4, i], old[BK.Y + 5, i], old[BK.Y + 6, i],
+                       track)
             bodies[BB.BUDGET, i] = 0.0
-            track_to(cur[BK.Y + 3, i], cur[BK.Y + 4, i], cur[BK.Y + 5, i], cur[BK.Y + 6, i],
-                     track)
+            follow(cur[BK.Y + 3, i], cur[BK.Y + 4, i], cur[BK.Y + 5, i], cur[BK.Y + 6, i], track)
         else:
             nfev = load_body(bst, old, cur, bodies, i)
             track_update(p, extra, cfg, bst, tracks[i], inc)
@@ -331,8 +330,8 @@ def block_refresh(bst: Array, soa: Array, bodies: Array, counters: npt.NDArray[n
     cur = soa[counters[LI.PAR]]
     for i in range(m):
         if bodies[BB.BUDGET, i] > 0.0 and bodies[BB.FAILED, i] == 0.0:   # (on the columns)
-            track_to(cur[BK.Y + 3, i], cur[BK.Y + 4, i], cur[BK.Y + 5, i], cur[BK.Y + 6, i],
-                     tracks[i])
+            follow(cur[BK.Y + 3, i], cur[BK.Y + 4, i], cur[BK.Y + 5, i], cur[BK.Y + 6, i],
+                   tracks[i])
             bodies[BB.BUDGET, i] = 0.0
 
 

@@ -14,7 +14,7 @@ import math
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, ST
 
-__all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of',
+__all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of', 'follow',
            'unwrapped_euler', 'set_track', 'track_to', 'track_rate', 'track_pieces',
            'refresh_track']
 
@@ -36,6 +36,30 @@ def unwrap_towards(angle: float, reference: float) -> float:
 
 
 @jit_inline
+def _rotation_parts(q0: float, q1: float, q2: float, q3: float
+                    ) -> tuple[float, float, float, float, float, float, float, float]:
+    """Return C's (c00, c02, c10, c12, c20, c21, c22) of quaternion q and sin theta (hypot)."""
+    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    c00 = 1.0 - s * (q2 * q2 + q3 * q3)
+    c02 = s * (q1 * q3 + q0 * q2)
+    c10 = s * (q1 * q2 + q0 * q3)
+    c12 = s * (q2 * q3 - q0 * q1)
+    c20 = s * (q1 * q3 - q0 * q2)
+    c21 = s * (q2 * q3 + q0 * q1)
+    c22 = 1.0 - s * (q1 * q1 + q2 * q2)
+    return c00, c02, c10, c12, c20, c21, c22, math.hypot(c20, c21)
+
+
+@jit_inline
+def _phi_psi(c00: float, c02: float, c10: float, c12: float, c20: float, c21: float,
+             sth: float) -> tuple[float, float]:
+    """Return phi, psi [rad] in (-pi, pi] from C's parts (:func:`_rotation_parts`)."""
+    if sth < 1e-300:
+        return math.atan2(c10, c00), 0.0
+    return math.atan2(c02, -c12), math.atan2(c20, c21)
+
+
+@jit_inline
 def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
              psi_ref: float) -> tuple[float, float, float]:
     """
@@ -45,23 +69,31 @@ def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
     rotation.matrix_to_euler of C^T). The one conversion: :func:`unwrapped_euler` (a state's
     row) and the lockstep loop (a block's column, ``lockstep.block_emit``) inline it.
     """
-    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    c00 = 1.0 - s * (q2 * q2 + q3 * q3)
-    c02 = s * (q1 * q3 + q0 * q2)
-    c10 = s * (q1 * q2 + q0 * q3)
-    c12 = s * (q2 * q3 - q0 * q1)
-    c20 = s * (q1 * q3 - q0 * q2)
-    c21 = s * (q2 * q3 + q0 * q1)
-    c22 = 1.0 - s * (q1 * q1 + q2 * q2)
-    sth = math.hypot(c20, c21)
+    c00, c02, c10, c12, c20, c21, c22, sth = _rotation_parts(q0, q1, q2, q3)
     theta = math.atan2(sth, c22)
-    if sth < 1e-300:
-        phi = math.atan2(c10, c00)
-        psi = 0.0
-    else:
-        psi = math.atan2(c20, c21)
-        phi = math.atan2(c02, -c12)
+    phi, psi = _phi_psi(c00, c02, c10, c12, c20, c21, sth)
     return unwrap_towards(phi, phi_ref), unwrap_towards(psi, psi_ref), theta
+
+
+@jit_inline
+def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
+    """
+    :func:`track_to` for a track whose theta is never read: phi and psi only.
+
+    The same phi, psi and the same rule (skipped unless phi, psi and theta are finite), without
+    theta's ``atan2``: atan2(y, x) is NaN exactly when y or x is, and finite otherwise, so
+    theta = atan2(sin theta, c22) is finite exactly when neither is NaN. The lockstep loop's
+    tracks (``lockstep.block_track``, ``block_refresh``), which no output reads but as the
+    references of phi and psi, take it: track[2] keeps its first value there.
+    """
+    c00, c02, c10, c12, c20, c21, c22, sth = _rotation_parts(q0, q1, q2, q3)
+    phi, psi = _phi_psi(c00, c02, c10, c12, c20, c21, sth)
+    phi = unwrap_towards(phi, track[0])
+    psi = unwrap_towards(psi, track[1])
+    if (math.isfinite(phi) and math.isfinite(psi) and not math.isnan(sth)
+            and not math.isnan(c22)):
+        track[0] = phi
+        track[1] = psi
 
 
 @jit
