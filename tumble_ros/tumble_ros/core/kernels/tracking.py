@@ -14,8 +14,8 @@ import math
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, ST
 
-__all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of', 'follow',
-           'unwrapped_euler', 'set_track', 'track_to', 'track_rate', 'track_pieces',
+__all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of',
+           'follow', 'unwrapped_euler', 'set_track', 'track_to', 'track_rate', 'track_pieces',
            'refresh_track']
 
 #: Largest turn of phi or psi between two track updates [rad].
