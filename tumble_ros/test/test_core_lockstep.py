@@ -252,6 +252,46 @@ def test_the_loops_are_loaded_before_the_timing_for_the_types_they_are_called_wi
 
 
 @needs_numba
+def test_the_lockstep_track_update_is_set_tracks_phi_and_psi_bit_for_bit():
+    """
+    ``tracking.follow`` (the lockstep loop's track update): ``set_track``'s phi and psi.
+
+    Without theta's atan2 and mostly without hypot: on random attitudes, references many turns
+    away, theta near 0 and pi across the band where |(c20, c21)| is decided by hypot
+    (0.5e-300 to 1e-300, and just above with both entries below it), NaN and infinite
+    quaternions (the track then kept); track[2] is never written.
+    """
+    from tumble_ros.core.kernels.tracking import follow, set_track
+
+    rng = np.random.default_rng(11)
+    tiny = np.geomspace(1e-302, 1e-299, 301)
+    one, zero = np.ones_like(tiny), np.zeros_like(tiny)
+    quaternions = np.vstack([
+        rng.normal(size=(400, 4)),
+        np.column_stack([one, zero, tiny, zero]),     # theta ~ 0: c20 = -2e, c21 = 0
+        np.column_stack([one, tiny, tiny, zero]),     # c20 = -2e, c21 = 2e: hypot 2.8e
+        np.column_stack([tiny, one, zero, zero]),     # theta ~ pi: c21 = 2e
+        np.column_stack([tiny, one, tiny, zero]),
+        [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [-0.0, -0.0, 1.0, 0.0],
+         [np.nan, 0.0, 0.0, 1.0], [1.0, np.nan, 0.0, 0.0], [np.inf, 0.0, 0.0, 0.0],
+         [1.0, np.inf, 1.0, 0.0], [1e200, 1e200, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]],
+    ])
+    st = np.zeros(kernels.ST.SIZE)
+    degenerate = 0
+    for q in quaternions:
+        reference = np.array([rng.uniform(-1e3, 1e3), rng.uniform(-1e3, 1e3), 7.0])
+        want, got = reference.copy(), reference.copy()
+        st[3:7] = q
+        set_track(st, 0, want)
+        follow(q[0], q[1], q[2], q[3], got)
+        assert got[:2].tobytes() == want[:2].tobytes(), q
+        assert got[2] == 7.0
+        degenerate += want[1] == 2 * np.pi * np.round(reference[1] / (2 * np.pi))
+    # the band's both sides were reached: psi = 0 (unwrapped) for some tiny quaternions only
+    assert 0 < degenerate < len(quaternions) - 400
+
+
+@needs_numba
 @pytest.mark.parametrize('method, step', [
     ('splitting', 2e-3),   # samples inside a step: the block's dense output (block_dense)
     ('splitting', 5e-2),   # fast bodies' tracks in pieces (dense), slow ones' on the columns

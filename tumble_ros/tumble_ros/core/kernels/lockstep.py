@@ -12,12 +12,17 @@ component r of all B bodies (layout :data:`~.layout.BK`): loops LLVM vectorises 
 
 Each body gets exactly the bits of its own run (``stepping.advance`` on one body): the same
 operations in the same order, vector lanes or not (no FMA contraction: numba does not allow it
-without ``fastmath``). The rare per-body work (output samples, Euler-track updates) is done by
-the single-body functions (:func:`~.stepping.emit`, :func:`~.stepping.track_update`) on a
-scratch state ``bst`` (layout :data:`~.layout.ST`) into which the method's ``block_load`` copies
-the body (``bst`` also holds the block's shared times and counters, as a single body's state
-holds them). A template like :mod:`.stepping`: :mod:`.methods` binds ``method_block_*`` per
-method.
+without ``fastmath``). The outputs and the Euler track are the single-body functions' too,
+on the block's columns: a sample is written for the whole block at once (:func:`block_emit`:
+the method's ``block_dense`` for a sample inside a step, then ``tracking.euler_of`` per body,
+``stepping.emit``'s operations), and a track update without dense output takes
+``tracking.follow`` on the columns (``stepping.track_update``'s phi and psi; theta, which no
+lockstep output reads, skipped). The rare rest (a method without ``block_dense``, a track
+update in pieces) calls the single-body functions (:func:`~.stepping.emit`,
+:func:`~.stepping.track_update`) on a scratch state ``bst`` (layout :data:`~.layout.ST`) into
+which the method's ``block_load`` copies the body (``bst`` also holds the block's shared times
+and counters, as a single body's state holds them). A template like :mod:`.stepping`:
+:mod:`.methods` binds ``method_block_*`` per method.
 """
 from __future__ import annotations
 
@@ -289,7 +294,14 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
 @jit
 def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                 bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, m: int) -> None:
-    """``stepping.track_euler`` for every running body: the bound vectorised, updates rare."""
+    """
+    ``stepping.track_euler`` for every running body: the bound vectorised, updates rare.
+
+    Each body keeps its own schedule (its updates at the steps of its single run: updating a
+    block's bodies together would move them, and below theta ~ 0.1 the bound does not bound
+    phi and psi, so the 2 pi multiples could differ). An update without dense output runs on
+    the columns (``tracking.follow``: phi and psi of the step's start, then of its end).
+    """
     if cfg[CF.EULER] == 0.0:
         return
     cur = soa[counters[LI.PAR]]
@@ -326,7 +338,7 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
 @jit
 def block_refresh(bst: Array, soa: Array, bodies: Array, counters: npt.NDArray[np.int64],
                   tracks: Array, m: int) -> None:
-    """``tracking.refresh_track`` for every running body (the end of ``stepping.advance``)."""
+    """``tracking.refresh_track`` for every running body (``tracking.follow`` on the columns)."""
     cur = soa[counters[LI.PAR]]
     for i in range(m):
         if bodies[BB.BUDGET, i] > 0.0 and bodies[BB.FAILED, i] == 0.0:   # (on the columns)
