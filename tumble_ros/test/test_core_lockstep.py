@@ -249,3 +249,90 @@ def test_the_loops_are_loaded_before_the_timing_for_the_types_they_are_called_wi
     simulate_ensemble(sc, omega0=omega0, euler0=euler0, threads=threads)
     for name, spy in spies.items():
         assert spy.called and spy.called == spy.loaded, (name, spy.called, spy.loaded)
+
+
+@needs_numba
+def test_the_lockstep_track_update_is_set_tracks_phi_and_psi_bit_for_bit():
+    """
+    ``tracking.follow`` (the lockstep loop's track update): ``set_track``'s phi and psi.
+
+    Without theta's atan2 and mostly without hypot: on random attitudes, references many turns
+    away, theta near 0 and pi across the band where |(c20, c21)| is decided by hypot
+    (0.5e-300 to 1e-300, and just above with both entries below it), NaN and infinite
+    quaternions (the track then kept); track[2] is never written.
+    """
+    from tumble_ros.core.kernels.tracking import follow, set_track
+
+    rng = np.random.default_rng(11)
+    tiny = np.geomspace(1e-302, 1e-299, 301)
+    one, zero = np.ones_like(tiny), np.zeros_like(tiny)
+    quaternions = np.vstack([
+        rng.normal(size=(400, 4)),
+        np.column_stack([one, zero, tiny, zero]),     # theta ~ 0: c20 = -2e, c21 = 0
+        np.column_stack([one, tiny, tiny, zero]),     # c20 = -2e, c21 = 2e: hypot 2.8e
+        np.column_stack([tiny, one, zero, zero]),     # theta ~ pi: c21 = 2e
+        np.column_stack([tiny, one, tiny, zero]),
+        [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [-0.0, -0.0, 1.0, 0.0],
+         [np.nan, 0.0, 0.0, 1.0], [1.0, np.nan, 0.0, 0.0], [np.inf, 0.0, 0.0, 0.0],
+         [1.0, np.inf, 1.0, 0.0], [1e200, 1e200, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]],
+    ])
+    st = np.zeros(kernels.ST.SIZE)
+    degenerate = 0
+    for q in quaternions:
+        reference = np.array([rng.uniform(-1e3, 1e3), rng.uniform(-1e3, 1e3), 7.0])
+        want, got = reference.copy(), reference.copy()
+        st[3:7] = q
+        set_track(st, 0, want)
+        follow(q[0], q[1], q[2], q[3], got)
+        assert got[:2].tobytes() == want[:2].tobytes(), q
+        assert got[2] == 7.0
+        degenerate += want[1] == 2 * np.pi * np.round(reference[1] / (2 * np.pi))
+    # the band's both sides were reached: psi = 0 (unwrapped) for some tiny quaternions only
+    assert 0 < degenerate < len(quaternions) - 400
+
+
+@needs_numba
+@pytest.mark.parametrize('method, step', [
+    ('splitting', 2e-3),   # samples inside a step: the block's dense output (block_dense)
+    ('splitting', 5e-2),   # fast bodies' tracks in pieces (dense), slow ones' on the columns
+    ('rk4', 2e-3),         # no block dense output: samples inside a step body by body
+])
+def test_a_mixed_block_gives_each_body_its_own_samples_and_euler_angles(method, step):
+    """
+    One block of very different bodies, samples on and off the step grid, several in a step.
+
+    Spins from 1e-3 to ~300 rad/yr (phi or psi through ~30 turns), theta near 0 and near pi
+    (phi and psi nearly degenerate), one body failing at its first step: each running body's
+    samples (Euler angles included) are its single run's, the failed one's the per-body
+    loop's, whatever the blocks, threads and checkpoints.
+    """
+    sc = fig9(method, step)
+    omega0 = np.array([[0.1, 0.1, 30.0], [0.01, -0.02, 0.3], [3.0, -2.0, 300.0],
+                       [20.0, 5.0, -30.0], [0.1, 0.1, 30.0], [1e-3, 0.0, 1e-3],
+                       [1e154, 1e154, 1e154], [50.0, 50.0, 100.0], [0.0, 0.0, -200.0]])
+    euler0 = np.array([[0.5, 0.0, 0.9], [1.0, 2.0, 1e-3], [0.3, -1.0, 1e-6],
+                       [-2.0, 0.5, np.pi - 1e-3], [0.5, 0.0, np.pi - 1e-7], [0.0, 0.0, 0.1],
+                       [0.1, 0.2, 0.3], [3.0, 3.0, 1.5], [-3.1, 3.1, 2e-2]])
+    n = len(omega0)
+    t_eval = np.unique(np.concatenate([np.linspace(0.0, 0.6, 41),
+                                       [0.1001, 0.1002, 0.1003, 0.33333, 0.5999]]))
+    method_type = INTEGRATORS[method]
+    # (the overflowing body is past the inputs' check: the loops are called directly)
+    ens = E._ensemble_lockstep(sc, t_eval, n, None, omega0, euler0, method_type, None, 1, 2)
+    assert ens.success.tolist() == [b != 6 for b in range(n)]
+    running = [b for b in range(n) if b != 6]
+    bodies = ensemble_scenarios(sc, omega0=omega0[running], euler0=euler0[running])
+    for b, body in zip(running, bodies):
+        one = simulate(body, t_eval)
+        for name in ('omega', 'euler', 'quaternion', 'jacobi'):
+            assert np.array_equal(getattr(ens, name)[b], getattr(one, name)), (b, name)
+        assert ens.n_steps[b] == one.n_steps and ens.nfev[b] == one.nfev
+    # the angles wrapped many times, and theta went near 0 and near pi
+    assert np.ptp(ens.euler[2, :, 0]) + np.ptp(ens.euler[2, :, 1]) > 40 * np.pi
+    assert np.nanmin(ens.euler[:, :, 2]) < 1e-2 and np.nanmax(ens.euler[:, :, 2]) > np.pi - 1e-2
+    for block, threads, checkpoints in [(1, 1, 1), (4, 2, 7), (256, 1, 3)]:
+        assert_identical(ens, E._ensemble_lockstep(sc, t_eval, n, None, omega0, euler0,
+                                                   method_type, None, checkpoints, threads,
+                                                   block=block))
+    assert_identical(ens, E._ensemble_compiled(sc, t_eval, n, None, omega0, euler0, method_type,
+                                               None, 1, 2))

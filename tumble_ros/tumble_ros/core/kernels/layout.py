@@ -155,6 +155,8 @@ BT = layout('BlockScratch', [
     ('K2', N, 'rk4: second stage'),
     ('K3', N, 'rk4: third stage'),
     ('K4', N, 'rk4: fourth stage'),
+    ('DENSE', BK.TORQUE + 3, "a dense output's state, rows Y, PI, TORQUE as BK (splitting's "
+                             'block_dense: samples inside a step)'),
 ])
 
 #: Per-body rows of a block ``(BB.SIZE, B)``: what is not shared by the block.

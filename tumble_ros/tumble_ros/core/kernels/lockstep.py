@@ -12,12 +12,17 @@ component r of all B bodies (layout :data:`~.layout.BK`): loops LLVM vectorises 
 
 Each body gets exactly the bits of its own run (``stepping.advance`` on one body): the same
 operations in the same order, vector lanes or not (no FMA contraction: numba does not allow it
-without ``fastmath``). The rare per-body work (output samples, Euler-track updates) is done by
-the single-body functions (:func:`~.stepping.emit`, :func:`~.stepping.track_update`) on a
-scratch state ``bst`` (layout :data:`~.layout.ST`) into which the method's ``block_load`` copies
-the body (``bst`` also holds the block's shared times and counters, as a single body's state
-holds them). A template like :mod:`.stepping`: :mod:`.methods` binds ``method_block_*`` per
-method.
+without ``fastmath``). The outputs and the Euler track are the single-body functions' too,
+on the block's columns: a sample is written for the whole block at once (:func:`block_emit`:
+the method's ``block_dense`` for a sample inside a step, then ``tracking.euler_of`` per body,
+``stepping.emit``'s operations), and a track update without dense output takes
+``tracking.follow`` on the columns (``stepping.track_update``'s phi and psi; theta, which no
+lockstep output reads, skipped). The rare rest (a method without ``block_dense``, a track
+update in pieces) calls the single-body functions (:func:`~.stepping.emit`,
+:func:`~.stepping.track_update`) on a scratch state ``bst`` (layout :data:`~.layout.ST`) into
+which the method's ``block_load`` copies the body (``bst`` also holds the block's shared times
+and counters, as a single body's state holds them). A template like :mod:`.stepping`:
+:mod:`.methods` binds ``method_block_*`` per method.
 """
 from __future__ import annotations
 
@@ -28,9 +33,10 @@ from tumble_ros.core.jit import jit
 from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, Extra, FAIL, LI, N, ST,
                                             STATUS)
-from tumble_ros.core.kernels.tracking import refresh_track, track_rate, UNWRAP_STEP
+from tumble_ros.core.kernels.tracking import (euler_of, follow, track_pieces, track_rate,
+                                              UNWRAP_STEP)
 
-__all__ = ['block_init', 'block_advance', 'LOOP_FUNCTIONS', 'BIGGEST']
+__all__ = ['block_init', 'block_advance', 'no_block_dense', 'LOOP_FUNCTIONS', 'BIGGEST']
 
 #: The functions :mod:`.methods` copies per method (each after those it calls).
 LOOP_FUNCTIONS = ('load_body', 'store_body', 'block_seg_init', 'block_emit', 'block_step',
@@ -51,6 +57,19 @@ def method_block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array
                       tmp: Array, bodies: Array, m: int) -> None:
     """Step m bodies from buffer old to new (bound per method by :mod:`.methods`)."""
     raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+def method_block_dense(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, out: Array,
+                       tmp: Array, tau: float, m: int) -> bool:
+    """Dense output of m bodies at local time tau to ``out``; False if none (see methods)."""
+    raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
+
+
+@jit
+def no_block_dense(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, out: Array,
+                   tmp: Array, tau: float, m: int) -> bool:
+    """``method_block_dense`` of a method without a block dense output: False (per body)."""
+    return False
 
 
 def method_block_load(bst: Array, old: Array, new: Array, i: int) -> None:
@@ -125,23 +144,61 @@ def block_seg_init(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, b
 
 
 @jit
-def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, bodies: Array,
-               counters: npt.NDArray[np.int64], tracks: Array, t_out: Array, y_out: Array,
-               e_out: Array, body0: int, m: int) -> None:
-    """Write the outputs t_out[k:] <= t of every running body (``stepping.emit`` each)."""
+def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
+               bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, t_out: Array,
+               y_out: Array, e_out: Array, body0: int, m: int) -> None:
+    """
+    Write the outputs t_out[k:] <= t of every running body: ``stepping.emit``'s bits.
+
+    A block at a time: the state at t_out[k] (the current buffer, or the method's
+    ``block_dense`` of every body into a scratch buffer), then each running body's row of y_out
+    and its Euler angles (:func:`~.tracking.euler_of`, towards its track). A method without
+    ``block_dense`` (rk4) takes the single-body ``emit`` per body for a sample inside a step.
+    """
     k = counters[LI.K]
-    if k >= t_out.shape[0] or t_out[k] > bst[ST.T]:
+    n_out = t_out.shape[0]
+    if k >= n_out or t_out[k] > bst[ST.T]:
         return
     cur = soa[counters[LI.PAR]]
     old = soa[1 - counters[LI.PAR]]
-    k_new = k
-    for i in range(m):
-        if bodies[BB.FAILED, i] != 0.0:
-            continue
-        nfev = load_body(bst, old, cur, bodies, i)
-        k_new = emit(p, extra, cfg, bst, tracks[i], t_out, y_out[body0 + i], e_out[body0 + i], k)
-        store_body(bst, cur, bodies, i, nfev)
-    counters[LI.K] = k_new
+    out = tmp[BT.DENSE:BT.DENSE + BK.TORQUE + 3]   # (rows Y, PI, TORQUE as BK)
+    euler = cfg[CF.EULER] != 0.0
+    while k < n_out and t_out[k] <= bst[ST.T]:
+        tk = t_out[k]
+        src = cur
+        if tk != bst[ST.T]:
+            # stepping.dense's local time, kept inside the step
+            tau = min(max(tk - bst[ST.T0], bst[ST.TAU_OLD]), bst[ST.TAU])
+            if not method_block_dense(p, extra, cfg, bst, old, out, tmp, tau, m):
+                break
+            src = out
+        for i in range(m):
+            if bodies[BB.FAILED, i] != 0.0:
+                continue
+            row = y_out[body0 + i, k]
+            for c in range(N):
+                row[c] = src[BK.Y + c, i]
+            if euler:
+                track = tracks[i]
+                phi, psi, theta = euler_of(src[BK.Y + 3, i], src[BK.Y + 4, i],
+                                           src[BK.Y + 5, i], src[BK.Y + 6, i], track[0],
+                                           track[1])
+                e_row = e_out[body0 + i, k]
+                e_row[0] = phi
+                e_row[1] = psi
+                e_row[2] = theta
+        k += 1
+    if k < n_out and t_out[k] <= bst[ST.T]:   # no block dense output: per body
+        k_new = k
+        for i in range(m):
+            if bodies[BB.FAILED, i] != 0.0:
+                continue
+            nfev = load_body(bst, old, cur, bodies, i)
+            k_new = emit(p, extra, cfg, bst, tracks[i], t_out, y_out[body0 + i],
+                         e_out[body0 + i], k)
+            store_body(bst, cur, bodies, i, nfev)
+        k = k_new
+    counters[LI.K] = k
 
 
 @jit
@@ -237,7 +294,14 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
 @jit
 def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                 bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, m: int) -> None:
-    """``stepping.track_euler`` for every running body: the bound vectorised, updates rare."""
+    """
+    ``stepping.track_euler`` for every running body: the bound vectorised, updates rare.
+
+    Each body keeps its own schedule (its updates at the steps of its single run: updating a
+    block's bodies together would move them, and below theta ~ 0.1 the bound does not bound
+    phi and psi, so the 2 pi multiples could differ). An update without dense output runs on
+    the columns (``tracking.follow``: phi and psi of the step's start, then of its end).
+    """
     if cfg[CF.EULER] == 0.0:
         return
     cur = soa[counters[LI.PAR]]
@@ -255,23 +319,32 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
     if due == 0:
         return
     for i in range(m):
-        if tmp[BT.INC, i] >= 0.0 and bodies[BB.FAILED, i] == 0.0:
+        inc = tmp[BT.INC, i]
+        if inc < 0.0 or bodies[BB.FAILED, i] != 0.0:
+            continue
+        if track_pieces(inc) == 1:   # track_update without dense output, on the columns
+            track = tracks[i]
+            if bodies[BB.BUDGET, i] > 0.0:
+                follow(old[BK.Y + 3, i], old[BK.Y + 4, i], old[BK.Y + 5, i], old[BK.Y + 6, i],
+                       track)
+            bodies[BB.BUDGET, i] = 0.0
+            follow(cur[BK.Y + 3, i], cur[BK.Y + 4, i], cur[BK.Y + 5, i], cur[BK.Y + 6, i], track)
+        else:
             nfev = load_body(bst, old, cur, bodies, i)
-            track_update(p, extra, cfg, bst, tracks[i], tmp[BT.INC, i])
+            track_update(p, extra, cfg, bst, tracks[i], inc)
             store_body(bst, cur, bodies, i, nfev)
 
 
 @jit
 def block_refresh(bst: Array, soa: Array, bodies: Array, counters: npt.NDArray[np.int64],
                   tracks: Array, m: int) -> None:
-    """``tracking.refresh_track`` for every running body (the end of ``stepping.advance``)."""
+    """``tracking.refresh_track`` for every running body (``tracking.follow`` on the columns)."""
     cur = soa[counters[LI.PAR]]
-    old = soa[1 - counters[LI.PAR]]
     for i in range(m):
-        if bodies[BB.BUDGET, i] > 0.0 and bodies[BB.FAILED, i] == 0.0:
-            nfev = load_body(bst, old, cur, bodies, i)
-            refresh_track(bst, tracks[i])
-            store_body(bst, cur, bodies, i, nfev)
+        if bodies[BB.BUDGET, i] > 0.0 and bodies[BB.FAILED, i] == 0.0:   # (on the columns)
+            follow(cur[BK.Y + 3, i], cur[BK.Y + 4, i], cur[BK.Y + 5, i], cur[BK.Y + 6, i],
+                   tracks[i])
+            bodies[BB.BUDGET, i] = 0.0
 
 
 @jit
@@ -299,8 +372,8 @@ def block_advance(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Arr
     while True:
         cur = counters[LI.SEG]
         p = probs[cur]
-        block_emit(p, extra, cfg, bst, soa, bodies, counters, tracks, t_out, y_out, e_out, body0,
-                   m)
+        block_emit(p, extra, cfg, bst, soa, tmp, bodies, counters, tracks, t_out, y_out, e_out,
+                   body0, m)
         if bst[ST.T] >= t_stop or bst[ST.STATUS] == STATUS.FAILED:
             break
         if bst[ST.STATUS] == STATUS.FINISHED:
@@ -316,6 +389,6 @@ def block_advance(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Arr
             block_track(p, extra, cfg, bst, soa, tmp, bodies, counters, tracks, m)
             k = counters[LI.K]
             if k < n_out and t_out[k] <= bst[ST.T]:
-                block_emit(p, extra, cfg, bst, soa, bodies, counters, tracks, t_out, y_out,
-                           e_out, body0, m)
+                block_emit(p, extra, cfg, bst, soa, tmp, bodies, counters, tracks, t_out,
+                           y_out, e_out, body0, m)
         block_refresh(bst, soa, bodies, counters, tracks, m)

@@ -35,7 +35,8 @@ __all__ = ['KERNELS', 'Loops', 'loops', 'kernel_id', 'kernel_name', 'loops_for',
 
 #: The functions a method's module defines to be stepped in lockstep (:mod:`.lockstep`):
 #: ``block_start``, ``block_step``, ``block_load``, ``block_store`` (see :mod:`.splitting`,
-#: :mod:`.rk4`); optional.
+#: :mod:`.rk4`); optional. A module may also define ``block_dense`` (the block's dense output:
+#: :mod:`.splitting`; without it a sample inside a step is written body by body).
 BLOCK_FUNCTIONS = ('block_start', 'block_step', 'block_load', 'block_store')
 
 #: The compiled methods: registry key (``Stepper.kernel``) -> module with start, step, dense.
@@ -125,6 +126,7 @@ def loops_for(module: ModuleType, suffix: str) -> Loops:
                      'method_block_step': module.block_step,
                      'method_block_load': module.block_load,
                      'method_block_store': module.block_store,
+                     'method_block_dense': getattr(module, 'block_dense', lockstep.no_block_dense),
                      **{name: single[name] for name in ('seg_init', 'emit', 'track_update')}},
                     suffix, cache)
     return Loops(single['seg_init'], single['step'], single['dense'], single['emit'],

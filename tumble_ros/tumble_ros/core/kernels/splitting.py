@@ -21,8 +21,8 @@ from tumble_ros.core.kernels.trig import REDUCED_LIMIT, sin_cos_reduced
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
 
 __all__ = ['flow', 'flow_called', 'pulse_step_count', 'start', 'step', 'dense',
-           'MAX_PULSE_SUBSTEPS', 'block_start', 'block_step', 'block_load', 'block_store',
-           'block_sincos',
+           'MAX_PULSE_SUBSTEPS', 'block_start', 'block_step', 'block_dense', 'block_flow',
+           'block_load', 'block_store', 'block_sincos',
            'block_axis']
 
 #: Most steps the pulse rule (:func:`pulse_step_count`) adds to a segment's own count.
@@ -239,18 +239,44 @@ def block_axis(new: Array, tmp: Array, axis: int, m: int, next_axis: int, c_next
 @jit
 def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: Array,
                tmp: Array, bodies: Array, m: int) -> None:
+    """Take :func:`step` for m bodies at once: buffer old -> new, the shared times in bst."""
+    h = bst[ST.H]
+    tau = bst[ST.TAU]
+    block_flow(p, extra, cfg, old, new, tmp, bst[ST.T0], tau, h, m)
+    bst[ST.TAU_OLD] = tau
+    bst[ST.TAU] = (bst[ST.TAU_BOUND] if bst[ST.N_STEPS] + 1.0 >= bst[ST.N_TOTAL]
+                   else (bst[ST.N_STEPS] + 1.0) * h)
+    bst[ST.NFEV] += cfg[CF.N_STAGES]
+
+
+@jit
+def block_dense(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, out: Array,
+                tmp: Array, tau: float, m: int) -> bool:
     """
-    Take :func:`step` for m bodies at once: buffer old -> new, the shared times in bst.
+    :func:`dense` for m bodies at once: the last step's start (buffer old) to local time tau.
+
+    The state at tau goes to buffer ``out`` (rows as ``old``); :func:`dense`'s bits: the same
+    :func:`flow` from the step's start over tau - tau_old, as :func:`block_flow`. Returns True
+    (a method without it: ``lockstep.no_block_dense``).
+    """
+    tau_old = bst[ST.TAU_OLD]
+    block_flow(p, extra, cfg, old, out, tmp, bst[ST.T0], tau_old, tau - tau_old, m)
+    return True
+
+
+@jit
+def block_flow(p: Array, extra: Extra, cfg: Array, old: Array, new: Array, tmp: Array,
+               t0: float, s0: float, h: float, m: int) -> None:
+    """
+    Take :func:`flow` for m bodies at once: a step of length h from local time s0, old -> new.
 
     :func:`flow`'s operations in its order, cut into passes over the bodies, each vectorised
     by LLVM: kick and the |pi| angle; sin/cos (:func:`block_sincos`); the turn about pi and the
     first axis angle; per axis piece sin/cos and the turn; the torque (the Sun's direction once
     for all bodies; :func:`~.physics.plain_torque_given_sun` on a segment it covers) and the
-    second kick.
+    second kick. Rows Y, PI and TORQUE of ``new`` are written (absolute time t0 + s0 + ...).
     """
-    h = bst[ST.H]
-    tau = bst[ST.TAU]
-    t0 = bst[ST.T0]
+    tau = s0
     inv_ref = p[PR.INV_REF]
     first, second = flow_pieces(p)
     for r in range(BK.Y + 3, BK.TORQUE + 3):
@@ -320,10 +346,6 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
         new[BK.Y, i] = new[BK.PI, i] * p[PR.INV_INERTIA]   # as flow
         new[BK.Y + 1, i] = new[BK.PI + 1, i] * p[PR.INV_INERTIA + 1]
         new[BK.Y + 2, i] = new[BK.PI + 2, i] * p[PR.INV_INERTIA + 2]
-    bst[ST.TAU_OLD] = tau
-    bst[ST.TAU] = (bst[ST.TAU_BOUND] if bst[ST.N_STEPS] + 1.0 >= bst[ST.N_TOTAL]
-                   else (bst[ST.N_STEPS] + 1.0) * h)
-    bst[ST.NFEV] += cfg[CF.N_STAGES]
 
 
 @jit_inline

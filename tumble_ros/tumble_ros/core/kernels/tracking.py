@@ -14,8 +14,9 @@ import math
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, ST
 
-__all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards',
-           'unwrapped_euler', 'set_track', 'track_rate', 'track_pieces', 'refresh_track']
+__all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of',
+           'follow', 'unwrapped_euler', 'set_track', 'track_to', 'track_rate', 'track_pieces',
+           'refresh_track']
 
 #: Largest turn of phi or psi between two track updates [rad].
 UNWRAP_STEP = 1.0
@@ -34,18 +35,10 @@ def unwrap_towards(angle: float, reference: float) -> float:
     return angle + _TWO_PI * round((reference - angle) / _TWO_PI)
 
 
-@jit
-def unwrapped_euler(st: Array, o: int, track: Array) -> tuple[float, float, float]:
-    """
-    Return the paper's (phi, psi, theta) of quaternion st[o+3:o+7].
-
-    phi and psi are unwrapped towards track[0], track[1] (z-x-z, orbital -> body; the
-    rotation.matrix_to_euler of C^T).
-    """
-    q0 = st[o + 3]
-    q1 = st[o + 4]
-    q2 = st[o + 5]
-    q3 = st[o + 6]
+@jit_inline
+def _rotation_parts(q0: float, q1: float, q2: float, q3: float
+                    ) -> tuple[float, float, float, float, float, float, float]:
+    """Return C's entries (c00, c02, c10, c12, c20, c21, c22) of quaternion q (body to orbital)."""
     s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
     c00 = 1.0 - s * (q2 * q2 + q3 * q3)
     c02 = s * (q1 * q3 + q0 * q2)
@@ -54,15 +47,78 @@ def unwrapped_euler(st: Array, o: int, track: Array) -> tuple[float, float, floa
     c20 = s * (q1 * q3 - q0 * q2)
     c21 = s * (q2 * q3 + q0 * q1)
     c22 = 1.0 - s * (q1 * q1 + q2 * q2)
+    return c00, c02, c10, c12, c20, c21, c22
+
+
+#: sin theta below which phi alone is defined (psi = 0): C's (c20, c21) of norm below it.
+_DEGENERATE_SIN = 1e-300
+
+
+@jit_inline
+def _phi_psi(c00: float, c02: float, c10: float, c12: float, c20: float, c21: float,
+             degenerate: bool) -> tuple[float, float]:
+    """Return phi, psi [rad] in (-pi, pi] from C's entries (psi = 0 if ``degenerate``)."""
+    if degenerate:
+        return math.atan2(c10, c00), 0.0
+    return math.atan2(c02, -c12), math.atan2(c20, c21)
+
+
+@jit_inline
+def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
+             psi_ref: float) -> tuple[float, float, float]:
+    """
+    Return the paper's (phi, psi, theta) [rad] of quaternion (q0, q1, q2, q3).
+
+    phi and psi are unwrapped towards phi_ref, psi_ref (z-x-z, orbital -> body; the
+    rotation.matrix_to_euler of C^T). The one conversion: :func:`unwrapped_euler` (a state's
+    row) and the lockstep loop (a block's column, ``lockstep.block_emit``) inline it.
+    """
+    c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
     sth = math.hypot(c20, c21)
     theta = math.atan2(sth, c22)
-    if sth < 1e-300:
-        phi = math.atan2(c10, c00)
-        psi = 0.0
-    else:
-        psi = math.atan2(c20, c21)
-        phi = math.atan2(c02, -c12)
-    return unwrap_towards(phi, track[0]), unwrap_towards(psi, track[1]), theta
+    phi, psi = _phi_psi(c00, c02, c10, c12, c20, c21, sth < _DEGENERATE_SIN)
+    return unwrap_towards(phi, phi_ref), unwrap_towards(psi, psi_ref), theta
+
+
+@jit_inline
+def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
+    """
+    :func:`track_to` for a track whose theta is never read: phi and psi only, the same bits.
+
+    The same phi, psi and the same rule (set unless phi, psi and theta are finite), without
+    theta's ``atan2`` and mostly without ``hypot``: atan2(y, x) is NaN exactly when y or x is,
+    and finite otherwise, so theta = atan2(hypot(c20, c21), c22) is finite unless c22 is NaN
+    or hypot is, and a NaN hypot (c20 or c21 NaN) makes psi NaN already. The branch
+    hypot(c20, c21) < 1e-300 is decided by max(|c20|, |c21|) <= hypot <= sqrt(2) max
+    outside [0.5e-300, 1e-300), by hypot inside. The lockstep loop's tracks
+    (``lockstep.block_track``, ``block_refresh``), which no output reads but as the references
+    of phi and psi, take it: track[2] keeps its first value there.
+    """
+    c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
+    a20 = abs(c20)
+    a21 = abs(c21)
+    if a20 >= _DEGENERATE_SIN or a21 >= _DEGENERATE_SIN:
+        degenerate = False
+    elif a20 < 0.5 * _DEGENERATE_SIN and a21 < 0.5 * _DEGENERATE_SIN:
+        degenerate = True
+    else:   # (also NaN: hypot NaN or inf, not below)
+        degenerate = math.hypot(c20, c21) < _DEGENERATE_SIN
+    phi, psi = _phi_psi(c00, c02, c10, c12, c20, c21, degenerate)
+    phi = unwrap_towards(phi, track[0])
+    psi = unwrap_towards(psi, track[1])
+    if math.isfinite(phi) and math.isfinite(psi) and not math.isnan(c22):
+        track[0] = phi
+        track[1] = psi
+
+
+@jit
+def unwrapped_euler(st: Array, o: int, track: Array) -> tuple[float, float, float]:
+    """
+    Return the paper's (phi, psi, theta) of quaternion st[o+3:o+7] [rad].
+
+    phi and psi are unwrapped towards track[0], track[1] (:func:`euler_of`).
+    """
+    return euler_of(st[o + 3], st[o + 4], st[o + 5], st[o + 6], track[0], track[1])
 
 
 @jit
@@ -72,7 +128,13 @@ def set_track(st: Array, o: int, track: Array) -> None:
 
     Not finite: a dense output inside a step whose state ran away (skipped).
     """
-    phi, psi, theta = unwrapped_euler(st, o, track)
+    track_to(st[o + 3], st[o + 4], st[o + 5], st[o + 6], track)
+
+
+@jit_inline
+def track_to(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
+    """Set track to the unwrapped Euler angles of quaternion q (:func:`set_track`'s rule)."""
+    phi, psi, theta = euler_of(q0, q1, q2, q3, track[0], track[1])
     if math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta):
         track[0] = phi
         track[1] = psi
