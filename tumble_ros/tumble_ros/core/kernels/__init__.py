@@ -21,6 +21,8 @@ One module per concern, every arrow downward:
   Euler tracking, output sampling); :mod:`.ensemble`: the loop over bodies and segments;
   :mod:`.lockstep`: a block of bodies sharing one time grid stepped together, structure of
   arrays (the methods that define ``block_step``: :mod:`.splitting`, :mod:`.rk4`);
+  :mod:`.lanes`: a block of bodies sharing their segments, each with its own clock (an
+  adaptive method's steps, ``lanes_*``: :mod:`.dop853`), stages vectorised across bodies;
 * :mod:`.methods`: the registry of the compiled methods (:data:`KERNELS`, one line each) and
   each method's copy of those two loops with its step inlined (:func:`loops`).
 * :mod:`.samples`: an ensemble's samples post-processed (Jacobi integral, continuous
@@ -33,18 +35,18 @@ from tumble_ros.core.kernels.arrays import (config_array, free_flow_split, new_s
                                             problem_array, problem_arrays, set_pulses)
 from tumble_ros.core.kernels.checks import collapsed, finite_norm, MIN_STEP_ULPS
 from tumble_ros.core.kernels.dop853 import MAX_REJECTIONS
-from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, describe, Extra, FAIL, LI, N,
-                                            PR, ST, STATUS)
-from tumble_ros.core.kernels.methods import (ensemble_advance, ensemble_init, has_lockstep,
-                                             kernel_id, kernel_name, KERNELS, Loops, loops)
+from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, describe, Extra, FAIL, LI, LN,
+                                            N, PR, ST, STATUS)
+from tumble_ros.core.kernels.methods import (ensemble_advance, ensemble_init, has_lanes,
+                                             has_lockstep, kernel_id, kernel_name, KERNELS, Loops, loops)
 from tumble_ros.core.kernels.physics import body_torque, free_flow, rhs, rhs_called
 from tumble_ros.core.kernels.splitting import flow_called, MAX_PULSE_SUBSTEPS, pulse_step_count
 from tumble_ros.core.kernels.tracking import (MAX_TRACK_PIECES, set_track, track_pieces,
                                               track_rate, UNWRAP_MIN_SIN, UNWRAP_STEP,
                                               unwrap_towards)
 
-__all__ = ['COMPILED', 'NUMBA_VERSION', 'ST', 'PR', 'CF', 'BK', 'BT', 'BB', 'LI', 'N', 'STATUS',
-           'FAIL', 'Array', 'Extra', 'has_lockstep', 'KERNELS', 'Loops', 'loops', 'kernel_id',
+__all__ = ['COMPILED', 'NUMBA_VERSION', 'ST', 'PR', 'CF', 'BK', 'BT', 'BB', 'LI', 'LN', 'N',
+           'STATUS', 'FAIL', 'Array', 'Extra', 'has_lockstep', 'has_lanes', 'KERNELS', 'Loops', 'loops', 'kernel_id',
            'kernel_name', 'describe',
            'config_array', 'free_flow_split', 'new_state',
            'problem_array', 'problem_arrays', 'set_pulses', 'collapsed', 'finite_norm',

@@ -15,11 +15,14 @@ import types
 
 import numpy as np
 
-from tumble_ros.core.jit import jit
-from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST, STATUS
+from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.kernels.lanes import lanes_rhs
+from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, LANE_STAGES, LN, N, ST, STATUS
 from tumble_ros.core.kernels.physics import rhs, rhs_called
 
-__all__ = ['start', 'step', 'dense', 'MAX_REJECTIONS', 'scipy_tables']
+__all__ = ['start', 'step', 'dense', 'MAX_REJECTIONS', 'scipy_tables', 'step_start', 'attempt',
+           'error_norm', 'control', 'accepted', 'lanes_start', 'lanes_attempt', 'lanes_stages',
+           'lanes_control', 'lanes_accept']
 
 
 def scipy_tables() -> types.ModuleType:
@@ -59,6 +62,7 @@ _ERR_EXP = -1.0 / (7 + 1)              # DOP853: error_estimator_order = 7
 #: (_MIN_FACTOR), so a finite h reaches min_step (FAIL.TOO_SMALL) within ~480 rejections even
 #: from 1e9 yr; this only bounds the loop by construction.
 MAX_REJECTIONS = 1000
+assert _NSTAGES + 1 == LANE_STAGES and _C[_NSTAGES] == 1.0 and np.array_equal(_A[_NSTAGES, :_NSTAGES], _B)
 
 
 @jit
@@ -116,6 +120,82 @@ def start(p: Array, extra: Extra, cfg: Array, st: Array) -> None:
     st[ST.NFEV] = 2.0
 
 
+@jit_inline
+def step_start(cfg: Array, st: Array) -> tuple[float, float]:
+    """Return (min_step, h_abs) of a step from st[ST.TAU]: scipy's bounds on its size [yr]."""
+    t = st[ST.TAU]
+    min_step: float = 10.0 * abs(np.nextafter(t, np.inf) - t)
+    h_abs = st[ST.H]
+    if h_abs > cfg[CF.MAX_STEP]:
+        h_abs = cfg[CF.MAX_STEP]
+    elif h_abs < min_step:
+        h_abs = min_step
+    return min_step, h_abs
+
+
+@jit_inline
+def attempt(t: float, t_bound: float, h_abs: float, min_step: float,
+            n_rejected: float) -> tuple[float, float, float]:
+    """
+    Return (FAIL code, t_new, h) of an attempt of size h_abs from local time t [yr].
+
+    The checks before each attempt of scipy's loop (and the bound on rejections), then the
+    attempt's end t_new, clipped to t_bound, and its step h = t_new - t.
+    """
+    if h_abs != h_abs:
+        # NaN (a non-finite right-hand side at the segment start): every comparison below
+        # is False, so without this the loop neither accepts nor fails, for ever
+        return FAIL.STEP_NAN, t, 0.0
+    if h_abs < min_step:
+        return FAIL.TOO_SMALL, t, 0.0
+    if n_rejected >= MAX_REJECTIONS:
+        return FAIL.REJECTED, t, 0.0
+    t_new = t + h_abs
+    if t_new - t_bound > 0:
+        t_new = t_bound
+    return FAIL.NONE, t_new, t_new - t
+
+
+@jit_inline
+def error_norm(e5: float, e3: float, h: float) -> float:
+    """Return DOP853's error norm of a step h from the sums of squares of its two estimates."""
+    e5 = math.sqrt(e5) ** 2
+    e3 = math.sqrt(e3) ** 2
+    if e5 == 0.0 and e3 == 0.0:
+        return 0.0
+    err: float = abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * N)
+    return err
+
+
+@jit_inline
+def control(err: float, h_abs: float, rejected: bool) -> tuple[bool, float]:
+    """Return (accepted, the next h_abs) after an attempt of error norm err: scipy's control."""
+    if err < 1.0:
+        if err == 0.0:
+            factor = _MAX_FACTOR
+        else:
+            factor = _SAFETY * err ** _ERR_EXP
+            if not factor < _MAX_FACTOR:
+                factor = _MAX_FACTOR
+        if rejected and not factor < 1.0:
+            factor = 1.0
+        return True, h_abs * factor
+    factor = _SAFETY * err ** _ERR_EXP
+    if not factor > _MIN_FACTOR:
+        factor = _MIN_FACTOR
+    return False, h_abs * factor
+
+
+@jit_inline
+def accepted(st: Array, t: float, t_new: float, h: float, h_abs: float) -> None:
+    """Record an accepted step h from local time t to t_new, the next one h_abs [yr]."""
+    st[ST.H_PREV] = h
+    st[ST.TAU_OLD] = t
+    st[ST.TAU] = t_new
+    st[ST.H] = h_abs
+    st[ST.DENSE] = 0.0
+
+
 @jit
 def step(p: Array, extra: Extra, cfg: Array, st: Array) -> float:
     """Take a step as scipy's RungeKutta._step_impl with DOP853's rk_step; returns a FAIL code."""
@@ -124,29 +204,14 @@ def step(p: Array, extra: Extra, cfg: Array, st: Array) -> float:
     t0 = st[ST.T0]
     rtol = cfg[CF.RTOL]
     atol = cfg[CF.ATOL]
-    max_step = cfg[CF.MAX_STEP]
-    min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
-    h_abs = st[ST.H]
-    if h_abs > max_step:
-        h_abs = max_step
-    elif h_abs < min_step:
-        h_abs = min_step
+    min_step, h_abs = step_start(cfg, st)
     rejected = False
     ns = _NSTAGES
-    n_rejected = 0
+    n_rejected = 0.0
     while True:
-        if h_abs != h_abs:
-            # NaN (a non-finite right-hand side at the segment start): every comparison below
-            # is False, so without this the loop neither accepts nor fails, for ever
-            return FAIL.STEP_NAN
-        if h_abs < min_step:
-            return FAIL.TOO_SMALL
-        if n_rejected >= MAX_REJECTIONS:
-            return FAIL.REJECTED
-        t_new = t + h_abs
-        if t_new - t_bound > 0:
-            t_new = t_bound
-        h = t_new - t
+        code, t_new, h = attempt(t, t_bound, h_abs, min_step, n_rejected)
+        if code != FAIL.NONE:
+            return code
         h_abs = abs(h)
         for i in range(N):
             st[ST.K + i] = st[ST.F + i]
@@ -180,37 +245,15 @@ def step(p: Array, extra: Extra, cfg: Array, st: Array) -> float:
             a3 = a3 / scale
             e5 += a5 * a5
             e3 += a3 * a3
-        e5 = math.sqrt(e5) ** 2
-        e3 = math.sqrt(e3) ** 2
-        if e5 == 0.0 and e3 == 0.0:
-            err = 0.0
-        else:
-            err = abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * N)
-        if err < 1.0:
-            if err == 0.0:
-                factor = _MAX_FACTOR
-            else:
-                factor = _SAFETY * err ** _ERR_EXP
-                if not factor < _MAX_FACTOR:
-                    factor = _MAX_FACTOR
-            if rejected and not factor < 1.0:
-                factor = 1.0
-            h_abs *= factor
+        ok, h_abs = control(error_norm(e5, e3, h), h_abs, rejected)
+        if ok:
             break
-        factor = _SAFETY * err ** _ERR_EXP
-        if not factor > _MIN_FACTOR:
-            factor = _MIN_FACTOR
-        h_abs *= factor
         rejected = True
-        n_rejected += 1
-    st[ST.H_PREV] = h
+        n_rejected += 1.0
     for i in range(N):
         st[ST.Y + i] = st[ST.Y_NEW + i]
         st[ST.F + i] = st[ST.K + ns * N + i]
-    st[ST.TAU_OLD] = t
-    st[ST.TAU] = t_new
-    st[ST.H] = h_abs
-    st[ST.DENSE] = 0.0
+    accepted(st, t, t_new, h, h_abs)
     return FAIL.NONE
 
 
@@ -250,3 +293,106 @@ def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
             else:
                 y *= 1 - x
         st[ST.SCRATCH + i] = y + st[ST.Y_OLD + i]
+
+
+# ---------------------------------------------------------------------------------------
+# Lanes with their own clocks (kernels.lanes): buffers (LN.SIZE, L), one body a column
+# ---------------------------------------------------------------------------------------
+@jit
+def lanes_start(cfg: Array, st: Array, ln: Array, i: int) -> None:
+    """Start a step of lane i from its state st (:func:`step_start`): no attempt rejected."""
+    min_step, h_abs = step_start(cfg, st)
+    ln[LN.TAU, i] = st[ST.TAU]
+    ln[LN.MIN_STEP, i] = min_step
+    ln[LN.H_ABS, i] = h_abs
+    ln[LN.REJECTED, i] = 0.0
+
+
+@jit
+def lanes_attempt(st: Array, ln: Array, i: int) -> float:
+    """Set up lane i's next attempt (:func:`attempt`) and count its evaluations; a FAIL code."""
+    code, t_new, h = attempt(ln[LN.TAU, i], st[ST.TAU_BOUND], ln[LN.H_ABS, i],
+                             ln[LN.MIN_STEP, i], ln[LN.REJECTED, i])
+    if code == FAIL.NONE:
+        ln[LN.TAU_NEW, i] = t_new
+        ln[LN.H, i] = h
+        ln[LN.H_ABS, i] = abs(h)
+        st[ST.NFEV] += float(_NSTAGES)
+    return code
+
+
+@jit
+def lanes_stages(p: Array, extra: Extra, cfg: Array, t0: float, ln: Array, m: int) -> None:
+    """
+    One attempt of m lanes, each from its own (tau, h): :func:`step`'s stages and error norm.
+
+    Its operations in its order, cut into passes over the lanes (vectorised): each stage's
+    argument (the sum over the earlier stages), the stage's times and right-hand side
+    (:func:`~.lanes.lanes_rhs`); the 12th stage's argument is the candidate y_new (scipy's
+    B is its A[12], C[12] = 1); then the error norm of each lane to ln[LN.ERR].
+    """
+    ns = _NSTAGES
+    for c in range(N):
+        for i in range(m):
+            ln[LN.K + c, i] = ln[LN.F + c, i]
+    for s in range(1, ns + 1):
+        out = LN.TMP if s < ns else LN.Y_NEW
+        for c in range(N):
+            for i in range(m):
+                ln[LN.ACC, i] = 0.0
+            for j in range(s):
+                a = _A[s, j]
+                for i in range(m):
+                    ln[LN.ACC, i] += ln[LN.K + j * N + c, i] * a
+            for i in range(m):
+                ln[out + c, i] = ln[LN.Y + c, i] + ln[LN.ACC, i] * ln[LN.H, i]
+        cs = _C[s]
+        for i in range(m):
+            ln[LN.T, i] = t0 + (ln[LN.TAU, i] + cs * ln[LN.H, i])
+        lanes_rhs(p, extra, ln, out, LN.K + s * N, m)
+    rtol = cfg[CF.RTOL]
+    atol = cfg[CF.ATOL]
+    for i in range(m):
+        ln[LN.E5, i] = 0.0
+        ln[LN.E3, i] = 0.0
+    for c in range(N):
+        for i in range(m):
+            ln[LN.ACC, i] = 0.0
+            ln[LN.ACC3, i] = 0.0
+        for j in range(ns + 1):
+            e5 = _E5[j]
+            e3 = _E3[j]
+            for i in range(m):
+                kj = ln[LN.K + j * N + c, i]
+                ln[LN.ACC, i] += kj * e5
+                ln[LN.ACC3, i] += kj * e3
+        for i in range(m):
+            ay = abs(ln[LN.Y + c, i])
+            an = abs(ln[LN.Y_NEW + c, i])
+            scale = atol + (an if an > ay else ay) * rtol
+            a5 = ln[LN.ACC, i] / scale
+            a3 = ln[LN.ACC3, i] / scale
+            ln[LN.E5, i] += a5 * a5
+            ln[LN.E3, i] += a3 * a3
+    for i in range(m):
+        ln[LN.ERR, i] = error_norm(ln[LN.E5, i], ln[LN.E3, i], ln[LN.H, i])
+
+
+@jit
+def lanes_control(ln: Array, i: int) -> bool:
+    """Judge lane i's attempt (:func:`control`): True if accepted; the next size to ln."""
+    ok, h_abs = control(ln[LN.ERR, i], ln[LN.H_ABS, i], ln[LN.REJECTED, i] > 0.0)
+    ln[LN.H_ABS, i] = h_abs
+    if not ok:
+        ln[LN.REJECTED, i] += 1.0
+    return ok
+
+
+@jit
+def lanes_accept(st: Array, ln: Array, i: int) -> None:
+    """Move lane i to its accepted attempt's end, as :func:`step` does (its checks passed)."""
+    for c in range(N):
+        ln[LN.Y_OLD + c, i] = ln[LN.Y + c, i]
+        ln[LN.Y + c, i] = ln[LN.Y_NEW + c, i]
+        ln[LN.F + c, i] = ln[LN.K + _NSTAGES * N + c, i]
+    accepted(st, ln[LN.TAU, i], ln[LN.TAU_NEW, i], ln[LN.H, i], ln[LN.H_ABS, i])

@@ -19,7 +19,8 @@ from typing import Any, NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['layout', 'describe', 'ST', 'PR', 'CF', 'BK', 'BT', 'BB', 'LI', 'N', 'MAX_STAGES',
+__all__ = ['layout', 'describe', 'ST', 'PR', 'CF', 'BK', 'BT', 'BB', 'LI', 'LN', 'N', 'MAX_STAGES',
+           'LANE_STAGES',
            'STATUS', 'FAIL', 'Array', 'Extra']
 
 #: The kernels' arrays: flat float64 (a state, a problem, a config, outputs).
@@ -34,6 +35,9 @@ N = 7
 MAX_STAGES = 16
 #: Stages of the largest Runge-Kutta tableau (DOP853 with its dense-output stages).
 RK_STAGES = 16
+#: Stages a step of the lanes loop keeps (DOP853's 12 and f at the step's end; the dense
+#: output's three more are taken per body, on its state).
+LANE_STAGES = 13
 
 
 def layout(name: str, fields: list[tuple[str, int, str]]) -> Any:
@@ -179,6 +183,33 @@ LI = layout('BlockCounters', [
     ('K', 1, 'outputs written (every body still running)'),
     ('PAR', 1, 'which of the two buffers holds the current state (0 or 1)'),
     ('STEPS', 1, 'steps taken by the block'),
+])
+
+#: Bodies stepped as lanes with their own clocks (``kernels.lanes``), structure of arrays: the
+#: rows of one buffer ``(LN.SIZE, L)``, column i = lane i; its vectors and the attempt in
+#: progress of each lane (the rest of a lane's state is its own ``ST`` state).
+LN = layout('Lanes', [
+    ('Y', N, 'omega [rad/yr], quaternion'),
+    ('Y_OLD', N, 'the state at the start of the last step'),
+    ('Y_NEW', N, "the attempt's candidate state"),
+    ('F', N, 'f(t, y) at the current state'),
+    ('K', LANE_STAGES * N, "the attempt's stages (dop853: scipy's K, f at the end last)"),
+    ('TMP', N, "a stage's argument"),
+    ('GO', 1, '1 if the lane attempts a step in this iteration'),
+    ('TAU', 1, "local time at the step's start [yr]"),
+    ('TAU_NEW', 1, "local time at the attempt's end [yr]"),
+    ('H', 1, "the attempt's step [yr]"),
+    ('H_ABS', 1, "the attempt's |step| [yr]"),
+    ('MIN_STEP', 1, "the step's smallest |step| [yr]"),
+    ('REJECTED', 1, 'attempts of the step rejected so far'),
+    ('T', 1, "a stage's absolute time [yr]"),
+    ('SX', 1, "the Sun's direction at that time: X' component"),
+    ('SY', 1, "the Sun's direction at that time: Y' component"),
+    ('ACC', 1, 'a sum over stages'),
+    ('ACC3', 1, 'a second sum over stages'),
+    ('E5', 1, "dop853: the 5th-order error's sum of squares"),
+    ('E3', 1, "dop853: the 3rd-order error's sum of squares"),
+    ('ERR', 1, "the attempt's error norm (< 1: accepted)"),
 ])
 
 

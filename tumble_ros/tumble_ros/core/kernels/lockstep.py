@@ -33,6 +33,7 @@ from tumble_ros.core.jit import jit
 from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, Extra, FAIL, LI, N, ST,
                                             STATUS)
+from tumble_ros.core.kernels.stepping import step_taken
 from tumble_ros.core.kernels.tracking import (euler_of, follow, track_pieces, track_rate,
                                               UNWRAP_STEP)
 
@@ -276,16 +277,7 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
         bst[ST.FAIL] = code
         bst[ST.FAIL_T] = t_good
         return False
-    bst[ST.N_STEPS] += 1.0
-    bst[ST.T_OLD] = t_good
-    bst[ST.T] = (bst[ST.T_BOUND] if bst[ST.TAU] >= bst[ST.TAU_BOUND]
-                 else bst[ST.T0] + bst[ST.TAU])
-    bst[ST.WIN_STEPS] += 1.0
-    if bst[ST.T] - bst[ST.WIN_T] >= cfg[CF.WINDOW]:
-        bst[ST.WIN_T] = bst[ST.T]
-        bst[ST.WIN_STEPS] = 0.0
-    if bst[ST.TAU] >= bst[ST.TAU_BOUND]:
-        bst[ST.STATUS] = STATUS.FINISHED
+    step_taken(cfg, bst, t_good)
     counters[LI.PAR] = 1 - par
     counters[LI.STEPS] += 1
     return True

@@ -26,18 +26,23 @@ from types import ModuleType
 from typing import Any, Callable, NamedTuple
 
 from tumble_ros.core.jit import COMPILED_SOURCES, specialise
-from tumble_ros.core.kernels import dop853, ensemble, lockstep, rk4, splitting, stepping
+from tumble_ros.core.kernels import dop853, ensemble, lanes, lockstep, rk4, splitting, stepping
 from tumble_ros.core.kernels.layout import Array, CF, Extra
 
 __all__ = ['KERNELS', 'Loops', 'loops', 'kernel_id', 'kernel_name', 'loops_for', 'cached',
            'ensemble_init', 'ensemble_advance', 'has_lockstep', 'has_lockstep_module',
-           'BLOCK_FUNCTIONS']
+           'has_lanes', 'has_lanes_module', 'BLOCK_FUNCTIONS', 'LANE_FUNCTIONS']
 
 #: The functions a method's module defines to be stepped in lockstep (:mod:`.lockstep`):
 #: ``block_start``, ``block_step``, ``block_load``, ``block_store`` (see :mod:`.splitting`,
 #: :mod:`.rk4`); optional. A module may also define ``block_dense`` (the block's dense output:
 #: :mod:`.splitting`; without it a sample inside a step is written body by body).
 BLOCK_FUNCTIONS = ('block_start', 'block_step', 'block_load', 'block_store')
+
+#: The functions a method's module defines to be stepped as lanes with their own clocks
+#: (:mod:`.lanes`): an adaptive method's step split (see :mod:`.dop853`); optional.
+LANE_FUNCTIONS = ('lanes_start', 'lanes_attempt', 'lanes_stages', 'lanes_control',
+                  'lanes_accept')
 
 #: The compiled methods: registry key (``Stepper.kernel``) -> module with start, step, dense.
 KERNELS: dict[str, ModuleType] = {
@@ -59,6 +64,7 @@ class Loops(NamedTuple):
     ensemble_advance: Callable[..., None]
     block_init: Callable[..., None] | None = None
     block_advance: Callable[..., None] | None = None
+    lanes_advance: Callable[..., None] | None = None
 
 
 _BUILT: dict[str, tuple[ModuleType, Loops]] = {}
@@ -118,25 +124,37 @@ def loops_for(module: ModuleType, suffix: str) -> Loops:
     many = _copies(ensemble, ensemble.LOOP_FUNCTIONS,
                    {name: single[name] for name in ('seg_init', 'emit', 'advance')}, suffix,
                    cache)
-    if not has_lockstep_module(module):
-        return Loops(single['seg_init'], single['step'], single['dense'], single['emit'],
-                     single['advance'], many['ensemble_init'], many['ensemble_advance'])
-    block = _copies(lockstep, lockstep.LOOP_FUNCTIONS,
-                    {'method_block_start': module.block_start,
-                     'method_block_step': module.block_step,
-                     'method_block_load': module.block_load,
-                     'method_block_store': module.block_store,
-                     'method_block_dense': getattr(module, 'block_dense', lockstep.no_block_dense),
-                     **{name: single[name] for name in ('seg_init', 'emit', 'track_update')}},
-                    suffix, cache)
+    blocks: dict[str, Any] = {}
+    shared = {name: single[name] for name in ('seg_init', 'emit', 'track_update')}
+    if has_lockstep_module(module):
+        block = _copies(lockstep, lockstep.LOOP_FUNCTIONS,
+                        {**{f'method_{name}': getattr(module, name) for name in BLOCK_FUNCTIONS},
+                         'method_block_dense': getattr(module, 'block_dense',
+                                                       lockstep.no_block_dense),
+                         **shared}, suffix, cache)
+        blocks.update(block_init=block['block_init'], block_advance=block['block_advance'])
+    if has_lanes_module(module):
+        lane = _copies(lanes, lanes.LOOP_FUNCTIONS,
+                       {**{f'method_{name}': getattr(module, name) for name in LANE_FUNCTIONS},
+                        **shared}, suffix, cache)
+        blocks.update(lanes_advance=lane['lanes_advance'])
     return Loops(single['seg_init'], single['step'], single['dense'], single['emit'],
-                 single['advance'], many['ensemble_init'], many['ensemble_advance'],
-                 block['block_init'], block['block_advance'])
+                 single['advance'], many['ensemble_init'], many['ensemble_advance'], **blocks)
 
 
 def has_lockstep_module(module: ModuleType) -> bool:
     """Return whether a method's module can step a block of bodies in lockstep."""
     return all(callable(getattr(module, name, None)) for name in BLOCK_FUNCTIONS)
+
+
+def has_lanes_module(module: ModuleType) -> bool:
+    """Return whether a method's module can step a block of bodies as lanes (:mod:`.lanes`)."""
+    return all(callable(getattr(module, name, None)) for name in LANE_FUNCTIONS)
+
+
+def has_lanes(name: str) -> bool:
+    """Return whether method ``name`` of :data:`KERNELS` can be stepped in :mod:`.lanes`."""
+    return name in KERNELS and has_lanes_module(KERNELS[name])
 
 
 def has_lockstep(name: str) -> bool:

@@ -24,7 +24,7 @@ from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST, STATUS
 from tumble_ros.core.kernels.tracking import (refresh_track, set_track, track_pieces, track_rate,
                                               UNWRAP_STEP, unwrapped_euler)
 
-__all__ = ['seg_init', 'step', 'dense', 'track_euler', 'emit', 'advance', 'LOOP_FUNCTIONS']
+__all__ = ['seg_init', 'step', 'step_taken', 'dense', 'track_euler', 'emit', 'advance', 'LOOP_FUNCTIONS']
 
 #: The functions of this module that call the method (directly or through each other): the
 #: ones :mod:`.methods` copies per method, in an order where each comes after those it calls.
@@ -111,6 +111,19 @@ def step(p: Array, extra: Extra, cfg: Array, st: Array) -> bool:
         st[ST.FAIL] = code
         st[ST.FAIL_T] = t_good
         return False
+    step_taken(cfg, st, t_good)
+    return True
+
+
+@jit_inline
+def step_taken(cfg: Array, st: Array, t_good: float) -> None:
+    """
+    Count a step from absolute time t_good that passed its checks (st[ST.TAU] its end).
+
+    The absolute time handed out, the work budget's window, the segment's end; the same for
+    one body (:func:`step`) and for a block's shared or a lane's own times (``lockstep``,
+    ``lanes``).
+    """
     st[ST.N_STEPS] += 1.0
     st[ST.T_OLD] = t_good
     # the absolute time handed out (integrators.base.Stepper.absolute)
@@ -121,7 +134,6 @@ def step(p: Array, extra: Extra, cfg: Array, st: Array) -> bool:
         st[ST.WIN_STEPS] = 0.0
     if st[ST.TAU] >= st[ST.TAU_BOUND]:
         st[ST.STATUS] = STATUS.FINISHED
-    return True
 
 
 @jit
