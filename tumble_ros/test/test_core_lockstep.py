@@ -43,9 +43,9 @@ def assert_identical(a, b):
 
 
 def per_body(monkeypatch):
-    """Take the lockstep loop out of the registry: the per-body ensemble loop runs."""
+    """Take the lockstep and lanes loops out of the registry: the per-body loop runs."""
     monkeypatch.setattr(E, 'ENSEMBLE_LOOPS',
-                        {k: v for k, v in E.ENSEMBLE_LOOPS.items() if k != 'lockstep'})
+                        {k: v for k, v in E.ENSEMBLE_LOOPS.items() if k == 'per-body'})
 
 
 def test_which_ensembles_are_stepped_in_lockstep():
@@ -58,9 +58,9 @@ def test_which_ensembles_are_stepped_in_lockstep():
     assert 'impacts' in E._lockstep_refusal(sc, [(), (hit,)], splitting)
     assert 'impacts' in E._lockstep_refusal(sc.replace(impacts=(hit,)), None, splitting)
     assert E._lockstep_refusal(fig9('rk4'), None, INTEGRATORS['rk4']) == ''
-    # adaptive: every body its own steps
+    # adaptive: every body its own steps (the lanes loop: test_core_lanes.py)
     assert "'dop853'" in E._lockstep_refusal(fig9('dop853'), None, dop853)
-    assert list(E.ENSEMBLE_LOOPS) == ['lockstep', 'per-body']
+    assert list(E.ENSEMBLE_LOOPS) == ['lockstep', 'lanes', 'per-body']
 
 
 def test_the_plain_torque_is_the_torque_bit_for_bit():
