@@ -298,7 +298,7 @@ def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
 # ---------------------------------------------------------------------------------------
 # Lanes with their own clocks (kernels.lanes): buffers (LN.SIZE, L), one body a column
 # ---------------------------------------------------------------------------------------
-@jit
+@jit_inline
 def lanes_start(cfg: Array, st: Array, ln: Array, i: int) -> None:
     """Start a step of lane i from its state st (:func:`step_start`): no attempt rejected."""
     min_step, h_abs = step_start(cfg, st)
@@ -308,7 +308,7 @@ def lanes_start(cfg: Array, st: Array, ln: Array, i: int) -> None:
     ln[LN.REJECTED, i] = 0.0
 
 
-@jit
+@jit_inline
 def lanes_attempt(st: Array, ln: Array, i: int) -> float:
     """Set up lane i's next attempt (:func:`attempt`) and count its evaluations; a FAIL code."""
     code, t_new, h = attempt(ln[LN.TAU, i], st[ST.TAU_BOUND], ln[LN.H_ABS, i],
@@ -319,6 +319,39 @@ def lanes_attempt(st: Array, ln: Array, i: int) -> float:
         ln[LN.H_ABS, i] = abs(h)
         st[ST.NFEV] += float(_NSTAGES)
     return code
+
+
+@jit_inline
+def _lanes_sum(ln: Array, acc: int, k: int, coefficients: Array, s: int, m: int) -> None:
+    """
+    ln[acc] = sum over j < s of ln[k + j N] * coefficients[j] for m lanes, from 0.0 in j's order.
+
+    The single body's ``acc += K[j] * a[j]``, one rounding a term in the same order, four terms
+    a pass over the lanes (the sum kept in a register: a quarter of the loads and stores).
+    """
+    for i in range(m):
+        ln[acc, i] = 0.0
+    j = 0
+    while j + 4 <= s:
+        a0 = coefficients[j]
+        a1 = coefficients[j + 1]
+        a2 = coefficients[j + 2]
+        a3 = coefficients[j + 3]
+        r = k + j * N
+        for i in range(m):
+            x = ln[acc, i]
+            x += ln[r, i] * a0
+            x += ln[r + N, i] * a1
+            x += ln[r + 2 * N, i] * a2
+            x += ln[r + 3 * N, i] * a3
+            ln[acc, i] = x
+        j += 4
+    while j < s:
+        a0 = coefficients[j]
+        r = k + j * N
+        for i in range(m):
+            ln[acc, i] += ln[r, i] * a0
+        j += 1
 
 
 @jit
@@ -338,12 +371,7 @@ def lanes_stages(p: Array, extra: Extra, cfg: Array, t0: float, ln: Array, m: in
     for s in range(1, ns + 1):
         out = LN.TMP if s < ns else LN.Y_NEW
         for c in range(N):
-            for i in range(m):
-                ln[LN.ACC, i] = 0.0
-            for j in range(s):
-                a = _A[s, j]
-                for i in range(m):
-                    ln[LN.ACC, i] += ln[LN.K + j * N + c, i] * a
+            _lanes_sum(ln, LN.ACC, LN.K + c, _A[s], s, m)
             for i in range(m):
                 ln[out + c, i] = ln[LN.Y + c, i] + ln[LN.ACC, i] * ln[LN.H, i]
         cs = _C[s]
@@ -356,16 +384,8 @@ def lanes_stages(p: Array, extra: Extra, cfg: Array, t0: float, ln: Array, m: in
         ln[LN.E5, i] = 0.0
         ln[LN.E3, i] = 0.0
     for c in range(N):
-        for i in range(m):
-            ln[LN.ACC, i] = 0.0
-            ln[LN.ACC3, i] = 0.0
-        for j in range(ns + 1):
-            e5 = _E5[j]
-            e3 = _E3[j]
-            for i in range(m):
-                kj = ln[LN.K + j * N + c, i]
-                ln[LN.ACC, i] += kj * e5
-                ln[LN.ACC3, i] += kj * e3
+        _lanes_sum(ln, LN.ACC, LN.K + c, _E5, ns + 1, m)
+        _lanes_sum(ln, LN.ACC3, LN.K + c, _E3, ns + 1, m)
         for i in range(m):
             ay = abs(ln[LN.Y + c, i])
             an = abs(ln[LN.Y_NEW + c, i])
@@ -378,7 +398,7 @@ def lanes_stages(p: Array, extra: Extra, cfg: Array, t0: float, ln: Array, m: in
         ln[LN.ERR, i] = error_norm(ln[LN.E5, i], ln[LN.E3, i], ln[LN.H, i])
 
 
-@jit
+@jit_inline
 def lanes_control(ln: Array, i: int) -> bool:
     """Judge lane i's attempt (:func:`control`): True if accepted; the next size to ln."""
     ok, h_abs = control(ln[LN.ERR, i], ln[LN.H_ABS, i], ln[LN.REJECTED, i] > 0.0)
@@ -388,7 +408,7 @@ def lanes_control(ln: Array, i: int) -> bool:
     return ok
 
 
-@jit
+@jit_inline
 def lanes_accept(st: Array, ln: Array, i: int) -> None:
     """Move lane i to its accepted attempt's end, as :func:`step` does (its checks passed)."""
     for c in range(N):

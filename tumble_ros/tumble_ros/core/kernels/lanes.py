@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit
+from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, LANE_STAGES, LN, N, PR, ST, STATUS
 from tumble_ros.core.kernels.lockstep import BIGGEST
@@ -156,7 +156,7 @@ def lane_stop(st: Array, ln: Array, track: Array, i: int) -> None:
     refresh_track(st, track)
 
 
-@jit
+@jit_inline
 def lane_started(cfg: Array, st: Array, ln: Array, track: Array, t_stop: float,
                  i: int) -> None:
     """Start lane i's next step if it goes on (running, before t_stop), else stop it."""
@@ -171,7 +171,7 @@ def lane_started(cfg: Array, st: Array, ln: Array, track: Array, t_stop: float,
         ln[LN.GO, i] = 1.0
 
 
-@jit
+@jit_inline
 def step_checked(cfg: Array, st: Array, ln: Array, i: int) -> None:
     """
     Lane i's accepted attempt through ``stepping.step``'s checks: on to its end, or failed.
@@ -195,7 +195,7 @@ def step_checked(cfg: Array, st: Array, ln: Array, i: int) -> None:
         step_taken(cfg, st, t_good)
 
 
-@jit
+@jit_inline
 def after_step(p: Array, extra: Extra, cfg: Array, st: Array, ln: Array, track: Array,
                t_out: Array, y_out: Array, e_out: Array, k_out: npt.NDArray[np.int64], b: int,
                i: int) -> None:
