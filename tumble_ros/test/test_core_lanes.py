@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_core_lockstep import assert_identical, spread  # (the lockstep loop's, the same checks)
 
 from tumble_ros.core import (ensemble_scenarios, Impact, IntegratorSettings, kernels,
                              load_scenario, simulate, simulate_ensemble)
@@ -21,7 +22,6 @@ from tumble_ros.core.propagation import ensemble as E
 pytestmark = pytest.mark.skipif(not kernels.COMPILED,
                                 reason='numba not available: only the reference path runs')
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
-FIELDS = ('omega', 'euler', 'quaternion', 'jacobi', 'success', 'n_steps', 'nfev')
 DOP853 = INTEGRATORS['dop853']
 
 
@@ -30,19 +30,6 @@ def fig9(duration=0.3, rtol=1e-9, atol=1e-11, **changes):
     return load_scenario(CONFIG / 'fig9.yaml').replace(
         **{'duration': duration, 'output_interval': duration / 6, 'integrator': settings,
            **changes})
-
-
-def spread(sc, n, seed=1, size=0.5):
-    rng = np.random.default_rng(seed)
-    return (np.array(sc.omega0) + size * rng.normal(size=(n, 3)),
-            np.array(sc.euler0) + 0.3 * rng.normal(size=(n, 3)))
-
-
-def assert_identical(a, b):
-    for name in FIELDS:
-        x, y = getattr(a, name), getattr(b, name)
-        assert x.shape == y.shape and np.array_equal(x, y, equal_nan=True), name
-    assert a.messages == b.messages
 
 
 def assert_single_runs(ens, sc, t_eval, omega0, euler0):

@@ -38,7 +38,8 @@ from tumble_ros.core.kernels.dop853 import MAX_REJECTIONS
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, describe, Extra, FAIL, LI, LN,
                                             N, PR, ST, STATUS)
 from tumble_ros.core.kernels.methods import (ensemble_advance, ensemble_init, has_lanes,
-                                             has_lockstep, kernel_id, kernel_name, KERNELS, Loops, loops)
+                                             has_lockstep, kernel_id, kernel_name, KERNELS,
+                                             Loops, loops)
 from tumble_ros.core.kernels.physics import body_torque, free_flow, rhs, rhs_called
 from tumble_ros.core.kernels.splitting import flow_called, MAX_PULSE_SUBSTEPS, pulse_step_count
 from tumble_ros.core.kernels.tracking import (MAX_TRACK_PIECES, set_track, track_pieces,
@@ -46,7 +47,8 @@ from tumble_ros.core.kernels.tracking import (MAX_TRACK_PIECES, set_track, track
                                               unwrap_towards)
 
 __all__ = ['COMPILED', 'NUMBA_VERSION', 'ST', 'PR', 'CF', 'BK', 'BT', 'BB', 'LI', 'LN', 'N',
-           'STATUS', 'FAIL', 'Array', 'Extra', 'has_lockstep', 'has_lanes', 'KERNELS', 'Loops', 'loops', 'kernel_id',
+           'STATUS', 'FAIL', 'Array', 'Extra', 'has_lockstep', 'has_lanes', 'KERNELS', 'Loops',
+           'loops', 'kernel_id',
            'kernel_name', 'describe',
            'config_array', 'free_flow_split', 'new_state',
            'problem_array', 'problem_arrays', 'set_pulses', 'collapsed', 'finite_norm',

@@ -17,7 +17,8 @@ import numpy as np
 
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.lanes import lanes_rhs
-from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, LANE_STAGES, LN, N, ST, STATUS
+from tumble_ros.core.kernels.layout import (Array, CF, Extra, FAIL, LANE_STAGES, LN, N, ST,
+                                            STATUS)
 from tumble_ros.core.kernels.physics import rhs, rhs_called
 
 __all__ = ['start', 'step', 'dense', 'MAX_REJECTIONS', 'scipy_tables', 'step_start', 'attempt',
@@ -62,7 +63,9 @@ _ERR_EXP = -1.0 / (7 + 1)              # DOP853: error_estimator_order = 7
 #: (_MIN_FACTOR), so a finite h reaches min_step (FAIL.TOO_SMALL) within ~480 rejections even
 #: from 1e9 yr; this only bounds the loop by construction.
 MAX_REJECTIONS = 1000
-assert _NSTAGES + 1 == LANE_STAGES and _C[_NSTAGES] == 1.0 and np.array_equal(_A[_NSTAGES, :_NSTAGES], _B)
+# the lanes' last stage is the candidate y_new, f at the step's end (lanes_stages)
+assert _NSTAGES + 1 == LANE_STAGES and _C[_NSTAGES] == 1.0
+assert np.array_equal(_A[_NSTAGES, :_NSTAGES], _B)
 
 
 @jit

@@ -28,10 +28,13 @@ import numpy.typing as npt
 
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.checks import collapsed
-from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, LANE_STAGES, LN, N, PR, ST, STATUS
-from tumble_ros.core.kernels.lockstep import BIGGEST
-from tumble_ros.core.kernels.stepping import step_taken
+from tumble_ros.core.kernels.layout import (Array, CF, Extra, FAIL, LANE_STAGES, LN, N, PR, ST,
+                                            STATUS)
+# (emit, seg_init, track_update: lockstep's unbound single-body functions, bound here too by
+# kernels.methods)
+from tumble_ros.core.kernels.lockstep import BIGGEST, emit, seg_init, track_update
 from tumble_ros.core.kernels.physics import derivatives, plain_torque_given_sun, torque_given_sun
+from tumble_ros.core.kernels.stepping import step_taken
 from tumble_ros.core.kernels.tracking import refresh_track, track_rate, UNWRAP_STEP
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
 
@@ -67,21 +70,16 @@ def method_lanes_accept(st: Array, ln: Array, i: int) -> None:
     raise NotImplementedError('a template: run kernels.methods.loops(name).lanes_advance')
 
 
-def seg_init(p: Array, extra: Extra, cfg: Array, st: Array, t0: float, t_bound: float) -> None:
-    """Start a segment: the single-body ``stepping.seg_init`` (bound by :mod:`.methods`)."""
-    raise NotImplementedError('a template: run kernels.methods.loops(name).lanes_advance')
-
-
-def emit(p: Array, extra: Extra, cfg: Array, st: Array, track: Array, t_out: Array,
-         y_out: Array, e_out: Array, k: int) -> int:
-    """Write outputs: the single-body ``stepping.emit`` (bound by :mod:`.methods`)."""
-    raise NotImplementedError('a template: run kernels.methods.loops(name).lanes_advance')
-
-
-def track_update(p: Array, extra: Extra, cfg: Array, st: Array, track: Array,
-                 increment: float) -> int:
-    """Update the track: the single-body ``stepping.track_update`` (bound by :mod:`.methods`)."""
-    raise NotImplementedError('a template: run kernels.methods.loops(name).lanes_advance')
+@jit_inline
+def _omega_rates(p: Array, ln: Array, yo: int, oo: int, i: int, tx: float, ty: float,
+                 tz: float) -> None:
+    """Write d omega/dt of lane i (state rows yo, torque (tx, ty, tz)) to rows oo .. oo+2."""
+    f0, f1, f2, _, _, _, _ = derivatives(p, ln[yo, i], ln[yo + 1, i], ln[yo + 2, i],
+                                         ln[yo + 3, i], ln[yo + 4, i], ln[yo + 5, i],
+                                         ln[yo + 6, i], tx, ty, tz)
+    ln[oo, i] = f0
+    ln[oo + 1, i] = f1
+    ln[oo + 2, i] = f2
 
 
 @jit
@@ -102,23 +100,13 @@ def lanes_rhs(p: Array, extra: Extra, ln: Array, yo: int, oo: int, m: int) -> No
         for i in range(m):
             tx, ty, tz = plain_torque_given_sun(p, ln[LN.SX, i], ln[LN.SY, i], ln[yo + 3, i],
                                                 ln[yo + 4, i], ln[yo + 5, i], ln[yo + 6, i])
-            f0, f1, f2, _, _, _, _ = derivatives(p, ln[yo, i], ln[yo + 1, i], ln[yo + 2, i],
-                                                 ln[yo + 3, i], ln[yo + 4, i], ln[yo + 5, i],
-                                                 ln[yo + 6, i], tx, ty, tz)
-            ln[oo, i] = f0
-            ln[oo + 1, i] = f1
-            ln[oo + 2, i] = f2
+            _omega_rates(p, ln, yo, oo, i, tx, ty, tz)
     else:
         for i in range(m):
             tx, ty, tz = torque_given_sun(p, extra, ln[LN.T, i], ln[LN.SX, i], ln[LN.SY, i],
                                           ln[yo + 3, i], ln[yo + 4, i], ln[yo + 5, i],
                                           ln[yo + 6, i])
-            f0, f1, f2, _, _, _, _ = derivatives(p, ln[yo, i], ln[yo + 1, i], ln[yo + 2, i],
-                                                 ln[yo + 3, i], ln[yo + 4, i], ln[yo + 5, i],
-                                                 ln[yo + 6, i], tx, ty, tz)
-            ln[oo, i] = f0
-            ln[oo + 1, i] = f1
-            ln[oo + 2, i] = f2
+            _omega_rates(p, ln, yo, oo, i, tx, ty, tz)
     for i in range(m):
         _, _, _, f3, f4, f5, f6 = derivatives(p, ln[yo, i], ln[yo + 1, i], ln[yo + 2, i],
                                               ln[yo + 3, i], ln[yo + 4, i], ln[yo + 5, i],
@@ -150,7 +138,7 @@ def lane_fail(st: Array, code: float) -> None:
 
 @jit
 def lane_stop(st: Array, ln: Array, track: Array, i: int) -> None:
-    """A lane leaves the iterations: ``stepping.advance``'s end (the track refreshed)."""
+    """Take lane i out of the iterations: ``stepping.advance``'s end (the track refreshed)."""
     ln[LN.GO, i] = 0.0
     lane_load(st, ln, i)
     refresh_track(st, track)

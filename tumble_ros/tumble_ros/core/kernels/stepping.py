@@ -24,7 +24,8 @@ from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST, STATUS
 from tumble_ros.core.kernels.tracking import (refresh_track, set_track, track_pieces, track_rate,
                                               UNWRAP_STEP, unwrapped_euler)
 
-__all__ = ['seg_init', 'step', 'step_taken', 'dense', 'track_euler', 'emit', 'advance', 'LOOP_FUNCTIONS']
+__all__ = ['seg_init', 'step', 'step_taken', 'dense', 'track_euler', 'emit', 'advance',
+           'LOOP_FUNCTIONS']
 
 #: The functions of this module that call the method (directly or through each other): the
 #: ones :mod:`.methods` copies per method, in an order where each comes after those it calls.
