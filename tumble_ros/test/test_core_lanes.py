@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_core_lockstep import assert_identical, spread  # (the lockstep loop's, the same checks)
+from test_core_lockstep import _Spy, assert_identical, spread  # (the lockstep loop's checks)
 
 from tumble_ros.core import (ensemble_scenarios, Impact, IntegratorSettings, kernels,
                              load_scenario, simulate, simulate_ensemble)
@@ -161,3 +161,16 @@ def test_segments_extra_torques_and_shared_pulses():
     ens = simulate_ensemble(hit, t_eval, omega0=omega0, euler0=euler0, threads=2)
     assert_single_runs(ens, hit, t_eval, omega0, euler0)
     assert np.max(np.abs(ens.omega[:, -1] - ens.omega[:, 1])) > 1.0   # the pulse did act
+
+
+@pytest.mark.parametrize('threads', [1, 2])
+def test_the_lanes_loop_is_loaded_before_the_timing_for_its_call_types(monkeypatch, threads):
+    """``wall_time`` leaves out numba's first load of the lanes loop (its scratch argument too)."""
+    real = kernels.loops('dop853')
+    spies = {name: _Spy(getattr(real, name)) for name in ('ensemble_init', 'lanes_advance')}
+    monkeypatch.setattr(kernels, 'loops', lambda name: real._replace(**spies))
+    sc = fig9(duration=0.1)
+    omega0, euler0 = spread(sc, 7, seed=5)
+    simulate_ensemble(sc, omega0=omega0, euler0=euler0, threads=threads)
+    for name, spy in spies.items():
+        assert spy.called and spy.called == spy.loaded, (name, spy.called, spy.loaded)

@@ -1,8 +1,8 @@
 """
 Compile the integration loops ahead (build tooling): ``python -m tumble_ros.cli.warmup``.
 
-numba compiles the single-body and the ensemble loops (per body, and in lockstep for the methods
-that have one) of each compiled method
+numba compiles the single-body and the ensemble loops (per body, and in lockstep or as lanes for
+the methods that have one) of each compiled method
 (``core.kernels.KERNELS``) on their first use (then cached beside the sources): a run compiles
 only the loops it uses (``core.jit.first_use`` says so on stderr). This optional step
 (``make warmup``; ``make test`` runs it first) compiles them all ahead. It also compiles the
@@ -67,7 +67,7 @@ def _warm_variant(name: str, extra: bool) -> float:
     started = time.perf_counter()
     run = _tiny(extra).replace(integrator=IntegratorSettings(method=name, step=1e-4))
     simulate(run)
-    simulate_ensemble(run, n_bodies=2)   # the lockstep loop (methods with one)
+    simulate_ensemble(run, n_bodies=2)   # the lockstep or lanes loop (methods with one)
     # bodies with their own impacts: the per-body loop
     simulate_ensemble(run, impacts=[(), (Impact(0.0, 5e-4, (1.0, 0.0, 0.0)),)])
     return time.perf_counter() - started
