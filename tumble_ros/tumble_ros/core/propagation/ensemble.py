@@ -705,7 +705,7 @@ POST_SAMPLES = 2**16
 
 
 #: Bodies per block of the lockstep loop: its buffers, (2 K.BK.SIZE + K.BT.SIZE + K.BB.SIZE) x 8
-#: bytes a body (672: 168 KB a block), stay in the core's L2 cache.
+#: bytes a body (776: 194 KB a block), stay in the core's L2 cache.
 BLOCK_BODIES = 256
 
 
@@ -819,7 +819,7 @@ def _lockstep_message(body: FloatArray, bst: FloatArray, method_name: str) -> st
 
 
 #: Bodies a block of the lanes loop steps at once: its scratch, (K.LN.SIZE) x 8 bytes a
-#: lane (1,248: 160 KB), stays in the core's L2 cache.
+#: lane (1,128: 141 KB), stays in the core's L2 cache.
 LANE_BODIES = 128
 
 
