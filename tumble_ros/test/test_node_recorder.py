@@ -233,6 +233,7 @@ def test_a_stopped_comparator_no_longer_holds_the_recorders_progress(ros, tmp_pa
     from tumble_ros.nodes import recorder as recorder_module
     from tumble_ros.nodes.comparator import ComparatorNode
     from tumble_ros.nodes.runner import close_node
+    from tumble_ros.nodes.sim import WINDOW
 
     monkeypatch.setattr(recorder_module, 'STALE_TOPIC', 1e9)
     sim = ros.start(SimNode, duration=20.0, output_interval=1e-3, real_time_factor=0.0,
@@ -246,7 +247,8 @@ def test_a_stopped_comparator_no_longer_holds_the_recorders_progress(ros, tmp_pa
     ros.nodes.remove(comparator)
     close_node(comparator)              # goodbye, then its publishers go (nodes.runner)
     at_stop = sim.published_samples
-    assert ros.spin_until(lambda: sim.published_samples > at_stop + 2000, 60.0), \
+    # stalled, it would publish at most sim.WINDOW (40) samples beyond the recorder's progress
+    assert ros.spin_until(lambda: sim.published_samples > at_stop + 10 * WINDOW, 60.0), \
         f'the simulator stalled at {sim.published_samples} samples ({at_stop} at the stop)'
     recorder.close()
 
