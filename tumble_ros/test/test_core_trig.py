@@ -81,3 +81,80 @@ def test_the_vectorised_block_pass_gives_the_scalar_bits():
     np.testing.assert_array_equal(tmp[BT.COS], scalar[:, 1])
     # signed zeros too
     assert np.array_equal(np.signbit(tmp[BT.SIN]), np.signbit(scalar[:, 0]))
+
+
+#: The track's atan2 compiled on its own, and its Python source.
+ATAN2 = {'compiled': called(trig.atan2), 'python': python_source(trig.atan2)}
+
+
+def atan2_arguments(seed=3, n=20000):
+    """(y, x): every quadrant, ratios 1e-40 to 1e40, near +-pi, near the reduction's edges."""
+    rng = np.random.default_rng(seed)
+    angle = rng.uniform(-math.pi, math.pi, n)
+    scale = 10.0 ** rng.uniform(-300, 300, n)
+    ratio = 10.0 ** rng.uniform(-40, 40, n) * rng.choice([-1.0, 1.0], n)
+    x = rng.choice([-1.0, 1.0], n) * 10.0 ** rng.uniform(-150, 150, n)
+    # |y/x| on both sides of 7/16, 11/16, 19/16, 39/16 and 2^60 (fdlibm's thresholds)
+    edges = np.array([0.4375, 0.6875, 1.1875, 2.4375, 2.0 ** 60])
+    edge = np.concatenate([edges, np.nextafter(edges, 0.0), np.nextafter(edges, np.inf)])
+    near_pi = 10.0 ** rng.uniform(-30, 0, n // 4)          # y -> +-0 with x < 0
+    ys = [scale * np.sin(angle), ratio * x, edge, -edge, near_pi, -near_pi]
+    xs = [scale * np.cos(angle), x, np.ones_like(edge), -np.ones_like(edge),
+          -np.ones_like(near_pi), -np.ones_like(near_pi)]
+    return np.concatenate(ys), np.concatenate(xs)
+
+
+#: Arguments libm's atan2 answers exactly by C99's special cases: zeros, infinities, NaN.
+SPECIAL = [0.0, -0.0, math.inf, -math.inf, math.nan, 1.0, -1.0, 5e-324, -1e308, 2.0 ** -60]
+
+
+@pytest.mark.parametrize('path', sorted(ATAN2))
+def test_atan2_is_within_one_ulp_of_libm(path):
+    if path == 'compiled' and not kernels.COMPILED:
+        pytest.skip('numba not available')
+    y, x = atan2_arguments()
+    got = np.array([ATAN2[path](float(a), float(b)) for a, b in zip(y, x)])
+    want = np.array([math.atan2(a, b) for a, b in zip(y, x)])
+    assert ulps(got, want).max() <= 1.0
+    assert np.array_equal(np.signbit(got), np.signbit(want))
+    # most are libm's own bits (fdlibm's polynomial; glibc's atan2 is correctly rounded)
+    assert np.mean(got == want) > 0.8
+    # every quadrant, |y/x| from tiny to huge, and both sides of +-pi were reached
+    assert np.all(np.histogram(want, bins=8, range=(-math.pi, math.pi))[0] > 1000)
+    assert np.abs(want).max() == math.pi and np.abs(got).max() == math.pi
+
+
+@pytest.mark.parametrize('path', sorted(ATAN2))
+def test_atan2_of_zeros_infinities_and_nan_is_libms(path):
+    if path == 'compiled' and not kernels.COMPILED:
+        pytest.skip('numba not available')
+    for y in SPECIAL:
+        for x in SPECIAL:
+            got, want = ATAN2[path](y, x), math.atan2(y, x)
+            if math.isnan(want):
+                assert math.isnan(got), (y, x)
+            elif 0.0 in (y, x) or math.isinf(y) or math.isinf(x):
+                # C99's cases: exactly libm's, signed zeros, +-pi/4, +-3pi/4, +-pi/2, +-pi
+                assert (got, math.copysign(1.0, got)) == (want, math.copysign(1.0, want)), (y, x)
+            else:
+                assert ulps(np.array([got]), np.array([want]))[0] <= 1.0, (y, x)
+
+
+@needs_numba
+def test_the_vectorised_atan2_gives_the_scalar_bits():
+    """A loop over arrays (vectorised by LLVM: packed divisions) gives every scalar call's bits."""
+    import numba
+
+    @numba.njit(error_model='numpy')
+    def many(y, x, out):
+        for i in range(y.shape[0]):
+            out[i] = trig.atan2(y[i], x[i])
+
+    y, x = atan2_arguments(seed=4, n=2000)
+    s, c = np.meshgrid(SPECIAL, SPECIAL)
+    y, x = np.concatenate([y, s.ravel()]), np.concatenate([x, c.ravel()])
+    out = np.empty_like(y)
+    many(y, x, out)
+    scalar = np.array([ATAN2['compiled'](float(a), float(b)) for a, b in zip(y, x)])
+    assert out.tobytes() == scalar.tobytes()
+    assert 'vdivpd' in next(iter(many.inspect_asm().values()))

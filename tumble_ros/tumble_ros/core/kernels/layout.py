@@ -161,6 +161,13 @@ BT = layout('BlockScratch', [
     ('K4', N, 'rk4: fourth stage'),
     ('DENSE', BK.TORQUE + 3, "a dense output's state, rows Y, PI, TORQUE as BK (splitting's "
                              'block_dense: samples inside a step)'),
+    ('TRACK_I', 1, 'Euler tracking: the bodies whose update a step runs on the columns, '
+                   'gathered (lockstep.block_track): their index in the block'),
+    ('TRACK_CATCH', 1, '1 if that update first catches up at the step\'s start'),
+    ('TRACK_Q_OLD', 4, "their quaternion at the step's start"),
+    ('TRACK_Q', 4, "their quaternion at the step's end"),
+    ('TRACK_OLD', 3, "tracking.track_angles of the step's start: phi, psi, verdict"),
+    ('TRACK_NEW', 3, "tracking.track_angles of the step's end"),
 ])
 
 #: Per-body rows of a block ``(BB.SIZE, B)``: what is not shared by the block.

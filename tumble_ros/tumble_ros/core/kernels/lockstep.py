@@ -17,7 +17,9 @@ on the block's columns: a sample is written for the whole block at once (:func:`
 the method's ``block_dense`` for a sample inside a step, then ``tracking.euler_of`` per body,
 ``stepping.emit``'s operations), and a track update without dense output takes
 ``tracking.follow`` on the columns (``stepping.track_update``'s phi and psi; theta, which no
-lockstep output reads, skipped). The rare rest (a method without ``block_dense``, a track
+lockstep output reads, skipped), the bodies due in a step gathered and converted in one
+vectorised pass (the track's ``trig.atan2``, which the single-body track takes too). The rare
+rest (a method without ``block_dense``, a track
 update in pieces) calls the single-body functions (:func:`~.stepping.emit`,
 :func:`~.stepping.track_update`) on a scratch state ``bst`` (layout :data:`~.layout.ST`) into
 which the method's ``block_load`` copies the body (``bst`` also holds the block's shared times
@@ -29,12 +31,13 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit
+from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, Extra, FAIL, LI, N, ST,
                                             STATUS)
 from tumble_ros.core.kernels.stepping import step_taken
-from tumble_ros.core.kernels.tracking import (euler_of, follow, track_pieces, track_rate,
+from tumble_ros.core.kernels.tracking import (euler_of, follow, settle, track_angles,
+                                              TRACK_BAND, track_pieces, track_rate,
                                               UNWRAP_STEP)
 
 __all__ = ['block_init', 'block_advance', 'no_block_dense', 'LOOP_FUNCTIONS', 'BIGGEST']
@@ -283,6 +286,16 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
     return True
 
 
+@jit_inline
+def _settle_gathered(tmp: Array, angles: int, quaternion: int, j: int, track: Array) -> None:
+    """``tracking.follow`` of gathered body j from its converted angles (rows ``angles``)."""
+    if tmp[angles + 2, j] == TRACK_BAND:   # (rare: the band's hypot, by follow itself)
+        follow(tmp[quaternion, j], tmp[quaternion + 1, j], tmp[quaternion + 2, j],
+               tmp[quaternion + 3, j], track)
+    else:
+        settle(tmp[angles, j], tmp[angles + 1, j], tmp[angles + 2, j], track)
+
+
 @jit
 def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                 bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, m: int) -> None:
@@ -292,7 +305,9 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
     Each body keeps its own schedule (its updates at the steps of its single run: updating a
     block's bodies together would move them, and below theta ~ 0.1 the bound does not bound
     phi and psi, so the 2 pi multiples could differ). An update without dense output runs on
-    the columns (``tracking.follow``: phi and psi of the step's start, then of its end).
+    the columns (``tracking.follow``: phi and psi of the step's start, then of its end): the
+    bodies due are gathered (rows ``BT.TRACK_*``), their angles converted in one vectorised
+    pass (``tracking.track_angles``), then each track unwrapped in turn (``tracking.settle``).
     """
     if cfg[CF.EULER] == 0.0:
         return
@@ -310,21 +325,39 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
         due += 1 if late else 0
     if due == 0:
         return
+    n = 0
     for i in range(m):
         inc = tmp[BT.INC, i]
         if inc < 0.0 or bodies[BB.FAILED, i] != 0.0:
             continue
-        if track_pieces(inc) == 1:   # track_update without dense output, on the columns
-            track = tracks[i]
-            if bodies[BB.BUDGET, i] > 0.0:
-                follow(old[BK.Y + 3, i], old[BK.Y + 4, i], old[BK.Y + 5, i], old[BK.Y + 6, i],
-                       track)
+        if track_pieces(inc) == 1:   # track_update without dense output: gathered
+            tmp[BT.TRACK_I, n] = i
+            tmp[BT.TRACK_CATCH, n] = 1.0 if bodies[BB.BUDGET, i] > 0.0 else 0.0
             bodies[BB.BUDGET, i] = 0.0
-            follow(cur[BK.Y + 3, i], cur[BK.Y + 4, i], cur[BK.Y + 5, i], cur[BK.Y + 6, i], track)
+            for c in range(4):
+                tmp[BT.TRACK_Q_OLD + c, n] = old[BK.Y + 3 + c, i]
+                tmp[BT.TRACK_Q + c, n] = cur[BK.Y + 3 + c, i]
+            n += 1
         else:
             nfev = load_body(bst, old, cur, bodies, i)
             track_update(p, extra, cfg, bst, tracks[i], inc)
             store_body(bst, cur, bodies, i, nfev)
+    for j in range(n):   # (vectorised: both ends of the step, catch-up or not)
+        phi, psi, verdict = track_angles(tmp[BT.TRACK_Q_OLD, j], tmp[BT.TRACK_Q_OLD + 1, j],
+                                         tmp[BT.TRACK_Q_OLD + 2, j], tmp[BT.TRACK_Q_OLD + 3, j])
+        tmp[BT.TRACK_OLD, j] = phi
+        tmp[BT.TRACK_OLD + 1, j] = psi
+        tmp[BT.TRACK_OLD + 2, j] = verdict
+        phi, psi, verdict = track_angles(tmp[BT.TRACK_Q, j], tmp[BT.TRACK_Q + 1, j],
+                                         tmp[BT.TRACK_Q + 2, j], tmp[BT.TRACK_Q + 3, j])
+        tmp[BT.TRACK_NEW, j] = phi
+        tmp[BT.TRACK_NEW + 1, j] = psi
+        tmp[BT.TRACK_NEW + 2, j] = verdict
+    for j in range(n):   # tracking.follow's unwrapping, in order: start, then end
+        track = tracks[int(tmp[BT.TRACK_I, j])]
+        if tmp[BT.TRACK_CATCH, j] != 0.0:
+            _settle_gathered(tmp, BT.TRACK_OLD, BT.TRACK_Q_OLD, j, track)
+        _settle_gathered(tmp, BT.TRACK_NEW, BT.TRACK_Q, j, track)
 
 
 @jit

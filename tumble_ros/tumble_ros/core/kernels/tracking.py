@@ -6,6 +6,12 @@ continuous, so the track (phi, psi, theta) is updated often enough that no updat
 psi by more than ~1 rad (:data:`UNWRAP_STEP`): a bound on their rate is |w| / sin(theta),
 capped at |w| / :data:`UNWRAP_MIN_SIN` (below theta ~ 0.1 only phi + psi is well defined).
 The reference path (``Propagator``) and the compiled loop (``stepping``) use these functions.
+
+A sample's angles (:func:`euler_of`) take libm's ``atan2``: they are the outputs. A track's
+updates (:func:`track_to`, :func:`follow`) take ``trig.atan2``, within 1 ulp of libm's and
+vectorisable, so the lockstep loop converts the bodies due in a step together: the track only
+sets the 2 pi multiple k = round((track - angle) / 2 pi) of a sample, and with the angle
+within ~1 rad of its track an ulp of the track cannot move k (docs/physics.md).
 """
 from __future__ import annotations
 
@@ -13,9 +19,11 @@ import math
 
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, ST
+from tumble_ros.core.kernels.trig import atan2
 
 __all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of',
-           'follow', 'unwrapped_euler', 'set_track', 'track_to', 'track_rate', 'track_pieces',
+           'follow', 'track_angles', 'settle', 'TRACK_SKIP', 'TRACK_SET', 'TRACK_BAND',
+           'unwrapped_euler', 'set_track', 'track_to', 'track_rate', 'track_pieces',
            'refresh_track']
 
 #: Largest turn of phi or psi between two track updates [rad].
@@ -80,6 +88,54 @@ def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
     return unwrap_towards(phi, phi_ref), unwrap_towards(psi, psi_ref), theta
 
 
+#: :func:`track_angles`' verdicts: set the track, leave it (a state that ran away), or take
+#: the band's ``hypot`` (:func:`follow`).
+TRACK_SKIP = 0.0
+TRACK_SET = 1.0
+TRACK_BAND = 2.0
+
+
+@jit_inline
+def _track_phi_psi(c00: float, c02: float, c10: float, c12: float, c20: float, c21: float,
+                   degenerate: bool) -> tuple[float, float]:
+    """:func:`_phi_psi` by ``trig.atan2`` (the track's), as selects: vectorisable [rad]."""
+    phi = atan2(c10 if degenerate else c02, c00 if degenerate else -c12)
+    psi = atan2(c20, c21)
+    return phi, 0.0 if degenerate else psi
+
+
+@jit_inline
+def track_angles(q0: float, q1: float, q2: float, q3: float) -> tuple[float, float, float]:
+    """
+    Return phi, psi [rad] in [-pi, pi] of quaternion q for a track, and what to do with them.
+
+    The verdict: :data:`TRACK_SET`, :data:`TRACK_SKIP` (c22 NaN: theta would not be finite),
+    or :data:`TRACK_BAND`: the degenerate branch is not decided without ``hypot`` (phi, psi
+    then meaningless: :func:`follow` computes them again). No call, no branch: the lockstep
+    loop takes it vectorised on the bodies due (``lockstep.block_track``).
+    """
+    c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
+    a20 = abs(c20)
+    a21 = abs(c21)
+    # hypot(c20, c21) < 1e-300 is decided by max(|c20|, |c21|) <= hypot <= sqrt(2) max
+    # outside [0.5e-300, 1e-300), by hypot inside (and NaN: neither comparison holds)
+    regular = (a20 >= _DEGENERATE_SIN) | (a21 >= _DEGENERATE_SIN)
+    degenerate = (a20 < 0.5 * _DEGENERATE_SIN) & (a21 < 0.5 * _DEGENERATE_SIN)
+    phi, psi = _track_phi_psi(c00, c02, c10, c12, c20, c21, degenerate)
+    verdict = TRACK_SKIP if math.isnan(c22) else TRACK_SET
+    return phi, psi, verdict if regular | degenerate else TRACK_BAND
+
+
+@jit_inline
+def settle(phi: float, psi: float, verdict: float, track: Array) -> None:
+    """Unwrap phi, psi towards the track and set it if ``verdict`` and they allow it."""
+    phi = unwrap_towards(phi, track[0])
+    psi = unwrap_towards(psi, track[1])
+    if verdict == TRACK_SET and math.isfinite(phi) and math.isfinite(psi):
+        track[0] = phi
+        track[1] = psi
+
+
 @jit_inline
 def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
     """
@@ -90,25 +146,17 @@ def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
     and finite otherwise, so theta = atan2(hypot(c20, c21), c22) is finite unless c22 is NaN
     or hypot is, and a NaN hypot (c20 or c21 NaN) makes psi NaN already. The branch
     hypot(c20, c21) < 1e-300 is decided by max(|c20|, |c21|) <= hypot <= sqrt(2) max
-    outside [0.5e-300, 1e-300), by hypot inside. The lockstep loop's tracks
-    (``lockstep.block_track``, ``block_refresh``), which no output reads but as the references
-    of phi and psi, take it: track[2] keeps its first value there.
+    outside [0.5e-300, 1e-300), by hypot inside (:func:`track_angles`). The lockstep loop's
+    tracks (``lockstep.block_track``, ``block_refresh``), which no output reads but as the
+    references of phi and psi, take it: track[2] keeps its first value there.
     """
-    c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
-    a20 = abs(c20)
-    a21 = abs(c21)
-    if a20 >= _DEGENERATE_SIN or a21 >= _DEGENERATE_SIN:
-        degenerate = False
-    elif a20 < 0.5 * _DEGENERATE_SIN and a21 < 0.5 * _DEGENERATE_SIN:
-        degenerate = True
-    else:   # (also NaN: hypot NaN or inf, not below)
-        degenerate = math.hypot(c20, c21) < _DEGENERATE_SIN
-    phi, psi = _phi_psi(c00, c02, c10, c12, c20, c21, degenerate)
-    phi = unwrap_towards(phi, track[0])
-    psi = unwrap_towards(psi, track[1])
-    if math.isfinite(phi) and math.isfinite(psi) and not math.isnan(c22):
-        track[0] = phi
-        track[1] = psi
+    phi, psi, verdict = track_angles(q0, q1, q2, q3)
+    if verdict == TRACK_BAND:   # (also NaN: hypot NaN or inf, not below)
+        c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
+        phi, psi = _track_phi_psi(c00, c02, c10, c12, c20, c21,
+                                  math.hypot(c20, c21) < _DEGENERATE_SIN)
+        verdict = TRACK_SKIP if math.isnan(c22) else TRACK_SET
+    settle(phi, psi, verdict, track)
 
 
 @jit
@@ -133,8 +181,18 @@ def set_track(st: Array, o: int, track: Array) -> None:
 
 @jit_inline
 def track_to(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
-    """Set track to the unwrapped Euler angles of quaternion q (:func:`set_track`'s rule)."""
-    phi, psi, theta = euler_of(q0, q1, q2, q3, track[0], track[1])
+    """
+    Set track to the unwrapped Euler angles of quaternion q (:func:`set_track`'s rule).
+
+    :func:`euler_of`'s conversion with the track's ``trig.atan2`` in place of libm's: the
+    track is only the reference of the samples' unwrapping, whose angles keep libm's.
+    """
+    c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
+    sth = math.hypot(c20, c21)
+    theta = atan2(sth, c22)
+    phi, psi = _track_phi_psi(c00, c02, c10, c12, c20, c21, sth < _DEGENERATE_SIN)
+    phi = unwrap_towards(phi, track[0])
+    psi = unwrap_towards(psi, track[1])
     if math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta):
         track[0] = phi
         track[1] = psi

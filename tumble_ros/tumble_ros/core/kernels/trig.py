@@ -1,5 +1,5 @@
 """
-The kernels' sin and cos: one function of plain arithmetic, the same bits one body or many.
+The kernels' sin and cos (and the Euler track's atan2): plain arithmetic, the same bits vectorised.
 
 Why not libm's
 --------------
@@ -24,6 +24,19 @@ them. Every result is within 1 ulp of libm's, and ~97 % are libm's own bits
 (tests/test_core_trig.py, from 1e-12 rad to the limit and beside every k pi/2). Arguments with
 |x| >= :data:`REDUCED_LIMIT`, infinities and NaN go to libm (:func:`sin_cos`): the rotation
 angles of a step are far below it.
+
+atan2 for the Euler track
+-------------------------
+:func:`atan2` is fdlibm's ``atan2``/``atan`` (FreeBSD's and musl's; the same coefficients) in
+the same plain arithmetic, its branches turned into selects so that LLVM vectorises it: t = |y/x|
+(one division), reduced by a second one to one of five intervals (atan t = atan c +
+atan((t - c) / (1 + c t)) with c = 0, 1/2, 1, 3/2 or infinity, atan c in two parts), then
+fdlibm's odd polynomial of degree 23 and the quadrant. Within 1 ulp of libm's ``atan2``, ~92 %
+of the test's results libm's own bits, signed zeros, infinities and NaN as libm
+(tests/test_core_trig.py). It is only the Euler track's (``tracking.follow``,
+``tracking.track_to``): the track is the reference towards which a sampled angle is unwrapped,
+and the samples' own angles keep libm's ``atan2`` (``tracking.euler_of``), so no output bit
+depends on it (docs/physics.md, Euler angles).
 """
 from __future__ import annotations
 
@@ -31,7 +44,7 @@ import math
 
 from tumble_ros.core.jit import jit_inline
 
-__all__ = ['sin_cos', 'sin_cos_reduced', 'REDUCED_LIMIT', 'SMALL']
+__all__ = ['sin_cos', 'sin_cos_reduced', 'REDUCED_LIMIT', 'SMALL', 'atan2']
 
 #: |x| [rad] below which :func:`sin_cos_reduced` is used (n pi/2 with |n| < 2^19 fits
 #: PIO2_1's 33 bits exactly); libm above it.
@@ -117,3 +130,89 @@ def sin_cos(x: float) -> tuple[float, float]:
     if abs(x) < REDUCED_LIMIT:
         return sin_cos_reduced(x)
     return math.sin(x), math.cos(x)
+
+
+_ATAN_HI0 = 4.63647609000806093515e-01   # atan(1/2), its first 53 bits
+_ATAN_HI1 = 7.85398163397448278999e-01   # atan(1)
+_ATAN_HI2 = 9.82793723247329054082e-01   # atan(3/2)
+_ATAN_HI3 = 1.57079632679489655800e+00   # atan(inf) = pi/2
+_ATAN_LO0 = 2.26987774529616870924e-17   # ... and the rest of each
+_ATAN_LO1 = 3.06161699786838301793e-17
+_ATAN_LO2 = 1.39033110312309984516e-17
+_ATAN_LO3 = 6.12323399573676603587e-17
+_AT0 = 3.33333333333329318027e-01
+_AT1 = -1.99999999998764832476e-01
+_AT2 = 1.42857142725034663711e-01
+_AT3 = -1.11111104054623557880e-01
+_AT4 = 9.09088713343650656196e-02
+_AT5 = -7.69187620504482999495e-02
+_AT6 = 6.66107313738753120669e-02
+_AT7 = -5.83357013379057348645e-02
+_AT8 = 4.97687799461593236017e-02
+_AT9 = -3.65315727442169155270e-02
+_AT10 = 1.62858201153657823623e-02
+_PI = 3.14159265358979311600e+00          # pi, its first 53 bits
+_PI_LO = 1.22464679914735317720e-16       # pi - _PI
+#: |y/x| above which atan2 is +-pi/2 whatever the sign of x (fdlibm's 2^60).
+_HUGE_RATIO = 1152921504606846976.0
+
+
+@jit_inline
+def _atan_nonnegative(t: float) -> float:
+    """Return atan t for t >= 0 (inf: pi/2; NaN: NaN) [rad]: fdlibm's ``atan``, branch-free."""
+    small = t < 0.4375
+    if t < 0.6875:       # atan(1/2) + atan((2t - 1) / (2 + t))
+        num = 2.0 * t - 1.0
+        den = 2.0 + t
+        hi = _ATAN_HI0
+        lo = _ATAN_LO0
+    elif t < 1.1875:     # atan(1) + atan((t - 1) / (t + 1))
+        num = t - 1.0
+        den = t + 1.0
+        hi = _ATAN_HI1
+        lo = _ATAN_LO1
+    elif t < 2.4375:     # atan(3/2) + atan((t - 3/2) / (1 + 3/2 t))
+        num = t - 1.5
+        den = 1.0 + 1.5 * t
+        hi = _ATAN_HI2
+        lo = _ATAN_LO2
+    else:                # pi/2 + atan(-1 / t)   (also inf and NaN)
+        num = -1.0
+        den = t
+        hi = _ATAN_HI3
+        lo = _ATAN_LO3
+    # below 7/16 no reduction: hi - ((r s - 0) - r) is fdlibm's r - r s, bit for bit
+    num = t if small else num
+    den = 1.0 if small else den
+    hi = 0.0 if small else hi
+    lo = 0.0 if small else lo
+    r = num / den
+    z = r * r
+    w = z * z
+    s1 = z * (_AT0 + w * (_AT2 + w * (_AT4 + w * (_AT6 + w * (_AT8 + w * _AT10)))))
+    s2 = w * (_AT1 + w * (_AT3 + w * (_AT5 + w * (_AT7 + w * _AT9))))
+    return hi - ((r * (s1 + s2) - lo) - r)
+
+
+@jit_inline
+def atan2(y: float, x: float) -> float:
+    """
+    Return atan2(y, x) [rad] in [-pi, pi], within 1 ulp of libm's: branch-free, vectorisable.
+
+    fdlibm's special cases through the one path: |y| = |x| = 0 or inf are given the ratio 0
+    or 1 (atan2(+-0, +-0) = +-0 or +-pi, atan2(+-inf, +-inf) = +-pi/4 or +-3 pi/4), x = 0
+    the ratio inf, a ratio
+    above 2^60 (x = 0 or y infinite included) is +-pi/2 whatever the sign of x; NaN in, NaN out.
+    """
+    ax = abs(x)
+    ay = abs(y)
+    both_inf = (ax == math.inf) & (ay == math.inf)
+    x_zero = ax == 0.0
+    num = 1.0 if both_inf else ay
+    den = 1.0 if both_inf | x_zero else ax    # (no division by zero: the Python path raises)
+    t = num / den
+    t = (0.0 if ay == 0.0 else ay * math.inf) if x_zero else t
+    z = _atan_nonnegative(t)
+    x_negative = (math.copysign(1.0, x) < 0.0) & (not t > _HUGE_RATIO)
+    r = _PI - (z - _PI_LO) if x_negative else z
+    return -r if math.copysign(1.0, y) < 0.0 else r
