@@ -41,7 +41,7 @@ plain = trig.atan2
 def libm_atan2(y, x):
     calls[0] += 1
     a, b = math.atan2(y, x), plain(y, x)
-    calls[1] += a != b and not (math.isnan(a) and math.isnan(b))
+    calls[1] += int(a != b and not (math.isnan(a) and math.isnan(b)))
     return a
 if sys.argv[2] == 'libm':
     tracking.atan2 = libm_atan2
@@ -109,6 +109,12 @@ def test_every_sample_is_mains_whose_tracks_took_libms_atan2():
     for key, fields in here.items():
         for name, values in fields.items():
             a, b = np.array(values), np.array(main[key][name])
+            if name == 'euler':
+                # theta reads no track; as plain Python it takes CPython's math.hypot, not
+                # libm's (1 ulp apart at times): phi and psi, the unwrapped ones, bit for bit
+                assert np.array_equal(a[..., :2], b[..., :2], equal_nan=True), key
+                np.testing.assert_allclose(a[..., 2], b[..., 2], rtol=3e-16, atol=0)
+                continue
             assert a.shape == b.shape and np.array_equal(a, b, equal_nan=True), (key, name)
     euler = np.array(here['splitting 0.002 lockstep']['euler'])
     assert np.ptp(euler[2, :, 1]) > 40 * np.pi       # psi of the fast body: many turns
