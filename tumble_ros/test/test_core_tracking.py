@@ -10,7 +10,6 @@ kernels' own Python source with libm's ``atan2`` put back into the track (a subp
 numba disabled), not hard-coded.
 """
 import json
-import math
 import os
 import subprocess
 import sys
@@ -19,8 +18,7 @@ import numpy as np
 import pytest
 
 from tumble_ros.core import kernels
-from tumble_ros.core.jit import python_source
-from tumble_ros.core.kernels import tracking, trig
+from tumble_ros.core.kernels import tracking
 from tumble_ros.core.kernels.layout import ST
 
 needs_numba = pytest.mark.skipif(not kernels.COMPILED,
@@ -33,7 +31,7 @@ _SUBPROCESS = r"""
 import json, math, sys
 import numpy as np
 from tumble_ros.core import kernels
-from tumble_ros.core.kernels import tracking, trig
+from tumble_ros.core.kernels import tracking
 sys.path.insert(0, sys.argv[1])
 from test_core_tracking import run_bodies
 calls = [0, 0]

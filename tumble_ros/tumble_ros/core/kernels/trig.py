@@ -197,12 +197,12 @@ def _atan_nonnegative(t: float) -> float:
 @jit_inline
 def atan2(y: float, x: float) -> float:
     """
-    Return atan2(y, x) [rad] in [-pi, pi], within 1 ulp of libm's: branch-free, vectorisable.
+    Return the angle of point (x, y) [rad] in [-pi, pi], within 1 ulp of libm's ``atan2``.
 
-    fdlibm's special cases through the one path: |y| = |x| = 0 or inf are given the ratio 0
-    or 1 (atan2(+-0, +-0) = +-0 or +-pi, atan2(+-inf, +-inf) = +-pi/4 or +-3 pi/4), x = 0
-    the ratio inf, a ratio
-    above 2^60 (x = 0 or y infinite included) is +-pi/2 whatever the sign of x; NaN in, NaN out.
+    Branch-free, vectorisable. fdlibm's special cases through the one path: |y| = |x| = 0 or
+    inf are given the ratio 0 or 1 (atan2(+-0, +-0) = +-0 or +-pi, atan2(+-inf, +-inf) =
+    +-pi/4 or +-3 pi/4), x = 0 the ratio inf; a ratio above 2^60 (x = 0 or y infinite
+    included) is +-pi/2 whatever the sign of x; NaN in, NaN out.
     """
     ax = abs(x)
     ay = abs(y)
