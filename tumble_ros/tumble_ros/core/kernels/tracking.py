@@ -136,7 +136,7 @@ def settle(phi: float, psi: float, verdict: float, track: Array) -> None:
         track[1] = psi
 
 
-@jit_inline
+@jit
 def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
     """
     :func:`track_to` for a track whose theta is never read: phi and psi only, the same bits.
@@ -148,7 +148,11 @@ def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
     hypot(c20, c21) < 1e-300 is decided by max(|c20|, |c21|) <= hypot <= sqrt(2) max
     outside [0.5e-300, 1e-300), by hypot inside (:func:`track_angles`). The lockstep loop's
     tracks (``lockstep.block_track``, ``block_refresh``), which no output reads but as the
-    references of phi and psi, take it: track[2] keeps its first value there.
+    references of phi and psi, take it: track[2] keeps its first value there. Called, not
+    inlined: it runs on the rare bodies ``lockstep.block_track``'s vectorised pass leaves (the
+    hypot band) and once a body at the end of a call (``block_refresh``), and its four
+    ``trig.atan2`` inlined into every method's copies of those loops cost ~15 s of compiling
+    a method and variant (docs/performance.md, "The warm-up in parts").
     """
     phi, psi, verdict = track_angles(q0, q1, q2, q3)
     if verdict == TRACK_BAND:   # (also NaN: hypot NaN or inf, not below)
