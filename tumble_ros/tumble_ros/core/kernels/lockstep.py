@@ -44,8 +44,7 @@ __all__ = ['block_init', 'block_advance', 'no_block_dense', 'LOOP_FUNCTIONS', 'B
 
 #: The functions :mod:`.methods` copies per method (each after those it calls).
 LOOP_FUNCTIONS = ('load_body', 'store_body', 'block_seg_init', 'block_emit', 'block_step',
-                  'block_track', 'block_refresh',
-                  'block_init', 'block_advance')
+                  'block_track', 'block_init', 'block_advance')
 
 #: The largest finite float: |y|^2 <= BIGGEST is finite_norm's test (NaN compares False).
 BIGGEST = float(np.finfo(np.float64).max)
@@ -361,9 +360,13 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
 
 
 @jit
-def block_refresh(bst: Array, soa: Array, bodies: Array, counters: npt.NDArray[np.int64],
-                  tracks: Array, m: int) -> None:
-    """``tracking.refresh_track`` for every running body (``tracking.follow`` on the columns)."""
+def block_refresh(soa: Array, bodies: Array, counters: npt.NDArray[np.int64], tracks: Array,
+                  m: int) -> None:
+    """
+    ``tracking.refresh_track`` for every running body (``tracking.follow`` on the columns).
+
+    No method's function in it: compiled once for every method (not in :data:`LOOP_FUNCTIONS`).
+    """
     cur = soa[counters[LI.PAR]]
     for i in range(m):
         if bodies[BB.BUDGET, i] > 0.0 and bodies[BB.FAILED, i] == 0.0:   # (on the columns)
@@ -416,4 +419,4 @@ def block_advance(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Arr
             if k < n_out and t_out[k] <= bst[ST.T]:
                 block_emit(p, extra, cfg, bst, soa, tmp, bodies, counters, tracks, t_out,
                            y_out, e_out, body0, m)
-        block_refresh(bst, soa, bodies, counters, tracks, m)
+        block_refresh(soa, bodies, counters, tracks, m)
