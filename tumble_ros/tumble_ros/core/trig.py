@@ -8,7 +8,7 @@ Why not libm's
 --------------
 The splitting's free flow needs sin/cos of two or three angles a body and step. glibc's
 ``sincos`` is a call LLVM cannot vectorise (numba has no vector maths library here), so a block
-of bodies stepped together (:mod:`.lockstep`) stopped at each angle for a scalar call: about a
+of bodies stepped together (``kernels.lockstep``) stopped at each angle for a scalar call: about a
 third of a body-step. glibc's vector ``libmvec`` or SVML would vectorise, but their last bits
 differ from the scalar ``sin``/``cos`` a single body's run takes, and a tumbling body's phase
 turns such a difference into a growing trajectory error. :func:`sin_cos` is written in plain
