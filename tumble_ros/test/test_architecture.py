@@ -209,15 +209,18 @@ def test_no_module_imports_a_private_name_of_another():
 
 
 #: Inside core, bottom up: the compiled physics may import only the numba switch, the units
-#: (constants), the torques, the limits/kernels below it; never the integrators, the
-#: propagator or the scenario.
+#: (constants), the plain-arithmetic sin/cos/atan2 (``core.trig``), the torques, the
+#: limits/kernels below it; never the integrators, the propagator or the scenario.
 CORE_BOTTOM = {
     'tumble_ros.core.jit': set(),
     'tumble_ros.core.model.units': set(),
-    'tumble_ros.core.torques': {'tumble_ros.core.jit', 'tumble_ros.core.model.units'},
-    'tumble_ros.core.kernels': {'tumble_ros.core.jit', 'tumble_ros.core.torques'},
+    'tumble_ros.core.trig': {'tumble_ros.core.jit'},
+    'tumble_ros.core.torques': {'tumble_ros.core.jit', 'tumble_ros.core.model.units',
+                                'tumble_ros.core.trig'},
+    'tumble_ros.core.kernels': {'tumble_ros.core.jit', 'tumble_ros.core.torques',
+                                'tumble_ros.core.trig'},
     'tumble_ros.core.model.limits': {'tumble_ros.core.kernels', 'tumble_ros.core.jit',
-                                     'tumble_ros.core.torques'},
+                                     'tumble_ros.core.torques', 'tumble_ros.core.trig'},
 }
 
 

@@ -31,7 +31,8 @@ _SUBPROCESS = r"""
 import json, math, sys
 import numpy as np
 from tumble_ros.core import kernels
-from tumble_ros.core.kernels import tracking, trig
+from tumble_ros.core import trig
+from tumble_ros.core.kernels import tracking
 sys.path.insert(0, sys.argv[1])
 from test_core_tracking import run_bodies
 calls = [0, 0]

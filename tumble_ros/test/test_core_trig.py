@@ -1,19 +1,19 @@
 """
-The kernels' sin and cos (core/kernels/trig.py): within 1 ulp of libm's, the same bits vectorised.
+The kernels' sin and cos (core/trig.py): within 1 ulp of libm's, the same bits vectorised.
 
 libm (glibc) is the independent reference: its sin and cos are accurate to within an ulp.
-Every kernel that turns a body calls ``trig.sin_cos``; the lockstep loop's vectorised pass
-(``splitting.block_sincos``) must give exactly its bits, or an ensemble body would drift from
-its own run (test_core_lockstep.py checks whole trajectories).
+Every kernel that turns a body or finds the Sun calls ``trig.sin_cos``; the vectorised passes
+(the lockstep loop's ``splitting.block_sincos``, the ``dop853`` lanes' Sun direction
+``gravity_gradient.sun_in_orbit_plane_rows``) must give exactly its bits, or an ensemble body
+would drift from its own run (test_core_lockstep.py checks whole trajectories).
 """
 import math
 
 import numpy as np
 import pytest
 
-from tumble_ros.core import kernels
+from tumble_ros.core import kernels, trig
 from tumble_ros.core.jit import called, python_source
-from tumble_ros.core.kernels import trig
 from tumble_ros.core.kernels.layout import BT
 
 needs_numba = pytest.mark.skipif(not kernels.COMPILED,
@@ -81,6 +81,36 @@ def test_the_vectorised_block_pass_gives_the_scalar_bits():
     np.testing.assert_array_equal(tmp[BT.COS], scalar[:, 1])
     # signed zeros too
     assert np.array_equal(np.signbit(tmp[BT.SIN]), np.signbit(scalar[:, 0]))
+
+
+@needs_numba
+def test_the_suns_direction_of_many_times_at_once_gives_the_scalar_bits():
+    """The dop853 lanes' pass: every lane's Sun direction is the single body's, bit for bit."""
+    from tumble_ros.core.jit import jit
+    from tumble_ros.core.torques.gravity_gradient import (sun_in_orbit_plane,
+                                                          sun_in_orbit_plane_rows)
+
+    @jit
+    def rows(rate, t, sx, sy, m):
+        sun_in_orbit_plane_rows(rate, t, sx, sy, m)
+
+    scalar_call = called(sun_in_orbit_plane)
+    # times over 2000 yr and beyond the reduced range's limit (libm), non-finite ones too
+    t = np.concatenate([np.abs(arguments(seed=4, n=1000)) / (2 * math.pi),
+                        [0.0, -0.0, 2e5, 1e9, -3e12, math.inf, math.nan]])
+    for rate in (2 * math.pi, 0.0172, 2.7e3):
+        sx, sy = np.full(t.size + 1, 7.0), np.full(t.size + 1, 7.0)
+        rows(rate, t, sx, sy, t.size)
+        scalar = np.array([scalar_call(rate, float(v)) for v in t])
+        np.testing.assert_array_equal(sx[:-1], scalar[:, 0])
+        np.testing.assert_array_equal(sy[:-1], scalar[:, 1])
+        assert np.array_equal(np.signbit(sx[:-1]), np.signbit(scalar[:, 0]))
+        assert sx[-1] == sy[-1] == 7.0        # only the first m written
+        # and the scalar is trig's sin/cos of rate * t, within an ulp of libm's
+        ok = np.abs(rate * t) < trig.REDUCED_LIMIT
+        for got, libm in ((scalar[ok, 0], np.sin(rate * t[ok])),
+                          (scalar[ok, 1], np.cos(rate * t[ok]))):
+            assert np.all(np.abs(got - libm) <= np.spacing(np.abs(libm)))
 
 
 #: The track's atan2 compiled on its own, and its Python source.

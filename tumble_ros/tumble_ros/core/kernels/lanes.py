@@ -7,7 +7,7 @@ one time grid as in :mod:`.lockstep`. Bodies that share their segments (no per-b
 still running attempts one step from its own (tau, h). The attempt's stages are passes over
 the lanes on a structure of arrays (layout :data:`~.layout.LN`: row r = component r of every
 lane), which LLVM vectorises, each lane with its own stage times (the Sun's direction per lane
-and stage: libm's sin/cos, one lane at a time, as a single body takes them); then, per lane,
+and stage: ``trig``'s sin/cos, vectorised too, as a single body takes them); then, per lane,
 its error, accept or reject and next step size, exactly as the single body's step does. The
 method's ``lanes_*`` functions (:mod:`.dop853`) are that split of its ``step``: the same
 operations in the same order, so every lane keeps the bits of its own run.
@@ -36,7 +36,7 @@ from tumble_ros.core.kernels.lockstep import BIGGEST, emit, seg_init, track_upda
 from tumble_ros.core.kernels.physics import derivatives, plain_torque_given_sun, torque_given_sun
 from tumble_ros.core.kernels.stepping import step_taken
 from tumble_ros.core.kernels.tracking import refresh_track, track_rate, UNWRAP_STEP
-from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
+from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane_rows
 
 __all__ = ['lanes_rhs', 'lane_load', 'lanes_advance', 'LOOP_FUNCTIONS']
 
@@ -87,15 +87,12 @@ def lanes_rhs(p: Array, extra: Extra, ln: Array, yo: int, oo: int, m: int) -> No
     """
     Write f(t, y) of m lanes, t = ln[LN.T], y = ln[yo:yo+7], to ln[oo:oo+7].
 
-    The Sun's direction of each lane at its own time first (``sun_in_orbit_plane``: libm, a
-    lane at a time, the bits a single body gets), then the passes of ``rk4.block_rhs``
-    (vectorised: the torque and d omega/dt, then dq/dt), the Sun's direction a row.
+    The Sun's direction of each lane at its own time first (``sun_in_orbit_plane_rows``:
+    ``trig``'s sin/cos vectorised, the bits a single body gets), then the passes of
+    ``rk4.block_rhs`` (vectorised: the torque and d omega/dt, then dq/dt), the Sun's direction
+    a row.
     """
-    rate = p[PR.ORBIT_RATE]
-    for i in range(m):
-        sx, sy = sun_in_orbit_plane(rate, ln[LN.T, i])
-        ln[LN.SX, i] = sx
-        ln[LN.SY, i] = sy
+    sun_in_orbit_plane_rows(p[PR.ORBIT_RATE], ln[LN.T], ln[LN.SX], ln[LN.SY], m)
     if extra is None and p[PR.HAS_ORBITAL] == 0.0:     # the torque without its branches
         for i in range(m):
             tx, ty, tz = plain_torque_given_sun(p, ln[LN.SX, i], ln[LN.SY, i], ln[yo + 3, i],

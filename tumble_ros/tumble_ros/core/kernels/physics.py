@@ -13,10 +13,10 @@ import math
 
 from tumble_ros.core.jit import called, jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, Extra, PR
-from tumble_ros.core.kernels.trig import sin_cos
 from tumble_ros.core.torques.frames import orbital_to_body
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane, tidal_torque
 from tumble_ros.core.torques.pulses import pulse_torque
+from tumble_ros.core.trig import sin_cos
 
 __all__ = ['body_torque', 'torque_given_sun', 'plain_torque_given_sun', 'rhs', 'derivatives',
            'rhs_called', 'free_flow', 'axis_rotation', 'axis_turn', 'pi_turn', 'flow_pieces']

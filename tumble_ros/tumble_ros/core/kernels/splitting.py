@@ -17,8 +17,8 @@ from tumble_ros.core.kernels.physics import (axis_turn, body_torque, flow_pieces
                                              pi_turn, plain_torque_given_sun,
                                              torque_given_sun)
 from tumble_ros.core.kernels.rk4 import step_count
-from tumble_ros.core.kernels.trig import REDUCED_LIMIT, sin_cos_reduced
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
+from tumble_ros.core.trig import REDUCED_LIMIT, sin_cos_reduced
 
 __all__ = ['flow', 'flow_called', 'pulse_step_count', 'start', 'step', 'dense',
            'MAX_PULSE_SUBSTEPS', 'block_start', 'block_step', 'block_dense', 'block_flow',

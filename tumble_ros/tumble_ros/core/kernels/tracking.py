@@ -19,7 +19,7 @@ import math
 
 from tumble_ros.core.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, ST
-from tumble_ros.core.kernels.trig import atan2
+from tumble_ros.core.trig import atan2
 
 __all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of',
            'follow', 'track_angles', 'settle', 'TRACK_SKIP', 'TRACK_SET', 'TRACK_BAND',

@@ -1,11 +1,14 @@
 """
 The kernels' sin and cos (and the Euler track's atan2): plain arithmetic, the same bits vectorised.
 
+Below the torques and the kernels in core (both import it): the flow's rotation angles and the
+Sun's direction (``torques.gravity_gradient.sun_in_orbit_plane``) take :func:`sin_cos`.
+
 Why not libm's
 --------------
 The splitting's free flow needs sin/cos of two or three angles a body and step. glibc's
 ``sincos`` is a call LLVM cannot vectorise (numba has no vector maths library here), so a block
-of bodies stepped together (:mod:`.lockstep`) stopped at each angle for a scalar call: about a
+of bodies stepped together (``kernels.lockstep``) stopped at each angle for a scalar call: about a
 third of a body-step. glibc's vector ``libmvec`` or SVML would vectorise, but their last bits
 differ from the scalar ``sin``/``cos`` a single body's run takes, and a tumbling body's phase
 turns such a difference into a growing trajectory error. :func:`sin_cos` is written in plain
@@ -42,9 +45,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+import numpy.typing as npt
+
 from tumble_ros.core.jit import jit_inline
 
-__all__ = ['sin_cos', 'sin_cos_reduced', 'REDUCED_LIMIT', 'SMALL', 'atan2']
+__all__ = ['sin_cos', 'sin_cos_reduced', 'scaled_sin_cos_rows', 'REDUCED_LIMIT', 'SMALL',
+           'atan2']
 
 #: |x| [rad] below which :func:`sin_cos_reduced` is used (n pi/2 with |n| < 2^19 fits
 #: PIO2_1's 33 bits exactly); libm above it.
@@ -130,6 +137,28 @@ def sin_cos(x: float) -> tuple[float, float]:
     if abs(x) < REDUCED_LIMIT:
         return sin_cos_reduced(x)
     return math.sin(x), math.cos(x)
+
+
+@jit_inline
+def scaled_sin_cos_rows(scale: float, x: npt.NDArray[np.float64],
+                        sin_out: npt.NDArray[np.float64], cos_out: npt.NDArray[np.float64],
+                        m: int) -> None:
+    """
+    Write sin, cos of scale * x[i] [rad] to sin_out[i], cos_out[i], i < m: :func:`sin_cos`'s bits.
+
+    A vectorised pass of :func:`sin_cos_reduced` over all m, then libm for the angles beyond
+    its range (a check an angle; none in practice). Below :data:`SMALL` the reduction gives
+    :func:`sin_cos`'s unreduced bits exactly (see there).
+    """
+    for i in range(m):
+        s, c = sin_cos_reduced(scale * x[i])
+        sin_out[i] = s
+        cos_out[i] = c
+    for i in range(m):
+        angle = scale * x[i]
+        if not abs(angle) < REDUCED_LIMIT:
+            sin_out[i] = math.sin(angle)
+            cos_out[i] = math.cos(angle)
 
 
 _ATAN_HI0 = 4.63647609000806093515e-01   # atan(1/2), its first 53 bits
