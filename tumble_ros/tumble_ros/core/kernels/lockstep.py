@@ -36,9 +36,9 @@ from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, Extra, FAIL, LI, N, ST,
                                             STATUS)
 from tumble_ros.core.kernels.stepping import step_taken
-from tumble_ros.core.kernels.tracking import (euler_of, follow, settle, track_angles,
-                                              TRACK_BAND, track_pieces, track_rate,
-                                              UNWRAP_STEP)
+from tumble_ros.core.kernels.tracking import (euler_finish, euler_parts, follow, settle,
+                                              track_angles, TRACK_BAND, track_pieces,
+                                              track_rate, UNWRAP_STEP)
 
 __all__ = ['block_init', 'block_advance', 'no_block_dense', 'LOOP_FUNCTIONS', 'BIGGEST']
 
@@ -147,6 +147,24 @@ def block_seg_init(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, b
 
 
 @jit
+def block_euler(src: Array, tmp: Array, m: int) -> None:
+    """
+    ``tracking.euler_parts`` of the quaternions of m bodies (rows BK.Y + 3 .. of src).
+
+    To tmp[BT.EULER:BT.EULER + 4]: phi, psi, theta [rad] and 1.0 if they hold (0.0: the band,
+    ``tracking.euler_band``). One pass LLVM vectorises (no call, no branch). No method's
+    function in it: compiled once for every method (not in :data:`LOOP_FUNCTIONS`).
+    """
+    for i in range(m):
+        phi, psi, theta, plain = euler_parts(src[BK.Y + 3, i], src[BK.Y + 4, i],
+                                             src[BK.Y + 5, i], src[BK.Y + 6, i])
+        tmp[BT.EULER, i] = phi
+        tmp[BT.EULER + 1, i] = psi
+        tmp[BT.EULER + 2, i] = theta
+        tmp[BT.EULER + 3, i] = plain
+
+
+@jit
 def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, t_out: Array,
                y_out: Array, e_out: Array, body0: int, m: int) -> None:
@@ -175,17 +193,20 @@ def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
             if not method_block_dense(p, extra, cfg, bst, old, out, tmp, tau, m):
                 break
             src = out
+        if euler:
+            block_euler(src, tmp, m)
         for i in range(m):
             if bodies[BB.FAILED, i] != 0.0:
                 continue
             row = y_out[body0 + i, k]
             for c in range(N):
                 row[c] = src[BK.Y + c, i]
-            if euler:
+            if euler:   # (tracking.euler_of: its second half, the band's hypot if needed)
                 track = tracks[i]
-                phi, psi, theta = euler_of(src[BK.Y + 3, i], src[BK.Y + 4, i],
-                                           src[BK.Y + 5, i], src[BK.Y + 6, i], track[0],
-                                           track[1])
+                phi, psi, theta = euler_finish(
+                    tmp[BT.EULER, i], tmp[BT.EULER + 1, i], tmp[BT.EULER + 2, i],
+                    tmp[BT.EULER + 3, i], src[BK.Y + 3, i], src[BK.Y + 4, i],
+                    src[BK.Y + 5, i], src[BK.Y + 6, i], track[0], track[1])
                 e_row = e_out[body0 + i, k]
                 e_row[0] = phi
                 e_row[1] = psi
