@@ -14,13 +14,14 @@ Each body gets exactly the bits of its own run (``stepping.advance`` on one body
 operations in the same order, vector lanes or not (no FMA contraction: numba does not allow it
 without ``fastmath``). The outputs and the Euler track are the single-body functions' too,
 on the block's columns: a sample is written for the whole block at once (:func:`block_emit`:
-the method's ``block_dense`` for a sample inside a step, then ``tracking.euler_of`` per body,
-``stepping.emit``'s operations), and a track update without dense output takes
-``tracking.follow`` on the columns (``stepping.track_update``'s phi and psi; theta, which no
-lockstep output reads, skipped), the bodies due in a step gathered and converted in one
-vectorised pass (the track's ``trig.atan2``, which the single-body track takes too). The rare
-rest (a method without ``block_dense``, a track
-update in pieces) calls the single-body functions (:func:`~.stepping.emit`,
+the method's ``block_dense`` for a sample inside a step, then ``tracking.euler_of``'s
+conversion of every body in one vectorised pass, :func:`block_euler`, its rare rest (the
+band's ``hypot``) and the unwrapping body by body: ``stepping.emit``'s operations), and a
+track update without dense output takes ``tracking.follow`` on the columns
+(``stepping.track_update``'s phi and psi; theta, which no lockstep output reads, skipped), the
+bodies due in a step gathered and converted in one vectorised pass (``trig.atan2``, which the
+single-body track takes too). The rare rest (a method without ``block_dense``, a track update
+in pieces) calls the single-body functions (:func:`~.stepping.emit`,
 :func:`~.stepping.track_update`) on a scratch state ``bst`` (layout :data:`~.layout.ST`) into
 which the method's ``block_load`` copies the body (``bst`` also holds the block's shared times
 and counters, as a single body's state holds them). A template like :mod:`.stepping`:
@@ -172,9 +173,11 @@ def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
     Write the outputs t_out[k:] <= t of every running body: ``stepping.emit``'s bits.
 
     A block at a time: the state at t_out[k] (the current buffer, or the method's
-    ``block_dense`` of every body into a scratch buffer), then each running body's row of y_out
-    and its Euler angles (:func:`~.tracking.euler_of`, towards its track). A method without
-    ``block_dense`` (rk4) takes the single-body ``emit`` per body for a sample inside a step.
+    ``block_dense`` of every body into a scratch buffer), the Euler angles of every body in one
+    vectorised pass (:func:`block_euler`), then each running body's row of y_out and its Euler
+    angles (``tracking.euler_finish``: the band's ``hypot`` if needed, unwrapped towards its
+    track: :func:`~.tracking.euler_of`'s bits). A method without ``block_dense`` (rk4) takes
+    the single-body ``emit`` per body for a sample inside a step.
     """
     k = counters[LI.K]
     n_out = t_out.shape[0]

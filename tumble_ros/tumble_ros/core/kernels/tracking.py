@@ -28,7 +28,8 @@ from tumble_ros.core.kernels.layout import Array, ST
 from tumble_ros.core.trig import atan2
 
 __all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of',
-           'euler_parts', 'euler_band', 'euler_finish', 'PLAIN_LOW', 'PLAIN_HIGH', 'follow', 'track_angles', 'settle', 'TRACK_SKIP', 'TRACK_SET', 'TRACK_BAND',
+           'euler_parts', 'euler_band', 'euler_finish', 'PLAIN_LOW', 'PLAIN_HIGH', 'follow',
+           'track_angles', 'settle', 'TRACK_SKIP', 'TRACK_SET', 'TRACK_BAND',
            'unwrapped_euler', 'set_track', 'track_to', 'track_rate', 'track_pieces',
            'refresh_track']
 
@@ -77,10 +78,7 @@ PLAIN_HIGH = 2.0 ** 500
 @jit_inline
 def _phi_psi(c00: float, c02: float, c10: float, c12: float, c20: float, c21: float,
              degenerate: bool) -> tuple[float, float]:
-    """Return phi, psi [rad] in [-pi, pi] from C's entries (psi = 0 if ``degenerate``).
-
-    ``trig.atan2``, the branch as selects: vectorisable.
-    """
+    """Return phi, psi [rad] in [-pi, pi] from C's entries (psi = 0 if ``degenerate``): selects."""
     phi = atan2(c10 if degenerate else c02, c00 if degenerate else -c12)
     psi = atan2(c20, c21)
     return phi, 0.0 if degenerate else psi
@@ -125,7 +123,11 @@ def euler_band(q0: float, q1: float, q2: float, q3: float) -> tuple[float, float
 def euler_finish(phi: float, psi: float, theta: float, plain: float, q0: float, q1: float,
                  q2: float, q3: float, phi_ref: float, psi_ref: float
                  ) -> tuple[float, float, float]:
-    """:func:`euler_parts`' angles of q (:func:`euler_band`'s unless ``plain``), unwrapped [rad]."""
+    """
+    Return :func:`euler_parts`' angles of q [rad] (:func:`euler_band`'s unless ``plain``).
+
+    phi and psi unwrapped towards phi_ref, psi_ref: :func:`euler_of`'s second half.
+    """
     if plain == 0.0:
         phi, psi, theta = euler_band(q0, q1, q2, q3)
     return unwrap_towards(phi, phi_ref), unwrap_towards(psi, psi_ref), theta
@@ -194,8 +196,8 @@ def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
 
     The same phi, psi and the same rule (set unless phi, psi and theta are finite), without
     theta's ``atan2`` and mostly without ``hypot``: atan2(y, x) is NaN exactly when y or x is,
-    and finite otherwise, so theta = atan2(hypot(c20, c21), c22) is finite unless c22 is NaN
-    or hypot is, and a NaN hypot (c20 or c21 NaN) makes psi NaN already. The branch
+    and finite otherwise, so theta = atan2(sin theta, c22) is finite unless c22 is NaN or
+    sin theta is, and a NaN sin theta (c20 or c21 NaN) makes psi NaN already. The branch
     hypot(c20, c21) < 1e-300 is decided by max(|c20|, |c21|) <= hypot <= sqrt(2) max
     outside [0.5e-300, 1e-300), by hypot inside (:func:`track_angles`). The lockstep loop's
     tracks (``lockstep.block_track``, ``block_refresh``), which no output reads but as the
