@@ -226,9 +226,11 @@ EULER_PARTS = called(tracking.euler_parts)
 
 def attitudes(seed=3, n=20_000):
     """
-    Quaternions: random (scaled 1e-3 to 1e5), theta near 0 and near pi (down to 1e-17 rad),
-    across the degenerate branch's 1e-300 and the plain range's 2^-500 (both sides), C's
-    exact 0, 1 and -1, signed zeros, NaN and infinities.
+    Return quaternions of every kind the conversion meets (rows, scalar first).
+
+    Random (scaled 1e-3 to 1e5), theta near 0 and near pi (down to 1e-17 rad), across the
+    degenerate branch's 1e-300 and the plain range's 2^-500 (both sides), C's exact 0, 1 and
+    -1, signed zeros, NaN and infinities.
     """
     rng = np.random.default_rng(seed)
     random = rng.normal(size=(n, 4)) * 10.0 ** rng.uniform(-3, 5, (n, 1))
@@ -282,8 +284,8 @@ def test_the_conversion_is_within_one_ulp_of_libms_for_phi_and_psi_and_two_for_t
     assert np.nanmax(ulps(unwrapped, main)) <= 2.0
     assert np.nanmax(np.abs(unwrapped[:, :2])) > 2e3
     plain = np.array([EULER_PARTS(*map(float, r))[3] for r in q])
-    tiny = np.all(np.abs(q[:, 1:3]) < 1e-100, axis=1) | np.all(np.abs(q[:, [0, 3]]) < 1e-100,
-                                                                   axis=1)
+    tiny = (np.all(np.abs(q[:, 1:3]) < 1e-100, axis=1)
+            | np.all(np.abs(q[:, [0, 3]]) < 1e-100, axis=1))
     assert 0 < np.sum(tiny & (plain == 1.0)) and 0 < np.sum(tiny & (plain == 0.0))
     assert np.all(plain[np.isnan(want).any(axis=1)] == 0.0)
 
