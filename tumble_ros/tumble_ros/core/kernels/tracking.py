@@ -133,7 +133,7 @@ def euler_finish(phi: float, psi: float, theta: float, plain: float, q0: float, 
     return unwrap_towards(phi, phi_ref), unwrap_towards(psi, psi_ref), theta
 
 
-@jit_inline
+@jit
 def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
              psi_ref: float) -> tuple[float, float, float]:
     """
@@ -143,8 +143,9 @@ def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
     rotation.matrix_to_euler of C^T, within 1 ulp of its libm ``atan2`` for phi and psi and
     2 ulp for theta: tests/test_core_tracking.py). The one conversion, :func:`euler_parts`
     then :func:`euler_finish`: :func:`unwrapped_euler` (a state's row) and :func:`track_to`
-    inline it, and the lockstep loop takes its two halves on a block's columns
-    (``lockstep.block_euler``, ``block_emit``).
+    call it, and the lockstep loop takes its two halves on a block's columns
+    (``lockstep.block_euler``, ``block_emit``). Called, not inlined: each inlined copy of its
+    three ``trig.atan2`` costs seconds of a first run's compiling.
     """
     phi, psi, theta, plain = euler_parts(q0, q1, q2, q3)
     return euler_finish(phi, psi, theta, plain, q0, q1, q2, q3, phi_ref, psi_ref)
