@@ -140,8 +140,9 @@ def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
     Return the paper's (phi, psi, theta) [rad] of quaternion (q0, q1, q2, q3).
 
     phi and psi are unwrapped towards phi_ref, psi_ref (z-x-z, orbital -> body; the
-    rotation.matrix_to_euler of C^T, within 1 ulp of its libm ``atan2`` for phi and psi and
-    2 ulp for theta: tests/test_core_tracking.py). The one conversion, :func:`euler_parts`
+    rotation.matrix_to_euler of C^T: with its libm ``atan2`` and ``hypot``, wrapped phi and psi
+    within 1 ulp, theta within 2, unwrapped within 2: tests/test_core_tracking.py). The one
+    conversion, :func:`euler_parts`
     then :func:`euler_finish`: :func:`unwrapped_euler` (a state's row) and :func:`track_to`
     call it, and the lockstep loop takes its two halves on a block's columns
     (``lockstep.block_euler``, ``block_emit``). Called, not inlined: each inlined copy of its
