@@ -36,11 +36,11 @@ the same plain arithmetic, its branches turned into selects so that LLVM vectori
 atan((t - c) / (1 + c t)) with c = 0, 1/2, 1, 3/2 or infinity, atan c in two parts), then
 fdlibm's odd polynomial of degree 23 and the quadrant. Within 1 ulp of libm's ``atan2``, ~92 %
 of the test's results libm's own bits, signed zeros, infinities and NaN as libm
-(tests/test_core_trig.py). It is the Euler angles' (``tracking.euler_of``: every sample's phi,
-psi and theta, and every track update), so that a sample's bodies are converted together in
-one vectorised pass (``lockstep.block_euler``) with each body's own bits; the samples' angles
-are then within 1 ulp of libm's conversion for phi and psi and 2 ulp for theta
-(tests/test_core_tracking.py; docs/physics.md, Euler angles).
+(tests/test_core_trig.py). It is the Euler angles' (``kernels.tracking.euler_of``: every
+sample's phi, psi and theta, and every track update), so that a sample's bodies are converted
+together in one vectorised pass (``kernels.lockstep.block_euler``) with each body's own bits;
+the samples' angles are then within 1 ulp of libm's conversion for phi and psi and 2 ulp for
+theta (tests/test_core_tracking.py; docs/physics.md, Euler angles).
 """
 from __future__ import annotations
 
