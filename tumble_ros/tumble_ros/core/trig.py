@@ -1,5 +1,5 @@
 """
-The kernels' sin and cos (and the Euler track's atan2): plain arithmetic, the same bits vectorised.
+The kernels' sin and cos (and the Euler angles' atan2): plain arithmetic, the same bits vectorised.
 
 Below the torques and the kernels in core (both import it): the flow's rotation angles and the
 Sun's direction (``torques.gravity_gradient.sun_in_orbit_plane``) take :func:`sin_cos`.
@@ -28,18 +28,19 @@ them. Every result is within 1 ulp of libm's, and ~97 % are libm's own bits
 |x| >= :data:`REDUCED_LIMIT`, infinities and NaN go to libm (:func:`sin_cos`): the rotation
 angles of a step are far below it.
 
-atan2 for the Euler track
--------------------------
+atan2 for the Euler angles
+--------------------------
 :func:`atan2` is fdlibm's ``atan2``/``atan`` (FreeBSD's and musl's; the same coefficients) in
 the same plain arithmetic, its branches turned into selects so that LLVM vectorises it: t = |y/x|
 (one division), reduced by a second one to one of five intervals (atan t = atan c +
 atan((t - c) / (1 + c t)) with c = 0, 1/2, 1, 3/2 or infinity, atan c in two parts), then
 fdlibm's odd polynomial of degree 23 and the quadrant. Within 1 ulp of libm's ``atan2``, ~92 %
 of the test's results libm's own bits, signed zeros, infinities and NaN as libm
-(tests/test_core_trig.py). It is only the Euler track's (``tracking.follow``,
-``tracking.track_to``): the track is the reference towards which a sampled angle is unwrapped,
-and the samples' own angles keep libm's ``atan2`` (``tracking.euler_of``), so no output bit
-depends on it (docs/physics.md, Euler angles).
+(tests/test_core_trig.py). It is the Euler angles' (``kernels.tracking.euler_of``: every
+sample's phi, psi and theta, and every track update), so that a sample's bodies are converted
+together in one vectorised pass (``kernels.lockstep.block_euler``) with each body's own bits;
+the samples' angles are then within 1 ulp of libm's conversion for phi and psi and 2 ulp for
+theta (tests/test_core_tracking.py; docs/physics.md, Euler angles).
 """
 from __future__ import annotations
 

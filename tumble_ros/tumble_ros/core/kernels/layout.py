@@ -168,6 +168,8 @@ BT = layout('BlockScratch', [
     ('TRACK_Q', 4, "their quaternion at the step's end"),
     ('TRACK_OLD', 3, "tracking.track_angles of the step's start: phi, psi, verdict"),
     ('TRACK_NEW', 3, "tracking.track_angles of the step's end"),
+    ('EULER', 4, "a sample's tracking.euler_parts, every body of the block "
+                 '(lockstep.block_euler): phi, psi, theta, 1.0 if they hold'),
 ])
 
 #: Per-body rows of a block ``(BB.SIZE, B)``: what is not shared by the block.

@@ -14,13 +14,14 @@ Each body gets exactly the bits of its own run (``stepping.advance`` on one body
 operations in the same order, vector lanes or not (no FMA contraction: numba does not allow it
 without ``fastmath``). The outputs and the Euler track are the single-body functions' too,
 on the block's columns: a sample is written for the whole block at once (:func:`block_emit`:
-the method's ``block_dense`` for a sample inside a step, then ``tracking.euler_of`` per body,
-``stepping.emit``'s operations), and a track update without dense output takes
-``tracking.follow`` on the columns (``stepping.track_update``'s phi and psi; theta, which no
-lockstep output reads, skipped), the bodies due in a step gathered and converted in one
-vectorised pass (the track's ``trig.atan2``, which the single-body track takes too). The rare
-rest (a method without ``block_dense``, a track
-update in pieces) calls the single-body functions (:func:`~.stepping.emit`,
+the method's ``block_dense`` for a sample inside a step, then ``tracking.euler_of``'s
+conversion of every body in one vectorised pass, :func:`block_euler`, its rare rest (the
+band's ``hypot``) and the unwrapping body by body: ``stepping.emit``'s operations), and a
+track update without dense output takes ``tracking.follow`` on the columns
+(``stepping.track_update``'s phi and psi; theta, which no lockstep output reads, skipped), the
+bodies due in a step gathered and converted in one vectorised pass (``trig.atan2``, which the
+single-body track takes too). The rare rest (a method without ``block_dense``, a track update
+in pieces) calls the single-body functions (:func:`~.stepping.emit`,
 :func:`~.stepping.track_update`) on a scratch state ``bst`` (layout :data:`~.layout.ST`) into
 which the method's ``block_load`` copies the body (``bst`` also holds the block's shared times
 and counters, as a single body's state holds them). A template like :mod:`.stepping`:
@@ -36,9 +37,9 @@ from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, Extra, FAIL, LI, N, ST,
                                             STATUS)
 from tumble_ros.core.kernels.stepping import step_taken
-from tumble_ros.core.kernels.tracking import (euler_of, follow, settle, track_angles,
-                                              TRACK_BAND, track_pieces, track_rate,
-                                              UNWRAP_STEP)
+from tumble_ros.core.kernels.tracking import (euler_finish, euler_parts, follow, settle,
+                                              track_angles, TRACK_BAND, track_pieces,
+                                              track_rate, UNWRAP_STEP)
 
 __all__ = ['block_init', 'block_advance', 'no_block_dense', 'LOOP_FUNCTIONS', 'BIGGEST']
 
@@ -147,6 +148,24 @@ def block_seg_init(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, b
 
 
 @jit
+def block_euler(src: Array, tmp: Array, m: int) -> None:
+    """
+    ``tracking.euler_parts`` of the quaternions of m bodies (rows BK.Y + 3 .. of src).
+
+    To tmp[BT.EULER:BT.EULER + 4]: phi, psi, theta [rad] and 1.0 if they hold (0.0: the band,
+    ``tracking.euler_band``). One pass LLVM vectorises (no call, no branch). No method's
+    function in it: compiled once for every method (not in :data:`LOOP_FUNCTIONS`).
+    """
+    for i in range(m):
+        phi, psi, theta, plain = euler_parts(src[BK.Y + 3, i], src[BK.Y + 4, i],
+                                             src[BK.Y + 5, i], src[BK.Y + 6, i])
+        tmp[BT.EULER, i] = phi
+        tmp[BT.EULER + 1, i] = psi
+        tmp[BT.EULER + 2, i] = theta
+        tmp[BT.EULER + 3, i] = plain
+
+
+@jit
 def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, t_out: Array,
                y_out: Array, e_out: Array, body0: int, m: int) -> None:
@@ -154,9 +173,11 @@ def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
     Write the outputs t_out[k:] <= t of every running body: ``stepping.emit``'s bits.
 
     A block at a time: the state at t_out[k] (the current buffer, or the method's
-    ``block_dense`` of every body into a scratch buffer), then each running body's row of y_out
-    and its Euler angles (:func:`~.tracking.euler_of`, towards its track). A method without
-    ``block_dense`` (rk4) takes the single-body ``emit`` per body for a sample inside a step.
+    ``block_dense`` of every body into a scratch buffer), the Euler angles of every body in one
+    vectorised pass (:func:`block_euler`), then each running body's row of y_out and its Euler
+    angles (``tracking.euler_finish``: the band's ``hypot`` if needed, unwrapped towards its
+    track: :func:`~.tracking.euler_of`'s bits). A method without ``block_dense`` (rk4) takes
+    the single-body ``emit`` per body for a sample inside a step.
     """
     k = counters[LI.K]
     n_out = t_out.shape[0]
@@ -175,17 +196,20 @@ def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
             if not method_block_dense(p, extra, cfg, bst, old, out, tmp, tau, m):
                 break
             src = out
+        if euler:
+            block_euler(src, tmp, m)
         for i in range(m):
             if bodies[BB.FAILED, i] != 0.0:
                 continue
             row = y_out[body0 + i, k]
             for c in range(N):
                 row[c] = src[BK.Y + c, i]
-            if euler:
+            if euler:   # (tracking.euler_of: its second half, the band's hypot if needed)
                 track = tracks[i]
-                phi, psi, theta = euler_of(src[BK.Y + 3, i], src[BK.Y + 4, i],
-                                           src[BK.Y + 5, i], src[BK.Y + 6, i], track[0],
-                                           track[1])
+                phi, psi, theta = euler_finish(
+                    tmp[BT.EULER, i], tmp[BT.EULER + 1, i], tmp[BT.EULER + 2, i],
+                    tmp[BT.EULER + 3, i], src[BK.Y + 3, i], src[BK.Y + 4, i],
+                    src[BK.Y + 5, i], src[BK.Y + 6, i], track[0], track[1])
                 e_row = e_out[body0 + i, k]
                 e_row[0] = phi
                 e_row[1] = psi

@@ -7,11 +7,17 @@ psi by more than ~1 rad (:data:`UNWRAP_STEP`): a bound on their rate is |w| / si
 capped at |w| / :data:`UNWRAP_MIN_SIN` (below theta ~ 0.1 only phi + psi is well defined).
 The reference path (``Propagator``) and the compiled loop (``stepping``) use these functions.
 
-A sample's angles (:func:`euler_of`) take libm's ``atan2``: they are the outputs. A track's
-updates (:func:`track_to`, :func:`follow`) take ``trig.atan2``, within 1 ulp of libm's and
-vectorisable, so the lockstep loop converts the bodies due in a step together: the track only
-sets the 2 pi multiple k = round((track - angle) / 2 pi) of a sample, and with the angle
-within ~1 rad of its track an ulp of the track cannot move k (docs/physics.md).
+One conversion (:func:`euler_of`) serves the samples and the track updates, in plain float64
+arithmetic: ``trig.atan2`` for phi, psi and theta, sin theta = sqrt(c20^2 + c21^2) where the
+squares neither underflow nor overflow, the degenerate branch as selects. So it has no call
+and LLVM vectorises it across a block's bodies (``lockstep.block_euler``), each lane with the
+scalar function's bits: an ensemble body keeps its own run's outputs. The rare rest (theta
+within ~3e-151 of 0 or pi, NaN, infinities) takes ``hypot`` (:func:`euler_band`). Its angles
+are within 1 ulp of libm's ``atan2`` on the same matrix entries for phi and psi and 2 ulp for
+theta (tests/test_core_tracking.py); the track only sets the 2 pi multiple
+k = round((track - angle) / 2 pi) of a sample, and with the angle within ~1 rad of its track
+an ulp cannot move k (docs/physics.md). The lockstep loop's track updates take the same phi
+and psi without theta (:func:`track_angles`, :func:`follow`).
 """
 from __future__ import annotations
 
@@ -22,7 +28,8 @@ from tumble_ros.core.kernels.layout import Array, ST
 from tumble_ros.core.trig import atan2
 
 __all__ = ['UNWRAP_STEP', 'UNWRAP_MIN_SIN', 'MAX_TRACK_PIECES', 'unwrap_towards', 'euler_of',
-           'follow', 'track_angles', 'settle', 'TRACK_SKIP', 'TRACK_SET', 'TRACK_BAND',
+           'euler_parts', 'euler_band', 'euler_finish', 'PLAIN_LOW', 'PLAIN_HIGH', 'follow',
+           'track_angles', 'settle', 'TRACK_SKIP', 'TRACK_SET', 'TRACK_BAND',
            'unwrapped_euler', 'set_track', 'track_to', 'track_rate', 'track_pieces',
            'refresh_track']
 
@@ -60,32 +67,89 @@ def _rotation_parts(q0: float, q1: float, q2: float, q3: float
 
 #: sin theta below which phi alone is defined (psi = 0): C's (c20, c21) of norm below it.
 _DEGENERATE_SIN = 1e-300
+#: max(|c20|, |c21|) within which sin theta is sqrt(c20^2 + c21^2) in plain arithmetic
+#: (:func:`euler_parts`): the larger square is normal (>= 2^-1000: the smaller one's rounding,
+#: even subnormal, is 2^-75 of it) and the sum finite. Outside it (theta within ~3e-151 of 0 or
+#: pi, where the degenerate branch lies too) and for NaN, ``hypot`` (:func:`euler_band`).
+PLAIN_LOW = 2.0 ** -500
+PLAIN_HIGH = 2.0 ** 500
 
 
 @jit_inline
 def _phi_psi(c00: float, c02: float, c10: float, c12: float, c20: float, c21: float,
              degenerate: bool) -> tuple[float, float]:
-    """Return phi, psi [rad] in (-pi, pi] from C's entries (psi = 0 if ``degenerate``)."""
-    if degenerate:
-        return math.atan2(c10, c00), 0.0
-    return math.atan2(c02, -c12), math.atan2(c20, c21)
+    """Return phi, psi [rad] in [-pi, pi] from C's entries (psi = 0 if ``degenerate``): selects."""
+    phi = atan2(c10 if degenerate else c02, c00 if degenerate else -c12)
+    psi = atan2(c20, c21)
+    return phi, 0.0 if degenerate else psi
 
 
 @jit_inline
+def euler_parts(q0: float, q1: float, q2: float, q3: float
+                ) -> tuple[float, float, float, float]:
+    """
+    Return the paper's (phi, psi, theta) [rad] of quaternion q, wrapped, and 1.0 if they hold.
+
+    0.0: max(|c20|, |c21|) is outside [:data:`PLAIN_LOW`, :data:`PLAIN_HIGH`] or NaN, and
+    :func:`euler_band` gives the angles. No call, no branch (sin theta = sqrt(c20^2 + c21^2),
+    ``trig.atan2``): the lockstep loop takes it vectorised on a block's columns
+    (``lockstep.block_euler``).
+    """
+    c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
+    a20 = abs(c20)
+    a21 = abs(c21)
+    plain = ((a20 <= PLAIN_HIGH) & (a21 <= PLAIN_HIGH)
+             & ((a20 >= PLAIN_LOW) | (a21 >= PLAIN_LOW)))   # (NaN: False)
+    theta = atan2(math.sqrt(c20 * c20 + c21 * c21), c22)
+    phi, psi = _phi_psi(c00, c02, c10, c12, c20, c21, False)   # (sin theta >= PLAIN_LOW)
+    return phi, psi, theta, 1.0 if plain else 0.0
+
+
+@jit
+def euler_band(q0: float, q1: float, q2: float, q3: float) -> tuple[float, float, float]:
+    """
+    :func:`euler_parts` where it does not hold: sin theta = ``hypot`` (c20, c21) [rad].
+
+    Below :data:`_DEGENERATE_SIN` only phi is defined (psi = 0). Called, not inlined: theta
+    within ~3e-151 of 0 or pi, or a state that ran away (NaN, infinities), only.
+    """
+    c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
+    sth = math.hypot(c20, c21)
+    phi, psi = _phi_psi(c00, c02, c10, c12, c20, c21, sth < _DEGENERATE_SIN)
+    return phi, psi, atan2(sth, c22)
+
+
+@jit_inline
+def euler_finish(phi: float, psi: float, theta: float, plain: float, q0: float, q1: float,
+                 q2: float, q3: float, phi_ref: float, psi_ref: float
+                 ) -> tuple[float, float, float]:
+    """
+    Return :func:`euler_parts`' angles of q [rad] (:func:`euler_band`'s unless ``plain``).
+
+    phi and psi unwrapped towards phi_ref, psi_ref: :func:`euler_of`'s second half.
+    """
+    if plain == 0.0:
+        phi, psi, theta = euler_band(q0, q1, q2, q3)
+    return unwrap_towards(phi, phi_ref), unwrap_towards(psi, psi_ref), theta
+
+
+@jit
 def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
              psi_ref: float) -> tuple[float, float, float]:
     """
     Return the paper's (phi, psi, theta) [rad] of quaternion (q0, q1, q2, q3).
 
     phi and psi are unwrapped towards phi_ref, psi_ref (z-x-z, orbital -> body; the
-    rotation.matrix_to_euler of C^T). The one conversion: :func:`unwrapped_euler` (a state's
-    row) and the lockstep loop (a block's column, ``lockstep.block_emit``) inline it.
+    rotation.matrix_to_euler of C^T: with its libm ``atan2`` and ``hypot``, wrapped phi and psi
+    within 1 ulp, theta within 2, unwrapped within 2: tests/test_core_tracking.py). The one
+    conversion, :func:`euler_parts`
+    then :func:`euler_finish`: :func:`unwrapped_euler` (a state's row) and :func:`track_to`
+    call it, and the lockstep loop takes its two halves on a block's columns
+    (``lockstep.block_euler``, ``block_emit``). Called, not inlined: each inlined copy of its
+    three ``trig.atan2`` costs seconds of a first run's compiling.
     """
-    c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
-    sth = math.hypot(c20, c21)
-    theta = math.atan2(sth, c22)
-    phi, psi = _phi_psi(c00, c02, c10, c12, c20, c21, sth < _DEGENERATE_SIN)
-    return unwrap_towards(phi, phi_ref), unwrap_towards(psi, psi_ref), theta
+    phi, psi, theta, plain = euler_parts(q0, q1, q2, q3)
+    return euler_finish(phi, psi, theta, plain, q0, q1, q2, q3, phi_ref, psi_ref)
 
 
 #: :func:`track_angles`' verdicts: set the track, leave it (a state that ran away), or take
@@ -93,15 +157,6 @@ def euler_of(q0: float, q1: float, q2: float, q3: float, phi_ref: float,
 TRACK_SKIP = 0.0
 TRACK_SET = 1.0
 TRACK_BAND = 2.0
-
-
-@jit_inline
-def _track_phi_psi(c00: float, c02: float, c10: float, c12: float, c20: float, c21: float,
-                   degenerate: bool) -> tuple[float, float]:
-    """:func:`_phi_psi` by ``trig.atan2`` (the track's), as selects: vectorisable [rad]."""
-    phi = atan2(c10 if degenerate else c02, c00 if degenerate else -c12)
-    psi = atan2(c20, c21)
-    return phi, 0.0 if degenerate else psi
 
 
 @jit_inline
@@ -121,7 +176,7 @@ def track_angles(q0: float, q1: float, q2: float, q3: float) -> tuple[float, flo
     # outside [0.5e-300, 1e-300), by hypot inside (and NaN: neither comparison holds)
     regular = (a20 >= _DEGENERATE_SIN) | (a21 >= _DEGENERATE_SIN)
     degenerate = (a20 < 0.5 * _DEGENERATE_SIN) & (a21 < 0.5 * _DEGENERATE_SIN)
-    phi, psi = _track_phi_psi(c00, c02, c10, c12, c20, c21, degenerate)
+    phi, psi = _phi_psi(c00, c02, c10, c12, c20, c21, degenerate)
     verdict = TRACK_SKIP if math.isnan(c22) else TRACK_SET
     return phi, psi, verdict if regular | degenerate else TRACK_BAND
 
@@ -143,8 +198,8 @@ def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
 
     The same phi, psi and the same rule (set unless phi, psi and theta are finite), without
     theta's ``atan2`` and mostly without ``hypot``: atan2(y, x) is NaN exactly when y or x is,
-    and finite otherwise, so theta = atan2(hypot(c20, c21), c22) is finite unless c22 is NaN
-    or hypot is, and a NaN hypot (c20 or c21 NaN) makes psi NaN already. The branch
+    and finite otherwise, so theta = atan2(sin theta, c22) is finite unless c22 is NaN or
+    sin theta is, and a NaN sin theta (c20 or c21 NaN) makes psi NaN already. The branch
     hypot(c20, c21) < 1e-300 is decided by max(|c20|, |c21|) <= hypot <= sqrt(2) max
     outside [0.5e-300, 1e-300), by hypot inside (:func:`track_angles`). The lockstep loop's
     tracks (``lockstep.block_track``, ``block_refresh``), which no output reads but as the
@@ -156,10 +211,9 @@ def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
     """
     phi, psi, verdict = track_angles(q0, q1, q2, q3)
     if verdict == TRACK_BAND:   # (also NaN: hypot NaN or inf, not below)
-        c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
-        phi, psi = _track_phi_psi(c00, c02, c10, c12, c20, c21,
-                                  math.hypot(c20, c21) < _DEGENERATE_SIN)
-        verdict = TRACK_SKIP if math.isnan(c22) else TRACK_SET
+        phi, psi, theta = euler_band(q0, q1, q2, q3)
+        # (theta NaN: c22 or hypot NaN; a NaN hypot, with c20 or c21 NaN, makes psi NaN too)
+        verdict = TRACK_SKIP if math.isnan(theta) else TRACK_SET
     settle(phi, psi, verdict, track)
 
 
@@ -188,15 +242,10 @@ def track_to(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
     """
     Set track to the unwrapped Euler angles of quaternion q (:func:`set_track`'s rule).
 
-    :func:`euler_of`'s conversion with the track's ``trig.atan2`` in place of libm's: the
-    track is only the reference of the samples' unwrapping, whose angles keep libm's.
+    :func:`euler_of`'s, the samples' conversion: the track's phi and psi are the references
+    towards which they are unwrapped.
     """
-    c00, c02, c10, c12, c20, c21, c22 = _rotation_parts(q0, q1, q2, q3)
-    sth = math.hypot(c20, c21)
-    theta = atan2(sth, c22)
-    phi, psi = _track_phi_psi(c00, c02, c10, c12, c20, c21, sth < _DEGENERATE_SIN)
-    phi = unwrap_towards(phi, track[0])
-    psi = unwrap_towards(psi, track[1])
+    phi, psi, theta = euler_of(q0, q1, q2, q3, track[0], track[1])
     if math.isfinite(phi) and math.isfinite(psi) and math.isfinite(theta):
         track[0] = phi
         track[1] = psi

@@ -705,7 +705,7 @@ POST_SAMPLES = 2**16
 
 
 #: Bodies per block of the lockstep loop: its buffers, (2 K.BK.SIZE + K.BT.SIZE + K.BB.SIZE) x 8
-#: bytes a body (904: 226 KB a block), stay in the core's L2 cache.
+#: bytes a body (936: 234 KB a block), stay in the core's L2 cache.
 BLOCK_BODIES = 256
 
 
