@@ -19,7 +19,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit_inline, python_source
+from tumble_ros.core.jit import called, jit_inline, python_source
 from tumble_ros.core.torques.frames import orbital_to_body
 from tumble_ros.core.trig import scaled_sin_cos_rows, sin_cos
 
@@ -27,6 +27,10 @@ __all__ = ['sun_direction_orbital', 'sun_direction_body', 'sun_in_orbit_plane',
            'sun_in_orbit_plane_rows', 'tidal_torque',
            'tidal_coefficients', 'point_mass_torque', 'gravity_gradient_torque',
            'gravity_gradient_potential', 'tidal_potential_coefficient']
+
+#: ``trig.sin_cos`` compiled once and called: inlined, its two copies of the polynomials in
+#: every right-hand side of every method cost ~20 s of the first run's compiling.
+_sin_cos_called = called(sin_cos)
 
 
 @jit_inline
@@ -53,7 +57,7 @@ def sun_in_orbit_plane(orbit_rate: float, t: float) -> tuple[float, float]:
     each at its own time, take them vectorised with a single body's bits
     (``kernels.lanes.lanes_sun``).
     """
-    return sin_cos(orbit_rate * t)
+    return _sin_cos_called(orbit_rate * t)
 
 
 @jit_inline
