@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from tumble_ros.core import kernels
-from tumble_ros.core.jit import called
+from tumble_ros.core.jit import called, python_source
 from tumble_ros.core.kernels import tracking
 from tumble_ros.core.kernels.layout import BK, BT, ST
 
@@ -158,18 +158,13 @@ def libm_euler(q, phi_ref=0.0, psi_ref=0.0):
     """
     Main's conversion of quaternion q: libm's atan2 and hypot on C's entries [rad].
 
-    rotation.matrix_to_euler of C^T, written out (the kernels' arithmetic for C), phi and psi
-    unwrapped towards phi_ref, psi_ref as ``tracking.unwrap_towards`` (not if not finite).
+    rotation.matrix_to_euler of C^T, written out on C's entries as the kernels compute them
+    (their own function, run as Python: the same bits, so that what differs is the
+    conversion), phi and psi unwrapped towards phi_ref, psi_ref as ``tracking.unwrap_towards``
+    (not if not finite).
     """
     q0, q1, q2, q3 = (float(v) for v in q)
-    s = 2.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    c00 = 1.0 - s * (q2 * q2 + q3 * q3)
-    c02 = s * (q1 * q3 + q0 * q2)
-    c10 = s * (q1 * q2 + q0 * q3)
-    c12 = s * (q2 * q3 - q0 * q1)
-    c20 = s * (q1 * q3 - q0 * q2)
-    c21 = s * (q2 * q3 + q0 * q1)
-    c22 = 1.0 - s * (q1 * q1 + q2 * q2)
+    c00, c02, c10, c12, c20, c21, c22 = python_source(tracking._rotation_parts)(q0, q1, q2, q3)
     sth = math.hypot(c20, c21)
     theta = math.atan2(sth, c22)
     if sth < 1e-300:
