@@ -18,7 +18,7 @@ from tumble_ros.core.kernels.physics import (axis_turn, body_torque, flow_pieces
                                              torque_given_sun)
 from tumble_ros.core.kernels.rk4 import step_count
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
-from tumble_ros.core.trig import REDUCED_LIMIT, sin_cos_reduced
+from tumble_ros.core.trig import scaled_sin_cos_rows
 
 __all__ = ['flow', 'flow_called', 'pulse_step_count', 'start', 'step', 'dense',
            'MAX_PULSE_SUBSTEPS', 'block_start', 'block_step', 'block_dense', 'block_flow',
@@ -197,18 +197,9 @@ def block_sincos(tmp: Array, m: int) -> None:
     """
     tmp[BT.COS], tmp[BT.SIN] = cos, sin of tmp[BT.ANGLE]: :func:`~.trig.sin_cos`'s bits.
 
-    A vectorised pass of :func:`~.trig.sin_cos_reduced` over all, then libm for the angles
-    beyond its range (none in practice: a check a body).
+    ``trig.scaled_sin_cos_rows`` on the rows (scale 1: the angles themselves, exactly).
     """
-    for i in range(m):
-        s, c = sin_cos_reduced(tmp[BT.ANGLE, i])
-        tmp[BT.SIN, i] = s
-        tmp[BT.COS, i] = c
-    for i in range(m):
-        x = tmp[BT.ANGLE, i]
-        if not abs(x) < REDUCED_LIMIT:
-            tmp[BT.SIN, i] = math.sin(x)
-            tmp[BT.COS, i] = math.cos(x)
+    scaled_sin_cos_rows(1.0, tmp[BT.ANGLE], tmp[BT.SIN], tmp[BT.COS], m)
 
 
 @jit

@@ -55,7 +55,7 @@ def sun_in_orbit_plane(orbit_rate: float, t: float) -> tuple[float, float]:
     pair per time, shared by every body of an ensemble stepped in lockstep. The sin/cos are
     ``trig.sin_cos``'s (plain arithmetic, within 1 ulp of libm's), so that ``dop853``'s lanes,
     each at its own time, take them vectorised with a single body's bits
-    (``kernels.lanes.lanes_sun``).
+    (:func:`sun_in_orbit_plane_rows`, in ``kernels.lanes.lanes_rhs``).
     """
     return _sin_cos_called(orbit_rate * t)
 
