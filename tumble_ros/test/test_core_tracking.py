@@ -313,4 +313,4 @@ def test_the_vectorised_euler_pass_gives_the_scalar_bits():
     many(np.ascontiguousarray(q.T), out)
     assert out.tobytes() == tmp[BT.EULER:BT.EULER + 4].tobytes()
     asm = next(iter(many.inspect_asm().values()))
-    assert re.search(r'vsqrtpd\s+%[xy]mm', asm) and re.search(r'vdivpd\s+%[xy]mm', asm)
+    assert re.search(r'vsqrtpd\s+%[xyz]mm', asm) and re.search(r'vdivpd\s+%[xyz]mm', asm)
