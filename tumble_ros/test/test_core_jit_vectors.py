@@ -1,81 +1,92 @@
-"""The kernels' vector width: 512-bit registers where the CPU has AVX-512 (core.jit)."""
+"""The block loops' 512-bit vectors where the CPU has AVX-512 (core.jit ``wide=True``)."""
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
+import re
 
+import numpy as np
 import pytest
 
-from tumble_ros.core.jit import COMPILED, PREFER_512_BIT, wide_vector_features
+from tumble_ros.core import kernels
+from tumble_ros.core.jit import _wide_ir, COMPILED, jit, PREFER_512_BIT, WIDE_VECTOR_LOOPS
 
 needs_numba = pytest.mark.skipif(not COMPILED, reason='numba not available')
 
-#: Run in a fresh interpreter: what the import of core.jit chose, and a compiled loop's code.
-PROBE = """
-import json
-import numpy as np
-import numba
-from numba.core.codegen import get_host_cpu_features
-from tumble_ros.core.jit import jit
+IR = """declare i32 @"g"(i8* %".1")
 
-def axpy(a, x, y):
-    for i in range(x.shape[0]):
-        y[i] = y[i] + a * x[i]
+define i32 @"f"(i8* %".1") noinline
+{
+entry:
+  %"x" = call i32 @"g"(i8* %".1")
+  ret i32 %"x"
+}
 
-axpy = jit(axpy, cache=False)
-x = np.arange(64.0)
-y = np.ones(64)
-axpy(2.0, x, y)
-assert np.array_equal(y, 1.0 + 2.0 * x)
-print(json.dumps({'features': numba.config.CPU_FEATURES, 'host': get_host_cpu_features(),
-                  'asm': next(iter(axpy.inspect_asm().values()))}))
+define i8* @"cpython.f"(i8* %"py_args")
+{
+entry:
+  ret i8* %"py_args"
+}
 """
 
 
-def _probe(**env: str) -> dict[str, str]:
-    """Run :data:`PROBE` with the environment's NUMBA_CPU_* replaced by ``env``."""
-    clean = {k: v for k, v in os.environ.items() if not k.startswith('NUMBA_CPU_')}
-    done = subprocess.run([sys.executable, '-c', PROBE], capture_output=True, text=True,
-                          env={**clean, **env}, timeout=120)
-    assert done.returncode == 0, done.stderr
-    answer: dict[str, str] = json.loads(done.stdout.splitlines()[-1])
-    return answer
+def test_every_function_defined_gets_the_attribute_and_nothing_else_changes():
+    wide = _wide_ir(IR)
+    assert PREFER_512_BIT == '"prefer-vector-width"="512"'
+    assert wide.count(PREFER_512_BIT) == 2
+    assert 'define i32 @"f"(i8* %".1") noinline ' + PREFER_512_BIT + '\n{' in wide
+    assert 'define i8* @"cpython.f"(i8* %"py_args") ' + PREFER_512_BIT + '\n{' in wide
+    assert 'declare i32 @"g"(i8* %".1")\n' in wide           # a declaration: no body, left
+    assert wide.replace(' ' + PREFER_512_BIT, '') == IR
 
 
-def test_a_cpu_with_avx512_is_told_to_prefer_512_bit_vectors():
-    host = '+avx2,+avx512f,+avx512dq,+fma,+prefer-256-bit,-amx-tile'
-    wide = wide_vector_features(host)
-    assert wide is not None
-    listed = wide.split(',')
-    assert listed[-1] == PREFER_512_BIT == '-prefer-256-bit'
-    assert '+prefer-256-bit' not in listed          # the host's own tuning replaced, not doubled
-    assert listed[:-1] == ['+avx2', '+avx512f', '+avx512dq', '+fma', '-amx-tile']
-
-
-def test_a_cpu_without_avx512_keeps_numbas_choice():
-    assert wide_vector_features('+avx2,+fma,-avx512f,+sse4.2') is None
-    assert wide_vector_features('') is None
+def _avx512() -> bool:
+    """Tell whether this CPU has AVX-512 (LLVM's features of the host, as numba reads them)."""
+    from numba.core.codegen import get_host_cpu_features
+    return '+avx512f' in str(get_host_cpu_features()).split(',')
 
 
 @needs_numba
-def test_the_kernels_compile_on_512_bit_registers_where_the_cpu_has_them():
-    """The import chose the features; a vectorised loop uses zmm exactly where AVX-512 is."""
-    probe = _probe()
-    wide = wide_vector_features(probe['host'])
-    assert probe['features'] == wide
-    if wide is None:     # this CPU: no AVX-512, numba's own features, no 512-bit register
-        assert 'zmm' not in probe['asm']
-    else:
-        assert 'zmm' in probe['asm'], probe['asm'][:2000]
+def test_a_wide_loop_runs_on_512_bit_registers_exactly_where_the_cpu_has_them():
+    """The same loop, compiled wide and not: zmm only wide, on AVX-512; the same bits."""
+    def scaled_sum_wide(a, x, y, out):
+        for i in range(x.shape[0]):
+            out[i] = y[i] + a * x[i]
+
+    def scaled_sum_narrow(a, x, y, out):
+        for i in range(x.shape[0]):
+            out[i] = y[i] + a * x[i]
+
+    wide = jit(scaled_sum_wide, cache=False, wide=True)
+    narrow = jit(scaled_sum_narrow, cache=False)
+    assert 'scaled_sum_wide' in {name.rsplit('.', 1)[-1] for name in WIDE_VECTOR_LOOPS}
+    x = np.random.default_rng(1).normal(size=1001)
+    y = np.random.default_rng(2).normal(size=1001)
+    out_wide, out_narrow = np.empty_like(x), np.empty_like(x)
+    wide(np.pi, x, y, out_wide)
+    narrow(np.pi, x, y, out_narrow)
+    assert out_wide.tobytes() == out_narrow.tobytes() == (y + np.pi * x).tobytes()
+    wide_asm = next(iter(wide.inspect_asm().values()))
+    narrow_asm = next(iter(narrow.inspect_asm().values()))
+    assert 'zmm' not in narrow_asm
+    if _avx512():
+        assert re.search(r'v(mul|add)pd\s+[^\n]*%zmm', wide_asm), wide_asm[:3000]
+    else:                     # the attribute asks for what the CPU does not have: nothing
+        assert 'zmm' not in wide_asm
 
 
 @needs_numba
-def test_the_users_choice_of_target_is_left_as_it_is():
-    host = _probe()['host']
-    assert _probe(NUMBA_CPU_FEATURES=host)['features'] == host    # (256-bit vectors)
-    assert 'zmm' not in _probe(NUMBA_CPU_FEATURES=host)['asm']
-    generic = _probe(NUMBA_CPU_NAME='generic')     # (numba's portable code: its own features)
-    assert PREFER_512_BIT not in (generic['features'] or '')
-    assert 'zmm' not in generic['asm']
+def test_the_block_loops_are_wide_and_the_single_body_loops_are_not():
+    """Which compiled functions get 512-bit vectors: the lockstep and lanes loops only."""
+    for name in ('splitting', 'rk4', 'dop853'):
+        loops = kernels.loops(name)
+        block = loops.block_advance if name != 'dop853' else loops.lanes_advance
+        assert block.py_func.__qualname__ in WIDE_VECTOR_LOOPS, name
+        for single in (loops.advance, loops.step, loops.dense, loops.emit,
+                       loops.ensemble_advance):
+            assert single.py_func.__qualname__ not in WIDE_VECTOR_LOOPS, (name, single)
+    from tumble_ros.core.kernels import dop853, lanes, lockstep, rk4, splitting
+    for function in (rk4.block_rhs, rk4.block_step, splitting.block_flow, splitting.block_step,
+                     dop853.lanes_stages, lanes.lanes_rhs, lanes.lanes_block,
+                     lockstep.block_step, lockstep.block_track, lockstep.block_euler):
+        assert function.py_func.__qualname__ in WIDE_VECTOR_LOOPS, function
+    for function in (lanes.lane_load, lockstep.load_body, rk4.block_load, dop853.step):
+        assert function.py_func.__qualname__ not in WIDE_VECTOR_LOOPS, function

@@ -29,6 +29,13 @@ nothing and return no array (they write into arrays their Python caller owns and
 for the call), so they are compiled without numba's runtime (:data:`JIT_OPTIONS`,
 ``_nrt=False``: numba's option, underscored, the one its maintainers use in that issue):
 ~70 ns a body-step. tests/test_core_fast.py checks the compiled code holds no reference count.
+
+512-bit vectors for the loops over a block of bodies
+----------------------------------------------------
+On a CPU with AVX-512, LLVM still vectorises with 256-bit registers (its tuning for those
+CPUs). The functions compiled with ``wide=True`` (:func:`jit_wide`: the lockstep and lanes
+loops, which run one body a vector lane) carry the LLVM attribute that lets them use 512-bit
+registers (:func:`_wide_ir`); the single-body loops do not (:data:`WIDE_VECTOR_LOOPS`).
 """
 from __future__ import annotations
 
@@ -37,6 +44,7 @@ import functools
 import hashlib
 import os
 from pathlib import Path
+import re
 import sys
 import threading
 import time
@@ -46,7 +54,7 @@ from typing import Any, Callable, cast, Iterator, TextIO, TypeVar
 __all__ = ['COMPILED', 'NUMBA_VERSION', 'JIT_OPTIONS', 'jit', 'jit_inline', 'called',
            'python_source', 'specialise', 'COMPILED_SOURCES', 'compiled_sources_hash',
            'first_use', 'COMPILE_NOTICE_SECONDS', 'COMPILE_NOTICE_VARIABLE', 'compile_notices',
-           'load_for', 'wide_vector_features', 'PREFER_512_BIT']
+           'load_for', 'WIDE_VECTOR_LOOPS', 'PREFER_512_BIT', 'jit_wide']
 
 #: A function (the decorators return a compiled function typed as the one they are given).
 F = TypeVar('F', bound=Callable[..., Any])
@@ -89,50 +97,67 @@ def compiled_sources_hash() -> bytes:
     return _hash(stamps)
 
 
-#: The LLVM target feature removed where the CPU has AVX-512: LLVM then uses 512-bit vectors.
-PREFER_512_BIT = '-prefer-256-bit'
+#: The compiled functions (numba's library names: qualified names, a copy's with its suffix)
+#: whose vectorised loops run on 512-bit registers where the CPU has AVX-512
+#: (:func:`jit` ``wide=True``; :func:`_wide_ir`).
+WIDE_VECTOR_LOOPS: set[str] = set()
+#: The LLVM function attribute given to them: it overrides the CPU's tuning (below).
+PREFER_512_BIT = '"prefer-vector-width"="512"'
 
 
-def wide_vector_features(host_features: str) -> str | None:
+def _wide_ir(text: str) -> str:
     """
-    Return the LLVM target features to compile with: ``host_features`` preferring 512 bits.
+    Return LLVM IR ``text`` with :data:`PREFER_512_BIT` on every function it defines.
 
-    ``host_features``: LLVM's comma-separated ``+feature``/``-feature`` list of this CPU
-    (``numba.core.codegen.get_host_cpu_features()``). On a CPU with AVX-512 (``+avx512f``)
-    LLVM's tuning for it still keeps vectorised loops to 256 bits (the ``prefer-256-bit``
-    tuning: 512-bit instructions lowered the clock of older Xeons); without that feature the
-    loops over a block of bodies (``kernels.lockstep``, ``kernels.lanes``) run on 512-bit
-    registers, 8 doubles a ``zmm``: 10-16 % less CPU a body-step, the same bits (the same
-    operations on more lanes at once; no reduction is reassociated). Returns None (numba's
-    own choice: the host's features) on a CPU without AVX-512.
+    LLVM's tuning for the CPUs with AVX-512 keeps vectorised loops to 256-bit registers
+    (``prefer-256-bit``: 512-bit instructions lowered the clock of older Xeons), for numba's
+    whole process. The loops over a block of bodies (``kernels.lockstep``, ``kernels.lanes``)
+    run 10-25 % faster on 512-bit registers, 8 doubles a ``zmm``, with the same bits (the same
+    operations on more bodies at once; no reduction is reassociated). The single-body loops
+    stay at 256 bits: there AVX-512 vectorises the loops over a state's 7 components with
+    masked 8-wide moves, whose stores the next scalar loads cannot take from the store buffer
+    (with 512 bits for the whole process, Fig 9's ``dop853`` run took 8-10 % more CPU). The
+    attribute is per function: only the functions compiled with ``wide=True`` get it; on a
+    CPU without AVX-512 it changes nothing.
     """
-    listed = host_features.split(',')
-    if '+avx512f' not in listed:
-        return None
-    return ','.join([f for f in listed if f.lstrip('+-') != PREFER_512_BIT[1:]]
-                    + [PREFER_512_BIT])
+    # (llvmlite writes a definition's opening brace on the line after its signature)
+    return re.sub(r'^(define [^\n]*)\n\{', r'\1 ' + PREFER_512_BIT + '\n{', text,
+                  flags=re.MULTILINE)
 
 
-def _prefer_wide_vectors() -> None:
+def _prefer_wide_vectors(codegen: Any, cgutils: Any, llvm: Any) -> None:
     """
-    Compile with :func:`wide_vector_features`, unless the user chose the target.
+    Compile the functions of :data:`WIDE_VECTOR_LOOPS` with :func:`_wide_ir`'s attribute.
 
-    Through numba's documented variable ``NUMBA_CPU_FEATURES`` (set here when neither it nor
-    ``NUMBA_CPU_NAME`` is set): numba keys its cache by the features, and the processes this
-    one starts (the warm-up's, Dask's workers) inherit the same choice. Nothing is compiled at
-    import, so every kernel sees it.
+    numba turns a function's IR module to text before LLVM parses it
+    (``CPUCodeLibrary.add_ir_module``, whose steps this repeats for those functions only;
+    numba has no option for a function attribute). Checked by
+    tests/test_core_jit_vectors.py: 512-bit registers in a block loop, none in a single-body
+    loop, the same bits.
     """
-    if os.environ.get('NUMBA_CPU_FEATURES') or os.environ.get('NUMBA_CPU_NAME'):
+    library = codegen.CPUCodeLibrary
+    plain = library.add_ir_module
+    if getattr(plain, 'wide_vectors', False):
         return
-    from numba.core import codegen
-    features = wide_vector_features(cast(Any, codegen).get_host_cpu_features())
-    if features is not None:
-        os.environ['NUMBA_CPU_FEATURES'] = features
-        _numba.config.reload_config()
+
+    def add_ir_module(self: Any, ir_module: Any) -> None:
+        if self.name not in WIDE_VECTOR_LOOPS:
+            plain(self, ir_module)
+            return
+        self._raise_if_finalized()
+        parsed = llvm.parse_assembly(_wide_ir(cgutils.normalize_ir_text(str(ir_module))))
+        parsed.name = ir_module.name
+        parsed.verify()
+        self.add_llvm_module(parsed)
+
+    add_ir_module.wide_vectors = True    # type: ignore[attr-defined]
+    library.add_ir_module = add_ir_module
 
 
 if COMPILED:
-    _prefer_wide_vectors()
+    from llvmlite import binding as _llvm
+    from numba.core import cgutils as _cgutils, codegen as _codegen
+    _prefer_wide_vectors(_codegen, _cgutils, _llvm)
     from numba.core import caching
     _caching: Any = caching
 
@@ -164,8 +189,15 @@ if COMPILED:
     if _CompiledSourcesLocator not in _LOCATORS:
         _LOCATORS.insert(0, _CompiledSourcesLocator)
 
-    def jit(f: F, cache: bool = True) -> F:
-        """Compile ``f`` (nogil: ensembles run blocks of bodies in several threads at once)."""
+    def jit(f: F, cache: bool = True, wide: bool = False) -> F:
+        """
+        Compile ``f`` (nogil: ensembles run blocks of bodies in several threads at once).
+
+        ``wide``: a loop over a block of bodies, its vectorised loops on 512-bit registers
+        where the CPU has them (:data:`WIDE_VECTOR_LOOPS`).
+        """
+        if wide:
+            WIDE_VECTOR_LOOPS.add(f.__qualname__)
         return cast(F, _numba.njit(**{**JIT_OPTIONS, 'cache': cache})(f))
 
     def jit_inline(f: F, cache: bool = True) -> F:
@@ -185,7 +217,7 @@ if COMPILED:
     def _inlined(f: Callable[..., Any]) -> bool:
         return bool(getattr(f, 'targetoptions', {}).get('inline') == 'always')
 else:
-    def jit(f: F, cache: bool = True) -> F:
+    def jit(f: F, cache: bool = True, wide: bool = False) -> F:
         """Return ``f`` unchanged (numba absent or disabled)."""
         return f
 
@@ -197,6 +229,11 @@ else:
 
     def _inlined(f: Callable[..., Any]) -> bool:
         return False
+
+
+def jit_wide(f: F, cache: bool = True) -> F:
+    """:func:`jit` for a loop over a block of bodies (``wide=True``: 512-bit vectors)."""
+    return jit(f, cache=cache, wide=True)
 
 
 def python_source(f: F) -> F:
@@ -219,8 +256,9 @@ def specialise(f: F, namespace: dict[str, Any], suffix: str, cache: bool = True)
     copy.__qualname__ = f'{source.__qualname__}__{suffix}'
     copy.__doc__ = source.__doc__
     copy.__annotations__ = dict(source.__annotations__)
-    compile_ = jit_inline if _inlined(f) else jit
-    return cast(F, compile_(copy, cache=cache))
+    if _inlined(f):
+        return cast(F, jit_inline(copy, cache=cache))
+    return cast(F, jit(copy, cache=cache, wide=source.__qualname__ in WIDE_VECTOR_LOOPS))
 
 
 #: A first call of a compiled loop that takes longer than this [s] says so on stderr (it is

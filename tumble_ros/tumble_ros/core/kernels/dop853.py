@@ -15,7 +15,7 @@ import types
 
 import numpy as np
 
-from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.jit import jit, jit_inline, jit_wide
 from tumble_ros.core.kernels.lanes import lanes_rhs
 from tumble_ros.core.kernels.layout import (Array, CF, Extra, FAIL, LANE_STAGES, LN, N, ST,
                                             STATUS)
@@ -357,7 +357,7 @@ def _lanes_sum(ln: Array, acc: int, k: int, coefficients: Array, s: int, m: int)
         j += 1
 
 
-@jit
+@jit_wide
 def lanes_stages(p: Array, extra: Extra, cfg: Array, t0: float, ln: Array, m: int) -> None:
     """
     One attempt of m lanes, each from its own (tau, h): :func:`step`'s stages and error norm.

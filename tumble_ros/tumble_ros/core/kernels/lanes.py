@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.jit import jit, jit_inline, jit_wide
 from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import (Array, CF, Extra, FAIL, LANE_STAGES, LN, N, PR, ST,
                                             STATUS)
@@ -82,7 +82,7 @@ def _omega_rates(p: Array, ln: Array, yo: int, oo: int, i: int, tx: float, ty: f
     ln[oo + 2, i] = f2
 
 
-@jit
+@jit_wide
 def lanes_rhs(p: Array, extra: Extra, ln: Array, yo: int, oo: int, m: int) -> None:
     """
     Write f(t, y) of m lanes, t = ln[LN.T], y = ln[yo:yo+7], to ln[oo:oo+7].
@@ -203,7 +203,7 @@ def after_step(p: Array, extra: Extra, cfg: Array, st: Array, ln: Array, track: 
         k_out[b] = emit(p, extra, cfg, st, track, t_out, y_out, e_out, k)
 
 
-@jit
+@jit_wide
 def lanes_block(extra: Extra, cfg: Array, probs: Array, seg_t: Array,
                 seg_ptr: npt.NDArray[np.int64], cur: npt.NDArray[np.int64], states: Array,
                 tracks: Array, t_stop: float, t_out: Array, y_out: Array, e_out: Array,
@@ -299,7 +299,7 @@ def lanes_block(extra: Extra, cfg: Array, probs: Array, seg_t: Array,
             st[ST.Y_OLD + c] = ln[LN.Y_OLD + c, i]
 
 
-@jit
+@jit_wide
 def lanes_advance(extra: Extra, cfg: Array, probs: Array, seg_t: Array,
                   seg_ptr: npt.NDArray[np.int64], cur: npt.NDArray[np.int64], states: Array,
                   tracks: Array, t_stop: float, t_out: Array, y_out: Array, e_out: Array,

@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.jit import jit, jit_inline, jit_wide
 from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, Extra, FAIL, LI, N, ST,
                                             STATUS)
@@ -124,7 +124,7 @@ def track_update(p: Array, extra: Extra, cfg: Array, st: Array, track: Array,
     raise NotImplementedError('a template: run kernels.methods.loops(name).block_advance')
 
 
-@jit
+@jit_wide
 def block_seg_init(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, bodies: Array,
                    counters: npt.NDArray[np.int64], t0: float, t_bound: float, m: int) -> None:
     """
@@ -147,7 +147,7 @@ def block_seg_init(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, b
             other[r, i] = cur[r, i]
 
 
-@jit
+@jit_wide
 def block_euler(src: Array, tmp: Array, m: int) -> None:
     """
     ``tracking.euler_parts`` of the quaternions of m bodies (rows BK.Y + 3 .. of src).
@@ -165,7 +165,7 @@ def block_euler(src: Array, tmp: Array, m: int) -> None:
         tmp[BT.EULER + 3, i] = plain
 
 
-@jit
+@jit_wide
 def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, t_out: Array,
                y_out: Array, e_out: Array, body0: int, m: int) -> None:
@@ -228,7 +228,7 @@ def block_emit(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: 
     counters[LI.K] = k
 
 
-@jit
+@jit_wide
 def _fail_bodies(bst: Array, old: Array, new: Array, tmp: Array, bodies: Array,
                  counters: npt.NDArray[np.int64], code: float, t_good: float, m: int) -> int:
     """
@@ -256,7 +256,7 @@ def _fail_bodies(bst: Array, old: Array, new: Array, tmp: Array, bodies: Array,
     return alive
 
 
-@jit
+@jit_wide
 def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                bodies: Array, counters: npt.NDArray[np.int64], m: int) -> bool:
     """
@@ -319,7 +319,7 @@ def _settle_gathered(tmp: Array, angles: int, quaternion: int, j: int, track: Ar
         settle(tmp[angles, j], tmp[angles + 1, j], tmp[angles + 2, j], track)
 
 
-@jit
+@jit_wide
 def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp: Array,
                 bodies: Array, counters: npt.NDArray[np.int64], tracks: Array, m: int) -> None:
     """
@@ -383,7 +383,7 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
         _settle_gathered(tmp, BT.TRACK_NEW, BT.TRACK_Q, j, track)
 
 
-@jit
+@jit_wide
 def block_refresh(soa: Array, bodies: Array, counters: npt.NDArray[np.int64], tracks: Array,
                   m: int) -> None:
     """
@@ -399,7 +399,7 @@ def block_refresh(soa: Array, bodies: Array, counters: npt.NDArray[np.int64], tr
             bodies[BB.BUDGET, i] = 0.0
 
 
-@jit
+@jit_wide
 def block_init(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Array,
                bodies: Array, counters: npt.NDArray[np.int64], bst: Array, m: int) -> None:
     """Start the first segment of a block whose current buffer holds every body's y0."""
@@ -407,7 +407,7 @@ def block_init(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Array,
                    m)
 
 
-@jit
+@jit_wide
 def block_advance(extra: Extra, cfg: Array, probs: Array, seg_t: Array, soa: Array,
                   tmp: Array, bodies: Array, counters: npt.NDArray[np.int64], bst: Array,
                   tracks: Array, t_stop: float, t_out: Array, y_out: Array, e_out: Array,

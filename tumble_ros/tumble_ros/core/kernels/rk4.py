@@ -18,7 +18,7 @@ from typing import TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.jit import jit, jit_inline, jit_wide
 from tumble_ros.core.kernels.layout import Array, BB, BK, BT, CF, Extra, FAIL, N, PR, ST
 from tumble_ros.core.kernels.physics import (derivatives, plain_torque_given_sun, rhs, rhs_called,
                                              torque_given_sun)
@@ -132,12 +132,12 @@ def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
 # ---------------------------------------------------------------------------------------
 # A block of bodies in lockstep (kernels.lockstep): buffers (BK.SIZE, B), one body a column
 # ---------------------------------------------------------------------------------------
-@jit
+@jit_wide
 def block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array, m: int) -> None:
     """Do nothing per body: :func:`start` sets the shared step count only (bst)."""
 
 
-@jit
+@jit_wide
 def block_rhs(p: Array, extra: Extra, t: float, y: Array, out: Array, m: int) -> None:
     """
     Write f(t, y) of m bodies, y in rows 0-6 of ``y``, to rows 0-6 of ``out`` (vectorised).
@@ -176,7 +176,7 @@ def block_rhs(p: Array, extra: Extra, t: float, y: Array, out: Array, m: int) ->
         out[6, i] = f6
 
 
-@jit
+@jit_wide
 def block_stage(y: Array, k: Array, kr: int, a: float, tmp: Array, m: int) -> None:
     """Write the stage argument y + a k of m bodies to tmp[BT.STAGE:] (:func:`stage`)."""
     for c in range(N):
@@ -184,7 +184,7 @@ def block_stage(y: Array, k: Array, kr: int, a: float, tmp: Array, m: int) -> No
             tmp[BT.STAGE + c, i] = stage(y[BK.Y + c, i], k[kr + c, i], a)
 
 
-@jit
+@jit_wide
 def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: Array,
                tmp: Array, bodies: Array, m: int) -> None:
     """

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from tumble_ros.core.jit import called, jit, jit_inline
+from tumble_ros.core.jit import called, jit, jit_inline, jit_wide
 from tumble_ros.core.kernels.layout import Array, BK, BT, CF, Extra, FAIL, N, PR, ST
 from tumble_ros.core.kernels.physics import (axis_turn, body_torque, flow_pieces, free_flow,
                                              pi_turn, plain_torque_given_sun,
@@ -179,7 +179,7 @@ def dense(p: Array, extra: Extra, cfg: Array, st: Array, tau: float) -> None:
 # ---------------------------------------------------------------------------------------
 # A block of bodies in lockstep (kernels.lockstep): buffers (BK.SIZE, B), one body a column
 # ---------------------------------------------------------------------------------------
-@jit
+@jit_wide
 def block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array, m: int) -> None:
     """:func:`start` per body (momentum, opening torque); bst holds the shared step count."""
     for i in range(m):
@@ -192,7 +192,7 @@ def block_start(p: Array, extra: Extra, cfg: Array, bst: Array, cur: Array, m: i
         cur[BK.TORQUE + 2, i] = tz
 
 
-@jit
+@jit_wide
 def block_sincos(tmp: Array, m: int) -> None:
     """
     tmp[BT.COS], tmp[BT.SIN] = cos, sin of tmp[BT.ANGLE]: :func:`~.trig.sin_cos`'s bits.
@@ -202,7 +202,7 @@ def block_sincos(tmp: Array, m: int) -> None:
     scaled_sin_cos_rows(1.0, tmp[BT.ANGLE], tmp[BT.SIN], tmp[BT.COS], m)
 
 
-@jit
+@jit_wide
 def block_axis(new: Array, tmp: Array, axis: int, m: int, next_axis: int, c_next: float,
                factor_a: float) -> None:
     """
@@ -227,7 +227,7 @@ def block_axis(new: Array, tmp: Array, axis: int, m: int, next_axis: int, c_next
             tmp[BT.ANGLE, i] = 0.5 * (c_next * new[BK.PI + next_axis, i] * factor_a)
 
 
-@jit
+@jit_wide
 def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: Array,
                tmp: Array, bodies: Array, m: int) -> None:
     """Take :func:`step` for m bodies at once: buffer old -> new, the shared times in bst."""
@@ -240,7 +240,7 @@ def block_step(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, new: 
     bst[ST.NFEV] += cfg[CF.N_STAGES]
 
 
-@jit
+@jit_wide
 def block_dense(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, out: Array,
                 tmp: Array, tau: float, m: int) -> bool:
     """
@@ -255,7 +255,7 @@ def block_dense(p: Array, extra: Extra, cfg: Array, bst: Array, old: Array, out:
     return True
 
 
-@jit
+@jit_wide
 def block_flow(p: Array, extra: Extra, cfg: Array, old: Array, new: Array, tmp: Array,
                t0: float, s0: float, h: float, m: int) -> None:
     """
