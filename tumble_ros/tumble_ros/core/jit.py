@@ -155,9 +155,8 @@ def _prefer_wide_vectors(codegen: Any, cgutils: Any, llvm: Any) -> None:
 
 
 if COMPILED:
-    from llvmlite import binding as _llvm
     from numba.core import cgutils as _cgutils, codegen as _codegen
-    _prefer_wide_vectors(_codegen, _cgutils, _llvm)
+    _prefer_wide_vectors(_codegen, _cgutils, _codegen.ll)     # (ll: numba's llvmlite.binding)
     from numba.core import caching
     _caching: Any = caching
 
