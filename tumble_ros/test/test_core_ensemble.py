@@ -189,3 +189,21 @@ def test_small_pages_switch_numpys_huge_pages_off_and_restore_them():
         assert inside == [False, False, False]
         assert multiarray._get_madvise_hugepage() is setting
     multiarray._set_madvise_hugepage(default)
+
+
+def test_the_fastest_spin_is_numpys_norm_bit_for_bit_and_bounds_the_ensemble():
+    """ensemble._fastest_spin (by columns) against np.linalg.norm's rows; the bound it checks."""
+    from tumble_ros.core.model.limits import MAX_OMEGA
+    from tumble_ros.core.propagation.ensemble import _fastest_spin
+
+    rng = np.random.default_rng(30)
+    for scale in (1e-170, 1e-3, 1.0, 30.0, 1e9, 1e160):
+        omega = rng.normal(size=(1001, 3)) * scale * rng.uniform(0.5, 2.0, size=(1001, 1))
+        expected = float(np.max(np.linalg.norm(omega, axis=1)))
+        assert _fastest_spin(omega).hex() == expected.hex(), scale
+    one = np.array([[3.0, 4.0, 12.0]])
+    assert _fastest_spin(one) == 13.0
+    too_fast = np.tile([0.0, 0.0, 1.0], (5, 1))
+    too_fast[3, 1] = 2.0 * MAX_OMEGA
+    with pytest.raises(ScenarioError, match=r'omega0: \|omega0\| = 2e\+10 rad/yr exceeds'):
+        simulate_ensemble(fig9('splitting'), omega0=too_fast)

@@ -162,6 +162,17 @@ def _resolve(scenario: Scenario, impacts: ImpactsInput, omega0: VectorsInput,
     return impacts, omega0, euler0
 
 
+def _fastest_spin(omega: FloatArray) -> float:
+    """
+    Return max |omega| [rad/yr] over the rows of ``omega`` (N, 3): the bodies' fastest spin.
+
+    By columns, x^2 + y^2 + z^2 in numpy's order (the bits of ``np.linalg.norm(omega,
+    axis=1)``): numpy's reduction along a row of three took ~0.1 s at N = 10^6.
+    """
+    x, y, z = omega[:, 0], omega[:, 1], omega[:, 2]
+    return float(np.sqrt(np.max(x * x + y * y + z * z)))
+
+
 def _bodies(scenario: Scenario, impacts: ImpactsInput, omega0: VectorsInput,
             euler0: VectorsInput, n_bodies: int | None, first_body: int = 0
             ) -> tuple[int, list[tuple[Impact, ...]] | None, FloatArray | None,
@@ -191,7 +202,7 @@ def _bodies(scenario: Scenario, impacts: ImpactsInput, omega0: VectorsInput,
             raise ScenarioError(f'omega0: must be a finite (N, 3) array, got shape {omega.shape}')
         # the bounds of Scenario (every body of the reference path is one), checked here for the
         # compiled path too
-        fastest = float(np.max(np.linalg.norm(omega, axis=1)))
+        fastest = _fastest_spin(omega)
         if fastest > MAX_OMEGA:
             raise ScenarioError(
                 f'omega0: |omega0| = {fastest:.3g} rad/yr exceeds {MAX_OMEGA:g} rad/yr')
@@ -533,8 +544,7 @@ def _config(scenario: Scenario, omega0: FloatArray | None, method: type[Stepper]
     settings = scenario.integrator
     gammas = method.composition() if hasattr(method, 'composition') else ()
     # the work budget at the fastest body's rate (limits.step_budget; adaptive methods only)
-    spin = 0.0 if omega0 is None else float(
-        np.max(np.linalg.norm(np.atleast_2d(omega0), axis=-1)))
+    spin = 0.0 if omega0 is None else _fastest_spin(np.atleast_2d(omega0))
     budget = (step_budget(scenario.output_interval, max(scenario.own_rate, spin),
                           settings.max_step) if method.adaptive else (math.inf, math.inf))
     if method.kernel is None:
@@ -788,15 +798,18 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
                 progress((c + 1) / len(stops), t_stop, int(done))
     wall = time.perf_counter() - start
 
-    per_body = bodies.transpose(0, 2, 1).reshape(padded, K.BB.SIZE)[:n]
-    failed = per_body[:, K.BB.FAILED] != 0.0
+    def row(r: int) -> FloatArray:   # row r of every body's BB column, body order
+        return bodies[:, r, :].reshape(padded)[:n]
+
+    failed = row(K.BB.FAILED) != 0.0
     every = np.repeat(np.arange(n_blocks), size)[:n]
-    steps = np.where(failed, per_body[:, K.BB.STEPS], counters[every, K.LI.STEPS]).astype(np.int64)
-    k_out = np.where(failed, per_body[:, K.BB.K], counters[every, K.LI.K]).astype(np.int64)
-    nfev = np.where(failed, per_body[:, K.BB.NFEV],
+    steps = np.where(failed, row(K.BB.STEPS), counters[every, K.LI.STEPS]).astype(np.int64)
+    k_out = np.where(failed, row(K.BB.K), counters[every, K.LI.K]).astype(np.int64)
+    nfev = np.where(failed, row(K.BB.NFEV),
                     bst[every, K.ST.NFEV_DONE] + bst[every, K.ST.NFEV]
-                    + per_body[:, K.BB.NFEV_ADJ]).astype(np.int64)
-    messages = tuple(_lockstep_message(per_body[b], bst[every[b]], method.name) if failed[b]
+                    + row(K.BB.NFEV_ADJ)).astype(np.int64)
+    messages = tuple(_lockstep_message(bodies[b // size, :, b % size], bst[every[b]],
+                                       method.name) if failed[b]
                      else '' for b in range(n)) if failed.any() else ('',) * n
     return _result(scenario, times, y_out, e_out, k_out, failed, messages, steps, nfev, wall,
                    threads)
