@@ -111,8 +111,9 @@ def _wide_ir(text: str) -> str:
 
     LLVM's tuning for the CPUs with AVX-512 keeps vectorised loops to 256-bit registers
     (``prefer-256-bit``: 512-bit instructions lowered the clock of older Xeons), for numba's
-    whole process. The loops over a block of bodies (``kernels.lockstep``, ``kernels.lanes``)
-    run 10-25 % faster on 512-bit registers, 8 doubles a ``zmm``, with the same bits (the same
+    whole process. The lockstep loops over a block of bodies (``kernels.lockstep``) take
+    11-15 % less CPU a body-step on 512-bit registers, 8 doubles a ``zmm`` (the ``dop853``
+    lanes of ``kernels.lanes`` about as much as before), with the same bits (the same
     operations on more bodies at once; no reduction is reassociated). The single-body loops
     stay at 256 bits: there AVX-512 vectorises the loops over a state's 7 components with
     masked 8-wide moves, whose stores the next scalar loads cannot take from the store buffer
