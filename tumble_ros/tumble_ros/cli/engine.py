@@ -14,6 +14,7 @@ from contextlib import contextmanager, nullcontext
 import math
 import signal
 import sys
+import threading
 from typing import Iterator
 
 from tumble_ros.core import ScenarioError
@@ -102,16 +103,30 @@ def interrupts() -> Iterator[None]:
     The first signal raises; any later one is ignored while the program cleans up (a local
     cluster stopping, a store's lock released). A KeyboardInterrupt raised by someone else's
     handler becomes Interrupted(SIGINT) too. The previous handlers are restored on exit.
+
+    Python runs a signal's handler wherever the main thread is, a finaliser or a garbage
+    collector's callback included (Dask's ``GCDiagnosis``), where an exception is not raised
+    but printed as "Exception ignored" (``sys.unraisablehook``): the stop was lost, and the
+    run went on to its end with every later Ctrl-C ignored. Such an Interrupted is raised
+    again where the program is (:func:`_raise_again`), silently.
     """
     previous = {sig: signal.getsignal(sig) for sig in STOP_SIGNALS}
+    previous_hook = sys.unraisablehook
 
     def stop(signum, frame) -> None:
         for sig in STOP_SIGNALS:
             signal.signal(sig, signal.SIG_IGN)
         raise Interrupted(signum)
 
+    def swallowed(unraisable) -> None:
+        if isinstance(unraisable.exc_value, Interrupted):
+            _raise_again(unraisable.exc_value.signum, stop)
+        else:
+            previous_hook(unraisable)
+
     for sig in STOP_SIGNALS:
         signal.signal(sig, stop)
+    sys.unraisablehook = swallowed
     try:
         yield
     except KeyboardInterrupt:
@@ -124,5 +139,28 @@ def interrupts() -> Iterator[None]:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         raise
+    finally:
+        sys.unraisablehook = previous_hook
     for sig, handler in previous.items():
         signal.signal(sig, handler)
+
+
+#: How long after a swallowed Interrupted its signal comes again [s] (:func:`_raise_again`).
+AGAIN_AFTER = 0.01
+
+
+def _raise_again(signum: int, stop) -> None:
+    """
+    Send signal ``signum`` to the main thread again in :data:`AGAIN_AFTER`, to handler ``stop``.
+
+    For an Interrupted that a finaliser swallowed (this runs in ``sys.unraisablehook``, in the
+    main thread, where signal handlers run). Not at once: the handler would run in the hook
+    itself, whose exceptions are swallowed too. A few milliseconds later the finaliser has
+    returned and the handler raises where the program is (or, landing in a finaliser again,
+    comes back here).
+    """
+    signal.signal(signum, stop)
+    again = threading.Timer(AGAIN_AFTER, signal.pthread_kill,
+                            (threading.main_thread().ident, signum))
+    again.daemon = True
+    again.start()
