@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import contextlib
 import re
+import subprocess
+import sys
 import types
 from typing import Any, Callable, Iterator
 
@@ -97,8 +99,19 @@ def _machine_code(function: Callable[..., Any], name: str) -> tuple[str, str]:
 
 
 @needs_numba
-def test_the_pinned_numba_gets_the_edit():
-    """The requirements' numba holds the lines edited: a numba that does not is noticed here."""
+def test_the_pinned_numba_gets_the_edit_when_it_first_inlines():
+    """
+    The requirements' numba holds the lines edited: a numba that does not is noticed here.
+
+    Not at import: a process that imports the package (a node, loading its loops from the
+    cache) does not import numba's inliner; it does once something compiles.
+    """
+    check = ('import sys, tumble_ros.core, tumble_ros.nodes.sim; '
+             'print("numba.core.inline_closurecall" in sys.modules)')
+    imported = subprocess.run([sys.executable, '-c', check], capture_output=True, text=True,
+                              check=True)
+    assert imported.stdout.strip() == 'False', imported
+    jit(lambda x: x + 1.0, cache=False)(1.0)     # compiles: the pipeline's inlining pass runs
     from numba.core.inline_closurecall import InlineWorker
     assert getattr(InlineWorker.inline_ir, 'copies_callee_once', False)
     assert one_copy_source(InlineWorker.inline_ir.numba_inline_ir) is not None

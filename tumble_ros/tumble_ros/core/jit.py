@@ -164,9 +164,9 @@ def _prefer_wide_vectors(codegen: Any, cgutils: Any, llvm: Any) -> None:
 if COMPILED:
     from numba.core import cgutils as _cgutils, codegen as _codegen
     _prefer_wide_vectors(_codegen, _cgutils, _codegen.ll)     # (ll: numba's llvmlite.binding)
-    from numba.core import inline_closurecall as _inline_closurecall
-    from tumble_ros.core.numba_inlining import copy_callee_once
-    copy_callee_once(_inline_closurecall.InlineWorker)
+    from numba.core import untyped_passes as _untyped_passes
+    from tumble_ros.core.numba_inlining import copy_callee_once_when_inlining
+    copy_callee_once_when_inlining(_untyped_passes)
     from numba.core import caching
     _caching: Any = caching
 
