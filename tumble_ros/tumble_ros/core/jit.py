@@ -33,8 +33,8 @@ for the call), so they are compiled without numba's runtime (:data:`JIT_OPTIONS`
 Inlining in less CPU
 --------------------
 numba copies an inlined function's IR once a block, each copy with the whole scope:
-:mod:`tumble_ros.core.numba_inlining` makes it one copy (the same machine code, a third less
-CPU to compile the loops).
+:mod:`tumble_ros.core.numba_inlining` makes it one copy (the same machine code; the warm-up
+from an empty cache in a fifth less CPU).
 
 512-bit vectors for the loops over a block of bodies
 ----------------------------------------------------

@@ -6,8 +6,8 @@ The kernels inline their per-step functions at numba's IR level (``jit.jit_inlin
 (``numba.core.inline_closurecall.InlineWorker.inline_ir``, its nested ``copy_ir``) one block at
 a time, each block with a memo of its own. Every variable refers to the function's scope, which
 holds every variable, so each block's copy copies the whole scope again: the copy costs the
-blocks times the variables. A fresh clone's warm-up spent a quarter of its time there
-(py-spy, 2026-12-06: 25 % of the 34 s that compiling the ``splitting`` loops took).
+blocks times the variables. Compiling the ``splitting`` loops spent a quarter of its time
+there (py-spy, 2026-12-06: 25 % of 34 s).
 
 :func:`copy_callee_once` makes that copy one ``copy.deepcopy`` of the blocks together (one memo:
 the scope and each variable copied once, as the blocks share them in the callee). numba has no
@@ -16,7 +16,8 @@ option for it: the method is numba's own source with that one edit, compiled in 
 Nothing else changes: the inlined IR is the same, and the machine code the same byte for byte
 (tests/test_core_numba_inlining.py). The ``splitting`` loops without extra torques compiled in
 30.0 s of CPU before, 21.6 s after; the ``dop853`` loops in 15.9 s, then 13.2 s
-(docs/performance.md, "The inliner's copies").
+(docs/performance.md, "The inliner's copies"); the whole warm-up 140 s of CPU before, 109-116
+s after.
 
 Where numba's source is not the one this edits (another numba version), nothing is changed and
 numba compiles as it always did, only slower; the test says so.
@@ -77,7 +78,7 @@ def copy_callee_once(worker: Any) -> bool:
     first_line = inspect.getsourcelines(plain)[1]
     namespace: dict[str, Any] = {}
     code = compile('\n' * (first_line - 1) + source, inspect.getfile(plain), 'exec')
-    exec(code, vars(module), namespace)  # noqa: S102  (numba's own source, one edit)
+    exec(code, vars(module), namespace)          # (numba's own source, one edit)
     edited: Any = functools.wraps(plain)(namespace[plain.__name__])
     edited.copies_callee_once = True
     edited.numba_inline_ir = plain
