@@ -14,10 +14,10 @@ the scope and each variable copied once, as the blocks share them in the callee)
 option for it: the method is numba's own source with that one edit, compiled in numba's module
 (the edit is the one numba-cuda's pull request 689 proposes, numba issue 8989 the discussion).
 Nothing else changes: the inlined IR is the same, and the machine code the same byte for byte
-(tests/test_core_numba_inlining.py). The ``splitting`` loops without extra torques compiled in
-30.0 s of CPU before, 21.6 s after; the ``dop853`` loops in 15.9 s, then 13.2 s
-(docs/performance.md, "The inliner's copies"); the whole warm-up 140 s of CPU before, 109-116
-s after.
+(tests/test_core_numba_inlining.py). Alternated, the ``splitting`` loops without extra
+torques compiled in 34.6-35.6 s of CPU before, 25.8-27.8 s after; the ``dop853`` loops in
+20.1-20.6 s, then 15.9-18.2 s; the whole warm-up in 140-143 s, then 109-116 s
+(docs/performance.md, "The inliner's copies").
 
 Where numba's source is not the one this edits (another numba version), nothing is changed and
 numba compiles as it always did, only slower; the test says so.
