@@ -36,6 +36,12 @@ numba copies an inlined function's IR once a block, each copy with the whole sco
 :mod:`tumble_ros.core.numba_inlining` makes it one copy (the same machine code; the warm-up
 from an empty cache in a fifth less CPU).
 
+No scipy.linalg at the first load
+---------------------------------
+numba's first compilation or cache load imports ``scipy.linalg`` to check that ``np.dot`` has
+a BLAS, which no kernel calls: :mod:`tumble_ros.core.numba_blas_check` asks only whether it is
+installed (a process's first loop loaded in ~0.17 s less CPU).
+
 512-bit vectors for the loops over a block of bodies
 ----------------------------------------------------
 On a CPU with AVX-512, LLVM still vectorises with 256-bit registers (its tuning for those
@@ -167,6 +173,9 @@ if COMPILED:
     from numba.core import untyped_passes as _untyped_passes
     from tumble_ros.core.numba_inlining import copy_callee_once_when_inlining
     copy_callee_once_when_inlining(_untyped_passes)
+    from numba.core import cpu as _cpu
+    from tumble_ros.core.numba_blas_check import check_blas_without_importing_it
+    check_blas_without_importing_it(_cpu)
     from numba.core import caching
     _caching: Any = caching
 
