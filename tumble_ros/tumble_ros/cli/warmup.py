@@ -5,7 +5,8 @@ numba compiles the single-body and the ensemble loops (per body, and in lockstep
 the methods that have one) of each compiled method
 (``core.kernels.KERNELS``) on their first use (then cached beside the sources): a run compiles
 only the loops it uses (``core.jit.first_use`` says so on stderr). This optional step
-(``make warmup``; ``make test`` runs it first) compiles them all ahead. It also compiles the
+(``make warmup``; ``make test`` runs it first) compiles them all ahead (into the user's cache,
+shared by the clones of the same sources: ``core.jit.shared_cache_folder``). It also compiles the
 loops' variant for extra torques (``core.torques.TorqueComponent``: every scenario with 1 to
 8 of them shares it, whatever their functions; ``core.torques.component.EXTRA_SLOTS``) and
 the reference path's calls. The loops compile in parallel, on up to as many processes as there
@@ -31,7 +32,7 @@ import sys
 import time
 from typing import Any
 
-from tumble_ros.core import (Impact, IntegratorSettings, kernels, load_scenario, Scenario,
+from tumble_ros.core import (Impact, IntegratorSettings, jit, kernels, load_scenario, Scenario,
                              simulate, simulate_ensemble, torque_function, TorqueComponent)
 from tumble_ros.core.integrators import INTEGRATORS
 
@@ -128,6 +129,7 @@ def warm_up(report: bool = False) -> float:
                       f'({took[label]:.1f} s)', flush=True)
     for function, args, _ in tasks:  # loaded here from the cache the workers wrote (ms)
         function(*args)
+    jit.prune_shared_cache()         # this version's folder marked used, old ones deleted
     return time.perf_counter() - started
 
 
@@ -150,6 +152,7 @@ def warm_up_scenario(name: str) -> float:
         path = CONFIG_DIR / f'{path.stem}.yaml'
     scenario = load_scenario(path)
     simulate(scenario.replace(duration=scenario.output_interval))
+    jit.prune_shared_cache()         # this version's folder marked used, old ones deleted
     return time.perf_counter() - started
 
 

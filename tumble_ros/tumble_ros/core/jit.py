@@ -2,7 +2,8 @@
 The numba switch: compile the kernels and torque functions, or run them as plain Python.
 
 With numba installed the decorated functions are compiled once (``cache=True``: the machine
-code is kept in ``__pycache__`` and reused by later processes); without numba, or with
+code is kept in the user's cache, :func:`shared_cache_folder`, and reused by later processes
+and by every clone of the same sources); without numba, or with
 ``TUMBLE_ROS_NO_JIT=1`` / ``NUMBA_DISABLE_JIT=1``, :data:`COMPILED` is False and the
 decorators return the functions unchanged, so the same source runs as plain Python (the
 reference path; tests/test_core_fast.py checks both give the same trajectory).
@@ -17,6 +18,15 @@ stepping.py's cache. :class:`_CompiledSourcesLocator` gives every function of th
 recompiles them all. It plugs into numba's documented locator list
 (``numba.core.caching.CacheImpl._locator_classes``, a private attribute: checked by
 tests/test_core_fast.py::test_an_edit_to_any_kernel_file_invalidates_the_cache).
+
+One cache for every clone
+-------------------------
+The locator keeps the machine code in the user's cache (``~/.cache/tumble_ros/numba``), in a
+folder named by that hash, not beside the sources: a second clone or worktree of the same
+sources, or a fresh clone for CI, loads the loops another compiled instead of spending ~110 s
+of CPU compiling them again (tests/test_core_shared_cache.py). Where that folder cannot be
+written, numba's ``__pycache__`` as before; ``NUMBA_CACHE_DIR`` is honoured. The warm-up
+deletes the folders of other versions but the last :data:`SHARED_CACHE_KEEP` used.
 
 No reference counting in the kernels
 ------------------------------------
@@ -63,10 +73,13 @@ import time
 import types
 from typing import Any, Callable, cast, Iterator, TextIO, TypeVar
 
+from tumble_ros.core.user_cache import user_cache_dir
+
 __all__ = ['COMPILED', 'NUMBA_VERSION', 'JIT_OPTIONS', 'jit', 'jit_inline', 'called',
            'python_source', 'specialise', 'COMPILED_SOURCES', 'compiled_sources_hash',
            'first_use', 'COMPILE_NOTICE_SECONDS', 'COMPILE_NOTICE_VARIABLE', 'compile_notices',
-           'load_for', 'WIDE_VECTOR_LOOPS', 'PREFER_512_BIT', 'jit_wide']
+           'load_for', 'WIDE_VECTOR_LOOPS', 'PREFER_512_BIT', 'jit_wide', 'shared_cache_root',
+           'shared_cache_folder', 'prune_shared_cache', 'SHARED_CACHE_KEEP']
 
 #: A function (the decorators return a compiled function typed as the one they are given).
 F = TypeVar('F', bound=Callable[..., Any])
@@ -107,6 +120,80 @@ def compiled_sources_hash() -> bytes:
     """Return the SHA-256 of every file in :data:`COMPILED_SOURCES` (re-read when one changes)."""
     stamps = tuple((os.stat(p).st_mtime_ns, os.stat(p).st_size) for p in COMPILED_SOURCES)
     return _hash(stamps)
+
+
+#: Folders of other versions of the compiled sources that :func:`prune_shared_cache` keeps (the
+#: last used; ~19 MB each when every loop is compiled).
+SHARED_CACHE_KEEP = 8
+
+
+def shared_cache_root() -> Path:
+    """Return the folder of numba's caches of :data:`COMPILED_SOURCES`, one folder a version."""
+    return user_cache_dir() / 'numba'
+
+
+def shared_cache_folder(py_file: str | Path) -> Path:
+    """
+    Return the folder where numba keeps the compiled functions of ``py_file`` (of this clone).
+
+    ``<shared_cache_root>/<first 16 hex digits of compiled_sources_hash>/<py_file's folder
+    relative to core>``: every clone, worktree or install whose compiled sources are the same,
+    byte for byte, loads what another compiled (numba's index also keys each entry by the
+    function's bytecode, its argument types, numba's version and the CPU). An edit to any of
+    them is another folder: everything compiles again, as in-tree.
+    """
+    return _version_folder() / _compiled_folder(str(py_file))
+
+
+@functools.lru_cache(maxsize=None)
+def _compiled_folder(py_file: str) -> Path:
+    """Return the folder of ``py_file``, one of :data:`COMPILED_SOURCES`, relative to core."""
+    return Path(py_file).resolve().parent.relative_to(_CORE)
+
+
+@functools.lru_cache(maxsize=1)
+def _version_folder() -> Path:
+    """
+    Return this process's folder of :func:`shared_cache_root` (the hash at its first call).
+
+    Once a process: a source edited while it runs only changes the stamp numba checks
+    (:func:`compiled_sources_hash`), and what it compiles then is kept in this folder.
+    """
+    return shared_cache_root() / compiled_sources_hash().hex()[:16]
+
+
+@functools.lru_cache(maxsize=None)
+def _is_compiled_source(py_file: str) -> bool:
+    """Whether ``py_file`` is one of :data:`COMPILED_SOURCES`."""
+    try:
+        return Path(py_file).resolve() in COMPILED_SOURCES
+    except OSError:
+        return False
+
+
+def prune_shared_cache(keep: int = SHARED_CACHE_KEEP) -> list[Path]:
+    """
+    Mark this version's folder used now; delete the other versions' but the ``keep`` last used.
+
+    The versions' folders are those of :func:`shared_cache_root` named by a hash; a folder is
+    marked used by the warm-ups (``cli.warmup``), else dated by its making. Returns the
+    folders deleted.
+    """
+    import shutil
+
+    root = shared_cache_root()
+    current = root / compiled_sources_hash().hex()[:16]
+    if current.is_dir():
+        os.utime(current)
+    try:
+        versions = [p for p in root.iterdir()
+                    if p != current and p.is_dir() and re.fullmatch('[0-9a-f]{16}', p.name)]
+    except OSError:
+        return []
+    versions.sort(key=lambda p: p.stat().st_mtime, reverse=True)
+    for folder in versions[keep:]:
+        shutil.rmtree(folder, ignore_errors=True)
+    return versions[keep:]
 
 
 #: The compiled functions (numba's library names: qualified names, a copy's with its suffix)
@@ -180,13 +267,19 @@ if COMPILED:
     _caching: Any = caching
 
     class _CompiledSourcesLocator(_caching.InTreeCacheLocator):  # type: ignore[misc]  # (numba)
-        """numba's in-tree cache, stamped with the hash of all :data:`COMPILED_SOURCES`."""
+        """
+        numba's cache of :data:`COMPILED_SOURCES`, stamped with the hash of them all.
 
-        def __init__(self, py_func: Callable[..., Any], py_file: str) -> None:
+        Kept in :func:`shared_cache_folder` (every clone of the same sources shares it), else,
+        where that cannot be written, in-tree (numba's ``__pycache__``); in
+        ``NUMBA_CACHE_DIR`` where that is set, as numba does.
+        """
+
+        def __init__(self, py_func: Callable[..., Any], py_file: str,
+                     folder: str | None = None) -> None:
             super().__init__(py_func, py_file)
-            if _numba.config.CACHE_DIR:  # NUMBA_CACHE_DIR is honoured, as numba does
-                self._cache_path = os.path.join(_numba.config.CACHE_DIR,
-                                                self.get_suitable_cache_subpath(py_file))
+            if folder is not None:
+                self._cache_path = folder
 
         def get_source_stamp(self) -> bytes:
             return compiled_sources_hash()
@@ -194,13 +287,21 @@ if COMPILED:
         @classmethod
         def from_function(cls, py_func: Callable[..., Any],
                           py_file: str) -> _CompiledSourcesLocator | None:
-            try:
-                if Path(py_file).resolve() not in COMPILED_SOURCES:
-                    return None
-            except OSError:
+            if not _is_compiled_source(py_file):
                 return None
-            located: _CompiledSourcesLocator | None = super().from_function(py_func, py_file)
-            return located
+            if _numba.config.CACHE_DIR:  # NUMBA_CACHE_DIR is honoured, as numba does
+                folders = [os.path.join(_numba.config.CACHE_DIR,
+                                        cls.get_suitable_cache_subpath(py_file))]
+            else:
+                folders = [str(shared_cache_folder(py_file))]
+            for folder in [*folders, None]:        # None: in-tree
+                located = cls(py_func, py_file, folder)
+                try:
+                    located.ensure_cache_path()
+                except OSError:
+                    continue
+                return located
+            return None
 
     _IMPL = getattr(_caching, 'CacheImpl', None) or getattr(_caching, '_CacheImpl')
     _LOCATORS = _IMPL._locator_classes

@@ -39,6 +39,7 @@ import uuid
 import numpy as np
 
 from tumble_ros.core import ScenarioError
+from tumble_ros.core.user_cache import user_cache_dir
 from tumble_ros.errors import CoreError
 
 __all__ = ['EnsembleRunError', 'dask_client', 'map_as_completed', 'LOOPBACK']
@@ -200,7 +201,7 @@ def _sigint_ignoring_python() -> Path:
 
     text = f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(sys.executable)} \"$@\"\n"
     name = 'python-sigint-ignored-' + hashlib.sha256(sys.executable.encode()).hexdigest()[:16]
-    cache = Path(os.environ.get('XDG_CACHE_HOME') or Path.home() / '.cache') / 'tumble_ros'
+    cache = user_cache_dir()
     try:
         cache.mkdir(mode=0o700, parents=True, exist_ok=True)
         folder = cache
