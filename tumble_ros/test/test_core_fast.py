@@ -203,7 +203,7 @@ def test_a_first_use_that_compiles_says_so_and_a_compiled_loop_says_nothing():
         assert compiled(2.0) == 13.0
     lines = out.getvalue().splitlines()
     assert lines[0] == 'compiling the test loop (first use, cached afterwards)...'
-    assert lines[1].startswith('... the test loop is compiled (') and len(lines) == 2
+    assert lines[1].startswith('... the test loop compiled in ') and len(lines) == 2
     # compiled now: nothing to say, whatever the wait
     quiet = io.StringIO()
     with first_use(compiled, 'test loop', after=0.0, out=quiet):

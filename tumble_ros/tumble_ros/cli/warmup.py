@@ -3,7 +3,7 @@ Compile the integration loops ahead (build tooling): ``python -m tumble_ros.cli.
 
 numba compiles the single-body and the ensemble loops (per body, and in lockstep or as lanes for
 the methods that have one) of each compiled method
-(``core.kernels.KERNELS``) on their first use (then cached beside the sources): a run compiles
+(``core.kernels.KERNELS``) on their first use (then cached in the user's cache): a run compiles
 only the loops it uses (``core.jit.first_use`` says so on stderr). This optional step
 (``make warmup``; ``make test`` runs it first) compiles them all ahead (into the user's cache,
 shared by the clones of the same sources: ``core.jit.shared_cache_folder``). It also compiles the

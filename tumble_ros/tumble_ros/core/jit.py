@@ -446,13 +446,13 @@ def first_use(function: Callable[..., Any], label: str,
     """
     Around a call of compiled ``function``: say so when its first call in this process compiles.
 
-    numba compiles a loop on its first call for its argument types (then keeps it in its cache
-    beside the sources), so a run waits only for the loops it uses. When ``function`` has no
-    compiled signature yet in this process and still none after ``after`` seconds (numba is
-    still compiling or loading it), a line ``compiling the <label> (first use, cached
-    afterwards)...`` goes to
-    ``out`` (stderr: a node's log), and one more when it is ready. Nothing otherwise (a
-    loaded cache, a plain Python function, the environment variable
+    numba compiles a loop on its first call for its argument types (then keeps it in its
+    cache, :func:`shared_cache_folder`), so a run waits only for the loops it uses. When
+    ``function`` has no compiled signature yet in this process and still none after ``after``
+    seconds (numba is still compiling or loading it), a line ``compiling the <label> (first
+    use, cached afterwards)...`` goes to ``out`` (stderr: a node's log), and ``... the <label>
+    compiled in <n> s`` when it is ready. Nothing otherwise (a loaded cache, a plain Python
+    function, the environment variable
     :data:`COMPILE_NOTICE_VARIABLE` set to ``0``).
     """
     if (not COMPILED or not _uncompiled(function)
@@ -480,5 +480,5 @@ def first_use(function: Callable[..., Any], label: str,
     finally:
         timer.cancel()
         if said.is_set():
-            print(f'... the {label} is compiled ({time.monotonic() - started:.0f} s)',
+            print(f'... the {label} compiled in {time.monotonic() - started:.0f} s',
                   file=stream, flush=True)
