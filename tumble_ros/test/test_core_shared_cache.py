@@ -107,3 +107,19 @@ def test_old_versions_are_deleted_but_the_last_used_and_the_current(tmp_path, mo
     assert {p.name for p in root.iterdir()} == {current.name, 'not-a-version'} | kept
     assert {p.name for p in deleted} == set(ages) - kept
     assert current.stat().st_mtime > now - 60                # marked used
+
+
+@pytest.mark.parametrize('xdg, home, expected', [
+    ('/x/cache', '/h', '/x/cache/tumble_ros'),
+    ('', '/h', '/h/.cache/tumble_ros'),
+    ('relative/cache', '/h', '/h/.cache/tumble_ros'),     # ignored, as the XDG spec says
+    ('', '~', None),                                      # no home known: the temporary folder
+])
+def test_the_users_cache_folder_is_absolute(monkeypatch, xdg, home, expected):
+    import tempfile
+
+    monkeypatch.setenv('XDG_CACHE_HOME', xdg)
+    monkeypatch.setattr(os.path, 'expanduser', lambda path: path.replace('~', home, 1))
+    if expected is None:
+        expected = f'{tempfile.gettempdir()}/tumble_ros-cache-{os.getuid()}'
+    assert user_cache_dir() == Path(expected)
