@@ -127,7 +127,7 @@ def warm_up(report: bool = False) -> float:
             if report and not left[label]:
                 print(f'   {label} {"calls" if label == REFERENCE else "loops"} ready '
                       f'({took[label]:.1f} s)', flush=True)
-    for function, args, _ in tasks:  # loaded here from the cache the workers wrote (ms)
+    for function, args, _ in tasks:  # loaded here from the cache the workers wrote (~3 s)
         function(*args)
     jit.prune_shared_cache()         # this version's folder marked used, old ones deleted
     return time.perf_counter() - started

@@ -159,7 +159,12 @@ def _version_folder() -> Path:
     Once a process: a source edited while it runs only changes the stamp numba checks
     (:func:`compiled_sources_hash`), and what it compiles then is kept in this folder.
     """
-    return shared_cache_root() / compiled_sources_hash().hex()[:16]
+    return _version_of(shared_cache_root())
+
+
+def _version_of(root: Path) -> Path:
+    """Return the folder in ``root`` of the compiled sources as they are now."""
+    return root / compiled_sources_hash().hex()[:16]
 
 
 @functools.lru_cache(maxsize=None)
@@ -182,7 +187,7 @@ def prune_shared_cache(keep: int = SHARED_CACHE_KEEP) -> list[Path]:
     import shutil
 
     root = shared_cache_root()
-    current = root / compiled_sources_hash().hex()[:16]
+    current = _version_of(root)
     if current.is_dir():
         os.utime(current)
     try:
@@ -290,11 +295,11 @@ if COMPILED:
             if not _is_compiled_source(py_file):
                 return None
             if _numba.config.CACHE_DIR:  # NUMBA_CACHE_DIR is honoured, as numba does
-                folders = [os.path.join(_numba.config.CACHE_DIR,
-                                        cls.get_suitable_cache_subpath(py_file))]
+                chosen = os.path.join(_numba.config.CACHE_DIR,
+                                      cls.get_suitable_cache_subpath(py_file))
             else:
-                folders = [str(shared_cache_folder(py_file))]
-            for folder in [*folders, None]:        # None: in-tree
+                chosen = str(shared_cache_folder(py_file))
+            for folder in (chosen, None):          # None: in-tree
                 located = cls(py_func, py_file, folder)
                 try:
                     located.ensure_cache_path()
