@@ -74,8 +74,14 @@ def test_the_loops_are_cached_in_the_folder_of_their_sources_hash(monkeypatch):
     advance = kernels.loops('rk4').advance
     locator = advance._cache._impl._locator        # numba's cache internals (checked here)
     folder = Path(locator.get_cache_path())
-    if not folder.is_relative_to(user_cache_dir()):   # (the user's cache cannot be written)
-        pytest.skip(f'numba caches in-tree here: {folder}')
+    try:                                  # where the user's cache cannot be written: in-tree
+        jit.shared_cache_root().mkdir(parents=True, exist_ok=True)
+        writable = os.access(jit.shared_cache_root(), os.W_OK)
+    except OSError:
+        writable = False
+    if not writable:
+        assert folder.name == '__pycache__', folder
+        return
     assert folder == jit.shared_cache_root() / jit.compiled_sources_hash().hex()[:16] / 'kernels'
     assert folder == jit.shared_cache_folder(advance.py_func.__code__.co_filename)
 

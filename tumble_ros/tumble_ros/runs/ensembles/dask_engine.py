@@ -189,7 +189,7 @@ def _sigint_ignoring_python() -> Path:
     the interpreter's exit, printed "/bin/sh: 0: cannot open .../python" (and the resource
     tracker it failed to start warned it died). Its text depends only on ``sys.executable``, so
     one file per interpreter serves every run: in the user's cache folder
-    (``$XDG_CACHE_HOME/tumble_ros``, else ``~/.cache/tumble_ros``, made private), written
+    (``core.user_cache.user_cache_dir``: ``~/.cache/tumble_ros``, made private), written
     whole then renamed into place (concurrent runs never see half a file); where that folder
     cannot be written, in a private temporary folder.
     """
