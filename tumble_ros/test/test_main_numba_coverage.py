@@ -4,7 +4,9 @@ numba imported without coverage by the main job when none is measured (numba_wit
 In a fresh process each: without ``coverage`` imported, numba's coverage support is imported
 with it hidden (numba then reports no coverage, and does not import it), and a later
 ``import coverage`` works; with ``coverage`` imported (a measured run), numba's support sees
-it as before. The main job calls it before its imports (tests/test_main_job.py runs the job).
+it as before. The main job calls it before its imports (tests/test_main_job.py runs the job),
+and so does every executable's start (``run_executable``) but the recorder's, which imports no
+numba.
 """
 import os
 from pathlib import Path
@@ -56,3 +58,17 @@ def test_the_main_job_imports_numba_without_coverage(tmp_path):
                                    'support.coverage_available)\n', env=_env())
     assert done.returncode == 0, done.stderr
     assert done.stdout.split()[-3:] == ['0', 'False', 'False']
+
+
+@pytest.mark.parametrize('name', ['sim', 'comparator', 'recorder'])
+def test_a_node_imports_numba_without_coverage_and_the_recorder_none(name):
+    """run_executable imports a node with numba but without coverage; the recorder, no numba."""
+    pytest.importorskip('coverage')
+    done = _python('import sys\n'
+                   'from tumble_ros.__main__ import _imported, EXECUTABLES, WITHOUT_NUMBA\n'
+                   f'_imported({name!r}, EXECUTABLES[{name!r}].split(":")[0])\n'
+                   f'print({name!r} in WITHOUT_NUMBA, "numba" in sys.modules, '
+                   '"coverage" in sys.modules)\n')
+    assert done.returncode == 0, done.stderr
+    without = name == 'recorder'
+    assert done.stdout.split() == [str(without), str(not without), 'False']
