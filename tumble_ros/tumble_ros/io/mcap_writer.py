@@ -331,7 +331,7 @@ class McapWriter:
         try:
             self._writer = Writer(self._stream, chunk_size=_NEVER,
                                   compression=COMPRESSIONS[compression])
-            self._bulk = bulk_supported(self._writer)   # write_rows' fast path (.mcap_bulk)
+            self._bulk = bulk_supported(self._writer)   # the fast paths (.mcap_bulk)
             self._finisher = (ChunkFinisher(self._writer)
                               if background and finisher_supported(self._writer) else None)
             self._writer.start(profile='ros2', library=_LIBRARY)
@@ -439,9 +439,18 @@ class McapWriter:
 
     def _append_locked(self, channel_id: int, data: bytes, log_time_ns: int,
                        publish_time_ns: int) -> None:
-        """Append one checked message through mcap's add_message; flush by the policy."""
-        self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, data=data,
-                                 publish_time=publish_time_ns)
+        """
+        Append one checked message; flush by the policy.
+
+        By :mod:`.mcap_bulk` where the Writer allows it (the same bytes as mcap's
+        ``add_message``, ~15 us less a message: a recorder node writes every message it
+        receives this way), else by ``add_message``.
+        """
+        if self._bulk:
+            append_messages(self._writer, ((channel_id, data, log_time_ns, publish_time_ns),))
+        else:
+            self._writer.add_message(channel_id=channel_id, log_time=log_time_ns, data=data,
+                                     publish_time=publish_time_ns)
         self._counts[self._topics[channel_id]] += 1
         self._kept_one(channel_id, data, log_time_ns, publish_time_ns)
         if self._pending_messages == 0:
