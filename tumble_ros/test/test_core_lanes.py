@@ -107,6 +107,32 @@ def test_rejected_attempts_keep_each_body_on_its_own_steps(monkeypatch):
                                             euler_angles=False))
 
 
+def test_steps_followed_in_pieces_and_in_one_keep_each_bodys_euler_angles(monkeypatch):
+    """
+    Steps followed in pieces and in one: each body's angles and counts are its own.
+
+    Loose tolerances give steps that turn phi or psi by more than the track's step (followed
+    in pieces, by dense outputs) beside steps followed in one. A lane loads only the step's
+    two ends for a step followed in one piece, all of its state for one in pieces
+    (``lanes.after_step``): steps in pieces must occur here (steps in one piece are most of
+    every run at the default tolerance, the tests above).
+    """
+    sc = fig9(duration=0.5, rtol=1e-6, atol=1e-6)
+    n = 12
+    omega0, euler0 = spread(sc, n, seed=7, size=5.0)
+    t_eval = np.linspace(0.0, sc.duration, 8)
+    ens = simulate_ensemble(sc, t_eval, omega0=omega0, euler0=euler0)
+    bare = simulate_ensemble(sc, t_eval, omega0=omega0, euler0=euler0, euler_angles=False)
+    pieces = ens.nfev - bare.nfev     # the track's dense outputs (its extra stages, evaluations)
+    assert pieces.max() > 0, pieces
+    assert np.array_equal(ens.n_steps, bare.n_steps)
+    for b, body in enumerate(ensemble_scenarios(sc, omega0=omega0, euler0=euler0)):
+        one = simulate(body, t_eval)
+        assert np.array_equal(ens.euler[b], one.euler) and ens.nfev[b] == one.nfev, b
+    per_body(monkeypatch)
+    assert_identical(ens, simulate_ensemble(sc, t_eval, omega0=omega0, euler0=euler0))
+
+
 def test_results_do_not_depend_on_blocks_threads_or_checkpoints():
     sc = fig9()
     n = 23

@@ -35,7 +35,8 @@ from tumble_ros.core.kernels.layout import (Array, CF, Extra, FAIL, LANE_STAGES,
 from tumble_ros.core.kernels.lockstep import BIGGEST, emit, seg_init, track_update
 from tumble_ros.core.kernels.physics import derivatives, plain_torque_given_sun, torque_given_sun
 from tumble_ros.core.kernels.stepping import step_taken
-from tumble_ros.core.kernels.tracking import refresh_track, track_rate, UNWRAP_STEP
+from tumble_ros.core.kernels.tracking import (refresh_track, track_pieces, track_rate,
+                                              UNWRAP_STEP)
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane_rows
 
 __all__ = ['lanes_rhs', 'lane_load', 'lanes_advance', 'LOOP_FUNCTIONS']
@@ -125,6 +126,19 @@ def lane_load(st: Array, ln: Array, i: int) -> None:
         st[ST.K + r] = ln[LN.K + r, i]
 
 
+@jit_inline
+def lane_load_ends(st: Array, ln: Array, i: int) -> None:
+    """
+    Copy lane i's y and y at the step's start into its state st: what a track update reads.
+
+    ``stepping.track_update`` of a step followed in one piece reads no dense output (no f, no
+    stages); :func:`lane_load` copies the rest before anything that does (an output sample).
+    """
+    for c in range(N):
+        st[ST.Y + c] = ln[LN.Y + c, i]
+        st[ST.Y_OLD + c] = ln[LN.Y_OLD + c, i]
+
+
 @jit
 def lane_fail(st: Array, code: float) -> None:
     """Record a failed step of a lane: as ``stepping.step``, its state the last good step's."""
@@ -193,8 +207,11 @@ def after_step(p: Array, extra: Extra, cfg: Array, st: Array, ln: Array, track: 
         if st[ST.BUDGET] + increment < UNWRAP_STEP:
             st[ST.BUDGET] += increment
         else:
-            lane_load(st, ln, i)
-            loaded = True
+            if track_pieces(increment) > 1:     # dense outputs inside the step: all of it
+                lane_load(st, ln, i)
+                loaded = True
+            else:                               # the step's two ends only
+                lane_load_ends(st, ln, i)
             track_update(p, extra, cfg, st, track, increment)
     k = k_out[b]
     if k < t_out.shape[0] and t_out[k] <= st[ST.T]:
