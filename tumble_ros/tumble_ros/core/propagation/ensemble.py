@@ -750,11 +750,6 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
     y0, tracks0 = _initial_states(scenario, n, omega0, euler0)
     n_blocks = -(-n // size)
     padded = n_blocks * size
-    soa = np.zeros((n_blocks, 2, K.BK.SIZE, size))
-    cols = np.zeros((padded, K.N))
-    cols[:n] = y0
-    cols[n:] = y0[0]      # padding columns: copies of body 0, never written out
-    soa[:, 0, K.BK.Y:K.BK.Y + K.N, :] = cols.reshape(n_blocks, size, K.N).transpose(0, 2, 1)
     flat_tracks = np.zeros((padded, 3))
     flat_tracks[:n] = tracks0
     tracks = flat_tracks.reshape(n_blocks, size, 3)
@@ -770,28 +765,37 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
     block_init, block_advance = lp.block_init, lp.block_advance
     assert block_init is not None and block_advance is not None
 
-    def init(i: int) -> None:
-        block_init(extra, cfg, probs, seg_t, soa[i], bodies[i], counters[i], bst[i], counts[i])
+    def started(i: int) -> FloatArray:
+        """Return block i's two state buffers (2, BK.SIZE, size), its first segment started."""
+        soa = _block_buffers(y0, i * size, counts[i], size)
+        block_init(extra, cfg, probs, seg_t, soa, bodies[i], counters[i], bst[i], counts[i])
+        return soa
 
-    def advance(i: int, t_stop: float) -> None:
+    def advance(soa: FloatArray, i: int, t_stop: float) -> None:
         tmp = np.empty((K.BT.SIZE, size))   # scratch of a step: a call's own, not a block's
-        block_advance(extra, cfg, probs, seg_t, soa[i], tmp, bodies[i], counters[i], bst[i],
+        block_advance(extra, cfg, probs, seg_t, soa, tmp, bodies[i], counters[i], bst[i],
                       tracks[i], t_stop, times, y_out, e_out, i * size, counts[i])
 
     t_end = float(times[-1])
     with first_use(block_advance, f'{kernel} lockstep loops'):      # outside the timing
-        load_for(block_init, extra, cfg, probs, seg_t, soa[0], bodies[0], counters[0], bst[0],
+        soa0 = _block_buffers(y0, 0, counts[0], size)
+        load_for(block_init, extra, cfg, probs, seg_t, soa0, bodies[0], counters[0], bst[0],
                  counts[0])
-        load_for(block_advance, extra, cfg, probs, seg_t, soa[0], np.empty((K.BT.SIZE, size)),
+        load_for(block_advance, extra, cfg, probs, seg_t, soa0, np.empty((K.BT.SIZE, size)),
                  bodies[0], counters[0], bst[0], tracks[0], t_end, times, y_out, e_out, 0,
                  counts[0])
     start = time.perf_counter()
     threads = min(threads, n_blocks)
     with ThreadPoolExecutor(threads) if threads > 1 else _NoPool() as pool:
-        list(pool.map(init, range(n_blocks)))
         stops = [t_end * (c + 1) / checkpoints for c in range(checkpoints - 1)] + [t_end]
+        # one stop: a block's buffers live in its one task (~80 KB); several: they hold its
+        # state between the stops, every block's kept (~320 bytes a body)
+        kept = None if len(stops) == 1 else list(pool.map(started, range(n_blocks)))
         for c, t_stop in enumerate(stops):
-            list(pool.map(lambda i: advance(i, t_stop), range(n_blocks)))
+            if kept is None:
+                list(pool.map(lambda i: advance(started(i), i, t_stop), range(n_blocks)))
+            else:
+                list(pool.map(lambda i: advance(kept[i], i, t_stop), range(n_blocks)))
             if progress is not None:
                 done = sum(_lockstep_steps(counters[i], bodies[i], counts[i]).sum()
                            for i in range(n_blocks))
@@ -813,6 +817,19 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
                      else '' for b in range(n)) if failed.any() else ('',) * n
     return _result(scenario, times, y_out, e_out, k_out, failed, messages, steps, nfev, wall,
                    threads)
+
+
+def _block_buffers(y0: FloatArray, body0: int, count: int, size: int) -> FloatArray:
+    """
+    Return a lockstep block's two state buffers (2, BK.SIZE, size), its bodies' y0 in the first.
+
+    Column i of buffer 0 holds body ``body0 + i``'s initial state (i < count); the padding
+    columns (i >= count) copies of the first body's, never written out; everything else 0.
+    """
+    soa = np.zeros((2, K.BK.SIZE, size))
+    soa[0, K.BK.Y:K.BK.Y + K.N, :count] = y0[body0:body0 + count].T
+    soa[0, K.BK.Y:K.BK.Y + K.N, count:] = y0[0][:, None]
+    return soa
 
 
 def _lockstep_steps(counters: npt.NDArray[np.int64], bodies: FloatArray,
