@@ -443,8 +443,8 @@ class McapWriter:
         Append one checked message; flush by the policy.
 
         By :mod:`.mcap_bulk` where the Writer allows it (the same bytes as mcap's
-        ``add_message``, ~15 us less a message: a recorder node writes every message it
-        receives this way), else by ``add_message``.
+        ``add_message``; a whole ``write`` 6.4-6.9 -> 5.8-6.2 us of CPU: a recorder node writes
+        every message it receives this way), else by ``add_message``.
         """
         if self._bulk:
             append_messages(self._writer, ((channel_id, data, log_time_ns, publish_time_ns),))
