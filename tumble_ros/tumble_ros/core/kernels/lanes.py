@@ -115,17 +115,6 @@ def lanes_rhs(p: Array, extra: Extra, ln: Array, yo: int, oo: int, m: int) -> No
         ln[oo + 6, i] = f6
 
 
-@jit
-def lane_load(st: Array, ln: Array, i: int) -> None:
-    """Copy lane i's vectors into its state st: y, y at the step's start, f, the stages."""
-    for c in range(N):
-        st[ST.Y + c] = ln[LN.Y + c, i]
-        st[ST.Y_OLD + c] = ln[LN.Y_OLD + c, i]
-        st[ST.F + c] = ln[LN.F + c, i]
-    for r in range(LANE_STAGES * N):
-        st[ST.K + r] = ln[LN.K + r, i]
-
-
 @jit_inline
 def lane_load_ends(st: Array, ln: Array, i: int) -> None:
     """
@@ -137,6 +126,16 @@ def lane_load_ends(st: Array, ln: Array, i: int) -> None:
     for c in range(N):
         st[ST.Y + c] = ln[LN.Y + c, i]
         st[ST.Y_OLD + c] = ln[LN.Y_OLD + c, i]
+
+
+@jit
+def lane_load(st: Array, ln: Array, i: int) -> None:
+    """Copy lane i's vectors into its state st: y, y at the step's start, f, the stages."""
+    lane_load_ends(st, ln, i)
+    for c in range(N):
+        st[ST.F + c] = ln[LN.F + c, i]
+    for r in range(LANE_STAGES * N):
+        st[ST.K + r] = ln[LN.K + r, i]
 
 
 @jit

@@ -790,12 +790,10 @@ def _ensemble_lockstep(scenario: Scenario, times: FloatArray, n: int,
         stops = [t_end * (c + 1) / checkpoints for c in range(checkpoints - 1)] + [t_end]
         # one stop: a block's buffers live in its one task (~80 KB); several: they hold its
         # state between the stops, every block's kept (~320 bytes a body)
-        kept = None if len(stops) == 1 else list(pool.map(started, range(n_blocks)))
+        buffers = (started if len(stops) == 1
+                   else list(pool.map(started, range(n_blocks))).__getitem__)
         for c, t_stop in enumerate(stops):
-            if kept is None:
-                list(pool.map(lambda i: advance(started(i), i, t_stop), range(n_blocks)))
-            else:
-                list(pool.map(lambda i: advance(kept[i], i, t_stop), range(n_blocks)))
+            list(pool.map(lambda i: advance(buffers(i), i, t_stop), range(n_blocks)))
             if progress is not None:
                 done = sum(_lockstep_steps(counters[i], bodies[i], counts[i]).sum()
                            for i in range(n_blocks))
