@@ -333,6 +333,35 @@ def test_an_edit_to_any_kernel_file_invalidates_the_cache(tmp_path, monkeypatch)
     assert jit.compiled_sources_hash() != before
 
 
+def test_every_core_module_a_compiled_source_imports_is_under_the_cache_stamp():
+    """
+    The core modules the kernels import: trig's sin/cos inlined, units' constants frozen.
+
+    A core module a compiled source imports, left out of COMPILED_SOURCES, would leave stale
+    machine code in use after an edit to it (trig.py was, until this test).
+    """
+    import ast
+
+    from tumble_ros.core import jit
+
+    core = Path(jit.__file__).resolve().parent
+    imported = set()
+    for path in jit.COMPILED_SOURCES:
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([node.module or ''] if isinstance(node, ast.ImportFrom)
+                     else [a.name for a in node.names] if isinstance(node, ast.Import) else [])
+            for name in names:
+                if name.startswith('tumble_ros.core.'):
+                    parts = name.split('.')[2:]
+                    module = core.joinpath(*parts).with_suffix('.py')
+                    imported.add(module if module.exists()
+                                 else core.joinpath(*parts, '__init__.py'))
+    assert {core / 'trig.py', core / 'model' / 'units.py'} <= imported   # (the check's reach)
+    missing = {p.relative_to(core) for p in imported if p.name != '__init__.py'} - {
+        p.relative_to(core) for p in jit.COMPILED_SOURCES}
+    assert not missing
+
+
 def _kernel_shaped_loop(options):
     """Compile a loop shaped like a kernel's: an inlined step hands a slice to a called check."""
     import numba

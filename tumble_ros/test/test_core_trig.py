@@ -69,10 +69,22 @@ def test_huge_and_non_finite_arguments_are_libms(path):
         assert all(math.isnan(r) for r in SIN_COS['compiled'](v))
 
 
+def block_arguments(rows):
+    """Return the block pass's angles: all kinds, all below trig.SMALL, or one above them."""
+    x = arguments(seed=2, n=1000)
+    small = x[np.abs(x) < trig.SMALL]
+    return {'all kinds': np.concatenate([x, [1e7, -1e12, math.inf, math.nan]]),
+            'all small': small,    # (the pass without reduction)
+            'one large': np.concatenate([small[:500], [-1.0], small[500:]]),   # (> pi/4)
+            'one nan': np.concatenate([small, [math.nan]])}[rows]
+
+
 @needs_numba
-def test_the_vectorised_block_pass_gives_the_scalar_bits():
+@pytest.mark.parametrize('rows', ['all kinds', 'all small', 'one large', 'one nan'])
+def test_the_vectorised_block_pass_gives_the_scalar_bits(rows):
     from tumble_ros.core.kernels.splitting import block_sincos
-    x = np.concatenate([arguments(seed=2, n=1000), [1e7, -1e12, math.inf, math.nan]])
+    x = block_arguments(rows)
+    assert x.size > 2000 and np.any(x < 0) and np.any(x == 0)
     tmp = np.zeros((BT.SIZE, x.size))
     tmp[BT.ANGLE] = x
     block_sincos(tmp, x.size)

@@ -101,10 +101,14 @@ COMPILED = bool(_numba is not None and not _numba.config.DISABLE_JIT
 JIT_OPTIONS: dict[str, Any] = {'cache': True, 'error_model': 'numpy', 'nogil': True, '_nrt': False}
 
 _CORE = Path(__file__).resolve().parent
-#: The files whose compiled functions inline each other: one cache stamp for all.
+#: The files whose compiled functions inline each other, and every core module they import
+#: (``trig``'s sin/cos and atan2 are inlined into the kernels, ``model.units``' constants frozen
+#: into them): one cache stamp for all (tests/test_core_fast.py checks the imports are here).
 COMPILED_SOURCES: tuple[Path, ...] = tuple(
     [Path(__file__).resolve()]
-    + sorted((_CORE / 'kernels').glob('*.py')) + sorted((_CORE / 'torques').glob('*.py')))
+    + sorted((_CORE / 'kernels').glob('*.py')) + sorted((_CORE / 'torques').glob('*.py'))
+    + [_CORE / name for name in ('model/units.py', 'numba_blas_check.py', 'numba_inlining.py',
+                                 'trig.py', 'user_cache.py')])
 
 
 @functools.lru_cache(maxsize=None)

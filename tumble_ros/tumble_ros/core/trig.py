@@ -51,8 +51,8 @@ import numpy.typing as npt
 
 from tumble_ros.core.jit import jit_inline
 
-__all__ = ['sin_cos', 'sin_cos_reduced', 'scaled_sin_cos_rows', 'REDUCED_LIMIT', 'SMALL',
-           'atan2']
+__all__ = ['sin_cos', 'sin_cos_reduced', 'scaled_sin_cos_rows', 'sin_cos_rows', 'REDUCED_LIMIT',
+           'SMALL', 'atan2']
 
 #: |x| [rad] below which :func:`sin_cos_reduced` is used (n pi/2 with |n| < 2^19 fits
 #: PIO2_1's 33 bits exactly); libm above it.
@@ -160,6 +160,30 @@ def scaled_sin_cos_rows(scale: float, x: npt.NDArray[np.float64],
         if not abs(angle) < REDUCED_LIMIT:
             sin_out[i] = math.sin(angle)
             cos_out[i] = math.cos(angle)
+
+
+@jit_inline
+def sin_cos_rows(x: npt.NDArray[np.float64], sin_out: npt.NDArray[np.float64],
+                 cos_out: npt.NDArray[np.float64], m: int) -> None:
+    """
+    Write sin, cos of x[i] [rad] to sin_out[i], cos_out[i], i < m: :func:`sin_cos`'s bits.
+
+    For rows of angles mostly below :data:`SMALL` (a step's rotation angles): when every
+    |x[i]| < SMALL, one vectorised pass of the polynomials without the reduction, whose result
+    there is y0 = x, y1 = 0 and quadrant 0 exactly (:func:`sin_cos`'s short path, the same
+    bits); otherwise :func:`scaled_sin_cos_rows`. The test is a count, which LLVM vectorises
+    (a float comparison's ``or`` or ``max`` across lanes it would not, without ``fastmath``).
+    """
+    large = 0
+    for i in range(m):
+        large += 0 if abs(x[i]) < SMALL else 1    # (NaN: large)
+    if large != 0:
+        scaled_sin_cos_rows(1.0, x, sin_out, cos_out, m)
+        return
+    for i in range(m):
+        s, c = _sin_cos_of_reduced(x[i], 0.0)
+        sin_out[i] = s
+        cos_out[i] = c
 
 
 _ATAN_HI0 = 4.63647609000806093515e-01   # atan(1/2), its first 53 bits

@@ -18,7 +18,7 @@ from tumble_ros.core.kernels.physics import (axis_turn, body_torque, flow_pieces
                                              torque_given_sun)
 from tumble_ros.core.kernels.rk4 import step_count
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane
-from tumble_ros.core.trig import scaled_sin_cos_rows
+from tumble_ros.core.trig import sin_cos_rows
 
 __all__ = ['flow', 'flow_called', 'pulse_step_count', 'start', 'step', 'dense',
            'MAX_PULSE_SUBSTEPS', 'block_start', 'block_step', 'block_dense', 'block_flow',
@@ -197,9 +197,9 @@ def block_sincos(tmp: Array, m: int) -> None:
     """
     tmp[BT.COS], tmp[BT.SIN] = cos, sin of tmp[BT.ANGLE]: :func:`~.trig.sin_cos`'s bits.
 
-    ``trig.scaled_sin_cos_rows`` on the rows (scale 1: the angles themselves, exactly).
+    ``trig.sin_cos_rows``: a step's angles are mostly below ``trig.SMALL``, without reduction.
     """
-    scaled_sin_cos_rows(1.0, tmp[BT.ANGLE], tmp[BT.SIN], tmp[BT.COS], m)
+    sin_cos_rows(tmp[BT.ANGLE], tmp[BT.SIN], tmp[BT.COS], m)
 
 
 @jit_wide
