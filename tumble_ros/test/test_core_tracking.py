@@ -314,3 +314,35 @@ def test_the_vectorised_euler_pass_gives_the_scalar_bits():
     assert out.tobytes() == tmp[BT.EULER:BT.EULER + 4].tobytes()
     asm = next(iter(many.inspect_asm().values()))
     assert re.search(r'vsqrtpd\s+%[xyz]mm', asm) and re.search(r'vdivpd\s+%[xyz]mm', asm)
+
+
+@pytest.mark.parametrize('budget', [0.0, 0.6])
+@pytest.mark.parametrize('increment', [0.0, 0.4, 1.0])
+def test_a_track_update_of_a_step_in_one_piece_converts_its_start_and_keeps_its_bound(
+        budget, increment):
+    """
+    ``stepping.track_update`` of a step of bound <= 1 rad: one conversion, the bound kept.
+
+    The track catches up to the step's start (unless it was left there: budget 0) and the
+    step's bound becomes the budget, so the track stays within 1 rad of bound of the state
+    (a budget of 0 here would let the next update come ~1 rad of bound later than that).
+    """
+    from tumble_ros.core.kernels import stepping
+
+    rng = np.random.default_rng(7)
+    start, end = rng.normal(size=4), rng.normal(size=4)
+    st = np.zeros(ST.SIZE)
+    st[ST.Y_OLD + 3:ST.Y_OLD + 7] = start
+    st[ST.Y + 3:ST.Y + 7] = end
+    st[ST.BUDGET] = budget
+    track = np.array([123.4, -56.7, 0.8])
+    want = track.copy()
+    if budget > 0.0:
+        converted = np.zeros(ST.SIZE)
+        converted[3:7] = start
+        tracking.set_track(converted, 0, want)
+        assert not np.array_equal(want, track)     # (the catch-up moves it)
+    work = python_source(stepping.track_update)(None, None, None, st, track, increment)
+    assert work == 0
+    assert track.tobytes() == want.tobytes()
+    assert st[ST.BUDGET] == increment

@@ -163,11 +163,8 @@ BT = layout('BlockScratch', [
                              'block_dense: samples inside a step)'),
     ('TRACK_I', 1, 'Euler tracking: the bodies whose update a step runs on the columns, '
                    'gathered (lockstep.block_track): their index in the block'),
-    ('TRACK_CATCH', 1, "1 if that update first catches up at the step's start"),
     ('TRACK_Q_OLD', 4, "their quaternion at the step's start"),
-    ('TRACK_Q', 4, "their quaternion at the step's end"),
     ('TRACK_OLD', 3, "tracking.track_angles of the step's start: phi, psi, verdict"),
-    ('TRACK_NEW', 3, "tracking.track_angles of the step's end"),
     ('EULER', 4, "a sample's tracking.euler_parts, every body of the block "
                  '(lockstep.block_euler): phi, psi, theta, 1.0 if they hold'),
 ])

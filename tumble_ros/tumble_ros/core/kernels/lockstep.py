@@ -327,10 +327,11 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
 
     Each body keeps its own schedule (its updates at the steps of its single run: updating a
     block's bodies together would move them, and below theta ~ 0.1 the bound does not bound
-    phi and psi, so the 2 pi multiples could differ). An update without dense output runs on
-    the columns (``tracking.follow``: phi and psi of the step's start, then of its end): the
-    bodies due are gathered (rows ``BT.TRACK_*``), their angles converted in one vectorised
-    pass (``tracking.track_angles``), then each track unwrapped in turn (``tracking.settle``).
+    phi and psi, so the 2 pi multiples could differ). An update of a step in one piece runs on
+    the columns (``stepping.track_update``: ``tracking.follow`` of the step's start, the
+    step's bound then the budget): the bodies due are gathered (rows ``BT.TRACK_*``), their
+    angles converted in one vectorised pass (``tracking.track_angles``), then each track
+    unwrapped in turn (``tracking.settle``).
     """
     if cfg[CF.EULER] == 0.0:
         return
@@ -353,34 +354,25 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
         inc = tmp[BT.INC, i]
         if inc < 0.0 or bodies[BB.FAILED, i] != 0.0:
             continue
-        if track_pieces(inc) == 1:   # track_update without dense output: gathered
-            tmp[BT.TRACK_I, n] = i
-            tmp[BT.TRACK_CATCH, n] = 1.0 if bodies[BB.BUDGET, i] > 0.0 else 0.0
-            bodies[BB.BUDGET, i] = 0.0
-            for c in range(4):
-                tmp[BT.TRACK_Q_OLD + c, n] = old[BK.Y + 3 + c, i]
-                tmp[BT.TRACK_Q + c, n] = cur[BK.Y + 3 + c, i]
-            n += 1
+        if track_pieces(inc) == 1:   # track_update's step in one piece: gathered
+            if bodies[BB.BUDGET, i] > 0.0:    # (the catch-up to the step's start)
+                tmp[BT.TRACK_I, n] = i
+                for c in range(4):
+                    tmp[BT.TRACK_Q_OLD + c, n] = old[BK.Y + 3 + c, i]
+                n += 1
+            bodies[BB.BUDGET, i] = inc
         else:
             nfev = load_body(bst, old, cur, bodies, i)
             track_update(p, extra, cfg, bst, tracks[i], inc)
             store_body(bst, cur, bodies, i, nfev)
-    for j in range(n):   # (vectorised: both ends of the step, catch-up or not)
+    for j in range(n):   # (vectorised)
         phi, psi, verdict = track_angles(tmp[BT.TRACK_Q_OLD, j], tmp[BT.TRACK_Q_OLD + 1, j],
                                          tmp[BT.TRACK_Q_OLD + 2, j], tmp[BT.TRACK_Q_OLD + 3, j])
         tmp[BT.TRACK_OLD, j] = phi
         tmp[BT.TRACK_OLD + 1, j] = psi
         tmp[BT.TRACK_OLD + 2, j] = verdict
-        phi, psi, verdict = track_angles(tmp[BT.TRACK_Q, j], tmp[BT.TRACK_Q + 1, j],
-                                         tmp[BT.TRACK_Q + 2, j], tmp[BT.TRACK_Q + 3, j])
-        tmp[BT.TRACK_NEW, j] = phi
-        tmp[BT.TRACK_NEW + 1, j] = psi
-        tmp[BT.TRACK_NEW + 2, j] = verdict
-    for j in range(n):   # tracking.follow's unwrapping, in order: start, then end
-        track = tracks[int(tmp[BT.TRACK_I, j])]
-        if tmp[BT.TRACK_CATCH, j] != 0.0:
-            _settle_gathered(tmp, BT.TRACK_OLD, BT.TRACK_Q_OLD, j, track)
-        _settle_gathered(tmp, BT.TRACK_NEW, BT.TRACK_Q, j, track)
+    for j in range(n):   # tracking.follow's unwrapping
+        _settle_gathered(tmp, BT.TRACK_OLD, BT.TRACK_Q_OLD, j, tracks[int(tmp[BT.TRACK_I, j])])
 
 
 @jit_wide

@@ -153,19 +153,25 @@ def dense(p: Array, extra: Extra, cfg: Array, st: Array, t: float) -> None:
 def track_update(p: Array, extra: Extra, cfg: Array, st: Array, track: Array,
                  increment: float) -> int:
     """
-    Update the track through the last step (the reference's subdivision).
+    Update the track for the last step, whose bound is ``increment`` [rad].
 
-    It first catches up from wherever it was left at the start of the step (see
-    :func:`track_euler`). Returns the number of dense-output evaluations it took (work, at
-    most MAX_TRACK_PIECES - 1).
+    It first catches up from wherever it was left to the start of the step (see
+    :func:`track_euler`). A step of bound at most UNWRAP_STEP (one piece) then becomes the
+    budget: the track is within it of the state, as the state is within 1 rad of bound of
+    a track set at the step's end, for one conversion instead of two. A longer step is
+    followed to its end in pieces (the reference's subdivision). Returns the number of
+    dense-output evaluations it took (work, at most MAX_TRACK_PIECES - 1).
     """
     if st[ST.BUDGET] > 0.0:
         set_track(st, ST.Y_OLD, track)
+    n = track_pieces(increment)
+    if n == 1:
+        st[ST.BUDGET] = increment
+        return 0
     st[ST.BUDGET] = 0.0
     t = st[ST.T]
     t_old = st[ST.T_OLD]
     h = t - t_old
-    n = track_pieces(increment)
     for j in range(1, n + 1):
         if j == n:
             o = ST.Y
@@ -183,8 +189,9 @@ def track_euler(p: Array, extra: Extra, cfg: Array, st: Array, track: Array) -> 
 
     The reference updates the track at the end of every step, subdividing steps over which
     phi or psi may turn by more than ~1 rad (bound: ``tracking.track_rate``). Here the bound
-    is accumulated over steps and the track is updated only when it would pass 1 rad (from
-    the start of the step, then through the step as the reference does), or by
+    is accumulated over steps and the track is updated only when it would pass 1 rad (to
+    the start of the step, the step's bound then the budget; a step of more than 1 rad
+    through the step as the reference does, :func:`track_update`), or by
     ``tracking.refresh_track``: the track is then never more than 1 rad of bound away from the
     state, so every unwrapped angle gets the same 2 pi multiple as on the reference path,
     while most steps skip the three atan2 of the conversion. Returns the dense-output
