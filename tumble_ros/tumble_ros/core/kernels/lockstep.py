@@ -329,9 +329,9 @@ def block_track(p: Array, extra: Extra, cfg: Array, bst: Array, soa: Array, tmp:
     block's bodies together would move them, and below theta ~ 0.1 the bound does not bound
     phi and psi, so the 2 pi multiples could differ). An update of a step in one piece runs on
     the columns (``stepping.track_update``: ``tracking.follow`` of the step's start, the
-    step's bound then the budget): the bodies due are gathered (rows ``BT.TRACK_*``), their
-    angles converted in one vectorised pass (``tracking.track_angles``), then each track
-    unwrapped in turn (``tracking.settle``).
+    step's bound then the budget): the bodies due whose track was left before the step are
+    gathered (rows ``BT.TRACK_*``), their angles converted in one vectorised pass
+    (``tracking.track_angles``), then each track unwrapped in turn (``tracking.settle``).
     """
     if cfg[CF.EULER] == 0.0:
         return
