@@ -113,7 +113,7 @@ def test_steps_followed_in_pieces_and_in_one_keep_each_bodys_euler_angles(monkey
 
     Loose tolerances give steps that turn phi or psi by more than the track's step (followed
     in pieces, by dense outputs) beside steps followed in one. A lane loads only the step's
-    two ends for a step followed in one piece, all of its state for one in pieces
+    start for a step followed in one piece, all of its state for one in pieces
     (``lanes.after_step``): steps in pieces must occur here (steps in one piece are most of
     every run at the default tolerance, the tests above).
     """

@@ -116,23 +116,24 @@ def lanes_rhs(p: Array, extra: Extra, ln: Array, yo: int, oo: int, m: int) -> No
 
 
 @jit_inline
-def lane_load_ends(st: Array, ln: Array, i: int) -> None:
+def lane_load_start(st: Array, ln: Array, i: int) -> None:
     """
-    Copy lane i's y and y at the step's start into its state st: what a track update reads.
+    Copy lane i's y at the step's start into its state st: what a track update reads.
 
-    ``stepping.track_update`` of a step followed in one piece reads no dense output (no f, no
-    stages); :func:`lane_load` copies the rest before anything that does (an output sample).
+    ``stepping.track_update`` of a step followed in one piece converts the step's start only
+    (no y, no dense output: no f, no stages); :func:`lane_load` copies the rest before
+    anything that reads it (an output sample, a step followed in pieces, the last refresh).
     """
     for c in range(N):
-        st[ST.Y + c] = ln[LN.Y + c, i]
         st[ST.Y_OLD + c] = ln[LN.Y_OLD + c, i]
 
 
 @jit
 def lane_load(st: Array, ln: Array, i: int) -> None:
     """Copy lane i's vectors into its state st: y, y at the step's start, f, the stages."""
-    lane_load_ends(st, ln, i)
+    lane_load_start(st, ln, i)
     for c in range(N):
+        st[ST.Y + c] = ln[LN.Y + c, i]
         st[ST.F + c] = ln[LN.F + c, i]
     for r in range(LANE_STAGES * N):
         st[ST.K + r] = ln[LN.K + r, i]
@@ -209,8 +210,8 @@ def after_step(p: Array, extra: Extra, cfg: Array, st: Array, ln: Array, track: 
             if track_pieces(increment) > 1:     # dense outputs inside the step: all of it
                 lane_load(st, ln, i)
                 loaded = True
-            else:                               # the step's two ends only
-                lane_load_ends(st, ln, i)
+            else:                               # the step's start only
+                lane_load_start(st, ln, i)
             track_update(p, extra, cfg, st, track, increment)
     k = k_out[b]
     if k < t_out.shape[0] and t_out[k] <= st[ST.T]:
