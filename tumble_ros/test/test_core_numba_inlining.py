@@ -87,16 +87,19 @@ def _machine_code(function: Callable[..., Any], name: str) -> tuple[str, str]:
     Return the LLVM IR and the assembly of compiled ``function``, its own names masked.
 
     In the IR also the numbers numba's counters give each compilation: the blocks' labels
-    (``B40``), the inlined variables' versions (``_branchy_v2_total``) and the sizes of the
-    string constants that hold a mangled name (``[125 x i8]``: its counters have more digits
-    when the process compiled more before; seen once in a full run, 126 against 125).
+    (``B40``) and the inlined variables' versions (``_branchy_v2_total``); in both, the sizes of
+    the string constants that hold a mangled name (``[125 x i8]``, ``.size ..., 125``: its
+    counters have more digits when the process compiled more before; seen in full runs, 126
+    against 125).
     """
     def mask(text: str) -> str:
-        return re.sub(rf'\w*{name}\w*', 'F', text)
+        text = re.sub(rf'\w*{name}\w*', 'F', text)
+        return re.sub(r'(?<=\[)\d+(?= x i8\])|(?<=\.size\t"\.const\.missing Environment: F", )\d+',
+                      'N', text)
 
     ir_text = next(iter(function.inspect_llvm().values()))
     asm = next(iter(function.inspect_asm().values()))
-    ir_text = re.sub(r'\bB\d+|_v\d+_|(?<=\[)\d+(?= x i8\])', 'N', mask(ir_text))
+    ir_text = re.sub(r'\bB\d+|_v\d+_', 'N', mask(ir_text))
     return re.sub(' +', ' ', ir_text), mask(asm)       # (the comments aligned to the labels)
 
 
