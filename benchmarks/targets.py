@@ -11,11 +11,14 @@ ensembles 1.15e7 body-steps/s. Issue 30's (2026-12-04, a quiet machine): ensembl
 body-steps/s (`splitting`, N = 10,000, the per-body loop; the lockstep section also runs that
 loop beside its own in the same run, and its ratio is the fair one); a node on the graph 3.3 s
 after its start; the Fig 9 main job 6.0 s; impacts quadratic (1,000 scheduled impacts more
-than 180 s, against ~2.5 s without).
+than 180 s, against ~2.5 s without); a fresh clone's first `make run` 95 s and its `make test`
+5.5 minutes (the README then); `rk4`, `splitting6` and `dop853` ensembles at 1x (the per-body
+loop, which each row measures beside its own in the same run).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 from typing import Callable
 
 from common import section
@@ -23,12 +26,14 @@ from common import section
 MAIN_JOB = "Main job end to end: Fig 9 (2000 yr), simulate + compare + record + analyse"
 READING = "Reading recordings (analyze): columnar vs generic decoding"
 STANDALONE = "Standalone nodes: sim, comparator, recorder as three processes"
+BRINGUP = "End-to-end ROS throughput (bringup: sim + comparator + recorder)"
 ENSEMBLE = "Ensemble throughput (body-steps per second)"
 LOCKSTEP = "Ensembles in lockstep, vectorised across bodies (issue 30)"
 STARTUP = "Node start-up: process start to the node on the ROS graph"
 IMPACTS = "Impacts: a 2000-yr offline recording with 0, 1,000 and 10,000 scheduled impacts"
 IMPACTS_LIVE = ("Impacts through the service: a live 2000-yr simulator with 0, 1,000 and 10,000 "
                 "requested impacts")
+FRESH_CLONE = "A fresh clone: its first make run and its make test (issue 30)"
 UNDER_LOAD = "events, 2 busy processes"     # ros_standalone.UNDER_LOAD
 
 
@@ -58,6 +63,15 @@ class Target:
 
 def _cpu_ratio(r: dict) -> float:
     return r[10_000]["cpu_s"] / r[0]["cpu_s"]
+
+
+def _lost_under_load(r: dict) -> float:
+    return float(sum(r[UNDER_LOAD]["lost"].values()))
+
+
+def _fresh_clone_wall(target: str) -> Callable[[dict], float]:
+    """Return the measure of a fresh clone's ``make <target>``: its wall time, inf if it failed."""
+    return lambda r: r[target]["wall_s"] if r[target]["ok"] else math.inf
 
 
 def _slowest_node(r: dict) -> float:
@@ -93,6 +107,10 @@ ISSUE_30 = [
            lambda r: r["splitting6 N=10000"]["ratio"], 1.0, 3.0, False, "x, same run"),
     Target("splitting6, N = 10,000: lockstep / per-body, the loops alone", LOCKSTEP,
            lambda r: r["splitting6 N=10000"]["loop_ratio"], 1.0, 3.0, False, "x, same run"),
+    Target("dop853, N = 10,000: lanes / per-body loop", LOCKSTEP,
+           lambda r: r["dop853 N=10000"]["ratio"], 1.0, 3.0, False, "x, same run"),
+    Target("dop853, N = 10,000: lanes / per-body, the loops alone", LOCKSTEP,
+           lambda r: r["dop853 N=10000"]["loop_ratio"], 1.0, 3.0, False, "x, same run"),
     Target("node on the ROS graph after its start (slowest)", STARTUP, _slowest_node, 3.3, 1.0,
            True, "s"),
     Target("Fig 9 main job, wall", MAIN_JOB, lambda r: min(r["wall_s"]), 6.0, 3.0, True, "s"),
@@ -102,9 +120,14 @@ ISSUE_30 = [
            lambda r: _cpu_ratio(r["ensemble"]), None, 2.0, True, "x", "not measured"),
     Target("10,000 impacts / none, live service, sim CPU", IMPACTS_LIVE, _cpu_ratio, None, 2.0,
            True, "x", "not measured"),
-    Target("standalone nodes beside 2 busy processes: lost", STANDALONE,
-           lambda r: float(sum(r[UNDER_LOAD]["lost"].values())), None, 0.0, True,
+    Target("standalone nodes beside 2 busy processes: lost", STANDALONE, _lost_under_load,
+           None, 0.0, True, "samples", "not measured"),
+    Target("bringup beside 2 busy processes: lost", BRINGUP, _lost_under_load, None, 0.0, True,
            "samples", "not measured"),
+    Target("a fresh clone's first make run, set-up included", FRESH_CLONE,
+           _fresh_clone_wall("run"), 95.0, 60.0, True, "s"),
+    Target("a fresh clone's make test, set-up included", FRESH_CLONE, _fresh_clone_wall("test"),
+           330.0, 240.0, True, "s"),
 ]
 
 #: (issue, its targets), in the order the tables are printed.

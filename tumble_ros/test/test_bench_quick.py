@@ -1,5 +1,6 @@
 """``make bench BENCH_ARGS=--quick`` judges nothing against the full run's targets."""
 import io
+import os
 from pathlib import Path
 import sys
 
@@ -14,7 +15,7 @@ def bench(monkeypatch):
     import common
     import targets
     yield common, targets
-    for name in ('common', 'targets'):
+    for name in ('common', 'targets', 'fresh_clone'):
         sys.modules.pop(name, None)
 
 
@@ -24,11 +25,15 @@ def _far_from_the_targets(summary) -> dict:
     return {summary.MAIN_JOB: {'wall_s': [40.0]}, summary.READING: {'columnar_per_s': 2e4},
             summary.STANDALONE: {'events': {'samples_per_s': 900.0, 'lost': {}},
                                  summary.UNDER_LOAD: {'lost': {'/attitude': 3}}},
+            summary.BRINGUP: {summary.UNDER_LOAD: {'lost': {'/clock': 1}}},
+            summary.FRESH_CLONE: {'run': {'wall_s': 300.0, 'ok': True},
+                                  'test': {'wall_s': 100.0, 'ok': False}},
             summary.ENSEMBLE: {'splitting N=10000': {'body_steps_per_s': 1e6}},
             summary.LOCKSTEP: {'splitting N=10000': {'end_to_end_per_s': 1e6, 'loop_per_s': 1e6},
                                'splitting N=1000000': {'end_to_end_per_s': 1e6},
                                'rk4 N=10000': {'ratio': 1.1, 'loop_ratio': 1.1},
-                               'splitting6 N=10000': {'ratio': 1.1, 'loop_ratio': 1.1}},
+                               'splitting6 N=10000': {'ratio': 1.1, 'loop_ratio': 1.1},
+                               'dop853 N=10000': {'ratio': 1.1, 'loop_ratio': 1.1}},
             summary.STARTUP: {'sim': node, 'comparator': node, 'recorder': node},
             summary.IMPACTS: {0: {'cpu_s': 1.0}, 10_000: {'cpu_s': 9.0},
                               'ensemble': {0: {'cpu_s': 1.0}, 10_000: {'cpu_s': 9.0}}},
@@ -61,4 +66,32 @@ def test_a_target_met_says_met_with_its_gain(bench):
     assert entry['met'] is True and abs(entry['gain'] - 6.0 / 2.5) < 1e-12
     assert results['issue 12: Fig 9 main job, wall']['met'] is True
     assert 'issue 30: node on the ROS graph after its start (slowest)' not in results
+    assert 'not measured' in out.getvalue()
+
+
+def test_a_fresh_clone_runs_in_a_new_shells_environment(bench, monkeypatch):
+    """The clone's make sees neither this checkout's venv and workspace nor make's variables."""
+    import fresh_clone
+    root = fresh_clone.ROOT
+    monkeypatch.setenv('PATH', os.pathsep.join([str(root / '.venv' / 'bin'), '/usr/bin']))
+    monkeypatch.setenv('LD_LIBRARY_PATH', f'{root}/install/tumble_ros_interfaces/lib:/opt/lib')
+    monkeypatch.setenv('PYTHONPATH', str(root / 'build' / 'tumble_ros'))
+    monkeypatch.setenv('MAKEFLAGS', 's -- BENCH_ARGS=--quick')
+    monkeypatch.setenv('VIRTUAL_ENV', str(root / '.venv'))
+    monkeypatch.setenv('_ROS_WHEELS_BOOTSTRAP_COMPLETE', '1')
+    env = fresh_clone.new_shell_environment()
+    assert env['PATH'] == '/usr/bin' and env['LD_LIBRARY_PATH'] == '/opt/lib'
+    dropped = {'PYTHONPATH', 'MAKEFLAGS', 'VIRTUAL_ENV', '_ROS_WHEELS_BOOTSTRAP_COMPLETE'}
+    assert not dropped & set(env), env
+    monkeypatch.setenv('LD_LIBRARY_PATH', f'{root}/.venv/lib/python3.11/site-packages/rclpy')
+    assert 'LD_LIBRARY_PATH' not in fresh_clone.new_shell_environment()
+    assert env['HOME'] == os.environ['HOME']
+
+
+def test_a_quick_run_makes_no_fresh_clone(bench, monkeypatch):
+    import fresh_clone
+    common, _ = bench
+    monkeypatch.setattr(fresh_clone.subprocess, 'run', None)     # nothing may be started
+    out = io.StringIO()
+    assert fresh_clone.fresh_clone_section(common.Context(quick=True, out=out)) is None
     assert 'not measured' in out.getvalue()
