@@ -8,7 +8,8 @@ checkout's venv and ROS workspace taken out of it, make's own variables too), an
 one's wall time, the CPU time of everything it ran, the load average at its start and the test
 count. What the machine keeps between clones stays: uv's download cache, numba's cache of the
 compiled loops (``~/.cache/tumble_ros/numba``: a clone of sources already compiled here loads
-them; the table says whether the run compiled) and mypy's cache. ~8 minutes on 2 cores;
+them; the table gives the set-up's numba warm-up, seconds when loaded, tens when compiled) and
+mypy's cache. ~8 minutes on 2 cores;
 ``--quick`` skips it (not measured).
 """
 from __future__ import annotations
@@ -20,6 +21,7 @@ import resource
 import subprocess
 import tempfile
 import time
+from typing import Any, Callable
 
 from common import section
 
@@ -36,6 +38,9 @@ WORKSPACE_VARIABLES = ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "COLCON_PREFIX_
                        # the ROS wheels' start-up sets it with LD_LIBRARY_PATH to this venv's
                        # libraries, then re-executes Python: the clone's Python must do its own
                        "_ROS_WHEELS_BOOTSTRAP_COMPLETE")
+
+#: The line the set-up's numba warm-up ends with (cli/warmup.py), its seconds.
+WARM_UP_READY = r"== (?:the loops of .*|compiled loops) ready \(([\d.]+) s\)"
 
 
 def new_shell_environment(root: Path = ROOT) -> dict[str, str]:
@@ -67,13 +72,15 @@ def _make(target: str, clone: Path, log: Path) -> dict:
     wall = time.perf_counter() - start
     text = log.read_text(errors="replace")
     return dict(wall_s=wall, cpu_s=_children_cpu() - cpu0, load=load, ok=done.returncode == 0,
-                compiled="compiling the" in text, tail=text[-1500:],
-                passed=_count(r"(\d+) passed", text), failed=_count(r"(\d+) failed", text))
+                warm_up_s=_last(WARM_UP_READY, text, float),
+                tail=text[-1500:], passed=_last(r"(\d+) passed", text, int) or 0,
+                failed=_last(r"(\d+) failed", text, int) or 0)
 
 
-def _count(pattern: str, text: str) -> int:
+def _last(pattern: str, text: str, kind: Callable[[str], Any]) -> Any:
+    """Return the last match of ``pattern``'s group in ``text`` as ``kind``, None if none."""
     found = re.findall(pattern, text)
-    return int(found[-1]) if found else 0
+    return kind(found[-1]) if found else None
 
 
 @section("A fresh clone: its first make run and its make test (issue 30)", order=90)
@@ -93,12 +100,14 @@ def fresh_clone_section(ctx):
             res = _make(target, clone, Path(tmp) / f"make_{target}.log")
             results[target] = res
             rows.append([f"make {target}", f"{res['wall_s']:.1f}", f"{res['cpu_s']:.0f}",
-                         f"{res['load']:.2f}", "compiled" if res["compiled"] else "loaded",
+                         f"{res['load']:.2f}",
+                         "-" if res["warm_up_s"] is None else f"{res['warm_up_s']:.1f}",
                          res["passed"] if target == "test" else "-",
                          "ok" if res["ok"] else f"FAILED ({res['failed']} failed)"])
             if not res["ok"]:
                 ctx.note(f"make {target} failed; the end of its output:\n{res['tail']}")
-    ctx.table(["command", "wall [s]", "CPU [s]", "load (1 min)", "numba loops", "tests passed",
+    ctx.table(["command", "wall [s]", "CPU [s]", "load (1 min)", "numba warm-up [s]",
+               "tests passed",
                "result"], rows)
     for target, limit, before in (("run", FIRST_RUN_TARGET_S, FIRST_RUN_BEFORE_S),
                                   ("test", MAKE_TEST_TARGET_S, MAKE_TEST_BEFORE_S)):

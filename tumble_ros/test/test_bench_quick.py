@@ -95,3 +95,18 @@ def test_a_quick_run_makes_no_fresh_clone(bench, monkeypatch):
     out = io.StringIO()
     assert fresh_clone.fresh_clone_section(common.Context(quick=True, out=out)) is None
     assert 'not measured' in out.getvalue()
+
+
+def test_a_fresh_clones_log_gives_its_warm_up_and_test_counts(bench):
+    """The warm-up's own lines (cli/warmup.py) and pytest's summary, the last of each."""
+    import fresh_clone
+
+    from tumble_ros.cli import warmup
+    source = Path(warmup.__file__).read_text()
+    assert '== the loops of {label} ready ({seconds:.1f} s)' in source
+    assert '== compiled loops ready ({seconds:.1f} s)' in source
+    log = ('== the loops of the default scenario ready (12.3 s)\n'
+           '== compiled loops ready (8.0 s)\n1 failed, 1589 passed in 300.2s\n')
+    assert fresh_clone._last(fresh_clone.WARM_UP_READY, log, float) == 8.0
+    assert fresh_clone._last(r'(\d+) passed', log, int) == 1589
+    assert fresh_clone._last(r'(\d+) skipped', log, int) is None
