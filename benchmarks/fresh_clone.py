@@ -9,8 +9,7 @@ one's wall time, the CPU time of everything it ran, the load average at its star
 count. What the machine keeps between clones stays: uv's download cache, numba's cache of the
 compiled loops (``~/.cache/tumble_ros/numba``: a clone of sources already compiled here loads
 them; the table gives the set-up's numba warm-up, seconds when loaded, tens when compiled) and
-mypy's cache. ~8 minutes on 2 cores;
-``--quick`` skips it (not measured).
+mypy's cache. ~7 minutes on 2 cores; ``--quick`` skips it (not measured).
 """
 from __future__ import annotations
 
@@ -107,8 +106,7 @@ def fresh_clone_section(ctx):
             if not res["ok"]:
                 ctx.note(f"make {target} failed; the end of its output:\n{res['tail']}")
     ctx.table(["command", "wall [s]", "CPU [s]", "load (1 min)", "numba warm-up [s]",
-               "tests passed",
-               "result"], rows)
+               "tests passed", "result"], rows)
     for target, limit, before in (("run", FIRST_RUN_TARGET_S, FIRST_RUN_BEFORE_S),
                                   ("test", MAKE_TEST_TARGET_S, MAKE_TEST_BEFORE_S)):
         res = results[target]
