@@ -102,7 +102,8 @@ def fresh_clone_section(ctx):
                          f"{res['load']:.2f}",
                          "-" if res["warm_up_s"] is None else f"{res['warm_up_s']:.1f}",
                          res["passed"] if target == "test" else "-",
-                         "ok" if res["ok"] else f"FAILED ({res['failed']} failed)"])
+                         "ok" if res["ok"] else "FAILED" + (f" ({res['failed']} tests)"
+                                                            if res["failed"] else "")])
             if not res["ok"]:
                 ctx.note(f"make {target} failed; the end of its output:\n{res['tail']}")
     ctx.table(["command", "wall [s]", "CPU [s]", "load (1 min)", "numba warm-up [s]",
