@@ -485,6 +485,57 @@ def test_non_finite_samples_are_counted_reported_and_left_out(tmp_path, capsys):
     assert f'395 samples of /{topics.ANGULAR_VELOCITY}' in out
 
 
+def test_comparisons_of_samples_that_are_not_the_runs_are_left_out_and_said(tmp_path, capsys):
+    """
+    A foreign publisher's samples reached an older comparator: its comparisons are left out.
+
+    The comparisons of the two NaN samples (NaN errors) and one of a sample the file does not
+    hold (30 rad/yr: a foreign sample of zeros compared) are left out of every comparison
+    topic, each topic says so in one line, and the error the summary reports is the run's.
+    """
+    from rclpy.serialization import serialize_message
+    from tumble_ros_interfaces.msg import ErrorNorm
+    t, omega = _spinning()
+    model = omega + 1e-3
+    omega[[3, 50]] = np.nan
+    foreign = ErrorNorm(model='paper', norm=30.0, relative=1.0)
+    foreign_ns = 1_000_000       # between the samples at 0 and 0.002 yr (1 s a year)
+    foreign.header.stamp.nanosec = foreign_ns
+    path = write_recording(
+        tmp_path / 'compared.mcap', t, omega, scenario=Scenario(duration=0.8), model=model,
+        extra_topics=[('/' + topics.ERROR_NORM, 'tumble_ros_interfaces/msg/ErrorNorm',
+                       foreign_ns, serialize_message(foreign))])
+    rec = load_recording(path)
+    assert len(rec.norm_t) == len(rec.error_t) == len(rec.model_t) == 398
+    assert np.isfinite(rec.error_norm).all() and rec.error_norm.max() < 2e-3
+    assert command([str(path)]) == 0
+    out, err = capsys.readouterr()
+    said = [line for line in err.splitlines() if 'comparisons that are not' in line]
+    assert [line.split(':')[1] for line in said] == [
+        f' /{topics.MODEL_ANGULAR_VELOCITY}', f' /{topics.ERROR}', f' /{topics.ERROR_NORM}']
+    assert 'left out 3 of 401 comparisons' in said[2] and 'left out 2 of 400' in said[0]
+
+
+def test_samples_whose_stamps_go_back_in_the_file_are_said_to_have_two_sources(tmp_path, capsys):
+    """One simulator writes in time order: stamps going back in the file mean a second source."""
+    from geometry_msgs.msg import Vector3Stamped
+    from rclpy.serialization import serialize_message
+    path = tmp_path / 'two.mcap'
+    with McapWriter(path) as writer:
+        channel = writer.add_channel('/' + topics.ANGULAR_VELOCITY,
+                                     'geometry_msgs/msg/Vector3Stamped')
+        for ns in [0, 2_000_000, 1_000_000, 4_000_000, 3_000_000, 6_000_000]:
+            msg = Vector3Stamped()
+            msg.header.stamp.nanosec = ns
+            msg.vector.z = 30.0
+            writer.write(channel, serialize_message(msg), ns + 1000, ns)
+    assert load_recording(path).n == 6
+    assert command([str(path)]) == 0
+    err = capsys.readouterr().err
+    assert (f'WARNING: /{topics.ANGULAR_VELOCITY}: the stamps go back 2 times in the file: more '
+            'than one publisher wrote samples on it') in err, err
+
+
 def _description(scenario: Scenario, run_id: str, t0: float = 0.0) -> ScenarioDescription:
     """Return a ScenarioDescription of ``scenario`` from t0 [yr] (1 s a year), run ``run_id``."""
     d = ScenarioDescription(parameters_yaml=dump_scenario(scenario), seconds_per_year=1.0,

@@ -59,8 +59,8 @@ def test_a_sample_off_the_simulators_grid_is_compared_at_its_own_time(ros):
     pub = ros.probe.create_publisher(Vector3Stamped, topics.ANGULAR_VELOCITY, STATE_QOS)
     assert ros.spin_until(lambda: pub.get_subscription_count() > 0, 5.0)
     ros.spin_for(0.3)  # the latched scenario description reaches the comparator
-    # ns: 0.0123 s, on the grid (0.002 yr), 0.0543 s
-    off_grid = [12_345_678, 2_000_000, 54_321_987]
+    # ns: on the grid (0.002 yr), 0.0123 s, 0.0543 s (in time order: see the next test)
+    off_grid = [2_000_000, 12_345_678, 54_321_987]
     for ns in off_grid:
         msg = Vector3Stamped()
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, 1_000_000_000)
@@ -68,6 +68,41 @@ def test_a_sample_off_the_simulators_grid_is_compared_at_its_own_time(ros):
     assert ros.spin_until(lambda: len(model) == 3, 5.0), len(model)
     expected = make_model('paper', Scenario()).omega(np.array(off_grid) * 1e-9)
     np.testing.assert_allclose(vec(model), expected, rtol=0, atol=1e-12)
+
+
+def test_samples_that_are_not_the_runs_never_reach_the_comparison(ros):
+    """
+    NaN, out-of-order and after-the-end samples of another publisher: dropped, counted, said.
+
+    A foreign publisher on ``angular_velocity`` (here the test's probe, the simulator paused):
+    its NaN sample, a sample older than the last one taken and one after the run's end (0.2 s
+    of ROS time) are dropped; the comparison topics carry only the two samples that can be the
+    run's, and ``comparison/status`` says how many were dropped and why.
+    """
+    model = ros.collect(Vector3Stamped, topics.MODEL_ANGULAR_VELOCITY)
+    norm = ros.collect(ErrorNorm, topics.ERROR_NORM)
+    status = ros.collect(DiagnosticStatus, topics.COMPARISON_STATUS, latched=True)
+    node = ros.start(ComparatorNode)
+    ros.start(SimNode, start_paused=True, **RUN)
+    pub = ros.probe.create_publisher(Vector3Stamped, topics.ANGULAR_VELOCITY, STATE_QOS)
+    assert ros.spin_until(lambda: pub.get_subscription_count() > 0, 5.0)
+    assert ros.spin_until(lambda: status and status[-1].level == DiagnosticStatus.OK, 10.0)
+    for ns, x in [(4_000_000, 0.0), (6_000_000, float('nan')), (2_000_000, 0.0),
+                  (10_000_000_000, 0.0), (8_000_000, 0.0)]:
+        msg = Vector3Stamped()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, 1_000_000_000)
+        msg.vector.x, msg.vector.z = x, 30.0
+        pub.publish(msg)
+    assert ros.spin_until(lambda: node.dropped_samples == 3 and len(norm) == 2, 5.0), (
+        node.dropped_samples, len(norm))
+    ros.spin_for(0.2)
+    assert [stamp_ns(m) for m in model] == [4_000_000, 8_000_000]
+    assert all(np.isfinite(m.norm) for m in norm)
+    # (the probe is also a second publisher: the second-source ERROR may follow)
+    said = [m for m in status if 'dropped 3 samples' in m.message]
+    assert said and said[0].level == DiagnosticStatus.WARN, [m.message for m in status]
+    for why in ('1 not finite', '1 not after the last sample', "1 after the run's end"):
+        assert why in said[0].message
 
 
 def test_an_unreadable_sample_is_skipped_and_the_next_one_compared(ros):

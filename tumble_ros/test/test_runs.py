@@ -14,7 +14,8 @@ from test_no_ros import _assert_loads_none
 
 from tumble_ros.core import (departure_text, Impact, IntegratorSettings, make_model, Scenario,
                              simulate, TimeBase)
-from tumble_ros.runs.comparison import Comparison, error_norms, error_norms_of_rows, WAITING
+from tumble_ros.runs.comparison import (Comparison, error_norms, error_norms_of_rows, SampleGate,
+                                        WAITING)
 from tumble_ros.runs.records import (ComparisonBlock, DIVERGED, FINISHED, ImpactEnded, OK,
                                      RUNNING, SampleBlock, SegmentStart, StatusChange, WARN)
 from tumble_ros.runs.session import output_grid, SimulationSession
@@ -402,3 +403,18 @@ def test_the_described_scenarios_are_what_their_texts_parse_to():
     for start in starts:
         assert told.anchor(start) == parsing.anchor(start)
     assert told._parsed is None and parsing._parsed is not None   # told parsed nothing
+
+
+def test_the_sample_gate_takes_the_runs_samples_and_drops_the_rest():
+    """SampleGate: finite, strictly later, within the run's end; the rest counted by reason."""
+    gate = SampleGate()
+    assert gate.admit(0, (0.0, 0.0, 30.0), end_ns=100) is None
+    assert gate.admit(10, (math.nan, 0.0, 30.0), end_ns=100) == 'not finite'
+    assert gate.admit(10, (math.inf, 0.0, 30.0)) == 'not finite'
+    assert gate.admit(0, (0.0, 0.0, 30.0)) == 'not after the last sample'
+    assert gate.admit(101, (0.0, 0.0, 30.0), end_ns=100) == "after the run's end"
+    assert gate.admit(100, (0.0, 0.0, 30.0), end_ns=100) is None
+    assert gate.dropped == 4 and gate.text().startswith('dropped 4 samples')
+    assert '2 not finite' in gate.text()
+    gate.reset()
+    assert gate.dropped == 0 and gate.text() == '' and gate.admit(0, (1.0, 2.0, 3.0)) is None

@@ -310,6 +310,12 @@ def _sorted(ns, rows, k: int, *, owned: bool = False) -> tuple[np.ndarray, np.nd
     return stamps[order], values[order]
 
 
+def _steps_back(ns) -> int:
+    """Count the stamps earlier than the one before them (in the file's order)."""
+    stamps = np.asarray(ns, dtype=np.int64)
+    return int((stamps[1:] < stamps[:-1]).sum()) if len(stamps) > 1 else 0
+
+
 def _select_topics(info, namespace: str | None
                    ) -> tuple[str, dict[str, str], dict[str, str]]:
     """Return (namespace, {full name: root name} of the topics to decode, {skipped: why})."""
@@ -466,6 +472,11 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
         return ns.astype(np.float64) / timebase.ns_per_year
 
     stamp_ns, rows = raw.get(ANGULAR_VELOCITY, ([], []))
+    back = _steps_back(stamp_ns)
+    if back:    # one simulator writes its samples in time order
+        left_out.append(f'{in_namespace(namespace, ANGULAR_VELOCITY)}: the stamps go back '
+                        f'{back} times in the file: more than one publisher wrote samples on it '
+                        '(another run, a test tool or a replay)')
     stamps, omega = _sorted(stamp_ns, rows, 3, owned=True)
     if mixed:   # another run chosen away: its samples are on the same topic, not separable
         shared = len(stamps) - len(np.unique(stamps))
@@ -498,14 +509,33 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
     if LIGHTCURVE in raw:
         ns, rec.lightcurve = _sorted(*raw[LIGHTCURVE], len(_COLUMNS[LIGHTCURVE]), owned=True)
         rec.lightcurve_t = years(ns)
+    def compared(topic: str, k: int, finite: int) -> tuple[np.ndarray, np.ndarray]:
+        """
+        The comparisons of ``topic`` at the kept samples' stamps (the rest left out, said).
+
+        ``finite``: the leading columns that must be finite (an error norm's relative error is
+        infinite at a zero rate, and kept).
+        """
+        ns, values = _sorted(*raw[topic], k, owned=True)
+        at_samples = (np.array_equal(ns, stamps)      # (every sample compared: no search)
+                      or np.isin(ns, stamps))
+        keep = at_samples & np.isfinite(values[:, :finite]).all(axis=1)
+        if not keep.all():
+            left_out.append(f'{in_namespace(namespace, topic)}: left out {int((~keep).sum())} '
+                            f'of {len(keep)} comparisons that are not of a sample of the run '
+                            '(not finite, or at a stamp with no finite sample of '
+                            f'{ANGULAR_VELOCITY}: a foreign publisher?)')
+            ns, values = ns[keep], values[keep]
+        return ns, values
+
     if MODEL_ANGULAR_VELOCITY in raw:
-        ns, rec.model_omega = _sorted(*raw[MODEL_ANGULAR_VELOCITY], 3, owned=True)
+        ns, rec.model_omega = compared(MODEL_ANGULAR_VELOCITY, 3, 3)
         rec.model_t = years(ns)
     if ERROR in raw:
-        ns, rec.error = _sorted(*raw[ERROR], 3, owned=True)
+        ns, rec.error = compared(ERROR, 3, 3)
         rec.error_t = years(ns)
     if ERROR_NORM in raw:
-        ns, values = _sorted(*raw[ERROR_NORM], 2, owned=True)
+        ns, values = compared(ERROR_NORM, 2, 1)
         rec.norm_t = years(ns)
         rec.error_norm, rec.error_relative = values[:, 0].copy(), values[:, 1].copy()
         rec.error_models = tuple(norm_models)

@@ -11,7 +11,9 @@ publishes, with the sample's own stamp and frame ``body``:
 * ``comparison/status`` (diagnostic_msgs/DiagnosticStatus, latched): whether the model applies,
   WARN from the first sample where the model left the numeric solution (relative error above
   :data:`tumble_ros.core.DEPARTURE`, once per segment), and ERROR when ``angular_velocity`` or
-  ``scenario`` has more than one publisher (two runs mix).
+  ``scenario`` has more than one publisher (two runs mix), and at least WARN, with a count, once
+  samples that are not the run's were dropped (:class:`~tumble_ros.runs.comparison.SampleGate`:
+  not finite, not after the last sample, or after the run's end).
 
 The model is anchored on the state the simulator's current integration segment starts from
 (``scenario`` topic): at start-up, and again after every impact (the simulator re-publishes the
@@ -55,11 +57,11 @@ from tumble_ros.nodes.parameters import declare_node_parameters
 from tumble_ros.nodes.progress import ProgressReporter
 from tumble_ros.nodes.runner import run_node
 from tumble_ros.nodes.sources import SourceMonitor
-from tumble_ros.runs.comparison import Comparison
+from tumble_ros.runs.comparison import Comparison, SampleGate
 from tumble_ros.runs.messages.builders import SampleEncoder, Vector3StampedReader
 from tumble_ros.runs.messages.qos import DESCRIPTION_QOS, PUBLISHER_QOS, STATE_QOS
 from tumble_ros.runs.messages.records import comparison_status_message, segment_start_of
-from tumble_ros.runs.records import ComparedSample, ComparisonStatus, ERROR, OK
+from tumble_ros.runs.records import ComparedSample, ComparisonStatus, ERROR, OK, WARN
 from tumble_ros_interfaces.msg import (  # type: ignore[attr-defined]  # rosidl-generated
     ErrorNorm, ScenarioDescription)
 
@@ -97,6 +99,7 @@ class ComparatorNode(GuardedNode):
         self._foreign: set[str] = set()   # the other runs' ids, warned about once each
         self.foreign_descriptions = 0     # descriptions of other runs, ignored
         self._received = 0
+        self._gate = SampleGate()   # drops the samples that are not the run's, counting them
         self.compared = 0  # comparisons published (each on the three comparison topics)
         # samples held before the first description: (stamp [ns], omega [rad/yr])
         self._pending: deque[tuple[int, tuple[float, float, float]]] = deque(
@@ -156,6 +159,7 @@ class ComparatorNode(GuardedNode):
             self.get_logger().info(f'following run {run!r}: the simulator of run '
                                    f'{self.run_id!r} left (restarted)')
             self.run_id = run
+            self._gate.reset()
             return True
         self.foreign_descriptions += 1
         if run not in self._foreign:
@@ -207,8 +211,26 @@ class ComparatorNode(GuardedNode):
             self._status = status
             if getattr(self, '_sources', None) is not None and self._sources.current:
                 return  # the second-source error stays on until it clears
+            status = self._with_drops(status)
         self._pub_status.publish(comparison_status_message(
             status, self.get_fully_qualified_name(), self._comparison.model_name))
+
+    def _with_drops(self, status: ComparisonStatus) -> ComparisonStatus:
+        """Return ``status`` saying what the gate dropped (then at least WARN)."""
+        dropped = self._gate.text()
+        if not dropped:
+            return status
+        level = max(status.level, WARN)
+        return ComparisonStatus(level, f'{status.message}; {dropped}', status.stamp_ns)
+
+    def _dropped(self, stamp_ns: int, why: str) -> None:
+        """Log and report a dropped sample (the status at a reason's first, and 1, 2, 4, ...)."""
+        n = self._gate.dropped
+        self.get_logger().warning(
+            f'angular_velocity: dropped a sample stamped {stamp_ns} ns ({why}): not the '
+            f'run\'s ({n} so far)', throttle_duration_sec=5.0)
+        if n & (n - 1) == 0 or self._gate.counts[why] == 1:
+            self._report(self._status)
 
     # -- comparison ---------------------------------------------------------------------
     def _on_omega(self, data: bytes) -> None:
@@ -225,6 +247,12 @@ class ComparatorNode(GuardedNode):
 
     def _compare(self, sample: tuple[int, tuple[float, float, float]]) -> None:
         stamp_ns, numeric = sample
+        grid = self._comparison.grid
+        why = self._gate.admit(stamp_ns, numeric,
+                               None if grid is None else grid.stamp(grid.count - 1))
+        if why is not None:
+            self._dropped(stamp_ns, why)
+            return
         k, self._received = self._received, self._received + 1
         if k % self._decimation == 0:
             compared = self._comparison.compare_one(stamp_ns, numeric)
@@ -238,6 +266,11 @@ class ComparatorNode(GuardedNode):
     def described(self) -> bool:
         """Return whether a description of the run followed has come in."""
         return self._comparison.latest is not None
+
+    @property
+    def dropped_samples(self) -> int:
+        """Count the samples dropped as not the run's (see :class:`SampleGate`)."""
+        return self._gate.dropped
 
     @property
     def consumed(self) -> int:

@@ -37,7 +37,7 @@ from .records import (ComparedSample, ComparisonBlock, ComparisonStatus, Floats,
                       SampleBlock, SegmentStart, WARN)
 
 __all__ = ['Comparison', 'anchor_model', 'GridModelValues', 'error_norms', 'error_norms_of_rows',
-           'LOOKAHEAD', 'WAITING']
+           'LOOKAHEAD', 'SampleGate', 'WAITING']
 
 #: Grid samples whose model value is computed in one vectorised call: the model's fixed numpy
 #: cost (~50 us a call) is then shared by this many samples.
@@ -95,6 +95,65 @@ def error_norms_of_rows(numeric: Floats, error: Floats) -> tuple[Floats, Floats]
     with np.errstate(over='ignore', invalid='ignore'):     # inf and nan, as Python's / gives
         np.divide(norm, magnitude, out=relative, where=magnitude > 0)
     return norm, relative
+
+
+class SampleGate:
+    """
+    Which live samples are the followed run's: finite, in time order, within the run.
+
+    A simulator publishes its samples in time order, each finite (a diverging run is stopped
+    before it publishes a NaN) and none after the run's last grid sample. A sample that is not
+    finite, not later than the last sample taken, or stamped after the run's end is another
+    publisher's on the same topic (a second run, a test tool, a replay) and must not reach the
+    comparison: :meth:`admit` returns why it is dropped and counts it, :meth:`text` says so in
+    the comparator's status. A foreign sample that is finite, in order and within the run cannot
+    be told apart by its content (a Vector3Stamped carries no run id): the comparator's
+    second-source check (:class:`~tumble_ros.nodes.sources.SourceMonitor`) reports that case.
+    :meth:`reset` when the followed run changes (a restart starts again from t = 0).
+    """
+
+    REASONS = ('not finite', 'not after the last sample', "after the run's end")
+
+    def __init__(self) -> None:
+        self.last_ns: int | None = None
+        self.counts = dict.fromkeys(self.REASONS, 0)
+
+    @property
+    def dropped(self) -> int:
+        """Count the samples dropped since the last :meth:`reset`."""
+        return sum(self.counts.values())
+
+    def reset(self) -> None:
+        """Forget the last stamp and the counts (the run followed changed)."""
+        self.last_ns = None
+        self.counts = dict.fromkeys(self.REASONS, 0)
+
+    def admit(self, stamp_ns: int, omega: Sequence[float], end_ns: int | None = None
+              ) -> str | None:
+        """
+        Return None if the sample is taken, else the reason it is dropped (and count it).
+
+        ``end_ns``: the stamp of the run's last grid sample (None: not known yet).
+        """
+        if not all(map(math.isfinite, omega)):
+            reason = self.REASONS[0]
+        elif self.last_ns is not None and stamp_ns <= self.last_ns:
+            reason = self.REASONS[1]
+        elif end_ns is not None and stamp_ns > end_ns:
+            reason = self.REASONS[2]
+        else:
+            self.last_ns = stamp_ns
+            return None
+        self.counts[reason] += 1
+        return reason
+
+    def text(self) -> str:
+        """Say what was dropped ('' if nothing)."""
+        if not self.dropped:
+            return ''
+        parts = ', '.join(f'{n} {why}' for why, n in self.counts.items() if n)
+        return (f"dropped {self.dropped} samples that are not the run's ({parts}): another "
+                'publisher on angular_velocity?')
 
 
 class GridModelValues:
