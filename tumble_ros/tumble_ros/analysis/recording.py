@@ -509,9 +509,10 @@ def load_recording(path: str | os.PathLike[str], *, namespace: str | None = None
     if LIGHTCURVE in raw:
         ns, rec.lightcurve = _sorted(*raw[LIGHTCURVE], len(_COLUMNS[LIGHTCURVE]), owned=True)
         rec.lightcurve_t = years(ns)
+
     def compared(topic: str, k: int, finite: int) -> tuple[np.ndarray, np.ndarray]:
         """
-        The comparisons of ``topic`` at the kept samples' stamps (the rest left out, said).
+        Return the comparisons of ``topic`` at the kept samples' stamps (the rest left out, said).
 
         ``finite``: the leading columns that must be finite (an error norm's relative error is
         infinite at a zero rate, and kept).

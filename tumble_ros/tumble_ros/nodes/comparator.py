@@ -228,7 +228,7 @@ class ComparatorNode(GuardedNode):
         n = self._gate.dropped
         self.get_logger().warning(
             f'angular_velocity: dropped a sample stamped {stamp_ns} ns ({why}): not the '
-            f'run\'s ({n} so far)', throttle_duration_sec=5.0)
+            f"run's ({n} so far)", throttle_duration_sec=5.0)
         if n & (n - 1) == 0 or self._gate.counts[why] == 1:
             self._report(self._status)
 
