@@ -368,3 +368,31 @@ def test_min_consumers_holds_publication_until_they_report(ros):
     assert len(omega) == sim.published_samples == WINDOW  # never more than the window ahead
     reporter.mark(TimeBase.stamp_ns(omega[-1].header.stamp.sec, omega[-1].header.stamp.nanosec))
     assert ros.spin_until(lambda: len(omega) == 2 * WINDOW, 10.0), len(omega)
+
+
+def test_nothing_is_published_before_the_command_line_is_accepted(ros):
+    """
+    A node refused for an unknown parameter has published nothing a consumer could anchor on.
+
+    ``run_node`` refuses unknown parameters after the node is built (rclpy drops them
+    silently): the run's description and its 'started' status go out at the first tick, not at
+    construction, so a comparator or recorder never hears of a run that is then refused.
+    """
+    from rclpy.parameter import Parameter as P
+
+    from tumble_ros.errors import NodeError
+    from tumble_ros.nodes.parameters import refuse_unknown_parameters
+    from tumble_ros.runs.messages.qos import DESCRIPTION_QOS
+    descriptions = ros.collect(ScenarioDescription, topics.SCENARIO, qos=DESCRIPTION_QOS)
+    status = ros.collect(SimStatus, topics.STATUS, latched=True)
+    sim = SimNode(context=ros.context, parameter_overrides=[P('durration', value=3.0)])
+    try:
+        with pytest.raises(NodeError, match="unknown parameter 'durration'"):
+            refuse_unknown_parameters([sim])
+        ros.spin_for(0.5)      # the probe only: the refused node is never spun
+        assert descriptions == [] and status == []
+    finally:
+        sim.destroy_node()
+    accepted = ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002)
+    assert ros.spin_until(lambda: len(descriptions) == 1 and status, 5.0)
+    assert descriptions[0].run_id == accepted.run_id

@@ -145,12 +145,12 @@ class SimNode(GuardedNode):
             self, lambda: own,
             lambda problem: self._publish_status(
                 problem or "single source again on the simulator's topics"))
-        self._publish_records(self._session.start())   # the first segment, 'started'
         # Steady clock: the simulator is the clock source, use_sim_time or not.
         self._timer = steady_timer(self, TICK_PERIOD, self._on_tick)
         steady_timer(self, STATUS_PERIOD, self._on_status_period)
-        # Announced at the first tick, once the command line was checked in full (an unknown
-        # parameter is refused after the node is built): nothing is announced that is refused.
+        # Announced (the first segment's description, 'started', the log line) at the first
+        # tick or step, once the command line was checked in full (an unknown parameter is
+        # refused after the node is built): nothing is published for a run that is refused.
         self._started_wall: float | None = None
 
     # -- parameters ---------------------------------------------------------------------
@@ -209,13 +209,19 @@ class SimNode(GuardedNode):
         """Return the simulated time [yr] of the last published sample (0 before the first)."""
         return self._session.t
 
+    def _announce(self) -> None:
+        """Publish the run's start (description, 'started') and log it, once."""
+        if self._started_wall is not None:
+            return
+        self._started_wall = time.monotonic()
+        self._publish_records(self._session.start())   # the first segment, 'started'
+        self.get_logger().info(
+            f'simulating {self.scenario.duration:g} yr with '
+            f'{self.scenario.integrator.method}, {self._grid.count} samples every '
+            f'{self.scenario.output_interval:g} yr, real_time_factor {self._rtf:g}')
+
     def _on_tick(self) -> None:
-        if self._started_wall is None:
-            self._started_wall = time.monotonic()
-            self.get_logger().info(
-                f'simulating {self.scenario.duration:g} yr with '
-                f'{self.scenario.integrator.method}, {self._grid.count} samples every '
-                f'{self.scenario.output_interval:g} yr, real_time_factor {self._rtf:g}')
+        self._announce()
         if self.state != RUNNING:
             return
         self._publish_up_to(self._target_index())
@@ -250,6 +256,7 @@ class SimNode(GuardedNode):
 
     def _publish_up_to(self, k_last: int) -> None:
         """Run the session up to sample ``k_last`` and publish the batch's records."""
+        self._announce()
         self._publish_records(self._session.advance(k_last))
 
     def _publish_records(self, records: list[SessionRecord]) -> None:
