@@ -18,7 +18,9 @@ The launch arguments:
 
 The simulator runs with ``min_consumers = 2`` (it waits for the comparator and the recorder, and
 never outruns them) and the ``real_time_factor`` of the scenario file, else its default. When one
-of the three nodes ends (refused its parameters, crashed), the launch stops the others.
+of the three nodes ends, the launch stops the others; when it ended with a non-zero exit code (it
+refused its parameters or scenario, it crashed), ``ros2 launch`` exits 1, so a script can tell a
+refused scenario from a good run.
 
 The params file's node sections apply whatever the namespace: a section keyed ``/**/sim`` (as in
 the shipped files), ``sim``, ``/sim`` or ``<namespace>/sim`` configures the simulator, and likewise
@@ -114,13 +116,27 @@ def _bool(name, text):
     return value == 'true'
 
 
+class NodeFailed(RuntimeError):
+    """A node of the launch ended with a non-zero exit code (e.g. it refused its scenario)."""
+
+
 def _stop_all(event, context):
     """
-    Stop the launch when one node ends (after Ctrl-C: a no-op).
+    Stop the launch when one node ends; fail it when that node failed.
 
-    The others cannot go on without it: the simulator would wait for its consumers forever.
+    The others cannot go on without it: the simulator would wait for its consumers forever. A
+    node that ends with a non-zero exit code (a refused scenario or parameter, a crash) makes
+    the launch fail: upstream launch exits 0 after a ``Shutdown`` and 1 only after an exception
+    in the launch, so the exception is raised here (launch logs "Caught exception in launch:
+    ...", shuts the other nodes down and exits 1). During a shutdown (Ctrl-C, another node's
+    end) a node's exit is not a failure of the launch.
     """
-    return Shutdown(reason=f'{event.action.name} ended with exit code {event.returncode}')
+    if context.is_shutdown:
+        return None
+    reason = f'{event.action.name} ended with exit code {event.returncode}'
+    if event.returncode != 0:
+        raise NodeFailed(f'{reason}: the launch fails (the reason is in its output above)')
+    return Shutdown(reason=reason)
 
 
 #: What the launch sets unless the scenario file says otherwise: the 3D scene on (the bare
