@@ -112,8 +112,19 @@ def _imported(name: str, module: str) -> Any:
 
 
 def entry() -> int:
-    """Console-script entry of every executable: the name is the installed script's."""
-    return run_executable(Path(sys.argv[0]).name, sys.argv[1:])
+    """
+    Console-script entry of every executable: the name is the installed script's.
+
+    A node's process ends by :func:`quick_exit` once its ``main`` returned (its files
+    finalised, its goodbyes sent, its context shut down): the interpreter's teardown (clearing
+    ~1,200 modules, numba's among them) took 1.5-1.8 s of a node's stop on a loaded machine,
+    past ``ros2 launch``'s 5-s limit for two asteroids (docs/ros.md, "Stopping").
+    """
+    name = Path(sys.argv[0]).name
+    code = run_executable(name, sys.argv[1:])
+    if name in NODES:
+        quick_exit(code)
+    return code
 
 
 def numba_without_coverage() -> None:
@@ -268,6 +279,11 @@ def is_main_job(argv: list[str]) -> bool:
     return not (argv and (argv[0] in EXECUTABLES or argv[0] in ('-h', '--help')))
 
 
+def ends_quickly(argv: list[str]) -> bool:
+    """Tell whether ``python -m tumble_ros`` ends by :func:`quick_exit`: the main job, a node."""
+    return is_main_job(argv) or argv[0] in NODES
+
+
 def quick_exit(code: int) -> None:
     """
     End the process with ``code`` without the interpreter's teardown; return if it cannot.
@@ -303,6 +319,6 @@ def main(argv: list[str] | None = None) -> int:
 
 if __name__ == '__main__':
     _code = main()
-    if is_main_job(sys.argv[1:]):
+    if ends_quickly(sys.argv[1:]):
         quick_exit(_code)
     raise SystemExit(_code)
