@@ -97,7 +97,7 @@ def _imported(name: str, module: str) -> Any:
     The collector is off during the imports (they free nothing), numba comes without
     ``coverage`` (but for the executables in :data:`WITHOUT_NUMBA`, which import no numba) and
     ``rosidl_generator_py`` without its code generator: ~0.06-0.09 s of a node's ~0.6-s import
-    (docs/performance.md, "Node start-up").
+    (benchmarks/HISTORY.md, "Node start-up").
     """
     enabled = gc.isenabled()
     gc.disable()
