@@ -33,16 +33,18 @@ def anchors(path: Path) -> set[str]:
 
 
 def links(path: Path):
+    """Yield (line number, target) of each relative link outside code blocks, wrapped or not."""
+    prose = []
     in_code = False
-    for number, line in enumerate(path.read_text().splitlines(), 1):
+    for line in path.read_text().splitlines():
         if line.startswith('```'):
             in_code = not in_code
-        if in_code:
-            continue
-        for match in LINK.finditer(line):
-            target = match.group(1)
-            if not re.match(r'^[a-z][a-z0-9+.-]*:', target):
-                yield number, target
+        prose.append('' if in_code or line.startswith('```') else line)
+    text = '\n'.join(prose)
+    for match in LINK.finditer(text):
+        target = match.group(1)
+        if not re.match(r'^[a-z][a-z0-9+.-]*:', target):
+            yield text.count('\n', 0, match.start()) + 1, target
 
 
 @pytest.mark.parametrize('page', PAGES, ids=lambda p: str(p.relative_to(ROOT)))
@@ -65,3 +67,11 @@ def test_the_readme_is_a_front_door():
     listed = {Path(target.partition('#')[0]).name for _, target in links(ROOT / 'README.md')}
     missing = [p.name for p in (ROOT / 'docs').glob('*.md') if p.name not in listed]
     assert not missing
+
+
+def test_a_link_wrapped_over_two_lines_is_checked(tmp_path):
+    """A link whose text wraps onto the next line is found, and found on its first line."""
+    page = tmp_path / 'page.md'
+    page.write_text('# Title\n\nSee [the first\nrun](other.md#a-heading) and [here](#title).\n'
+                    '```\n[not a link](nowhere.md)\n```\n')
+    assert list(links(page)) == [(3, 'other.md#a-heading'), (4, '#title')]
