@@ -63,7 +63,7 @@ def python_blocks(text: str, name: str = 'page') -> list[Block]:
 
 
 def scripts(page: Path) -> list[tuple[str, str]]:
-    """Return (id, script) for each block to run: continued blocks joined, skipped ones left out."""
+    """Return (id, script) of each block to run: continued ones joined, skipped ones out."""
     name = str(page.relative_to(ROOT))
     out: list[tuple[str, str]] = []
     for block in python_blocks(page.read_text(), name):

@@ -1,6 +1,8 @@
 """
-The docs hold together: every relative link of README.md, docs/ (the engineering notes included)
-and the benchmarks' history reaches its target.
+The docs hold together: every relative link reaches its target.
+
+The pages: README.md, docs/ (the engineering notes included), the benchmarks' history and the
+examples' index.
 
 A link reaches a file, and its anchor a heading of that file.
 """
@@ -12,7 +14,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 PAGES = [ROOT / 'README.md', *sorted((ROOT / 'docs').glob('*.md')),
          *sorted((ROOT / 'docs' / 'engineering').glob('*.md')), ROOT / 'benchmarks' / 'HISTORY.md',
-         ROOT / 'docs' / 'figures' / 'README.md']
+         ROOT / 'docs' / 'figures' / 'README.md', ROOT / 'examples' / 'README.md']
 LINK = re.compile(r'!?\[[^\]]*\]\(([^)\s]+)\)')
 #: README lines: the front door stays short (the reference lives in docs/).
 README_MAX_LINES = 250

@@ -74,7 +74,7 @@ def _from_result(result: SimulationResult, scenario: Scenario | None,
         rec.euler_t, rec.euler = t, np.asarray(result.euler, dtype=float)
     if model is not None:
         if scenario is None:
-            raise AnalysisError(f'model: {model!r} needs the result\'s scenario (scenario=...)')
+            raise AnalysisError(f"model: {model!r} needs the result's scenario (scenario=...)")
         rec.model_t, rec.model_omega = t, make_model(model, scenario).omega(t)
         rec.error_models = (model,)
     return rec
@@ -103,7 +103,7 @@ def error_figure(source: Source, scenario: Scenario | None = None, *,
     fig = figures.error_figure(as_recording(source, scenario, model=model))
     if fig is None:
         raise AnalysisError('model: no analytic model to compare with (a result needs '
-                            'model=..., a recording the comparator\'s topics)')
+                            "model=..., a recording the comparator's topics)")
     return fig
 
 
