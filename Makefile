@@ -70,7 +70,7 @@ setup:
 	@# The package's bytecode, refreshed at every make (0.1 s when fresh): the modules are
 	@# live (--symlink-install), and where Python is told not to write bytecode
 	@# (PYTHONDONTWRITEBYTECODE) every process compiled ~110 of them from source: ~0.2 s of
-	@# the Fig 9 main job's start (docs/performance.md).
+	@# the Fig 9 main job's start (benchmarks/HISTORY.md).
 	@$(ENV) python -m compileall -q -j 0 tumble_ros/tumble_ros
 
 $(VENV_STAMP): requirements.txt
@@ -117,7 +117,7 @@ $(BUILD_STAMP): $(VENV_STAMP) $(BUILD_INPUTS) $(if $(BUILD_PRESENT),,FORCE)
 # beside the set-up's bytecode and colcon build (the loops need only the venv).
 # PYTEST_WORKERS: pytest-xdist workers (auto: one per core; 0 runs the tests in this process).
 # One BLAS thread per worker: the workers already take every core, and OpenBLAS's second thread
-# spins between the period search's many small calls (twice the CPU, docs/performance.md).
+# spins between the period search's many small calls (twice the CPU, benchmarks/HISTORY.md).
 PYTEST_WORKERS ?= auto
 test: SETUP_EXTRA = warmup
 test: SETUP_ALWAYS = warmup

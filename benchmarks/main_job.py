@@ -6,7 +6,7 @@ CONFIG=tumble_ros/config/fig9.yaml` does; best of two runs. Target (issue 30): <
 Before issue 30: 6.0 s (issue 12's target was 10 s, from 77 s). Beside the wall time, the CPU
 time (user + sys of the process and its figure workers) and the load average at the start:
 on a shared machine the wall time depends on the other work, the CPU time much less. Where
-the time goes: docs/performance.md.
+the time goes: benchmarks/HISTORY.md.
 """
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ docs/figures/apophis_2029/depth/, refreshed with --out and committed):
 - summary.txt: the nominal body, the degree-3 sensitivity table, the size of each effect for
   the nominal spin state at a few phases (degree 4, the Moon, the Sun, the coupling, a
   plausible degree-3 moment), the ensembles' table and their body-by-body differences;
-- table.md: the same tables in Markdown (docs/physics.md "Apophis 2029" quotes them);
+- table.md: the same tables in Markdown (docs/apophis.md quotes them);
 - depth.png: the ensembles' distributions after the flyby and the differences of each step.
 
 The body: a homogeneous ellipsoid of principal moments 0.64 : 0.97 : 1 (Lee et al. 2022, A&A

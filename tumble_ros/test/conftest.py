@@ -100,7 +100,7 @@ def spawn(tmp_path):
 
 
 #: The test files that took longest (the sum of their tests' times, longest first; measured
-#: 2026-12-04, docs/performance.md, "The first run"). They are collected first, each
+#: 2026-12-04, benchmarks/HISTORY.md, "The first run"). They are collected first, each
 #: file's tests in their own order: pytest-xdist hands the first quarter of the tests out one at
 #: a time, alternately, and the rest as workers free up, so the long tests are spread over the
 #: workers and the run ends on short ones, not on one worker finishing a long test alone. A file

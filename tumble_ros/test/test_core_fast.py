@@ -398,7 +398,7 @@ def test_kernels_are_compiled_without_reference_counting():
     """
     The kernels run without numba's atomic reference counts (jit.JIT_OPTIONS, _nrt=False).
 
-    Those counts took two thirds of an ensemble's splitting step (docs/performance.md). A
+    Those counts took two thirds of an ensemble's splitting step (benchmarks/HISTORY.md). A
     kernel-shaped loop compiled with the kernels' options holds no NRT_incref; compiled with
     numba's defaults it does (so this test would see them come back). The same value either way.
     """

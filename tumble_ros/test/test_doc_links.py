@@ -1,5 +1,8 @@
 """
-The docs hold together: every relative link of README.md and docs/ reaches its target.
+The docs hold together: every relative link reaches its target.
+
+The pages: README.md, docs/ (the engineering notes included), the benchmarks' history and the
+examples' index.
 
 A link reaches a file, and its anchor a heading of that file.
 """
@@ -10,7 +13,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGES = [ROOT / 'README.md', *sorted((ROOT / 'docs').glob('*.md')),
-         ROOT / 'docs' / 'figures' / 'README.md']
+         *sorted((ROOT / 'docs' / 'engineering').glob('*.md')), ROOT / 'benchmarks' / 'HISTORY.md',
+         ROOT / 'docs' / 'figures' / 'README.md', ROOT / 'examples' / 'README.md']
 LINK = re.compile(r'!?\[[^\]]*\]\(([^)\s]+)\)')
 #: README lines: the front door stays short (the reference lives in docs/).
 README_MAX_LINES = 250
@@ -31,16 +35,18 @@ def anchors(path: Path) -> set[str]:
 
 
 def links(path: Path):
+    """Yield (line number, target) of each relative link outside code blocks, wrapped or not."""
+    prose = []
     in_code = False
-    for number, line in enumerate(path.read_text().splitlines(), 1):
+    for line in path.read_text().splitlines():
         if line.startswith('```'):
             in_code = not in_code
-        if in_code:
-            continue
-        for match in LINK.finditer(line):
-            target = match.group(1)
-            if not re.match(r'^[a-z][a-z0-9+.-]*:', target):
-                yield number, target
+        prose.append('' if in_code or line.startswith('```') else line)
+    text = '\n'.join(prose)
+    for match in LINK.finditer(text):
+        target = match.group(1)
+        if not re.match(r'^[a-z][a-z0-9+.-]*:', target):
+            yield text.count('\n', 0, match.start()) + 1, target
 
 
 @pytest.mark.parametrize('page', PAGES, ids=lambda p: str(p.relative_to(ROOT)))
@@ -63,3 +69,11 @@ def test_the_readme_is_a_front_door():
     listed = {Path(target.partition('#')[0]).name for _, target in links(ROOT / 'README.md')}
     missing = [p.name for p in (ROOT / 'docs').glob('*.md') if p.name not in listed]
     assert not missing
+
+
+def test_a_link_wrapped_over_two_lines_is_checked(tmp_path):
+    """A link whose text wraps onto the next line is found, and found on its first line."""
+    page = tmp_path / 'page.md'
+    page.write_text('# Title\n\nSee [the first\nrun](other.md#a-heading) and [here](#title).\n'
+                    '```\n[not a link](nowhere.md)\n```\n')
+    assert list(links(page)) == [(3, 'other.md#a-heading'), (4, '#title')]

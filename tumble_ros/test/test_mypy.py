@@ -8,7 +8,7 @@ checked in one run: a module's errors depend on the types of what it imports.
 mypy's cache is the user's (``core.user_cache``), shared by the clones of the repository: mypy
 takes a module's cached result only where the source's hash is the one it checked (a clone has
 other paths and times, so it hashes each file), and checks again what changed and what depends
-on it. A fresh clone's check then takes ~1 s instead of ~18 s (docs/performance.md).
+on it. A fresh clone's check then takes ~1 s instead of ~18 s (benchmarks/HISTORY.md).
 """
 from __future__ import annotations
 

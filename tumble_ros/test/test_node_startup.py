@@ -2,7 +2,7 @@
 A node process imports only what it needs before its node exists (issue 30, node start-up).
 
 Importing a node's module is most of the time from ``ros2 run`` to the node on the graph
-(docs/performance.md, "Node start-up"). Each check imports a module in a fresh interpreter
+(benchmarks/HISTORY.md, "Node start-up"). Each check imports a module in a fresh interpreter
 and lists what landed in ``sys.modules``: what no node needs (scipy's integrators, special
 functions and optimisers, matplotlib, the analysis, Dask), what only some need (the recorder
 runs no numerics: no numba, no ``tumble_ros.core``), and numba's compiled perturber torques,

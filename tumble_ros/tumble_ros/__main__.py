@@ -3,7 +3,7 @@
 
     python -m tumble_ros [SCENARIO] [--live]       the main job (default: the default scenario)
     python -m tumble_ros <executable> [args ...]   run an executable, as `ros2 run tumble_ros` does
-    python -m tumble_ros --help                    this text; <executable> --help: its own
+    python -m tumble_ros --help                    the usage (USAGE); <executable> --help: its own
 
 Executables: sim, comparator, recorder, bringup, analyze, ensemble, encounter. SCENARIO is a
 params file or the name of a shipped one (``fig10``: config/fig10.yaml).
@@ -60,6 +60,35 @@ EXECUTABLES = {
     'ensemble': 'tumble_ros.cli.ensemble:main',
     'encounter': 'tumble_ros.cli.encounter:main',
 }
+#: What each executable does, in one line of ``--help``.
+SUMMARIES = {
+    'sim': 'the simulator node: publishes omega, the attitude, /clock; the apply_impact service',
+    'comparator': "the paper's analytic solution beside the simulator's, and the error",
+    'recorder': 'every topic to an MCAP file',
+    'bringup': 'the three nodes in one process (--offline: the recording without a ROS graph)',
+    'analyze': "a recording's summary and figures, offline",
+    'ensemble': 'N bodies (impacts, spread spin states), on Dask, into a Zarr store',
+    'encounter': 'an ensemble through a flyby: the spin state before and after',
+}
+#: ``python -m tumble_ros --help``: the usage, not the module's notes (and kept under -OO).
+USAGE = """usage: python -m tumble_ros [SCENARIO] [--live]
+       python -m tumble_ros EXECUTABLE [ARGS ...]
+
+Without an executable, the main job: simulate SCENARIO, compare it with the paper's analytic
+solution, record everything to recordings/<scenario>_<UTC time>.mcap and analyse it (a summary
+on stdout, the figures in recordings/<scenario>_<UTC time>_figures/). SCENARIO is a params file
+or a shipped scenario's name (default, fig3 ... fig10, apophis_2029); without one: default.
+
+  --live      run the three nodes over the ROS graph (default: the recording written offline)
+  -h, --help  this text
+
+Executables (EXECUTABLE --help: its own options; as `ros2 run tumble_ros EXECUTABLE`):
+""" + '\n'.join(f'  {name:<11} {text}' for name, text in SUMMARIES.items()) + """
+
+Examples:
+  python -m tumble_ros fig9
+  python -m tumble_ros analyze recordings/run.mcap --figures figs/
+Docs: README.md; the nodes, topics and parameters: docs/ros.md."""
 #: The executables whose ``main`` takes the arguments without the program name.
 BARE_ARGV = frozenset({'ensemble', 'encounter'})
 #: The nodes: they exit 0 when a signal stops them.
@@ -97,7 +126,7 @@ def _imported(name: str, module: str) -> Any:
     The collector is off during the imports (they free nothing), numba comes without
     ``coverage`` (but for the executables in :data:`WITHOUT_NUMBA`, which import no numba) and
     ``rosidl_generator_py`` without its code generator: ~0.06-0.09 s of a node's ~0.6-s import
-    (docs/performance.md, "Node start-up").
+    (benchmarks/HISTORY.md, "Node start-up").
     """
     enabled = gc.isenabled()
     gc.disable()
@@ -310,7 +339,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run ``python -m tumble_ros``: an executable, the main job, or this usage (--help)."""
     argv = sys.argv[1:] if argv is None else argv
     if argv and argv[0] in ('-h', '--help'):
-        print(__doc__.strip())
+        print(USAGE)
         return 0
     if argv and argv[0] in EXECUTABLES:
         return run_executable(argv[0], argv[1:])

@@ -70,7 +70,8 @@ from .timeaxis import runs
 __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plot_error',
            'plot_impacts', 'plot_omega_windows', 'plot_spectrum', 'plot_wy_vs_wx',
            'write_figures', 'numeric_limits', 'check_outputs', 'write_files', 'FIGURES',
-           'draw_figures', 'warm_up']
+           'draw_figures', 'warm_up', 'omega_figure', 'wy_vs_wx_figure', 'error_figure',
+           'spectrum_figure']
 
 DPI = 110
 #: Above this many samples the wy-vs-wx path is drawn as a density image (_draw_path_density).
@@ -240,10 +241,11 @@ def _mark_impacts(ax, rec: Recording) -> None:
 def plot_angular_velocity(rec: Recording, out_dir: str | os.PathLike[str], *,
                           overwrite: bool = False) -> list[Path]:
     """``omega.png``: the three components against t, the model's overlaid if recorded."""
-    return write_files(_draw_angular_velocity(rec, _departure(rec)), out_dir, overwrite)
+    return write_files(_draw_angular_velocity(rec, model_departure(rec)), out_dir, overwrite)
 
 
-def _departure(rec: Recording) -> float | None:
+def model_departure(rec: Recording) -> float | None:
+    """Return when the recorded model left the numeric solution [yr], or None."""
     stats, _ = comparator_errors(rec)
     return stats.t_departure if stats is not None else None
 
@@ -272,6 +274,15 @@ def _draw_model(ax, t: np.ndarray, y: np.ndarray, limits: tuple[float, float], l
 
 
 def _draw_angular_velocity(rec: Recording, departure: float | None = None) -> list[Drawing]:
+    return [_png(omega_figure(rec, departure), 'omega.png')]
+
+
+def omega_figure(rec: Recording, departure: float | None = None) -> Figure:
+    """
+    Draw ``omega.png``'s figure: wx, wy, wz [display rate] against t, the model's if recorded.
+
+    ``departure``: the time [yr] the model left the numeric solution, drawn when given.
+    """
     fig, axes = _new(3, 2.4)
     has_model = len(rec.model_t) > 0
     for i, ax in enumerate(axes):
@@ -295,7 +306,7 @@ def _draw_angular_velocity(rec: Recording, departure: float | None = None) -> li
     if has_model or rec.impacts or is_flyby(rec.scenario):
         axes[0].legend(loc='upper right', fontsize='small')
     axes[0].set_title(_title(rec), fontsize='small')
-    return [_png(fig, 'omega.png')]
+    return fig
 
 
 def plot_omega_windows(rec: Recording, out_dir: str | os.PathLike[str], *,
@@ -360,6 +371,11 @@ def plot_wy_vs_wx(rec: Recording, out_dir: str | os.PathLike[str], *,
 
 
 def _draw_wy_vs_wx(rec: Recording) -> list[Drawing]:
+    return [_png(wy_vs_wx_figure(rec), 'wy_vs_wx.png')]
+
+
+def wy_vs_wx_figure(rec: Recording) -> Figure:
+    """Draw ``wy_vs_wx.png``'s figure: wy against wx [display rate], start and end marked."""
     fig, (ax,) = _new(1, 6.0, 6.5)
     x, y = rec.omega[:, 0], rec.omega[:, 1]
     if len(x) > PATH_POINTS_MAX:
@@ -376,7 +392,7 @@ def _draw_wy_vs_wx(rec: Recording) -> list[Drawing]:
     unit = _unit(rec)
     ax.set_title(f'{_label(rec)}: $\\omega_y$ vs $\\omega_x$, t = {unit.t(rec.t[0]):.4g} .. '
                  f'{_t(rec.t[-1], unit)}', fontsize='small')
-    return [_png(fig, 'wy_vs_wx.png')]
+    return fig
 
 
 def envelope(t: np.ndarray, y: np.ndarray, bins: int = ENVELOPE_BINS
@@ -450,6 +466,12 @@ def plot_error(rec: Recording, out_dir: str | os.PathLike[str], *,
 
 
 def _draw_error(rec: Recording) -> list[Drawing]:
+    fig = error_figure(rec)
+    return [] if fig is None else [_png(fig, 'error.png')]
+
+
+def error_figure(rec: Recording) -> Figure | None:
+    """Draw ``error.png``'s figure: w - w_model and its norm against t; None without a model."""
     t_vec, vec = rec.error_t, rec.error
     if not len(t_vec) and len(rec.model_t):
         _, ia, ib = np.intersect1d(rec.model_t, rec.t, return_indices=True)
@@ -459,7 +481,7 @@ def _draw_error(rec: Recording) -> list[Drawing]:
     elif len(t_vec):
         t_norm, norm = t_vec, np.linalg.norm(vec, axis=1)
     else:
-        return []
+        return None
     fig, (ax1, ax2) = _new(2, 2.8)
     if len(t_vec):
         for i in range(3):
@@ -479,7 +501,7 @@ def _draw_error(rec: Recording) -> list[Drawing]:
     models = ', '.join(rec.error_models) or (rec.comparator_status.values.get('model', '')
                                              if rec.comparator_status else '')
     ax1.set_title(f'{_label(rec)}: numeric - analytic model {models}', fontsize='small')
-    return [_png(fig, 'error.png')]
+    return fig
 
 
 def plot_impacts(rec: Recording, out_dir: str | os.PathLike[str], *, samples: int = 25,
@@ -548,13 +570,25 @@ def plot_spectrum(rec: Recording, out_dir: str | os.PathLike[str],
 
 def _draw_spectrum(rec: Recording, summary: AnalysisSummary | SummaryParts | None
                    ) -> list[Drawing]:
+    drawn = spectrum_figure(rec, summary)
+    return [] if drawn is None else [_png(drawn[0], f'spectrum_{drawn[1]}.png')]
+
+
+def spectrum_figure(rec: Recording, summary: AnalysisSummary | SummaryParts | None = None
+                    ) -> tuple[Figure, str] | None:
+    """
+    Draw ``spectrum_wx.png``'s figure and name its component; None when there is no spectrum.
+
+    The amplitude spectrum [display rate] of wx with the theory's lines and the peaks, as in
+    the summary (``summary``, or computed); none for a flyby or fewer than 8 samples.
+    """
     if summary is not None:
         spec, lines = summary.spectrum, list(summary.theory)
     else:
         lines, _ = theory_lines(rec.scenario, rec.omega)
         spec = spectrum(rec.t, rec.omega[:, 0], lines)
     if spec is None or is_flyby(rec.scenario):
-        return []           # a flyby is one passage: no line to resolve in 144 h
+        return None         # a flyby is one passage: no line to resolve in 144 h
     u = _unit(rec)
     fig, (ax,) = _new(1, 3.5)
     positive = spec.amplitude > 0       # (drawn in display units: rad/yr, rad/d, ...)
@@ -580,7 +614,7 @@ def _draw_spectrum(rec: Recording, summary: AnalysisSummary | SummaryParts | Non
     ax.legend(loc='upper right', fontsize='x-small')
     ax.set_title(f'{_label(rec)}: spectrum of {spec.component}, resolution '
                  f'{u.rate_text(spec.resolution, 3)}', fontsize='small')
-    return [_png(fig, f'spectrum_{spec.component}.png')]
+    return fig, spec.component
 
 
 #: The theory lines' colours: the spectrum's blue left out, and brown and grey, which read as

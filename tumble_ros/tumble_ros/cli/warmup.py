@@ -94,7 +94,7 @@ def _tasks(names: list[str]) -> list[Task]:
     As one task a method, the longest (the splitting's two variants, ~30 s of CPU) started
     after another and ran alone for ~20 s of a fresh clone's warm-up, and the reference path
     (~7 s) compiled after them all, in one process; in parts of 3 to 30 s the processes stay
-    busy to the end whatever their order (docs/performance.md, "The warm-up in parts").
+    busy to the end whatever their order (benchmarks/HISTORY.md, "The warm-up in parts").
     """
     return ([(_warm_reference, (extra,), REFERENCE) for extra in (False, True)]
             + [(_warm_variant, (name, extra), name) for name in names for extra in (False, True)])

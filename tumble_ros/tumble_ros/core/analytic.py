@@ -736,7 +736,7 @@ class TorqueFreeExactModel(AnalyticModel):
         sigma = 1.0 if _is_cyclic(r, q, p) else -1.0
         nu = sigma * math.copysign(1.0, w[p]) * math.copysign(1.0, i_p - i_q) * math.sqrt(
             (i_p - i_q) * e_r / (i_r * i_q * i_p))
-        # scipy.special on first use, not with the module (~0.15-0.3 s: docs/performance.md,
+        # scipy.special on first use, not with the module (~0.15-0.3 s: benchmarks/HISTORY.md,
         # "Node start-up")
         from scipy.special import ellipk, ellipkinc
         u0 = float(ellipkinc(math.atan2(w[q] / a_q, w[r] / a_r), m))

@@ -9,7 +9,7 @@ lowering modules (``numba.core.cpu.CPUContext.load_additional_registries``). One
 Nothing in this package uses BLAS in compiled code, and no process imports ``scipy.linalg``
 otherwise: a node or a run spent ~0.1 s of its start and ~0.17 s of CPU there (a fresh process
 loading the ``dop853`` loop from the cache: 0.83 → 0.66 s of CPU, 2026-12-07,
-docs/performance.md, "numba's BLAS check").
+benchmarks/HISTORY.md, "numba's BLAS check").
 
 :func:`check_blas_without_importing_it` makes that one check at arraymath's import ask only
 whether ``scipy.linalg`` is installed (:func:`scipy_linalg_installed`), as numba's check does

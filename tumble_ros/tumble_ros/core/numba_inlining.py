@@ -17,7 +17,7 @@ Nothing else changes: the inlined IR is the same, and the machine code the same 
 (tests/test_core_numba_inlining.py). Alternated, the ``splitting`` loops without extra
 torques compiled in 34.6-35.6 s of CPU before, 25.8-27.8 s after; the ``dop853`` loops in
 20.1-20.6 s, then 15.9-18.2 s; the whole warm-up in 140-143 s, then 109-116 s
-(docs/performance.md, "The inliner's copies").
+(benchmarks/HISTORY.md, "The inliner's copies").
 
 Where numba's source is not the one this edits (another numba version), nothing is changed and
 numba compiles as it always did, only slower; the test says so.

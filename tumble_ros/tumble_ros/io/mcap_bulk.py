@@ -19,7 +19,7 @@ full chunk (its bytes and index entries, taken out of the chunk builder at once)
 filling the next, while the thread compresses it (zstd releases the GIL), computes its CRC and
 writes the Chunk and MessageIndex records and the chunk index as ``Writer.flush`` does, in the
 same order: the same file byte for byte (``test_io_written.py``). The offline recording uses
-it: ~0.2-0.4 s of the Fig 9 main job's critical path on the other core (docs/performance.md).
+it: ~0.2-0.4 s of the Fig 9 main job's critical path on the other core (benchmarks/HISTORY.md).
 Up to :data:`IN_FLIGHT` chunks wait for the thread (one write of the Fig 9 run fills about
 three: with one, the caller waited for each compression in turn, 0.1-0.17 s of that run);
 after a chunk failed to be written the thread writes no later one.

@@ -6,8 +6,8 @@ validated by :class:`tumble_ros.core.Scenario` itself: the node adds no rules of
 They are read-only: a scenario is fixed for the life of a run.
 
 ``tumble_ros.core`` (numba, the kernels: ~0.3 s) is imported by the functions that need it, not
-with this module: the recorder, which declares no scenario, never imports it (docs/performance.md,
-"Node start-up"; tests/test_node_startup.py).
+with this module: the recorder, which declares no scenario, never imports it
+(benchmarks/HISTORY.md, "Node start-up"; tests/test_node_startup.py).
 """
 from __future__ import annotations
 

@@ -16,7 +16,7 @@ of the steps they report instead (:class:`_StepClock`).
 ``scipy.integrate`` is imported when a stepper of this module is first built, not with the
 module: it costs ~0.2-0.5 s (it pulls in scipy.optimize, linalg, sparse), which every process
 importing ``tumble_ros.core`` paid, the nodes included, though the compiled path never uses it
-(docs/performance.md, "Node start-up").
+(benchmarks/HISTORY.md, "Node start-up").
 """
 from __future__ import annotations
 

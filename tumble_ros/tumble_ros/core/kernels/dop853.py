@@ -32,7 +32,7 @@ def scipy_tables() -> types.ModuleType:
 
     Read from its file, without importing the ``scipy.integrate`` package around it: that
     import costs ~0.2-0.5 s (scipy.optimize, linalg, sparse) in every process that imports the
-    kernels, the nodes included, and the tables need only numpy (docs/performance.md, "Node
+    kernels, the nodes included, and the tables need only numpy (benchmarks/HISTORY.md, "Node
     start-up"). Where the file is not found (another layout of scipy), the ordinary import.
     """
     spec = importlib.util.find_spec('scipy')

@@ -16,7 +16,7 @@ with those three functions bound in (numba inlines them: no dispatch at run time
 not a closure: numba's cache key of a closure pickles the compiled functions it closes over,
 and a compiled function pickles with a new random id in every process, so a closure would be
 compiled again by every process. A new compiled integrator is one module and one line in
-:data:`KERNELS` (docs/performance.md, "Adding a compiled integrator").
+:data:`KERNELS` (benchmarks/HISTORY.md, "Adding a compiled integrator").
 """
 from __future__ import annotations
 

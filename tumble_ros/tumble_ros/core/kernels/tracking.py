@@ -207,7 +207,7 @@ def follow(q0: float, q1: float, q2: float, q3: float, track: Array) -> None:
     inlined: it runs on the rare bodies ``lockstep.block_track``'s vectorised pass leaves (the
     hypot band) and once a body at the end of a call (``block_refresh``), and its four
     ``trig.atan2`` inlined into every method's copies of those loops cost ~15 s of compiling
-    a method and variant (docs/performance.md, "The warm-up in parts").
+    a method and variant (benchmarks/HISTORY.md, "The warm-up in parts").
     """
     phi, psi, verdict = track_angles(q0, q1, q2, q3)
     if verdict == TRACK_BAND:   # (also NaN: hypot NaN or inf, not below)

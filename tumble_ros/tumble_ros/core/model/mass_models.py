@@ -169,7 +169,7 @@ class MassModel(Protocol):
 def _gauss_jacobi_01(n: int, alpha: float) -> tuple[FloatArray, FloatArray]:
     """Return n nodes and weights on [0, 1] for the weight (1 - x)^alpha."""
     # scipy.special when a mass model is integrated, not with the module (every process
-    # importing tumble_ros.core paid ~0.15 s: docs/performance.md, "Node start-up")
+    # importing tumble_ros.core paid ~0.15 s: benchmarks/HISTORY.md, "Node start-up")
     from scipy.special import roots_jacobi
     x, w = roots_jacobi(n, alpha, 0.0)
     return (x + 1.0) / 2.0, w / 2.0 ** (alpha + 1.0)

@@ -196,7 +196,7 @@ def omega_for_periods(inertia: ArrayLike, precession_period: float,
                          f'P_psi / P_phi = {target:.6g} (the SAMs have ratios above '
                          f'{limit.rotation_period / limit.precession_period:.6g})')
     # scipy.optimize here, not at import: it costs 0.2-0.4 s, and the analysis of every
-    # recording imports this module (docs/performance.md, the Fig 9 main job)
+    # recording imports this module (benchmarks/HISTORY.md, the Fig 9 main job)
     from scipy.optimize import brentq
     d = brentq(mismatch, low, high, xtol=1e-15 * i3, rtol=1e-14)
     unit = periods(d)

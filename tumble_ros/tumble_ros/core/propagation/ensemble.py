@@ -482,7 +482,7 @@ def small_pages() -> Iterator[None]:
     numpy advises the kernel to back every array of 4 MB or more with huge pages (``madvise``).
     Where the kernel then compacts memory at the first touch of each
     (``/sys/kernel/mm/transparent_hugepage/defrag`` = ``madvise``, this project's machine), a
-    fresh process's N = 10^6 ensemble spent ~1.4 s more outside its loop (docs/performance.md,
+    fresh process's N = 10^6 ensemble spent ~1.4 s more outside its loop (benchmarks/HISTORY.md,
     "The samples' post-processing compiled"). numpy's setting is the process's: it is switched
     off by the first of concurrent callers and restored by the last. The arrays and their
     values are the same either way; a no-op where numpy has no such switch.

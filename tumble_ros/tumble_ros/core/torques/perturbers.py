@@ -172,7 +172,7 @@ class SourceKind:
     the kernels call, is made from it on first use, not when this module is imported: numba
     loading two C callbacks from its cache (and the typing machinery they need, ~0.2 s) was
     paid by every process importing ``tumble_ros.core``, the nodes included, with perturbers
-    or without (docs/performance.md, "Node start-up").
+    or without (benchmarks/HISTORY.md, "Node start-up").
     """
 
     name: str
