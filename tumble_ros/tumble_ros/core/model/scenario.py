@@ -725,7 +725,7 @@ class Scenario:
         unit = _one_of('time_unit', params.get('time_unit', 'yr'), TIME_UNITS)
         perturbers = _perturbers_from_parameters(
             params, unit, Path(params_file).parent if params_file is not None else None)
-        params = to_years(params, unit)
+        given, params = params, to_years(params, unit)
         plain = {k: params[k] for k in _SCENARIO_PLAIN if k in params}
         integ = {
             k.split('.', 1)[1]: params[k] for k in params if k.startswith('integrator.')
@@ -745,7 +745,7 @@ class Scenario:
         plain['lightcurve'] = LightcurveSettings.from_parameters(params)
         spin = spin_from_parameters(params)
         if spin is not None:
-            plain.update(_spin_fields(spin, params, body))
+            plain.update(_spin_fields(spin, given, body))
         return cls(**plain)
 
 
@@ -766,8 +766,9 @@ def _spin_fields(spin: SpinObservables, params: Mapping[str, Any],
     """
     Return the inertia, omega0 and euler0 of the ``spin.*`` block, refusing a second statement.
 
-    omega0 and euler0 must be left out (or at their defaults: a node holds every declared
-    parameter); a stated inertia, or a mass model's, must have the block's ratios.
+    omega0 and euler0 must be left out (or at their defaults, as ``params`` states them before
+    any time_unit conversion: a node holds every declared parameter); a stated inertia, or a
+    mass model's, must have the block's ratios.
     """
     defaults = Scenario.__dataclass_fields__
     for name in ('omega0', 'euler0'):
