@@ -116,7 +116,7 @@ def test_a_params_file_block_states_the_spin_state_it_gives(mode):
 
 @pytest.mark.parametrize('mode', ['SAM', 'LAM'])
 def test_the_state_survives_a_simulation_as_analyze_reports_it(mode):
-    """Literature state -> scenario -> torque-free run over a few P_psi -> spin_state at the end."""
+    """Literature state -> scenario -> torque-free run of a few P_psi -> spin_state at its end."""
     rng = np.random.default_rng(2014 if mode == 'SAM' else 2022)
     for _ in range(3):
         state = random_state(rng, mode)
@@ -158,7 +158,7 @@ def test_omega_for_periods_builds_long_axis_modes():
 
 
 def test_the_apophis_like_config_is_pravec_et_al_2014():
-    """The shipped file states Pravec et al.'s solution, and its E/E0 is theirs (1.024 +- 0.013)."""
+    """The shipped file states Pravec et al.'s solution; its E/E0 is theirs (1.024 +- 0.013)."""
     scenario = load_scenario(CONFIG / 'tumbling_from_observables.yaml')
     assert scenario.inertia == (0.61, 0.965, 1.0)
     state = observe(scenario.omega0, scenario.inertia, euler_to_quaternion(*scenario.euler0))
@@ -181,7 +181,7 @@ def _euler_poinsot(t, y, inertia):
 
 def test_an_independent_integration_measures_the_stated_periods_and_pole():
     """
-    scipy's DOP853 on Euler's equations (not the project's integrators), from the config's state.
+    The config's state through scipy's DOP853 on Euler's equations (not the project's code).
 
     P_psi: the time between upward zero crossings of w2; P_phi: the mean rate of the I3 axis'
     azimuth about L over the run; L's direction in the inertial frame: (250 deg, -75 deg).
@@ -217,12 +217,13 @@ def test_an_independent_integration_measures_the_stated_periods_and_pole():
     assert p_phi == pytest.approx(PRAVEC.precession_period, rel=1e-4)
 
 
-GOOD = dict(mode='SAM', precession_period=27.38 * HOUR, rotation_period=263.0 * HOUR,
-            inertia_ratios=(0.61, 0.965), pole=(4.36, -1.31))
+GOOD = {'mode': 'SAM', 'precession_period': 27.38 * HOUR, 'rotation_period': 263.0 * HOUR,
+        'inertia_ratios': (0.61, 0.965), 'pole': (4.36, -1.31)}
 
 
 @pytest.mark.parametrize('change, field', [
-    ({'rotation_period': 1.0 * HOUR}, 'spin.rotation_period: impossible'),     # SAM: P_psi/P_phi > 7.5
+    # (a SAM of these ratios has P_psi / P_phi > 7.5, a LAM > 1.6)
+    ({'rotation_period': 1.0 * HOUR}, 'spin.rotation_period: impossible'),
     ({'mode': 'LAM', 'rotation_period': 10.0 * HOUR}, 'spin.rotation_period: impossible'),
     ({'pole': (4.36, -1.6)}, 'spin.pole: the latitude'),
     ({'inertia_ratios': (0.965, 0.61)}, 'spin.inertia_ratios: must be'),
@@ -242,8 +243,10 @@ def test_bad_values_are_refused_in_one_line_naming_the_field(change, field):
 
 
 @pytest.mark.parametrize('old, new, field', [
-    ('    spin:\n', '    omega0: [1.0, 2.0, 3.0]\n    spin:\n', 'omega0: give the spin state once'),
-    ('    spin:\n', '    euler0: [0.1, 0.2, 0.3]\n    spin:\n', 'euler0: give the spin state once'),
+    ('    spin:\n', '    omega0: [1.0, 2.0, 3.0]\n    spin:\n',
+     'omega0: give the spin state once'),
+    ('    spin:\n', '    euler0: [0.1, 0.2, 0.3]\n    spin:\n',
+     'euler0: give the spin state once'),
     ('    spin:\n', '    inertia: [0.6, 0.965, 1.0]\n    spin:\n',
      'spin.inertia_ratios: disagree'),
     ('rotation_period: 263.0', 'rotation_period: 1.0', 'spin.rotation_period: impossible'),
@@ -258,7 +261,7 @@ def test_a_params_file_states_the_spin_once_and_right(old, new, field):
 
 
 def test_a_stated_inertia_with_the_ratios_keeps_its_axes():
-    """inertia [2, 1.22, 1.93] (I3 along x) with the block: the ratios agree, the axes are kept."""
+    """An inertia [2, 1.22, 1.93] (I3 along x) with the block: the ratios agree, axes kept."""
     text = block(PRAVEC).replace('    spin:\n', '    inertia: [2.0, 1.22, 1.93]\n    spin:\n')
     scenario = parse_scenario(text)
     assert scenario.inertia == (2.0, 1.22, 1.93)
@@ -268,7 +271,7 @@ def test_a_stated_inertia_with_the_ratios_keeps_its_axes():
 
 def test_spin_fields_without_a_mode_are_refused():
     text = '/**/sim:\n  ros__parameters:\n    spin:\n      pole: [1.0, 0.5]\n'
-    with pytest.raises(ScenarioError, match=r"^spin\.pole: is used only with spin\.mode"):
+    with pytest.raises(ScenarioError, match=r'^spin\.pole: is used only with spin\.mode'):
         parse_scenario(text)
 
 

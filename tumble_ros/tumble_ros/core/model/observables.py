@@ -181,7 +181,7 @@ class SpinObservables:
         moments = np.asarray(inertia, dtype=float).reshape(3)
         ratios = np.sort(moments)[:2] / moments.max()
         if not np.all(np.abs(ratios - (r1, r2)) <= RATIO_TOLERANCE * np.array([r1, r2])):
-            _fail('inertia_ratios', f'disagree with the scenario\'s moments {moments.tolist()} '
+            _fail('inertia_ratios', f"disagree with the scenario's moments {moments.tolist()} "
                   f'(their ratios are {ratios.tolist()}): give one or the other',
                   list(self.inertia_ratios))
         return moments
@@ -247,7 +247,7 @@ SPIN_DEFAULTS: dict[str, Any] = {
 
 #: Unit and meaning of every ``spin.*`` parameter (the nodes' descriptors, docs/ros.md).
 SPIN_PARAMETER_DOCS: dict[str, tuple[str, str]] = {
-    'spin.mode': ('', "the spin state as the literature gives it: SAM or LAM, with the spin.* "
+    'spin.mode': ('', 'the spin state as the literature gives it: SAM or LAM, with the spin.* '
                   "below instead of omega0, euler0 (and inertia); '' (default) = not used "
                   '(docs/physics.md, "The spin state from what is observed")'),
     'spin.precession_period': ('yr', 'P_phi, the mean precession period of the reference axis '
@@ -258,7 +258,7 @@ SPIN_PARAMETER_DOCS: dict[str, tuple[str, str]] = {
                             'I2/I3, 1) unless the scenario states its moments'),
     'spin.pole': ('rad', "L's direction (lambda, beta), orbital frame (ecliptic when the orbital "
                   'frame is ecliptic J2000)'),
-    'spin.phases': ('rad', "the Euler angles (phi0, psi0) of the body about L at t = 0"),
+    'spin.phases': ('rad', 'the Euler angles (phi0, psi0) of the body about L at t = 0'),
     'spin.anti_aligned': ('', 'theta0 > 90 deg: the reference axis points away from L'),
 }
 
@@ -276,7 +276,7 @@ def spin_from_parameters(params: Mapping[str, Any]) -> SpinObservables | None:
         for key, default in SPIN_DEFAULTS.items():
             if values[key] != default and not (isinstance(default, list)
                                                and list(values[key]) == default):
-                _fail(key.split('.', 1)[1], "is used only with spin.mode SAM or LAM (spin.mode "
+                _fail(key.split('.', 1)[1], 'is used only with spin.mode SAM or LAM (spin.mode '
                       "is '')", values[key])
         return None
     return SpinObservables(

@@ -35,8 +35,8 @@ from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, M
                                           MAX_ORBIT_RATE, MAX_ROTATION, MAX_RTOL, MAX_SAMPLES,
                                           MAX_STEPS, MIN_ORBIT_RATE, MIN_RTOL, RESOLUTION_ULPS,
                                           ScenarioError, step_budget)
-from tumble_ros.core.model.observables import (SPIN_DEFAULTS, SPIN_PARAMETER_DOCS,
-                                               spin_from_parameters, SpinObservables)
+from tumble_ros.core.model.observables import (SPIN_DEFAULTS, spin_from_parameters,
+                                               SPIN_PARAMETER_DOCS, SpinObservables)
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
 from tumble_ros.core.model.units import TIME_UNITS, to_years
 from tumble_ros.core.photometry.settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
@@ -775,7 +775,7 @@ def _spin_fields(spin: SpinObservables, params: Mapping[str, Any],
         if name in params and _vector(name, params[name]) != defaults[name].default:
             _fail(name, f'give the spin state once: omega0 and euler0, or the spin.* block '
                   f'(spin.mode {spin.mode})', params[name])
-    inertia = body.inertia
+    inertia: tuple[float, ...] | None = body.inertia
     stated = params.get('inertia')
     if inertia is None and stated is not None and _vector('inertia', stated) != \
             defaults['inertia'].default:
