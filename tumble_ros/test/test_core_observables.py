@@ -284,3 +284,24 @@ def test_the_block_round_trips_through_its_parameters():
     """to_parameters (periods in years) read back as the same state."""
     from tumble_ros.core.model.observables import spin_from_parameters
     assert spin_from_parameters(PRAVEC.to_parameters()) == PRAVEC
+
+
+def test_analyze_reports_the_state_as_the_block_it_was_given(tmp_path):
+    """A recording of the shipped file: analyze's start state is Pravec et al.'s block again."""
+    from test_analysis_support import write_recording
+
+    from tumble_ros.analysis import analyze, format_summary, load_recording, summary_to_dict
+
+    scenario = load_scenario(CONFIG / 'tumbling_from_observables.yaml').replace(
+        duration=10 * HOUR, output_interval=HOUR)
+    run = simulate(scenario)
+    path = write_recording(tmp_path / 'tumbler.mcap', run.t, run.omega,
+                           quaternion=run.quaternion, scenario=scenario)
+    summary = analyze(load_recording(path))
+    assert summary.spin is not None and summary.spin.start_block is not None
+    assert_same_state(summary.spin.start_block, PRAVEC, rel=1e-11)
+    assert summary.spin.end_block is not None
+    assert_same_state(summary.spin.end_block, PRAVEC, rel=1e-9, phases=False)
+    assert 'as spin.*: inertia_ratios [0.61, 0.965], phases (phi0, psi0) = (0, 0) deg' \
+        in format_summary(summary)
+    assert summary_to_dict(summary)['spin']['start_block']['mode'] == 'SAM'
