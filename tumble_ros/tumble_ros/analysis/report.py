@@ -206,7 +206,7 @@ def _pole(u: DisplayUnits, state) -> str:
 
 
 def _block_text(block: SpinObservables) -> str:
-    """The inertia ratios and phases of a ``spin.*`` block (the line above has the rest)."""
+    """Return the inertia ratios and phases of a ``spin.*`` block (its line has the rest)."""
     # (in [0, 360) after rounding at 1e-9 deg: 2 pi - 1e-16 is 0, not 360)
     phi, psi = (round(math.degrees(v), 9) % 360.0 for v in block.phases)
     ratios = ', '.join(f'{v:.6g}' for v in block.inertia_ratios)
