@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from types import ModuleType
 from typing import Any, Mapping
 
 import numpy as np
@@ -42,7 +43,6 @@ import numpy as np
 from tumble_ros.core.array_types import ArrayLike
 from tumble_ros.core.model.limits import ScenarioError
 from tumble_ros.core.model.rotation import euler_to_matrix, matrix_to_euler, quaternion_to_matrix
-from tumble_ros.core.model.spinstate import omega_for_periods, spin_state
 
 __all__ = ['SpinObservables', 'observe', 'SPIN_MODES', 'SPIN_PARAMETER_DOCS',
            'SPIN_DEFAULTS', 'spin_from_parameters']
@@ -52,6 +52,17 @@ SPIN_MODES = ('SAM', 'LAM')
 #: Largest relative difference between the inertia ratios and the scenario's moments.
 RATIO_TOLERANCE = 1e-9
 _TWO_PI = 2.0 * math.pi
+
+
+def _spinstate() -> ModuleType:
+    """
+    Return :mod:`~.spinstate`, imported on first use.
+
+    It imports scipy.special, which no node module may import at start-up (the scenario imports
+    this module; test_node_startup.py): only a scenario with a ``spin.*`` block needs it.
+    """
+    from tumble_ros.core.model import spinstate
+    return spinstate
 
 
 def _fail(name: str, why: str, value: Any) -> None:
@@ -132,6 +143,7 @@ class SpinObservables:
 
     def _check_periods(self, moments: tuple[float, float, float]) -> None:
         """Refuse a P_psi that no body of these ratios has in this mode with this P_phi."""
+        omega_for_periods = _spinstate().omega_for_periods
         try:
             omega_for_periods(moments, self.precession_period, self.rotation_period, self.mode)
         except ValueError as err:
@@ -152,6 +164,7 @@ class SpinObservables:
         the paper's Euler angles (orbital -> body) [rad].
         """
         moments = self._moments(inertia)
+        omega_for_periods = _spinstate().omega_for_periods
         axes = _principal_axes(moments)
         sam = self.mode == 'SAM'
         # (a, b, r) in body components: a SAM's (e1, e2, e3), a LAM's (e2, e3, e1)
@@ -222,7 +235,7 @@ def observe(omega: ArrayLike, inertia: ArrayLike, quaternion: ArrayLike) -> Spin
     triaxial.
     """
     moments = np.asarray(inertia, dtype=float).reshape(3)
-    state = spin_state(omega, moments, quaternion)
+    state = _spinstate().spin_state(omega, moments, quaternion)
     if state.mode not in SPIN_MODES or len(set(moments.tolist())) < 3:
         _fail('mode', 'the state has no SAM/LAM description (a principal rotation, the '
               'separatrix or a body that is not triaxial)', state.mode)
