@@ -715,7 +715,8 @@ class Scenario:
         ``params_file``: the file the parameters come from, if any (``body.shape_file`` and the
         perturbers' ``ephemeris_file`` may be relative to it). Raises ScenarioError for unknown
         keys and invalid values, and for an ``inertia`` given beside a mass model that disagrees
-        with it.
+        with it. A ``spin.*`` block (the spin state as the literature gives it:
+        :mod:`~.observables`) gives ``inertia``, ``omega0`` and ``euler0``, converted here once.
         """
         known = set(PARAMETER_NAMES) | set(perturber_parameter_names(params))
         unknown = sorted(set(params) - known)
