@@ -24,6 +24,8 @@ from .display import display_units, DisplayUnits
 from .recording import ROOT_NAMESPACE
 
 if TYPE_CHECKING:
+    from tumble_ros.core.model.observables import SpinObservables
+
     from .summary import AnalysisSummary
 
 __all__ = ['format_summary', 'summary_to_dict']
@@ -203,16 +205,28 @@ def _pole(u: DisplayUnits, state) -> str:
     return f', pole {u.direction_text(state.pole_longitude, state.pole_latitude)}'
 
 
+def _block_text(block: SpinObservables) -> str:
+    """Return the inertia ratios and phases of a ``spin.*`` block (its line has the rest)."""
+    # (in [0, 360) after rounding at 1e-9 deg: 2 pi - 1e-16 is 0, not 360)
+    phi, psi = (round(math.degrees(v), 9) % 360.0 for v in block.phases)
+    ratios = ', '.join(f'{v:.6g}' for v in block.inertia_ratios)
+    sense = ', anti_aligned' if block.anti_aligned else ''
+    return f'inertia_ratios [{ratios}], phases (phi0, psi0) = ({phi:.6g}, {psi:.6g}) deg{sense}'
+
+
 def _spin(s: AnalysisSummary) -> list[str]:
     if s.spin is None:
         return [f'spin state: not computed ({s.spin_note})']
     u = _units(s)
     out = ['spin state (torque-free through the sample; docs/analysis.md):']
-    for label, t, state in (('start', s.spin.t_start, s.spin.start),
-                            ('end', s.spin.t_end, s.spin.end)):
+    for label, t, state, block in (
+            ('start', s.spin.t_start, s.spin.start, s.spin.start_block),
+            ('end', s.spin.t_end, s.spin.end, s.spin.end_block)):
         out.append(f'  {label} (t = {u.time_text(t, 10)}): {state.mode}, rotation '
                    f'{u.period_text(state.rotation_period)}, precession '
                    f'{u.period_text(state.precession_period)}{_pole(u, state)}')
+        if block is not None:
+            out.append(f'    as spin.*: {_block_text(block)}')
     if s.spin.pole_shift is not None:
         out.append(f'  pole shift: {math.degrees(s.spin.pole_shift):.3g} deg')
     if s.closest_approach is not None:

@@ -8,8 +8,9 @@ Quick start::
     result.omega   # (3, 3) angular velocity [rad/yr], body axes
 
 Packages, by concern: ``model`` (the body and its inputs: ``scenario`` validated, ``shape``,
-``spinstate``, ``units``, ``rotation`` (Euler angles, matrices, quaternions), ``dynamics``
-(equations of motion, invariants), ``limits``), ``propagation`` (``propagator``: incremental
+``spinstate``, ``observables`` (the spin state as the literature gives it), ``units``,
+``rotation`` (Euler angles, matrices, quaternions), ``dynamics`` (equations of motion,
+invariants), ``limits``), ``propagation`` (``propagator``: incremental
 integration split at impacts; ``simulate``: batch runs; ``ensemble``: N bodies at once;
 ``timebase``: simulated years <-> ROS stamps), ``torques`` (the torques as components:
 gravity gradient, impact pulses, and :class:`TorqueComponent` for torques defined outside

@@ -35,6 +35,8 @@ from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, M
                                           MAX_ORBIT_RATE, MAX_ROTATION, MAX_RTOL, MAX_SAMPLES,
                                           MAX_STEPS, MIN_ORBIT_RATE, MIN_RTOL, RESOLUTION_ULPS,
                                           ScenarioError, step_budget)
+from tumble_ros.core.model.observables import (SPIN_DEFAULTS, spin_from_parameters,
+                                               SPIN_PARAMETER_DOCS, SpinObservables)
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
 from tumble_ros.core.model.units import TIME_UNITS, to_years
 from tumble_ros.core.photometry.settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
@@ -701,6 +703,7 @@ class Scenario:
         params['gravity.degree'] = self.gravity_degree
         params.update(self.body.to_parameters())
         params.update(self.lightcurve.to_parameters())
+        params.update(SPIN_DEFAULTS)   # (the spin.* block is converted when read: omega0, euler0)
         return params
 
     @classmethod
@@ -712,7 +715,8 @@ class Scenario:
         ``params_file``: the file the parameters come from, if any (``body.shape_file`` and the
         perturbers' ``ephemeris_file`` may be relative to it). Raises ScenarioError for unknown
         keys and invalid values, and for an ``inertia`` given beside a mass model that disagrees
-        with it.
+        with it. A ``spin.*`` block (the spin state as the literature gives it:
+        :mod:`~.observables`) gives ``inertia``, ``omega0`` and ``euler0``, converted here once.
         """
         known = set(PARAMETER_NAMES) | set(perturber_parameter_names(params))
         unknown = sorted(set(params) - known)
@@ -722,7 +726,7 @@ class Scenario:
         unit = _one_of('time_unit', params.get('time_unit', 'yr'), TIME_UNITS)
         perturbers = _perturbers_from_parameters(
             params, unit, Path(params_file).parent if params_file is not None else None)
-        params = to_years(params, unit)
+        given, params = params, to_years(params, unit)
         plain = {k: params[k] for k in _SCENARIO_PLAIN if k in params}
         integ = {
             k.split('.', 1)[1]: params[k] for k in params if k.startswith('integrator.')
@@ -740,6 +744,9 @@ class Scenario:
             # parameter, so the simulator's parameters always carry an inertia)
             _check_body_inertia(stated, body)
         plain['lightcurve'] = LightcurveSettings.from_parameters(params)
+        spin = spin_from_parameters(params)
+        if spin is not None:
+            plain.update(_spin_fields(spin, given, body))
         return cls(**plain)
 
 
@@ -753,6 +760,28 @@ def _check_body_inertia(inertia: Any, body: BodySpec) -> None:
         _fail('inertia', f'disagrees with the mass model (body.model {body.model}), whose '
               f'normalised principal moments are {list(derived)}: give one or the other (a '
               'body and its inertia cannot disagree)', inertia)
+
+
+def _spin_fields(spin: SpinObservables, params: Mapping[str, Any],
+                 body: BodySpec) -> dict[str, Any]:
+    """
+    Return the inertia, omega0 and euler0 of the ``spin.*`` block, refusing a second statement.
+
+    omega0 and euler0 must be left out (or at their defaults, as ``params`` states them before
+    any time_unit conversion: a node holds every declared parameter); a stated inertia, or a
+    mass model's, must have the block's ratios.
+    """
+    defaults = Scenario.__dataclass_fields__
+    for name in ('omega0', 'euler0'):
+        if name in params and _vector(name, params[name]) != defaults[name].default:
+            _fail(name, f'give the spin state once: omega0 and euler0, or the spin.* block '
+                  f'(spin.mode {spin.mode})', params[name])
+    inertia: tuple[float, ...] | None = body.inertia
+    stated = params.get('inertia')
+    if inertia is None and stated is not None and _vector('inertia', stated) != \
+            defaults['inertia'].default:
+        inertia = _vector('inertia', stated)
+    return spin.scenario_fields(inertia)
 
 
 _SCENARIO_PLAIN = (
@@ -775,6 +804,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
     + ('gravity.degree',)
     + tuple(BODY_PARAMETER_DOCS)
     + tuple(LIGHTCURVE_PARAMETER_DOCS)
+    + tuple(SPIN_PARAMETER_DOCS)
 )
 
 
@@ -869,6 +899,7 @@ PARAMETER_DOCS: dict[str, tuple[str, str]] = {
                        '(needs a perturber and the field)'),
     **BODY_PARAMETER_DOCS,
     **LIGHTCURVE_PARAMETER_DOCS,
+    **SPIN_PARAMETER_DOCS,
 }
 
 

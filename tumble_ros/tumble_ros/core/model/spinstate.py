@@ -48,6 +48,8 @@ from tumble_ros.core.model.rotation import quaternion_to_matrix
 __all__ = ['SpinState', 'spin_state', 'omega_for_periods']
 
 _SEPARATRIX = 1e-12   # |D - I2| / I2 below this: the separatrix (infinite period)
+#: The tumbling modes :func:`omega_for_periods` builds, and their names in its messages.
+_MODE_NAMES = {'SAM': 'short-axis mode', 'LAM': 'long-axis mode'}
 
 
 @dataclass(frozen=True)
@@ -152,24 +154,26 @@ def _precession_period(mode: str, moments: tuple[float, float, float], momentum:
 
 
 def omega_for_periods(inertia: ArrayLike, precession_period: float,
-                      rotation_period: float) -> np.ndarray:
+                      rotation_period: float, mode: str = 'SAM') -> np.ndarray:
     """
-    Return a w [rad/yr] (body axes) of the short-axis mode with the given periods [yr].
+    Return a w [rad/yr] (body axes) of the ``mode`` ('SAM' or 'LAM') with the given periods [yr].
 
-    The inverse of :func:`spin_state` for a SAM, how photometric solutions state a tumbler
-    (e.g. Apophis: P_phi = 27.374 h, P_psi = 262.2 h). At a fixed dynamical moment D = L^2/2E
-    both periods scale as 1/L, so their ratio fixes D (a root in (I2, I3)) and P_phi then fixes
-    L. The w returned is the point of the polhode where the intermediate axis' component is 0,
-    with the short axis' component > 0; the rest of the polhode is that state moved on by the
-    torque-free motion. Raises ValueError when no SAM of these moments has these periods.
+    The inverse of :func:`spin_state`, how photometric solutions state a tumbler (e.g. Apophis:
+    P_phi = 27.374 h, P_psi = 262.2 h, a SAM). At a fixed dynamical moment D = L^2/2E both
+    periods scale as 1/L, so their ratio fixes D (a root in (I2, I3) for a SAM, in (I1, I2) for
+    a LAM) and P_phi then fixes L. The w returned is the point of the polhode where the
+    intermediate axis' component is 0, with the short and long axes' components > 0; the rest
+    of the polhode is that state moved on by the torque-free motion. Raises ValueError when no
+    such mode of these moments has these periods.
     """
     moments = np.asarray(inertia, dtype=float).reshape(3)
     order = np.argsort(moments, kind='stable')
     i1, i2, i3 = moments[order]
-    if not (0.0 < i1 < i2 < i3 and precession_period > 0.0 and rotation_period > 0.0):
-        raise ValueError(f'omega_for_periods: needs I1 < I2 < I3 (a triaxial body) and periods '
-                         f'> 0, got {moments.tolist()}, {precession_period!r}, '
-                         f'{rotation_period!r}')
+    if not (0.0 < i1 < i2 < i3 and precession_period > 0.0 and rotation_period > 0.0
+            and mode in _MODE_NAMES):
+        raise ValueError(f'omega_for_periods: needs I1 < I2 < I3 (a triaxial body), periods '
+                         f'> 0 and a mode SAM or LAM, got {moments.tolist()}, '
+                         f'{precession_period!r}, {rotation_period!r}, {mode!r}')
 
     def polhode_point(d: float, momentum: float) -> np.ndarray:
         e2 = momentum * momentum / d                               # 2E
@@ -183,18 +187,21 @@ def omega_for_periods(inertia: ArrayLike, precession_period: float,
         return spin_state(polhode_point(d, 1.0), moments)
 
     target = rotation_period / precession_period
-    span = i3 - i2
 
     def mismatch(d: float) -> float:
         state = periods(d)
         return state.rotation_period / state.precession_period - target
 
-    low, high = i2 + 1e-9 * span, i3 - 1e-9 * span
+    # (D between the pure spin about the reference axis and the separatrix, both left out)
+    low, high = (i2, i3) if mode == 'SAM' else (i1, i2)
+    span = high - low
+    low, high = low + 1e-9 * span, high - 1e-9 * span
     if mismatch(low) * mismatch(high) > 0.0:
-        limit = periods(high)
-        raise ValueError(f'omega_for_periods: no short-axis mode of these moments has '
-                         f'P_psi / P_phi = {target:.6g} (the SAMs have ratios above '
-                         f'{limit.rotation_period / limit.precession_period:.6g})')
+        ends = sorted(periods(d).rotation_period / periods(d).precession_period
+                      for d in (low, high))
+        raise ValueError(f'omega_for_periods: no {_MODE_NAMES[mode]} of these moments has '
+                         f'P_psi / P_phi = {target:.6g} (its ratios lie between '
+                         f'{ends[0]:.6g} and {ends[1]:.6g})')
     # scipy.optimize here, not at import: it costs 0.2-0.4 s, and the analysis of every
     # recording imports this module (benchmarks/HISTORY.md, the Fig 9 main job)
     from scipy.optimize import brentq

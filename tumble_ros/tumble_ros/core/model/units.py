@@ -4,7 +4,8 @@ Units at the boundary: a scenario may state its times in years, days, hours, min
 Inside, everything is in years (times), rad/yr (rates) and I rad/yr^2 (torques). A scenario
 file or parameter set with ``time_unit: h`` states every time-like value in hours instead:
 ``duration``, ``output_interval``, ``integrator.step``, ``integrator.max_step``,
-``impacts.start``, ``impacts.duration``, ``orbit.t_p`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
+``impacts.start``, ``impacts.duration``, ``orbit.t_p``, ``spin.precession_period``,
+``spin.rotation_period`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
 ``impacts.torque`` [I rad/h^2]. :func:`to_years` converts them once, when the scenario is read;
 the scenario, the recordings and the analysis then speak years (the analysis also prints periods
 in hours or days). A year is the Julian year, 365.25 days.
@@ -56,6 +57,7 @@ TIME_UNITS = {
 TIME_POWERS = {
     'duration': 1, 'output_interval': 1, 'integrator.step': 1, 'integrator.max_step': 1,
     'impacts.start': 1, 'impacts.duration': 1, 'orbit.t_p': 1,
+    'spin.precession_period': 1, 'spin.rotation_period': 1,
     'omega0': -1, 'orbit_rate': -1,
     'impacts.torque': -2,
 }
