@@ -123,7 +123,7 @@ def test_every_dependency_has_a_lower_bound_and_no_pin():
 
 
 def test_no_root_file_makes_colcon_take_the_root_for_a_package():
-    """colcon stops at a package: setup.cfg's name or COLCON_IGNORE would hide the two below."""
+    """No setup.py, setup.cfg, COLCON_IGNORE: colcon would stop at the root (below)."""
     assert not (REPO / 'setup.py').exists() and not (REPO / 'setup.cfg').exists()
     assert not (REPO / 'COLCON_IGNORE').exists() and not (REPO / 'package.xml').exists()
 
@@ -190,7 +190,7 @@ def test_the_built_metadata_declares_the_dependencies_and_the_command(built):
 
 
 def _fresh_venv(path, lib):
-    """A venv holding the built package alone; the shared venv's packages reached by a .pth."""
+    """Make a venv holding the built package; the shared venv's packages reached by a .pth."""
     subprocess.run([sys.executable, '-m', 'venv', '--without-pip', str(path)], check=True,
                    timeout=60)
     python = path / 'bin' / 'python'
