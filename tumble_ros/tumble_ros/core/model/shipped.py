@@ -61,6 +61,6 @@ def shipped_scenario(name: str) -> Path:
     shipped = shipped_scenarios()
     stem = name[:-len('.yaml')] if name.endswith('.yaml') else name
     if stem not in shipped:
-        raise ScenarioError(f'scenario: no shipped scenario {name!r} (shipped: '
-                            f"{', '.join(shipped) or 'none, in ' + str(config_dir())})")
+        raise ScenarioError(f"scenario: no shipped scenario {name!r}: no {config_dir() / stem}"
+                            f".yaml (shipped: {', '.join(shipped) or 'none'})")
     return shipped[stem]
