@@ -305,3 +305,16 @@ def test_the_command_says_in_one_line_which_module_it_misses(monkeypatch, capsys
     assert entry.main(['probe', '--flag']) == 1
     out, err = capsys.readouterr()
     assert out == '' and err.startswith(f'tumble_ros probe: {says}') and err.count('\n') == 1
+
+
+def test_the_usage_into_a_closed_pipe_ends_quietly(tmp_path):
+    """``tumble_ros --help | head -3``: exit 141 as every executable, not a BrokenPipeError."""
+    read, write = os.pipe()
+    os.close(read)          # the reader has gone before anything is written
+    with open(tmp_path / 'stderr.log', 'w') as err:
+        run = subprocess.run([sys.executable, '-m', 'tumble_ros', '--help'], stdout=write,
+                             stderr=err, stdin=subprocess.DEVNULL, timeout=120)
+    os.close(write)
+    stderr = (tmp_path / 'stderr.log').read_text()
+    assert run.returncode == 141, stderr
+    assert 'Traceback' not in stderr and 'BrokenPipeError' not in stderr, stderr

@@ -315,8 +315,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run ``python -m tumble_ros``: an executable, the main job, or this usage (--help)."""
     argv = sys.argv[1:] if argv is None else argv
     if argv and argv[0] in ('-h', '--help'):
-        print(__doc__.strip())
-        return 0
+        return call_closing_quietly(_usage, argv)   # `tumble_ros --help | head -3`: 141
     try:
         if argv and argv[0] in EXECUTABLES:
             return run_executable(argv[0], argv[1:])
@@ -325,6 +324,12 @@ def main(argv: list[str] | None = None) -> int:
         program = ' '.join(['tumble_ros', *argv[:1]])
         print(missing_module_line(program, err), file=sys.stderr)
         return 1
+
+
+def _usage(argv: list[str]) -> int:
+    """Print this module's usage (its docstring; ``python -OO``: the executables' names)."""
+    print((__doc__ or f"executables: {', '.join(EXECUTABLES)}").strip())
+    return 0
 
 
 def console() -> int:
