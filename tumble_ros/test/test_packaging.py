@@ -318,3 +318,10 @@ def test_the_usage_into_a_closed_pipe_ends_quietly(tmp_path):
     stderr = (tmp_path / 'stderr.log').read_text()
     assert run.returncode == 141, stderr
     assert 'Traceback' not in stderr and 'BrokenPipeError' not in stderr, stderr
+
+
+def test_a_module_of_the_package_itself_missing_is_a_bug_not_the_environment(monkeypatch):
+    import tumble_ros.__main__ as entry
+    monkeypatch.setitem(entry.EXECUTABLES, 'probe', 'tumble_ros.no_such_module:main')
+    with pytest.raises(ModuleNotFoundError, match='tumble_ros.no_such_module'):
+        entry.main(['probe'])

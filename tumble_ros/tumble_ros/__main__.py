@@ -290,8 +290,8 @@ def quick_exit(code: int) -> None:
     os._exit(code)
 
 
-#: What a module missing from the environment belongs to (its top-level name's prefix), and
-#: how to get it: a pip install of the repository root has no ROS (docs/setup.md).
+#: What a module missing from the environment comes with, by its top-level name: a pip install
+#: of the repository root has no ROS, and the ensembles' stack is an extra (docs/setup.md).
 MISSING_MODULES = {
     **dict.fromkeys(('dask', 'distributed', 'xarray', 'zarr'),
                     "the ensembles' extra: pip install 'tumble_ros[ensembles]'"),
@@ -321,6 +321,8 @@ def main(argv: list[str] | None = None) -> int:
             return run_executable(argv[0], argv[1:])
         return main_job(argv)
     except ModuleNotFoundError as err:
+        if (err.name or '').split('.')[0] == 'tumble_ros':
+            raise                   # not the environment's: a bug of this package
         program = ' '.join(['tumble_ros', *argv[:1]])
         print(missing_module_line(program, err), file=sys.stderr)
         return 1
