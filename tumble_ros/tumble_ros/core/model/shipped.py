@@ -61,6 +61,7 @@ def shipped_scenario(name: str) -> Path:
     shipped = shipped_scenarios()
     stem = name[:-len('.yaml')] if name.endswith('.yaml') else name
     if stem not in shipped:
-        raise ScenarioError(f"scenario: no shipped scenario {name!r}: no {config_dir() / stem}"
-                            f".yaml (shipped: {', '.join(shipped) or 'none'})")
+        known = ', '.join(shipped) or 'none'
+        raise ScenarioError(f'scenario: no shipped scenario {name!r}: no '
+                            f'{config_dir() / stem}.yaml (shipped: {known})')
     return shipped[stem]
