@@ -7,7 +7,8 @@ here, so the clone's `make` is told it is done with `-o setup`), and runs every 
 README's "Ways in" that needs no `ros2` command line, with the shorter sizes the README allows
 (fewer bodies, a shorter duration), then checks that each succeeded, wrote what the README says,
 The `ros2 run` / `ros2 launch` lines need a
-real ROS 2 install and are not run here.
+real ROS 2 install and are not run here; the `pip install` lines would install into this venv
+(test_packaging.py builds and installs the package into a venv of its own instead).
 """
 from __future__ import annotations
 
@@ -41,7 +42,9 @@ def shell_commands() -> list[str]:
         joined = re.sub(r'\\\n\s*', ' ', block)
         for line in joined.splitlines():
             line = line.split('  #', 1)[0].strip()
-            if not line or line.startswith('ros2 '):
+            # not ros2 (no ros2 CLI here), nor pip install (it would install into the test's
+            # venv: test_packaging.py builds and installs the package into a venv of its own)
+            if not line or line.startswith(('ros2 ', 'pip ')):
                 continue
             for text, replacement in OVERRIDES.items():
                 line = line.replace(text, replacement)

@@ -335,19 +335,62 @@ def quick_exit(code: int) -> None:
     os._exit(code)
 
 
+#: What a module missing from the environment comes with, by its top-level name: a pip install
+#: of the repository root has no ROS, and the ensembles' stack is an extra (docs/setup.md).
+MISSING_MODULES = {
+    **dict.fromkeys(('dask', 'distributed', 'xarray', 'zarr'),
+                    "the ensembles' extra: pip install 'tumble_ros[ensembles]'"),
+    'rclpy': 'ROS 2 Jazzy (make setup, or a ROS install: docs/setup.md); without ROS, '
+             'analyze, ensemble and encounter run',
+}
+#: Top-level names of the ROS packages besides rclpy (the message and interface packages).
+ROS_SUFFIXES = ('_msgs', '_srvs', '_interfaces', '_python', '_runtime_py')
+
+
+def missing_module_line(program: str, err: ModuleNotFoundError) -> str:
+    """Return the one line saying which module ``program`` misses and what provides it."""
+    top = (err.name or '').split('.')[0]
+    if top.startswith(('rosidl', 'launch')) or top.endswith(ROS_SUFFIXES):
+        top = 'rclpy'
+    where = MISSING_MODULES.get(top, 'a dependency the installation lacks')
+    return f'{program}: no module named {err.name!r}: it comes with {where}'
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``python -m tumble_ros``: an executable, the main job, or this usage (--help)."""
     argv = sys.argv[1:] if argv is None else argv
     if argv and argv[0] in ('-h', '--help'):
-        print(USAGE)
-        return 0
-    if argv and argv[0] in EXECUTABLES:
-        return run_executable(argv[0], argv[1:])
-    return main_job(argv)
+        return call_closing_quietly(_usage, argv)   # `tumble_ros --help | head -3`: 141
+    try:
+        if argv and argv[0] in EXECUTABLES:
+            return run_executable(argv[0], argv[1:])
+        return main_job(argv)
+    except ModuleNotFoundError as err:
+        if (err.name or '').split('.')[0] == 'tumble_ros':
+            raise                   # not the environment's: a bug of this package
+        program = ' '.join(['tumble_ros', *argv[:1]])
+        print(missing_module_line(program, err), file=sys.stderr)
+        return 1
+
+
+def _usage(argv: list[str]) -> int:
+    """Print the usage (:data:`USAGE`, kept under ``python -OO``)."""
+    print(USAGE)
+    return 0
+
+
+def console() -> int:
+    """
+    Run the ``tumble_ros`` command a pip install makes (pyproject.toml): ``python -m tumble_ros``.
+
+    The same arguments and exit codes; the main job and the nodes end at once
+    (:func:`quick_exit`, :func:`ends_quickly`).
+    """
+    code = main()
+    if ends_quickly(sys.argv[1:]):
+        quick_exit(code)
+    return code
 
 
 if __name__ == '__main__':
-    _code = main()
-    if ends_quickly(sys.argv[1:]):
-        quick_exit(_code)
-    raise SystemExit(_code)
+    raise SystemExit(console())

@@ -33,7 +33,8 @@ import time
 from typing import Any
 
 from tumble_ros.core import (Impact, IntegratorSettings, jit, kernels, load_scenario, Scenario,
-                             simulate, simulate_ensemble, torque_function, TorqueComponent)
+                             shipped_scenario, simulate, simulate_ensemble, torque_function,
+                             TorqueComponent)
 from tumble_ros.core.integrators import INTEGRATORS
 
 __all__ = ['warm_up', 'warm_up_scenario', 'main']
@@ -133,10 +134,6 @@ def warm_up(report: bool = False) -> float:
     return time.perf_counter() - started
 
 
-#: The shipped scenarios, in the source tree (colcon installs the same files).
-CONFIG_DIR = Path(__file__).resolve().parents[2] / 'config'
-
-
 def warm_up_scenario(name: str) -> float:
     """
     Compile (or load) the loops a run of scenario ``name`` uses; return the seconds taken.
@@ -149,7 +146,7 @@ def warm_up_scenario(name: str) -> float:
     started = time.perf_counter()
     path = Path(name or 'default')
     if not path.is_file() and path.parent == Path('.') and path.suffix in ('', '.yaml'):
-        path = CONFIG_DIR / f'{path.stem}.yaml'
+        path = shipped_scenario(path.name)
     scenario = load_scenario(path)
     simulate(scenario.replace(duration=scenario.output_interval))
     jit.prune_shared_cache()         # this version's folder marked used, old ones deleted

@@ -10,7 +10,8 @@ Quick start::
 Packages, by concern: ``model`` (the body and its inputs: ``scenario`` validated, ``shape``,
 ``spinstate``, ``observables`` (the spin state as the literature gives it), ``units``,
 ``rotation`` (Euler angles, matrices, quaternions), ``dynamics`` (equations of motion,
-invariants), ``limits``), ``propagation`` (``propagator``: incremental
+invariants), ``limits``, ``shipped`` (the shipped scenario files and shapes, found in the source
+tree or a pip install)), ``propagation`` (``propagator``: incremental
 integration split at impacts; ``simulate``: batch runs; ``ensemble``: N bodies at once;
 ``timebase``: simulated years <-> ROS stamps), ``torques`` (the torques as components:
 gravity gradient, impact pulses, and :class:`TorqueComponent` for torques defined outside
@@ -34,6 +35,7 @@ from tumble_ros.core.model.params_file import check_params_file
 from tumble_ros.core.model.scenario import (dump_scenario, Impact, ImpactLimits,
                                             IntegratorSettings, load_scenario, PARAMETER_DOCS,
                                             parse_scenario, Scenario, ScenarioError)
+from tumble_ros.core.model.shipped import shipped_scenario, shipped_scenarios
 from tumble_ros.core.propagation.ensemble import (body_rng, ChunkResult, concatenate_results,
                                                   ensemble_scenarios, EnsembleResult,
                                                   GaussianSpread, iter_chunks, random_impacts,
@@ -87,6 +89,8 @@ __all__ = [
     'kinetic_energy',
     'dump_scenario',
     'load_scenario',
+    'shipped_scenario',
+    'shipped_scenarios',
     'check_params_file',
     'parse_scenario',
     'simulate',

@@ -38,6 +38,7 @@ from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, M
 from tumble_ros.core.model.observables import (SPIN_DEFAULTS, spin_from_parameters,
                                                SPIN_PARAMETER_DOCS, SpinObservables)
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
+from tumble_ros.core.model.shipped import config_dir
 from tumble_ros.core.model.units import TIME_UNITS, to_years
 from tumble_ros.core.photometry.settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
 from tumble_ros.core.propagation.timebase import SampleGrid, TimeBase
@@ -917,8 +918,8 @@ PERTURBER_DEFAULTS: dict[str, Any] = {**_PERTURBER_OWN,
                                       **{f: getattr(_DEFAULT_ORBIT, f) for f in _ORBIT_FIELDS},
                                       **dict.fromkeys(_FLYBY_FIELDS, 0.0)}
 #: Where a relative ephemeris file is looked for after the params file's folder: the package's
-#: scenario files (the source tree's ``config/``, installed as share/tumble_ros/config).
-PACKAGE_CONFIG = Path(__file__).resolve().parents[3] / 'config'
+#: scenario files (the source tree's ``config/``, or the pip install's: :mod:`.shipped`).
+PACKAGE_CONFIG = config_dir()
 
 
 def _checked_perturbers(scenario: Scenario) -> tuple[Perturber, ...]:

@@ -24,7 +24,8 @@ normal of the right-hand rule), as every shape model archive states; :class:`Pol
 refuses a surface whose volume comes out negative. An error names the file, the line and the
 problem (:class:`ShapeFileError`).
 
-Shipped shapes live in ``config/shapes/`` (installed to ``share/tumble_ros/config/shapes``);
+Shipped shapes live in ``config/shapes/`` (installed to ``share/tumble_ros/config/shapes`` by
+colcon, into the import package by pip: :mod:`.shipped`);
 :func:`resolve_shape_path` finds the file a params file names.
 """
 from __future__ import annotations
@@ -38,6 +39,7 @@ import numpy as np
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.model.limits import ScenarioError
 from tumble_ros.core.model.mass_models import MassModelError, Polyhedron
+from tumble_ros.core.model.shipped import package_dir
 
 __all__ = ['ShapeFileError', 'Mesh', 'read_mesh', 'load_shape', 'write_obj', 'write_counts',
            'resolve_shape_path', 'SHAPES_DIR', 'box_mesh', 'ellipsoid_mesh']
@@ -212,8 +214,9 @@ def resolve_shape_path(name: str | Path, params_file: str | Path | None = None) 
     2. relative to the directory of ``params_file`` (when given);
     3. relative to the package's share directory (``share/tumble_ros``, found on
        ``AMENT_PREFIX_PATH``), e.g. ``config/shapes/apophis.obj``;
-    4. relative to the source tree's package directory (``tumble_ros/``), the same path
-       (for a run from a checkout without a colcon install).
+    4. relative to the package's own files (:func:`~.shipped.package_dir`: the source tree's
+       ``tumble_ros/``, or the import package as pip installs it), the same path (for a run
+       from a checkout without a colcon install, or from a pip install).
 
     Raises :class:`ShapeFileError` listing the places tried.
     """
@@ -229,7 +232,7 @@ def resolve_shape_path(name: str | Path, params_file: str | Path | None = None) 
     share = _package_share()
     if share is not None:
         bases.append(share)
-    bases.append(Path(__file__).resolve().parents[3])
+    bases.append(package_dir())
     for base in bases:
         candidate = base / path
         tried.append(str(candidate))
