@@ -47,6 +47,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.model.limits import MAX_DEGREE
 from tumble_ros.core.torques.component import TorqueComponent
 from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
@@ -57,8 +58,6 @@ __all__ = ['GravityField', 'regular_solid_harmonics', 'stokes_normalisation', 'p
 #: Relative tolerance of a field's frame (centre of mass, principal axes) and of its moments'
 #: agreement with C_20, C_22: relative to the second moment (A + B + C) / (M a^2).
 FRAME_TOLERANCE = 1e-9
-#: Highest degree accepted: the recursions are stable far beyond, the cost grows as N^2.
-MAX_DEGREE = 30
 
 
 def regular_solid_harmonics(positions: ArrayLike, degree: int,
