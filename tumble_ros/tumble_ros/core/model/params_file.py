@@ -11,6 +11,7 @@ it): the same refusals, in one line naming the file, whoever reads it::
     params file F.yaml: cannot read it as text: it holds UTF-16 text, not UTF-8 ...
     params file F.yaml: not valid YAML: ...
     params file F.yaml: no parameters (expected a ROS 2 params file: node names mapping to ...)
+    params file F.yaml: sim.body.stokes: a list mixing integers and decimals ([2, 0, -0.1, 0.0]) ...
     params file F.yaml: no section applies to node /ast1/sim (sections: sim; ...)
 
 A FIFO, a device or a socket is refused before any read, a file larger than
@@ -33,7 +34,7 @@ from tumble_ros.core.user_files import decode_user_text, read_user_bytes
 if TYPE_CHECKING:
     import yaml
 
-__all__ = ['check_params_file', 'node_sections', 'params_loader', 'parse_params_text',
+__all__ = ['check_params_file', 'mixed_list', 'node_sections', 'params_loader', 'parse_params_text',
            'section_applies']
 
 
@@ -137,6 +138,38 @@ def section_applies(key: str, node_fqn: str) -> bool:
     return re.fullmatch(pattern, node_fqn) is not None
 
 
+#: The kinds of a list's elements, as rcl's parser types them (bool before int: a bool is an int).
+_ELEMENT_KINDS = ((bool, 'true/false'), (int, 'integers'), (float, 'decimals'), (str, 'strings'))
+
+
+def _element_kind(value: Any) -> str:
+    return next((name for kind, name in _ELEMENT_KINDS if isinstance(value, kind)), 'other')
+
+
+def mixed_list(document: Any, path: tuple[str, ...] = ()) -> str | None:
+    """
+    Say which parameter of a params file's document is a list of mixed kinds (None: none).
+
+    rcl reads a list as one type and refuses ``[2, 0, -0.1, 0.0]`` ("Sequence should be of same
+    type"), where YAML (``load_scenario``) reads it as numbers: every reader refuses it alike.
+    """
+    if isinstance(document, Mapping):
+        for key, value in document.items():
+            inner = path if key == 'ros__parameters' else (*path, str(key))
+            found = mixed_list(value, inner)
+            if found:
+                return found
+    elif isinstance(document, list):
+        kinds = list(dict.fromkeys(_element_kind(v) for v in document))
+        if len(kinds) > 1:
+            name = '.'.join(path)
+            quoted = repr(document) if len(document) <= 8 else f'list of {len(document):,}'
+            return (f'{name}: a list mixing {" and ".join(kinds)} ({quoted}): ROS 2 reads a '
+                    "list as one type (rcl: 'Sequence should be of same type'); write every "
+                    'number of a list of decimals with a decimal point (2.0, not 2)')
+    return None
+
+
 def check_params_file(path: str | os.PathLike[str],
                       node_fqn: str | None = None) -> Mapping[str, Any]:
     """
@@ -145,13 +178,17 @@ def check_params_file(path: str | os.PathLike[str],
     Raises ScenarioError, one line starting ``params file PATH:``, for a missing file, a path
     that is not a regular file (a FIFO, a directory, a device: refused before any read), a file
     above :data:`MAX_PARAMS_FILE_BYTES`, one that is not UTF-8 text, not YAML or without any
-    ``ros__parameters`` section. With ``node_fqn`` (``/sim``, ``/ast1/sim``) a section must also
-    apply to that node: an empty file, one written for another node, or a ``sim:`` section given
+    ``ros__parameters`` section, or with a list rcl refuses (:func:`mixed_list`). With
+    ``node_fqn`` (``/sim``, ``/ast1/sim``) a section must also apply to that node: an empty
+    file, one written for another node, or a ``sim:`` section given
     to a namespaced simulator would otherwise run silently with the defaults.
     """
     path = Path(os.fspath(path))
     text = decode_user_text(_read_bytes(path), f'params file {path}')
     document = parse_params_text(text, path)
+    mixed = mixed_list(document)
+    if mixed:
+        raise ScenarioError(f'params file {path}: {mixed}')
     if node_fqn:
         sections = node_sections(document)
         if not any(section_applies(s, node_fqn) for s in sections):

@@ -62,9 +62,9 @@ class Mesh:
         self.vertex_lines = vertex_lines
 
 
-def _too_many(path: Path, line: int | None, what: str, count: int) -> ShapeFileError:
+def _too_many(path: Path, line: int | None, what: str, count: str) -> ShapeFileError:
     return _error(path, line, f'more than {MAX_FACETS:,} {what} (MAX_FACETS: twice the largest '
-                  f'radar shape model; decimate the mesh), {count:,} so far')
+                  f'radar shape model; decimate the mesh), {count}')
 
 
 def _error(path: Path, line: int | None, why: str) -> ShapeFileError:
@@ -91,7 +91,7 @@ def _read_obj(path: Path, rows: list[tuple[int, list[str]]]) -> Mesh:
             if len(tokens) < 4:
                 raise _error(path, number, f'a vertex needs x y z, got {" ".join(tokens)!r}')
             if len(vertices) >= MAX_FACETS:
-                raise _too_many(path, number, 'vertices', len(vertices) + 1)
+                raise _too_many(path, number, 'vertices', f'{len(vertices) + 1:,} so far')
             vertices.append(_numbers(path, number, tokens[1:4], float, 'vertex'))
             vertex_lines.append(number)
         elif key == 'f':
@@ -109,7 +109,7 @@ def _read_obj(path: Path, rows: list[tuple[int, list[str]]]) -> Mesh:
                 facets.append((index[0], index[j], index[j + 1]))
                 lines.append(number)
             if len(facets) > MAX_FACETS:
-                raise _too_many(path, number, 'facets', len(facets))
+                raise _too_many(path, number, 'facets', f'{len(facets):,} so far')
     return Mesh(np.array(vertices, dtype=float).reshape(-1, 3),
                 np.array(facets, dtype=np.int64).reshape(-1, 3), np.array(lines),
                 np.array(vertex_lines))
@@ -118,8 +118,9 @@ def _read_obj(path: Path, rows: list[tuple[int, list[str]]]) -> Mesh:
 def _read_counts(path: Path, rows: list[tuple[int, list[str]]]) -> Mesh:
     number, head = rows[0]
     n_v, n_f = (int(x) for x in _numbers(path, number, head[:2], int, 'counts'))
-    if max(n_v, n_f) > MAX_FACETS:
-        raise _too_many(path, number, 'vertices' if n_v > MAX_FACETS else 'facets', max(n_v, n_f))
+    for what, count in (('facets', n_f), ('vertices', n_v)):
+        if count > MAX_FACETS:
+            raise _too_many(path, number, what, f'{count:,} announced')
     if len(rows) - 1 < n_v + n_f:
         raise _error(path, None, f'the first line announces {n_v} vertices and {n_f} facets, '
                      f'the file holds {len(rows) - 1} data lines')

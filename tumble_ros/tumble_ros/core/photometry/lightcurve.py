@@ -187,14 +187,11 @@ class LightcurveSampler:
         """
         Return the sampler of ``scenario``; None when it has no lightcurve.
 
-        None when ``lightcurve.enabled`` is false, the moments break the triangle inequality
-        (no body has them) or the body is a non-convex polyhedron (self-shadowing is not
-        modelled).
+        None when ``lightcurve.enabled`` is false or the moments break the triangle inequality
+        (no body has them). A non-convex polyhedron (its self-shadowing is not modelled) with
+        ``lightcurve.enabled`` is refused by the Scenario itself, with the reason.
         """
         if not scenario.lightcurve.enabled or not body_shape(scenario.inertia).physical:
-            return None
-        model = scenario.body.mass_model
-        if isinstance(model, Polyhedron) and not model.convex:
             return None
         return cls(scenario, lightcurve_mesh(scenario, scenario.lightcurve))
 
