@@ -620,7 +620,7 @@ def _stokes_arrays(stokes: Any) -> tuple[FloatArray, FloatArray]:
     if top > MAX_DEGREE:
         k = int(np.argmax(rows[:, 0]))
         _fail(f'stokes[{4 * k}]', f'degree n at most {MAX_DEGREE} (MAX_DEGREE, as '
-              'gravity.degree)', rows[k, 0])
+              'gravity.degree)', float(rows[k, 0]))
     degree = int(max(2, top))
     C, S = np.zeros((degree + 1, degree + 1)), np.zeros((degree + 1, degree + 1))
     C[0, 0] = 1.0

@@ -130,9 +130,9 @@ def convexity_defect(vertices: FloatArray, facets: np.ndarray,
     Return where the closed surface (``vertices``, outward ``facets``) is not convex, or None.
 
     ``normals``: the facets' outward unit normals (computed when None). Checks every edge and
-    every vertex (module docstring) and the surface's connectedness; the defect reported is the
-    highest vertex above a neighbouring facet's plane (or the first vertex whose angles wrap,
-    or a second body, or an open edge).
+    every vertex (module docstring) and the surface's connectedness; the defect reported is a
+    second body, an open or inconsistent edge, the highest vertex above a neighbouring facet's
+    plane, or the first vertex whose angles wrap, in this order.
     """
     v = np.asarray(vertices, dtype=float)
     f = np.asarray(facets, dtype=np.int64)
@@ -140,6 +140,12 @@ def convexity_defect(vertices: FloatArray, facets: np.ndarray,
     if normals is None:
         cross = facet_cross(v, f)
         normals = cross / np.linalg.norm(cross, axis=1)[:, None]
+    count, labels = components(f)
+    if count > 1:
+        second = int(np.flatnonzero(labels != labels[0])[0])
+        return ConvexityDefect(int(f[second, 0]), second, math.inf,
+                               f'{count} separate bodies (facet {second} is not connected to '
+                               'facet 0)')
     pairs = _edge_pairs(f)
     if isinstance(pairs, str):
         return ConvexityDefect(-1, -1, math.inf, pairs)
@@ -157,12 +163,6 @@ def convexity_defect(vertices: FloatArray, facets: np.ndarray,
         return ConvexityDefect(vertex, facet, height, (
             f'vertex {vertex} lies {height:.3g} ({height / size:.2g} of the size) outside the '
             f'plane of its neighbouring facet {facet}: a dent (a reflex edge)'))
-    count, labels = components(f)
-    if count > 1:
-        second = int(np.flatnonzero(labels != labels[0])[0])
-        return ConvexityDefect(int(f[second, 0]), second, math.inf,
-                               f'{count} separate bodies (facet {second} is not connected to '
-                               'facet 0)')
     return _wrapped_vertex(v, f)
 
 
