@@ -132,8 +132,11 @@ def lightcurve_mesh(scenario: Scenario, settings: LightcurveSettings) -> Mesh:
     of the principal moments (:func:`~.shape.body_mesh`; ValueError for unphysical moments).
     """
     model = scenario.body.mass_model
-    if isinstance(model, Polyhedron):
-        return convex_mesh(model.vertices, model.facets)
+    if isinstance(model, Polyhedron):     # (its convexity known: checked once, by the model)
+        if not model.convex:
+            raise ValueError(f'body.shape_file: the polyhedron is not convex '
+                             f'({model.convexity_defect}): no shadowing is modelled')
+        return convex_mesh(model.vertices, model.facets, check_convex=False)
     if isinstance(model, Ellipsoid):
         return ellipsoid_mesh(model.semi_axes, settings.subdivisions)
     return body_mesh(scenario.inertia, settings.subdivisions)
