@@ -691,7 +691,7 @@ def test_a_params_file_names_its_shape_relative_to_itself(tmp_path):
 # -- bounded and checked: issue 48 ---------------------------------------------------------------
 
 def brute_convexity(v, f, tolerance):
-    """The definition, O(F V): the highest any vertex stands above any facet's plane."""
+    """Tell convexity by the definition, O(F V): no vertex above any facet's plane."""
     a = v[f[:, 0]]
     n = np.cross(v[f[:, 1]] - a, v[f[:, 2]] - a)
     n /= np.linalg.norm(n, axis=1)[:, None]
@@ -779,7 +779,8 @@ def test_a_body_too_large_or_too_small_is_refused_naming_the_line(tmp_path, scal
 
 
 def test_an_ellipsoid_of_1e_300_km_is_refused_not_divided_by_zero():
-    with pytest.raises(MassModelError, match=r'semi_axes\[0\]: a body 2e-300 km across .*MIN_BODY'):
+    with pytest.raises(MassModelError,
+                       match=r'semi_axes\[0\]: a body 2e-300 km across .*MIN_BODY'):
         Ellipsoid((1e-300, 1e-300, 1e-300), DENSITY)
     Ellipsoid((1e-5, 1e-5, 1e-5), DENSITY)          # 2e-5 km: accepted
 

@@ -92,7 +92,8 @@ def test_a_non_convex_polyhedron_is_refused_a_lightcurve_with_the_reason(tmp_pat
     body = BodySpec(model='polyhedron', density=2600.0, shape_file=str(dented))
     model = body.mass_model
     assert isinstance(model, Polyhedron) and not model.convex
-    with pytest.raises(ScenarioError, match=r'lightcurve.enabled: the polyhedron of body.shape_file '
+    with pytest.raises(ScenarioError,
+                       match=r'lightcurve.enabled: the polyhedron of body.shape_file '
                        r'.*dented.obj is not convex \(vertex 5 lies 0.894 .* outside the plane of '
                        r'its neighbouring facet .*set lightcurve.enabled: false'):
         Scenario(body=body, **SPIN)

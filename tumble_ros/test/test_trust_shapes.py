@@ -27,7 +27,7 @@ CUBE_V, CUBE_F = box_mesh((1.0, 1.0, 1.0))
 
 
 def dented_cube(path):
-    """A cube whose top face is four triangles meeting at a vertex pushed inwards."""
+    """Write a cube whose top face is four triangles meeting at a vertex pushed inwards."""
     lines = ['v -1 -1 -1', 'v 1 -1 -1', 'v 1 1 -1', 'v -1 1 -1',
              'v -1 -1 1', 'v 1 -1 1', 'v 1 1 1', 'v -1 1 1', 'v 0 0 0.5']
     faces = ['f 1 3 2', 'f 1 4 3', 'f 1 2 6', 'f 1 6 5', 'f 2 3 7', 'f 2 7 6',
@@ -43,7 +43,7 @@ def two_cubes(path):
 
 
 def sliver(path):
-    """A closed cube whose edge (0, 1) is split by a vertex m and closed by a zero-area facet."""
+    """Write a cube whose edge (0, 1) is split by a vertex m, closed by a zero-area facet."""
     vertices = np.concatenate([CUBE_V, [(CUBE_V[0] + CUBE_V[1]) / 2.0]])
     m = len(CUBE_V)
     keep, split = [], None

@@ -544,7 +544,7 @@ class Polyhedron:
 
     @property
     def convex(self) -> bool:
-        """Tell whether the body is convex (to :data:`~.mesh_checks.CONVEXITY_TOLERANCE`)."""
+        """Tell whether the body is convex, to :data:`~.mesh_checks.CONVEXITY_TOLERANCE`."""
         return self.convexity_defect is None
 
     @property

@@ -1,6 +1,7 @@
 """
-Checks of a triangulated surface every user of a mesh shares: degenerate facets, separate
-bodies, convexity. Each costs O(F log F) (one sort of the edges) for F facets.
+Checks of a triangulated surface: degenerate facets, separate bodies, convexity.
+
+Every user of a mesh shares them; each costs O(F log F) (one sort of the edges) for F facets.
 
 Vertices (V, 3) in any length unit, facets (F, 3) 0-based vertex indices. Used by the mass
 model (:class:`~.mass_models.Polyhedron`: one body, no zero-area facet) and by the photometry

@@ -11,7 +11,7 @@ it): the same refusals, in one line naming the file, whoever reads it::
     params file F.yaml: cannot read it as text: it holds UTF-16 text, not UTF-8 ...
     params file F.yaml: not valid YAML: ...
     params file F.yaml: no parameters (expected a ROS 2 params file: node names mapping to ...)
-    params file F.yaml: sim.body.stokes: a list mixing integers and decimals ([2, 0, -0.1, 0.0]) ...
+    params file F.yaml: sim.body.stokes: a list mixing integers and decimals ([2, 0, -0.1]) ...
     params file F.yaml: no section applies to node /ast1/sim (sections: sim; ...)
 
 A FIFO, a device or a socket is refused before any read, a file larger than
@@ -34,8 +34,8 @@ from tumble_ros.core.user_files import decode_user_text, read_user_bytes
 if TYPE_CHECKING:
     import yaml
 
-__all__ = ['check_params_file', 'mixed_list', 'node_sections', 'params_loader', 'parse_params_text',
-           'section_applies']
+__all__ = ['check_params_file', 'mixed_list', 'node_sections', 'params_loader',
+           'parse_params_text', 'section_applies']
 
 
 def _read_bytes(path: Path) -> bytes:
