@@ -228,3 +228,28 @@ def test_the_sliver_of_these_tests_is_closed_with_one_facet_of_no_area(tmp_path)
     mesh = read_mesh(shape)
     _check_closed(mesh.facets)
     assert degenerate_facet(mesh.vertices, mesh.facets) == len(mesh.facets) - 1
+
+
+@pytest.mark.parametrize('offline', [True, False], ids=['offline', 'ros graph'])
+def test_a_signal_while_bringup_builds_the_simulator_stops_it_there(tmp_path, monkeypatch,
+                                                                    capfd, offline):
+    """bringup builds the simulator under the same rule: stopped there, nothing recorded."""
+    import tumble_ros.nodes.bringup as bringup
+    done = []
+
+    class SlowSim(SimNode):
+        def _set_up(self):
+            os.kill(os.getpid(), signal.SIGTERM)
+            until = time.monotonic() + 60.0
+            while time.monotonic() < until:
+                sum(range(1000))
+            done.append(True)
+            raise AssertionError('the build was not stopped')
+
+    monkeypatch.setattr(bringup, 'SimNode', SlowSim)
+    output = tmp_path / 'run.mcap'
+    code = bringup.main(['--quiet', '--output', str(output), *(['--offline'] if offline else [])])
+    err = capfd.readouterr().err
+    assert code == 128 + signal.SIGTERM and not done, err
+    assert err.strip() == 'bringup: stopped by SIGTERM while starting: nothing recorded'
+    assert not output.exists()
