@@ -745,12 +745,19 @@ def test_a_shape_file_above_the_facet_limit_is_refused_at_the_line_that_passes_i
     monkeypatch.setattr(shape_files, 'MAX_FACETS', 12)
     v, f = ellipsoid_mesh(AXES, 1)                  # 42 vertices, 80 facets
     write_obj(tmp_path / 'many.obj', v, f)
-    with pytest.raises(ShapeFileError, match=r'many.obj, line 13: more than 12 vertices '
-                       r'\(MAX_FACETS.*13 so far'):
+    with pytest.raises(ShapeFileError, match=r'many.obj: more than 12 facets '
+                       r"\(MAX_FACETS.*80 'f' lines"):       # counted before the lines are read
         read_mesh(tmp_path / 'many.obj')
-    write_obj(tmp_path / 'facets.obj', v[:12], [(0, 1, 2)] * 13)
-    with pytest.raises(ShapeFileError, match=r'facets.obj, line 25: more than 12 facets'):
-        read_mesh(tmp_path / 'facets.obj')
+    write_obj(tmp_path / 'vertices.obj', v, f[:12])
+    with pytest.raises(ShapeFileError,
+                       match=r"vertices.obj: more than 12 vertices .*42 'v' lines"):
+        read_mesh(tmp_path / 'vertices.obj')
+    # six hexagons: 6 lines, 24 triangles, refused at the line whose fan passes the limit
+    hexagons = ''.join(f'v {np.cos(a)} {np.sin(a)} 0\n' for a in np.arange(6) * np.pi / 3)
+    (tmp_path / 'fans.obj').write_text(hexagons + 'f 1 2 3 4 5 6\n' * 6)
+    with pytest.raises(ShapeFileError,
+                       match=r'fans.obj, line 10: more than 12 facets .*16 so far'):
+        read_mesh(tmp_path / 'fans.obj')
     write_counts(tmp_path / 'many.tab', v, f)
     with pytest.raises(ShapeFileError, match=r'many.tab, line 1: more than 12 facets .*80 '
                        'announced'):
