@@ -233,7 +233,7 @@ def test_the_sliver_of_these_tests_is_closed_with_one_facet_of_no_area(tmp_path)
 @pytest.mark.parametrize('offline', [True, False], ids=['offline', 'ros graph'])
 def test_a_signal_while_bringup_builds_the_simulator_stops_it_there(tmp_path, monkeypatch,
                                                                     capfd, offline):
-    """bringup builds the simulator under the same rule: stopped there, nothing recorded."""
+    """The bringup builds the simulator under the same rule: stopped there, nothing recorded."""
     import tumble_ros.nodes.bringup as bringup
     done = []
 
