@@ -812,3 +812,11 @@ def test_a_shape_file_in_utf16_or_utf32_is_refused_by_name(tmp_path, encoding, s
         read_mesh(tmp_path / 'wide.obj')
     (tmp_path / 'bom.obj').write_text(text, encoding='utf-8-sig')    # a UTF-8 BOM: read
     assert len(read_mesh(tmp_path / 'bom.obj').facets) == 12
+
+
+def test_a_refused_stokes_coefficient_is_quoted_as_written():
+    """The value was quoted as numpy's repr: 'got np.float64(-0.1)'."""
+    with pytest.raises(MassModelError, match=r'stokes C\[2, 0\]: must agree .*, got -0.1$'):
+        DensityMoments.from_parameters({'mass': 5e10, 'reference_radius': 0.2,
+                                        'principal_moments': (1.0e8, 1.5e8, 2.0e8),
+                                        'stokes': [2.0, 0.0, -0.1, 0.0]})
