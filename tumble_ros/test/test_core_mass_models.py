@@ -441,7 +441,7 @@ def test_a_tetrahedron_in_the_counts_format_has_its_closed_form_volume(tmp_path)
 
 
 def test_a_missing_shape_file_is_named():
-    with pytest.raises(ShapeFileError, match='nowhere.obj.*cannot be read'):
+    with pytest.raises(ShapeFileError, match='nowhere.obj: no such file'):
         read_mesh('/nowhere.obj')
 
 
@@ -686,3 +686,137 @@ def test_a_params_file_names_its_shape_relative_to_itself(tmp_path):
     with pytest.raises(ScenarioError, match="bad.yaml: body.shape_file: 'shapes/none.tab' not "
                                             'found'):
         load_scenario(tmp_path / 'bad.yaml')
+
+
+# -- bounded and checked: issue 48 ---------------------------------------------------------------
+
+def brute_convexity(v, f, tolerance):
+    """Tell convexity by the definition, O(F V): no vertex above any facet's plane."""
+    a = v[f[:, 0]]
+    n = np.cross(v[f[:, 1]] - a, v[f[:, 2]] - a)
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    height = v @ n.T - np.einsum('ij,ij->i', a, n)
+    return height.max() <= tolerance * np.ptp(v, axis=0).max()
+
+
+@pytest.mark.parametrize('depth', [0.0, 1e-9, 1e-3, 0.05, 0.5, -0.3])
+def test_the_edge_convexity_check_agrees_with_every_vertex_against_every_facet(depth):
+    """Icospheres with vertices pushed in (a dent) or out (a spike): the two checks agree."""
+    from tumble_ros.core.model.mesh_checks import convexity_defect, CONVEXITY_TOLERANCE
+    rng = np.random.default_rng(SEED)
+    v, f = ellipsoid_mesh(AXES, 3)
+    for _ in range(4):
+        moved = v.copy()
+        moved[rng.integers(len(v), size=3)] *= 1.0 - depth
+        expected = brute_convexity(moved, f, CONVEXITY_TOLERANCE)
+        assert (convexity_defect(moved, f) is None) == expected
+        assert Polyhedron(moved, f, DENSITY).convex == expected
+    assert expected == (depth in (0.0, 1e-9, 1e-3))  # (1e-3: within the facets' own bulge)
+
+
+def test_a_surface_with_a_saddle_vertex_is_not_convex():
+    """A box whose face centre is raised into a tent is convex; lowered into a pit, it is not."""
+    from tumble_ros.core.model.mesh_checks import convexity_defect
+    v, f = box_mesh((1.0, 1.0, 1.0))
+    top = [k for k, facet in enumerate(f) if np.all(v[facet][:, 2] > 0)]
+    rest = np.delete(f, top, axis=0)
+    corners = [1, 5, 7, 3]                           # the top face (z = 1), counter-clockwise
+    for height, convex in ((1.2, True), (0.8, False)):
+        apex = np.vstack([v, [0.0, 0.0, height]])
+        tent = [[corners[k], corners[(k + 1) % 4], 8] for k in range(4)]
+        facets = np.vstack([rest, tent])
+        assert (convexity_defect(apex, facets) is None) == convex
+        assert Polyhedron(apex, facets, DENSITY).convex == convex
+
+
+def test_convex_mesh_refuses_an_open_surface_and_two_bodies():
+    from tumble_ros.core.photometry import convex_mesh
+    v, f = box_mesh((1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match='shared by 1 facet.*not a closed surface'):
+        convex_mesh(v, f[1:])
+    with pytest.raises(ValueError, match='2 separate bodies'):
+        convex_mesh(np.vstack([v, v + 3.0]), np.vstack([f, f + len(v)]))
+
+
+def test_a_shape_file_above_the_facet_limit_is_refused_at_the_line_that_passes_it(
+        tmp_path, monkeypatch):
+    """The reader stops at the first facet or vertex beyond MAX_FACETS, naming its line."""
+    import tumble_ros.core.model.shape_files as shape_files
+    monkeypatch.setattr(shape_files, 'MAX_FACETS', 12)
+    v, f = ellipsoid_mesh(AXES, 1)                  # 42 vertices, 80 facets
+    write_obj(tmp_path / 'many.obj', v, f)
+    with pytest.raises(ShapeFileError, match=r'many.obj: more than 12 facets '
+                       r"\(MAX_FACETS.*80 'f' lines"):       # counted before the lines are read
+        read_mesh(tmp_path / 'many.obj')
+    write_obj(tmp_path / 'vertices.obj', v, f[:12])
+    with pytest.raises(ShapeFileError,
+                       match=r"vertices.obj: more than 12 vertices .*42 'v' lines"):
+        read_mesh(tmp_path / 'vertices.obj')
+    # six hexagons: 6 lines, 24 triangles, refused at the line whose fan passes the limit
+    hexagons = ''.join(f'v {np.cos(a)} {np.sin(a)} 0\n' for a in np.arange(6) * np.pi / 3)
+    (tmp_path / 'fans.obj').write_text(hexagons + 'f 1 2 3 4 5 6\n' * 6)
+    with pytest.raises(ShapeFileError,
+                       match=r'fans.obj, line 10: more than 12 facets .*16 so far'):
+        read_mesh(tmp_path / 'fans.obj')
+    write_counts(tmp_path / 'many.tab', v, f)
+    with pytest.raises(ShapeFileError, match=r'many.tab, line 1: more than 12 facets .*80 '
+                       'announced'):
+        read_mesh(tmp_path / 'many.tab')
+
+
+def test_a_polyhedron_above_the_facet_limit_is_refused_before_its_checks(monkeypatch):
+    import tumble_ros.core.model.mass_models as mass_models
+    monkeypatch.setattr(mass_models, 'MAX_FACETS', 79)
+    v, f = ellipsoid_mesh(AXES, 1)
+    with pytest.raises(MassModelError, match='facets: at most 79 facets and vertices '
+                       r'\(MAX_FACETS.*got .80 facets and 42 vertices'):
+        Polyhedron(v, f, DENSITY)
+
+
+@pytest.mark.parametrize('scale, message', [
+    (1e200, r'line 1: vertices\[0\]: a coordinate beyond 100000 km \(MAX_BODY_SIZE'),
+    (1e-9, r'vertices: a body 2e-09 km across is outside \[1e-05, 100000\] km'),
+])
+def test_a_body_too_large_or_too_small_is_refused_naming_the_line(tmp_path, scale, message):
+    """1e200 km was a 70-line OverflowError; a body 2 micrometres across had no bound."""
+    v, f = box_mesh((1.0, 1.0, 1.0))
+    write_obj(tmp_path / 'box.obj', v * scale, f)
+    with pytest.raises(ShapeFileError, match=message):
+        load_shape(tmp_path / 'box.obj', DENSITY)
+
+
+def test_an_ellipsoid_of_1e_300_km_is_refused_not_divided_by_zero():
+    with pytest.raises(MassModelError,
+                       match=r'semi_axes\[0\]: a body 2e-300 km across .*MIN_BODY'):
+        Ellipsoid((1e-300, 1e-300, 1e-300), DENSITY)
+    Ellipsoid((1e-5, 1e-5, 1e-5), DENSITY)          # 2e-5 km: accepted
+
+
+def test_density_moments_of_a_degree_above_the_limit_are_refused_before_any_array():
+    """Degree 100,000 asked for a 74.5-GiB array and ended in a 51-line traceback."""
+    with pytest.raises(MassModelError, match=r'stokes\[4\]: degree n at most 30 .*got 100000.0'):
+        DensityMoments.from_parameters({'mass': 1e10, 'reference_radius': 1.0,
+                                        'principal_moments': (1.0, 1.0, 1.0),
+                                        'stokes': [2, 0, 0.0, 0.0, 100000, 0, 0.0, 0.0]})
+
+
+@pytest.mark.parametrize('encoding, said', [
+    ('utf-16', 'UTF-16 text'), ('utf-16-le', 'UTF-16 text'), ('utf-32', 'UTF-32 text')])
+def test_a_shape_file_in_utf16_or_utf32_is_refused_by_name(tmp_path, encoding, said):
+    """It read as '0 vertices and 0 facets' (the NUL bytes made every line unreadable)."""
+    v, f = box_mesh((1.0, 1.0, 1.0))
+    write_obj(tmp_path / 'box.obj', v, f)
+    text = (tmp_path / 'box.obj').read_text()
+    (tmp_path / 'wide.obj').write_text(text, encoding=encoding)
+    with pytest.raises(ShapeFileError, match=f'wide.obj: cannot read it as text: it holds {said}'):
+        read_mesh(tmp_path / 'wide.obj')
+    (tmp_path / 'bom.obj').write_text(text, encoding='utf-8-sig')    # a UTF-8 BOM: read
+    assert len(read_mesh(tmp_path / 'bom.obj').facets) == 12
+
+
+def test_a_refused_stokes_coefficient_is_quoted_as_written():
+    """The value was quoted as numpy's repr: 'got np.float64(-0.1)'."""
+    with pytest.raises(MassModelError, match=r'stokes C\[2, 0\]: must agree .*, got -0.1$'):
+        DensityMoments.from_parameters({'mass': 5e10, 'reference_radius': 0.2,
+                                        'principal_moments': (1.0e8, 1.5e8, 2.0e8),
+                                        'stokes': [2.0, 0.0, -0.1, 0.0]})

@@ -3,16 +3,18 @@ The lightcurve of a body given by its mass model: the shape seen is the mass mod
 
 A scenario with ``body.model`` ellipsoid or polyhedron shows that body to the telescope
 (``core.photometry.lightcurve.lightcurve_mesh``), not the ellipsoid of its normalised moments;
-a non-convex polyhedron has no lightcurve (self-shadowing is not modelled).
+a non-convex polyhedron is refused a lightcurve, with the reason (self-shadowing is not
+modelled).
 """
 import numpy as np
+import pytest
 
-from tumble_ros.core import Scenario, simulate
+from tumble_ros.core import Scenario, ScenarioError, simulate
 from tumble_ros.core.model.body import BodySpec
 from tumble_ros.core.model.mass_models import Polyhedron
 from tumble_ros.core.photometry import brightness, convex_mesh, ellipsoid_mesh
 from tumble_ros.core.photometry.lightcurve import (lightcurve_mesh, LightcurveSampler,
-                                                   synthetic_lightcurve)
+                                                   LightcurveSettings, synthetic_lightcurve)
 
 #: A tumbler under the Sun's torque (rad/yr): a lightcurve with both periods in it.
 SPIN = {'orbit_rate': 1.0, 'omega0': (3.0, 1.0, 30.0), 'euler0': (0.5, 0.2, 0.7),
@@ -72,8 +74,13 @@ def record_sun(scenario: Scenario, t: np.ndarray) -> np.ndarray:
     return np.stack([np.sin(angle), np.cos(angle), np.zeros_like(angle)], axis=-1)
 
 
-def test_a_non_convex_polyhedron_has_no_lightcurve(tmp_path):
-    """A cube with a dent in one face: a body that shadows itself is not shown (None)."""
+def test_a_non_convex_polyhedron_is_refused_a_lightcurve_with_the_reason(tmp_path):
+    """
+    A cube with a dent in one face: a body that shadows itself is refused a lightcurve.
+
+    It had none, silently (LightcurveSampler.of returned None): the scenario now says why, and
+    runs with ``lightcurve.enabled`` false.
+    """
     dented = tmp_path / 'dented.obj'
     lines = ['v -1 -1 -1', 'v 1 -1 -1', 'v 1 1 -1', 'v -1 1 -1',
              'v -1 -1 1', 'v 1 -1 1', 'v 1 1 1', 'v -1 1 1', 'v 0 0 0.5']
@@ -85,5 +92,12 @@ def test_a_non_convex_polyhedron_has_no_lightcurve(tmp_path):
     body = BodySpec(model='polyhedron', density=2600.0, shape_file=str(dented))
     model = body.mass_model
     assert isinstance(model, Polyhedron) and not model.convex
-    scenario = Scenario(body=body, **SPIN)
+    with pytest.raises(ScenarioError,
+                       match=r'lightcurve.enabled: the polyhedron of body.shape_file '
+                       r'.*dented.obj is not convex \(vertex 5 lies 0.894 .* outside the plane of '
+                       r'its neighbouring facet .*set lightcurve.enabled: false'):
+        Scenario(body=body, **SPIN)
+    scenario = Scenario(body=body, lightcurve=LightcurveSettings(enabled=False), **SPIN)
     assert LightcurveSampler.of(scenario) is None
+    with pytest.raises(ValueError, match='not convex'):
+        lightcurve_mesh(scenario, LightcurveSettings())

@@ -45,7 +45,7 @@ def _bad_files(tmp_path):
     binary.write_bytes(bytes(range(256)) * 4)
     return {'fifo': (fifo, 'is a FIFO (named pipe), not a params file (only regular files '
                            'are read)'),
-            'binary': (binary, 'cannot read it as text (UnicodeDecodeError'),
+            'binary': (binary, 'cannot read it as text: it holds binary data'),
             'directory': (tmp_path, 'is a directory, not a params file'),
             'missing': (tmp_path / 'missing.yaml', 'no such file')}
 

@@ -175,7 +175,8 @@ def test_sim_refuses_a_binary_params_file_in_one_line(spawn, tmp_path):
     sim = spawn('sim', '--ros-args', '--params-file', path)
     assert sim.wait(SLOW) == 1, sim.output
     (line,) = sim.output.strip().splitlines()
-    assert line.startswith(f'sim: params file {path}: cannot read it as text (UnicodeDecodeError')
+    assert line.startswith(f'sim: params file {path}: cannot read it as text: it holds binary '
+                           'data')
 
 
 # -- edges: help, signals at start-up, closed pipes, misplaced options, rcl's refusals ----------

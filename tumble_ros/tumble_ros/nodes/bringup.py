@@ -54,7 +54,7 @@ from tumble_ros.nodes.comparator import ComparatorNode
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
 from tumble_ros.nodes.recorder import default_output, RecorderNode
 from tumble_ros.nodes.runner import EXECUTORS, init_rclpy, tear_down
-from tumble_ros.nodes.shutdown import StopSignals
+from tumble_ros.nodes.shutdown import StopDuringSetUp, StopSignals
 from tumble_ros.nodes.sim import SimNode
 from tumble_ros.runs.offline import record_offline
 from tumble_ros_interfaces.msg import SimStatus  # type: ignore[attr-defined]  # ROS message
@@ -161,8 +161,9 @@ def _run_offline(args, output, model, progress, stop: StopSignals,
     init_rclpy(args, context)
     nodes: list[Node] = []
     try:
-        sim = SimNode(context=context, parameter_overrides=[
-            Parameter('real_time_factor', value=0.0), Parameter('markers', value=markers)])
+        with stop.interrupting():     # a signal stops a long set-up (a large shape file)
+            sim = SimNode(context=context, parameter_overrides=[
+                Parameter('real_time_factor', value=0.0), Parameter('markers', value=markers)])
         nodes.append(sim)
         comparator_overrides = [Parameter('model', value=model)] if model else []
         nodes.append(ComparatorNode(context=context, parameter_overrides=comparator_overrides))
@@ -211,9 +212,10 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
     executor = EXECUTORS[executor_name](context=context)
     nodes: list[Node] = []
     try:
-        sim = SimNode(context=context, parameter_overrides=[
-            Parameter('real_time_factor', value=0.0), Parameter('min_consumers', value=2),
-            Parameter('markers', value=markers)])
+        with stop.interrupting():     # a signal stops a long set-up (a large shape file)
+            sim = SimNode(context=context, parameter_overrides=[
+                Parameter('real_time_factor', value=0.0), Parameter('min_consumers', value=2),
+                Parameter('markers', value=markers)])
         nodes.append(sim)
         comparator_overrides = [Parameter('run_id', value=sim.run_id),
                                 *([Parameter('model', value=model)] if model else [])]
@@ -368,6 +370,11 @@ def main(args: list[str] | None = None, keep: WrittenMessages | None = None) -> 
                              executor_name=options.executor,
                              visible=options.visible, offline=options.offline,
                              markers=not options.no_markers, keep=keep)
+    except StopDuringSetUp as stopped:      # while the simulator was built: nothing recorded
+        signum = int(stopped.args[0])
+        print(f'bringup: stopped by {signal.Signals(signum).name} while starting: nothing '
+              'recorded', file=sys.stderr)
+        return 128 + signum
     except (ScenarioError, ValueError, ParameterException) as err:
         print(f"ERROR: {' '.join(str(err).split())}", file=sys.stderr)
         return 1

@@ -19,7 +19,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from tumble_ros.errors import NodeError
 from tumble_ros.nodes.parameters import params_file_problem, refuse_unknown_parameters
-from tumble_ros.nodes.shutdown import spin_until_stopped, StopSignals
+from tumble_ros.nodes.shutdown import spin_until_stopped, StopDuringSetUp, StopSignals
 
 __all__ = ['run_node', 'close_node', 'tear_down', 'init_rclpy', 'wants_help', 'EXECUTORS',
            'EXECUTOR_ENV', 'chosen_executor', 'TEARDOWN_TIMEOUT']
@@ -150,7 +150,8 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
 
     ``--help`` (before any ``--ros-args``) prints the usage and the node's module docstring.
     Returns 0 on a stop by SIGINT, SIGTERM or SIGHUP (all finalise alike: the node's ``close()``
-    runs while its context is still valid; a second signal during the clean-up is absorbed), 1 when
+    runs while its context is still valid; a second signal during the clean-up is absorbed; one
+    while the node is being built stops the building at once), 1 when
     the node refused its parameters, a params file or a ROS argument (one line saying why, no
     traceback).
     ``needs_params_section``: every ``--params-file`` must have a section for this node (the
@@ -179,7 +180,8 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
         executor = EXECUTORS[executor_name]()
         node = None
         try:
-            node = make_node()
+            with stop.interrupting():       # a signal stops a long set-up (a large shape file)
+                node = make_node()
             problem = (params_file_problem(args, node.get_fully_qualified_name())
                        if needs_params_section else None)
             if problem:
@@ -187,6 +189,8 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None, name: str,
             refuse_unknown_parameters([node])
             executor.add_node(node)
             spin_until_stopped(executor, lambda: stop.requested)
+        except StopDuringSetUp:
+            return 0                        # stopped before it ran: nothing to finalise
         except (ParameterException, ValueError) as err:   # ScenarioError is a ValueError
             print(f'{name}: invalid parameters: {err}', file=sys.stderr, flush=True)
             return 1

@@ -18,21 +18,30 @@ outer one already received.
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 import os
 import signal
 import threading
 from types import FrameType
-from typing import Any, Callable, TYPE_CHECKING
+from typing import Any, Callable, Iterator, TYPE_CHECKING
 
 if TYPE_CHECKING:   # rclpy is imported when spinning only: StopSignals is installed before it
     from rclpy.executors import Executor
 
-__all__ = ['StopSignals', 'spin_until_stopped', 'POLL', 'STOP_SIGNALS']
+__all__ = ['StopSignals', 'StopDuringSetUp', 'spin_until_stopped', 'POLL', 'STOP_SIGNALS']
 
 #: The signals that request a stop.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: Longest wait of the spin loop [s] before it looks at the stop request again.
 POLL = 0.1
+
+
+class StopDuringSetUp(BaseException):
+    """
+    A stop signal received while a node is being built (:meth:`StopSignals.interrupting`).
+
+    A BaseException (as KeyboardInterrupt): no ``except Exception`` on the way swallows it.
+    """
 
 
 class StopSignals:
@@ -49,6 +58,7 @@ class StopSignals:
         self.signum: int | None = None
         self._saved: dict[int, Callable[[int, FrameType | None], Any] | int | None] = {}
         self._outer: StopSignals | None = None
+        self._interrupting = False
 
     def __enter__(self) -> StopSignals:
         if threading.current_thread() is threading.main_thread():
@@ -73,9 +83,31 @@ class StopSignals:
         if self._outer is not None and self._outer.signum is None:
             self._outer.signum = self.signum   # the outer one ignores later signals too
 
+    @contextmanager
+    def interrupting(self) -> Iterator[None]:
+        """
+        Within: a stop signal raises :class:`StopDuringSetUp` at once, instead of waiting.
+
+        For building a node (reading a shape file, checking it: seconds for a large one), where
+        nothing is half-written and the spin loop that would see the request has not started.
+        Python runs the handler between two bytecodes, so the stop is served within the
+        longest single C call of the set-up (each bounded: docs/ros.md, "Limits of the
+        inputs"). A stop requested before entering raises on entry.
+        """
+        if self.requested:
+            raise StopDuringSetUp(self.signum)
+        self._interrupting = True
+        try:
+            yield
+        finally:
+            self._interrupting = False
+
     def _handle(self, signum: int, _frame) -> None:
         if self.signum is None:
             self.signum = signum
+            if self._interrupting:
+                self._interrupting = False
+                raise StopDuringSetUp(signum)
             return
         # os.write, not print: a handler may run while the main thread is inside a print.
         name = signal.Signals(signum).name

@@ -14,7 +14,8 @@ from tumble_ros.errors import CoreError
 __all__ = ['ScenarioError', 'MIN_RTOL', 'MAX_RTOL', 'MIN_ORBIT_RATE', 'MAX_ORBIT_RATE',
            'MAX_OMEGA', 'MAX_ATOL', 'MAX_DURATION', 'MAX_STEPS', 'MAX_SAMPLES', 'MAX_ROTATION',
            'RESOLUTION_ULPS', 'MAX_PARAMS_FILE_BYTES', 'MAX_IMPACTS', 'MIN_WINDOW_STEPS',
-           'STEPS_PER_RADIAN', 'step_budget', 'budget_message']
+           'STEPS_PER_RADIAN', 'step_budget', 'budget_message', 'MAX_SHAPE_FILE_BYTES',
+           'MAX_FACETS', 'MIN_BODY_SIZE', 'MAX_BODY_SIZE', 'MAX_DEGREE']
 
 
 class ScenarioError(CoreError, ValueError):
@@ -65,6 +66,30 @@ MAX_PARAMS_FILE_BYTES = 4 * 1024 * 1024
 #: Most scheduled impacts in a scenario (``impacts.start``): each is a segment of the run, and
 #: 10**6 of them took 3.9 GB before the first step; the paper uses a handful.
 MAX_IMPACTS = 10_000
+
+# -- Shapes and mass models (docs/physics.md, "Mass models"). A shape file's work grows with its
+# facets (parsing, the closed-surface and convexity checks, the mass moments: O(F log F); the
+# gravity field: O(F N^3 N^2)), so it is bounded before any of it is done.
+
+#: Most facets of a polyhedron (a shape file or ``Polyhedron``): the radar shape models of the
+#: PDS (EAR-A-5-DDR-RADARSHAPE-MODELS) hold 2,000 to ~150,000 facets (146,688 the largest the
+#: issue names), the spacecraft models are published decimated to that size as well; twice
+#: the largest leaves room. A 1,000,000-facet file took 300 s before the first output.
+MAX_FACETS = 300_000
+#: Largest shape file [bytes]: ~40 bytes a vertex line and ~25 a facet line give ~20 MB at
+#: MAX_FACETS (half as many vertices as facets); 64 MiB leaves room for comments and 17-digit
+#: coordinates. Checked before the file is read (its text is held while it parses).
+MAX_SHAPE_FILE_BYTES = 64 * 1024 * 1024
+#: Smallest and largest size of a body [km] (an ellipsoid's semi-axes, a polyhedron's extent
+#: along x, y and z): the smallest asteroids observed are metres across (2008 TC3, ~4 m), the
+#: largest small body (Ceres) ~1,000 km; two orders of magnitude either side. Semi-axes of
+#: 1e-300 km made the mass 0 (a ZeroDivisionError), vertices at 1e200 km an OverflowError.
+MIN_BODY_SIZE, MAX_BODY_SIZE = 1e-5, 1e5
+#: Highest degree of a gravity field (``gravity.degree``, a mass model's Stokes coefficients):
+#: the multipole torque costs ~N^2 per step and a polyhedron's coefficients (N/2 + 1)^3 points
+#: a facet; the flybys studied need N <= 4-8. Stokes coefficients of degree 100,000 asked for a
+#: 74.5-GiB array before any check.
+MAX_DEGREE = 30
 
 # -- The work budget of the adaptive methods (docs/physics.md, "Work budget"). A fixed-step run
 # takes duration / step steps, checked above (MAX_STEPS); an adaptive method chooses its steps,

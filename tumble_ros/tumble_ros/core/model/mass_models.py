@@ -47,7 +47,10 @@ import numpy as np
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.model.gravity_field import (GravityField, principal_axes,
                                                  regular_solid_harmonics, stokes_normalisation)
-from tumble_ros.core.model.limits import ScenarioError
+from tumble_ros.core.model.limits import (MAX_BODY_SIZE, MAX_DEGREE, MAX_FACETS, MIN_BODY_SIZE,
+                                          ScenarioError)
+from tumble_ros.core.model.mesh_checks import (components, convexity_defect, ConvexityDefect,
+                                               degenerate_facet, mesh_size)
 
 __all__ = ['MassModelError', 'Reference', 'IDENTITY', 'MassModel', 'Ellipsoid', 'Polyhedron',
            'DensityMoments', 'MASS_MODELS', 'KG_PER_KM3_PER_DENSITY', 'tetrahedron_rule',
@@ -63,15 +66,30 @@ MIN_DENSITY, MAX_DENSITY = 100.0, 30000.0
 
 
 class MassModelError(ScenarioError):
-    """An invalid mass model; the message starts with the field's name. ``facet``: the facet."""
+    """
+    An invalid mass model; the message starts with the field's name.
 
-    def __init__(self, message: str, facet: int | None = None) -> None:
+    ``facet``, ``vertex``: the facet or vertex at fault (0-based), if any.
+    """
+
+    def __init__(self, message: str, facet: int | None = None,
+                 vertex: int | None = None) -> None:
         super().__init__(message)
         self.facet = facet
+        self.vertex = vertex
 
 
-def _fail(name: str, why: str, value: Any, facet: int | None = None) -> None:
-    raise MassModelError(f'{name}: {why}, got {value!r}', facet)
+def _fail(name: str, why: str, value: Any, facet: int | None = None,
+          vertex: int | None = None) -> None:
+    raise MassModelError(f'{name}: {why}, got {value!r}', facet, vertex)
+
+
+def _size(name: str, size: float, value: Any) -> None:
+    """Refuse a body's ``size`` [km] outside [MIN_BODY_SIZE, MAX_BODY_SIZE]."""
+    if not MIN_BODY_SIZE <= size <= MAX_BODY_SIZE:
+        _fail(name, f'a body {size:.3g} km across is outside [{MIN_BODY_SIZE:g}, '
+              f'{MAX_BODY_SIZE:g}] km (MIN_BODY_SIZE, MAX_BODY_SIZE: from a boulder to beyond '
+              'Ceres; lengths are in km)', value)
 
 
 def _density(value: Any) -> float:
@@ -245,6 +263,7 @@ def _semi_axes(value: Any) -> tuple[float, float, float]:
             _fail(f'semi_axes[{k}]', 'must be a number [km]', v)
         if isinstance(v, bool) or not math.isfinite(x) or x <= 0.0:
             _fail(f'semi_axes[{k}]', 'must be a finite number > 0 [km]', v)
+        _size(f'semi_axes[{k}]', 2.0 * x, v)
         out.append(x)
     return (out[0], out[1], out[2])
 
@@ -339,10 +358,19 @@ def _mesh_arrays(vertices: Any, facets: Any) -> tuple[FloatArray, np.ndarray]:
         _fail('vertices', 'must be an (n, 3) array of n >= 4 points [km]', np.shape(v))
     bad = np.flatnonzero(~np.all(np.isfinite(v), axis=1))
     if bad.size:
-        _fail(f'vertices[{bad[0]}]', 'must be finite', tuple(v[bad[0]]))
+        _fail(f'vertices[{bad[0]}]', 'must be finite', tuple(v[bad[0]]), vertex=int(bad[0]))
+    far = np.flatnonzero(np.any(np.abs(v) > MAX_BODY_SIZE, axis=1))
+    if far.size:
+        _fail(f'vertices[{far[0]}]', f'a coordinate beyond {MAX_BODY_SIZE:g} km (MAX_BODY_SIZE; '
+              'lengths are in km)', tuple(float(x) for x in v[far[0]]), vertex=int(far[0]))
+    _size('vertices', mesh_size(v), f'extent {mesh_size(v):.3g} km')
     f = np.asarray(facets)
     if f.ndim != 2 or f.shape[1] != 3 or len(f) < 4:
         _fail('facets', 'must be an (n, 3) array of n >= 4 vertex triples', np.shape(f))
+    if len(f) > MAX_FACETS or len(v) > MAX_FACETS:
+        _fail('facets', f'at most {MAX_FACETS:,} facets and vertices (MAX_FACETS: twice the '
+              'largest radar shape model; decimate the mesh)', f'{len(f):,} facets and '
+              f'{len(v):,} vertices')
     if not np.issubdtype(f.dtype, np.integer):
         _fail('facets', 'must be integer vertex indices', f.dtype)
     out = np.flatnonzero(np.any((f < 0) | (f >= len(v)), axis=1))
@@ -383,6 +411,21 @@ def _check_closed(facets: np.ndarray) -> None:
               int(owner[k]))
 
 
+def _check_one_body(v: FloatArray, f: np.ndarray) -> None:
+    """Refuse a facet of no area, and a surface of several separate bodies."""
+    flat = degenerate_facet(v, f)
+    if flat is not None:
+        _fail(f'facets[{flat}]', 'has no area (its vertices are collinear or coincide): no '
+              'outward normal', tuple(int(i) for i in f[flat]), flat)
+    count, labels = components(f)
+    if count > 1:
+        second = int(np.flatnonzero(labels != labels[0])[0])
+        sizes = np.bincount(np.unique(labels, return_inverse=True)[1])
+        _fail(f'facets[{second}]', f'the surface is {count} separate bodies (facet {second} is '
+              'not connected to facet 0): a rigid body is one; give each its own shape file',
+              f'{", ".join(str(int(n)) for n in sizes)} facets', second)
+
+
 def _tetra_moments(vertices: FloatArray, facets: np.ndarray,
                    origin: FloatArray) -> tuple[float, FloatArray, FloatArray]:
     """Return (volume, first moment (3,), second moments (3, 3)) about ``origin`` [km]."""
@@ -418,6 +461,7 @@ class Polyhedron:
     def __post_init__(self) -> None:
         v, f = _mesh_arrays(self.vertices, self.facets)
         _check_closed(f)
+        _check_one_body(v, f)
         v.setflags(write=False)
         f.setflags(write=False)
         object.__setattr__(self, 'vertices', v)
@@ -494,10 +538,14 @@ class Polyhedron:
                           self.reference.then(move))
 
     @cached_property
+    def convexity_defect(self) -> ConvexityDefect | None:
+        """Say where the body is not convex (:func:`~.mesh_checks.convexity_defect`), or None."""
+        return convexity_defect(self.vertices, self.facets)
+
+    @property
     def convex(self) -> bool:
-        """Tell whether the body is convex: its volume equals its hull's (to 1e-9)."""
-        from scipy.spatial import ConvexHull
-        return bool(ConvexHull(self.vertices).volume <= self.volume * (1.0 + 1e-9))
+        """Tell whether the body is convex, to :data:`~.mesh_checks.CONVEXITY_TOLERANCE`."""
+        return self.convexity_defect is None
 
     @property
     def radius(self) -> float:
@@ -568,7 +616,12 @@ def _stokes_arrays(stokes: Any) -> tuple[FloatArray, FloatArray]:
     rows = values.reshape(-1, 4)
     if not np.all(np.isfinite(rows)):
         _fail('stokes', 'must be finite numbers', list(values))
-    degree = int(max(2, rows[:, 0].max(initial=0)))
+    top = rows[:, 0].max(initial=0)
+    if top > MAX_DEGREE:
+        k = int(np.argmax(rows[:, 0]))
+        _fail(f'stokes[{4 * k}]', f'degree n at most {MAX_DEGREE} (MAX_DEGREE, as '
+              'gravity.degree)', float(rows[k, 0]))
+    degree = int(max(2, top))
     C, S = np.zeros((degree + 1, degree + 1)), np.zeros((degree + 1, degree + 1))
     C[0, 0] = 1.0
     for k, (n, m, c, s) in enumerate(rows):

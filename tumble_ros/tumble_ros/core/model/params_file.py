@@ -8,16 +8,16 @@ it): the same refusals, in one line naming the file, whoever reads it::
     params file F.yaml: no such file
     params file F.yaml: is a FIFO (named pipe), not a params file (only regular files are read)
     params file F.yaml: 61,000,000 bytes, above the limit of 4,194,304 (MAX_PARAMS_FILE_BYTES)
-    params file F.yaml: cannot read it as text (UnicodeDecodeError: ...)
+    params file F.yaml: cannot read it as text: it holds UTF-16 text, not UTF-8 ...
     params file F.yaml: not valid YAML: ...
     params file F.yaml: no parameters (expected a ROS 2 params file: node names mapping to ...)
+    params file F.yaml: sim.body.stokes: a list mixing integers and decimals ([2, 0, -0.1]) ...
     params file F.yaml: no section applies to node /ast1/sim (sections: sim; ...)
 
-A FIFO, a device or a socket is refused before any read (opening a FIFO for reading blocks
-until a writer comes: the file is opened with O_NONBLOCK and checked on the open descriptor,
-as ``tumble_ros.io.mcap_reader`` opens a recording), and a file larger than
+A FIFO, a device or a socket is refused before any read, a file larger than
 :data:`MAX_PARAMS_FILE_BYTES` before it is read (a 60-MB ``omega0`` list held 1.2 GB while
-YAML parsed it).
+YAML parsed it), UTF-16 or binary data by name: :mod:`tumble_ros.core.user_files`, the
+check of every file a user names.
 """
 from __future__ import annotations
 
@@ -26,67 +26,26 @@ import functools
 import os
 from pathlib import Path
 import re
-import stat
 from typing import Any, TYPE_CHECKING
 
 from tumble_ros.core.model.limits import MAX_PARAMS_FILE_BYTES, ScenarioError
+from tumble_ros.core.user_files import decode_user_text, read_user_bytes
 
 if TYPE_CHECKING:
     import yaml
 
-__all__ = ['check_params_file', 'node_sections', 'params_loader', 'parse_params_text',
-           'section_applies']
-
-_FILE_KINDS = ((stat.S_ISDIR, 'is a directory'), (stat.S_ISFIFO, 'is a FIFO (named pipe)'),
-               (stat.S_ISCHR, 'is a character device'), (stat.S_ISBLK, 'is a block device'),
-               (stat.S_ISSOCK, 'is a socket'))
-
-
-def _kind(mode: int) -> str:
-    return next((text for test, text in _FILE_KINDS if test(mode)), 'is not a regular file')
-
-
-def _one_line(text: object) -> str:
-    return ' '.join(str(text).split())
+__all__ = ['check_params_file', 'mixed_list', 'node_sections', 'params_loader',
+           'parse_params_text', 'section_applies']
 
 
 def _read_bytes(path: Path) -> bytes:
     """Return the bytes of the regular file ``path``, never blocking, at most the limit."""
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
-    except FileNotFoundError:
-        raise ScenarioError(f'params file {path}: no such file') from None
-    except OSError as err:
-        try:
-            mode = os.stat(path).st_mode          # a socket or a directory fails to open
-        except OSError:
-            mode = stat.S_IFREG
-        if not stat.S_ISREG(mode):
-            raise ScenarioError(f'params file {path}: {_kind(mode)}, not a params file (only '
-                                'regular files are read)') from None
-        raise ScenarioError(f'params file {path}: cannot open it: '
-                            f'{_one_line(err.strerror or err)}') from None
-    try:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            raise ScenarioError(f'params file {path}: {_kind(info.st_mode)}, not a params file '
-                                '(only regular files are read)')
-        if info.st_size > MAX_PARAMS_FILE_BYTES:
-            raise ScenarioError(f'params file {path}: {info.st_size:,} bytes, above the limit '
-                                f'of {MAX_PARAMS_FILE_BYTES:,} (MAX_PARAMS_FILE_BYTES, '
-                                'docs/ros.md "Limits of the inputs")')
-        os.set_blocking(fd, True)
-        with os.fdopen(fd, 'rb', closefd=False) as stream:
-            data = stream.read(MAX_PARAMS_FILE_BYTES + 1)
-    except OSError as err:
-        raise ScenarioError(f'params file {path}: cannot read it: '
-                            f'{_one_line(err.strerror or err)}') from None
-    finally:
-        os.close(fd)
-    if len(data) > MAX_PARAMS_FILE_BYTES:                  # grew since the fstat
-        raise ScenarioError(f'params file {path}: above the limit of '
-                            f'{MAX_PARAMS_FILE_BYTES:,} bytes (MAX_PARAMS_FILE_BYTES)')
-    return data
+    return read_user_bytes(path, f'params file {path}', MAX_PARAMS_FILE_BYTES,
+                           'MAX_PARAMS_FILE_BYTES', 'params file')
+
+
+def _one_line(text: object) -> str:
+    return ' '.join(str(text).split())
 
 
 def params_loader() -> type[yaml.SafeLoader]:
@@ -179,6 +138,38 @@ def section_applies(key: str, node_fqn: str) -> bool:
     return re.fullmatch(pattern, node_fqn) is not None
 
 
+#: The kinds of a list's elements, as rcl's parser types them (bool before int: a bool is an int).
+_ELEMENT_KINDS = ((bool, 'true/false'), (int, 'integers'), (float, 'decimals'), (str, 'strings'))
+
+
+def _element_kind(value: Any) -> str:
+    return next((name for kind, name in _ELEMENT_KINDS if isinstance(value, kind)), 'other')
+
+
+def mixed_list(document: Any, path: tuple[str, ...] = ()) -> str | None:
+    """
+    Say which parameter of a params file's document is a list of mixed kinds (None: none).
+
+    rcl reads a list as one type and refuses ``[2, 0, -0.1, 0.0]`` ("Sequence should be of same
+    type"), where YAML (``load_scenario``) reads it as numbers: every reader refuses it alike.
+    """
+    if isinstance(document, Mapping):
+        for key, value in document.items():
+            inner = path if key == 'ros__parameters' else (*path, str(key))
+            found = mixed_list(value, inner)
+            if found:
+                return found
+    elif isinstance(document, list):
+        kinds = list(dict.fromkeys(_element_kind(v) for v in document))
+        if len(kinds) > 1:
+            name = '.'.join(path)
+            quoted = repr(document) if len(document) <= 8 else f'list of {len(document):,}'
+            return (f'{name}: a list mixing {" and ".join(kinds)} ({quoted}): ROS 2 reads a '
+                    "list as one type (rcl: 'Sequence should be of same type'); write every "
+                    'number of a list of decimals with a decimal point (2.0, not 2)')
+    return None
+
+
 def check_params_file(path: str | os.PathLike[str],
                       node_fqn: str | None = None) -> Mapping[str, Any]:
     """
@@ -187,18 +178,17 @@ def check_params_file(path: str | os.PathLike[str],
     Raises ScenarioError, one line starting ``params file PATH:``, for a missing file, a path
     that is not a regular file (a FIFO, a directory, a device: refused before any read), a file
     above :data:`MAX_PARAMS_FILE_BYTES`, one that is not UTF-8 text, not YAML or without any
-    ``ros__parameters`` section. With ``node_fqn`` (``/sim``, ``/ast1/sim``) a section must also
-    apply to that node: an empty file, one written for another node, or a ``sim:`` section given
+    ``ros__parameters`` section, or with a list rcl refuses (:func:`mixed_list`). With
+    ``node_fqn`` (``/sim``, ``/ast1/sim``) a section must also apply to that node: an empty
+    file, one written for another node, or a ``sim:`` section given
     to a namespaced simulator would otherwise run silently with the defaults.
     """
     path = Path(os.fspath(path))
-    data = _read_bytes(path)
-    try:
-        text = data.decode('utf-8')
-    except UnicodeDecodeError as err:
-        raise ScenarioError(f'params file {path}: cannot read it as text '
-                            f'({err.__class__.__name__}: {err})') from None
+    text = decode_user_text(_read_bytes(path), f'params file {path}')
     document = parse_params_text(text, path)
+    mixed = mixed_list(document)
+    if mixed:
+        raise ScenarioError(f'params file {path}: {mixed}')
     if node_fqn:
         sections = node_sections(document)
         if not any(section_applies(s, node_fqn) for s in sections):

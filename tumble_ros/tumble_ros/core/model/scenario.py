@@ -515,6 +515,18 @@ class Scenario:
                       'the orbit gives the tidal torque', self.orbit_rate)
         _set(self, 'perturbers', _checked_perturbers(self))
         self._check_gravity()
+        self._check_lightcurve()
+
+    def _check_lightcurve(self) -> None:
+        """Refuse a lightcurve of a non-convex polyhedron: its shadows are not modelled."""
+        model = self.body.mass_model
+        defect = getattr(model, 'convexity_defect', None)
+        if self.lightcurve.enabled and defect is not None:
+            _fail('lightcurve.enabled',
+                  f'the polyhedron of body.shape_file {self.body.shape_file} is not convex '
+                  f'({defect}): the lightcurve sums the lit visible facets without shadowing, '
+                  'exact for a convex body only; set lightcurve.enabled: false to simulate it '
+                  'without a lightcurve', self.lightcurve.enabled)
 
     def _apply_body(self) -> None:
         """Derive ``inertia`` (and ``gravity_field``) from the mass model ``body``."""

@@ -132,8 +132,11 @@ def lightcurve_mesh(scenario: Scenario, settings: LightcurveSettings) -> Mesh:
     of the principal moments (:func:`~.shape.body_mesh`; ValueError for unphysical moments).
     """
     model = scenario.body.mass_model
-    if isinstance(model, Polyhedron):
-        return convex_mesh(model.vertices, model.facets)
+    if isinstance(model, Polyhedron):     # (its convexity known: checked once, by the model)
+        if not model.convex:
+            raise ValueError(f'body.shape_file: the polyhedron is not convex '
+                             f'({model.convexity_defect}): no shadowing is modelled')
+        return convex_mesh(model.vertices, model.facets, check_convex=False)
     if isinstance(model, Ellipsoid):
         return ellipsoid_mesh(model.semi_axes, settings.subdivisions)
     return body_mesh(scenario.inertia, settings.subdivisions)
@@ -187,14 +190,11 @@ class LightcurveSampler:
         """
         Return the sampler of ``scenario``; None when it has no lightcurve.
 
-        None when ``lightcurve.enabled`` is false, the moments break the triangle inequality
-        (no body has them) or the body is a non-convex polyhedron (self-shadowing is not
-        modelled).
+        None when ``lightcurve.enabled`` is false or the moments break the triangle inequality
+        (no body has them). A non-convex polyhedron (its self-shadowing is not modelled) with
+        ``lightcurve.enabled`` is refused by the Scenario itself, with the reason.
         """
         if not scenario.lightcurve.enabled or not body_shape(scenario.inertia).physical:
-            return None
-        model = scenario.body.mass_model
-        if isinstance(model, Polyhedron) and not model.convex:
             return None
         return cls(scenario, lightcurve_mesh(scenario, scenario.lightcurve))
 

@@ -26,17 +26,14 @@ import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.model.mesh_checks import convexity_defect, CONVEXITY_TOLERANCE, \
+    DEGENERATE_AREA
 from tumble_ros.core.model.shape import body_shape
 from tumble_ros.core.photometry.settings import DEFAULT_SUBDIVISIONS, MAX_SUBDIVISIONS
 
 __all__ = ['Mesh', 'convex_mesh', 'icosphere', 'ellipsoid_mesh', 'body_mesh',
            'DEFAULT_SUBDIVISIONS', 'MAX_SUBDIVISIONS', 'CONVEXITY_TOLERANCE']
 
-#: A vertex may stand this far outside a facet's plane, relative to the mesh's size, and the
-#: mesh still counts as convex: shape models are often printed to 6-7 significant digits, and
-#: a dent of 1e-6 of the size changes the brightness by less (test_core_photometry.py refuses a
-#: dimple of 1/2 the radius).
-CONVEXITY_TOLERANCE = 1e-6
 _IntArray = npt.NDArray[np.int64]
 
 
@@ -68,10 +65,12 @@ def convex_mesh(vertices: ArrayLike, facets: ArrayLike, *, check_convex: bool = 
 
     Facets are re-oriented outward (their order of vertices does not matter). ValueError, naming
     the argument, for arrays of the wrong shape, non-finite coordinates, indices out of range,
-    degenerate facets, or a polyhedron that is not convex (a vertex outside a facet's plane by
-    more than :data:`CONVEXITY_TOLERANCE` of its size): the brightness sums visible lit facets
-    without shadowing, which only a convex body makes exact. ``check_convex`` False skips that
-    check (O(F V)) for a mesh convex by construction (:func:`ellipsoid_mesh`).
+    degenerate facets, or a polyhedron that is not convex or not one closed surface
+    (:func:`~tumble_ros.core.model.mesh_checks.convexity_defect`: a vertex outside a
+    neighbouring facet's plane by more than :data:`CONVEXITY_TOLERANCE` of its size, O(F log
+    F)): the brightness sums visible lit facets without shadowing, which only a convex body
+    makes exact. ``check_convex`` False skips that check for a mesh convex by construction
+    (:func:`ellipsoid_mesh`).
     """
     v = np.asarray(vertices, dtype=float)
     f = np.asarray(facets)
@@ -89,7 +88,7 @@ def convex_mesh(vertices: ArrayLike, facets: ArrayLike, *, check_convex: bool = 
     cross = np.cross(b - a, c - a)
     double_area = np.linalg.norm(cross, axis=1)
     size = float(np.ptp(v, axis=0).max())
-    if not np.all(double_area > 1e-14 * size * size):
+    if not np.all(double_area > DEGENERATE_AREA * size * size):
         k = int(np.argmin(double_area))
         raise ValueError(f'facets: facet {k} {f[k].tolist()} is degenerate (zero area)')
     normals = cross / double_area[:, None]
@@ -97,27 +96,14 @@ def convex_mesh(vertices: ArrayLike, facets: ArrayLike, *, check_convex: bool = 
     outward = np.einsum('ij,ij->i', normals, (a + b + c) / 3.0 - centre) > 0.0
     normals = np.where(outward[:, None], normals, -normals)
     f = np.where(outward[:, None], f, f[:, ::-1])
-    if check_convex:
-        _check_convex(v, a, normals, size)
+    defect = convexity_defect(v, f, normals) if check_convex else None
+    if defect is not None:
+        raise ValueError(f'vertices, facets: the mesh is not convex ({defect}; the brightness is '
+                         'exact for convex bodies only: no shadowing or occlusion is modelled)')
     areas = 0.5 * double_area
     centroids = (a + b + c) / 3.0
     volume = float(np.sum(areas * np.einsum('ij,ij->i', centroids, normals)) / 3.0)
     return Mesh(v, f, normals, areas, volume)
-
-
-def _check_convex(v: FloatArray, corner: FloatArray, normals: FloatArray, size: float) -> None:
-    """Raise ValueError unless every vertex lies inside every facet's plane (to the tolerance)."""
-    block = max(1, 2**22 // v.shape[0])
-    for start in range(0, normals.shape[0], block):
-        n = normals[start:start + block]
-        height = v @ n.T - np.einsum('ij,ij->i', corner[start:start + block], n)
-        worst = float(height.max())
-        if worst > CONVEXITY_TOLERANCE * size:
-            facet, vertex = np.unravel_index(int(np.argmax(height)), height.shape)
-            raise ValueError(
-                f'vertices, facets: the mesh is not convex (vertex {int(vertex)} lies '
-                f'{worst:.3g} outside the plane of facet {start + int(facet)}; the brightness '
-                'is exact for convex bodies only: no shadowing or occlusion is modelled)')
 
 
 def icosphere(subdivisions: int) -> tuple[FloatArray, _IntArray]:
