@@ -34,15 +34,16 @@ from tumble_ros.core.model.limits import MAX_PARAMS_FILE_BYTES, ScenarioError
 if TYPE_CHECKING:
     import yaml
 
-__all__ = ['check_params_file', 'node_sections', 'params_loader', 'parse_params_text',
-           'section_applies']
+__all__ = ['check_params_file', 'file_kind', 'node_sections', 'params_loader',
+           'parse_params_text', 'section_applies']
 
 _FILE_KINDS = ((stat.S_ISDIR, 'is a directory'), (stat.S_ISFIFO, 'is a FIFO (named pipe)'),
                (stat.S_ISCHR, 'is a character device'), (stat.S_ISBLK, 'is a block device'),
                (stat.S_ISSOCK, 'is a socket'))
 
 
-def _kind(mode: int) -> str:
+def file_kind(mode: int) -> str:
+    """Return what a non-regular file is, from its ``st_mode``: 'is a FIFO (named pipe)', ...."""
     return next((text for test, text in _FILE_KINDS if test(mode)), 'is not a regular file')
 
 
@@ -62,15 +63,15 @@ def _read_bytes(path: Path) -> bytes:
         except OSError:
             mode = stat.S_IFREG
         if not stat.S_ISREG(mode):
-            raise ScenarioError(f'params file {path}: {_kind(mode)}, not a params file (only '
+            raise ScenarioError(f'params file {path}: {file_kind(mode)}, not a params file (only '
                                 'regular files are read)') from None
         raise ScenarioError(f'params file {path}: cannot open it: '
                             f'{_one_line(err.strerror or err)}') from None
     try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
-            raise ScenarioError(f'params file {path}: {_kind(info.st_mode)}, not a params file '
-                                '(only regular files are read)')
+            raise ScenarioError(f'params file {path}: {file_kind(info.st_mode)}, not a params '
+                                'file (only regular files are read)')
         if info.st_size > MAX_PARAMS_FILE_BYTES:
             raise ScenarioError(f'params file {path}: {info.st_size:,} bytes, above the limit '
                                 f'of {MAX_PARAMS_FILE_BYTES:,} (MAX_PARAMS_FILE_BYTES, '
