@@ -57,7 +57,7 @@ __all__ = ['Alternative', 'Harmonic', 'MirrorSolution', 'PeriodSolution', 'Progr
            'campaign_times', 'combination', 'fit_series', 'format_periods', 'harmonics', 'sampling_periods',
            'search_periods', 'stderr_search_progress', 'BIC_MARGIN', 'DAYS_IN_HOURS',
            'GRID_BUDGET', 'MAX_FREQUENCIES', 'MAX_MAGNITUDE', 'MAX_ORDER', 'MAX_SIGMA',
-           'MIN_SIGMA', 'OVERSAMPLE', 'TOP_PEAKS', 'TREND_RATIO', 'WINDOW', 'WINDOW_PEAK']
+           'MIN_SIGMA', 'OVERSAMPLE', 'ROTATION_RANGE', 'TOP_PEAKS', 'TREND_RATIO', 'WINDOW', 'WINDOW_PEAK']
 
 #: grid steps per 1/(m T) in f (T the span, m the order)
 OVERSAMPLE = 3
@@ -86,6 +86,9 @@ MAX_FREQUENCIES = 200_000
 #: a smooth trend (quadratic in time) whose range is more than this times the spread of the
 #: rest is a geometry (distance, phase angle) or a period longer than the span: warned about
 TREND_RATIO = 3.0
+#: the largest range of magnitudes a rotation makes [mag]: 2.5 log10 of an elongation of 10
+#: (the largest lightcurve amplitudes observed are ~2 mag); beyond it the geometry dominates
+ROTATION_RANGE = 2.5
 #: the spectral window's peaks above this (1 at f = 0) are periodicities of the sampling
 WINDOW_PEAK = 0.5
 #: the periodicities a ground campaign's sampling has, in hours: the solar and sidereal days
@@ -850,7 +853,13 @@ def _warnings(t, y, w, span: float, unit: str, periods: tuple[float, float],
     """What could make the periods wrong, one line each (docs/analysis.md)."""
     out = []
     trend, spread = _trend(t, y, w, span)
-    if trend > TREND_RATIO * spread:
+    data_range = float(np.percentile(y, 98) - np.percentile(y, 2))
+    if data_range > ROTATION_RANGE:
+        out.append(f'the magnitudes span {data_range:.3g} mag (2-98 %), more than a rotation '
+                   f'makes (~{ROTATION_RANGE:g} mag for an elongation of 10): a changing '
+                   f'distance or phase angle (a flyby) dominates, and the periods may fit it, '
+                   f'not the rotation (search reduced magnitudes)')
+    elif trend > TREND_RATIO * spread:
         out.append(f'the magnitudes hold a smooth trend of {trend:.3g} mag over the span (a '
                    f'quadratic in time), {trend / max(spread, 1e-12):.3g} times the '
                    f'{spread:.3g} mag of the rest: a changing distance or phase angle (a '

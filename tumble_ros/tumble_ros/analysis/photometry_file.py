@@ -19,6 +19,7 @@ the line and the column. docs/analysis.md, "Periods from a lightcurve".
 """
 from __future__ import annotations
 
+import codecs
 import csv
 from dataclasses import dataclass
 import io
@@ -73,9 +74,9 @@ def _one(path: Path, header: list[str], names, what: str, required: bool) -> int
     return found[0] if found else None
 
 
-def _open_text(path: Path) -> io.TextIOWrapper:
+def _open(path: Path) -> io.BufferedReader:
     """
-    Open the regular file ``path`` as UTF-8 text (a BOM skipped), never blocking on it.
+    Open the regular file ``path`` for reading, never blocking on it.
 
     O_NONBLOCK makes the open of a FIFO return at once; the opened file (not the name) must be
     regular and at most MAX_PHOTOMETRY_BYTES long.
@@ -100,22 +101,31 @@ def _open_text(path: Path) -> io.TextIOWrapper:
                                 f'{MAX_PHOTOMETRY_BYTES:,} (MAX_PHOTOMETRY_BYTES; a campaign '
                                 f'of 10^4 points is ~0.5 MB)')
         os.set_blocking(fd, True)
-        return io.TextIOWrapper(os.fdopen(fd, 'rb'), encoding='utf-8-sig', newline='')
+        return os.fdopen(fd, 'rb')
     except BaseException:
         os.close(fd)
         raise
 
 
-def _rows(path: Path, stream: io.TextIOWrapper):
+def _text_lines(path: Path, stream: io.BufferedReader):
+    """Yield the lines as text (a UTF-8 BOM skipped); AnalysisError naming one not UTF-8."""
+    for number, raw in enumerate(stream, start=1):
+        if number == 1 and raw.startswith(codecs.BOM_UTF8):
+            raw = raw[len(codecs.BOM_UTF8):]
+        try:
+            yield raw.decode('utf-8')
+        except UnicodeDecodeError as err:
+            raise AnalysisError(f'{path} line {number}: not UTF-8 text ({err.reason})') \
+                from None
+
+
+def _rows(path: Path, stream: io.BufferedReader):
     """Yield (line number, fields) of the lines that are neither empty nor comments."""
-    reader = csv.reader(stream)
+    reader = csv.reader(_text_lines(path, stream))
     try:
         for row in reader:
             if row and ''.join(row).strip() and not row[0].lstrip().startswith('#'):
                 yield reader.line_num, row
-    except UnicodeDecodeError as err:
-        raise AnalysisError(f'{path} line {reader.line_num + 1}: not UTF-8 text '
-                            f'({err.reason})') from None
     except csv.Error as err:
         raise AnalysisError(f'{path} line {reader.line_num}: not CSV: {err}') from None
 
@@ -149,7 +159,7 @@ def _numbers(path: Path, line: int, row: list[str], header: list[str],
 def read_photometry(path: str | Path) -> Photometry:
     """Read a photometry CSV (module docstring); AnalysisError for a bad file."""
     path = Path(path)
-    with _open_text(path) as stream:
+    with _open(path) as stream:
         rows = _rows(path, stream)
         first = next(rows, None)
         if first is None:
