@@ -20,14 +20,14 @@ from tumble_ros.errors import AnalysisError
 
 
 def rows(count, start=1):
-    """``count`` data lines 'jd,mag,err' half an hour apart."""
+    """Return ``count`` data lines 'jd,mag,err' half an hour apart."""
     return ''.join(f'{2460000.5 + k / 48:.6f},{15 + 0.1 * np.sin(k):.4f},0.01\n'
                    for k in range(start, start + count))
 
 
 @pytest.fixture
 def alarm():
-    """Fail instead of hanging: SIGALRM after 20 s raises in the blocked call."""
+    """Fail instead of hanging: SIGALRM after 20 s raises in a blocked call."""
     def expire(signum, frame):
         raise TimeoutError('the reader blocked')
     previous = signal.signal(signal.SIGALRM, expire)

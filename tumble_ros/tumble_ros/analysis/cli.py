@@ -292,7 +292,7 @@ def _solution_dict(sol) -> dict:
 
 
 def _search_progress(args):
-    """The period search's progress on stderr (after 2 s), or None with --quiet."""
+    """Return the period search's progress on stderr (after 2 s), or None with --quiet."""
     from .periods import stderr_search_progress
     return None if args.quiet else stderr_search_progress()
 

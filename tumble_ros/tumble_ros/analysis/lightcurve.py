@@ -4,8 +4,8 @@ The recorded lightcurve: its periods and its figure (``analyze RUN.mcap --lightc
 The ``lightcurve`` topic's magnitudes (core/photometry, recorded per sample), reduced (the
 distance modulus and a fitted phase function removed: :func:`reduced_lightcurve`), are searched
 for one or two periods (:func:`tumble_ros.analysis.periods.search_periods`, times in hours) and
-drawn: reduced magnitude against time with the fit, and the residuals. docs/analysis.md, "Periods from a
-lightcurve".
+drawn: reduced magnitude against time with the fit, and the residuals. docs/analysis.md,
+"Periods from a lightcurve".
 """
 from __future__ import annotations
 

@@ -54,10 +54,11 @@ import numpy as np
 from scipy.optimize import minimize
 
 __all__ = ['Alternative', 'Harmonic', 'MirrorSolution', 'PeriodSolution', 'Progress',
-           'campaign_times', 'combination', 'fit_series', 'format_periods', 'harmonics', 'sampling_periods',
-           'search_periods', 'stderr_search_progress', 'BIC_MARGIN', 'DAYS_IN_HOURS',
-           'GRID_BUDGET', 'MAX_FREQUENCIES', 'MAX_MAGNITUDE', 'MAX_ORDER', 'MAX_SIGMA',
-           'MIN_SIGMA', 'OVERSAMPLE', 'ROTATION_RANGE', 'TOP_PEAKS', 'TREND_RATIO', 'WINDOW', 'WINDOW_PEAK']
+           'campaign_times', 'combination', 'fit_series', 'format_periods', 'harmonics',
+           'sampling_periods', 'search_periods', 'stderr_search_progress', 'BIC_MARGIN',
+           'DAYS_IN_HOURS', 'GRID_BUDGET', 'MAX_FREQUENCIES', 'MAX_MAGNITUDE', 'MAX_ORDER',
+           'MAX_SIGMA', 'MIN_SIGMA', 'OVERSAMPLE', 'ROTATION_RANGE', 'TOP_PEAKS', 'TREND_RATIO',
+           'WINDOW', 'WINDOW_PEAK']
 
 #: grid steps per 1/(m T) in f (T the span, m the order)
 OVERSAMPLE = 3
@@ -505,7 +506,7 @@ def _period_range(t: np.ndarray, span: float, period_min: float | None,
                   period_max: float | None, start_order: int,
                   unit: str) -> tuple[float, float, str]:
     """
-    The periods searched [time] and how they were chosen; ValueError for a range too big.
+    Return the periods searched [time] and how they were chosen; ValueError for too many.
 
     Default: the span down to 4 median sampling steps, that short end raised where the
     2-period grid would hold more than GRID_BUDGET trials at order 3 (its f2 axis holds
@@ -518,7 +519,9 @@ def _period_range(t: np.ndarray, span: float, period_min: float | None,
     if period_min is not None:
         p_min = float(period_min)
     else:
-        room = GRID_BUDGET / (2 * TOP_PEAKS * (2 * WINDOW + 1)) / (OVERSAMPLE * 3 * span)
+        # (two f2 fewer: np.arange's end and rounding)
+        room = ((GRID_BUDGET / (2 * TOP_PEAKS * (2 * WINDOW + 1)) - 2.0)
+                / (OVERSAMPLE * 3 * span))
         p_min = max(shortest, 1.0 / (1.0 / p_max + room)) if p_max > 0.0 else shortest
         note = ('the default: ' + ('the span' if period_max is None else 'P_max as given')
                 + f' down to 4 median sampling steps ({shortest:.3g}{unit})'
@@ -537,7 +540,7 @@ def _period_range(t: np.ndarray, span: float, period_min: float | None,
 
 
 def _window(t: np.ndarray, w: np.ndarray, fs: np.ndarray) -> np.ndarray:
-    """The spectral window |sum w exp(2 pi i f t)| / sum w at ``fs`` (1 at f = 0), in chunks."""
+    """Return the spectral window |sum w exp(2 pi i f t)| / sum w at ``fs`` (1 at f = 0)."""
     out = np.empty(fs.size)
     step = max(1, _CHUNK // max(t.size, 1))
     for lo in range(0, fs.size, step):
@@ -617,7 +620,7 @@ def _same_pair(a: tuple[float, float], b: tuple[float, float], span: float) -> b
 
 def _grid_minima(rss: np.ndarray, f1s: np.ndarray, f2s: np.ndarray, step: float,
                  count: int) -> list[tuple[float, float]]:
-    """The ``count`` least trials of a grid, each more than 2 steps from a better one."""
+    """Return the ``count`` least trials of a grid, each > 2 steps from a better one."""
     out: list[tuple[float, float]] = []
     for k in np.argsort(rss, axis=None)[:20_000]:
         i, j = np.unravel_index(k, rss.shape)
@@ -712,9 +715,8 @@ def search_periods(t, magnitude, sigma=None, period_min: float | None = None,
                                         for c in candidates]))
         f1s = f1s[(f1s >= f_lo) & (f1s <= f_hi)]
         f2s = np.arange(f_lo, f_hi + step, step)
-        done = sum(o * o for o in range(1, order)) / sum(o * o for o in
-                                                        range(1, start_order + 1))
-        share = order * order / sum(o * o for o in range(1, start_order + 1))
+        whole = sum(o * o for o in range(1, start_order + 1))   # the cost grows as order^2
+        done, share = sum(o * o for o in range(1, order)) / whole, order * order / whole
         rss = _grid_rss(t, y, w, f1s, f2s, order, span,
                         lambda k, total: report(f'2-period grid, order {order}',
                                                 done + share * k / total))
@@ -809,9 +811,11 @@ def _alternatives(t, y, w, pair: tuple[float, float], order: int, span: float,
                   sampling: tuple[tuple[str, float], ...], refined, chi2
                   ) -> tuple[Alternative, ...]:
     """
-    Other pairs, each refined at ``order``: the pair's aliases by the sampling's periodicities
-    (f1 +- fs, f2), (f1, f2 +- fs), the grid's other minima; by increasing RMS, without
-    duplicates (within 1/span, either order) or the pair itself.
+    Return other pairs than ``pair``, each refined and refitted at ``order``.
+
+    The pair's aliases by the sampling's periodicities, (f1 +- fs, f2) and (f1, f2 +- fs), and
+    the grid's other minima; by increasing RMS, without duplicates (within 1/span, either
+    order) or the pair itself.
     """
     f1, f2 = pair
     starts: list[tuple[str, tuple[float, float]]] = []
@@ -850,7 +854,7 @@ def _alternatives(t, y, w, pair: tuple[float, float], order: int, span: float,
 def _warnings(t, y, w, span: float, unit: str, periods: tuple[float, float],
               aliases: tuple[str, ...], harm: list[Harmonic], scan_edge: bool,
               p_max: float) -> tuple[str, ...]:
-    """What could make the periods wrong, one line each (docs/analysis.md)."""
+    """Return what could make the periods wrong, one line each (docs/analysis.md)."""
     out = []
     trend, spread = _trend(t, y, w, span)
     data_range = float(np.percentile(y, 98) - np.percentile(y, 2))
@@ -878,7 +882,7 @@ def _warnings(t, y, w, span: float, unit: str, periods: tuple[float, float],
                    f'which may be what was fitted; its aliases are among the alternatives')
     data_range = float(np.ptp(y))
     if harm and harm[0].amplitude > 2.0 * data_range:
-        out.append(f'the fit\'s harmonics reach {harm[0].amplitude:.3g} mag against a data '
+        out.append(f"the fit's harmonics reach {harm[0].amplitude:.3g} mag against a data "
                    f'range of {data_range:.3g} mag: near-degenerate terms cancel each other, '
                    f'the periods are not determined')
     return tuple(out)
@@ -914,8 +918,10 @@ def _fit_text(rms: float, chi2: float) -> str:
 
 def format_periods(sol: PeriodSolution, unit: str = 'h', harmonics_shown: int = 6) -> str:
     """
-    Return the solution as text: what was searched, the periods, order, RMS (chi-square), the
-    strongest harmonics, the mirror bases, the alternatives and the warnings.
+    Return the solution as text.
+
+    What was searched, the periods, order, RMS (chi-square), the strongest harmonics, the
+    mirror bases, the alternatives and the warnings.
     """
     lines = [f'lightcurve: {sol.n} points over {sol.span:.6g} {unit}; periods searched '
              f'{sol.period_range[0]:.4g} to {sol.period_range[1]:.4g} {unit} ({sol.range_note})']

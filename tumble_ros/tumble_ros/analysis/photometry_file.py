@@ -132,7 +132,7 @@ def _rows(path: Path, stream: io.BufferedReader):
 
 def _numbers(path: Path, line: int, row: list[str], header: list[str],
              columns: list[int]) -> list[float]:
-    """The row's time, magnitude (and error) as floats; AnalysisError naming line and column."""
+    """Return the row's time, magnitude (and error); AnalysisError naming line and column."""
     if len(row) != len(header):
         raise AnalysisError(f'{path} line {line}: {len(row)} fields, the header has '
                             f'{len(header)}')
