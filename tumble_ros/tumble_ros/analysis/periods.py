@@ -836,7 +836,7 @@ def _alternatives(t, y, w, pair: tuple[float, float], order: int, span: float,
     for label, (g1, g2) in starts:
         g1, g2 = abs(g1), abs(g2)
         if min(g1, g2) < 0.5 * band[0] or max(g1, g2) > 2.0 * band[1] or \
-                _degenerate(g1, g2, order, span):
+                _degenerate(np.asarray(g1), np.asarray(g2), order, span):
             continue
         g = refined(np.array([g1, g2]), order, 150)
         g = (float(max(g)), float(min(g)))

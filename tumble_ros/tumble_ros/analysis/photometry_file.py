@@ -170,7 +170,7 @@ def read_photometry(path: str | Path) -> Photometry:
         i_m = _one(path, header, MAGNITUDE_COLUMNS, 'magnitude', True)
         i_e = _one(path, header, ERROR_COLUMNS, 'error', False)
         columns = [i for i in (i_t, i_m, i_e) if i is not None]
-        values = []
+        values: list[list[float]] = []
         for line, row in rows:
             if len(values) == MAX_PHOTOMETRY_ROWS:
                 raise AnalysisError(f'{path} line {line}: more than {MAX_PHOTOMETRY_ROWS:,} '
