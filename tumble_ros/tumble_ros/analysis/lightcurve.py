@@ -63,10 +63,10 @@ def reduced_lightcurve(rec: Recording) -> tuple[np.ndarray, np.ndarray, str]:
     The magnitude is -2.5 log10(B / B_ref) + 5 log10(r delta) (core/photometry): with the
     recorded brightness B, m + 2.5 log10 B is the distance modulus plus a constant, removed
     (the magnitude at the recording's nearest distances is kept). What the phase angle alpha
-    does to B (the body's phase curve) is then removed by a weighted quadratic a + b alpha +
-    c alpha^2 fitted to the reduced magnitudes, when alpha varies by more than PHASE_SPAN.
-    What remains is the part of the brightness that the rotation makes (the shape seen at a
-    changing aspect, to the quadratic's accuracy).
+    does to B (the body's phase curve) is then removed: a quadratic a + b alpha + c alpha^2
+    fitted by least squares to the reduced magnitudes, when alpha varies by more than
+    PHASE_SPAN. What remains is the part of the brightness that the rotation makes (the shape
+    seen at a changing aspect, to the quadratic's accuracy).
     """
     t, mag, brightness, phase = _lit(rec)
     modulus = mag + 2.5 * np.log10(brightness)
