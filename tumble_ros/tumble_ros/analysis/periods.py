@@ -515,7 +515,7 @@ def _period_range(t: np.ndarray, span: float, period_min: float | None,
     """
     p_max = span if period_max is None else float(period_max)
     shortest = 4.0 * float(np.median(np.diff(np.sort(t))))
-    note = 'as given'
+    note = 'as given' if period_max is not None else 'P_min as given, to the span'
     if period_min is not None:
         p_min = float(period_min)
     else:
