@@ -41,8 +41,8 @@ def _column_algebra(terms: np.ndarray, m: int):
     return jk, is_sin, plus, minus, (re_minus, re_plus, im_minus, im_plus)
 
 
-def _baseline_grid_rss(t, y, w, f1s, f2s, order, span=None):
-    """The grid's kernel before 2026-12-04 (analysis/periods.py then), the reference."""
+def _baseline_grid_rss(t, y, w, f1s, f2s, order, span=None, tick=None):
+    """The grid kernel before 2026-12-04 (analysis/periods.py then), the reference; no tick."""
     from tumble_ros.analysis.periods import _degenerate, _terms
     m = order
     jk, is_sin, plus, minus, (a, b, c, d) = _column_algebra(_terms(m, True), m)

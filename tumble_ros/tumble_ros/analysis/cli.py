@@ -80,8 +80,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--period-range', type=float, nargs=2, default=None,
                         metavar=('MIN', 'MAX'),
                         help='with --photometry or --lightcurve: the periods searched [h] '
-                             '(default: 4 '
-                             'median sampling steps to the data span)')
+                             '(default: from the sampling: 4 median sampling steps to the '
+                             'data span, the short end raised to bound the search; the output '
+                             'says which)')
     parser.add_argument('--figures', metavar='DIR', default=None,
                         help='also write the figures (PNG) into DIR, created if needed '
                              '(default: no figures); existing files are not overwritten and '
@@ -247,6 +248,8 @@ def command(argv: Iterable[str] | None = None, written: WrittenMessages | None =
             print(format_periods(periods[0]))
             for path in periods[1:]:
                 print(f'lightcurve: {path}')
+    if periods is not None:
+        _period_warnings(periods[0])
     return _partial(summary)
 
 
@@ -260,7 +263,7 @@ def _recorded_periods(rec, args) -> tuple | None:
         raise AnalysisError(f'{Path(args.figures) / FIGURE_NAME} exists (--overwrite '
                             f'replaces existing figures)')
     low, high = args.period_range if args.period_range is not None else (None, None)
-    t, mag, sol = recorded_periods(rec, low, high)
+    t, mag, sol = recorded_periods(rec, low, high, progress=_search_progress(args))
     if args.figures is None:
         return (sol,)
     try:
@@ -272,24 +275,39 @@ def _recorded_periods(rec, args) -> tuple | None:
 
 
 def _solution_dict(sol) -> dict:
-    """Return the PeriodSolution as JSON-ready values (p2, p2_sigma None for one period)."""
+    """Return the PeriodSolution as JSON-ready values (NaN, p2 for one period: None)."""
     from dataclasses import asdict
-    out = asdict(sol)
-    for key in ('p2', 'p2_sigma'):
-        out[key] = None if not sol.two_periods else out[key]
+
+    def plain(value):
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        if isinstance(value, dict):
+            return {key: plain(item) for key, item in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [plain(item) for item in value]
+        return value
+    out = plain(asdict(sol))
     out['unit'] = 'h'
     return out
 
 
+def _search_progress(args):
+    """Return the period search's progress on stderr (after 2 s), or None with --quiet."""
+    from .periods import stderr_search_progress
+    return None if args.quiet else stderr_search_progress()
+
+
 def _photometry(args) -> int:
-    """Search a photometry CSV for its periods; print them (text or JSON)."""
-    from .periods import format_periods, search_periods
+    """Search a photometry CSV for its periods; print them (text or JSON), warnings on stderr."""
+    from .periods import DAYS_IN_HOURS, format_periods, search_periods
     from .photometry_file import read_photometry
     try:
         data = read_photometry(args.photometry)
         low, high = args.period_range if args.period_range is not None else (None, None)
         try:
-            sol = search_periods(data.t, data.magnitude, data.sigma, low, high)
+            sol = search_periods(data.t, data.magnitude, data.sigma, low, high,
+                                 named_periods=DAYS_IN_HOURS, unit=' h',
+                                 progress=_search_progress(args))
         except ValueError as err:
             raise AnalysisError(f'{args.photometry}: {err}') from None
     except AnalysisError as err:
@@ -297,11 +315,18 @@ def _photometry(args) -> int:
     except KeyboardInterrupt:
         return _error('interrupted')
     if args.json:
-        print(json.dumps(_solution_dict(sol), indent=1, default=float))
+        print(json.dumps(_solution_dict(sol), indent=1, allow_nan=False))
     else:
         print(f'photometry: {args.photometry} (time column {data.time_column}, hours)')
         print(format_periods(sol))
+    _period_warnings(sol)
     return 0
+
+
+def _period_warnings(sol) -> None:
+    """Each of the period search's warnings as one ``WARNING:`` line on stderr."""
+    for text in sol.warnings:
+        print(f'WARNING: period search: {text}', file=sys.stderr)
 
 
 def _partial(summary) -> int:
