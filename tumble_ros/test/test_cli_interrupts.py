@@ -1,4 +1,4 @@
-"""A stop signal ends an ensemble command wherever it lands (cli.engine.interrupts)."""
+"""A stop signal ends a command wherever it lands (tumble_ros.exits.interrupts); each long offline command stops promptly."""
 from __future__ import annotations
 
 import gc
@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from tumble_ros.cli.engine import Interrupted, interrupts, STOP_SIGNALS
+from tumble_ros.exits import Interrupted, interrupts, STOP_SIGNALS
 
 #: Longest wait for a stop that should come at once [s].
 PATIENCE = 10.0

@@ -36,7 +36,6 @@ modules and collecting what they hold: 0.2-0.35 s of a 4-s Fig 9 run) is left to
 """
 from __future__ import annotations
 
-import atexit
 from collections.abc import Iterator
 from contextlib import contextmanager
 import gc
@@ -45,10 +44,10 @@ import os
 from pathlib import Path
 import signal
 import sys
-import threading
 from typing import Any
 
-from tumble_ros.exits import BROKEN_PIPE_EXIT, call_closing_quietly
+from tumble_ros.exits import (BROKEN_PIPE_EXIT, call_closing_quietly, end_if_stopped,
+                              quick_exit)
 
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
 EXECUTABLES = {
@@ -112,8 +111,13 @@ def _imported(name: str, module: str) -> Any:
 
 
 def entry() -> int:
-    """Console-script entry of every executable: the name is the installed script's."""
-    return run_executable(Path(sys.argv[0]).name, sys.argv[1:])
+    """
+    Console-script entry of every executable: the name is the installed script's.
+
+    A command a stop signal ended (:func:`tumble_ros.exits.interrupts`) ends its process at once
+    (:func:`~tumble_ros.exits.end_if_stopped`).
+    """
+    return end_if_stopped(run_executable(Path(sys.argv[0]).name, sys.argv[1:]))
 
 
 def numba_without_coverage() -> None:
@@ -268,28 +272,6 @@ def is_main_job(argv: list[str]) -> bool:
     return not (argv and (argv[0] in EXECUTABLES or argv[0] in ('-h', '--help')))
 
 
-def quick_exit(code: int) -> None:
-    """
-    End the process with ``code`` without the interpreter's teardown; return if it cannot.
-
-    The atexit handlers run (coverage's, multiprocessing's) and stdout and stderr are flushed
-    (a closed pipe: exit 141, as :func:`run_executable`), then ``os._exit``: the modules are
-    not cleared nor their objects collected one by one, the OS frees the memory at once. It
-    returns (the caller exits as usual) while another thread runs, which teardown would join.
-    """
-    if threading.active_count() > 1:
-        return
-    atexit._run_exitfuncs()     # as the interpreter's exit does, first
-    try:
-        sys.stdout.flush()
-        sys.stderr.flush()
-    except (BrokenPipeError, ValueError):
-        code = BROKEN_PIPE_EXIT
-    except OSError:
-        code = code or 1
-    os._exit(code)
-
-
 def main(argv: list[str] | None = None) -> int:
     """Run ``python -m tumble_ros``: an executable, the main job, or this usage (--help)."""
     argv = sys.argv[1:] if argv is None else argv
@@ -305,4 +287,4 @@ if __name__ == '__main__':
     _code = main()
     if is_main_job(sys.argv[1:]):
         quick_exit(_code)
-    raise SystemExit(_code)
+    raise SystemExit(end_if_stopped(_code))
