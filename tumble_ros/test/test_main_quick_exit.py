@@ -4,7 +4,8 @@ The main job's end without the interpreter's teardown (tumble_ros.__main__.quick
 In a fresh process each: the exit code is kept, what is buffered on stdout and stderr comes
 out, the atexit handlers run (once), a closed stdout gives 141 as elsewhere, and with another
 thread still running it returns (the usual exit joins the thread). `python -m tumble_ros` on a
-short scenario ends with everything written and exit code 0; executables do not take this path.
+short scenario ends with everything written and exit code 0; executables take it only when a
+stop signal ended them (test_cli_interrupts.py).
 """
 import os
 from pathlib import Path
