@@ -177,7 +177,7 @@ ENTRIES = {'python -m tumble_ros analyze': ('analyze', True),
 
 
 def _importtime_line(module: str) -> str:
-    """What ``-X importtime`` prints when ``module`` is imported (the step's lazy import)."""
+    """Return what ``-X importtime`` prints when ``module`` is imported (a step's import)."""
     return f' {module}\n'
 
 
@@ -196,7 +196,7 @@ STEPS = {
 @pytest.fixture(scope='module')
 def long_inputs(tmp_path_factory):
     """
-    A recording and a photometry CSV whose steps last long: minutes to animate 2,000 frames.
+    Return a recording and a photometry CSV whose steps last long (2,000 frames: minutes).
 
     Fig 9 over 200 yr (20,001 samples: ~3 s of drawing the figures alone); 300 points over 20
     days searched from 2 to 100 h (~12 s of CPU).

@@ -23,7 +23,10 @@ Every executable, here and as installed for ``ros2 run`` (setup.py points them a
 or SIGHUP while it is still importing ends it quietly (nothing is compiled at import: numba
 compiles a loop on its first use), with the exit code it gives when stopped later (0 for a
 node, 128 + the signal otherwise). A closed stdout or stderr (``bringup | head -1``) ends it
-quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the recording finalised.
+quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the recording finalised. The offline
+commands (analyze, ensemble, encounter) serve a stop where they are
+(:func:`tumble_ros.exits.interrupts`, taking over one the early handler recorded) and, stopped,
+end without the interpreter's teardown (:func:`~tumble_ros.exits.end_if_stopped`).
 
 The main job imports with the garbage collector off until its figure worker is forked (the
 imports free nothing; :func:`_figure_pool`), numba without coverage and rosidl_generator_py
@@ -40,7 +43,6 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 import gc
 import importlib
-import os
 from pathlib import Path
 import signal
 import sys

@@ -17,8 +17,8 @@ uses it.
 """
 from __future__ import annotations
 
-from contextlib import contextmanager
 import atexit
+from contextlib import contextmanager
 import os
 import signal
 import sys
