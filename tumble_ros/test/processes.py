@@ -34,17 +34,23 @@ def executable(name: str) -> str:
 class Process:
     """One started executable: its Popen, its output file."""
 
-    def __init__(self, name: str, args, log: Path, module: bool = False, **kwargs) -> None:
+    def __init__(self, name: str, args, log: Path, module: bool | str = False,
+                 **kwargs) -> None:
         """
         Start ``name`` with ``args``: the installed executable (what `ros2 run` runs).
 
         ``module``: through the project's own entry point instead, ``python -m tumble_ros
-        <name>`` (``name`` '' for the main job).
+        <name>`` (``name`` '' for the main job); a module name: ``python -m <module>`` (a
+        command's module entry, ``tumble_ros.analysis``), ``name`` only naming the log.
         """
         self.name, self.log = name, log
         self._out = open(log, 'w')
-        command = ([sys.executable, '-m', 'tumble_ros', *([name] if name else [])] if module
-                   else [executable(name)])
+        if isinstance(module, str):
+            command = [sys.executable, '-m', module]
+        elif module:
+            command = [sys.executable, '-m', 'tumble_ros', *([name] if name else [])]
+        else:
+            command = [executable(name)]
         self.popen = subprocess.Popen([*command, *map(str, args)], stdout=self._out,
                                       stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                       text=True,

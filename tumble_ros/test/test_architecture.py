@@ -160,8 +160,8 @@ def test_the_check_sees_relative_and_nested_imports():
 #: forked child ends without the parent's clean-up; the main job's end without the interpreter's
 #: teardown, after atexit._run_exitfuncs): (module, expression).
 THIRD_PARTY_PRIVATE = {
-    ('tumble_ros.__main__', 'atexit._run_exitfuncs'),
-    ('tumble_ros.__main__', 'os._exit'),
+    ('tumble_ros.exits', 'atexit._run_exitfuncs'),
+    ('tumble_ros.exits', 'os._exit'),
     ('tumble_ros.analysis.figure_pool', 'os._exit'),
     ('tumble_ros.core.integrators.adaptive', 'solver._integrator'),
     ('tumble_ros.core.integrators.adaptive', 'solver._y'),

@@ -5,7 +5,7 @@ The same files, byte for byte (names, order, PNG bytes), drawn by two processes 
 and a helper it forks) and by the worker alone, after the worker's warm-up figure, and when the
 worker or a helper has died, with the recording handed over through shared memory or the pipe;
 the errors of the in-process path (existing files, an error raised in a helper); and the main
-job's process never imports matplotlib.
+job's process never imports matplotlib; a pool closed while it draws ends its worker and helpers.
 """
 import dataclasses
 import gc
@@ -14,6 +14,8 @@ from pathlib import Path
 import signal
 import subprocess
 import sys
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -223,3 +225,49 @@ def test_the_main_job_never_imports_matplotlib(tmp_path):
     assert 'matplotlib loaded: False' in done.stdout
     figures = sorted(p.name for p in tmp_path.glob('recordings/short_*_figures/*.png'))
     assert 'omega.png' in figures and 'error.png' in figures
+
+
+def _gone(pid: int) -> bool:
+    """Tell whether process ``pid`` has ended (a zombie that nobody reaped has ended too)."""
+    try:
+        return Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()[0] == 'Z'
+    except (FileNotFoundError, ProcessLookupError):
+        return True
+
+
+def test_a_pool_closed_while_it_draws_ends_its_worker_and_helpers(tmp_path, monkeypatch):
+    """
+    The main job's analysis stopped by a signal while the figures are drawn: no wait for them.
+
+    The drawing here never ends (an hour); close waited for it (shutdown(wait=True)).
+    """
+    rec = load_recording(Path(__file__).resolve().parent / 'data' / 'golden.mcap')
+    summary = analyze(rec)
+    drawing = tmp_path / 'drawing'
+
+    def draw_for_an_hour(rec, summary, share):
+        with open(drawing, 'a') as pids:
+            pids.write(f'{os.getpid()}\n')
+        time.sleep(3600)
+    monkeypatch.setattr(figure_pool, '_draw', draw_for_an_hour)
+    pool = FigurePool.start(2)               # the worker inherits the patched module
+    pool.begin(rec, summary)
+    deadline = time.monotonic() + 120
+    while (not drawing.exists() or len(drawing.read_text().split()) < 2) \
+            and time.monotonic() < deadline:
+        time.sleep(0.05)
+    pids = [int(pid) for pid in drawing.read_text().split()]
+    assert len(pids) == 2                    # the worker and its helper, drawing
+    closing = threading.Thread(target=pool.close, daemon=True)
+    closing.start()
+    closing.join(60)
+    deadline = time.monotonic() + 30
+    try:
+        assert not closing.is_alive()
+        while not all(_gone(pid) for pid in pids) and time.monotonic() < deadline:
+            time.sleep(0.05)        # (the helper's SIGKILL is delivered as the worker ends)
+        assert [pid for pid in pids if not _gone(pid)] == []
+    finally:
+        for pid in pids:
+            if not _gone(pid):
+                os.kill(pid, signal.SIGKILL)

@@ -5,7 +5,8 @@ In a fresh process each: the exit code is kept, what is buffered on stdout and s
 out, the atexit handlers run (once), a closed stdout gives 141 as elsewhere, and with another
 thread still running it returns (the usual exit joins the thread). `python -m tumble_ros` on a
 short scenario ends with everything written and exit code 0; of the executables, the nodes take
-this path too (a node's interpreter teardown took ~2.5 s of its stop at load 20), the others not.
+this path too (a node's interpreter teardown took ~2.5 s of its stop at load 20), the others only
+when a stop signal ended them (test_cli_interrupts.py).
 """
 import os
 from pathlib import Path

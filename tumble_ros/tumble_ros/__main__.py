@@ -23,7 +23,10 @@ Every executable, here and as installed for ``ros2 run`` (setup.py points them a
 or SIGHUP while it is still importing ends it quietly (nothing is compiled at import: numba
 compiles a loop on its first use), with the exit code it gives when stopped later (0 for a
 node, 128 + the signal otherwise). A closed stdout or stderr (``bringup | head -1``) ends it
-quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the recording finalised.
+quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the recording finalised. The offline
+commands (analyze, ensemble, encounter) serve a stop where they are
+(:func:`tumble_ros.exits.interrupts`, taking over one the early handler recorded) and, stopped,
+end without the interpreter's teardown (:func:`~tumble_ros.exits.end_if_stopped`).
 
 The main job imports with the garbage collector off until its figure worker is forked (the
 imports free nothing; :func:`_figure_pool`), numba without coverage and rosidl_generator_py
@@ -36,19 +39,17 @@ modules and collecting what they hold: 0.2-0.35 s of a 4-s Fig 9 run) is left to
 """
 from __future__ import annotations
 
-import atexit
 from collections.abc import Iterator
 from contextlib import contextmanager
 import gc
 import importlib
-import os
 from pathlib import Path
 import signal
 import sys
-import threading
 from typing import Any
 
-from tumble_ros.exits import BROKEN_PIPE_EXIT, call_closing_quietly
+from tumble_ros.exits import (BROKEN_PIPE_EXIT, call_closing_quietly, end_if_stopped,
+                              quick_exit)
 
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
 EXECUTABLES = {
@@ -144,16 +145,18 @@ def entry() -> int:
     """
     Console-script entry of every executable: the name is the installed script's.
 
-    A node's process ends by :func:`quick_exit` once its ``main`` returned (its files
-    finalised, its goodbyes sent, its context shut down): the interpreter's teardown (clearing
-    ~1,200 modules, numba's among them) took 1.5-1.8 s of a node's stop on a loaded machine,
-    past ``ros2 launch``'s 5-s limit for two asteroids (docs/ros.md, "Stopping").
+    A node's process ends by :func:`~tumble_ros.exits.quick_exit` once its ``main`` returned
+    (its files finalised, its goodbyes sent, its context shut down): the interpreter's teardown
+    (clearing ~1,200 modules, numba's among them) took 1.5-2.5 s of a node's stop on a loaded
+    machine, against ``ros2 launch``'s 5-s limit (docs/ros.md, "Signals and exit codes"). A
+    command a stop signal ended (:func:`tumble_ros.exits.interrupts`) ends at once too
+    (:func:`~tumble_ros.exits.end_if_stopped`).
     """
     name = Path(sys.argv[0]).name
     code = run_executable(name, sys.argv[1:])
     if name in NODES:
         quick_exit(code)
-    return code
+    return end_if_stopped(code)
 
 
 def numba_without_coverage() -> None:
@@ -309,30 +312,8 @@ def is_main_job(argv: list[str]) -> bool:
 
 
 def ends_quickly(argv: list[str]) -> bool:
-    """Tell whether ``python -m tumble_ros`` ends by :func:`quick_exit`: the main job, a node."""
+    """Tell whether ``python -m tumble_ros`` ends by ``quick_exit``: the main job, a node."""
     return is_main_job(argv) or argv[0] in NODES
-
-
-def quick_exit(code: int) -> None:
-    """
-    End the process with ``code`` without the interpreter's teardown; return if it cannot.
-
-    The atexit handlers run (coverage's, multiprocessing's) and stdout and stderr are flushed
-    (a closed pipe: exit 141, as :func:`run_executable`), then ``os._exit``: the modules are
-    not cleared nor their objects collected one by one, the OS frees the memory at once. It
-    returns (the caller exits as usual) while another thread runs, which teardown would join.
-    """
-    if threading.active_count() > 1:
-        return
-    atexit._run_exitfuncs()     # as the interpreter's exit does, first
-    try:
-        sys.stdout.flush()
-        sys.stderr.flush()
-    except (BrokenPipeError, ValueError):
-        code = BROKEN_PIPE_EXIT
-    except OSError:
-        code = code or 1
-    os._exit(code)
 
 
 #: What a module missing from the environment comes with, by its top-level name: a pip install
@@ -384,12 +365,13 @@ def console() -> int:
     Run the ``tumble_ros`` command a pip install makes (pyproject.toml): ``python -m tumble_ros``.
 
     The same arguments and exit codes; the main job and the nodes end at once
-    (:func:`quick_exit`, :func:`ends_quickly`).
+    (:func:`~tumble_ros.exits.quick_exit`, :func:`ends_quickly`), and so does a command a stop
+    signal ended (:func:`~tumble_ros.exits.end_if_stopped`).
     """
     code = main()
     if ends_quickly(sys.argv[1:]):
         quick_exit(code)
-    return code
+    return end_if_stopped(code)
 
 
 if __name__ == '__main__':

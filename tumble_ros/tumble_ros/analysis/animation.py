@@ -34,7 +34,7 @@ import os
 from pathlib import Path
 import struct
 import sys
-from typing import Any, Callable, TextIO
+from typing import Any, Callable, Iterator, TextIO
 
 from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -304,12 +304,20 @@ def _target(path, overwrite: bool) -> Path:
     return path
 
 
-def _replace(temporary: Path, path: Path) -> None:
+@contextmanager
+def _written_as(path: Path, suffix: str) -> Iterator[Path]:
+    """
+    Yield a temporary name beside ``path``: renamed to ``path`` if the block ends normally.
+
+    Removed otherwise, whatever ends the block (an error, a stop signal's
+    :class:`~tumble_ros.exits.Interrupted`): no ``.NAME.PID.tmpSUFFIX`` is left behind.
+    """
+    temporary = path.with_name(f'.{path.stem}.{os.getpid()}.tmp{suffix}')
     try:
+        yield temporary
         os.replace(temporary, path)
     finally:
-        if temporary.exists():
-            temporary.unlink()
+        temporary.unlink(missing_ok=True)
 
 
 def stderr_bar(name: str, stream: TextIO | None = None) -> Callable[[int, int], None]:
@@ -443,25 +451,19 @@ def write_animation(rec: Recording, path: str | os.PathLike[str], *, frames: int
 
     if single:
         draw(0)
-        temporary = path.with_name(f'.{path.stem}.{os.getpid()}.tmp.png')
-        fig.savefig(temporary, format='png', dpi=DPI)
-        _replace(temporary, path)
+        with _written_as(path, '.png') as temporary:
+            fig.savefig(temporary, format='png', dpi=DPI)
         return path, 1
-    # The writer driven directly (not FuncAnimation.save, which draws every frame twice).
-    temporary = path.with_name(f'.{path.stem}.{os.getpid()}.tmp{path.suffix}')
+    # The writer driven directly (not FuncAnimation.save, which draws every frame twice),
+    # frame by frame: a stop signal is served between two frames' C calls (drawing, saving).
     assert writer is not None  # (not single)
-    try:
-        with writer.saving(fig, str(temporary), DPI):
-            for j in range(len(chosen)):
-                draw(j)
-                writer.grab_frame()
-                if progress is not None:
-                    progress(j + 1, len(chosen))
-    except BaseException:
-        if temporary.exists():
-            temporary.unlink()
-        raise
-    _replace(temporary, path)
+    with _written_as(path, path.suffix) as temporary, \
+            writer.saving(fig, str(temporary), DPI):
+        for j in range(len(chosen)):
+            draw(j)
+            writer.grab_frame()
+            if progress is not None:
+                progress(j + 1, len(chosen))
     return path, len(chosen)
 
 
@@ -498,7 +500,6 @@ def write_still(rec: Recording, path: str | os.PathLike[str], *, at: float | Non
     _draw_scene(ax3d, marker_scene(chosen))
     ax3d.set_title(f'{rec.path.name}: {topic} at t = {t_chosen:.6g} yr, frame orbital',
                    fontsize=9)
-    temporary = path.with_name(f'.{path.stem}.{os.getpid()}.tmp.png')
-    fig.savefig(temporary, format='png')
-    _replace(temporary, path)
+    with _written_as(path, '.png') as temporary:
+        fig.savefig(temporary, format='png')
     return path, t_chosen

@@ -34,6 +34,7 @@ import sys
 from typing import NoReturn
 
 from tumble_ros.errors import AnalysisError
+from tumble_ros.exits import Interrupted, interrupts
 from tumble_ros.io import McapError, WrittenMessages
 from tumble_ros.topics import MARKERS
 
@@ -195,7 +196,23 @@ def command(argv: Iterable[str] | None = None, written: WrittenMessages | None =
     them (:func:`~.recording.load_recording` takes them instead of reading the file back);
     ``pool``, worker processes started earlier that draw the figures (:mod:`.figure_pool`),
     from the recording as soon as it is loaded, while this process analyses it.
+
+    SIGINT, SIGTERM and SIGHUP stop it wherever it is (:func:`tumble_ros.exits.interrupts`):
+    one line on stderr, exit 128 + the signal (130, 143, 129); the file being written (an
+    animation, a still) is removed, and the drawing ``pool`` was given is abandoned (its
+    owner's close ends the workers).
     """
+    try:
+        with interrupts():
+            return _command(argv, written, pool)
+    except Interrupted as stop:
+        print(f'{PROG}: stopped by {stop.name}', file=sys.stderr)
+        return stop.exit_code
+
+
+def _command(argv: Iterable[str] | None, written: WrittenMessages | None,
+             pool: FigurePool | None) -> int:
+    """:func:`command` without its handling of the stop signals."""
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
         args = _parser().parse_args(argv)
@@ -368,6 +385,6 @@ def main(args: list[str] | None = None) -> int:
 
 
 if __name__ == '__main__':
-    from tumble_ros.exits import call_closing_quietly     # a closed pipe: 141, quietly
+    from tumble_ros.exits import call_closing_quietly, end_if_stopped  # a closed pipe: 141
 
-    sys.exit(call_closing_quietly(main, sys.argv))
+    sys.exit(end_if_stopped(call_closing_quietly(main, sys.argv)))   # stopped: no teardown

@@ -19,7 +19,10 @@ POSIX) :meth:`FigurePool.start` returns None and the figures are drawn in the pr
 worker dies (:class:`~concurrent.futures.process.BrokenProcessPool`) the figures are drawn in
 the process; a helper that dies has its share drawn by the worker. Exceptions raised while
 drawing are raised by :meth:`FigurePool.write_figures`, as in the process. The worker and its
-helpers ignore SIGINT (the main process handles it and ends the pool). :meth:`FigurePool.begin`
+helpers ignore SIGINT (the main process handles it and ends the pool): a pool closed while a
+drawing is still running (the main process stopped by a signal, or failed) ends its worker at
+once with SIGTERM, on which the worker kills its helpers (:func:`_end_drawing`), instead of
+waiting for a drawing nobody will write. :meth:`FigurePool.begin`
 starts the drawing and :meth:`FigurePool.finish` writes it: the main job begins with the
 summary's parts (:class:`~.summary.SummaryParts`, computed by the drawing processes) and
 analyses while the figures are drawn. The worker freezes its warm state and draws with the
@@ -78,10 +81,15 @@ _shared: mmap.mmap | None = None
 
 
 def _warm(shared: mmap.mmap | None = None) -> None:
-    """Initialise a worker: SIGINT ignored, the figures module imported, fonts loaded, frozen."""
+    """
+    Initialise a worker: SIGINT ignored, SIGTERM ends its helpers too, fonts loaded, frozen.
+
+    The figures module is imported and its fonts loaded (:func:`~.figures.warm_up`).
+    """
     global _shared, _worker
     _shared = shared
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _end_drawing)
     from . import figures
     figures.warm_up()
     _worker = True
@@ -90,6 +98,23 @@ def _warm(shared: mmap.mmap | None = None) -> None:
 
 #: Whether this process is a worker (:func:`_warm` ran).
 _worker = False
+#: The helpers a worker forked that are still drawing (process ids).
+_helpers: set[int] = set()
+
+
+def _end_drawing(signum: int, _frame: Any) -> None:
+    """
+    End a worker on SIGTERM (its pool closed while it draws): its helpers first (SIGKILL).
+
+    Helpers hold nothing to finalise (drawings in memory, a pipe to this worker); without this
+    they would draw on, orphaned, until their share is done.
+    """
+    for pid in _helpers:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    os._exit(128 + signum)
 
 
 def _collector_off() -> None:
@@ -144,8 +169,11 @@ def _helper(rec: Recording, summary: Summary, share: tuple[str, ...]
     pid = os.fork()
     if pid:
         os.close(write_fd)
+        _helpers.add(pid)
         return pid, read_fd
     try:                            # the helper: never returns into the worker's loop
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        _helpers.clear()
         os.close(read_fd)
         try:
             payload = pickle.dumps((True, _draw(rec, summary, share)))
@@ -165,6 +193,7 @@ def _collect(pid: int, read_fd: int) -> tuple[bool, Any] | None:
     with os.fdopen(read_fd, 'rb') as pipe:
         data = pipe.read()
     os.waitpid(pid, 0)
+    _helpers.discard(pid)
     return pickle.loads(data) if data else None
 
 
@@ -243,11 +272,15 @@ class FigurePool:
     """A worker process that draws figures (see the module docstring); a context manager."""
 
     def __init__(self, executor: ProcessPoolExecutor, workers: int,
-                 shared: mmap.mmap | None = None) -> None:
+                 shared: mmap.mmap | None = None,
+                 processes: tuple[multiprocessing.process.BaseProcess, ...] = (),
+                 given: tuple[Future[Any], ...] = ()) -> None:
         self._executor = executor
         self.workers = workers
         self._shared = shared
         self._in_shared: Future[_Drawn] | None = None  # the drawing using the shared memory
+        self._processes = processes     # the executor's worker, ended by close if it draws
+        self._given: list[Future[Any]] = list(given)    # what the worker was given
 
     @classmethod
     def start(cls, workers: int = WORKERS, shared_bytes: int = SHARED_BYTES
@@ -274,8 +307,11 @@ class FigurePool:
             shared = None
         executor = ProcessPoolExecutor(max_workers=1, mp_context=context, initializer=_warm,
                                        initargs=(shared,))
-        executor.submit(_ready)     # starts the worker now
-        return cls(executor, workers, shared)
+        before = set(multiprocessing.active_children())
+        ready = executor.submit(_ready)     # starts the worker now (forked in submit)
+        return cls(executor, workers, shared,
+                   tuple(p for p in multiprocessing.active_children() if p not in before),
+                   (ready,))
 
     def write_figures(self, rec: Recording, out_dir: str | os.PathLike[str],
                       summary: Summary, *, overwrite: bool = False) -> list[Path]:
@@ -337,11 +373,23 @@ class FigurePool:
             shared = _to_shared(self._shared, (rec, summary))
             if shared is not None:
                 self._in_shared = self._executor.submit(_draw_shared, *shared, shares)
+                self._given.append(self._in_shared)
                 return self._in_shared
-        return self._executor.submit(_draw_shares, rec, summary, shares)
+        future = self._executor.submit(_draw_shares, rec, summary, shares)
+        self._given.append(future)
+        return future
 
     def close(self) -> None:
-        """End the workers (those drawing finish first); pending work is cancelled."""
+        """
+        End the worker; pending work is cancelled.
+
+        A worker still busy (a drawing :meth:`finish` did not wait for, the warm-up) is ended
+        at once (SIGTERM: its helpers too, :func:`_end_drawing`), not waited for: its drawing
+        would be written nowhere (the main process stopped by a signal, or failed).
+        """
+        if any(not future.done() for future in self._given):
+            for process in self._processes:
+                process.terminate()
         self._executor.shutdown(wait=True, cancel_futures=True)
         if self._shared is not None:
             self._shared.close()

@@ -28,9 +28,10 @@ from typing import Sequence
 import numpy as np
 
 from tumble_ros.analysis.figure_files import check_outputs, write_files
-from tumble_ros.cli.engine import add_engine_arguments, engine, Interrupted, interrupts
+from tumble_ros.cli.engine import add_engine_arguments, engine
 from tumble_ros.core import load_scenario, ScenarioError
 from tumble_ros.errors import TumbleRosError
+from tumble_ros.exits import Interrupted, interrupts
 from tumble_ros.topics import SIM_NODE_PARAMETERS
 
 __all__ = ['main']
@@ -135,6 +136,6 @@ def _arrays(result) -> bytes:
 
 
 if __name__ == '__main__':  # pragma: no cover
-    from tumble_ros.exits import call_closing_quietly     # a closed pipe: 141, quietly
+    from tumble_ros.exits import call_closing_quietly, end_if_stopped  # a closed pipe: 141
 
-    sys.exit(call_closing_quietly(main, sys.argv[1:]))
+    sys.exit(end_if_stopped(call_closing_quietly(main, sys.argv[1:])))   # stopped: no teardown

@@ -12,15 +12,12 @@ from __future__ import annotations
 import argparse
 from contextlib import contextmanager, nullcontext
 import math
-import signal
 import sys
-import threading
-from typing import Iterator
 
 from tumble_ros.core import ScenarioError
 from tumble_ros.ensembles import dask_client
 
-__all__ = ['add_engine_arguments', 'engine', 'Interrupted', 'interrupts', 'MAX_SCHEDULER_TIMEOUT']
+__all__ = ['add_engine_arguments', 'engine', 'MAX_SCHEDULER_TIMEOUT']
 
 #: Longest --scheduler-timeout [s]: an hour.
 MAX_SCHEDULER_TIMEOUT = 3600.0
@@ -74,93 +71,3 @@ def _announced(clients, dashboard: bool):
         if dashboard:
             print(f'dask dashboard: {client.dashboard_link}', file=sys.stderr, flush=True)
         yield client
-
-
-class Interrupted(BaseException):
-    """
-    A stop asked by a signal (SIGINT, SIGTERM, SIGHUP), raised where the program is.
-
-    A BaseException, as KeyboardInterrupt is: no ``except Exception`` (Dask's included) on the
-    way up swallows it. ``exit_code`` is 128 + the signal's number (130, 143, 129).
-    """
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.signum = int(signum)
-        self.name = signal.Signals(self.signum).name
-        self.exit_code = 128 + self.signum
-
-
-#: The signals that stop an ensemble command, alike.
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-
-
-@contextmanager
-def interrupts() -> Iterator[None]:
-    """
-    Turn SIGINT, SIGTERM and SIGHUP into :class:`Interrupted` while the block runs.
-
-    The first signal raises; any later one is ignored while the program cleans up (a local
-    cluster stopping, a store's lock released). A KeyboardInterrupt raised by someone else's
-    handler becomes Interrupted(SIGINT) too. The previous handlers are restored on exit.
-
-    Python runs a signal's handler wherever the main thread is, a finaliser or a garbage
-    collector's callback included (Dask's ``GCDiagnosis``), where an exception is not raised
-    but printed as "Exception ignored" (``sys.unraisablehook``): the stop was lost, and the
-    run went on to its end with every later Ctrl-C ignored. Such an Interrupted is raised
-    again where the program is (:func:`_raise_again`), silently.
-    """
-    previous = {sig: signal.getsignal(sig) for sig in STOP_SIGNALS}
-    previous_hook = sys.unraisablehook
-
-    def stop(signum, frame) -> None:
-        for sig in STOP_SIGNALS:
-            signal.signal(sig, signal.SIG_IGN)
-        raise Interrupted(signum)
-
-    def swallowed(unraisable) -> None:
-        if isinstance(unraisable.exc_value, Interrupted):
-            _raise_again(unraisable.exc_value.signum, stop)
-        else:
-            previous_hook(unraisable)
-
-    for sig in STOP_SIGNALS:
-        signal.signal(sig, stop)
-    sys.unraisablehook = swallowed
-    try:
-        yield
-    except KeyboardInterrupt:
-        for sig in STOP_SIGNALS:
-            signal.signal(sig, signal.SIG_IGN)
-        raise Interrupted(signal.SIGINT) from None
-    except Interrupted:
-        raise
-    except BaseException:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-        raise
-    finally:
-        sys.unraisablehook = previous_hook
-    for sig, handler in previous.items():
-        signal.signal(sig, handler)
-
-
-#: How long after a swallowed Interrupted its signal comes again [s] (:func:`_raise_again`).
-AGAIN_AFTER = 0.01
-
-
-def _raise_again(signum: int, stop) -> None:
-    """
-    Send signal ``signum`` to the main thread again in :data:`AGAIN_AFTER`, to handler ``stop``.
-
-    For an Interrupted that a finaliser swallowed (this runs in ``sys.unraisablehook``, in the
-    main thread, where signal handlers run). Not at once: the handler would run in the hook
-    itself, whose exceptions are swallowed too. A few milliseconds later the finaliser has
-    returned and the handler raises where the program is (or, landing in a finaliser again,
-    comes back here).
-    """
-    signal.signal(signum, stop)
-    again = threading.Timer(AGAIN_AFTER, signal.pthread_kill,
-                            (threading.main_thread().ident, signum))
-    again.daemon = True
-    again.start()

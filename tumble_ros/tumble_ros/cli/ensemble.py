@@ -27,7 +27,7 @@ from typing import Sequence
 
 import numpy as np
 
-from tumble_ros.cli.engine import add_engine_arguments, engine, Interrupted, interrupts
+from tumble_ros.cli.engine import add_engine_arguments, engine
 from tumble_ros.cli.progress import ProgressBar
 from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
                              Scenario, ScenarioError)
@@ -35,6 +35,7 @@ from tumble_ros.core.jit import compile_notices
 from tumble_ros.ensembles import (EnsembleStoreError, open_ensemble, run_ensemble,
                                   run_ensemble_to_store)
 from tumble_ros.errors import TumbleRosError
+from tumble_ros.exits import Interrupted, interrupts
 from tumble_ros.topics import SIM_NODE_PARAMETERS
 
 __all__ = ['main']
@@ -216,6 +217,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == '__main__':  # pragma: no cover
-    from tumble_ros.exits import call_closing_quietly     # a closed pipe: 141, quietly
+    from tumble_ros.exits import call_closing_quietly, end_if_stopped  # a closed pipe: 141
 
-    sys.exit(call_closing_quietly(main, sys.argv[1:]))
+    sys.exit(end_if_stopped(call_closing_quietly(main, sys.argv[1:])))   # stopped: no teardown
