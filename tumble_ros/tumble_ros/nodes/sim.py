@@ -44,7 +44,7 @@ from std_srvs.srv import Trigger
 
 from tumble_ros import topics
 from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeBase
-from tumble_ros.core.model.units import seconds_per_year_of
+from tumble_ros.core.propagation.timebase import SampleGrid
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import (declare_node_parameters, declare_scenario_parameters,
@@ -93,8 +93,9 @@ class SimNode(GuardedNode):
         # ScenarioError: refused
         scenario_parameters = read_scenario_parameters(self)
         self.scenario = Scenario.from_parameters(scenario_parameters)
-        self.timebase = TimeBase(params['seconds_per_year'] or seconds_per_year_of(
-            scenario_parameters.get('time_unit', 'yr')))
+        # 0: the scenario's own (one ROS second per time_unit), the grid of simulate(scenario)
+        self.timebase = (TimeBase(params['seconds_per_year']) if params['seconds_per_year']
+                         else self.scenario.timebase)
         # the output grid (the one of Scenario.output_times, at this node's seconds_per_year)
         self._grid = output_grid(self.scenario, self.timebase)
         self._limits = ImpactLimits(params['max_impact_duration'], params['max_impact_impulse'])
@@ -198,6 +199,11 @@ class SimNode(GuardedNode):
         """Return the topics with one message per published sample (not /clock)."""
         return tuple(name for name, publisher in self._sample_publishers.items()
                      if name != topics.CLOCK and publisher is not None)
+
+    @property
+    def grid(self) -> SampleGrid:
+        """Return the output grid the node publishes (its ``seconds_per_year``'s time base)."""
+        return self._grid
 
     @property
     def published_samples(self) -> int:
