@@ -1,20 +1,11 @@
 """
 ``python -m tumble_ros``: the project's own entry point (the pip-only path has no ``ros2``).
 
-    python -m tumble_ros [SCENARIO] [--live]       the main job (default: the default scenario)
-    python -m tumble_ros <executable> [args ...]   run an executable, as `ros2 run tumble_ros` does
-    python -m tumble_ros --help                    this text; <executable> --help: its own
-
-Executables: sim, comparator, recorder, bringup, analyze, ensemble, encounter. SCENARIO is a
-params file or the name of a shipped one (``fig10``: config/fig10.yaml).
-
-The main job simulates the scenario, compares it with the paper's analytic solution and records
-everything to ``recordings/<scenario>_<UTC time>.mcap`` (``bringup --offline``: the recording is
-written straight from the simulation; ``--live`` runs the three nodes over the ROS graph
-instead, as ``bringup`` does), then analyses the file. Offline, the analysis takes the messages
-from memory (the writer kept them: :class:`tumble_ros.io.WrittenMessages`, the same Recording as
-reading the file back), and the figures are drawn by a worker process forked before the
-recording, which loads matplotlib while it runs, and a helper it forks
+Its usage, what ``--help`` prints, is :data:`USAGE`. The main job runs ``bringup --offline`` on
+the scenario (``--live``: ``bringup``), then analyses the recording. Offline, the analysis takes
+the messages from memory (the writer kept them: :class:`tumble_ros.io.WrittenMessages`, the same
+Recording as reading the file back), and the figures are drawn by a worker process forked before
+the recording, which loads matplotlib while it runs, and a helper it forks
 (:mod:`tumble_ros.analysis.figure_pool`, the same PNG bytes); this process never imports
 matplotlib.
 
@@ -49,6 +40,23 @@ import threading
 from typing import Any
 
 from tumble_ros.exits import BROKEN_PIPE_EXIT, call_closing_quietly
+
+#: What ``python -m tumble_ros --help`` prints: the usage, for a person who runs it.
+USAGE = """\
+usage: python -m tumble_ros [SCENARIO] [--live]      the main job (SCENARIO: the default one)
+       python -m tumble_ros EXECUTABLE [ARGS ...]    run an executable, as `ros2 run tumble_ros`
+       python -m tumble_ros --help                   this text (EXECUTABLE --help: its own)
+
+The main job simulates SCENARIO, compares it with an analytic model (the paper's, unless the
+file's comparator section names another) and records both to
+recordings/<scenario>_<UTC time>.mcap, then prints the recording's summary and draws its
+figures into recordings/<scenario>_<UTC time>_figures/. --live runs the simulator, comparator
+and recorder nodes over the ROS graph instead of writing the recording directly (the same file).
+
+SCENARIO: a ROS 2 params file, or the name of a shipped one (fig10: config/fig10.yaml).
+Times, rates and periods are printed in the scenario's time_unit (periods also in hours).
+Executables: {executables}.
+"""
 
 #: Executables: name -> "module:function", as in setup.py's console_scripts.
 EXECUTABLES = {
@@ -294,7 +302,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run ``python -m tumble_ros``: an executable, the main job, or this usage (--help)."""
     argv = sys.argv[1:] if argv is None else argv
     if argv and argv[0] in ('-h', '--help'):
-        print(__doc__.strip())
+        print(USAGE.format(executables=', '.join(EXECUTABLES)), end='')
         return 0
     if argv and argv[0] in EXECUTABLES:
         return run_executable(argv[0], argv[1:])

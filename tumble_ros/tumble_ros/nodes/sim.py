@@ -44,6 +44,7 @@ from std_srvs.srv import Trigger
 
 from tumble_ros import topics
 from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeBase
+from tumble_ros.core.model.units import from_years
 from tumble_ros.core.propagation.timebase import SampleGrid
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
@@ -218,10 +219,12 @@ class SimNode(GuardedNode):
     def _on_tick(self) -> None:
         if self._started_wall is None:
             self._started_wall = time.monotonic()
+            unit = self.scenario.time_unit
             self.get_logger().info(
-                f'simulating {self.scenario.duration:g} yr with '
+                f'simulating {from_years(self.scenario.duration, unit):g} {unit} with '
                 f'{self.scenario.integrator.method}, {self._grid.count} samples every '
-                f'{self.scenario.output_interval:g} yr, real_time_factor {self._rtf:g}')
+                f'{from_years(self.scenario.output_interval, unit):g} {unit}, real_time_factor '
+                f'{self._rtf:g}')
         if self.state != RUNNING:
             return
         self._publish_up_to(self._target_index())
@@ -323,8 +326,10 @@ class SimNode(GuardedNode):
         self._pub_status.publish(status_message(change))
         if change.state == FINISHED:
             wall = time.monotonic() - (self._started_wall or time.monotonic())
+            unit = self.scenario.time_unit
             self.get_logger().info(
-                f'finished at t = {self.t:g} yr: {self.published_samples} samples in {wall:.1f} '
+                f'finished at t = {from_years(self.t, unit):g} {unit}: '
+                f'{self.published_samples} samples in {wall:.1f} '
                 's wall (the simulator records nothing: a recorder or bringup does)')
 
     def _publish_status(self, message: str) -> None:
