@@ -51,17 +51,19 @@ def test_a_days_recording_is_summarised_in_days(tmp_path):
         f'{rotation * 365.25:.4g} d ({rotation * 8766.0:.4g} h)')
 
 
-def test_an_hours_run_shows_its_progress_in_hours(tmp_path):
+@pytest.mark.parametrize('offline', [True, False], ids=['offline', 'live'])
+def test_an_hours_run_shows_its_progress_in_hours(tmp_path, offline):
     from tumble_ros.nodes.bringup import run_bringup
 
     config = tmp_path / 'hours.yaml'
     config.write_text(HOURS)
     progress = io.StringIO()
     result = run_bringup(config, output=str(tmp_path / 'hours.mcap'), progress=progress,
-                         offline=True, markers=False)
+                         offline=offline, markers=False)
     assert result.ok
     last = progress.getvalue().strip().split('\r')[-1]
-    assert last.startswith('bringup (offline): t = 24 / 24 h (100.0 %), 481 samples'), last
+    label = 'bringup (offline)' if offline else 'bringup'
+    assert last.startswith(f'{label}: t = 24 / 24 h (100.0 %), 481 samples'), last
     assert ' yr' not in progress.getvalue()
 
 

@@ -262,7 +262,8 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
             executor.spin_once(timeout_sec=0.01)
         undrained = not drained() and not stopped()
         if progress:
-            progress.write(_progress_line(sim, started) + '\n')
+            progress.write(_progress_line('bringup', sim.scenario, sim.t,
+                                          sim.published_samples, started) + '\n')
         comparator.close()
         recorder.close()
         return BringupResult(output=recorder.path, state=sim.state, message=sim.status_message,

@@ -1030,7 +1030,8 @@ PERTURBER_DOCS: dict[str, tuple[str, str]] = {
                        "perturber's position relative to the asteroid [km], orbital frame; "
                        "relative paths: the params file's folder, then the package's config/"),
     'epoch_jd': ('d', 'Julian date (TDB) of t = 0, for a Horizons table'),
-    'ephemeris_time_unit': ('', "unit of a plain table's t; '' = time_unit"),
+    'ephemeris_time_unit': ('', "unit of a plain table's t; '' = time_unit (yr with "
+                            'values_in_years)'),
     'j2': ('', "the perturber's J2 (the Earth 1.0826e-3); 0 = a point mass"),
     'pole': ('', "the perturber's pole, orbital frame (its J2's axis)"),
     **{f: (unit, text.replace('(kepler)', '(kind kepler)').replace(
