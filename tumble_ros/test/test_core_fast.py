@@ -250,7 +250,6 @@ def test_a_long_first_call_that_is_already_running_is_not_called_compiling():
     assert jit_module.COMPILE_NOTICE_VARIABLE not in os.environ
 
 
-
 @needs_numba
 def test_a_first_use_that_loads_from_the_cache_says_loading_not_compiling(tmp_path):
     """Issue 47: every ensemble run said 'compiling ... (first use)' when it loaded the cache."""

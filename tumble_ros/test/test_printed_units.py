@@ -1,7 +1,8 @@
 """
-What a person reads is in the field's units (issue 47): the scenario's time_unit for times,
-rates and periods (periods in hours too), pole longitudes in [0, 360) everywhere, a --help that
-is usage.
+What a person reads is in the field's units (issue 47).
+
+The scenario's time_unit for times, rates and periods (periods in hours too), pole longitudes in
+[0, 360) everywhere, a --help that is usage.
 """
 import io
 import math
@@ -43,7 +44,7 @@ def test_a_days_recording_is_summarised_in_days(tmp_path):
     text = format_summary(summary)
     assert summary.units.time == 'd'
     assert 'rad/yr' not in text and ' yr' not in text.replace('seconds_per_year', ''), text
-    assert f't = 0 .. 1190 d, duration 1190 d, dt = 0.25 d (uniform)' in text, text
+    assert 't = 0 .. 1190 d, duration 1190 d, dt = 0.25 d (uniform)' in text, text
     assert 'omega0 (0.5, 0.1, 3) rad/d' in text, text
     # periods: in days, and hours beside
     rotation = summary.spin.start.rotation_period
@@ -78,8 +79,8 @@ def test_the_ensemble_prints_its_time_and_rates_in_the_scenario_unit(tmp_path, c
     assert 'final |w_perp| [rad/h]' in out and 'rad/yr' not in out, out
 
 
-def test_a_pole_longitude_reads_0_to_360_in_the_text_and_the_ensemble_figure(tmp_path,
-                                                                          monkeypatch):
+def test_a_pole_longitude_reads_0_to_360_in_the_text_and_the_ensemble_figure(
+        tmp_path, monkeypatch):
     from matplotlib.figure import Figure
 
     from tumble_ros.analysis import ensemble

@@ -1,6 +1,8 @@
 """
-One output grid for every time_unit (issue 47): the Python API, the sim node and the offline
-recording sample the same times, every output_interval from 0 to the duration included.
+One output grid for every time_unit (issue 47).
+
+The Python API, the sim node and the offline recording sample the same times, every
+output_interval from 0 to the duration included.
 """
 from fractions import Fraction
 import itertools
@@ -10,7 +12,7 @@ import pytest
 from rclpy.parameter import Parameter
 
 from tumble_ros.analysis.recording import load_recording
-from tumble_ros.core import load_scenario, parse_scenario, Scenario, simulate
+from tumble_ros.core import load_scenario, parse_scenario, simulate
 from tumble_ros.core.model.units import TIME_UNITS
 from tumble_ros.runs.offline import record_offline
 

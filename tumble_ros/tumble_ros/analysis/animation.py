@@ -52,7 +52,7 @@ from tumble_ros.io import read_messages
 from tumble_ros.topics import MARKER_AXES, MARKER_MOMENTUM, MARKER_PERTURBER, MARKER_SUN, MARKERS
 
 from .display import recording_units
-from .figures import _time_axis, envelope, numeric_limits
+from .figures import envelope, numeric_limits, time_axis
 from .recording import Recording
 
 __all__ = ['Solid', 'Arrow', 'FRAMES', 'FPS', 'SIZE', 'DPI', 'STILL_SIZE', 'STILL_DPI',
@@ -281,7 +281,7 @@ def _draw_plots(rec: Recording, axes: list) -> list:
     else:
         ax_e.text(0.5, 0.5, 'no comparator in the recording', ha='center', va='center',
                   transform=ax_e.transAxes, fontsize=8)
-    _time_axis(axes, u)
+    time_axis(axes, u)
     ax_e.xaxis.label.set_fontsize(8)
     cursors = []
     for ax in axes:

@@ -62,7 +62,7 @@ def frame_name(scenario: Scenario | None) -> str:
 
 
 def longitude_degrees(longitude: Any) -> Any:
-    """Return a longitude [rad] (a number or an array) in degrees in [0, 360), the one convention."""
+    """Return a longitude [rad] (a number or an array) in degrees in [0, 360): the convention."""
     return np.mod(np.degrees(longitude), 360.0)
 
 

@@ -852,7 +852,7 @@ def _orbit_from_parameters(params: Mapping[str, Any], prefix: str = 'orbit',
 
 #: Unit and meaning of every scenario parameter (the nodes' descriptors, the README tables).
 PARAMETER_DOCS: dict[str, tuple[str, str]] = {
-    'time_unit': ('', 'the scenario\'s time unit: yr (default), d, h, min or s; the unit of every '
+    'time_unit': ('', "the scenario's time unit: yr (default), d, h, min or s; the unit of every "
                   'time, rate and torque below (converted to years once, when the scenario is '
                   'read: core/model/units.py), of the output grid (one ROS second per unit) and '
                   'of every printed time, rate and period'),
