@@ -12,7 +12,7 @@ import pytest
 from rclpy.parameter import Parameter
 
 from tumble_ros.analysis.recording import load_recording
-from tumble_ros.core import load_scenario, parse_scenario, simulate
+from tumble_ros.core import load_scenario, parse_scenario, Scenario, simulate
 from tumble_ros.core.model.units import TIME_UNITS
 from tumble_ros.runs.offline import record_offline
 
@@ -49,6 +49,14 @@ def test_the_grid_of_every_unit_ends_at_the_duration(unit):
         elif Fraction(duration) % Fraction(interval) == 0 and t[-1] != sc.duration:
             wrong.append((duration, interval, 'last', t[-1], sc.duration))
     assert not wrong
+
+
+def test_only_float_rounding_moves_a_duration_onto_its_stamp():
+    assert Scenario(duration=1 / 3, output_interval=0.01).duration == 1 / 3   # between stamps
+    days = Scenario(duration=1190 * TIME_UNITS['d'], output_interval=0.25 * TIME_UNITS['d'],
+                    time_unit='d')
+    assert days.duration == 1190 / 365.25 != 1190 * TIME_UNITS['d']   # an ulp apart
+    assert days.output_times[-1] == days.duration
 
 
 def test_the_issue_cases():

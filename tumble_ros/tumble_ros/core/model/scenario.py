@@ -341,7 +341,9 @@ class Scenario:
         How the attitude is integrated: ``"quaternion"`` (default, no singularity) or
         ``"euler"`` (the paper's eq 15, singular at theta = 0, pi).
     duration : float
-        Simulated time span tk [yr], starting at t = 0.
+        Simulated time span tk [yr], starting at t = 0. Within 4 ulp of the time of a stamp of
+        :attr:`timebase` (a duration in days or hours converted to years), it is that time: the
+        output grid's last sample is at the end of the run.
     output_interval : float
         Spacing of output samples [yr] (the paper: tk / n with n = 1000); at least 1e-9 yr,
         rounded to whole nanoseconds of ROS time (:attr:`output_times`).
