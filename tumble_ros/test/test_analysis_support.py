@@ -220,7 +220,7 @@ def test_the_time_axis_of_a_flyby_reads_in_round_hours():
     from matplotlib.figure import Figure
 
     from tumble_ros.analysis.display import display_units
-    from tumble_ros.analysis.figures import _time_axis
+    from tumble_ros.analysis.figures import time_axis
 
     t = np.linspace(0.0, 144 / 8766, 145)           # [yr]
     fig = Figure()
@@ -228,7 +228,7 @@ def test_the_time_axis_of_a_flyby_reads_in_round_hours():
     axes = fig.subplots(2, 1, sharex=True)
     for ax in axes:
         ax.plot(t, np.sin(t))
-    _time_axis(axes, display_units(t[-1]))
+    time_axis(axes, display_units(t[-1]))
     fig.canvas.draw()
     hours = [tick * 8766 for tick in axes[-1].get_xticks() if 0 <= tick <= t[-1]]
     assert len(hours) >= 3

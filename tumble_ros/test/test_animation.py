@@ -92,7 +92,10 @@ def test_the_still_draws_a_recorded_scene(tmp_path, capsys):
     result = record_offline(Scenario(duration=0.2, output_interval=0.01), tmp_path / 'r.mcap')
     out = tmp_path / 'scene.png'
     assert command([str(result.output), '--still', str(out), '--at', '0.1', '--quiet']) == 0
-    assert f'still: {out} (the /markers scene at t = 0.1 yr)' in capsys.readouterr().out
+    # (--at is in years; the scene's time reads in the summary's display unit: a 0.2-yr run's
+    # days)
+    said = capsys.readouterr().out
+    assert f'still: {out} (the /markers scene at t = {0.1 * 365.25:g} d)' in said
     with Image.open(out) as png:
         assert png.size == _pixels(STILL_SIZE, STILL_DPI)
     # a recording without scenes (the golden file predates them): one error line

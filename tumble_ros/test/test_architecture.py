@@ -168,6 +168,7 @@ THIRD_PARTY_PRIVATE = {
     ('tumble_ros.core.integrators.adaptive', 'ode._integrator'),
     ('tumble_ros.core.integrators.adaptive', 'ode._y'),
     ('tumble_ros.core.jit', '_IMPL._locator_classes'),
+    ('tumble_ros.core.jit', 'cache_file._load_index'),   # numba's: is a loop in its cache
     ('tumble_ros.core.torques.component', 'f._sig'),
     ('tumble_ros.nodes.parameters', 'node._parameters'),
     ('tumble_ros.nodes.parameters', 'node._parameter_overrides'),

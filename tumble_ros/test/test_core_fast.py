@@ -250,6 +250,36 @@ def test_a_long_first_call_that_is_already_running_is_not_called_compiling():
     assert jit_module.COMPILE_NOTICE_VARIABLE not in os.environ
 
 
+@needs_numba
+def test_a_first_use_that_loads_from_the_cache_says_loading_not_compiling(tmp_path):
+    """Issue 47: every ensemble run said 'compiling ... (first use)' when it loaded the cache."""
+    import io
+    import threading
+    import time
+
+    from tumble_ros.core.jit import first_use
+
+    (tmp_path / 'cached_loop.py').write_text(
+        'from numba import njit\n\n\n@njit(cache=True)\ndef cube(x):\n    return x * x * x\n')
+    env = {**os.environ, 'PYTHONPATH': str(tmp_path)}
+    subprocess.run([sys.executable, '-c', 'import cached_loop; cached_loop.cube(2.0)'],
+                   env=env, check=True, timeout=120)          # compiled and cached there
+    sys.path.insert(0, str(tmp_path))
+    try:
+        import cached_loop
+    finally:
+        sys.path.remove(str(tmp_path))
+    out = io.StringIO()
+    with first_use(cached_loop.cube, 'cached loop', after=0.0, out=out):
+        deadline = time.monotonic() + 30.0   # (the notice comes from a timer thread)
+        while not out.getvalue() and time.monotonic() < deadline:
+            threading.Event().wait(0.01)
+        assert cached_loop.cube(3.0) == 27.0
+    lines = out.getvalue().splitlines()
+    assert lines[0] == 'loading the cached loop from the numba cache...'
+    assert lines[1].startswith('... the cached loop loaded in ') and len(lines) == 2
+
+
 _SUBPROCESS = r"""
 import json, sys
 import numpy as np

@@ -45,9 +45,24 @@ def test_a_scenario_in_hours_is_the_same_scenario_in_years():
     assert hours.orbit.gm == years.orbit.gm == 1.3271244e11   # km^3/s^2 whatever time_unit
     assert hours.orbit.t_p == pytest.approx(0.1, rel=1e-14)
     np.testing.assert_allclose(simulate(hours).omega, simulate(years).omega, rtol=1e-9)
-    # inside, and in every description the simulator publishes, the scenario is in years
-    assert hours.to_parameters()['time_unit'] == 'yr'
-    assert Scenario.from_parameters(hours.to_parameters()) == hours
+    # inside, and in every description the simulator publishes, the values are in years; the
+    # scenario keeps its unit (its grid's, and what is printed)
+    params = hours.to_parameters()
+    assert (params['time_unit'], params['values_in_years']) == ('h', True)
+    assert params['duration'] == hours.duration
+    assert Scenario.from_parameters(params) == hours
+    assert (hours.time_unit, years.time_unit) == ('h', 'yr')
+    assert years.to_parameters()['values_in_years'] is False
+
+
+def test_values_in_years_must_be_a_boolean():
+    with pytest.raises(ScenarioError, match=r"^values_in_years: must be true or false, got 'y'"):
+        Scenario.from_parameters({'time_unit': 'h', 'values_in_years': 'y'})
+
+
+def test_a_time_unit_is_refused_naming_the_field_in_the_python_api():
+    with pytest.raises(ScenarioError, match=r"^time_unit: must be one of \['d', 'h', 'min', "):
+        Scenario(time_unit='hours')
 
 
 def test_the_conversion_factors():

@@ -237,7 +237,8 @@ MARKER_FRAMES = 10_000
 #: params file for its scenario (``cli.ensemble``, ``cli.encounter``) skip them.
 SIM_NODE_PARAMETERS = {
     'seconds_per_year': (0.0, 's/yr', 'ROS seconds per simulated year in every stamp and /clock; '
-                         '0 = one ROS second per time_unit (1 for yr, 8766 for h)',
+                         '0 = one ROS second per time_unit (1 for yr, 8766 for h): the grid of '
+                         'simulate(scenario); another value samples its own grid',
                          (0.0, 1e6), True),
     'real_time_factor': (0.1, 'yr/s', 'simulated years per wall-clock second; 0 = as fast as the '
                          'subscribers take it', (0.0, 1e6), False),

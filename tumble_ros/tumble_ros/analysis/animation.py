@@ -51,7 +51,8 @@ from tumble_ros.errors import AnalysisError
 from tumble_ros.io import read_messages
 from tumble_ros.topics import MARKER_AXES, MARKER_MOMENTUM, MARKER_PERTURBER, MARKER_SUN, MARKERS
 
-from .figures import envelope, numeric_limits
+from .display import recording_units
+from .figures import envelope, numeric_limits, time_axis
 from .recording import Recording
 
 __all__ = ['Solid', 'Arrow', 'FRAMES', 'FPS', 'SIZE', 'DPI', 'STILL_SIZE', 'STILL_DPI',
@@ -258,27 +259,30 @@ def _draw_plots(rec: Recording, axes: list) -> list:
     w is scaled on the numeric solution (the model is not drawn here: omega.png has it).
     """
     ax_xy, ax_z, ax_e = axes
+    u = recording_units(rec)     # rates drawn in it; times stay years, ticked in it
+    omega = u.w(rec.omega)
     for ax, components in ((ax_xy, (0, 1)), (ax_z, (2,))):
         limits = []
         for i in components:
             name = 'xyz'[i]
-            ax.plot(*envelope(rec.t, rec.omega[:, i]), lw=0.6, color=COLORS[name][:3],
+            ax.plot(*envelope(rec.t, omega[:, i]), lw=0.6, color=COLORS[name][:3],
                     label=f'$\\omega_{name}$')
-            limits.append(numeric_limits(rec.omega[:, i]))
+            limits.append(numeric_limits(omega[:, i]))
         ax.set_ylim(min(lo for lo, _ in limits), max(hi for _, hi in limits))
         ax.legend(loc='upper right', fontsize=6, ncol=2)
-        ax.set_ylabel('rad/yr', fontsize=7)
+        ax.set_ylabel(u.rate, fontsize=7)
     if len(rec.norm_t):
-        ax_e.plot(*envelope(rec.norm_t, rec.error_norm), lw=0.6, color='black',
+        ax_e.plot(*envelope(rec.norm_t, u.w(rec.error_norm)), lw=0.6, color='black',
                   label='$|\\omega - \\omega_{model}|$')
         ax_e.legend(loc='upper left', fontsize=6)
-        ax_e.set_ylabel('rad/yr', fontsize=7)
+        ax_e.set_ylabel(u.rate, fontsize=7)
         if np.nanmax(rec.error_norm) > 0:
             ax_e.set_yscale('log')
     else:
         ax_e.text(0.5, 0.5, 'no comparator in the recording', ha='center', va='center',
                   transform=ax_e.transAxes, fontsize=8)
-    ax_e.set_xlabel('t [yr]', fontsize=8)
+    time_axis(axes, u)
+    ax_e.xaxis.label.set_fontsize(8)
     cursors = []
     for ax in axes:
         ax.set_xlim(rec.t[0], rec.t[-1] if rec.t[-1] > rec.t[0] else rec.t[0] + 1.0)
@@ -432,6 +436,7 @@ def write_animation(rec: Recording, path: str | os.PathLike[str], *, frames: int
     scenes = recorded_scene(rec, t[chosen], quaternion[chosen], omega[chosen])
     fig, ax3d, plots = _figure(with_plots=True)
     cursors = _draw_plots(rec, plots)
+    units = recording_units(rec)
     step = int(np.median(np.diff(chosen))) if len(chosen) > 1 else 1
     title = fig.suptitle('', fontsize=9)
 
@@ -444,9 +449,10 @@ def write_animation(rec: Recording, path: str | os.PathLike[str], *, frames: int
         drawn[:] = _draw_scene(ax3d, scenes[j])
         for cursor in cursors:
             cursor.set_xdata([t[chosen[j]]] * 2)
-        title.set_text(f'{rec.path.name}: t = {t[chosen[j]]:.5g} yr (frame {j + 1} of '
+        now = units.time_text(t[chosen[j]], 5)
+        title.set_text(f'{rec.path.name}: t = {now} (frame {j + 1} of '
                        f'{len(chosen)}, every {step}th attitude sample)' if not single else
-                       f'{rec.path.name}: t = {t[chosen[j]]:.5g} yr (attitude sample '
+                       f'{rec.path.name}: t = {now} (attitude sample '
                        f'{chosen[j]} of {len(t)})')
 
     if single:
@@ -498,7 +504,8 @@ def write_still(rec: Recording, path: str | os.PathLike[str], *, at: float | Non
     fig, ax3d, _ = _figure(with_plots=False)
     _set_up_3d(ax3d)
     _draw_scene(ax3d, marker_scene(chosen))
-    ax3d.set_title(f'{rec.path.name}: {topic} at t = {t_chosen:.6g} yr, frame orbital',
+    ax3d.set_title(f'{rec.path.name}: {topic} at t = {recording_units(rec).time_text(t_chosen)}, '
+                   'frame orbital',
                    fontsize=9)
     with _written_as(path, '.png') as temporary:
         fig.savefig(temporary, format='png')

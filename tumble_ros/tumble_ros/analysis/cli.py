@@ -38,6 +38,7 @@ from tumble_ros.exits import Interrupted, interrupts
 from tumble_ros.io import McapError, WrittenMessages
 from tumble_ros.topics import MARKERS
 
+from .display import recording_units
 from .figure_files import FigureExistsError
 from .figure_pool import FigurePool, PendingFigures
 from .recording import load_recording, normalize_namespace, stderr_progress
@@ -371,7 +372,8 @@ def _pictures(rec, args) -> dict[str, tuple]:
         out['animation'] = (path, f'{count} frames at {fps:g} fps' if count > 1 else 'one frame')
     if args.still is not None:
         path, t = animation.write_still(rec, args.still, at=args.at, overwrite=args.overwrite)
-        out['still'] = (path, f'the {rec.topic(MARKERS)} scene at t = {t:.6g} yr')
+        out['still'] = (path, f'the {rec.topic(MARKERS)} scene at t = '
+                              f'{recording_units(rec).time_text(t)}')
     return out
 
 

@@ -4,11 +4,14 @@ The units and the frame the analysis shows a recording in: chosen once, used by 
 Inside, the analysis computes in years [yr], rad/yr and radians (``core.model.units``). What it
 prints and draws is in the units of the field, chosen here from the run's span and its scenario:
 
-* times, periods and rates in one time unit: years for a run of a year or more (the paper's
-  runs: t in yr, w in rad/yr, periods in yr with hours or days beside), otherwise the largest
-  of d, h, min, s that the run spans at least :data:`~.timeaxis.DISPLAY_MIN_UNITS` times
-  (:func:`~.timeaxis.display_unit`): a 144-h flyby in h, rad/h and periods in h;
-* directions (the pole of L) in degrees, always with the frame named (:func:`frame_name`):
+* times, periods and rates in one time unit: the scenario's ``time_unit`` when it states one
+  (d, h, min, s: a 1190-d run in d and rad/d, the 144-h flyby in h and rad/h); for a scenario
+  in years (the default) or none, years for a run of a year or more (the paper's runs: t in
+  yr, w in rad/yr), otherwise the largest of d, h, min, s that the run spans at least
+  :data:`~.timeaxis.DISPLAY_MIN_UNITS` times (:func:`~.timeaxis.display_unit`); periods in
+  that unit with hours beside (:meth:`DisplayUnits.period_text`);
+* directions (the pole of L) in degrees, longitude in [0, 360) (:func:`longitude_degrees`),
+  always with the frame named (:func:`frame_name`):
   ``ecliptic J2000`` for a scenario with a Kepler orbit or a flyby (its ``orbit.*`` elements
   are stated in the ephemeris' frame, ecliptic J2000 by the project's convention: JPL Horizons
   elements, docs/physics.md "Apophis 2029"), otherwise the paper's ``orbital frame`` (Z' the
@@ -27,7 +30,9 @@ import math
 import re
 from typing import Any, TYPE_CHECKING
 
-from tumble_ros.core.model.units import HOURS_PER_YEAR
+import numpy as np
+
+from tumble_ros.core.model.units import HOURS_PER_YEAR, TIME_UNITS
 
 from .timeaxis import display_unit
 
@@ -37,7 +42,7 @@ if TYPE_CHECKING:
     from .recording import Recording
 
 __all__ = ['DisplayUnits', 'display_units', 'recording_units', 'frame_name', 'is_flyby',
-           'ORBITAL_FRAME', 'ELEMENTS_FRAME']
+           'longitude_degrees', 'ORBITAL_FRAME', 'ELEMENTS_FRAME']
 
 #: The frame of a circular-orbit run (the paper's X'Y'Z': Z' the orbit normal).
 ORBITAL_FRAME = 'orbital frame'
@@ -56,8 +61,17 @@ def frame_name(scenario: Scenario | None) -> str:
     return ELEMENTS_FRAME if getattr(scenario, 'orbit', None) is not None else ORBITAL_FRAME
 
 
-#: A time in years as the nodes write it in their messages.
-_YEARS = re.compile(r't = ([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?) yr\b')
+def longitude_degrees(longitude: Any) -> Any:
+    """Return a longitude [rad] (a number or an array) in degrees in [0, 360): the convention."""
+    return np.mod(np.degrees(longitude), 360.0)
+
+
+_NUMBER = r'[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?'
+#: A time [yr] or a rate [rad/yr] as the nodes and the computing code write them in text:
+#: ``t = 0.5 yr``, ``period 0.0104 yr``, ``606.4 rad/yr`` (not ``rad/yr^2``, not ``/yr per``).
+_IN_YEARS = re.compile(rf'(?<![\w.])({_NUMBER}) (yr|rad/yr)(?![\w^/])')
+#: An interval of times [yr]: ``[0.1, 0.1000003] yr``.
+_INTERVAL_IN_YEARS = re.compile(rf'\[({_NUMBER}), ({_NUMBER})\] yr(?![\w^/])')
 
 
 @dataclass(frozen=True)
@@ -99,34 +113,42 @@ class DisplayUnits:
         return '-' if rad_per_year is None else f'{self.w(rad_per_year):.{digits}g} {self.rate}'
 
     def period_text(self, years: float, digits: int = 4) -> str:
-        """
-        Write a period [yr] in :attr:`time`.
-
-        In years (the paper's runs) the period is also given in hours (below 48 h) or days.
-        """
+        """Write a period [yr] in :attr:`time`, and in hours beside unless that is hours."""
         if not math.isfinite(years):
             return 'inf'
-        if self.time != 'yr':
-            return f'{self.t(years):.{digits}g} {self.time}'
-        hours = years * HOURS_PER_YEAR
-        other = f'{hours:.4g} h' if hours < 48 else f'{hours / 24:.4g} d'
-        return f'{years:.6g} yr ({other})'
+        text = self.time_text(years, 6 if self.time == 'yr' else digits)
+        return text if self.time == 'h' else f'{text} ({years * HOURS_PER_YEAR:.4g} h)'
 
     def retime(self, text: str) -> str:
-        """Rewrite the times 't = <x> yr' of a node's message (a status) in :attr:`time`."""
+        """
+        Rewrite the times '<x> yr', '[<a>, <b>] yr' and rates '<x> rad/yr' of text in our units.
+
+        Text written in years by code that knows no display unit (a node's status, the
+        theory's basis, a warning) reads in :attr:`time` and :attr:`rate`, 6 digits.
+        """
         if self.time == 'yr':
             return text
-        return _YEARS.sub(lambda m: f't = {self.time_text(float(m.group(1)))}', text)
+        text = _INTERVAL_IN_YEARS.sub(
+            lambda m: f'[{self.t(float(m.group(1))):.6g}, {self.t(float(m.group(2))):.6g}] '
+                      f'{self.time}', text)
+        return _IN_YEARS.sub(
+            lambda m: (self.time_text if m.group(2) == 'yr' else self.rate_text)(
+                float(m.group(1))), text)
 
     def direction_text(self, longitude: float, latitude: float) -> str:
         """Write a direction given by longitude and latitude [rad] in degrees, frame named."""
-        return (f'lon {math.degrees(longitude) % 360.0:.2f} deg, '
+        return (f'lon {longitude_degrees(longitude):.2f} deg, '
                 f'lat {math.degrees(latitude):.2f} deg ({self.frame})')
 
 
 def display_units(span: float, scenario: Scenario | None = None) -> DisplayUnits:
-    """Return the units of a run spanning ``span`` [yr] of ``scenario``."""
-    name, years = display_unit(span)
+    """
+    Return the units of a run spanning ``span`` [yr] of ``scenario``.
+
+    The scenario's ``time_unit`` unless it is years (the default), else the span's unit.
+    """
+    unit = getattr(scenario, 'time_unit', 'yr')
+    name, years = (unit, TIME_UNITS[unit]) if unit != 'yr' else display_unit(span)
     return DisplayUnits(name, years, frame_name(scenario))
 
 

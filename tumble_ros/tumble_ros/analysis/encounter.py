@@ -39,6 +39,8 @@ from tumble_ros.core.model.rotation import (euler_to_quaternion, matrix_to_euler
 from tumble_ros.core.model.spinstate import omega_for_periods, spin_state
 from tumble_ros.core.model.units import HOURS_PER_YEAR
 
+from .display import longitude_degrees
+
 __all__ = ['EncounterResult', 'encounter_ensemble', 'tumbler_states', 'format_encounter',
            'encounter_figure', 'draw_encounter', 'encounter_memory', 'MAX_INERTIA_SPREAD',
            'BYTES_PER_BODY', 'with_inertia']
@@ -374,7 +376,7 @@ def format_encounter(result: EncounterResult) -> str:
 
 def _ecliptic(pole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return (longitude, latitude) [deg] of unit vectors (n, 3)."""
-    return (np.degrees(np.arctan2(pole[:, 1], pole[:, 0])) % 360.0,
+    return (longitude_degrees(np.arctan2(pole[:, 1], pole[:, 0])),
             np.degrees(np.arcsin(np.clip(pole[:, 2], -1.0, 1.0))))
 
 

@@ -26,11 +26,12 @@ from matplotlib.figure import Figure
 import numpy as np
 from tumble_ros.core import parse_scenario
 from tumble_ros.core.model.spinstate import spin_state
+from tumble_ros.core.model.units import HOURS_PER_YEAR
 from tumble_ros.errors import AnalysisError, TumbleRosError
 from tumble_ros.io import open_ensemble
 from tumble_ros.io.ensemble_store import SCENARIO_ATTR
 
-from .display import display_units, DisplayUnits
+from .display import display_units, DisplayUnits, longitude_degrees
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -116,6 +117,14 @@ def ensemble_units(ds: xr.Dataset) -> DisplayUnits:
     return display_units(span, parse_scenario(ds.attrs[SCENARIO_ATTR]))
 
 
+def _periods_text(name: str, st: dict, units: DisplayUnits) -> list[str]:
+    """Return the lines of a period's statistics [yr]: in ``units``, then in hours."""
+    lines = [f'  {name} [{units.time}]: {_stats_text(st, 1.0 / units.years_per_time)}']
+    if units.time != 'h' and st.get('n'):
+        lines.append(f'  {name} [h]: {_stats_text(st, HOURS_PER_YEAR)}')
+    return lines
+
+
 def _stats_text(st: dict, scale: float = 1.0) -> str:
     if not st.get('n'):
         return 'none'
@@ -128,11 +137,10 @@ def format_statistics(stats: dict, units: DisplayUnits) -> str:
     """
     Return :func:`ensemble_statistics` as text, each quantity with its unit.
 
-    Rates and periods in ``units`` (rad/yr and yr for the paper's runs, rad/h and h for a
-    flyby), the pole latitude in degrees, its frame named.
+    Rates and periods in ``units`` (the scenario's time unit: rad/yr and yr for the paper's runs,
+    rad/h and h for a flyby), periods in hours too, the pole latitude in degrees, its frame named.
     """
     modes = ', '.join(f'{m} {c}' for m, c in stats['modes'].items()) or 'none'
-    period = 1.0 / units.years_per_time
     return '\n'.join([
         f"time: {units.time_text(stats['time'])}",
         f"bodies: {stats['bodies']} ({stats['succeeded']} succeeded, {stats['failed']} failed, "
@@ -143,10 +151,8 @@ def format_statistics(stats: dict, units: DisplayUnits) -> str:
         f'omega_perp = |(omega_x, omega_y)| [{units.rate}]: '
         f"{_stats_text(stats['omega_perp'], units.years_per_time)}",
         f"spin states (torque-free, of {stats['spin_states']} bodies): modes {modes}",
-        f'  rotation period P_psi [{units.time}]: '
-        f"{_stats_text(stats['rotation_period'], period)}",
-        f'  precession period P_phi [{units.time}]: '
-        f"{_stats_text(stats['precession_period'], period)}",
+        *_periods_text('rotation period P_psi', stats['rotation_period'], units),
+        *_periods_text('precession period P_phi', stats['precession_period'], units),
         f'  pole latitude [deg, {units.frame}]: '
         f"{_stats_text(stats['pole_latitude'], math.degrees(1.0))}",
     ])
@@ -169,9 +175,9 @@ def plot_ensemble(ds: xr.Dataset, out_dir: str | os.PathLike[str], time: float |
     axes[1, 0].hist(periods, bins=50)
     axes[1, 0].set_xlabel(f'rotation period $P_\\psi$ [{u.time}] (torque-free, from the final '
                           'state)')
-    axes[1, 1].scatter(np.degrees(spin['pole_longitude']), np.degrees(spin['pole_latitude']),
-                       s=4)
-    axes[1, 1].set_xlabel(f'pole longitude [deg] ({u.frame})')
+    axes[1, 1].scatter(longitude_degrees(spin['pole_longitude']),
+                       np.degrees(spin['pole_latitude']), s=4)
+    axes[1, 1].set_xlabel(f'pole longitude [deg, 0-360] ({u.frame})')
     axes[1, 1].set_ylabel(f'pole latitude [deg] ({u.frame})')
     for ax in axes.flat[:3]:
         ax.set_ylabel('bodies')

@@ -71,7 +71,7 @@ __all__ = ['FigureExistsError', 'FigurePathError', 'plot_angular_velocity', 'plo
            'plot_impacts', 'plot_omega_windows', 'plot_spectrum', 'plot_wy_vs_wx',
            'write_figures', 'numeric_limits', 'check_outputs', 'write_files', 'FIGURES',
            'draw_figures', 'warm_up', 'omega_figure', 'wy_vs_wx_figure', 'error_figure',
-           'spectrum_figure']
+           'spectrum_figure', 'time_axis']
 
 DPI = 110
 #: Above this many samples the wy-vs-wx path is drawn as a density image (_draw_path_density).
@@ -124,7 +124,7 @@ def _scaled_axis(axis, years_per_unit: float) -> None:
     axis.set_major_formatter(FuncFormatter(lambda x, _: f'{x / years_per_unit:.6g}'))
 
 
-def _time_axis(axes, unit: DisplayUnits) -> None:
+def time_axis(axes, unit: DisplayUnits) -> None:
     """
     Label the time axis of ``axes`` (the last one gets the label) in ``unit``.
 
@@ -302,7 +302,7 @@ def omega_figure(rec: Recording, departure: float | None = None) -> Figure:
         _mark_closest_approach(ax, rec, i == 0)
         _rate_axis(ax.yaxis, _unit(rec), _LABELS[i])
         ax.grid(True, lw=0.3)
-    _time_axis(axes, _unit(rec))
+    time_axis(axes, _unit(rec))
     if has_model or rec.impacts or is_flyby(rec.scenario):
         axes[0].legend(loc='upper right', fontsize='small')
     axes[0].set_title(_title(rec), fontsize='small')
@@ -357,7 +357,7 @@ def _draw_omega_windows(rec: Recording) -> list[Drawing]:
         unit = _unit(rec)
         axes[0, col].set_title(f'{name}: t = {unit.t(t0):.6g} .. {_t(t1, unit, 6)}',
                                fontsize='small')
-        _time_axis(axes[:, col], unit)
+        time_axis(axes[:, col], unit)
     axes[0, 0].legend(loc='upper right', fontsize='x-small')
     fig.suptitle(f'{_label(rec)}: $\\omega$ at full resolution ({WINDOW_SAMPLES} samples a '
                  'window; omega.png: the whole run)', fontsize='small')
@@ -490,7 +490,7 @@ def error_figure(rec: Recording) -> Figure | None:
     _rate_axis(ax1.yaxis, _unit(rec), '$\\omega - \\omega_{model}$')
     ax2.plot(*gapped_envelope(t_norm, norm), lw=0.8, color='black')
     _rate_axis(ax2.yaxis, _unit(rec), '|error|')
-    _time_axis((ax1, ax2), _unit(rec))
+    time_axis((ax1, ax2), _unit(rec))
     for ax in (ax1, ax2):
         _mark_gaps(ax, t_norm, ax is ax1)
         _mark_impacts(ax, rec)
@@ -543,7 +543,7 @@ def _draw_impacts(rec: Recording, samples: int = 25) -> list[Drawing]:
             ax.grid(True, lw=0.3)
             ax.set_xlim(lo, hi)
         axes[0].legend(loc='upper left', fontsize='x-small')
-        _time_axis(axes, _unit(rec))
+        time_axis(axes, _unit(rec))
         u = _unit(rec)
         d = u.w(np.asarray(event.delta_omega))
         axes[0].set_title(

@@ -167,7 +167,7 @@ def _frequencies(s: AnalysisSummary) -> list[str]:
     out = [f'expected frequencies: {s.theory_basis}']
     for line in s.theory:
         out.append(f'  {line.name:<20} {u.w(line.omega):12.6g} {u.rate}  (period '
-                   f'{u.time_text(2 * math.pi / line.omega if line.omega else math.inf, 4)})  '
+                   f'{u.period_text(2 * math.pi / line.omega if line.omega else math.inf)})  '
                    f'{line.meaning}')
     sp = s.spectrum
     if sp is not None:
@@ -184,7 +184,7 @@ def _frequencies(s: AnalysisSummary) -> list[str]:
                 match = (f', nearest line {peak.nearest} = {_g(u.w(peak.nearest_omega))}{alias} '
                          f'(offset {u.w(peak.offset):+.3g})')
             out.append(f'  {k}. {u.w(peak.omega):12.6g} {u.rate} (period '
-                       f'{u.time_text(peak.period, 4)}), amplitude '
+                       f'{u.period_text(peak.period)}), amplitude '
                        f'{u.rate_text(peak.amplitude, 4)}{match}')
         if not sp.peaks:
             out.append('  no peak (constant signal)')
@@ -259,7 +259,9 @@ def format_summary(s: AnalysisSummary) -> str:
            + _spin(s) + _frequencies(s))
     out += [f'note: {note}' for note in s.notes]
     out += [f'WARNING: {warning}' for warning in s.warnings]
-    return '\n'.join(out)
+    # what was written in years by code that knows no display unit (the theory's basis, the
+    # nodes' messages, the warnings) in the display unit too
+    return _units(s).retime('\n'.join(out))
 
 
 def _jsonable(value):

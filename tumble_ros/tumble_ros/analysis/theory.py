@@ -79,10 +79,10 @@ def check_aliasing(samp: Sampling, lines: list[TheoryLine]) -> AliasingCheck:
     warning = None
     if aliased:
         listing = '; '.join(f'{line.name} = {line.omega:.4g} rad/yr (appears at '
-                            f'{seen:.4g})' for line, seen in aliased)
+                            f'{seen:.4g} rad/yr)' for line, seen in aliased)
         warning = (f'sampling interval dt = {samp.dt:.4g} yr (Nyquist pi/dt = {nyquist:.4g} '
                    f'rad/yr) aliases {listing}: the spectrum and any slow amplitude change in '
                    f'the plots can be aliasing (docs/paper.md, conventions); sample at dt < '
-                   f'pi/{fastest.omega:.4g} = {math.pi / fastest.omega:.3g} yr, several times '
+                   f'pi / {fastest.name} = {math.pi / fastest.omega:.3g} yr, several times '
                    f'finer for plots')
     return AliasingCheck(samp.dt, nyquist, fastest, aliased, warning)

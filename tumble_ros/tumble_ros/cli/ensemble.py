@@ -32,6 +32,7 @@ from tumble_ros.cli.progress import ProgressBar
 from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
                              Scenario, ScenarioError)
 from tumble_ros.core.jit import compile_notices
+from tumble_ros.core.model.units import from_years, TIME_UNITS
 from tumble_ros.ensembles import (EnsembleStoreError, open_ensemble, run_ensemble,
                                   run_ensemble_to_store)
 from tumble_ros.errors import TumbleRosError
@@ -89,11 +90,14 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _final_spin_lines(w_end: np.ndarray, jac_start: np.ndarray, jac_end: np.ndarray) -> list:
-    """Return the summary lines of the succeeded bodies' last samples."""
+def _final_spin_lines(w_end: np.ndarray, jac_start: np.ndarray, jac_end: np.ndarray,
+                      unit: str) -> list:
+    """Return the summary lines of the succeeded bodies' last samples (w [rad/yr] in unit)."""
+    w_end = w_end * TIME_UNITS[unit]
     w_perp = np.hypot(w_end[:, 0], w_end[:, 1])
-    return [f'final |w_perp| [rad/yr]: mean {w_perp.mean():.6g}, std {w_perp.std():.3g}; '
-            f'final wz: mean {w_end[:, 2].mean():.6g}, std {w_end[:, 2].std():.3g}',
+    return [f'final |w_perp| [rad/{unit}]: mean {w_perp.mean():.6g}, std {w_perp.std():.3g}; '
+            f'final wz [rad/{unit}]: mean {w_end[:, 2].mean():.6g}, '
+            f'std {w_end[:, 2].std():.3g}',
             f'Jacobi integral: start {np.mean(jac_start):.10g}, '
             f'end mean {np.mean(jac_end):.10g}, std {np.std(jac_end):.3g}']
 
@@ -103,7 +107,8 @@ def _to_store(args, sc, inputs, client) -> int:
         sc, args.out, n_bodies=args.bodies, chunk_size=args.chunk_size, client=client,
         fast=False if args.reference else None, overwrite=args.overwrite,
         euler_angles=not args.no_euler_angles,
-        progress=None if args.quiet else ProgressBar(sc.duration, args.bodies, by='bodies'),
+        progress=None if args.quiet else ProgressBar(sc.duration, args.bodies, by='bodies',
+                                                     unit=sc.time_unit),
         **inputs)
     print('\n'.join(summary.lines()))
     if summary.succeeded:
@@ -115,7 +120,7 @@ def _to_store(args, sc, inputs, client) -> int:
         except RuntimeError as err:       # numcodecs: a chunk that does not decompress
             raise EnsembleStoreError(f'{args.out}: damaged ensemble store: cannot read its '
                                      f"data ({' '.join(str(err).split())})") from None
-        print('\n'.join(_final_spin_lines(w_end, jac[:, 0], jac[:, 1])))
+        print('\n'.join(_final_spin_lines(w_end, jac[:, 0], jac[:, 1], sc.time_unit)))
     return 0 if summary.succeeded == summary.n_bodies else 1
 
 
@@ -176,7 +181,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 sc, n_bodies=args.bodies, fast=False if args.reference else None,
                 client=client, chunk_size=args.chunk_size,
                 progress=None if args.quiet else ProgressBar(
-                    sc.duration, args.bodies, by='time' if client is None else 'bodies'),
+                    sc.duration, args.bodies, by='time' if client is None else 'bodies',
+                    unit=sc.time_unit),
                 impacts=impacts, omega0=omega0, euler_angles=not args.no_euler_angles)
     except (TumbleRosError, ValueError) as err:
         print(f'error: {err}', file=sys.stderr)
@@ -193,12 +199,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f'bodies: {result.n_bodies} ({ok} succeeded), impacts: {n_impacts}, '
           f'method: {sc.integrator.method}, '
           f"{'compiled' if result.compiled else 'reference'} path")
-    print(f'time: {sc.duration:g} yr, {result.t.size} samples per body, '
+    print(f'time: {from_years(sc.duration, sc.time_unit):g} {sc.time_unit}, '
+          f'{result.t.size} samples per body, '
           f'{int(result.n_steps.sum())} body-steps in {result.wall_time:.3f} s = '
           f'{result.body_steps_per_second:.3g} body-steps/s')
     if ok:
         good = result.success
-        lines = _final_spin_lines(w_end[good], result.jacobi[good, 0], result.jacobi[good, -1])
+        lines = _final_spin_lines(w_end[good], result.jacobi[good, 0], result.jacobi[good, -1],
+                                  sc.time_unit)
         print('\n'.join(lines))
     for b, msg in enumerate(result.messages):
         if msg:

@@ -453,15 +453,17 @@ def first_use(function: Callable[..., Any], label: str,
               after: float = COMPILE_NOTICE_SECONDS,
               out: TextIO | None = None) -> Iterator[None]:
     """
-    Around a call of compiled ``function``: say so when its first call in this process compiles.
+    Around a call of compiled ``function``: say so when its first call in this process is slow.
 
     numba compiles a loop on its first call for its argument types (then keeps it in its
-    cache, :func:`shared_cache_folder`), so a run waits only for the loops it uses. When
+    cache, :func:`shared_cache_folder`), so a run waits only for the loops it uses; a later
+    process loads it from the cache (well under a second, but seconds on a busy machine). When
     ``function`` has no compiled signature yet in this process and still none after ``after``
-    seconds (numba is still compiling or loading it), a line ``compiling the <label> (first
-    use, cached afterwards)...`` goes to ``out`` (stderr: a node's log), and ``... the <label>
-    compiled in <n> s`` when it is ready. Nothing otherwise (a loaded cache, a plain Python
-    function, the environment variable
+    seconds, a line goes to ``out`` (stderr: a node's log): ``compiling the <label> (first use,
+    cached afterwards)...``, or ``loading the <label> from the numba cache...`` when the cache
+    holds it for the current source (:func:`_in_cache`); then ``... the <label> compiled in
+    <n> s`` or ``loaded in <n> s``, as numba's cache counters say once it is ready. Nothing
+    otherwise (ready in time, a plain Python function, the environment variable
     :data:`COMPILE_NOTICE_VARIABLE` set to ``0``).
     """
     if (not COMPILED or not _uncompiled(function)
@@ -470,15 +472,17 @@ def first_use(function: Callable[..., Any], label: str,
         return
     stream = out if out is not None else sys.stderr
     started = time.monotonic()
-    said = threading.Event()
+    said: list[bool] = []    # [whether the notice said loading], once said
 
     def notice() -> None:
         # numba adds the signature once the loop is compiled (or loaded), before it runs it: a
         # long first call that is already running says nothing (an ensemble of many bodies)
         if getattr(function, 'signatures', None):
             return
-        said.set()
-        print(f'compiling the {label} (first use, cached afterwards)...', file=stream,
+        loading = _in_cache(function)
+        said.append(loading)
+        print(f'loading the {label} from the numba cache...' if loading else
+              f'compiling the {label} (first use, cached afterwards)...', file=stream,
               flush=True)
 
     timer = threading.Timer(after, notice)
@@ -488,6 +492,23 @@ def first_use(function: Callable[..., Any], label: str,
         yield
     finally:
         timer.cancel()
-        if said.is_set():
-            print(f'... the {label} compiled in {time.monotonic() - started:.0f} s',
-                  file=stream, flush=True)
+        if said:
+            misses = getattr(function, '_cache_misses', None)
+            loaded = said[0] if misses is None else not misses
+            print(f"... the {label} {'loaded' if loaded else 'compiled'} in "
+                  f'{time.monotonic() - started:.0f} s', file=stream, flush=True)
+
+
+def _in_cache(function: Callable[..., Any]) -> bool:
+    """
+    Tell whether numba's cache holds compiled code of ``function`` for its current source.
+
+    Its index file lists entries and matches the source file's stamp (numba's own check, which
+    gives no entries otherwise): the first call then loads them (unless its argument types are
+    new). False for anything else (no cache, a stand-in, an unreadable index).
+    """
+    cache_file = getattr(getattr(function, '_cache', None), '_cache_file', None)
+    try:
+        return bool(cache_file is not None and cache_file._load_index())
+    except Exception:   # (numba's private API: any failure means "cannot tell")
+        return False

@@ -47,7 +47,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from tumble_ros import topics
-from tumble_ros.core import ScenarioError
+from tumble_ros.core import Scenario, ScenarioError
+from tumble_ros.core.model.units import from_years
 from tumble_ros.errors import NodeError
 from tumble_ros.io import WrittenMessages
 from tumble_ros.nodes.comparator import ComparatorNode
@@ -97,11 +98,14 @@ class BringupResult:
         return 0 if self.ok else 1
 
 
-def _progress_line(sim: SimNode, started: float) -> str:
-    done = sim.t / sim.scenario.duration if sim.scenario.duration else 1.0
-    rate = sim.published_samples / max(time.monotonic() - started, 1e-9)
-    return (f'\rbringup: t = {sim.t:.6g} / {sim.scenario.duration:g} yr ({100 * done:5.1f} %), '
-            f'{sim.published_samples} samples, {rate:,.0f} samples/s')
+def _progress_line(label: str, scenario: Scenario, t: float, samples: int,
+                   started: float) -> str:
+    """Return a progress line: t [yr] of the duration in the scenario's time unit, the rate."""
+    unit = scenario.time_unit
+    done = t / scenario.duration
+    rate = samples / max(time.monotonic() - started, 1e-9)
+    return (f'\r{label}: t = {from_years(t, unit):.6g} / {from_years(scenario.duration, unit):g} '
+            f'{unit} ({100 * done:5.1f} %), {samples} samples, {rate:,.0f} samples/s')
 
 
 @contextmanager
@@ -186,10 +190,7 @@ def _run_offline(args, output, model, progress, stop: StopSignals,
     def show(t: float, samples: int, last: bool = False) -> None:
         nonlocal last_line
         if progress and (last or time.monotonic() - last_line > PROGRESS_PERIOD):
-            rate = samples / max(1e-9, time.monotonic() - started)
-            progress.write(f'\rbringup (offline): t = {t:.6g} / {scenario.duration:g} yr '
-                           f'({100 * t / scenario.duration:5.1f} %), {samples} samples, '
-                           f'{rate:,.0f} samples/s')
+            progress.write(_progress_line('bringup (offline)', scenario, t, samples, started))
             progress.flush()
             last_line = time.monotonic()
 
@@ -239,7 +240,8 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
         while sim.state not in (SimStatus.FINISHED, SimStatus.DIVERGED) and not stopped():
             executor.spin_once(timeout_sec=0.05)
             if progress and time.monotonic() - last_line > PROGRESS_PERIOD:
-                progress.write(_progress_line(sim, started))
+                progress.write(_progress_line('bringup', sim.scenario, sim.t,
+                                              sim.published_samples, started))
                 progress.flush()
                 last_line = time.monotonic()
         # Let the consumers take what is in flight, until every sample and every comparison
@@ -262,7 +264,8 @@ def _run(args, output, model, progress, executor_name, stop: StopSignals,
             executor.spin_once(timeout_sec=0.01)
         undrained = not drained() and not stopped()
         if progress:
-            progress.write(_progress_line(sim, started) + '\n')
+            progress.write(_progress_line('bringup', sim.scenario, sim.t,
+                                          sim.published_samples, started) + '\n')
         comparator.close()
         recorder.close()
         return BringupResult(output=recorder.path, state=sim.state, message=sim.status_message,

@@ -44,7 +44,8 @@ from std_srvs.srv import Trigger
 
 from tumble_ros import topics
 from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeBase
-from tumble_ros.core.model.units import seconds_per_year_of
+from tumble_ros.core.model.units import from_years
+from tumble_ros.core.propagation.timebase import SampleGrid
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import (declare_node_parameters, declare_scenario_parameters,
@@ -93,8 +94,9 @@ class SimNode(GuardedNode):
         # ScenarioError: refused
         scenario_parameters = read_scenario_parameters(self)
         self.scenario = Scenario.from_parameters(scenario_parameters)
-        self.timebase = TimeBase(params['seconds_per_year'] or seconds_per_year_of(
-            scenario_parameters.get('time_unit', 'yr')))
+        # 0: the scenario's own (one ROS second per time_unit), the grid of simulate(scenario)
+        self.timebase = (TimeBase(params['seconds_per_year']) if params['seconds_per_year']
+                         else self.scenario.timebase)
         # the output grid (the one of Scenario.output_times, at this node's seconds_per_year)
         self._grid = output_grid(self.scenario, self.timebase)
         self._limits = ImpactLimits(params['max_impact_duration'], params['max_impact_impulse'])
@@ -200,6 +202,11 @@ class SimNode(GuardedNode):
                      if name != topics.CLOCK and publisher is not None)
 
     @property
+    def grid(self) -> SampleGrid:
+        """Return the output grid the node publishes (its ``seconds_per_year``'s time base)."""
+        return self._grid
+
+    @property
     def published_samples(self) -> int:
         """Count the samples published so far."""
         return self._session.samples
@@ -215,10 +222,12 @@ class SimNode(GuardedNode):
             return
         self._started_wall = time.monotonic()
         self._publish_records(self._session.start())   # the first segment, 'started'
+        unit = self.scenario.time_unit
         self.get_logger().info(
-            f'simulating {self.scenario.duration:g} yr with '
+            f'simulating {from_years(self.scenario.duration, unit):g} {unit} with '
             f'{self.scenario.integrator.method}, {self._grid.count} samples every '
-            f'{self.scenario.output_interval:g} yr, real_time_factor {self._rtf:g}')
+            f'{from_years(self.scenario.output_interval, unit):g} {unit}, real_time_factor '
+            f'{self._rtf:g}')
 
     def _on_tick(self) -> None:
         self._announce()
@@ -324,8 +333,10 @@ class SimNode(GuardedNode):
         self._pub_status.publish(status_message(change))
         if change.state == FINISHED:
             wall = time.monotonic() - (self._started_wall or time.monotonic())
+            unit = self.scenario.time_unit
             self.get_logger().info(
-                f'finished at t = {self.t:g} yr: {self.published_samples} samples in {wall:.1f} '
+                f'finished at t = {from_years(self.t, unit):g} {unit}: '
+                f'{self.published_samples} samples in {wall:.1f} '
                 's wall (the simulator records nothing: a recorder or bringup does)')
 
     def _publish_status(self, message: str) -> None:

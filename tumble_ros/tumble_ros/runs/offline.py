@@ -172,7 +172,8 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
     """
     Simulate ``scenario``, compare it with ``model_name`` and write the recording ``output``.
 
-    ``timebase``: the simulator's (its ``seconds_per_year``; default one second per year);
+    ``timebase``: the simulator's (its ``seconds_per_year``; default the scenario's own, one
+    ROS second per ``time_unit``: the grid of ``simulate(scenario)``);
     ``publish_clock``, ``markers``, ``marker_decimation``: the simulator's parameters.
     ``stop()`` is checked between slices of the integration (:class:`Slicer`, about
     :data:`SLICE_SECONDS` of wall each): a stopped run keeps what it wrote (the file is
@@ -182,7 +183,7 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
     the file cannot be created or written, ScenarioError for a grid ROS stamps cannot carry.
     """
     started = time.monotonic()
-    grid = output_grid(scenario, timebase or TimeBase())
+    grid = output_grid(scenario, timebase or scenario.timebase)
     output = Path(output)
     output.parent.mkdir(parents=True, exist_ok=True)
     # the recording's run id, in every description

@@ -39,9 +39,9 @@ from tumble_ros.core.model.observables import (SPIN_DEFAULTS, spin_from_paramete
                                                SPIN_PARAMETER_DOCS, SpinObservables)
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
 from tumble_ros.core.model.shipped import config_dir
-from tumble_ros.core.model.units import TIME_UNITS, to_years
+from tumble_ros.core.model.units import seconds_per_year_of, TIME_UNITS, to_years
 from tumble_ros.core.photometry.settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
-from tumble_ros.core.propagation.timebase import SampleGrid, TimeBase
+from tumble_ros.core.propagation.timebase import MAX_STAMP_NS, SampleGrid, TimeBase
 from tumble_ros.core.torques import orbital_to_body, TorqueComponent
 from tumble_ros.core.torques.ephemeris import Ephemeris, read_ephemeris
 from tumble_ros.core.torques.orbits import KeplerOrbit, perturber_position
@@ -344,7 +344,9 @@ class Scenario:
         How the attitude is integrated: ``"quaternion"`` (default, no singularity) or
         ``"euler"`` (the paper's eq 15, singular at theta = 0, pi).
     duration : float
-        Simulated time span tk [yr], starting at t = 0.
+        Simulated time span tk [yr], starting at t = 0. Within 4 ulp of the time of a stamp of
+        :attr:`timebase` (a duration in days or hours converted to years), it is that time: the
+        output grid's last sample is at the end of the run.
     output_interval : float
         Spacing of output samples [yr] (the paper: tk / n with n = 1000); at least 1e-9 yr,
         rounded to whole nanoseconds of ROS time (:attr:`output_times`).
@@ -384,6 +386,11 @@ class Scenario:
     lightcurve : LightcurveSettings
         What the synthetic lightcurve assumes (``core.photometry``; the ``lightcurve.*``
         parameters): the scattering law, the observer, light time.
+    time_unit : str
+        The scenario's own time unit (a key of ``units.TIME_UNITS``: yr, d, h, min, s; ROS
+        ``time_unit``). The fields stay in years; the unit sets the output grid's time base, one
+        ROS second per unit (:attr:`timebase`, the sim node's default), and the unit every
+        printed time, rate and period is given in.
 
     """
 
@@ -404,8 +411,10 @@ class Scenario:
     gravity_field: GravityField | None = None
     body: BodySpec = field(default_factory=BodySpec)
     lightcurve: LightcurveSettings = field(default_factory=LightcurveSettings)
+    time_unit: str = 'yr'
 
     def __post_init__(self) -> None:
+        _one_of('time_unit', self.time_unit, TIME_UNITS)
         self._apply_body()
         inertia = _vector('inertia', self.inertia)
         for k, v in enumerate(inertia):
@@ -460,7 +469,7 @@ class Scenario:
             _fail('duration',
                   f'must be <= {MAX_DURATION:g} yr (the model ignores orbital evolution and '
                   'YORP, which act over such times)', self.duration)
-        _set(self, 'duration', duration)
+        _set(self, 'duration', _grid_end(duration, self.timebase))
         rotation = max(math.hypot(*self.omega0), self.orbit_rate) * duration
         if rotation > MAX_ROTATION:
             _fail('duration',
@@ -472,9 +481,11 @@ class Scenario:
             _fail('output_interval', f'must be <= duration ({self.duration:g} yr)',
                   self.output_interval)
         try:  # the grid must fit ROS stamps (at least 1 ns apart: 1e-9 yr at 1 s per year)
-            TimeBase().check(self.output_interval, self.duration)
+            self.timebase.check(self.output_interval, self.duration)
         except ScenarioError as err:
-            raise ScenarioError(f'{err} (simulate(scenario, t_eval) samples any times)') from None
+            raise ScenarioError(f'{err} (time_unit {self.time_unit}: one ROS second per '
+                                f'{self.time_unit}; simulate(scenario, t_eval) samples any '
+                                'times)') from None
         samples = self.duration / self.output_interval + 1.0
         if samples > MAX_SAMPLES:
             _fail('output_interval',
@@ -667,19 +678,24 @@ class Scenario:
         return stacked
 
     @property
+    def timebase(self) -> TimeBase:
+        """Return the scenario's time base: one ROS second per ``time_unit``."""
+        return TimeBase(seconds_per_year_of(self.time_unit))
+
+    @property
     def output_grid(self) -> SampleGrid:
-        """Return the output grid at the default time base (one ROS second per year)."""
-        return TimeBase().grid(self.output_interval, self.duration)
+        """Return the output grid at the scenario's time base (:attr:`timebase`)."""
+        return self.timebase.grid(self.output_interval, self.duration)
 
     @property
     def output_times(self) -> np.ndarray:
         """
-        Return the default output grid [yr]: every ``output_interval`` from 0 to ``duration``.
+        Return the output grid [yr]: every ``output_interval`` from 0 to ``duration`` included.
 
-        The same grid as the sim node's (:class:`~.timebase.SampleGrid`: the interval rounded to
-        whole nanoseconds of ROS time at one second per year, times t_k = k interval_ns / 1e9),
-        so ``simulate(scenario)`` samples exactly the times the node publishes at its default
-        ``seconds_per_year``.
+        The grid the sim node publishes at its default ``seconds_per_year`` (0: one ROS second
+        per ``time_unit``), the offline recording writes and ``simulate(scenario)`` samples
+        (:class:`~.timebase.SampleGrid` at :attr:`timebase`: the interval rounded to whole
+        nanoseconds of ROS time, t_k = k interval_ns / ns_per_year), whatever the time unit.
         """
         return self.output_grid.times()
 
@@ -691,7 +707,9 @@ class Scenario:
     def to_parameters(self) -> dict[str, Any]:
         """Flat parameter dictionary as ROS 2 parameters (``integrator.rtol``, ...)."""
         params: dict[str, Any] = {
-            'time_unit': 'yr',
+            'time_unit': self.time_unit,
+            # the values below are in years (read back bit for bit; a unit's would be rounded)
+            'values_in_years': self.time_unit != 'yr',
             'inertia': list(self.inertia),
             'allow_unphysical_inertia': self.allow_unphysical_inertia,
             'orbit_rate': self.orbit_rate,
@@ -736,7 +754,11 @@ class Scenario:
         if unknown:
             raise ScenarioError(
                 f"{unknown[0]}: unknown scenario parameter (known: {', '.join(sorted(known))})")
-        unit = _one_of('time_unit', params.get('time_unit', 'yr'), TIME_UNITS)
+        time_unit = _one_of('time_unit', params.get('time_unit', 'yr'), TIME_UNITS)
+        in_years = params.get('values_in_years', False)
+        if not isinstance(in_years, bool):
+            _fail('values_in_years', 'must be true or false', in_years)
+        unit = 'yr' if in_years else time_unit   # the unit of the values
         perturbers = _perturbers_from_parameters(
             params, unit, Path(params_file).parent if params_file is not None else None)
         given, params = params, to_years(params, unit)
@@ -760,7 +782,24 @@ class Scenario:
         spin = spin_from_parameters(params)
         if spin is not None:
             plain.update(_spin_fields(spin, given, body))
+        plain['time_unit'] = time_unit
         return cls(**plain)
+
+
+def _grid_end(duration: float, timebase: TimeBase) -> float:
+    """
+    Return ``duration`` [yr], or the time of its stamp when only float rounding separates them.
+
+    A duration stated in a unit (``1190 d`` * years per day) can come out an ulp or two off the
+    time of its own stamp (1190 s of ROS time / 365.25 s per year): a grid sample at that stamp
+    would then lie past the end and be dropped, or an ulp before it. Within 4 ulp, the duration
+    is the stamp's time, so the last sample is at the end of the run; a duration between two
+    stamps is kept as given.
+    """
+    if not duration * timebase.ns_per_year <= MAX_STAMP_NS:
+        return duration   # (refused by the grid's check, naming the field)
+    end = timebase.to_years(timebase.to_ns(duration))
+    return end if abs(end - duration) <= 4.0 * math.ulp(duration) else duration
 
 
 def _check_body_inertia(inertia: Any, body: BodySpec) -> None:
@@ -809,7 +848,7 @@ _ORBIT_KINDS = ('circular', 'kepler', 'flyby')
 #: The orbit.* values of a scenario without a Kepler orbit (orbit.kind circular).
 _DEFAULT_ORBIT = KeplerOrbit(gm=1.0, a=1.0)
 PARAMETER_NAMES: tuple[str, ...] = (
-    ('time_unit',) + _SCENARIO_PLAIN
+    ('time_unit', 'values_in_years') + _SCENARIO_PLAIN
     + tuple(f'integrator.{f.name}' for f in dataclasses.fields(IntegratorSettings))
     + _IMPACT_KEYS
     + ('orbit.kind',) + tuple(f'orbit.{name}' for name in _ORBIT_FIELDS + _FLYBY_FIELDS)
@@ -858,8 +897,13 @@ def _orbit_from_parameters(params: Mapping[str, Any], prefix: str = 'orbit',
 
 #: Unit and meaning of every scenario parameter (the nodes' descriptors, the README tables).
 PARAMETER_DOCS: dict[str, tuple[str, str]] = {
-    'time_unit': ('', 'unit of every time, rate and torque below: yr (default), d, h, min or s; '
-                  'converted to years once, when the scenario is read (core/model/units.py)'),
+    'time_unit': ('', "the scenario's time unit: yr (default), d, h, min or s; the unit of every "
+                  'time, rate and torque below (converted to years once, when the scenario is '
+                  'read: core/model/units.py), of the output grid (one ROS second per unit) and '
+                  'of every printed time, rate and period'),
+    'values_in_years': ('', 'true: the times, rates and torques below are in years whatever '
+                        'time_unit says (a written scenario: to_parameters, the scenario '
+                        'topic, so that it reads back bit for bit)'),
     'inertia': ('normalised', 'principal moments of inertia (Ix, Iy, Iz); only ratios matter'),
     'allow_unphysical_inertia': (
         '', 'accept moments that break the triangle inequality (paper Figs 3, 6-10)'),
@@ -1032,7 +1076,8 @@ PERTURBER_DOCS: dict[str, tuple[str, str]] = {
                        "perturber's position relative to the asteroid [km], orbital frame; "
                        "relative paths: the params file's folder, then the package's config/"),
     'epoch_jd': ('d', 'Julian date (TDB) of t = 0, for a Horizons table'),
-    'ephemeris_time_unit': ('', "unit of a plain table's t; '' = time_unit"),
+    'ephemeris_time_unit': ('', "unit of a plain table's t; '' = time_unit (yr with "
+                            'values_in_years)'),
     'j2': ('', "the perturber's J2 (the Earth 1.0826e-3); 0 = a point mass"),
     'pole': ('', "the perturber's pole, orbital frame (its J2's axis)"),
     **{f: (unit, text.replace('(kepler)', '(kind kepler)').replace(

@@ -7,8 +7,10 @@ file or parameter set with ``time_unit: h`` states every time-like value in hour
 ``impacts.start``, ``impacts.duration``, ``orbit.t_p``, ``spin.precession_period``,
 ``spin.rotation_period`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
 ``impacts.torque`` [I rad/h^2]. :func:`to_years` converts them once, when the scenario is read;
-the scenario, the recordings and the analysis then speak years (the analysis also prints periods
-in hours or days). A year is the Julian year, 365.25 days.
+the scenario, the recordings and the analysis then compute in years. The scenario remembers its
+unit (``Scenario.time_unit``): its output grid is one ROS second per unit, and what a person
+reads (progress lines, logs, the analysis' text and figures) is in that unit
+(:func:`from_years`), periods also in hours. A year is the Julian year, 365.25 days.
 
 The orbit of the torquing body (``orbit.*``) is stated in the astrodynamics units every table
 uses, whatever ``time_unit``: GM [km^3/s^2], distances [km], speeds [km/s]; only its time of
@@ -20,7 +22,7 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 __all__ = ['TIME_UNITS', 'HOURS_PER_YEAR', 'SECONDS_PER_YEAR', 'to_years', 'TIME_POWERS',
-           'seconds_per_year_of',
+           'seconds_per_year_of', 'from_years',
            'GM_SUN', 'GM_EARTH', 'GM_MOON', 'KM_PER_AU', 'PERTURBER_RADII']
 
 HOURS_PER_YEAR = 365.25 * 24.0
@@ -73,6 +75,11 @@ def _scaled(value: Any, factor: float) -> Any:
                                                 and not isinstance(v, bool) for v in value):
         return [v * factor for v in value]
     return value   # (the scenario's validation names the field and says what is wrong)
+
+
+def from_years(years: float, unit: str) -> float:
+    """Return a time [yr] in ``unit`` (a key of :data:`TIME_UNITS`): what a person reads."""
+    return years / TIME_UNITS[unit]
 
 
 def seconds_per_year_of(unit: str) -> float:
