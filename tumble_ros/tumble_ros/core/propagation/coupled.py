@@ -156,7 +156,17 @@ class CoupledBody:
         Its moments ((b^2 + c^2) / 5, ...) per unit mass; the degree-4 field of an ellipsoid
         is a mass model's (``gravity_field``). ``degree`` 0: the point mass.
         """
-        a2, b2, c2 = (float(v) ** 2 for v in semi_axes)
+        if isinstance(gm, bool) or not isinstance(gm, (int, float)) or not (
+                math.isfinite(gm) and gm > 0.0):
+            raise ValueError(f"coupled.gm: the asteroid's GM must be a finite number > 0 "
+                             f'km^3/s^2, got {gm!r}')
+        axes = list(semi_axes) if not isinstance(semi_axes, (str, bytes)) else []
+        if len(axes) != 3 or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                and v > 0.0 for v in axes):
+            raise ValueError('coupled.semi_axes: must be 3 finite numbers > 0 km, got '
+                             f'{semi_axes!r}')
+        a2, b2, c2 = (float(v) ** 2 for v in axes)
         mass = gm / G_KM3
         moments = (mass * (b2 + c2) / 5.0, mass * (a2 + c2) / 5.0, mass * (a2 + b2) / 5.0)
         radius = math.sqrt(max(a2, b2, c2))
@@ -258,6 +268,11 @@ def propagate_coupled(scenario: Scenario, body: CoupledBody,
     if not gm_p > 0.0:
         raise ValueError(f"coupled.gm: the asteroid's GM must be below the orbit's G(M + m) = "
                          f'{orbit.gm!r} km^3/s^2, got {body.gm!r}')
+    radius = float(body.field.reference_radius)
+    if not orbit.pericentre > radius:
+        raise ValueError(f"coupled.field: the body's reference radius {radius:.6g} km (its "
+                         f'field converges outside that sphere) must lie inside the pericentre '
+                         f'{orbit.pericentre:.6g} km: the perturber would pass through the body')
     share = gm_p / gm_total                              # M / (M + m)
     a = np.asarray(body.inertia_per_mass)
     field = body.degree != 0
