@@ -156,18 +156,15 @@ class CoupledBody:
         Its moments ((b^2 + c^2) / 5, ...) per unit mass; the degree-4 field of an ellipsoid
         is a mass model's (``gravity_field``). ``degree`` 0: the point mass.
         """
-        if isinstance(gm, bool) or not isinstance(gm, (int, float)) or not (
-                math.isfinite(gm) and gm > 0.0):
+        if not _real(gm) > 0.0:
             raise ValueError(f"coupled.gm: the asteroid's GM must be a finite number > 0 "
                              f'km^3/s^2, got {gm!r}')
-        axes = list(semi_axes) if not isinstance(semi_axes, (str, bytes)) else []
-        if len(axes) != 3 or not all(
-                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                and v > 0.0 for v in axes):
+        axes = [_real(v) for v in semi_axes] if not isinstance(semi_axes, (str, bytes)) else []
+        if len(axes) != 3 or not all(v > 0.0 for v in axes):
             raise ValueError('coupled.semi_axes: must be 3 finite numbers > 0 km, got '
                              f'{semi_axes!r}')
         a2, b2, c2 = (float(v) ** 2 for v in axes)
-        mass = gm / G_KM3
+        mass = float(gm) / G_KM3
         moments = (mass * (b2 + c2) / 5.0, mass * (a2 + c2) / 5.0, mass * (a2 + b2) / 5.0)
         radius = math.sqrt(max(a2, b2, c2))
         return cls(GravityField.from_principal_moments(mass, radius, moments, 2), degree)
@@ -225,6 +222,15 @@ class CoupledResult:
         """Return the change of the total angular momentum since t[0], (n, 3)."""
         change: FloatArray = self.orbit_momentum + self.spin_momentum - self.spin_momentum[0]
         return change
+
+
+def _real(value: object) -> float:
+    """Return ``value`` as a float, NaN unless a finite real number (not a bool)."""
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return math.nan
+    return number if math.isfinite(number) and not isinstance(value, bool) else math.nan
 
 
 def _quaternion_rate(q: FloatArray, w: FloatArray) -> FloatArray:

@@ -241,9 +241,12 @@ class Ephemeris:
         """
         Return (the smallest distance [km], its time [yr]) of the interpolant over the table.
 
-        At the knots and at 16 points of each interval (the interpolant's own polynomials,
-        :meth:`parameters`): the perigee between two knots, not only the nearest knot.
+        The interpolant's own polynomials (:meth:`parameters`) at 17 points of each interval,
+        then, on the intervals next to the smallest, the exact minimum of |x(s)|^2 (a root of
+        its derivative, a polynomial): the perigee between two knots, not the nearest knot.
         """
+        from numpy.polynomial import polynomial
+
         par = np.asarray(self.parameters())
         n = int(par[0])
         t = par[1:n + 2]
@@ -254,7 +257,15 @@ class Ephemeris:
         x = np.einsum('kap,ksp->ksa', coefficients, powers)                      # (n, 17, 3)
         distance = np.linalg.norm(x, axis=2)
         k, j = np.unravel_index(int(np.argmin(distance)), distance.shape)
-        return float(distance[k, j]), float(0.5 * (t[k] + t[k + 1]) + s[k, j])
+        best = (float(distance[k, j]), float(0.5 * (t[k] + t[k + 1]) + s[k, j]))
+        for m in range(max(k - 1, 0), min(k + 2, n)):
+            squared = sum(polynomial.polymul(c, c) for c in coefficients[m])
+            for root in polynomial.polyroots(polynomial.polyder(squared)):
+                if abs(root.imag) <= 1e-6 * half[m] and abs(root.real) <= half[m]:
+                    value = float(polynomial.polyval(root.real, squared))
+                    if value >= 0.0 and math.sqrt(value) < best[0]:
+                        best = (math.sqrt(value), float(0.5 * (t[m] + t[m + 1]) + root.real))
+        return best
 
     def position(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Return the interpolated positions [km], orbital frame, (n, 3), at times ``t`` [yr]."""
