@@ -29,6 +29,12 @@ Files (:func:`read_ephemeris`):
 The positions must be the perturber's relative to the asteroid (Horizons: the asteroid as the
 centre, ``CENTER = '@2099942'`` for Apophis, or the negated geocentric vectors of the asteroid)
 in the frame the attitude is given in.
+
+Refused, each in one line naming the file (and the line): a field that is not a finite number
+(``NaN``), a row with fewer or more numbers than the first, more than :data:`MAX_KNOTS` rows, a
+file over :data:`MAX_EPHEMERIS_BYTES`; and, for a table from a file or from Python alike, knots
+whose interpolation error may exceed :data:`MAX_INTERPOLATION_ERROR` of the distance
+(:func:`interpolation_error`: a gap across a perigee).
 """
 from __future__ import annotations
 
