@@ -130,7 +130,8 @@ def test_a_plain_table_is_read_in_the_scenarios_time_unit(tmp_path):
 @pytest.mark.parametrize('text, match', [
     ('$$SOE\n2462240.5 = A.D.\n1 2 3\n', r'one \$\$SOE and one \$\$EOE'),
     ('t,x,y,z\n0,1,2,3\n1,1,2,3\n', r'times: must have 6 to'),
-    ('0,1,2,3\n1,1,2\n2,1,2,3\n', r'bad\.csv:2: the row has 3 numbers, the first row \(line 1\) 4'),
+    ('0,1,2,3\n1,1,2\n2,1,2,3\n',
+     r'bad\.csv:2: the row has 3 numbers, the first row \(line 1\) 4'),
     ('\n'.join(f'{t},1,2,3' for t in (0, 1, 2, 2, 3, 4)), r'strictly increasing, got 2\.0'),
     ('\n'.join(f'{t},0,0,0' for t in range(6)), r'distance 0'),
     ('0,1,2,3\n1,1,2,3\nabc\n', r"bad\.csv:3: 'abc' is not a finite number"),

@@ -712,9 +712,9 @@ def test_a_body_around_the_flybys_perigee_is_refused(degree):
     from tumble_ros.core import ScenarioError
 
     flyby = {**EARTH_FLYBY, 'orbit.perigee': 38326.0, 'gravity.degree': degree}
-    with pytest.raises(ScenarioError, match=r"^body\.semi_axes: the body's bounding radius "
-                                            r'100000 km must lie inside the closest approach of '
-                                            r'perturber kepler_orbit, 38326 km \(its pericentre\)'):
+    expected = (r"^body\.semi_axes: the body's bounding radius 100000 km must lie inside the "
+                r'closest approach of perturber kepler_orbit, 38326 km \(its pericentre\)')
+    with pytest.raises(ScenarioError, match=expected):
         Scenario.from_parameters({**flyby, **ELLIPSOID})
     small = {**ELLIPSOID, 'body.semi_axes': [30000.0, 20000.0, 10000.0]}
     assert Scenario.from_parameters({**flyby, **small}).gravity_degree == degree
@@ -736,7 +736,7 @@ def test_a_body_around_an_ephemeris_closest_approach_is_refused():
     from tumble_ros.core.model.body import BodySpec
 
     body = BodySpec(model='ellipsoid', semi_axes=(38326.2, 30000.0, 20000.0), density=2000.0)
-    with pytest.raises(ScenarioError, match=r"^body\.semi_axes: .* radius 38326\.2 km must lie "
+    with pytest.raises(ScenarioError, match=r'^body\.semi_axes: .* radius 38326\.2 km must lie '
                                             r'inside the closest approach of perturber earth, '
                                             r'38326 km \(its ephemeris at t = 0\.005'):
         Scenario(orbit_rate=0.0, duration=0.01, body=body,

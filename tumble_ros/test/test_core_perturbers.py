@@ -342,7 +342,7 @@ def test_a_perturber_named_moon_1_is_refused_for_its_name_not_its_kind():
     """Issue 48: the refusal blamed perturbers.moon-1.kind, a parameter the name could not key."""
     from tumble_ros.core import ScenarioError
 
-    expected = (r"^perturbers\.names: each name must be an identifier \(letters, digits, _; a "
+    expected = (r'^perturbers\.names: each name must be an identifier \(letters, digits, _; a '
                 r"parameter key\), got 'moon-1'$")
     with pytest.raises(ScenarioError, match=expected):
         Scenario.from_parameters({'orbit_rate': 0.0, 'perturbers.names': ['moon-1'],

@@ -131,8 +131,8 @@ def test_every_bad_input_of_issue_48_is_refused_alike_by_load_scenario_and_the_n
     from tumble_ros.core import load_scenario, ScenarioError
 
     params, expected = BAD_INPUTS[case]
-    tables = {'gap': _gap_table(tmp_path / 'gap.csv'), 'nan': _gap_table(tmp_path / 'nan.csv',
-                                                                          nan=True)}
+    tables = {'gap': _gap_table(tmp_path / 'gap.csv'),
+              'nan': _gap_table(tmp_path / 'nan.csv', nan=True)}
     params = {k: v.format(**tables) if isinstance(v, str) else v for k, v in params.items()}
     path = tmp_path / f'{case}.yaml'
     path.write_text(yaml.safe_dump({'/**/sim': {'ros__parameters': _nested(params)}}))

@@ -185,9 +185,10 @@ class Ephemeris:
                       f'{self.epoch_jd + t[k + 1] * DAYS_PER_YEAR:.6f})')
         raise ValueError(
             f'{name}.times: the knots {where}, {gap:.4g} h apart, allow interpolation errors up '
-            f'to ~{error[k]:.3g} km, above the limit {limit[k]:.3g} km ({MAX_INTERPOLATION_ERROR:.1%}'
-            ' of the distance there; the estimate: the quintic spline through the knots minus '
-            'the cubic): sample the table more densely there (Horizons: a smaller step)')
+            f'to ~{error[k]:.3g} km, above the limit {limit[k]:.3g} km '
+            f'({MAX_INTERPOLATION_ERROR:.1%} of the distance there; the estimate: the quintic '
+            'spline through the knots minus the cubic): sample the table more densely there '
+            '(Horizons: a smaller step)')
 
     @property
     def start(self) -> float:
