@@ -64,6 +64,7 @@ MIN_KNOTS = 6
 #: floats a knot: 1e5 knots are 10 MB). Real use: ten days at one minute is 14,400 rows, a year
 #: at 10 minutes 52,600. The reader stops at the row beyond it.
 MAX_KNOTS = 100_000
+#: Why, in the refusal's words.
 MAX_KNOTS_REASON = ('the interpolant of 1e5 knots is 10 MB of torque parameters; ten days at '
                     'one minute is 14,400 rows')
 #: Largest ephemeris file [bytes] read: a Horizons record of X..VZ, LT, RG, RR takes ~250 bytes
@@ -346,6 +347,7 @@ class _Rows:
         self.lines: list[int] = []
 
     def start(self, values: list[float], line: int) -> None:
+        """Append a row read from ``line``; ValueError if it is one more than MAX_KNOTS."""
         if len(self.rows) == MAX_KNOTS:
             raise ValueError(f'{self.name}:{line}: more than {MAX_KNOTS:,} rows (MAX_KNOTS: '
                              f'{MAX_KNOTS_REASON}); split the run or sample the table more '
@@ -422,8 +424,9 @@ def read_ephemeris(path: str | Path, *, epoch_jd: float = 0.0, time_unit: str = 
         size = path.stat().st_size
         if size > MAX_EPHEMERIS_BYTES:
             raise ValueError(f'{name}: {size:,} bytes, above {MAX_EPHEMERIS_BYTES:,} '
-                             f'(MAX_EPHEMERIS_BYTES: {MAX_KNOTS:,} records of a Horizons table '
-                             'fit in ~30 MB); split the run or sample the table more coarsely')
+                             f'(MAX_EPHEMERIS_BYTES: {MAX_KNOTS:,} Horizons records of ~330 bytes '
+                             'and a header fit in it); split the run or sample the table more '
+                             'coarsely')
         text = path.read_text(encoding='utf-8')
     except (OSError, UnicodeDecodeError) as err:
         raise ValueError(f'{name}: cannot read the ephemeris ({err})') from None
