@@ -35,6 +35,7 @@ from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, M
                                           MAX_ORBIT_RATE, MAX_ROTATION, MAX_RTOL, MAX_SAMPLES,
                                           MAX_STEPS, MIN_ORBIT_RATE, MIN_RTOL, RESOLUTION_ULPS,
                                           ScenarioError, step_budget)
+from tumble_ros.core.model.mass_models import DensityMoments
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
 from tumble_ros.core.model.units import TIME_UNITS, to_years
 from tumble_ros.core.photometry.settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
@@ -923,9 +924,8 @@ def _body_radius(scenario: Scenario) -> tuple[float, str]:
     """Return (the body's bounding radius [km], the field that sets it); (0, '') if no size."""
     model = scenario.body.mass_model
     if model is not None:
-        radius = getattr(model, 'radius', None)
-        if radius is None:                       # moments: the field's reference radius
-            radius = model.field.reference_radius
+        radius = (model.field.reference_radius if isinstance(model, DensityMoments)
+                  else model.radius)             # moments: the field's reference radius
         return float(radius), _SIZE_PARAMETER[model.kind]
     if scenario.gravity_field is not None:
         return float(scenario.gravity_field.reference_radius), 'gravity_field'

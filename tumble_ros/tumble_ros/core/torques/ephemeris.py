@@ -264,7 +264,7 @@ class Ephemeris:
         powers = s[:, :, None] ** np.arange(_WIDTH)                              # (n, 17, 6)
         x = np.einsum('kap,ksp->ksa', coefficients, powers)                      # (n, 17, 3)
         distance = np.linalg.norm(x, axis=2)
-        k, j = np.unravel_index(int(np.argmin(distance)), distance.shape)
+        k, j = (int(v) for v in np.unravel_index(int(np.argmin(distance)), distance.shape))
         best = (float(distance[k, j]), float(0.5 * (t[k] + t[k + 1]) + s[k, j]))
         for m in range(max(k - 1, 0), min(k + 2, n)):
             squared = sum(polynomial.polymul(c, c) for c in coefficients[m])
