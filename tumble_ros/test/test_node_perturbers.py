@@ -114,8 +114,7 @@ BAD_INPUTS = {
                  r'orbit\.e: the speed at the pericentre 1496 km, .* = 13320\.1 km/s'),
     'inside': ({**_SUN, 'orbit.a': 2992.0, 'orbit.e': 1.5},
                r'orbit\.e: the speed at the pericentre 1496 km, .* = 14892\.2 km/s'),
-    'name': ({'orbit_rate': 0.0, 'perturbers.names': ['moon-1'],
-              'perturbers.moon-1.kind': 'kepler'},
+    'name': ({'orbit_rate': 0.0, 'perturbers.names': ['moon-1']},
              r"perturbers\.names: each name must be an identifier .*got 'moon-1'$"),
 }
 
