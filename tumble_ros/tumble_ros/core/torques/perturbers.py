@@ -276,6 +276,12 @@ class Perturber:
             raise ValueError(f'{field}.radius: J2 needs its reference radius (> 0 km; taken '
                              f'by gm only for the {known}), got {self.radius!r}')
         object.__setattr__(self, 'radius', radius)
+        if isinstance(self.source, Ephemeris) and radius > 0.0:
+            closest, when = self.source.closest_approach()
+            if not closest > radius:
+                raise ValueError(f'{field}.ephemeris_file: the table passes {closest:.6g} km from '
+                                 f'the perturber at t = {when:.6g} yr, inside its radius '
+                                 f'{radius!r} km (a collision, not a flyby)')
         pole = self.pole
         if isinstance(pole, (str, bytes)) or not hasattr(pole, '__len__') or len(pole) != 3:
             raise ValueError(f'{field}.pole: must be 3 numbers (orbital frame), got {pole!r}')
