@@ -182,3 +182,26 @@ def test_to_degree_4_the_totals_are_conserved_as_well():
     assert np.max(np.linalg.norm(four.momentum_change, axis=1)) < 1e-12 * spin_momentum
     change = np.linalg.norm(four.omega[-1] - runs[2].omega[-1]) / np.linalg.norm(four.omega[-1])
     assert 1e-14 < change < 1e-10
+
+
+@pytest.mark.parametrize('gm, semi_axes, match', [
+    (0.0, (0.2, 0.15, 0.1), r"^coupled\.gm: the asteroid's GM must be a finite number > 0 "
+                            r'km\^3/s\^2, got 0\.0$'),
+    (float('nan'), (0.2, 0.15, 0.1), r'^coupled\.gm: .*got nan$'),
+    (1e-9, (0.0, 0.0, 0.0), r'^coupled\.semi_axes: must be 3 finite numbers > 0 km, got '
+                            r'\(0\.0, 0\.0, 0\.0\)$'),
+    (1e-9, (0.2, 0.15), r'^coupled\.semi_axes: must be 3 '),
+])
+def test_a_body_of_gm_0_or_semi_axes_0_is_refused_naming_it(gm, semi_axes, match):
+    """Issue 48: these were a ZeroDivisionError deep inside."""
+    with pytest.raises(ValueError, match=match):
+        CoupledBody.ellipsoid(gm, semi_axes)
+
+
+def test_a_body_reaching_beyond_the_perigee_is_refused():
+    """Issue 48: a body larger than its perigee distance (38,326 km) was integrated."""
+    big = CoupledBody.ellipsoid(1e-9, (50000.0, 40000.0, 30000.0))
+    with pytest.raises(ValueError, match=r"^coupled\.field: the body's reference radius 50000 km "
+                                         r'.* inside the pericentre 38326 km'):
+        propagate_coupled(APOPHIS, big)
+    assert APOPHIS.orbit.pericentre == pytest.approx(38326.0)

@@ -664,3 +664,108 @@ def test_the_flyby_distance_has_no_cancellation_near_a_parabola():
         exact = Decimal(a) * (Decimal(e) * cosh - 1)
         worst = max(worst, abs(float((Decimal(distance) - exact) / exact)))
     assert worst <= 4 * 2.2e-16, worst
+
+
+# -- issue 48: no accepted orbit hangs or passes through the body --------------------------------
+#: A point mass of the Sun's GM (orbit.radius 1 km) passing 1,496 km away: near a parabola and on
+#: a hyperbola. Each ran at 2 samples/s (> 240 s): the passage spins the body up to ~1e7 rad/yr.
+RELATIVISTIC = [(1.00001, 1.496e8, 13320.1), (1.5, 2992.0, 14892.2)]
+
+
+@pytest.mark.parametrize('e, a, speed', RELATIVISTIC)
+def test_a_pericentre_passed_faster_than_a_hundredth_of_light_is_refused(e, a, speed):
+    from tumble_ros.core import ScenarioError
+
+    with pytest.raises(ScenarioError) as err:
+        Scenario.from_parameters({**SUN_ORBIT, 'orbit.a': a, 'orbit.e': e, 'orbit.radius': 1.0})
+    message = str(err.value)
+    assert message.startswith(f'orbit.e: the speed at the pericentre 1496 km, sqrt(gm (1 + e) / '
+                              f'pericentre) = {speed} km/s ('), message
+    assert 'exceeds 2997.92 km/s (1 % of light: the model is Newtonian' in message
+    assert message.endswith(f'got {e!r} (orbit.a = {a!r} km)')
+    # the same passage as a flyby is refused naming what the flyby states
+    v_inf = math.sqrt(1.3271244e11 / a)
+    with pytest.raises(ScenarioError, match=r'^orbit\.perigee, orbit\.v_inf: the speed at the '
+                                            r'pericentre 1496 km'):
+        Scenario.from_parameters({**EARTH_FLYBY, 'orbit.gm': 1.3271244e11, 'orbit.perigee':
+                                  1496.0, 'orbit.v_inf': v_inf, 'orbit.radius': 1.0})
+
+
+def test_a_pericentre_just_below_a_hundredth_of_light_is_accepted():
+    """The Sun's mass at 30,000 km: 2,975 km/s at the pericentre, on a near-parabola."""
+    from tumble_ros.core.torques.orbits import MAX_PERICENTRE_SPEED, pericentre_speed
+
+    sc = Scenario.from_parameters({**SUN_ORBIT, 'orbit.a': 3e10, 'orbit.e': 1.000001,
+                                   'orbit.radius': 1.0})
+    speed = pericentre_speed(sc.orbit.gm, sc.orbit.pericentre, sc.orbit.e)
+    assert speed == pytest.approx(math.sqrt(1.3271244e11 * 2.000001 / 30000.0))
+    assert 0.99 * MAX_PERICENTRE_SPEED < speed < MAX_PERICENTRE_SPEED
+
+
+ELLIPSOID = {'body.model': 'ellipsoid', 'body.semi_axes': [100000.0, 80000.0, 60000.0],
+             'body.density': 2000.0}
+
+
+@pytest.mark.parametrize('degree', [2, 4])
+def test_a_body_around_the_flybys_perigee_is_refused(degree):
+    """Issue 48: a 100,000-km ellipsoid was accepted with the 38,326-km perigee inside it."""
+    from tumble_ros.core import ScenarioError
+
+    flyby = {**EARTH_FLYBY, 'orbit.perigee': 38326.0, 'gravity.degree': degree}
+    expected = (r"^body\.semi_axes: the body's bounding radius 100000 km must lie inside the "
+                r'closest approach of perturber kepler_orbit, 38326 km \(its pericentre\)')
+    with pytest.raises(ScenarioError, match=expected):
+        Scenario.from_parameters({**flyby, **ELLIPSOID})
+    small = {**ELLIPSOID, 'body.semi_axes': [30000.0, 20000.0, 10000.0]}
+    assert Scenario.from_parameters({**flyby, **small}).gravity_degree == degree
+
+
+def test_a_body_around_an_ephemeris_closest_approach_is_refused():
+    """The closest approach between the knots, not the nearest knot, is the one checked."""
+    from tumble_ros.core import ScenarioError
+    from tumble_ros.core.torques.ephemeris import Ephemeris
+
+    orbit = KeplerOrbit.flyby(398600.4418, 38326.0, v_inf=5.8, t_p=0.005)
+    t = (np.arange(0.0, 121.0, 0.5) + 0.25) / 8766.0      # every 30 min from 15 min: the
+    t[0] = 0.0                                             # perigee (43.83 h) between two knots
+    table = Ephemeris(tuple(t), tuple(map(tuple, orbit.position(t))))
+    closest, when = table.closest_approach()
+    assert closest == pytest.approx(38326.0, rel=1e-6) and when == pytest.approx(0.005, abs=1e-5)
+    knots = float(np.min(np.linalg.norm(table.positions, axis=1)))
+    assert knots > 38327.0                                # the nearest knot misses the perigee
+    from tumble_ros.core.model.body import BodySpec
+
+    body = BodySpec(model='ellipsoid', semi_axes=(38326.2, 30000.0, 20000.0), density=2000.0)
+    with pytest.raises(ScenarioError, match=r'^body\.semi_axes: .* radius 38326\.2 km must lie '
+                                            r'inside the closest approach of perturber earth, '
+                                            r'38326 km \(its ephemeris at t = 0\.005'):
+        Scenario(orbit_rate=0.0, duration=0.01, body=body,
+                 perturbers=(Perturber('earth', table, gm=398600.4418),))
+
+
+@pytest.mark.parametrize('e, bound', [(1.00001, 2e-9), (1.000001, 2e-8)])
+def test_a_near_parabolic_orbit_is_the_two_body_motion(e, bound):
+    """
+    Kepler's solution near e = 1 against r'' = -GM r / r^3 integrated from pericentre.
+
+    Measured 2026-12-07 (max position difference / the largest distance over 4 yr): 1.7e-8,
+    1.8e-9, 5.7e-10 at e = 1 + 1e-5 and 1.7e-7, 1.8e-8, 5.5e-9 at 1 + 1e-6 for the reference's
+    rtol 1e-12, 1e-13, 3e-14: the difference is the reference's own error (it falls with its
+    rtol), so the solver needs no universal-variable reformulation here.
+    """
+    orbit = kepler_orbit(gm=9.0, a=1.5, e=e, t_p=0.0, lambda_p=0.4)
+    rp = orbit.pericentre
+    vp = math.sqrt(orbit.gm_per_yr2 * (1 + e) / rp)
+    lam = orbit.lambda_p
+    y0 = [rp * math.sin(lam), rp * math.cos(lam), vp * math.cos(lam), -vp * math.sin(lam)]
+
+    def two_body(t, y):
+        r3 = math.hypot(y[0], y[1]) ** 3
+        return [y[2], y[3], -orbit.gm_per_yr2 * y[0] / r3, -orbit.gm_per_yr2 * y[1] / r3]
+
+    times = np.linspace(0.0, 4.0, 200)
+    sol = solve_ivp(two_body, (0.0, 4.0), y0, method='DOP853', rtol=3e-14, atol=1e-13,
+                    t_eval=times)
+    scale = np.max(np.hypot(*sol.y[:2]))
+    assert sol.success
+    assert np.max(np.abs(orbit.position(times)[:, :2] - sol.y[:2].T)) < bound * scale

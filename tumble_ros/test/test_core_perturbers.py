@@ -336,3 +336,33 @@ def test_every_perturber_takes_the_mass_models_field_to_the_scenarios_degree():
     assert four.success
     difference = np.max(np.abs(four.omega - two.omega)) / np.max(np.abs(two.omega))
     assert 0.0 < difference < 1e-6                  # an ellipsoid's degree 4: (a / R)^2 C_40
+
+
+def test_a_perturber_named_moon_1_is_refused_for_its_name_not_its_kind():
+    """Issue 48: the refusal blamed perturbers.moon-1.kind, a parameter the name could not key."""
+    from tumble_ros.core import ScenarioError
+
+    expected = (r'^perturbers\.names: each name must be an identifier \(letters, digits, _; a '
+                r"parameter key\), got 'moon-1'$")
+    with pytest.raises(ScenarioError, match=expected):
+        Scenario.from_parameters({'orbit_rate': 0.0, 'perturbers.names': ['moon-1'],
+                                  'perturbers.moon-1.kind': 'kepler'})
+    with pytest.raises(ScenarioError, match=expected):
+        Scenario.from_parameters({'orbit_rate': 0.0, 'perturbers.names': ['moon-1']})
+    with pytest.raises(ValueError, match=expected):
+        Perturber('moon-1', KeplerOrbit(gm=4902.800066, a=4e5))
+
+
+def test_an_ephemeris_passing_inside_the_perturber_is_refused():
+    """As a Kepler pericentre inside the Earth is: the table's closest approach, not a knot."""
+    from tumble_ros.core.torques.ephemeris import Ephemeris
+
+    orbit = KeplerOrbit.flyby(GM_EARTH, 7000.0, v_inf=6.0, t_p=0.001)
+    t = np.linspace(0.0, 0.002, 400)
+    x = orbit.position(t) * (6000.0 / 7000.0)            # the same path scaled to 6,000 km
+    table = Ephemeris(tuple(t), tuple(map(tuple, x)))
+    with pytest.raises(ValueError, match=r'^perturbers\.earth\.ephemeris_file: the table passes '
+                                         r'6000 km from the perturber at t = 0\.001 yr, inside '
+                                         r'its radius 6378\.137 km'):
+        Perturber('earth', table, gm=GM_EARTH)
+    assert Perturber('earth', table, gm=GM_EARTH, radius=5000.0).radius == 5000.0

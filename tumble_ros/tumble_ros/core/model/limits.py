@@ -9,13 +9,21 @@ from __future__ import annotations
 import math
 
 from tumble_ros.core.kernels.checks import MIN_STEP_ULPS
+# The bounds of the perturbers' inputs live beside the code that reads them, each with its
+# reason (core.torques sits below this module: it may not import it); named here too.
+from tumble_ros.core.torques.ephemeris import (MAX_EPHEMERIS_BYTES, MAX_INTERPOLATION_ERROR,
+                                               MAX_KNOTS, MIN_KNOTS)
+from tumble_ros.core.torques.orbits import (MAX_ECCENTRICITY, MAX_GM, MAX_PERICENTRE_SPEED,
+                                            MAX_SEMI_MAJOR_AXIS)
 from tumble_ros.errors import CoreError
 
 __all__ = ['ScenarioError', 'MIN_RTOL', 'MAX_RTOL', 'MIN_ORBIT_RATE', 'MAX_ORBIT_RATE',
            'MAX_OMEGA', 'MAX_ATOL', 'MAX_DURATION', 'MAX_STEPS', 'MAX_SAMPLES', 'MAX_ROTATION',
            'RESOLUTION_ULPS', 'MAX_PARAMS_FILE_BYTES', 'MAX_IMPACTS', 'MIN_WINDOW_STEPS',
            'STEPS_PER_RADIAN', 'step_budget', 'budget_message', 'MAX_SHAPE_FILE_BYTES',
-           'MAX_FACETS', 'MIN_BODY_SIZE', 'MAX_BODY_SIZE', 'MAX_DEGREE']
+           'MAX_FACETS', 'MIN_BODY_SIZE', 'MAX_BODY_SIZE', 'MAX_DEGREE', 'MAX_EPHEMERIS_BYTES',
+           'MAX_INTERPOLATION_ERROR', 'MAX_KNOTS', 'MIN_KNOTS', 'MAX_ECCENTRICITY', 'MAX_GM',
+           'MAX_PERICENTRE_SPEED', 'MAX_SEMI_MAJOR_AXIS']
 
 
 class ScenarioError(CoreError, ValueError):

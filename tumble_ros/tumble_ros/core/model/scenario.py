@@ -35,6 +35,7 @@ from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, M
                                           MAX_ORBIT_RATE, MAX_ROTATION, MAX_RTOL, MAX_SAMPLES,
                                           MAX_STEPS, MIN_ORBIT_RATE, MIN_RTOL, RESOLUTION_ULPS,
                                           ScenarioError, step_budget)
+from tumble_ros.core.model.mass_models import DensityMoments
 from tumble_ros.core.model.observables import (SPIN_DEFAULTS, spin_from_parameters,
                                                SPIN_PARAMETER_DOCS, SpinObservables)
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
@@ -45,7 +46,7 @@ from tumble_ros.core.propagation.timebase import MAX_STAMP_NS, SampleGrid, TimeB
 from tumble_ros.core.torques import orbital_to_body, TorqueComponent
 from tumble_ros.core.torques.ephemeris import Ephemeris, read_ephemeris
 from tumble_ros.core.torques.orbits import KeplerOrbit, perturber_position
-from tumble_ros.core.torques.perturbers import Perturber
+from tumble_ros.core.torques.perturbers import check_name, Perturber
 
 __all__ = [
     'ScenarioError',
@@ -527,6 +528,7 @@ class Scenario:
         _set(self, 'perturbers', _checked_perturbers(self))
         self._check_gravity()
         self._check_lightcurve()
+        _check_clearance(self)
 
     def _check_lightcurve(self) -> None:
         """Refuse a lightcurve of a non-convex polyhedron: its shadows are not modelled."""
@@ -1001,6 +1003,49 @@ def _checked_perturbers(scenario: Scenario) -> tuple[Perturber, ...]:
     return perturbers
 
 
+#: The body.* parameter that sets the size of each mass model (named by the clearance check).
+_SIZE_PARAMETER = {'ellipsoid': 'body.semi_axes', 'polyhedron': 'body.shape_file',
+                   'moments': 'body.reference_radius'}
+
+
+def _body_radius(scenario: Scenario) -> tuple[float, str]:
+    """Return (the body's bounding radius [km], the field that sets it); (0, '') if no size."""
+    model = scenario.body.mass_model
+    if model is not None:
+        radius = (model.field.reference_radius if isinstance(model, DensityMoments)
+                  else model.radius)             # moments: the field's reference radius
+        return float(radius), _SIZE_PARAMETER[model.kind]
+    if scenario.gravity_field is not None:
+        return float(scenario.gravity_field.reference_radius), 'gravity_field'
+    return 0.0, ''
+
+
+def _check_clearance(scenario: Scenario) -> None:
+    """
+    Refuse a perturber whose closest approach lies inside the body's bounding sphere.
+
+    A mass model's bounding radius (an ellipsoid's longest semi-axis, a polyhedron's farthest
+    vertex, a field's reference radius) against each perturber's pericentre or an ephemeris'
+    closest approach: inside it the perturber would pass through the body, and the field's
+    expansion (gravity.degree > 2) diverges.
+    """
+    radius, field = _body_radius(scenario)
+    if radius <= 0.0:
+        return
+    for body in scenario.all_perturbers:
+        source = body.source
+        if isinstance(source, KeplerOrbit):
+            closest, what = source.pericentre, 'its pericentre'
+        else:
+            closest, when = source.closest_approach()
+            what = f'its ephemeris at t = {when:.6g} yr'
+        if not closest > radius:
+            _fail(field, f"the body's bounding radius {radius:.6g} km must lie inside the "
+                  f'closest approach of perturber {body.name}, {closest:.6g} km ({what}): the '
+                  'perturber would pass through the body',
+                  getattr(scenario.body, field[5:]) if field.startswith('body.') else radius)
+
+
 def perturber_parameter_names(params: Mapping[str, Any]) -> tuple[str, ...]:
     """Return the ``perturbers.<name>.<field>`` names of the perturbers ``params`` names."""
     names = params.get('perturbers.names', []) or []
@@ -1008,6 +1053,11 @@ def perturber_parameter_names(params: Mapping[str, Any]) -> tuple[str, ...]:
         _fail('perturbers.names', 'must be a list of names', names)
     if len(set(names)) != len(names):
         _fail('perturbers.names', 'must be distinct', names)
+    for name in names:
+        try:
+            check_name(name)
+        except ValueError as err:
+            raise ScenarioError(str(err)) from None
     return tuple(f'perturbers.{n}.{f}' for n in names for f in PERTURBER_FIELDS)
 
 

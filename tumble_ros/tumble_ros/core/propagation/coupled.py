@@ -156,8 +156,15 @@ class CoupledBody:
         Its moments ((b^2 + c^2) / 5, ...) per unit mass; the degree-4 field of an ellipsoid
         is a mass model's (``gravity_field``). ``degree`` 0: the point mass.
         """
-        a2, b2, c2 = (float(v) ** 2 for v in semi_axes)
-        mass = gm / G_KM3
+        if not _real(gm) > 0.0:
+            raise ValueError(f"coupled.gm: the asteroid's GM must be a finite number > 0 "
+                             f'km^3/s^2, got {gm!r}')
+        axes = [_real(v) for v in semi_axes] if not isinstance(semi_axes, (str, bytes)) else []
+        if len(axes) != 3 or not all(v > 0.0 for v in axes):
+            raise ValueError('coupled.semi_axes: must be 3 finite numbers > 0 km, got '
+                             f'{semi_axes!r}')
+        a2, b2, c2 = (float(v) ** 2 for v in axes)
+        mass = float(gm) / G_KM3
         moments = (mass * (b2 + c2) / 5.0, mass * (a2 + c2) / 5.0, mass * (a2 + b2) / 5.0)
         radius = math.sqrt(max(a2, b2, c2))
         return cls(GravityField.from_principal_moments(mass, radius, moments, 2), degree)
@@ -217,6 +224,15 @@ class CoupledResult:
         return change
 
 
+def _real(value: object) -> float:
+    """Return ``value`` as a float, NaN unless a finite real number (not a bool)."""
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return math.nan
+    return number if math.isfinite(number) and not isinstance(value, bool) else math.nan
+
+
 def _quaternion_rate(q: FloatArray, w: FloatArray) -> FloatArray:
     q0, q1, q2, q3 = q
     wx, wy, wz = w
@@ -258,6 +274,11 @@ def propagate_coupled(scenario: Scenario, body: CoupledBody,
     if not gm_p > 0.0:
         raise ValueError(f"coupled.gm: the asteroid's GM must be below the orbit's G(M + m) = "
                          f'{orbit.gm!r} km^3/s^2, got {body.gm!r}')
+    radius = float(body.field.reference_radius)
+    if not orbit.pericentre > radius:
+        raise ValueError(f"coupled.field: the body's reference radius {radius:.6g} km (its "
+                         f'field converges outside that sphere) must lie inside the pericentre '
+                         f'{orbit.pericentre:.6g} km: the perturber would pass through the body')
     share = gm_p / gm_total                              # M / (M + m)
     a = np.asarray(body.inertia_per_mass)
     field = body.degree != 0

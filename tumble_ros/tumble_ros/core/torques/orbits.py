@@ -47,7 +47,7 @@ from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital
 __all__ = ['KeplerOrbit', 'eccentric_anomaly', 'hyperbolic_anomaly', 'orbit_state',
            'plane_to_orbital', 'perturber_position', 'orientation_from_elements',
            'perturber_radius', 'MAX_ECCENTRICITY', 'MAX_GM', 'MAX_SEMI_MAJOR_AXIS',
-           'GM_MATCH']
+           'GM_MATCH', 'MAX_PERICENTRE_SPEED', 'pericentre_speed']
 
 _TWO_PI = 2.0 * math.pi
 #: The rounding noise of Kepler's equation's residual, relative to the sum of its terms' sizes
@@ -74,6 +74,13 @@ MAX_SEMI_MAJOR_AXIS = 1e16
 GM_MATCH = 1e-3
 #: The speed of light [km/s]: the bound of a flyby's speeds (a Newtonian model).
 SPEED_OF_LIGHT = 299792.458
+#: Largest speed at pericentre [km/s]: 1 % of the speed of light. The model is Newtonian: its
+#: relative errors are of order (v/c)^2 ~ GM / (R c^2), 1e-4 here; a perturber of that GM whose
+#: surface lies below such a pericentre is relativistically compact (a neutron star, a black
+#: hole). Such passages also spin the body up to its pericentre's angular rate (the Sun's mass
+#: 1,496 km away: ~1e7 rad/yr after the passage, a few hundred seconds of work a simulated
+#: year); every known solar-system encounter is far below (grazing the Sun: 618 km/s, 0.2 %).
+MAX_PERICENTRE_SPEED = 0.01 * SPEED_OF_LIGHT
 
 
 def perturber_radius(gm: float) -> tuple[float, str]:
@@ -87,6 +94,22 @@ def perturber_radius(gm: float) -> tuple[float, str]:
         if abs(gm - body_gm) <= GM_MATCH * body_gm:
             return radius, name
     return 0.0, ''
+
+
+def pericentre_speed(gm: float, pericentre: float, e: float) -> float:
+    """Return the speed at pericentre sqrt(GM (1 + e) / q) [km/s] (GM [km^3/s^2], q [km])."""
+    return math.sqrt(gm * (1.0 + e) / pericentre)
+
+
+def _speed_problem(gm: float, pericentre: float, e: float) -> str:
+    """Return why the pericentre is too fast for the Newtonian model, or '' when it is not."""
+    speed = pericentre_speed(gm, pericentre, e)
+    if speed <= MAX_PERICENTRE_SPEED:
+        return ''
+    return (f'the speed at the pericentre {pericentre:.6g} km, sqrt(gm (1 + e) / pericentre) = '
+            f'{speed:.6g} km/s ({speed / SPEED_OF_LIGHT:.2%} of light), exceeds '
+            f'{MAX_PERICENTRE_SPEED:.6g} km/s (1 % of light: the model is Newtonian, and a body '
+            'of this gm with its surface below the pericentre is relativistically compact)')
 
 
 def _number(name: str, value: object, unit: str) -> float:
@@ -287,6 +310,9 @@ class KeplerOrbit:
                 f'orbit.e: the pericentre a |1 - e| = {self.pericentre:.6g} km (orbit.a = '
                 f'{self.a!r} km) must lie outside the perturber, radius {radius!r} km '
                 f'({source}), got {self.e!r}')
+        problem = _speed_problem(self.gm, self.pericentre, self.e)
+        if problem:
+            raise ValueError(f'orbit.e: {problem}, got {self.e!r} (orbit.a = {self.a!r} km)')
 
     @classmethod
     def flyby(cls, gm: float, perigee: float, *, v_inf: float = 0.0, v_perigee: float = 0.0,
@@ -343,6 +369,10 @@ class KeplerOrbit:
                 f'orbit.perigee, orbit.{speed}: e - 1 = perigee v_inf^2 / gm = '
                 f'{perigee * v2 / gm:.3g} must be >= {_NEAR_PARABOLIC:g} (near-parabolic orbits '
                 f'are not modelled), got perigee = {perigee!r} km, {speed} = {given!r} km/s')
+        problem = _speed_problem(gm, perigee, 1.0 + perigee * v2 / gm)
+        if problem:
+            raise ValueError(f'orbit.perigee, orbit.{speed}: {problem}, got perigee = '
+                             f'{perigee!r} km, {speed} = {given!r} km/s')
         return cls(gm=gm, a=gm / v2, e=1.0 + perigee * v2 / gm, t_p=t_p, lambda_p=lambda_p,
                    inclination=inclination, node=node, radius=body)
 

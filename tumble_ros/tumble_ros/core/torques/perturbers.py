@@ -47,9 +47,9 @@ from tumble_ros.core.torques.oblateness import oblateness_torque
 from tumble_ros.core.torques.orbits import (KeplerOrbit, MAX_GM, orbit_state, perturber_radius,
                                             plane_to_orbital)
 
-__all__ = ['Perturber', 'Source', 'SourceKind', 'SOURCE_KINDS', 'perturber_torque',
-           'kepler_perturber_torque', 'ephemeris_perturber_torque', 'MAX_J2', 'LAW_WIDTH',
-           'BodyField', 'field_block']
+__all__ = ['Perturber', 'Source', 'check_name', 'SourceKind', 'SOURCE_KINDS',
+           'perturber_torque', 'kepler_perturber_torque', 'ephemeris_perturber_torque', 'MAX_J2',
+           'LAW_WIDTH', 'BodyField', 'field_block']
 
 #: Where a perturber is: a Kepler orbit or a tabulated ephemeris, relative to the asteroid.
 Source = KeplerOrbit | Ephemeris
@@ -192,6 +192,19 @@ SOURCE_KINDS: dict[type, SourceKind] = {
 }
 
 
+def check_name(name: object) -> str:
+    """
+    Return a perturber's ``name``; ValueError unless an identifier (letters, digits, _).
+
+    The name is a parameter key (``perturbers.<name>.kind``): checked before any of its
+    fields is read, so ``moon-1`` is refused for its name, not for a ``kind`` never found.
+    """
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ValueError('perturbers.names: each name must be an identifier (letters, digits, '
+                         f'_; a parameter key), got {name!r}')
+    return name
+
+
 def _number(field: str, value: object, unit: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ValueError(f'{field}: must be a finite number{unit}, got {value!r}')
@@ -232,9 +245,7 @@ class Perturber:
     pole: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name.isidentifier():
-            raise ValueError('perturbers.names: each name must be an identifier (letters, '
-                             f'digits, _; a parameter key), got {self.name!r}')
+        check_name(self.name)
         field = f'perturbers.{self.name}'
         if type(self.source) not in SOURCE_KINDS:
             raise ValueError(f'{field}.source: must be a KeplerOrbit or an Ephemeris, got '
@@ -265,6 +276,12 @@ class Perturber:
             raise ValueError(f'{field}.radius: J2 needs its reference radius (> 0 km; taken '
                              f'by gm only for the {known}), got {self.radius!r}')
         object.__setattr__(self, 'radius', radius)
+        if isinstance(self.source, Ephemeris) and radius > 0.0:
+            closest, when = self.source.closest_approach()
+            if not closest > radius:
+                raise ValueError(f'{field}.ephemeris_file: the table passes {closest:.6g} km from '
+                                 f'the perturber at t = {when:.6g} yr, inside its radius '
+                                 f'{radius!r} km (a collision, not a flyby)')
         pole = self.pole
         if isinstance(pole, (str, bytes)) or not hasattr(pole, '__len__') or len(pole) != 3:
             raise ValueError(f'{field}.pole: must be 3 numbers (orbital frame), got {pole!r}')
