@@ -28,7 +28,7 @@ class Shutdown(_Action):
 
 @pytest.fixture
 def launch_file(monkeypatch):
-    """The launch file as a module, with launch and launch_ros stood in for."""
+    """Return the launch file as a module, with launch and launch_ros stood in for."""
     names = {
         'launch': ['LaunchDescription'],
         'launch.actions': ['DeclareLaunchArgument', 'GroupAction', 'OpaqueFunction',
