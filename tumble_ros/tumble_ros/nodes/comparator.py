@@ -98,7 +98,8 @@ class ComparatorNode(GuardedNode):
         self.run_id: str | None = params['run_id'] or None   # the run followed (None: none yet)
         self._foreign: set[str] = set()   # the other runs' ids, warned about once each
         self.foreign_descriptions = 0     # descriptions of other runs, ignored
-        self._received = 0
+        self._received = 0   # samples of the run taken (the decimation counts these)
+        self._taken = 0      # samples taken from angular_velocity, the run's or dropped
         self._gate = SampleGate()   # drops the samples that are not the run's, counting them
         self.compared = 0  # comparisons published (each on the three comparison topics)
         # samples held before the first description: (stamp [ns], omega [rad/yr])
@@ -247,6 +248,7 @@ class ComparatorNode(GuardedNode):
 
     def _compare(self, sample: tuple[int, tuple[float, float, float]]) -> None:
         stamp_ns, numeric = sample
+        self._taken += 1
         grid = self._comparison.grid
         why = self._gate.admit(stamp_ns, numeric,
                                None if grid is None else grid.stamp(grid.count - 1))
@@ -274,8 +276,8 @@ class ComparatorNode(GuardedNode):
 
     @property
     def consumed(self) -> int:
-        """Count the samples taken from angular_velocity and processed (compared or not)."""
-        return self._received
+        """Count the samples taken from angular_velocity and processed (compared, or dropped)."""
+        return self._taken
 
     def _publish(self, compared: ComparedSample) -> None:
         """
