@@ -57,6 +57,28 @@ def test_a_stop_is_raised_where_the_program_is(signum):
     assert all(signal.getsignal(sig) is signal.SIG_IGN for sig in STOP_SIGNALS)  # (cleaning up)
 
 
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_that_code_turned_into_another_error_is_still_the_stop(signum):
+    """
+    A stop raised inside code that replaces the exception is still the stop (exit 128 + n).
+
+    Seen once in the full suite: a SIGTERM while matplotlib's Agg renderer drew a frame of
+    ``--animate`` came out as "ValueError: Invalid bounding box" and the command exited 1.
+    """
+    with pytest.raises(Interrupted) as raised, interrupts():
+        try:
+            os.kill(os.getpid(), signum)
+            _busy_until_stopped()
+        except Interrupted:
+            raise ValueError('Invalid bounding box') from None
+    assert raised.value.exit_code == 128 + signum
+
+
+def test_an_error_without_a_stop_is_left_as_it_is():
+    with pytest.raises(ValueError, match='not a stop'), interrupts():
+        raise ValueError('not a stop')
+
+
 def test_a_stop_that_lands_in_a_garbage_collectors_callback_is_raised_after_it(capfd):
     """
     Dask's GCDiagnosis is such a callback: Python printed "Exception ignored" and ran on.

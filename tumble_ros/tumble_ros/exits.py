@@ -169,6 +169,11 @@ def interrupts() -> Iterator[None]:
     except Interrupted:
         raise
     except BaseException:
+        if _stopped_by is not None:
+            # the stop was raised inside code that turned it into another error (matplotlib's
+            # Agg draw gave "ValueError: Invalid bounding box" for a SIGTERM mid-frame): it is
+            # still the stop
+            raise Interrupted(_stopped_by) from None
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         raise
