@@ -4,7 +4,8 @@ The import map: no circle, and every arrow points down the layers.
 Layers, bottom up: ``errors`` and ``topics`` (facts, no imports), ``core`` (numerics), ``io``
 (recordings, ensemble stores), ``runs`` (what a run does, without ROS: the ensembles' engines
 and runs into io's stores), ``ensembles`` (the run layer's ensemble names, re-exported),
-``analysis`` (offline tools over core and io), ``cli`` (command lines over core, runs,
+``analysis`` (offline tools over core and io), ``inversion`` (photometry back to a spin
+state, over analysis and the ensembles), ``cli`` (command lines over core, runs,
 ensembles and analysis; the simulator's parameter names from topics), ``nodes`` (ROS).
 ``runs`` also holds one run's simulation session, comparison and offline recording (ROS-free
 but for the offline writer's serialisation).
@@ -24,9 +25,10 @@ ALLOWED = {
     'runs': {'errors', 'topics', 'core', 'io'},
     'ensembles': {'errors', 'core', 'io', 'runs'},
     'analysis': {'errors', 'topics', 'core', 'io', 'exits'},
-    'cli': {'errors', 'topics', 'core', 'runs', 'ensembles', 'analysis', 'exits'},
+    'inversion': {'errors', 'topics', 'core', 'io', 'runs', 'ensembles', 'analysis', 'exits'},
+    'cli': {'errors', 'topics', 'core', 'runs', 'ensembles', 'analysis', 'inversion', 'exits'},
     'nodes': {'errors', 'topics', 'core', 'io', 'runs'},
-    '__main__': {'nodes', 'analysis', 'cli', 'runs', 'io', 'exits'},
+    '__main__': {'nodes', 'analysis', 'inversion', 'cli', 'runs', 'io', 'exits'},
     '__init__': set(),
 }
 
