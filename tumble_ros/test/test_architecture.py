@@ -169,8 +169,8 @@ THIRD_PARTY_PRIVATE = {
     ('tumble_ros.core.integrators.adaptive', 'solver._y'),
     ('tumble_ros.core.integrators.adaptive', 'ode._integrator'),
     ('tumble_ros.core.integrators.adaptive', 'ode._y'),
-    ('tumble_ros.core.jit', '_IMPL._locator_classes'),
-    ('tumble_ros.core.jit', 'cache_file._load_index'),   # numba's: is a loop in its cache
+    ('tumble_ros.core.compiling.jit', '_IMPL._locator_classes'),
+    ('tumble_ros.core.compiling.jit', 'cache_file._load_index'),  # numba's: a loop cached?
     ('tumble_ros.core.torques.component', 'f._sig'),
     ('tumble_ros.nodes.parameters', 'node._parameters'),
     ('tumble_ros.nodes.parameters', 'node._parameter_overrides'),
@@ -215,16 +215,14 @@ def test_no_module_imports_a_private_name_of_another():
 #: (constants), the plain-arithmetic sin/cos/atan2 (``core.trig``), the torques, the
 #: limits/kernels below it; never the integrators, the propagator or the scenario.
 CORE_BOTTOM = {
-    'tumble_ros.core.jit': {'tumble_ros.core.numba_inlining', 'tumble_ros.core.numba_blas_check',
-                            'tumble_ros.core.user_cache'},
-    'tumble_ros.core.user_cache': set(),
+    'tumble_ros.core.compiling': set(),
     'tumble_ros.core.model.units': set(),
-    'tumble_ros.core.trig': {'tumble_ros.core.jit'},
-    'tumble_ros.core.torques': {'tumble_ros.core.jit', 'tumble_ros.core.model.units',
+    'tumble_ros.core.trig': {'tumble_ros.core.compiling'},
+    'tumble_ros.core.torques': {'tumble_ros.core.compiling', 'tumble_ros.core.model.units',
                                 'tumble_ros.core.trig'},
-    'tumble_ros.core.kernels': {'tumble_ros.core.jit', 'tumble_ros.core.torques',
+    'tumble_ros.core.kernels': {'tumble_ros.core.compiling', 'tumble_ros.core.torques',
                                 'tumble_ros.core.trig'},
-    'tumble_ros.core.model.limits': {'tumble_ros.core.kernels', 'tumble_ros.core.jit',
+    'tumble_ros.core.model.limits': {'tumble_ros.core.kernels', 'tumble_ros.core.compiling',
                                      'tumble_ros.core.torques', 'tumble_ros.core.trig'},
 }
 

@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from tumble_ros.core import load_scenario, simulate
-from tumble_ros.core.jit import python_source
+from tumble_ros.core.compiling.jit import python_source
 from tumble_ros.core.model.gravity_field import GravityField, principal_frame
 from tumble_ros.core.model.units import SECONDS_PER_YEAR
 from tumble_ros.core.propagation.coupled import CoupledBody, field_potential, propagate_coupled

@@ -84,7 +84,7 @@ def test_the_hyperbolic_solver_converges_in_a_few_iterations_near_a_parabola(mon
     pericentre; and from the logarithmic starter Newton crawled on the nearly cubic equation.
     A runaway flyby test spent ~90 % of its 12 s there.
     """
-    from tumble_ros.core.jit import python_source
+    from tumble_ros.core.compiling.jit import python_source
     from tumble_ros.core.torques import orbits
 
     counting = _CountingMath('sinh')
@@ -101,7 +101,7 @@ def test_the_hyperbolic_solver_converges_in_a_few_iterations_near_a_parabola(mon
 @pytest.mark.parametrize('e', [0.0, 0.3, 0.9, 0.99])
 def test_the_elliptic_solver_converges_in_a_few_iterations(monkeypatch, e):
     """At most 6 Halley iterations for every mean anomaly (its Python source, sin counted)."""
-    from tumble_ros.core.jit import python_source
+    from tumble_ros.core.compiling.jit import python_source
     from tumble_ros.core.torques import orbits
 
     counting = _CountingMath('sin')

@@ -20,7 +20,7 @@ import numpy.typing as npt
 from tumble_ros.core import kernels as K
 from tumble_ros.core.integrators.base import (FAILED, FINISHED, RUNNING, SegmentProblem,
                                               step_nan_message, Stepper)
-from tumble_ros.core.jit import first_use, needs_compiling
+from tumble_ros.core.compiling.jit import first_use, needs_compiling
 from tumble_ros.core.model.limits import budget_message
 from tumble_ros.core.torques import extra_torque_arrays
 

@@ -27,7 +27,7 @@ import numpy as np
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.integrators import INTEGRATORS
-from tumble_ros.core.jit import python_source
+from tumble_ros.core.compiling.jit import python_source
 from tumble_ros.core.model.body import BODY_PARAMETER_DOCS, BodySpec
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.model.gravity_field import GravityField, MAX_DEGREE

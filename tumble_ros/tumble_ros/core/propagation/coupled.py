@@ -41,7 +41,7 @@ from typing import Callable, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import python_source
+from tumble_ros.core.compiling.jit import python_source
 from tumble_ros.core.model.gravity_field import G_KM3, GravityField
 from tumble_ros.core.model.rotation import euler_to_quaternion, quaternion_to_matrix
 from tumble_ros.core.model.scenario import Scenario

@@ -48,7 +48,7 @@ from typing import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit_inline, python_source
+from tumble_ros.core.compiling.jit import jit_inline, python_source
 from tumble_ros.core.model.units import KM_PER_AU, SECONDS_PER_YEAR, TIME_UNITS
 
 __all__ = ['Ephemeris', 'read_ephemeris', 'ephemeris_position', 'interpolation_error',

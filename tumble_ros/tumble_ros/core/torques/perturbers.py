@@ -36,7 +36,7 @@ from typing import Any, Callable, Protocol, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit_inline
+from tumble_ros.core.compiling.jit import jit_inline
 from tumble_ros.core.model.units import PERTURBER_RADII, SECONDS_PER_YEAR
 from tumble_ros.core.torques.component import torque_function, TorqueComponent
 from tumble_ros.core.torques.ephemeris import Ephemeris, ephemeris_position
