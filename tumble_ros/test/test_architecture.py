@@ -216,9 +216,9 @@ def test_no_module_imports_a_private_name_of_another():
 #: limits/kernels below it; never the integrators, the propagator or the scenario.
 CORE_BOTTOM = {
     'tumble_ros.core.compiling': set(),
-    'tumble_ros.core.model.units': set(),
+    'tumble_ros.core.units': set(),
     'tumble_ros.core.trig': {'tumble_ros.core.compiling'},
-    'tumble_ros.core.torques': {'tumble_ros.core.compiling', 'tumble_ros.core.model.units',
+    'tumble_ros.core.torques': {'tumble_ros.core.compiling', 'tumble_ros.core.units',
                                 'tumble_ros.core.trig'},
     'tumble_ros.core.kernels': {'tumble_ros.core.compiling', 'tumble_ros.core.torques',
                                 'tumble_ros.core.trig'},

@@ -17,9 +17,9 @@ from test_core_torque import point_cloud
 from tumble_ros.core import (dump_scenario, IntegratorSettings, parse_scenario, Scenario,
                              ScenarioError, simulate)
 from tumble_ros.core.model.rotation import quaternion_to_matrix
-from tumble_ros.core.model.units import GM_EARTH, SECONDS_PER_YEAR
 from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
+from tumble_ros.core.units import GM_EARTH, SECONDS_PER_YEAR
 
 #: The seed of this file's random inputs: each test draws from a generator of its own, so its
 #: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).

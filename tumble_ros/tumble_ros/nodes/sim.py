@@ -44,8 +44,8 @@ from std_srvs.srv import Trigger
 
 from tumble_ros import topics
 from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeBase
-from tumble_ros.core.model.units import from_years
 from tumble_ros.core.propagation.timebase import SampleGrid
+from tumble_ros.core.units import from_years
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import (declare_node_parameters, declare_scenario_parameters,

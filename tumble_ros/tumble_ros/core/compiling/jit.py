@@ -103,12 +103,12 @@ JIT_OPTIONS: dict[str, Any] = {'cache': True, 'error_model': 'numpy', 'nogil': T
 _CORE = Path(__file__).resolve().parents[1]
 #: The files whose compiled functions inline each other, the compile machinery (this folder) and
 #: every core module they import (``trig``'s sin/cos and atan2 are inlined into the kernels,
-#: ``model.units``' constants frozen into them): one cache stamp for all (tests/test_core_fast.py
+#: ``units``' constants frozen into them): one cache stamp for all (tests/test_core_fast.py
 #: checks the imports are here).
 COMPILED_SOURCES: tuple[Path, ...] = tuple(
     sorted((_CORE / 'compiling').glob('*.py'))
     + sorted((_CORE / 'kernels').glob('*.py')) + sorted((_CORE / 'torques').glob('*.py'))
-    + [_CORE / name for name in ('model/units.py', 'trig.py')])
+    + [_CORE / name for name in ('units.py', 'trig.py')])
 
 
 @functools.lru_cache(maxsize=None)

@@ -41,8 +41,8 @@ import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core.compiling.jit import jit, jit_inline, python_source
-from tumble_ros.core.model.units import GM_SUN, PERTURBER_RADII, SECONDS_PER_YEAR
 from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital
+from tumble_ros.core.units import GM_SUN, PERTURBER_RADII, SECONDS_PER_YEAR
 
 __all__ = ['KeplerOrbit', 'eccentric_anomaly', 'hyperbolic_anomaly', 'orbit_state',
            'plane_to_orbital', 'perturber_position', 'orientation_from_elements',
