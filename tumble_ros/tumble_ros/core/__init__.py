@@ -36,13 +36,13 @@ from tumble_ros.core.model.scenario import (dump_scenario, Impact, ImpactLimits,
                                             IntegratorSettings, load_scenario, PARAMETER_DOCS,
                                             parse_scenario, Scenario, ScenarioError)
 from tumble_ros.core.model.shipped import shipped_scenario, shipped_scenarios
+from tumble_ros.core.model.timebase import TimeBase
 from tumble_ros.core.propagation.ensemble import (body_rng, ChunkResult, concatenate_results,
                                                   ensemble_scenarios, EnsembleResult,
                                                   GaussianSpread, iter_chunks, random_impacts,
                                                   RandomImpacts, simulate_ensemble)
 from tumble_ros.core.propagation.propagator import IntegrationError, Propagator, Sample
 from tumble_ros.core.propagation.simulate import simulate, SimulationResult
-from tumble_ros.core.propagation.timebase import TimeBase
 from tumble_ros.core.torques import torque_function, TorqueComponent
 
 __all__ = [

@@ -31,6 +31,7 @@ from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.model.body import BODY_PARAMETER_DOCS, BodySpec
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.model.gravity_field import GravityField, MAX_DEGREE
+from tumble_ros.core.model.lightcurve_settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
 from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, MAX_OMEGA,
                                           MAX_ORBIT_RATE, MAX_ROTATION, MAX_RTOL, MAX_SAMPLES,
                                           MAX_STEPS, MIN_ORBIT_RATE, MIN_RTOL, RESOLUTION_ULPS,
@@ -40,8 +41,7 @@ from tumble_ros.core.model.observables import (SPIN_DEFAULTS, spin_from_paramete
                                                SPIN_PARAMETER_DOCS, SpinObservables)
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
 from tumble_ros.core.model.shipped import config_dir
-from tumble_ros.core.photometry.settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
-from tumble_ros.core.propagation.timebase import MAX_STAMP_NS, SampleGrid, TimeBase
+from tumble_ros.core.model.timebase import MAX_STAMP_NS, SampleGrid, TimeBase
 from tumble_ros.core.torques import orbital_to_body, TorqueComponent
 from tumble_ros.core.torques.ephemeris import Ephemeris, read_ephemeris
 from tumble_ros.core.torques.orbits import KeplerOrbit, perturber_position
