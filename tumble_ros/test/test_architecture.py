@@ -279,7 +279,7 @@ def test_the_rooms_of_core_are_in_order():
 def test_every_module_of_core_is_in_a_room():
     rooms = {core_room(m) for m in graph() if layer(m) == 'core'}
     assert rooms - set(CORE_ROOMS) - set(CORE_REEXPORTS) == set()
-    assert 'compiling' in rooms and 'tumble_ros.core.compiling.jit' in graph()  # (the check's reach)
+    assert 'compiling' in rooms and 'tumble_ros.core.compiling.jit' in graph()  # (reach)
 
 
 def test_no_arrow_points_back_up_between_the_rooms_of_core():
