@@ -11,7 +11,8 @@ import time
 
 import pytest
 
-from tumble_ros.core.compiling import jit, kernels
+from tumble_ros.core import kernels
+from tumble_ros.core.compiling import jit
 from tumble_ros.core.compiling.user_cache import user_cache_dir
 
 needs_numba = pytest.mark.skipif(not jit.COMPILED, reason='numba not available')
