@@ -110,7 +110,7 @@ def decode_user_text(data: bytes, what: str, error: type[Exception] = ScenarioEr
     Return ``data`` decoded as UTF-8 (a leading byte-order mark dropped).
 
     Raises ``error``, starting with ``what``, for UTF-16 or UTF-32 text, binary data (NUL
-    bytes), or bytes that are not UTF-8 (naming the first offset).
+    bytes), or bytes that are not UTF-8 (naming the line and the offset of the first).
     """
     found = _encoding(data)
     if found is not None:
@@ -119,8 +119,9 @@ def decode_user_text(data: bytes, what: str, error: type[Exception] = ScenarioEr
     try:
         return data.decode('utf-8-sig')
     except UnicodeDecodeError as err:
-        raise error(f'{what}: cannot read it as text ({err.__class__.__name__}: {err})') \
-            from None
+        line = data.count(b'\n', 0, err.start) + 1
+        raise error(f'{what}: cannot read it as text: line {line} is not UTF-8 ({err.reason} '
+                    f'at byte {err.start:,}; save the file as UTF-8 text)') from None
 
 
 def read_user_text(path: str | os.PathLike[str], what: str, limit: int, limit_name: str,
