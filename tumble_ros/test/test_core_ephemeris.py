@@ -332,5 +332,5 @@ def test_a_table_beyond_the_row_and_size_limits_is_refused_in_one_line(tmp_path,
     with pytest.raises(ValueError, match=r'big\.csv:22: more than 20 rows \(MAX_KNOTS: '):
         read_ephemeris(path, time_unit='h')
     monkeypatch.setattr(ephemeris, 'MAX_EPHEMERIS_BYTES', 1000)
-    with pytest.raises(ValueError, match=r'big\.csv: [\d,]+ bytes, above the limit of 1,000 '):
+    with pytest.raises(ValueError, match=r'big\.csv: [\d,]+ bytes, above 1,000 '):
         read_ephemeris(path, time_unit='h')

@@ -311,6 +311,11 @@ def test_alcdef_without_or_with_wrong_tables_is_refused(tmp_path, tables):
                           frame='ICRF')
     with pytest.raises(CampaignError, match=r'eq.txt: the table is not ecliptic'):
         read_campaign(path, ephemeris=(equatorial, tables[1]))
+    broken = tables[0].read_text().splitlines()
+    broken[9] = broken[9].replace(broken[9].split(',')[2], ' NaN', 1)
+    (tmp_path / 'nan.txt').write_text('\n'.join(broken))
+    with pytest.raises(CampaignError, match=r'nan.txt line 10: .NaN. is not a finite number'):
+        read_campaign(path, ephemeris=(tmp_path / 'nan.txt', tables[1]))
     with pytest.raises(CampaignError, match=r'geo.txt: neither the target .* is the Sun'):
         read_campaign(path, ephemeris=(tables[1], tables[1]))
     with pytest.raises(CampaignError, match=r"sun.txt: the Sun is in the observer's table"):

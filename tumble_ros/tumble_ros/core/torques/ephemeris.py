@@ -415,18 +415,25 @@ def read_ephemeris(path: str | Path, *, epoch_jd: float = 0.0, time_unit: str = 
 
     ``epoch_jd``: the Julian date (TDB) of the scenario's t = 0, required for a Horizons table;
     ``time_unit``: the unit of a plain table's t (a key of ``units.TIME_UNITS``; the scenario's).
-    The file is read as ``core.user_files.read_user_text`` reads a user's file (a regular file,
-    at most :data:`MAX_EPHEMERIS_BYTES`, UTF-8). ValueError naming the file, the line or field,
-    and what was expected.
+    ValueError naming the file, the line or field, and what was expected. (A reader that must
+    refuse a FIFO or a device by its kind reads the text through ``core.user_files`` and calls
+    :func:`parse_ephemeris`, as ``inversion.readers.geometry`` does: this module, the bottom of
+    core, imports no file checks.)
     """
-    from tumble_ros.core.user_files import read_user_text    # (it imports model.limits: ours)
-
     path = Path(path).resolve()
     name = str(path)
     if time_unit not in TIME_UNITS:
         _fail(f'{name}: time_unit', f'must be one of {sorted(TIME_UNITS)}', time_unit)
-    text = read_user_text(path, name, MAX_EPHEMERIS_BYTES, 'MAX_EPHEMERIS_BYTES',
-                          'ephemeris table', ValueError)
+    try:
+        size = path.stat().st_size
+        if size > MAX_EPHEMERIS_BYTES:
+            raise ValueError(f'{name}: {size:,} bytes, above {MAX_EPHEMERIS_BYTES:,} '
+                             f'(MAX_EPHEMERIS_BYTES: {MAX_KNOTS:,} Horizons records of ~330 bytes '
+                             'and a header fit in it); split the run or sample the table more '
+                             'coarsely')
+        text = path.read_text(encoding='utf-8')
+    except (OSError, UnicodeDecodeError) as err:
+        raise ValueError(f'{name}: cannot read the ephemeris ({err})') from None
     return parse_ephemeris(text, name, epoch_jd=epoch_jd, time_unit=time_unit)
 
 

@@ -67,8 +67,7 @@ class _Block:
 def _blocks(path: Path, text: str) -> list[_Block]:
     """Return the blocks; refuse a line out of place (data outside a block, a missing END)."""
     blocks: list[_Block] = []
-    state = 'outside'
-    block: _Block | None = None
+    state = 'outside'          # then 'metadata', 'data' inside blocks[-1]
     line = 0
     for line, raw in enumerate(text.splitlines(), 1):
         body = raw.strip()
@@ -77,10 +76,10 @@ def _blocks(path: Path, text: str) -> list[_Block]:
         word = body.upper()
         if word == 'STARTMETADATA':
             if state != 'outside':
-                fail(path, line, f'STARTMETADATA inside the block of line {block.line} '
-                     '(ENDMETADATA or ENDDATA missing)')  # type: ignore[union-attr]
-            block, state = _Block(line), 'metadata'
-            blocks.append(block)
+                fail(path, line, f'STARTMETADATA inside the block of line {blocks[-1].line} '
+                     '(ENDMETADATA or ENDDATA missing)')
+            blocks.append(_Block(line))
+            state = 'metadata'
         elif word == 'ENDMETADATA':
             if state != 'metadata':
                 fail(path, line, 'ENDMETADATA without STARTMETADATA')
@@ -90,21 +89,25 @@ def _blocks(path: Path, text: str) -> list[_Block]:
                 fail(path, line, 'ENDDATA outside a data block')
             state = 'outside'
         elif state == 'metadata':
-            if '=' not in body:
-                fail(path, line, f'a metadata line is KEYWORD=VALUE, got {body[:60]!r}')
-            key, value = body.split('=', 1)
-            if key.strip().upper() != 'COMMENT':
-                block.meta[key.strip().upper()] = value.strip()    # type: ignore[union-attr]
+            _metadata(path, line, body, blocks[-1])
         elif state == 'data':
-            _data(path, line, body, block)                          # type: ignore[arg-type]
+            _data(path, line, body, blocks[-1])
         else:
             fail(path, line, f'{body[:40]!r} outside a block (STARTMETADATA ... ENDDATA)')
     if state != 'outside':
-        fail(path, line, f'the block of line {block.line} has no '  # type: ignore[union-attr]
+        fail(path, line, f'the block of line {blocks[-1].line} has no '
              f'{"ENDMETADATA" if state == "metadata" else "ENDDATA"}')
     if not blocks:
         fail(path, None, 'no ALCDEF block (STARTMETADATA ... ENDDATA)')
     return blocks
+
+
+def _metadata(path: Path, line: int, body: str, block: _Block) -> None:
+    if '=' not in body:
+        fail(path, line, f'a metadata line is KEYWORD=VALUE, got {body[:60]!r}')
+    key, value = body.split('=', 1)
+    if key.strip().upper() != 'COMMENT':
+        block.meta[key.strip().upper()] = value.strip()
 
 
 def _data(path: Path, line: int, body: str, block: _Block) -> None:

@@ -89,8 +89,12 @@ class _Table:
                  'J2000)')
         try:
             ephemeris = parse_ephemeris(text, name, epoch_jd=EPOCH_JD)
-        except ValueError as err:
-            fail(name, None, str(err).replace(f'{name}: ', '').replace(f'{name}', ''))
+        except ValueError as err:                  # 'NAME:LINE: why' or 'NAME: why' or 'why'
+            said = str(err)
+            line = re.match(rf'{re.escape(name)}:(\d+): (.*)$', said, re.DOTALL)
+            if line:
+                fail(name, int(line.group(1)), line.group(2))
+            fail(name, None, said[len(name) + 2:] if said.startswith(f'{name}: ') else said)
         return cls(name, ephemeris, _body(header, 'Target'), _body(header, 'Center'),
                    ephemeris.coefficients())
 

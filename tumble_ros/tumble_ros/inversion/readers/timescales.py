@@ -33,12 +33,11 @@ MJD_ZERO = 2400000.5
 
 def leap_second_expiry() -> datetime.datetime:
     """Return the date until which the bundled leap-second table is known to hold (UTC)."""
-    import erfa
     from astropy.utils import iers
 
     with iers.conf.set_temp('auto_download', False):
-        iers.LeapSeconds.auto_open()          # what astropy's UTC conversions load
-    expires: datetime.datetime = erfa.leap_seconds.expires
+        table = iers.LeapSeconds.auto_open()          # what astropy's UTC conversions load
+    expires: datetime.datetime = table.expires.to_datetime()
     return expires
 
 
