@@ -277,6 +277,18 @@ def test_a_bad_alcdef_line_is_refused_with_its_number(tmp_path, tables, rows, li
         read_campaign(path, ephemeris=tables, time_scale='tdb')
 
 
+def test_alcdef_reads_a_tab_delimiter_and_refuses_a_data_line_without_its_magnitude(tmp_path,
+                                                                                     tables):
+    path = tmp_path / 'a.alcdef'
+    path.write_text(alcdef_block(['2459000.6\t15.5\t0.02\t1.3'], DELIMITER='TAB'))
+    c = read_campaign(path, ephemeris=tables)
+    assert c.magnitude.tolist() == [15.5] and c.sigma.tolist() == [0.02]
+    path.write_text(alcdef_block(['2459000.6']))
+    with pytest.raises(CampaignError, match=rf'^{path} line 12: 1 field: a DATA line gives '
+                                            r'JD\|MAG\|MAGERR'):
+        read_campaign(path, ephemeris=tables)
+
+
 def test_a_time_whose_emission_falls_before_the_ephemeris_is_refused(tmp_path, tables):
     path = tmp_path / 'a.alcdef'
     path.write_text(alcdef_block(['2458998.5001|15|0.01']))          # tau ~ 0.008 d
