@@ -277,8 +277,7 @@ def test_a_bad_alcdef_line_is_refused_with_its_number(tmp_path, tables, rows, li
         read_campaign(path, ephemeris=tables, time_scale='tdb')
 
 
-def test_alcdef_reads_a_tab_delimiter_and_refuses_a_data_line_without_its_magnitude(tmp_path,
-                                                                                     tables):
+def test_alcdef_reads_tabs_and_refuses_a_data_line_without_its_magnitude(tmp_path, tables):
     path = tmp_path / 'a.alcdef'
     path.write_text(alcdef_block(['2459000.6\t15.5\t0.02\t1.3'], DELIMITER='TAB'))
     c = read_campaign(path, ephemeris=tables)
