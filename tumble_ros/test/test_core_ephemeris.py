@@ -8,6 +8,7 @@ and CSV) and as a plain t, x, y, z table; the torque through the compiled evalua
 same perturber on its Kepler orbit; and the Apophis flyby simulated through a Horizons table
 against the Kepler-orbit run of config/apophis_2029.yaml.
 """
+import os
 from pathlib import Path
 
 import numpy as np
@@ -332,5 +333,24 @@ def test_a_table_beyond_the_row_and_size_limits_is_refused_in_one_line(tmp_path,
     with pytest.raises(ValueError, match=r'big\.csv:22: more than 20 rows \(MAX_KNOTS: '):
         read_ephemeris(path, time_unit='h')
     monkeypatch.setattr(ephemeris, 'MAX_EPHEMERIS_BYTES', 1000)
-    with pytest.raises(ValueError, match=r'big\.csv: [\d,]+ bytes, above 1,000 '):
+    with pytest.raises(ValueError, match=r'big\.csv: [\d,]+ bytes, above the limit of 1,000 '
+                                         r'\(MAX_EPHEMERIS_BYTES: '):
         read_ephemeris(path, time_unit='h')
+
+
+@pytest.mark.parametrize('kind, make', [
+    ('is a FIFO', lambda p: os.mkfifo(p)), ('is a directory', lambda p: p.mkdir())])
+def test_a_table_that_is_not_a_regular_file_is_refused_by_its_kind_before_any_read(
+        tmp_path, kind, make):
+    """
+    A FIFO or a directory is refused by its kind, through the API and a scenario.
+
+    A FIFO without a writer used to block the reader (open() waits for one), a directory to
+    fail with an OS message, and a scenario called both "no such file".
+    """
+    path = tmp_path / 'earth.txt'
+    make(path)
+    with pytest.raises(ValueError, match=rf'earth\.txt: {kind}.*, not a table'):
+        read_ephemeris(path, time_unit='h')
+    with pytest.raises(ScenarioError, match=rf'^perturbers\.earth\.ephemeris_file: .*{kind}'):
+        parse_scenario(apophis_through(path))

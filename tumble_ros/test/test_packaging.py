@@ -37,6 +37,7 @@ DISTRIBUTIONS = {
     'matplotlib': 'matplotlib', 'mpl_toolkits': 'matplotlib', 'PIL': 'pillow', 'mcap': 'mcap',
     'mcap_ros2': 'mcap-ros2-support', 'zstandard': 'zstandard', 'lz4': 'lz4',
     'dask': 'dask', 'distributed': 'dask', 'xarray': 'xarray', 'zarr': 'zarr',
+    'astropy': 'astropy',
 }
 #: The canonical text of the Apache License 2.0 (www.apache.org/licenses/LICENSE-2.0.txt).
 APACHE_2_SHA256 = 'cfc7749b96f63bd31c3c42b5c471bf756814053e847c10f3eb003417bc523d30'

@@ -73,9 +73,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('file', metavar='FILE.mcap', nargs='?', default=None,
                         help='the recording (optional with --photometry)')
     parser.add_argument('--photometry', metavar='FILE.csv', default=None,
-                        help='search a photometry CSV (time, magnitude, optional error; '
-                             'docs/analysis.md, "Periods from a lightcurve") for one or two '
-                             'periods and print them')
+                        help='search a photometry CSV (time, magnitude, optional error and '
+                             'geometry: with r, delta or the Sun and observer vectors, '
+                             'reduced magnitudes are searched; docs/analysis.md, "Periods '
+                             'from a lightcurve") for one or two periods and print them')
     parser.add_argument('--lightcurve', action='store_true',
                         help='also search the recorded lightcurve topic for its periods and '
                              'print them; with --figures also draw lightcurve.png')
@@ -317,17 +318,22 @@ def _search_progress(args):
 
 def _photometry(args) -> int:
     """Search a photometry CSV for its periods; print them (text or JSON), warnings on stderr."""
+    from dataclasses import replace
+
     from .periods import DAYS_IN_HOURS, format_periods, search_periods
-    from .photometry_file import read_photometry
+    from .photometry_file import read_photometry, reduced_photometry
     try:
         data = read_photometry(args.photometry)
+        magnitude, reduction = reduced_photometry(data)    # with the CSV's geometry, reduced
         low, high = args.period_range if args.period_range is not None else (None, None)
         try:
-            sol = search_periods(data.t, data.magnitude, data.sigma, low, high,
+            sol = search_periods(data.t, magnitude, data.sigma, low, high,
                                  named_periods=DAYS_IN_HOURS, unit=' h',
                                  progress=_search_progress(args))
         except ValueError as err:
             raise AnalysisError(f'{args.photometry}: {err}') from None
+        if reduction is not None:
+            sol = replace(sol, reduction=reduction)
     except AnalysisError as err:
         return _error(err)
     except KeyboardInterrupt:

@@ -24,7 +24,7 @@ from .recording import Recording
 from .spin import spin_change
 
 __all__ = ['FIGURE_NAME', 'PHASE_SPAN', 'SPIN_CHANGE', 'recorded_lightcurve', 'recorded_periods',
-           'reduced_lightcurve', 'write_lightcurve_figure']
+           'reduced_lightcurve', 'remove_phase_function', 'write_lightcurve_figure']
 
 #: the figure's file name in the --figures directory
 FIGURE_NAME = 'lightcurve.png'
@@ -71,19 +71,27 @@ def reduced_lightcurve(rec: Recording) -> tuple[np.ndarray, np.ndarray, str]:
     t, mag, brightness, phase = _lit(rec)
     modulus = mag + 2.5 * np.log10(brightness)
     reduced = mag - (modulus - modulus.min())
-    parts = [f'reduced magnitudes: the distance modulus 5 log10(r delta) removed (it spans '
-             f'{np.ptp(modulus):.3g} mag)']
-    if np.ptp(phase) > PHASE_SPAN:
-        design = np.column_stack([np.ones_like(phase), phase, phase * phase])
-        coef = np.linalg.lstsq(design, reduced, rcond=None)[0]
-        fitted = design @ coef
-        reduced = reduced - (fitted - fitted.min())
-        parts.append(f'a quadratic phase function of the phase angle '
-                     f'({np.degrees(phase.min()):.1f} to {np.degrees(phase.max()):.1f} deg, '
-                     f'{np.ptp(fitted):.3g} mag) removed')
-    else:
-        parts.append(f'the phase angle is fixed ({np.degrees(phase.mean()):.1f} deg)')
-    return t, reduced, ', '.join(parts)
+    reduced, phase_note = remove_phase_function(reduced, phase)
+    return t, reduced, (f'reduced magnitudes: the distance modulus 5 log10(r delta) removed (it '
+                        f'spans {np.ptp(modulus):.3g} mag), {phase_note}')
+
+
+def remove_phase_function(reduced: np.ndarray, phase: np.ndarray) -> tuple[np.ndarray, str]:
+    """
+    Return (``reduced`` with its phase function removed [mag], what was done).
+
+    A quadratic a + b alpha + c alpha^2 in the phase angle ``phase`` [rad], fitted by least
+    squares, is removed (its smallest value kept) when alpha varies by more than PHASE_SPAN;
+    else nothing is (the phase angle is fixed).
+    """
+    if np.ptp(phase) <= PHASE_SPAN:
+        return reduced, f'the phase angle is fixed ({np.degrees(phase.mean()):.1f} deg)'
+    design = np.column_stack([np.ones_like(phase), phase, phase * phase])
+    coef = np.linalg.lstsq(design, reduced, rcond=None)[0]
+    fitted = design @ coef
+    return reduced - (fitted - fitted.min()), (
+        f'a quadratic phase function of the phase angle ({np.degrees(phase.min()):.1f} to '
+        f'{np.degrees(phase.max()):.1f} deg, {np.ptp(fitted):.3g} mag) removed')
 
 
 def _spin_warning(rec: Recording) -> str | None:

@@ -1069,7 +1069,7 @@ def _ephemeris_path(field: str, value: Any, folder: Path | None) -> Path:
     places = [path] if path.is_absolute() else [(folder or Path.cwd()) / path,
                                                 PACKAGE_CONFIG / path]
     for place in places:
-        if place.is_file():
+        if place.exists():        # a FIFO, a device, a directory: the reader says which
             return place
     _fail(field, 'no such file (looked in ' + ', '.join(str(p) for p in places) + ')', value)
     raise AssertionError  # (unreachable: _fail raises)

@@ -25,11 +25,9 @@ from __future__ import annotations
 
 import codecs
 import os
-from pathlib import Path
-import stat
 
 from tumble_ros.core.model.limits import ScenarioError
-from tumble_ros.file_kinds import file_kind
+from tumble_ros.file_kinds import file_kind, read_regular_bytes
 
 __all__ = ['read_user_bytes', 'decode_user_text', 'read_user_text', 'file_kind']
 
@@ -39,51 +37,16 @@ _BOMS = ((codecs.BOM_UTF32_LE, 'UTF-32'), (codecs.BOM_UTF32_BE, 'UTF-32'),
          (codecs.BOM_UTF16_LE, 'UTF-16'), (codecs.BOM_UTF16_BE, 'UTF-16'))
 
 
-def _one_line(text: object) -> str:
-    return ' '.join(str(text).split())
-
-
 def read_user_bytes(path: str | os.PathLike[str], what: str, limit: int, limit_name: str,
                     kind: str = 'file', error: type[Exception] = ScenarioError) -> bytes:
     """
     Return the bytes of the regular file ``path``, never blocking, at most ``limit`` bytes.
 
-    ``what`` starts every message (``params file F.yaml``); ``limit_name`` names the constant
-    of the limit; ``kind`` what the file should be (``params file``, ``shape file``). Raises
-    ``error`` for a missing file, a path that is not a regular file (before any read), a file
-    above ``limit`` bytes (before it is read) or one that cannot be read.
+    :func:`tumble_ros.file_kinds.read_regular_bytes` with the model's error
+    (:class:`~.limits.ScenarioError`) and its limits explained in docs/ros.md.
     """
-    path = Path(os.fspath(path))
-    regular_only = f'not a {kind} (only regular files are read)'
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
-    except FileNotFoundError:
-        raise error(f'{what}: no such file') from None
-    except OSError as err:
-        try:
-            mode = os.stat(path).st_mode          # a socket or a directory fails to open
-        except OSError:
-            mode = stat.S_IFREG
-        if not stat.S_ISREG(mode):
-            raise error(f'{what}: {file_kind(mode)}, {regular_only}') from None
-        raise error(f'{what}: cannot open it: {_one_line(err.strerror or err)}') from None
-    try:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            raise error(f'{what}: {file_kind(info.st_mode)}, {regular_only}')
-        if info.st_size > limit:
-            raise error(f'{what}: {info.st_size:,} bytes, above the limit of {limit:,} '
-                        f'({limit_name}, docs/ros.md "Limits of the inputs")')
-        os.set_blocking(fd, True)
-        with os.fdopen(fd, 'rb', closefd=False) as stream:
-            data = stream.read(limit + 1)
-    except OSError as err:
-        raise error(f'{what}: cannot read it: {_one_line(err.strerror or err)}') from None
-    finally:
-        os.close(fd)
-    if len(data) > limit:                  # grew since the fstat
-        raise error(f'{what}: above the limit of {limit:,} bytes ({limit_name})')
-    return data
+    return read_regular_bytes(path, what, limit, limit_name, kind, error,
+                              ', docs/ros.md "Limits of the inputs"')
 
 
 def _encoding(data: bytes) -> str | None:
@@ -105,7 +68,7 @@ def decode_user_text(data: bytes, what: str, error: type[Exception] = ScenarioEr
     Return ``data`` decoded as UTF-8 (a leading byte-order mark dropped).
 
     Raises ``error``, starting with ``what``, for UTF-16 or UTF-32 text, binary data (NUL
-    bytes), or bytes that are not UTF-8 (naming the first offset).
+    bytes), or bytes that are not UTF-8 (naming the line and the offset of the first).
     """
     found = _encoding(data)
     if found is not None:
@@ -114,8 +77,9 @@ def decode_user_text(data: bytes, what: str, error: type[Exception] = ScenarioEr
     try:
         return data.decode('utf-8-sig')
     except UnicodeDecodeError as err:
-        raise error(f'{what}: cannot read it as text ({err.__class__.__name__}: {err})') \
-            from None
+        line = data.count(b'\n', 0, err.start) + 1
+        raise error(f'{what}: cannot read it as text: line {line} is not UTF-8 ({err.reason} '
+                    f'at byte {err.start:,}; save the file as UTF-8 text)') from None
 
 
 def read_user_text(path: str | os.PathLike[str], what: str, limit: int, limit_name: str,

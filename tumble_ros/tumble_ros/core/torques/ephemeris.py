@@ -50,8 +50,10 @@ import numpy.typing as npt
 
 from tumble_ros.core.compiling.jit import jit_inline, python_source
 from tumble_ros.core.units import KM_PER_AU, SECONDS_PER_YEAR, TIME_UNITS
+from tumble_ros.file_kinds import read_regular_bytes
 
-__all__ = ['Ephemeris', 'read_ephemeris', 'ephemeris_position', 'interpolation_error',
+__all__ = ['Ephemeris', 'read_ephemeris', 'parse_ephemeris', 'ephemeris_position',
+           'interpolation_error',
            'DEGREE', 'MIN_KNOTS', 'MAX_KNOTS', 'MAX_EPHEMERIS_BYTES', 'MAX_INTERPOLATION_ERROR',
            'DAYS_PER_YEAR']
 
@@ -414,22 +416,29 @@ def read_ephemeris(path: str | Path, *, epoch_jd: float = 0.0, time_unit: str = 
 
     ``epoch_jd``: the Julian date (TDB) of the scenario's t = 0, required for a Horizons table;
     ``time_unit``: the unit of a plain table's t (a key of ``units.TIME_UNITS``; the scenario's).
-    ValueError naming the file, the line or field, and what was expected.
+    ValueError naming the file, the line or field, and what was expected; a FIFO, a device or
+    a directory is refused by its kind before any read (``tumble_ros.file_kinds``).
     """
     path = Path(path).resolve()
     name = str(path)
     if time_unit not in TIME_UNITS:
         _fail(f'{name}: time_unit', f'must be one of {sorted(TIME_UNITS)}', time_unit)
+    data = read_regular_bytes(path, name, MAX_EPHEMERIS_BYTES, 'MAX_EPHEMERIS_BYTES',
+                              'table', ValueError,
+                              f': {MAX_KNOTS:,} Horizons records of ~330 bytes and a header fit '
+                              'in it; split the run or sample the table more coarsely')
     try:
-        size = path.stat().st_size
-        if size > MAX_EPHEMERIS_BYTES:
-            raise ValueError(f'{name}: {size:,} bytes, above {MAX_EPHEMERIS_BYTES:,} '
-                             f'(MAX_EPHEMERIS_BYTES: {MAX_KNOTS:,} Horizons records of ~330 bytes '
-                             'and a header fit in it); split the run or sample the table more '
-                             'coarsely')
-        text = path.read_text(encoding='utf-8')
-    except (OSError, UnicodeDecodeError) as err:
-        raise ValueError(f'{name}: cannot read the ephemeris ({err})') from None
+        text = data.decode('utf-8')
+    except UnicodeDecodeError as err:
+        line = data.count(b'\n', 0, err.start) + 1
+        raise ValueError(f'{name}: cannot read the ephemeris as text: line {line} is not UTF-8 '
+                         f'({err.reason} at byte {err.start:,})') from None
+    return parse_ephemeris(text, name, epoch_jd=epoch_jd, time_unit=time_unit)
+
+
+def parse_ephemeris(text: str, name: str, *, epoch_jd: float = 0.0, time_unit: str = 'yr',
+                    ) -> Ephemeris:
+    """Return the table in ``text`` (read from the file ``name``) as :func:`read_ephemeris`."""
     lines = text.splitlines()
     marks = [k for k, line in enumerate(lines) if line.strip() in ('$$SOE', '$$EOE')]
     if marks:
@@ -451,6 +460,8 @@ def read_ephemeris(path: str | Path, *, epoch_jd: float = 0.0, time_unit: str = 
         scale = (km, km / seconds)
         epoch, table_unit = float(epoch_jd), ''
     else:
+        if time_unit not in TIME_UNITS:
+            _fail(f'{name}: time_unit', f'must be one of {sorted(TIME_UNITS)}', time_unit)
         table = _table(_plain_rows(lines, name))
         times = table[:, 0] * TIME_UNITS[time_unit]
         scale = (1.0, 1.0)
