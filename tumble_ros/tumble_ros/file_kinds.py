@@ -8,8 +8,9 @@ size): core's user files (params and shape files, ``core.model.user_files``), io
 :func:`file_kind`, and the bytes of a regular file come from :func:`read_regular_bytes`
 (opened with O_NONBLOCK, checked on the open descriptor, its size bounded before the read; the
 caller names its error class: ``ScenarioError`` for core's model files, ValueError for the
-ephemeris tables of the torques, ``AnalysisError`` for photometry). A fact of the operating system that imports nothing of tumble_ros: the
-bottom layer, beside ``errors`` and ``topics``, so that core and io both reach it.
+ephemeris tables of the torques, ``AnalysisError`` for photometry). A fact of the operating
+system that imports nothing of tumble_ros: the bottom layer, beside ``errors`` and ``topics``,
+so that core and io both reach it.
 """
 from __future__ import annotations
 
