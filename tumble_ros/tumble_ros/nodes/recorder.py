@@ -189,9 +189,11 @@ class RecorderNode(GuardedNode):
         self._discover()
         steady_timer(self, p['discovery_period'], self._discover)
         steady_timer(self, p['chunk_seconds'] / 4, self._poll)
+        # (/tf and /tf_static: every asteroid publishes there, with its own frames)
         self._sources = SourceMonitor(
             self, lambda: [t for t, c in self._channels.items()
-                           if c >= 0 and t in self._tumble_topics],
+                           if c >= 0 and t in self._tumble_topics
+                           and t not in topics.SHARED_TOPICS],
             self._on_sources)
         self.get_logger().info(f'recording to {path}')
 
