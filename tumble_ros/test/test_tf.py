@@ -93,7 +93,7 @@ def _qos(metadata):
     return yaml.safe_load(metadata['offered_qos_profiles'])
 
 
-def _assert_replay_metadata(path):
+def _assert_replay_metadata(path, namespace=''):
     channels = _channels(path)
     for topic in (TF, TF_STATIC):
         schema, metadata = channels[topic]
@@ -101,7 +101,7 @@ def _assert_replay_metadata(path):
         assert metadata['topic_type_hash'] == UPSTREAM_HASH
         assert {p['reliability'] for p in _qos(metadata)} == {'reliable'}
     # what is sent once reaches a late subscriber, and a player that replays the file
-    for topic in (TF_STATIC, BODY_MARKERS):
+    for topic in (TF_STATIC, topics.in_namespace(namespace, topics.BODY_MARKERS)):
         assert {p['durability'] for p in _qos(channels[topic][1])} == {'transient_local'}
 
 
@@ -263,7 +263,8 @@ def test_two_asteroids_share_tf_with_their_own_frames(ros, tmp_path):
     for ns, duration in (('ast1', 0.2), ('ast2', 0.1)):
         sim = ros.add(SimNode(context=ros.context, namespace=ns, parameter_overrides=[
             Parameter('duration', value=duration), Parameter('real_time_factor', value=0.0),
-            Parameter('min_consumers', value=1), Parameter('publish_clock', value=False)]))
+            Parameter('min_consumers', value=1), Parameter('publish_clock', value=False),
+            Parameter('markers', value=True)]))
         recorder = ros.add(RecorderNode(context=ros.context, namespace=ns, parameter_overrides=[
             Parameter('output', value=str(tmp_path / f'{ns}.mcap'))]))
         nodes[ns] = (sim, recorder)
@@ -273,13 +274,15 @@ def test_two_asteroids_share_tf_with_their_own_frames(ros, tmp_path):
     attitude = {ns: topics.in_namespace(ns, topics.ATTITUDE) for ns in nodes}
     assert ros.spin_until(lambda: all(r.counts.get(attitude[ns], 0) == expected[ns]
                                       for ns, (_, r) in nodes.items()), 20.0)
-    ros.spin_for(0.5)                                    # (the other asteroid's last transforms)
+    # each recorder takes both asteroids' transforms from the one /tf
+    assert ros.spin_until(lambda: all(r.counts.get(TF, 0) == sum(expected.values())
+                                      for _, r in nodes.values()), 20.0)
     for ns, (sim, recorder) in nodes.items():
         assert 'second source' not in sim.status_message       # /tf is shared by design
         assert not recorder.warnings
         recorder.close()
         _assert_tf_is_the_attitude(recorder.path, ns, samples=expected[ns])
-        _assert_replay_metadata(recorder.path)
+        _assert_replay_metadata(recorder.path, ns)
         frames = {(t.header.frame_id, t.child_frame_id)
                   for _, m in _decoded(recorder.path, [TF])[TF] for t in m.transforms}
         # the other asteroid's transforms, on the same /tf, under its own frames

@@ -67,6 +67,9 @@ __all__ = ['RecorderNode', 'DEFAULT_TOPICS', 'main']
 #: Recorded when ``topics`` is not given (relative names resolve in the recorder's namespace);
 #: ``topic_pattern`` adds to them, as it adds to ``topics``.
 DEFAULT_TOPICS = topics.RECORDED
+#: Recorded tumble topics with one publisher per simulator by design (/tf, /tf_static): not
+#: watched for a second source.
+SHARED_TOPICS = frozenset(topics.SHARED_TOPICS)
 #: Types whose CDR starts with a header stamp: one message per simulator sample. The recorder's
 #: progress is the oldest of their latest stamps. Not /clock: it is best effort (CLOCK_QOS).
 PER_SAMPLE_TYPES = {topics.TYPES[t] for t in topics.PER_SAMPLE}
@@ -193,7 +196,7 @@ class RecorderNode(GuardedNode):
         self._sources = SourceMonitor(
             self, lambda: [t for t, c in self._channels.items()
                            if c >= 0 and t in self._tumble_topics
-                           and t not in topics.SHARED_TOPICS],
+                           and t not in SHARED_TOPICS],
             self._on_sources)
         self.get_logger().info(f'recording to {path}')
 

@@ -213,9 +213,9 @@ class SimNode(GuardedNode):
 
     @property
     def per_sample_topics(self) -> tuple[str, ...]:
-        """Return the topics with one message per published sample (not /clock)."""
+        """Return the topics with one message per published sample (not /clock; /tf too)."""
         return tuple(name for name, publisher in self._sample_publishers.items()
-                     if name != topics.CLOCK and publisher is not None)
+                     if name != topics.CLOCK and publisher is not None) + (topics.TF,)
 
     @property
     def grid(self) -> SampleGrid:
