@@ -276,3 +276,19 @@ def test_a_polyhedron_body_is_drawn_once_as_its_facets_turning_with_tf(tmp_path)
     assert [o.w, o.x, o.y, o.z] == [1.0, 0.0, 0.0, 0.0]      # the attitude comes from TF
     assert sorted(tf) == sorted(q) and all(tf[s].tolist() == q[s].tolist() for s in q)
     assert len(_scenes(result.output)) == 3
+
+
+def test_the_still_poses_the_shape_sent_once_with_the_attitude(recorded):
+    """analyze --still: the body and its axes of body_markers, turned by the sample's attitude."""
+    from tumble_ros.analysis.animation import Arrow, marker_scene, Solid
+    _, result = recorded
+    q, _ = _samples(result.output)
+    for stamp in sorted(q)[::25]:
+        scene = marker_scene(_body(result.output), q[stamp])
+        (solid,) = [p for p in scene if isinstance(p, Solid)]
+        np.testing.assert_allclose(solid.quaternion, q[stamp], atol=1e-15)
+        arrows = {p.label: p for p in scene if isinstance(p, Arrow)}
+        for i, axis in enumerate('xyz'):
+            along = np.array(arrows[axis].end) - np.array(arrows[axis].start)
+            np.testing.assert_allclose(along / np.linalg.norm(along),
+                                       _rotate(q[stamp], np.eye(3)[i]), atol=1e-12)

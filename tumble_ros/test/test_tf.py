@@ -1,5 +1,5 @@
 """
-The attitude on TF (issue 50) and the scene's shape sent once (issue 48), in live and offline files.
+The attitude on TF (issue 50) and the shape sent once (issue 48), in live and offline files.
 
 Every file is decoded with mcap's own ROS 2 decoder (not this project's reader), the transforms
 composed by hand (tf2 is not on PyPI: tf2_ros, tf2_py have no wheel): the rotation of
@@ -15,17 +15,16 @@ from mcap_ros2.decoder import DecoderFactory
 import numpy as np
 import pytest
 from rclpy.parameter import Parameter
-import yaml
-
 from tumble_ros import topics
 from tumble_ros.core import Impact, Scenario, TimeBase
 from tumble_ros.core.model.body import BodySpec
 from tumble_ros.io.msgdefs import type_hash
 from tumble_ros.runs.offline import record_offline
+import yaml
 
 TF, TF_STATIC = topics.TF, topics.TF_STATIC
-ATTITUDE, MARKERS, BODY_MARKERS = ('/' + t for t in (topics.ATTITUDE, topics.MARKERS,
-                                                      topics.BODY_MARKERS))
+ATTITUDE, MARKERS, BODY_MARKERS = (
+    '/' + t for t in (topics.ATTITUDE, topics.MARKERS, topics.BODY_MARKERS))
 #: tf2_msgs/msg/TFMessage's RIHS01 hash in ROS 2 Jazzy (ros2/geometry2's generated
 #: TFMessage.json, as `ros2 topic info -v /tf` prints it): typed out, not computed here.
 UPSTREAM_HASH = 'RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087'
@@ -108,7 +107,7 @@ def _assert_replay_metadata(path, namespace=''):
 def test_the_vendored_tf2_msgs_is_the_upstream_type():
     from tf2_msgs.msg import TFMessage
     assert type_hash('tf2_msgs/msg/TFMessage') == UPSTREAM_HASH
-    assert [f for f in TFMessage.get_fields_and_field_types().items()] == [
+    assert list(TFMessage.get_fields_and_field_types().items()) == [
         ('transforms', 'sequence<geometry_msgs/TransformStamped>')]
 
 
@@ -173,7 +172,7 @@ def _rotate(q, v):
 
 
 def test_the_static_frame_is_where_the_shape_file_put_the_body(tmp_path):
-    """body -> body_as_given takes the file's vertices onto the drawn body (display units)."""
+    """The transform body -> body_as_given takes the file's vertices onto the drawn body."""
     angle = 0.7
     turn = np.array([[np.cos(angle), -np.sin(angle), 0.0], [np.sin(angle), np.cos(angle), 0.0],
                      [0.0, 0.0, 1.0]])

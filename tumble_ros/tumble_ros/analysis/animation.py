@@ -183,7 +183,8 @@ def marker_scene(array: Any, attitude: Any = None) -> Scene:
         position = _xyz(m.pose.position)
         turn = np.eye(3)
         if attitude is not None and m.header.frame_id.rsplit('/', 1)[-1] == FRAME_BODY:
-            q = tuple(float(v) for v in quaternion_multiply(attitude, q))
+            w, x, y, z = (float(v) for v in quaternion_multiply(attitude, q))
+            q = (w, x, y, z)
             turn = quaternions_to_matrices(np.asarray(attitude, dtype=float))
             position = turn @ position
         if m.type in (_SPHERE, _CUBE):

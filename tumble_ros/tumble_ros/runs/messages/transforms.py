@@ -24,10 +24,10 @@ are written from numpy columns into one serialised template
 """
 from __future__ import annotations
 
+from geometry_msgs.msg import TransformStamped
 import numpy as np
 from rclpy.serialization import serialize_message
-from tf2_msgs.msg import TFMessage  # type: ignore[attr-defined]  # rosidl-generated
-from geometry_msgs.msg import TransformStamped
+from tf2_msgs.msg import TFMessage
 
 from tumble_ros import topics
 from tumble_ros.core import Scenario
@@ -105,7 +105,7 @@ class TransformEncoder:
         return self._template.encode(len(stamp_ns), values)
 
     def static(self, stamp_ns: int) -> bytes:
-        """Return the ``/tf_static`` message (``body`` -> ``body_as_given``) stamped ``stamp_ns``."""
+        """Return the ``/tf_static`` message (``body`` -> ``body_as_given``) at ``stamp_ns``."""
         translation, rotation = given_frame_transform(self.scenario)
         msg = TFMessage(transforms=[_transform(self.body, self.given, stamp_ns, translation,
                                                rotation)])
