@@ -16,6 +16,7 @@ VENV := .venv
 ENV := scripts/env.sh
 # vendor/tf2_msgs: TFMessage of /tf (the PyPI wheels have no tf2_msgs; docs/ros.md "TF"), built
 # beside tumble_ros_interfaces (colcon builds the two at once), left out where the venv has one.
+# Named here: vendor/COLCON_IGNORE hides it from a crawl (a ROS workspace has the real one).
 TF2_MSGS := $(if $(wildcard $(VENV)/share/tf2_msgs/package.xml),,vendor/tf2_msgs)
 COLCON_PACKAGES := tumble_ros_interfaces $(TF2_MSGS) tumble_ros
 COLCON_ARGS ?=
