@@ -24,7 +24,8 @@ as time sources expect, and recorded as received).
 Log times (``log_time``): ``sim`` (default) records on the simulated clock, as ``ros2 bag record
 --use-sim-time`` does, but exactly: a message of a tumble topic is logged at the ROS time of the
 sample it belongs to, its stamp (``header.stamp``, ``/clock``'s ``clock``, a MarkerArray's first
-marker's stamp; the ``seconds_per_year`` mapping of :class:`~tumble_ros.core.TimeBase`), and
+marker's stamp, a TFMessage's first transform's; the ``seconds_per_year`` mapping of
+:class:`~tumble_ros.core.TimeBase`), and
 a message without a stamp (``comparison/status``, a topic matched by ``topic_pattern``) at the
 latest stamp received so far (0 before any), so a viewer plays, seeks and shows rates in the
 run's own time. ``receive`` logs the receive time on the node's clock instead: the wall clock,

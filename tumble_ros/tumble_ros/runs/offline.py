@@ -16,8 +16,9 @@ schemas and the offered QoS metadata are those the live recorder writes
 
 Log times are simulated time on the ROS clock, as the live recorder's (its default ``log_time``
 ``sim``): a message's log time is the stamp of the sample it belongs to (``seconds_per_year``
-mapping, :class:`~tumble_ros.core.TimeBase`): the per-sample topics and ``/clock`` their stamp,
-``markers`` the stamp of their sample, ``scenario`` its segment start, ``impact_events`` the
+mapping, :class:`~tumble_ros.core.TimeBase`): the per-sample topics, ``/tf`` and ``/clock``
+their stamp, ``markers`` the stamp of their sample, ``/tf_static`` and ``body_markers`` (sent
+once) the run's start, ``scenario`` its segment start, ``impact_events`` the
 impact's end, ``status`` the last sample written, ``comparison/status`` the sample it is about
 (0 before the first, a segment's start for its anchoring, the first departing sample for a
 departure). A viewer then plays, seeks and shows rates in the run's own time. Publish times are
