@@ -279,7 +279,7 @@ def test_a_polyhedron_body_is_drawn_once_as_its_facets_turning_with_tf(tmp_path)
 
 
 def test_the_still_poses_the_shape_sent_once_with_the_attitude(recorded):
-    """analyze --still: the body and its axes of body_markers, turned by the sample's attitude."""
+    """The still (analyze --still): the body and axes of body_markers, turned by the attitude."""
     from tumble_ros.analysis.animation import Arrow, marker_scene, Solid
     _, result = recorded
     q, _ = _samples(result.output)
