@@ -2,7 +2,7 @@
 # `make setup` (a prerequisite of both) is idempotent and cheap when nothing changed:
 #   1. .venv from python3 -m venv, then requirements.txt installed by uv   (only when it changed)
 #   2. at once, on both cores: the venv's bytecode compiled (after 1), and
-#      colcon build --symlink-install of tumble_ros_interfaces and tumble_ros
+#      colcon build --symlink-install of tumble_ros_interfaces (and vendor/tf2_msgs) and tumble_ros
 #      (only when a package file that matters for the build changed)
 # The environment logic (venv + install/setup.bash) lives in scripts/env.sh.
 
@@ -14,7 +14,11 @@ SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
 ENV := scripts/env.sh
-COLCON_PACKAGES := tumble_ros_interfaces tumble_ros
+# vendor/tf2_msgs: TFMessage of /tf (the PyPI wheels have no tf2_msgs; docs/ros.md "TF"), built
+# beside tumble_ros_interfaces (colcon builds the two at once), left out where the venv has one.
+# Named here: vendor/COLCON_IGNORE hides it from a crawl (a ROS workspace has the real one).
+TF2_MSGS := $(if $(wildcard $(VENV)/share/tf2_msgs/package.xml),,vendor/tf2_msgs)
+COLCON_PACKAGES := tumble_ros_interfaces $(TF2_MSGS) tumble_ros
 COLCON_ARGS ?=
 PYTEST_ARGS ?=
 CONFIG ?=
@@ -27,7 +31,9 @@ BYTECODE_STAMP := $(VENV)/.bytecode.stamp
 
 # What colcon's output depends on. Python modules are not listed: with --symlink-install they are
 # live. Directories are listed so that adding, renaming or deleting a file in them rebuilds.
-BUILD_INPUTS := \
+BUILD_INPUTS := cmake/tumble_ros_rosidl.cmake \
+	$(if $(TF2_MSGS),vendor/tf2_msgs/package.xml vendor/tf2_msgs/CMakeLists.txt vendor/tf2_msgs/msg \
+	  $(wildcard vendor/tf2_msgs/msg/*.msg)) \
 	tumble_ros_interfaces/package.xml tumble_ros_interfaces/CMakeLists.txt \
 	tumble_ros_interfaces/srv tumble_ros_interfaces/msg \
 	$(wildcard tumble_ros_interfaces/srv/*.srv tumble_ros_interfaces/msg/*.msg) \

@@ -415,8 +415,10 @@ def test_namespace_without_the_topics(tmp_path, capsys, runs):
 def test_the_analysis_takes_topic_names_and_types_from_the_topics_module():
     """tumble_ros.topics is the one list of names; the analysis spells none of them itself."""
     from tumble_ros.analysis import recording
-    # /clock and the 3D scene (markers: read on demand by the still, analysis.scene) are counted
-    assert set(recording.EXPECTED_TYPES) == set(topics.RECORDED) - {topics.CLOCK, topics.MARKERS}
+    # /clock, the 3D scene (markers, body_markers: read on demand by the still, analysis.scene)
+    # and TF (the attitude again) are counted
+    assert set(recording.EXPECTED_TYPES) == set(topics.RECORDED) - {
+        topics.CLOCK, topics.MARKERS, topics.BODY_MARKERS, topics.TF, topics.TF_STATIC}
     assert all(recording.EXPECTED_TYPES[name] == topics.TYPES[name]
                for name in recording.EXPECTED_TYPES)
     # Typed out on purpose: what in_namespace makes of a name, not computed by it.

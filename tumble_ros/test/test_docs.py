@@ -41,9 +41,10 @@ def test_every_topic_and_service_has_a_reference_row(ros):
         ros.probe.get_topic_names_and_types()
     # The names as docs/ros.md spells them, typed out on purpose (not from tumble_ros.topics):
     # they are the contract checked here. Its row `pause`, `resume`, `step` gives
-    # table_rows only its first name; `/clock` keeps its slash there.
+    # table_rows only its first name; the global names (`/clock`, `/tf`, `/tf_static`) keep
+    # their slash there.
     rows = table_rows(REFERENCE) | {'pause', 'resume', 'step'}
-    topics = {n.lstrip('/') if n != '/clock' else n
+    topics = {n.lstrip('/') if n not in ('/clock', '/tf', '/tf_static') else n
               for n, _ in ros.probe.get_topic_names_and_types()}
     ignored = {'rosout', 'parameter_events', 'apply_impact/_service_event'}
     assert not sorted(topics - rows - ignored)

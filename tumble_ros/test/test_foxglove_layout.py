@@ -217,8 +217,9 @@ def test_the_3d_panel_follows_the_frame_of_the_markers(path):
     (panel,) = _panels(path, '3D').values()
     assert panel['followTf'] == topics.FRAME_ORBITAL
     assert panel['followMode'] in FOLLOW_MODES - {'follow-none'}
-    assert list(panel['topics']) == ['/' + topics.MARKERS]
-    assert panel['topics']['/' + topics.MARKERS]['visible'] is True
+    # the scene's moving part and its shape (sent once, posed by TF: test_tf.py)
+    assert list(panel['topics']) == ['/' + topics.MARKERS, '/' + topics.BODY_MARKERS]
+    assert all(panel['topics'][t]['visible'] is True for t in panel['topics'])
     assert set(panel['scene']) <= SCENE_KEYS
     assert set(panel['scene'].get('transforms', {})) <= SCENE_TRANSFORMS_KEYS
     assert set(panel['cameraState']) <= CAMERA_KEYS

@@ -1,6 +1,9 @@
 """
 The 3D scene (runs.messages.markers): decoded by the standard readers, equal to the samples.
 
+The shape and the axes are sent once in the frame body (body_markers) and posed by /tf; the
+scenes of the samples (markers) hold what moves in the orbital frame (L, the Sun).
+
 The expected values are computed here from the recorded attitude and angular velocity and from
 textbook formulas (an ellipsoid's moments from its semi-axes), never taken from the code under
 test.
@@ -21,6 +24,7 @@ from tumble_ros.runs.offline import record_offline
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 MARKERS = '/' + topics.MARKERS
+BODY_MARKERS = '/' + topics.BODY_MARKERS
 SPHERE, CUBE, ARROW = 2, 1, 0          # visualization_msgs/Marker types, typed out
 
 
@@ -49,13 +53,32 @@ def test_moments_that_no_body_has_are_drawn_as_a_box(inertia):
     assert 'triangle inequality' in shape.note
 
 
-def _scenes(path):
-    """Decode /markers with mcap's own ROS 2 decoder: [(stamp ns, MarkerArray)]."""
+def _scenes(path, topic=MARKERS):
+    """Decode /markers with mcap's own ROS 2 decoder: [MarkerArray]."""
     out = []
     with open(path, 'rb') as stream:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
-        for _, channel, _, msg in reader.iter_decoded_messages(topics=[MARKERS]):
+        for _, channel, _, msg in reader.iter_decoded_messages(topics=[topic]):
             out.append(msg)
+    return out
+
+
+def _body(path):
+    """Decode the one /body_markers message: the shape and its axes, in the frame body."""
+    (body,) = _scenes(path, BODY_MARKERS)
+    assert all(m.frame_locked and m.header.frame_id == topics.FRAME_BODY for m in body.markers)
+    return body
+
+
+def _tf(path):
+    """Return {stamp ns: (w, x, y, z)} of /tf's orbital -> body (test_tf.py: the attitude)."""
+    out = {}
+    for msg in _scenes(path, topics.TF):
+        (t,) = msg.transforms
+        assert (t.header.frame_id, t.child_frame_id) == ('orbital', 'body')
+        r = t.transform.rotation
+        out[TimeBase.stamp_ns(t.header.stamp.sec, t.header.stamp.nanosec)] = np.array(
+            [r.w, r.x, r.y, r.z])
     return out
 
 
@@ -96,10 +119,16 @@ def recorded(tmp_path_factory):
 
 
 def test_every_sample_has_a_scene_whose_poses_are_its_attitude(recorded):
+    """The shape, sent once in body, posed by each sample's /tf; L and the Sun per sample."""
     sc, result = recorded
     scenes = _scenes(result.output)
     q, w = _samples(result.output)
-    assert len(scenes) == result.samples == len(q) == 101
+    tf = _tf(result.output)
+    assert len(scenes) == result.samples == len(q) == len(tf) == 101
+    body = _body(result.output)
+    shape = {(m.ns, m.id): m for m in body.markers}
+    o = shape['body', 0].pose.orientation
+    assert [o.w, o.x, o.y, o.z] == [1.0, 0.0, 0.0, 0.0]          # the body's own frame
     for scene in scenes:
         stamps = {TimeBase.stamp_ns(m.header.stamp.sec, m.header.stamp.nanosec)
                   for m in scene.markers}
@@ -107,15 +136,14 @@ def test_every_sample_has_a_scene_whose_poses_are_its_attitude(recorded):
         stamp = stamps.pop()
         by_ns = {(m.ns, m.id): m for m in scene.markers}
         assert all(m.header.frame_id == topics.FRAME_ORBITAL for m in scene.markers)
-        body = by_ns['body', 0]
-        o = body.pose.orientation
-        assert [o.w, o.x, o.y, o.z] == q[stamp].tolist()       # the attitude, bit for bit
-        # each axis arrow points along the body axis, rotated into the orbital frame
+        assert tf[stamp].tolist() == q[stamp].tolist()          # the attitude, bit for bit
+        # each axis arrow points along the body axis, rotated into the orbital frame by TF
         for i in range(3):
-            arrow = by_ns['axes', i]
+            arrow = shape['axes', i]
             assert arrow.type == ARROW
             p = arrow.pose.orientation
-            along = _rotate(np.array([p.w, p.x, p.y, p.z]), np.array([1.0, 0.0, 0.0]))
+            along = _rotate(tf[stamp], _rotate(np.array([p.w, p.x, p.y, p.z]),
+                                               np.array([1.0, 0.0, 0.0])))
             np.testing.assert_allclose(along, _rotate(q[stamp], np.eye(3)[i]), atol=1e-12)
         # L = C(q) I w, in the orbital frame
         momentum = _rotate(q[stamp], np.array(sc.inertia) * w[stamp])
@@ -127,16 +155,15 @@ def test_every_sample_has_a_scene_whose_poses_are_its_attitude(recorded):
                                    [np.sin(sc.orbit_rate * t), np.cos(sc.orbit_rate * t), 0.0],
                                    atol=1e-12)
     # fig10's body (1, 1, 1.5): the ellipsoid of these moments, scale = its diameters
-    body = scenes[0].markers[0]
-    assert body.type == SPHERE
-    moments = _ellipsoid_moments(body.scale.x / 2, body.scale.y / 2, body.scale.z / 2)
+    solid = shape['body', 0]
+    assert solid.type == SPHERE
+    moments = _ellipsoid_moments(solid.scale.x / 2, solid.scale.y / 2, solid.scale.z / 2)
     np.testing.assert_allclose(moments / moments[0], sc.inertia, rtol=1e-12)
 
 
 def test_an_unphysical_body_is_a_box_and_a_flyby_body_is_drawn(tmp_path):
     sc = load_scenario(CONFIG / 'fig9.yaml').replace(duration=0.05, output_interval=0.01)
-    (scene, *_) = _scenes(record_offline(sc, tmp_path / 'box.mcap').output)
-    body = scene.markers[0]
+    body = _body(record_offline(sc, tmp_path / 'box.mcap').output).markers[0]
     assert body.type == CUBE and body.scale.z == 2 * MIN_THICKNESS   # a plate: Iz > Ix + Iy
     from tumble_ros.core.torques.orbits import KeplerOrbit
     sun = 1.3271244e11                                  # GM [km^3/s^2], the orbit's unit
@@ -150,8 +177,10 @@ def test_an_unphysical_body_is_a_box_and_a_flyby_body_is_drawn(tmp_path):
         np.testing.assert_allclose(_direction(by_ns['perturber'].points),
                                    r / np.linalg.norm(r), atol=1e-12)
     no_torque = Scenario(orbit_rate=0.0, duration=0.01, output_interval=0.01)
-    (scene, *_) = _scenes(record_offline(no_torque, tmp_path / 'free.mcap').output)
-    assert [m.ns for m in scene.markers] == ['body', 'axes', 'axes', 'axes', 'angular_momentum']
+    free = record_offline(no_torque, tmp_path / 'free.mcap').output
+    (scene, *_) = _scenes(free)
+    assert [m.ns for m in scene.markers] == ['angular_momentum']
+    assert [m.ns for m in _body(free).markers] == ['body', 'axes', 'axes', 'axes']
 
 
 def test_each_perturber_is_drawn(tmp_path):
@@ -175,20 +204,25 @@ def test_each_perturber_is_drawn(tmp_path):
 def test_rosbags_decodes_the_scene_too(recorded):
     _, result = recorded
     from rosbags.highlevel import AnyReader
+    decoded = {}
     with AnyReader([result.output]) as reader:
-        (connection,) = [c for c in reader.connections if c.topic == MARKERS]
-        assert connection.msgtype == topics.TYPES[topics.MARKERS]
-        decoded = [reader.deserialize(raw, connection.msgtype)
-                   for _, _, raw in reader.messages(connections=[connection])]
-    assert len(decoded) == result.samples
+        for topic in (MARKERS, BODY_MARKERS, topics.TF):
+            (connection,) = [c for c in reader.connections if c.topic == topic]
+            assert connection.msgtype == {MARKERS: topics.TYPES[topics.MARKERS],
+                                          BODY_MARKERS: topics.TYPES[topics.BODY_MARKERS],
+                                          topics.TF: 'tf2_msgs/msg/TFMessage'}[topic]
+            decoded[topic] = [reader.deserialize(raw, connection.msgtype)
+                              for _, _, raw in reader.messages(connections=[connection])]
+    assert len(decoded[MARKERS]) == len(decoded[topics.TF]) == result.samples
     q, _ = _samples(result.output)
-    for scene in decoded:
-        body = scene.markers[0]
-        stamp = TimeBase.stamp_ns(body.header.stamp.sec, body.header.stamp.nanosec)
-        o = body.pose.orientation
+    for scene, tf in zip(decoded[MARKERS], decoded[topics.TF]):
+        (t,) = tf.transforms
+        stamp = TimeBase.stamp_ns(t.header.stamp.sec, t.header.stamp.nanosec)
+        o = t.transform.rotation
         assert [o.w, o.x, o.y, o.z] == q[stamp].tolist()
-        assert [m.ns for m in scene.markers] == ['body', 'axes', 'axes', 'axes',
-                                                 'angular_momentum', 'sun']
+        assert [m.ns for m in scene.markers] == ['angular_momentum', 'sun']
+    (body,) = decoded[BODY_MARKERS]
+    assert [m.ns for m in body.markers] == ['body', 'axes', 'axes', 'axes']
 
 
 def test_long_runs_are_decimated_and_end_on_the_last_sample(tmp_path):
@@ -219,26 +253,42 @@ def test_a_template_encodes_what_rclpy_decodes():
         template.encode(1, {'markers[2].id': 1})
 
 
-def test_a_polyhedron_body_is_drawn_as_its_facets_turning_with_the_attitude(tmp_path):
+def test_a_polyhedron_body_is_drawn_once_as_its_facets_turning_with_tf(tmp_path):
     from tumble_ros.core.model.body import BodySpec
     from tumble_ros.core.model.shape_files import load_shape, resolve_shape_path
     body = BodySpec(model='polyhedron', density=2600.0, shape_file='config/shapes/apophis.obj')
     sc = Scenario(body=body, duration=0.02, output_interval=0.01)
-    scenes = _scenes(record_offline(sc, tmp_path / 'shape.mcap').output)
+    result = record_offline(sc, tmp_path / 'shape.mcap')
     shape = load_shape(resolve_shape_path('config/shapes/apophis.obj'), 2600.0)
     v, f = shape.vertices, shape.facets                 # (shipped in principal axes)
     q, _ = _samples(tmp_path / 'shape.mcap')
-    for scene in scenes:
-        marker = scene.markers[0]
-        assert marker.type == 11 and marker.ns == 'body'          # TRIANGLE_LIST
-        assert (marker.scale.x, marker.scale.y, marker.scale.z) == (1.0, 1.0, 1.0)
-        points = np.array([[p.x, p.y, p.z] for p in marker.points])
-        assert points.shape == (3 * len(f), 3)
-        scale = np.linalg.norm(v, axis=1).max()          # the farthest vertex drawn at 1
-        np.testing.assert_allclose(points, v[f].reshape(-1, 3) / scale, rtol=1e-12)
-        normals = np.cross(points[1::3] - points[0::3], points[2::3] - points[0::3])
-        assert np.all(np.einsum('ij,ij->i', normals, points[0::3]) > 0)   # outward, as read
-        o = marker.pose.orientation
-        stamp = TimeBase.stamp_ns(marker.header.stamp.sec, marker.header.stamp.nanosec)
-        np.testing.assert_allclose([o.w, o.x, o.y, o.z], q[stamp], atol=1e-12)
-    assert len(scenes) == 3
+    tf = _tf(tmp_path / 'shape.mcap')
+    marker = _body(result.output).markers[0]             # sent once
+    assert marker.type == 11 and marker.ns == 'body'          # TRIANGLE_LIST
+    assert (marker.scale.x, marker.scale.y, marker.scale.z) == (1.0, 1.0, 1.0)
+    points = np.array([[p.x, p.y, p.z] for p in marker.points])
+    assert points.shape == (3 * len(f), 3)
+    scale = np.linalg.norm(v, axis=1).max()          # the farthest vertex drawn at 1
+    np.testing.assert_allclose(points, v[f].reshape(-1, 3) / scale, rtol=1e-12)
+    normals = np.cross(points[1::3] - points[0::3], points[2::3] - points[0::3])
+    assert np.all(np.einsum('ij,ij->i', normals, points[0::3]) > 0)   # outward, as read
+    o = marker.pose.orientation
+    assert [o.w, o.x, o.y, o.z] == [1.0, 0.0, 0.0, 0.0]      # the attitude comes from TF
+    assert sorted(tf) == sorted(q) and all(tf[s].tolist() == q[s].tolist() for s in q)
+    assert len(_scenes(result.output)) == 3
+
+
+def test_the_still_poses_the_shape_sent_once_with_the_attitude(recorded):
+    """The still (analyze --still): the body and axes of body_markers, turned by the attitude."""
+    from tumble_ros.analysis.animation import Arrow, marker_scene, Solid
+    _, result = recorded
+    q, _ = _samples(result.output)
+    for stamp in sorted(q)[::25]:
+        scene = marker_scene(_body(result.output), q[stamp])
+        (solid,) = [p for p in scene if isinstance(p, Solid)]
+        np.testing.assert_allclose(solid.quaternion, q[stamp], atol=1e-15)
+        arrows = {p.label: p for p in scene if isinstance(p, Arrow)}
+        for i, axis in enumerate('xyz'):
+            along = np.array(arrows[axis].end) - np.array(arrows[axis].start)
+            np.testing.assert_allclose(along / np.linalg.norm(along),
+                                       _rotate(q[stamp], np.eye(3)[i]), atol=1e-12)

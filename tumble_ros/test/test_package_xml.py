@@ -36,6 +36,7 @@ ROSDEP_KEYS = {
     'service_msgs': 'service_msgs',
     'std_msgs': 'std_msgs',
     'std_srvs': 'std_srvs',
+    'tf2_msgs': 'tf2_msgs',   # vendor/tf2_msgs where no tf2_msgs is installed
     'tumble_ros_interfaces': 'tumble_ros_interfaces',
     'visualization_msgs': 'visualization_msgs',
     # Python libraries (rosdep/python.yaml of ros/rosdistro)

@@ -23,7 +23,8 @@ __all__ = [
     'APPLY_IMPACT', 'PAUSE', 'RESUME', 'STEP', 'TYPES', 'SIM_TOPICS', 'COMPARATOR_TOPICS',
     'RECORDED', 'PER_SAMPLE', 'SIM_PER_SAMPLE', 'COMPARATOR_PER_SAMPLE', 'FRAME_BODY',
     'FRAME_ORBITAL', 'FRAME_EULER', 'MARKER_BODY', 'MARKER_AXES', 'MARKER_MOMENTUM',
-    'MARKER_SUN', 'MARKER_PERTURBER', 'in_namespace',
+    'MARKER_SUN', 'MARKER_PERTURBER', 'in_namespace', 'BODY_MARKERS', 'TF', 'TF_STATIC',
+    'SHARED_TOPICS', 'FRAME_GIVEN', 'frame_id',
 ]
 
 # -- the simulator's (sim) ---------------------------------------------------------------------
@@ -52,8 +53,17 @@ PERTURBER = 'perturber'
 #: magnitude, phase angle, the Sun's and the observer's latitude and longitude in body axes;
 #: one per sample, published when the body is physical and ``lightcurve.enabled``.
 LIGHTCURVE = 'lightcurve'
-#: the 3D scene (visualization_msgs/MarkerArray, frame ``orbital``): body, axes, L, Sun.
+#: the 3D scene's moving part (visualization_msgs/MarkerArray, frame ``orbital``): L and the
+#: Sun or the perturbers, one per shown sample.
 MARKERS = 'markers'
+#: the 3D scene's fixed part (visualization_msgs/MarkerArray, frame ``body``, ``frame_locked``):
+#: the body's shape and its principal axes, sent once (latched); TF turns it.
+BODY_MARKERS = 'body_markers'
+#: the attitude as a transform ``orbital`` -> ``body`` (tf2_msgs/TFMessage), one per sample;
+#: global, as tf2 has it: the frames carry the namespace (:func:`frame_id`).
+TF = '/tf'
+#: what is fixed: ``body`` -> ``body_as_given`` (tf2_msgs/TFMessage, latched), once.
+TF_STATIC = '/tf_static'
 
 # -- the comparator's --------------------------------------------------------------------------
 MODEL_ANGULAR_VELOCITY = 'comparison/model_angular_velocity'
@@ -72,6 +82,9 @@ STEP = 'step'
 FRAME_BODY = 'body'
 FRAME_ORBITAL = 'orbital'
 FRAME_EULER = 'euler_phi_psi_theta'
+#: The frame the body was given in (a shape file's vertices; for an ellipsoid or given moments
+#: the principal axes themselves): a child of ``body`` on ``/tf_static``.
+FRAME_GIVEN = 'body_as_given'
 
 #: Who publishes a per-sample topic (:attr:`SampleTopic.source`).
 SIM = 'sim'
@@ -185,13 +198,19 @@ TYPES = {
     SCENARIO: 'tumble_ros_interfaces/msg/ScenarioDescription',
     CONSUMER_PROGRESS: 'tumble_ros_interfaces/msg/ConsumerProgress',
     MARKERS: 'visualization_msgs/msg/MarkerArray',
+    BODY_MARKERS: 'visualization_msgs/msg/MarkerArray',
+    TF: 'tf2_msgs/msg/TFMessage',
+    TF_STATIC: 'tf2_msgs/msg/TFMessage',
     COMPARISON_STATUS: 'diagnostic_msgs/msg/DiagnosticStatus',
 }
 
 #: What the simulator publishes (``/clock`` unless ``publish_clock`` is false, ``perturber``
-#: with a Kepler orbit, ``markers`` unless ``markers`` is false).
+#: with a Kepler orbit, ``markers`` and ``body_markers`` unless ``markers`` is false).
 SIM_TOPICS = (*(t.name for t in sample_topics(SIM)), CLOCK, IMPACT_EVENTS, STATUS, SCENARIO,
-              MARKERS)
+              MARKERS, BODY_MARKERS, TF, TF_STATIC)
+#: Topics every simulator of a domain shares by design (tf2's): two asteroids publish on them
+#: with their own frames, so a second publisher there is no second source.
+SHARED_TOPICS = (TF, TF_STATIC)
 #: What the comparator publishes.
 COMPARATOR_TOPICS = (*(t.name for t in sample_topics(COMPARATOR)), COMPARISON_STATUS)
 #: What the recorder records by default.
@@ -215,6 +234,17 @@ MARKER_AXES = 'axes'
 MARKER_MOMENTUM = 'angular_momentum'
 MARKER_SUN = 'sun'
 MARKER_PERTURBER = 'perturber'
+
+
+def frame_id(namespace: str, frame: str) -> str:
+    """
+    Return the TF frame id of ``frame`` in a node's ``namespace`` (``'/ast1'``, ``'/'``, ``''``).
+
+    ``frame_id('/ast1', 'body') == 'ast1/body'``, ``frame_id('/', 'body') == 'body'``: tf2 frame
+    ids carry no leading slash, and two asteroids' frames on the shared ``/tf`` never collide.
+    """
+    namespace = namespace.strip('/')
+    return f'{namespace}/{frame}' if namespace else frame
 
 
 def in_namespace(namespace: str, topic: str) -> str:

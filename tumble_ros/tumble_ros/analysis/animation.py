@@ -43,13 +43,14 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 import numpy as np
 
 from tumble_ros.core.model.dynamics import angular_momentum_orbital
-from tumble_ros.core.model.rotation import quaternions_to_matrices
+from tumble_ros.core.model.rotation import quaternion_multiply, quaternions_to_matrices
 from tumble_ros.core.model.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, ELLIPSOID,
                                          MOMENTUM_LENGTH, PERTURBER_LENGTH,
                                          torquing_body_direction)
 from tumble_ros.errors import AnalysisError
 from tumble_ros.io import read_messages
-from tumble_ros.topics import MARKER_AXES, MARKER_MOMENTUM, MARKER_PERTURBER, MARKER_SUN, MARKERS
+from tumble_ros.topics import (BODY_MARKERS, FRAME_BODY, MARKER_AXES, MARKER_MOMENTUM,
+                               MARKER_PERTURBER, MARKER_SUN, MARKERS)
 
 from .display import recording_units
 from .figures import envelope, numeric_limits, time_axis
@@ -166,25 +167,53 @@ def _xyz(v) -> np.ndarray:
     return np.array([float(v.x), float(v.y), float(v.z)])
 
 
-def marker_scene(array: Any) -> Scene:
-    """Return the primitives of a decoded visualization_msgs/MarkerArray (SPHERE, CUBE, ARROW)."""
+def marker_scene(array: Any, attitude: Any = None) -> Scene:
+    """
+    Return the primitives of a decoded visualization_msgs/MarkerArray (SPHERE, CUBE, ARROW).
+
+    Markers in the frame ``body`` (``body_markers``: the shape, its axes) are posed in the
+    orbital frame by ``attitude`` (w, x, y, z; body -> orbital), as a viewer's TF does; the
+    others are drawn as they are (the frame ``orbital``).
+    """
     scene: Scene = []
     for m in array.markers:
         label = 'xyz'[m.id] if m.ns == MARKER_AXES and 0 <= m.id < 3 else _LABELS.get(m.ns, m.ns)
         o = m.pose.orientation
         q = (float(o.w), float(o.x), float(o.y), float(o.z))
         position = _xyz(m.pose.position)
+        turn = np.eye(3)
+        if attitude is not None and m.header.frame_id.rsplit('/', 1)[-1] == FRAME_BODY:
+            w, x, y, z = (float(v) for v in quaternion_multiply(attitude, q))
+            q = (w, x, y, z)
+            turn = quaternions_to_matrices(np.asarray(attitude, dtype=float))
+            position = turn @ position
         if m.type in (_SPHERE, _CUBE):
             scene.append(Solid(ELLIPSOID if m.type == _SPHERE else BOX, q,
                                tuple(_xyz(m.scale) / 2.0), _rgba(m.color)))
         elif m.type == _ARROW and len(m.points) >= 2:
-            scene.append(Arrow(tuple(_xyz(m.points[0]) + position),
-                               tuple(_xyz(m.points[1]) + position), _rgba(m.color), label))
+            scene.append(Arrow(tuple(turn @ _xyz(m.points[0]) + position),
+                               tuple(turn @ _xyz(m.points[1]) + position), _rgba(m.color),
+                               label))
         elif m.type == _ARROW:
             c = quaternions_to_matrices(np.array(q))
             scene.append(Arrow(tuple(position), tuple(position + m.scale.x * c[:, 0]),
                                _rgba(m.color), label))
     return scene
+
+
+def _recorded_body(rec: Recording, t: float) -> Scene:
+    """
+    Return the body and its axes (``body_markers``) posed by the attitude sample at ``t`` [yr].
+
+    Empty for a recording without them (made before they were split from ``markers``, whose
+    every scene then holds the body).
+    """
+    topic = rec.topic(BODY_MARKERS)
+    if topic not in rec.topics or rec.topics[topic][1] == 0 or not len(rec.quaternion_t):
+        return []
+    body = next(iter(read_messages(rec.path, topics=[topic]))).message
+    k = int(np.argmin(np.abs(rec.quaternion_t - t)))
+    return marker_scene(body, rec.quaternion[k])
 
 
 # -- drawing ------------------------------------------------------------------------------------
@@ -503,7 +532,7 @@ def write_still(rec: Recording, path: str | os.PathLike[str], *, at: float | Non
         raise AnalysisError(f'{rec.path}: {topic} holds no markers')
     fig, ax3d, _ = _figure(with_plots=False)
     _set_up_3d(ax3d)
-    _draw_scene(ax3d, marker_scene(chosen))
+    _draw_scene(ax3d, _recorded_body(rec, t_chosen) + marker_scene(chosen))
     ax3d.set_title(f'{rec.path.name}: {topic} at t = {recording_units(rec).time_text(t_chosen)}, '
                    'frame orbital',
                    fontsize=9)

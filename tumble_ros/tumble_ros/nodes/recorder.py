@@ -24,7 +24,8 @@ as time sources expect, and recorded as received).
 Log times (``log_time``): ``sim`` (default) records on the simulated clock, as ``ros2 bag record
 --use-sim-time`` does, but exactly: a message of a tumble topic is logged at the ROS time of the
 sample it belongs to, its stamp (``header.stamp``, ``/clock``'s ``clock``, a MarkerArray's first
-marker's stamp; the ``seconds_per_year`` mapping of :class:`~tumble_ros.core.TimeBase`), and
+marker's stamp, a TFMessage's first transform's; the ``seconds_per_year`` mapping of
+:class:`~tumble_ros.core.TimeBase`), and
 a message without a stamp (``comparison/status``, a topic matched by ``topic_pattern``) at the
 latest stamp received so far (0 before any), so a viewer plays, seeks and shows rates in the
 run's own time. ``receive`` logs the receive time on the node's clock instead: the wall clock,
@@ -67,6 +68,9 @@ __all__ = ['RecorderNode', 'DEFAULT_TOPICS', 'main']
 #: Recorded when ``topics`` is not given (relative names resolve in the recorder's namespace);
 #: ``topic_pattern`` adds to them, as it adds to ``topics``.
 DEFAULT_TOPICS = topics.RECORDED
+#: Recorded tumble topics with one publisher per simulator by design (/tf, /tf_static): not
+#: watched for a second source.
+SHARED_TOPICS = frozenset(topics.SHARED_TOPICS)
 #: Types whose CDR starts with a header stamp: one message per simulator sample. The recorder's
 #: progress is the oldest of their latest stamps. Not /clock: it is best effort (CLOCK_QOS).
 PER_SAMPLE_TYPES = {topics.TYPES[t] for t in topics.PER_SAMPLE}
@@ -189,9 +193,11 @@ class RecorderNode(GuardedNode):
         self._discover()
         steady_timer(self, p['discovery_period'], self._discover)
         steady_timer(self, p['chunk_seconds'] / 4, self._poll)
+        # (/tf and /tf_static: every asteroid publishes there, with its own frames)
         self._sources = SourceMonitor(
             self, lambda: [t for t, c in self._channels.items()
-                           if c >= 0 and t in self._tumble_topics],
+                           if c >= 0 and t in self._tumble_topics
+                           and t not in SHARED_TOPICS],
             self._on_sources)
         self.get_logger().info(f'recording to {path}')
 

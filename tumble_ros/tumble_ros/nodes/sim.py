@@ -14,10 +14,15 @@ and publishes every ``output_interval`` of simulated time:
 * ``scenario`` (tumble_ros_interfaces/ScenarioDescription, latched) at the start and after each
   impact (one per segment): the scenario as started, the initial state of the segment and the
   run's id (:attr:`SimNode.run_id`, drawn at start-up);
+* ``/tf`` (tf2_msgs/TFMessage): the attitude as the transform ``orbital`` -> ``body`` of every
+  sample, and ``/tf_static`` (latched) once: ``body`` -> ``body_as_given``; frame ids in the
+  node's namespace (``ast1/body``; :mod:`~tumble_ros.runs.messages.transforms`);
 * ``markers`` (visualization_msgs/MarkerArray, frame ``orbital``) when ``markers`` is true (off
   for a bare ``ros2 run``, where it would cost ~30 % of the throughput; on in bringup, make run
   and the launch files):
-  the 3D scene of every ``marker_decimation``-th sample (:mod:`.markers`).
+  the 3D scene's moving part (L, the Sun) of every ``marker_decimation``-th sample, and
+  ``body_markers`` (latched, frame ``body``) once: the body's shape and axes
+  (:mod:`~tumble_ros.runs.messages.markers`).
 
 Every stamp is ROS time carrying simulated time, ``status`` included (the time of the last
 published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year)
@@ -41,6 +46,7 @@ from rclpy.qos import QoSProfile
 from rclpy.service_introspection import ServiceIntrospectionState
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
+from tf2_msgs.msg import TFMessage  # type: ignore[attr-defined]  # rosidl-generated
 
 from tumble_ros import topics
 from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeBase
@@ -57,6 +63,7 @@ from tumble_ros.runs.messages.builders import FRAMES, message_class, new_run_id,
 from tumble_ros.runs.messages.markers import marker_every, MarkerScene
 from tumble_ros.runs.messages.qos import PUBLISHER_QOS, publisher_qos, SERVICE_QOS
 from tumble_ros.runs.messages.records import description_message, impact_message, status_message
+from tumble_ros.runs.messages.transforms import TransformEncoder
 from tumble_ros.runs.records import (DIVERGED, FINISHED, ImpactEnded, PAUSED, RUNNING, SampleBlock,
                                      SegmentStart, SessionRecord, StatusChange)
 from tumble_ros.runs.session import output_grid, SimulationSession
@@ -128,10 +135,17 @@ class SimNode(GuardedNode):
         self._pub_events = publish(ImpactEvent, topics.IMPACT_EVENTS, qos[topics.IMPACT_EVENTS])
         self._pub_status = publish(SimStatus, topics.STATUS, qos[topics.STATUS])
         self._pub_scenario = publish(ScenarioDescription, topics.SCENARIO, qos[topics.SCENARIO])
-        self._scene = MarkerScene(self.scenario) if params['markers'] else None
+        namespace = self.get_namespace()
+        self._transforms = TransformEncoder(self.scenario, namespace)
+        self._pub_tf = publish(TFMessage, topics.TF, qos[topics.TF])
+        self._pub_tf_static = publish(TFMessage, topics.TF_STATIC, qos[topics.TF_STATIC])
+        self._scene = MarkerScene(self.scenario, namespace) if params['markers'] else None
         self._marker_every = marker_every(params['marker_decimation'], self._grid.count)
         self._pub_markers = (publish(MarkerArray, topics.MARKERS, qos[topics.MARKERS])
                              if self._scene is not None else None)
+        self._pub_body_markers = (
+            publish(MarkerArray, topics.BODY_MARKERS, qos[topics.BODY_MARKERS])
+            if self._scene is not None else None)
         self._srv_impact = self.create_service(ApplyImpact, topics.APPLY_IMPACT,
                                                self._on_apply_impact, qos_profile=SERVICE_QOS)
         self._srv_impact.configure_introspection(
@@ -139,8 +153,10 @@ class SimNode(GuardedNode):
         self.create_service(Trigger, topics.PAUSE, self._on_pause)
         self.create_service(Trigger, topics.RESUME, self._on_resume)
         self.create_service(Trigger, topics.STEP, self._on_step)
-        absent = {t for t, on in optional.items() if not on} | {
-            t for t, p in ((topics.CLOCK, self._pub_clock), (topics.MARKERS, self._pub_markers))
+        # (the shared topics, /tf and /tf_static, have one publisher per asteroid by design)
+        absent = {t for t, on in optional.items() if not on} | set(topics.SHARED_TOPICS) | {
+            t for t, p in ((topics.CLOCK, self._pub_clock), (topics.MARKERS, self._pub_markers),
+                           (topics.BODY_MARKERS, self._pub_body_markers))
             if p is None}
         own = [t for t in topics.SIM_TOPICS if t not in absent]
         self._sources = SourceMonitor(
@@ -197,9 +213,9 @@ class SimNode(GuardedNode):
 
     @property
     def per_sample_topics(self) -> tuple[str, ...]:
-        """Return the topics with one message per published sample (not /clock)."""
+        """Return the topics with one message per published sample (not /clock; /tf too)."""
         return tuple(name for name, publisher in self._sample_publishers.items()
-                     if name != topics.CLOCK and publisher is not None)
+                     if name != topics.CLOCK and publisher is not None) + (topics.TF,)
 
     @property
     def grid(self) -> SampleGrid:
@@ -281,6 +297,8 @@ class SimNode(GuardedNode):
                 self._publish_samples(record)
                 self._publish_markers(record)
             elif isinstance(record, SegmentStart):
+                if record.revision == 0:     # the run's start: what is fixed, once
+                    self._publish_fixed(record.stamp_ns)
                 self._pub_scenario.publish(description_message(record))
             elif isinstance(record, ImpactEnded):
                 self._publish_impact_event(record)
@@ -293,7 +311,8 @@ class SimNode(GuardedNode):
 
         Per sample: /clock, ω [rad/yr] (body axes), the attitude quaternion (scalar first,
         body -> orbital), the continuous Euler angles (φ, ψ, θ) [rad], with a Kepler orbit
-        where the torquing body is [km] (body axes), with a physical body its lightcurve.
+        where the torquing body is [km] (body axes), with a physical body its lightcurve; then
+        the attitude as the transform orbital -> body on /tf.
         """
         blocks = self._encoder.simulator(block.stamps, block.omega, block.quaternion,
                                          block.euler, clock=self._pub_clock is not None,
@@ -301,9 +320,17 @@ class SimNode(GuardedNode):
                                          lightcurve=block.lightcurve)
         publishers = [self._sample_publishers[topic].publish for topic, _ in blocks]
         rows = [rows for _, rows in blocks]
+        publishers.append(self._pub_tf.publish)     # the attitude on /tf, last
+        rows.append(self._transforms.encode(block.stamps, block.quaternion))
         for j in range(len(block)):
             for publish, block_rows in zip(publishers, rows):
                 publish(block_rows[j].tobytes())
+
+    def _publish_fixed(self, stamp_ns: int) -> None:
+        """Publish what is sent once, at the run's start: /tf_static, body_markers (latched)."""
+        self._pub_tf_static.publish(self._transforms.static(stamp_ns))
+        if self._scene is not None and self._pub_body_markers is not None:
+            self._pub_body_markers.publish(self._scene.body_bytes(stamp_ns))
 
     def _publish_markers(self, block: SampleBlock) -> None:
         """Publish the 3D scene of the block's samples that get one (decimation)."""

@@ -16,8 +16,9 @@ schemas and the offered QoS metadata are those the live recorder writes
 
 Log times are simulated time on the ROS clock, as the live recorder's (its default ``log_time``
 ``sim``): a message's log time is the stamp of the sample it belongs to (``seconds_per_year``
-mapping, :class:`~tumble_ros.core.TimeBase`): the per-sample topics and ``/clock`` their stamp,
-``markers`` the stamp of their sample, ``scenario`` its segment start, ``impact_events`` the
+mapping, :class:`~tumble_ros.core.TimeBase`): the per-sample topics, ``/tf`` and ``/clock``
+their stamp, ``markers`` the stamp of their sample, ``/tf_static`` and ``body_markers`` (sent
+once) the run's start, ``scenario`` its segment start, ``impact_events`` the
 impact's end, ``status`` the last sample written, ``comparison/status`` the sample it is about
 (0 before the first, a segment's start for its anchoring, the first departing sample for a
 departure). A viewer then plays, seeks and shows rates in the run's own time. Publish times are
@@ -53,6 +54,7 @@ from tumble_ros.runs.messages.builders import new_run_id, SampleEncoder
 from tumble_ros.runs.messages.markers import marker_every, marker_samples, MarkerScene
 from tumble_ros.runs.messages.qos import as_discovered, publisher_qos, qos_dict
 from tumble_ros.runs.messages.records import RecordEncoder
+from tumble_ros.runs.messages.transforms import TransformEncoder
 
 from .comparison import Comparison
 from .records import (ComparisonStatus, DIVERGED, ImpactEnded, RUNNING, SampleBlock,
@@ -132,7 +134,7 @@ class _Channels:
         for topic in topics.recorded():
             if (topic == topics.CLOCK and not publish_clock
                     or not optional.get(topic, True)
-                    or topic == topics.MARKERS and not markers):
+                    or topic in (topics.MARKERS, topics.BODY_MARKERS) and not markers):
                 continue
             name = topic if topic.startswith('/') else '/' + topic
             type_name = topics.TYPES.get(topic) or topics.sample_topic(topic).type_name
@@ -196,7 +198,8 @@ def record_offline(scenario: Scenario, output: str | Path, *, timebase: TimeBase
     # chunks compressed and written in a thread while the next batch is simulated: the same file
     with McapWriter(output, chunk_seconds=math.inf, keep=keep, background=True) as writer:
         channels = _Channels(writer, publish_clock, session.optional_topics, markers=markers)
-        writer_of = _Writer(channels, comparison, scene, publish_clock)
+        writer_of = _Writer(channels, comparison, scene, publish_clock,
+                            TransformEncoder(scenario))
         channels.comparison_status(comparison.waiting(), model_name)
         writer_of.records(session.start())
         while session.samples < grid.count and not stop():
@@ -224,6 +227,7 @@ class _Writer:
     comparison: Comparison
     scene: _Scene | None
     publish_clock: bool
+    transforms: TransformEncoder
 
     def records(self, records: list[SessionRecord]) -> StatusChange | None:
         """
@@ -237,6 +241,8 @@ class _Writer:
             if isinstance(record, SampleBlock):
                 self.samples(record)
             elif isinstance(record, SegmentStart):
+                if record.revision == 0:     # the run's start: what is fixed, once
+                    self.fixed(record.stamp_ns)
                 self.channels.one(topics.SCENARIO, encode.description(record), record.stamp_ns)
                 self.channels.comparison_status(self.comparison.anchor(record),
                                                 self.comparison.model_name)
@@ -247,19 +253,28 @@ class _Writer:
                 final = record if record.state != RUNNING else None
         return final
 
+    def fixed(self, stamp_ns: int) -> None:
+        """Queue what is sent once, at the run's start ``stamp_ns``: /tf_static, body_markers."""
+        self.channels.one(topics.TF_STATIC, self.transforms.static(stamp_ns), stamp_ns)
+        if self.scene is not None:
+            self.channels.one(topics.BODY_MARKERS, self.scene.scene.body_bytes(stamp_ns),
+                              stamp_ns)
+
     def samples(self, block: SampleBlock) -> None:
         """
-        Write a block of samples: the simulator's topics, the comparator's three, the markers.
+        Write a block of samples: the simulator's topics, /tf, the comparator's three, markers.
 
         The simulator's: /clock (if published), ω, attitude, Euler angles, the perturber's
         position when the scenario has a Kepler orbit and the lightcurve when the body has one
         (as the live simulator), encoded as the live simulator encodes them
-        (:class:`~tumble_ros.runs.messages.builders.SampleEncoder`).
+        (:class:`~tumble_ros.runs.messages.builders.SampleEncoder`), then the attitude on /tf
+        (:class:`~tumble_ros.runs.messages.transforms.TransformEncoder`).
         """
         channels, n, ns = self.channels, len(block), block.stamps
         sim = channels.encoder.simulator(ns, block.omega, block.quaternion, block.euler,
                                          clock=self.publish_clock, perturber=block.perturber,
                                          lightcurve=block.lightcurve)
+        sim.append((topics.TF, self.transforms.encode(ns, block.quaternion)))
         compared = self.comparison.compare(block)
         for departure in compared.departures:
             channels.comparison_status(departure, self.comparison.model_name)

@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Scenario
 
 __all__ = ['BodyShape', 'ELLIPSOID', 'BOX', 'POLYHEDRON', 'MIN_THICKNESS', 'body_shape',
-           'polyhedron_triangles',
+           'polyhedron_triangles', 'display_scale',
            'torquing_body_direction', 'torquing_body_directions', 'AXIS_LENGTH',
            'MOMENTUM_LENGTH', 'PERTURBER_LENGTH', 'COLORS']
 
@@ -104,6 +104,16 @@ def body_shape(inertia: ArrayLike) -> BodyShape:
                      (float(semi[0]), float(semi[1]), float(semi[2])), physical)
 
 
+def display_scale(vertices: ArrayLike) -> float:
+    """
+    Return the display units per km of a polyhedron's drawing: 1 / its farthest vertex [1/km].
+
+    ``vertices`` (n, 3) [km] about the centre of mass: the farthest is drawn at 1, the longest
+    semi-axis of the ellipsoid (:func:`body_shape`).
+    """
+    return float(1.0 / np.linalg.norm(np.asarray(vertices, dtype=float), axis=1).max())
+
+
 def polyhedron_triangles(vertices: ArrayLike, facets: ArrayLike) -> FloatArray:
     """
     Return the corners of every facet, (3 m, 3), at the display scale: a triangle list.
@@ -114,7 +124,7 @@ def polyhedron_triangles(vertices: ArrayLike, facets: ArrayLike) -> FloatArray:
     """
     v = np.asarray(vertices, dtype=float)
     f = np.asarray(facets, dtype=np.int64)
-    corners: FloatArray = v[f].reshape(-1, 3) / np.linalg.norm(v, axis=1).max()
+    corners: FloatArray = v[f].reshape(-1, 3) * display_scale(v)
     return corners
 
 

@@ -1,33 +1,42 @@
 """
 The asteroid's 3D scene as ``visualization_msgs/MarkerArray`` messages, built in one place.
 
-The simulator publishes them on ``markers`` (:data:`tumble_ros.topics.MARKERS`) and the offline
-recorder writes them, both through :class:`MarkerScene`: one MarkerArray per shown sample, every
-marker in the frame ``orbital`` and stamped with the sample's stamp, so that RViz and Foxglove
-(fixed frame ``orbital``) show the body tumbling. Namespaces (``ns``) and ids:
+The simulator publishes them and the offline recorder writes them, both through
+:class:`MarkerScene`, in two parts (docs/viewing.md):
 
-* ``body`` 0: the body (:func:`tumble_ros.core.model.shape.body_shape`): a SPHERE scaled to the
-  uniform ellipsoid of the principal moments (scale = 2 x semi-axes, the longest semi-axis 1),
-  or a CUBE when the moments break the triangle inequality (no body has them), or, for a
-  polyhedron mass model (``body.model: polyhedron``), a TRIANGLE_LIST of its facets in its
-  principal axes (:func:`tumble_ros.core.model.shape.polyhedron_triangles`: the farthest vertex
-  at 1, scale 1); position 0, orientation = the attitude quaternion (body -> orbital) of the
-  sample;
-* ``axes`` 0, 1, 2: ARROWs along the body's principal axes x, y, z (red, green, blue),
-  ``AXIS_LENGTH`` long (lengths and colours: :mod:`tumble_ros.core.model.shape`): orientation = the
-  attitude times the fixed rotation taking +x onto the axis (:data:`AXIS_ROTATIONS`);
-* ``angular_momentum`` 0: an ARROW from 0 to L / |L| * ``MOMENTUM_LENGTH`` (``points``),
-  L = C(q) I w in the orbital frame (its direction; |L| is in the recording's w);
+* ``body_markers`` (:data:`tumble_ros.topics.BODY_MARKERS`), once at the run's start, latched:
+  what is fixed in the body, in the frame ``body`` with ``frame_locked`` set, so RViz and
+  Foxglove pose it with the TF ``orbital`` -> ``body`` of the time they show
+  (:mod:`.transforms`: the attitude), not with the one of its stamp;
+* ``markers`` (:data:`tumble_ros.topics.MARKERS`), one per shown sample, stamped with the
+  sample's stamp, in the frame ``orbital``: what moves in it.
+
+A viewer with the fixed frame ``orbital`` then shows the body tumbling; the body's triangles
+travel once, not with every sample (a 20,480-facet body took 1.3 MB a scene). Frame ids carry
+the node's namespace (:func:`tumble_ros.topics.frame_id`). Namespaces (``ns``) and ids:
+
+* ``body`` 0 (``body_markers``): the body (:func:`tumble_ros.core.model.shape.body_shape`): a
+  SPHERE scaled to the uniform ellipsoid of the principal moments (scale = 2 x semi-axes, the
+  longest semi-axis 1), or a CUBE when the moments break the triangle inequality (no body has
+  them), or, for a polyhedron mass model (``body.model: polyhedron``), a TRIANGLE_LIST of its
+  facets in its principal axes (:func:`tumble_ros.core.model.shape.polyhedron_triangles`: the
+  farthest vertex at 1, scale 1); pose: the identity of ``body``;
+* ``axes`` 0, 1, 2 (``body_markers``): ARROWs along the body's principal axes x, y, z (red,
+  green, blue), ``AXIS_LENGTH`` long (lengths and colours: :mod:`tumble_ros.core.model.shape`):
+  orientation = the fixed rotation taking +x onto the axis (:data:`AXIS_ROTATIONS`);
+* ``angular_momentum`` 0 (``markers``): an ARROW from 0 to L / |L| * ``MOMENTUM_LENGTH``
+  (``points``), L = C(q) I w in the orbital frame (its direction; |L| is in the recording's w);
 * ``sun`` 0 (circular orbit) or ``perturber`` 0, 1, ... (one per perturber, in the order of
-  ``Scenario.all_perturbers``: the Kepler orbit, then ``perturbers``): an ARROW from 0 towards
-  the torquing body, ``PERTURBER_LENGTH`` long; absent when nothing torques (``orbit_rate`` 0).
+  ``Scenario.all_perturbers``: the Kepler orbit, then ``perturbers``; ``markers``): an ARROW
+  from 0 towards the torquing body, ``PERTURBER_LENGTH`` long; absent when nothing torques
+  (``orbit_rate`` 0).
 
-Every array of one run has the same markers, strings and sequence lengths, so its CDR differs
-from sample to sample only in numbers: :class:`~tumble_ros.io.MessageTemplate` writes them
-from numpy columns (~1 us a message, where building and serialising a MarkerArray in Python
-takes ~1 ms), and the live simulator publishes those bytes too: live and offline recordings
-hold the same messages. Lengths are display units (the viewer's metres), not physical sizes:
-the inertia is normalised.
+Every ``markers`` array of one run has the same markers, strings and sequence lengths, so its
+CDR differs from sample to sample only in numbers: :class:`~tumble_ros.io.MessageTemplate`
+writes them from numpy columns (~1 us a message, where building and serialising a MarkerArray
+in Python takes ~1 ms), and the live simulator publishes those bytes too: live and offline
+recordings hold the same messages. Lengths are display units (the viewer's metres), not
+physical sizes: the inertia is normalised.
 """
 from __future__ import annotations
 
@@ -48,6 +57,7 @@ from tumble_ros.core.model.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, M
                                          torquing_body_direction, torquing_body_directions)
 from tumble_ros.core.model.timebase import SampleGrid
 from tumble_ros.io import message_definition, MessageTemplate
+from tumble_ros.runs.messages.builders import stamp
 from visualization_msgs.msg import Marker, MarkerArray
 
 __all__ = ['MarkerScene', 'marker_every', 'marker_samples', 'MARKER_FRAMES', 'AXIS_ROTATIONS',
@@ -86,22 +96,19 @@ def _color(rgba: Sequence[float]) -> ColorRGBA:
     return ColorRGBA(r=float(r), g=float(g), b=float(b), a=float(a))
 
 
-def _quaternion_products(q: np.ndarray, r: Any) -> np.ndarray:
-    """Return the Hamilton products q * r of (n, 4) quaternions with one r, (n, 4)."""
-    q0, q1, q2, q3 = q.T
-    r0, r1, r2, r3 = r
-    return np.stack([q0 * r0 - q1 * r1 - q2 * r2 - q3 * r3,
-                     q0 * r1 + q1 * r0 + q2 * r3 - q3 * r2,
-                     q0 * r2 - q1 * r3 + q2 * r0 + q3 * r1,
-                     q0 * r3 + q1 * r2 - q2 * r1 + q3 * r0], axis=-1)
-
-
 class MarkerScene:
-    """The markers of one scenario's body; :meth:`encode` writes them for samples."""
+    """
+    The markers of one scenario's body in a node's ``namespace`` ('' or '/': none).
 
-    def __init__(self, scenario: Scenario):
+    :meth:`body_message` is the fixed part (``body_markers``), :meth:`encode` the moving part
+    of samples (``markers``).
+    """
+
+    def __init__(self, scenario: Scenario, namespace: str = ''):
         self.scenario = scenario
         self.shape = body_shape(scenario.inertia)
+        self.orbital = topics.frame_id(namespace, topics.FRAME_ORBITAL)
+        self.body = topics.frame_id(namespace, topics.FRAME_BODY)
         self.perturber_ns = (None if torquing_body_direction(scenario, 0.0) is None
                              else NS_PERTURBER if scenario.all_perturbers else NS_SUN)
         self.perturbers = max(1, len(scenario.all_perturbers))
@@ -110,47 +117,70 @@ class MarkerScene:
                                        message_definition(topics.TYPES[topics.MARKERS]),
                                        serialize_message(self.message))
 
-    def _template(self) -> MarkerArray:
-        """Return the scene with every number that does not change from sample to sample."""
+    @staticmethod
+    def _marker(frame: str, ns: str, marker_id: int, kind: int, scale: Any, color: ColorRGBA,
+                points: int = 0, at: Any = None, orientation: Any = (1.0, 0.0, 0.0, 0.0)
+                ) -> Marker:
+        m = Marker(ns=ns, id=marker_id, type=kind, action=Marker.ADD, color=color)
+        m.header.frame_id = frame
+        o = m.pose.orientation
+        o.w, o.x, o.y, o.z = (float(v) for v in orientation)
+        m.scale.x, m.scale.y, m.scale.z = (float(v) for v in scale)
+        m.points = ([Point() for _ in range(points)] if at is None else
+                    [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in at])
+        return m
+
+    def body_message(self, stamp_ns: int) -> MarkerArray:
+        """
+        Return the fixed part of the scene (``body_markers``): the body and its axes.
+
+        In the frame ``body``, ``frame_locked`` (a viewer poses them with the TF of the time it
+        shows), stamped ``stamp_ns`` [ns of ROS time] (the run's start).
+        """
         markers = []
-
-        def add(ns: str, marker_id: int, kind: int, scale: Any, color: ColorRGBA,
-                points: int = 0, at: Any = None) -> None:
-            m = Marker(ns=ns, id=marker_id, type=kind, action=Marker.ADD, color=color)
-            m.header.frame_id = topics.FRAME_ORBITAL
-            m.pose.orientation.w = 1.0
-            m.scale.x, m.scale.y, m.scale.z = (float(v) for v in scale)
-            m.points = ([Point() for _ in range(points)] if at is None else
-                        [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in at])
-            markers.append(m)
-
         model = self.scenario.body.mass_model
         if isinstance(model, Polyhedron):
-            add(NS_BODY, 0, Marker.TRIANGLE_LIST, (1.0, 1.0, 1.0), _color(COLORS[POLYHEDRON]),
-                at=polyhedron_triangles(model.vertices, model.facets))
+            markers.append(self._marker(
+                self.body, NS_BODY, 0, Marker.TRIANGLE_LIST, (1.0, 1.0, 1.0),
+                _color(COLORS[POLYHEDRON]), at=polyhedron_triangles(model.vertices, model.facets)))
         else:
-            add(NS_BODY, 0, Marker.CUBE if self.shape.kind == BOX else Marker.SPHERE,
-                [2.0 * v for v in self.shape.semi_axes], _color(COLORS[self.shape.kind]))
+            markers.append(self._marker(
+                self.body, NS_BODY, 0, Marker.CUBE if self.shape.kind == BOX else Marker.SPHERE,
+                [2.0 * v for v in self.shape.semi_axes], _color(COLORS[self.shape.kind])))
         for i, axis in enumerate('xyz'):
-            add(NS_AXES, i, Marker.ARROW, (AXIS_LENGTH, 0.04, 0.08), _color(COLORS[axis]))
+            markers.append(self._marker(self.body, NS_AXES, i, Marker.ARROW,
+                                        (AXIS_LENGTH, 0.04, 0.08), _color(COLORS[axis]),
+                                        orientation=AXIS_ROTATIONS[i]))
+        for m in markers:
+            m.frame_locked = True
+            m.header.stamp = stamp(stamp_ns)
+        return MarkerArray(markers=markers)
+
+    def body_bytes(self, stamp_ns: int) -> bytes:
+        """Return :meth:`body_message` serialised (CDR)."""
+        return bytes(serialize_message(self.body_message(stamp_ns)))
+
+    def _template(self) -> MarkerArray:
+        """Return the moving part with every number that does not change from sample to sample."""
         # ARROW with points: scale = (shaft diameter, head diameter, head length)
-        add(NS_MOMENTUM, 0, Marker.ARROW, (0.05, 0.1, 0.2), _color(COLORS['momentum']),
-            points=2)
+        markers = [self._marker(self.orbital, NS_MOMENTUM, 0, Marker.ARROW, (0.05, 0.1, 0.2),
+                                _color(COLORS['momentum']), points=2)]
         if self.perturber_ns is not None:
             for j in range(self.perturbers):
-                add(self.perturber_ns, j, Marker.ARROW, (0.05, 0.1, 0.2),
-                    _color(COLORS['torquing_body']), points=2)
+                markers.append(self._marker(self.orbital, self.perturber_ns, j, Marker.ARROW,
+                                            (0.05, 0.1, 0.2), _color(COLORS['torquing_body']),
+                                            points=2))
         return MarkerArray(markers=markers)
 
     @property
     def markers(self) -> int:
-        """Count the markers of one scene."""
+        """Count the markers of one scene's moving part (``markers``)."""
         return len(self.message.markers)
 
     def columns(self, stamp_ns: np.ndarray, t: np.ndarray, quaternion: np.ndarray,
                 omega: np.ndarray) -> dict[str, np.ndarray]:
         """
-        Return the numbers of n scenes: field path -> (n,) column.
+        Return the numbers of n scenes' moving parts: field path -> (n,) column.
 
         ``stamp_ns`` (n,) [ns of ROS time], ``t`` (n,) [yr], ``quaternion`` (n, 4) (w, x, y,
         z, body -> orbital), ``omega`` (n, 3) [rad/yr, body axes]: the samples shown.
@@ -163,25 +193,18 @@ class MarkerScene:
             values[f'markers[{j}].header.stamp.sec'] = sec
             values[f'markers[{j}].header.stamp.nanosec'] = nanosec
 
-        def orient(j: int, q: np.ndarray) -> None:
-            for name, column in zip('wxyz', q.T):
-                values[f'markers[{j}].pose.orientation.{name}'] = column
-
         def arrow(j: int, vector: np.ndarray, length: float) -> None:
             norm = np.linalg.norm(vector, axis=1, keepdims=True)
             tip = np.divide(vector, norm, out=np.zeros_like(vector), where=norm > 0) * length
             for name, column in zip('xyz', tip.T):
                 values[f'markers[{j}].points[1].{name}'] = column
 
-        orient(0, quaternion)
-        for i, rotation in enumerate(AXIS_ROTATIONS):
-            orient(1 + i, _quaternion_products(quaternion, rotation))
         momentum = angular_momentum_orbital(np.asarray(omega, dtype=float),
                                             quaternions_to_matrices(quaternion),
                                             self.scenario.inertia)
-        arrow(4, momentum, MOMENTUM_LENGTH)
+        arrow(0, momentum, MOMENTUM_LENGTH)
         for j, direction in enumerate(torquing_body_directions(self.scenario, t)):
-            arrow(5 + j, direction, PERTURBER_LENGTH)
+            arrow(1 + j, direction, PERTURBER_LENGTH)
         return values
 
     def encode(self, stamp_ns: np.ndarray, t: np.ndarray, quaternion: np.ndarray,

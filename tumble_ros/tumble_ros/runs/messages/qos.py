@@ -73,6 +73,13 @@ PUBLISHER_QOS = {
     topics.STATUS: LATCHED_QOS,
     topics.SCENARIO: DESCRIPTION_QOS,
     topics.MARKERS: STATE_QOS,
+    # sent once: a viewer or recorder that comes later still gets it
+    topics.BODY_MARKERS: LATCHED_QOS,
+    # the attitude per sample, like every per-sample topic (tf2's listeners subscribe volatile:
+    # they match it and get what is published from then on)
+    topics.TF: STATE_QOS,
+    # tf2's static broadcaster's QoS: reliable, transient local, depth 1
+    topics.TF_STATIC: LATCHED_QOS,
     topics.COMPARISON_STATUS: LATCHED_QOS,
 }
 
