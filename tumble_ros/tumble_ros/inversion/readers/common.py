@@ -16,9 +16,9 @@ from typing import NoReturn
 
 import numpy as np
 
-from tumble_ros.core.model.units import KM_PER_AU
-from tumble_ros.core.torques.orbits import SPEED_OF_LIGHT
 from tumble_ros.core.model.user_files import decode_user_text, read_user_bytes
+from tumble_ros.core.torques.orbits import SPEED_OF_LIGHT
+from tumble_ros.core.units import KM_PER_AU
 
 from ..campaign import Campaign, CampaignError
 

@@ -35,7 +35,7 @@ import re
 
 import numpy as np
 
-from tumble_ros.core.model.units import KM_PER_AU
+from tumble_ros.core.units import KM_PER_AU
 from tumble_ros.core.torques.ephemeris import (DAYS_PER_YEAR, Ephemeris, MAX_EPHEMERIS_BYTES,
                                                parse_ephemeris)
 
