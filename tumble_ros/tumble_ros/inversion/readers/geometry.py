@@ -35,9 +35,9 @@ import re
 
 import numpy as np
 
-from tumble_ros.core.units import KM_PER_AU
 from tumble_ros.core.torques.ephemeris import (DAYS_PER_YEAR, Ephemeris, MAX_EPHEMERIS_BYTES,
                                                parse_ephemeris)
+from tumble_ros.core.units import KM_PER_AU
 
 from .common import fail, LIGHT_DAYS_PER_AU, read_text
 

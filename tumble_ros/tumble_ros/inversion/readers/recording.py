@@ -27,9 +27,9 @@ import numpy as np
 
 from tumble_ros.analysis.display import ELEMENTS_FRAME, frame_name
 from tumble_ros.analysis.recording import load_recording
-from tumble_ros.core.units import SECONDS_PER_YEAR
 from tumble_ros.core.photometry.lightcurve import observer_geometry
 from tumble_ros.core.torques.ephemeris import DAYS_PER_YEAR
+from tumble_ros.core.units import SECONDS_PER_YEAR
 from tumble_ros.errors import AnalysisError
 from tumble_ros.io import McapError
 
