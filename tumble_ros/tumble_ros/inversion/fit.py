@@ -36,7 +36,7 @@ _RELATIVE = ('precession_period', 'rotation_period')
 CHI2_FAR = 2.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class InversionFit:
     """
     One local solution.

@@ -127,7 +127,7 @@ class TumblerParameters:
                          self.lambert_weight, self.phase_slope])
 
     @classmethod
-    def from_vector(cls, values: Sequence[float], mode: str,
+    def from_vector(cls, values: Sequence[float] | np.ndarray, mode: str,
                     anti_aligned: bool) -> 'TumblerParameters':
         """Return the parameters of a full vector (ScenarioError for an impossible state)."""
         v = [float(x) for x in values]
@@ -147,7 +147,8 @@ class TumblerParameters:
                                anti_aligned)
         return cls(spin, axis_ratios, lambert_weight, phase_slope)
 
-    def with_values(self, names: Sequence[str], values: Sequence[float]) -> 'TumblerParameters':
+    def with_values(self, names: Sequence[str],
+                    values: Sequence[float] | np.ndarray) -> 'TumblerParameters':
         """Return a copy with the named parameters set (ScenarioError if impossible)."""
         full = self.vector()
         index = list(PARAMETER_UNITS)
@@ -211,7 +212,7 @@ class ForwardModel:
 
     # -- pieces ----------------------------------------------------------------------------
     def mesh(self, params: TumblerParameters) -> Mesh:
-        """Return the shape's mesh (the fixed one, or the ellipsoid's, cached)."""
+        """Return the mesh of the shape: the fixed one, or the ellipsoid's (cached)."""
         if self.options.mesh is not None:
             return self.options.mesh
         key = (float(params.axis_ratios[0]), float(params.axis_ratios[1]))
@@ -253,7 +254,7 @@ class ForwardModel:
 
     # -- the model -------------------------------------------------------------------------
     def magnitudes(self, params: TumblerParameters) -> np.ndarray:
-        """Return the model's magnitudes (n,) [mag] without the block offsets."""
+        """Return the model's magnitudes [mag], one a point, without the block offsets."""
         self.evaluations += 1
         q = self.quaternions(params)
         n = q.shape[0]
@@ -289,17 +290,22 @@ class ForwardModel:
         return np.asarray(offsets[block_group])
 
     def try_residuals(self, params: TumblerParameters | None) -> np.ndarray | None:
-        """Return :meth:`residuals`, or None for no state or a failed propagation."""
+        """
+        Return :meth:`residuals`, or None for no state, a body no mass has, a failed run.
+
+        (The moments must obey the triangle inequality, I1/I3 + I2/I3 >= 1: the Scenario's
+        check, which the fit meets as a wall.)
+        """
         if params is None:
             return None
         try:
             return self.residuals(params)
-        except ModelError:
+        except (ModelError, ScenarioError):
             return None
 
 
 def parameters_or_none(start: TumblerParameters, names: Sequence[str],
-                       values: Sequence[float]) -> TumblerParameters | None:
+                       values: Sequence[float] | np.ndarray) -> TumblerParameters | None:
     """Return ``start`` with the named values set, or None for an impossible spin state."""
     try:
         return start.with_values(names, values)

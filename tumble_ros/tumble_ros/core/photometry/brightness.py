@@ -37,7 +37,8 @@ from tumble_ros.core.photometry.scattering import law as find_law, ScatteringLaw
 from tumble_ros.core.photometry.shape import Mesh
 from tumble_ros.core.torques.frames import orbital_to_body
 
-__all__ = ['brightness', 'brightness_in_body', 'scattering_sums', 'to_body', 'phase_angle', 'aspect_angles',
+__all__ = ['brightness', 'brightness_in_body', 'scattering_sums', 'to_body', 'phase_angle',
+           'aspect_angles',
            'latitude_longitude', 'reference_brightness', 'magnitude', 'CHUNK_ELEMENTS']
 
 #: The samples x facets blocks of :func:`brightness` hold at most this many numbers (8 MB per
