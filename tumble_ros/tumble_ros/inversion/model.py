@@ -209,6 +209,7 @@ class ForwardModel:
         self._mesh_key: tuple[float, float] | None = None
         self._mesh: Mesh | None = None
         self._references = (1.0, 1.0)
+        self._attitudes: tuple[SpinObservables, np.ndarray] | None = None
 
     # -- pieces ----------------------------------------------------------------------------
     def mesh(self, params: TumblerParameters) -> Mesh:
@@ -243,13 +244,20 @@ class ForwardModel:
                                                       self.options.rtol * 1e-2))
 
     def quaternions(self, params: TumblerParameters) -> np.ndarray:
-        """Return the attitudes (n, 4) body -> ecliptic at the emission times, point order."""
+        """
+        Return the attitudes (n, 4) body -> ecliptic at the emission times, point order.
+
+        The last spin state's are kept: a change of the shape or the law alone reuses them.
+        """
+        if self._attitudes is not None and self._attitudes[0] == params.spin:
+            return self._attitudes[1]           # (the shape's and the law's derivatives)
         times = self.t_years[self.order]
         run = simulate(self.scenario(params), times)
         if not run.success:
             raise ModelError(f'the propagation failed: {run.message}')
         q = np.empty_like(run.quaternion)
         q[self.order] = run.quaternion
+        self._attitudes = (params.spin, q)
         return q
 
     # -- the model -------------------------------------------------------------------------
