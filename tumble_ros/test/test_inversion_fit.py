@@ -118,3 +118,19 @@ def test_the_compiled_brightness_is_the_numpy_sum_of_every_law(name):
     reference = _numpy_brightness(sun, observer, mesh, law(name))
     assert np.allclose(compiled, reference, rtol=1e-13, atol=1e-15)
     assert np.any(reference == 0.0) or np.all(compiled > 0.0)
+
+
+def test_the_posterior_sample_spreads_as_the_covariance():
+    from tumble_ros.inversion.posterior import sample_posterior
+    points = geometry(nights=3, per_night=20)
+    options = ModelOptions(fixed=('i1_i3', 'i2_i3', 'axis_b_a', 'axis_c_a', 'phi0', 'psi0'))
+    clean = ForwardModel(points, options).magnitudes(TRUTH)
+    noisy = observed(points, clean + np.random.default_rng(2).normal(0.0, 0.01, clean.size))
+    fit = fit_local(noisy, TRUTH, options)
+    posterior = sample_posterior(noisy, fit, walkers=8, steps=260, burn=80, options=options)
+    assert posterior.samples.shape == (8 * 180, 4) and 0.1 < posterior.acceptance < 0.9
+    spread = posterior.samples.std(axis=0)
+    # linear model near the minimum: the posterior's spread is the covariance's 1 sigma
+    assert np.all((spread / fit.sigma > 0.5) & (spread / fit.sigma < 2.0)), spread / fit.sigma
+    assert np.all(np.abs(posterior.samples.mean(axis=0) - fit.values) < fit.sigma)
+    assert posterior.parameters(fit, 0).spin.mode == 'SAM'
