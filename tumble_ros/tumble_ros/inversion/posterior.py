@@ -38,7 +38,7 @@ class Posterior:
     acceptance: float
 
     def parameters(self, fit: InversionFit, k: int) -> TumblerParameters:
-        """Return the k-th sample as model parameters (the fit's mode and theta0's side)."""
+        """Return sample k as a model: the fit's mode and side of theta0, these values."""
         return fit.parameters.with_values(self.names, self.samples[k])
 
 
