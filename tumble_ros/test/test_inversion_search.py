@@ -123,3 +123,30 @@ def test_a_fit_from_a_grid_start_keeps_its_mode(noisy):
     fit = fit_local(noisy, start, max_nfev=3)
     assert fit.parameters.spin.mode == 'SAM'
     assert fit.parameters.spin.anti_aligned == start.spin.anti_aligned
+
+
+def test_the_period_search_gets_hours_and_block_means_removed(noisy, monkeypatch):
+    from types import SimpleNamespace
+
+    from tumble_ros.inversion import search
+    seen = {}
+
+    def fake(t, y, sigma, p_min, p_max, **kwargs):
+        seen.update(t=t, y=y, unit=kwargs['unit'])
+        mirror = SimpleNamespace(label='(f2, f1)', p1=263.0, p2=27.38)
+        return SimpleNamespace(p1=27.38, p2=263.0, mirrors=(mirror,), alternatives=(),
+                               warnings=('a warning',), aliases=('P1',))
+    monkeypatch.setattr(search, 'search_periods', fake)
+    candidates, solution = period_candidates(noisy, SearchSettings(modes=('SAM',)))
+    assert seen['unit'] == 'h' and seen['t'][0] == 0.0
+    assert seen['t'][-1] == pytest.approx(noisy.span_days * 24.0)
+    for b in range(len(noisy.block_names)):
+        assert np.average(seen['y'][noisy.block == b],
+                          weights=noisy.sigma[noisy.block == b] ** -2) == pytest.approx(0.0,
+                                                                                        abs=1e-12)
+    pairs = [(c.precession_period, c.rotation_period) for c in candidates]
+    assert pairs[0] == pytest.approx((27.38, 263.0))          # the search's own reading first
+    assert len(set((round(a, 6), round(b, 6)) for a, b in pairs)) == len(pairs)  # no repeats
+    assert all(c.mode == 'SAM' for c in candidates)
+    warnings = search._result_warnings((fit_local(noisy, TRUTH, max_nfev=1),), solution)
+    assert 'period search: a warning' in warnings and any('alias' in w for w in warnings)
