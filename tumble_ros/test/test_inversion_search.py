@@ -146,7 +146,7 @@ def test_the_period_search_gets_hours_and_block_means_removed(noisy, monkeypatch
                                                                                         abs=1e-12)
     pairs = [(c.precession_period, c.rotation_period) for c in candidates]
     assert pairs[0] == pytest.approx((27.38, 263.0))          # the search's own reading first
-    assert len(set((round(a, 6), round(b, 6)) for a, b in pairs)) == len(pairs)  # no repeats
+    assert len({(round(a, 6), round(b, 6)) for a, b in pairs}) == len(pairs)  # no repeats
     assert all(c.mode == 'SAM' for c in candidates)
     warnings = search._result_warnings((fit_local(noisy, TRUTH, max_nfev=1),), solution)
     assert 'period search: a warning' in warnings and any('alias' in w for w in warnings)
