@@ -150,3 +150,21 @@ def test_the_period_search_gets_hours_and_block_means_removed(noisy, monkeypatch
     assert all(c.mode == 'SAM' for c in candidates)
     warnings = search._result_warnings((fit_local(noisy, TRUTH, max_nfev=1),), solution)
     assert 'period search: a warning' in warnings and any('alias' in w for w in warnings)
+
+
+def test_the_invert_command_samples_the_posterior_and_runs_the_flyby(noisy, tmp_path,
+                                                                      monkeypatch, capsys):
+    monkeypatch.setattr(invert_cli, 'load_campaign', lambda files, fmt, eph: noisy)
+    out = tmp_path / 'out'
+    code = invert_cli.main(['obs.txt', '--periods', '27.38,263', '--modes', 'SAM',
+                            '--poles', '2', '--phases', '1', '--starts', '1', '--out',
+                            str(out), '--no-figures', '--quiet', '--posterior', '4',
+                            '--flyby', 'apophis_2029', '--flyby-samples', '1'])
+    assert code in (0, 1)
+    printed = capsys.readouterr().out
+    assert 'flyby: model' in printed and 'nominal' in printed and 'posterior 1' in printed
+    with np.load(out / 'posterior.npz') as data:
+        assert data['samples'].shape[1] == len(data['names']) == 10
+    assert (out / 'flyby.txt').read_text().startswith('flyby: model')
+    assert invert_cli.main(['obs.txt', '--flyby', 'no_such_scenario', '--quiet']) == 2
+    assert 'no_such_scenario' in capsys.readouterr().err

@@ -59,6 +59,16 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--starts', type=int, default=2, help='grid points fitted a candidate (2)')
     p.add_argument('--candidates', type=int, default=6, help='most period pairs (6)')
     p.add_argument('--epoch', type=float, help='t = 0 [JD TDB] (default: the first point)')
+    p.add_argument('--posterior', type=int, metavar='STEPS',
+                   help='sample the best fit\'s posterior with emcee, STEPS per walker (a '
+                   'quarter burnt): posterior.npz in --out')
+    p.add_argument('--flyby', metavar='SCENARIO',
+                   help='run the accepted solutions (and --flyby-samples posterior samples) '
+                   'through this flyby scenario (e.g. apophis_2029): flyby.txt in --out')
+    p.add_argument('--flyby-samples', type=int, default=20, metavar='N',
+                   help='posterior samples run through --flyby (20; one run each)')
+    p.add_argument('--flyby-start', type=float, metavar='JD',
+                   help='t = 0 of --flyby [JD TDB] (default: apophis_2029\'s, 2029-04-10 21:46)')
     p.add_argument('--json', action='store_true', help='print the report as JSON')
     p.add_argument('--out', type=Path, help='folder for the report, fit.yaml and figures')
     p.add_argument('--no-figures', action='store_true', help='no PNG figures in --out')
@@ -79,6 +89,7 @@ def load_campaign(files: Sequence[str], file_format: str | None,
 def _outputs(args: argparse.Namespace, accepted: int) -> list[str]:
     names = ['report.txt', 'report.json', 'fit.yaml']
     names += [f'fit_{k}.yaml' for k in range(2, accepted + 1)]
+    names += (['posterior.npz'] if args.posterior else []) + (['flyby.txt'] if args.flyby else [])
     return names + ([] if args.no_figures else ['nights.png', 'period_plane.png', 'poles.png'])
 
 
@@ -94,11 +105,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                                   modes=tuple(m.strip().upper() for m in args.modes.split(',')),
                                   max_candidates=args.candidates, poles=args.poles,
                                   phases=args.phases, starts=args.starts)
+        flyby = _flyby_scenario(args.flyby) if args.flyby else None
         campaign = load_campaign(args.files, args.format, args.ephemeris)
         with interrupts():
             result = invert(campaign, settings, epoch_jd=args.epoch,
                             progress=None if args.quiet else stderr_progress())
-            _print_and_write(args, campaign, result)
+            _print_and_write(args, campaign, result, _extras(args, campaign, result, flyby))
     except (TumbleRosError, ValueError) as err:
         print(f'error: {err}', file=sys.stderr)
         return 2
@@ -113,12 +125,73 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 1 if result.warnings else 0
 
 
-def _print_and_write(args: argparse.Namespace, campaign: Any, result: Any) -> None:
+def _flyby_scenario(name: str) -> Any:
+    """Return the scenario of ``--flyby`` (a params file or a shipped scenario's name)."""
+    from tumble_ros.core import load_scenario
+    from tumble_ros.core.model.shipped import shipped_scenarios
+    from tumble_ros.topics import SIM_NODE_PARAMETERS
+    path = shipped_scenarios().get(name, name)
+    return load_scenario(path, ignore=frozenset(SIM_NODE_PARAMETERS))
+
+
+def _extras(args: argparse.Namespace, campaign: Any, result: Any,
+            flyby: Any) -> list[tuple[str, bytes]]:
+    """Return the files of ``--posterior`` and ``--flyby`` (flyby.txt also printed)."""
+    import io
+
+    import numpy as np
+    files: list[tuple[str, bytes]] = []
+    models = [fit.parameters for fit in result.accepted]
+    if args.posterior:
+        from tumble_ros.inversion.posterior import sample_posterior
+        posterior = sample_posterior(campaign, result.best, steps=args.posterior,
+                                     burn=args.posterior // 4)
+        buffer = io.BytesIO()
+        np.savez(buffer, names=np.array(posterior.names), samples=posterior.samples,
+                 log_probability=posterior.log_probability)
+        files.append(('posterior.npz', buffer.getvalue()))
+        count = max(0, args.flyby_samples) if flyby is not None else 0
+        every = max(1, len(posterior.samples) // max(count, 1))
+        models += [posterior.parameters(result.best, k)
+                   for k in range(0, len(posterior.samples), every)][:count]
+        print(f'posterior: {len(posterior.samples)} samples, acceptance '
+              f'{posterior.acceptance:.2f}', file=sys.stderr)
+    if flyby is not None:
+        from tumble_ros.inversion.flyby import APOPHIS_2029_START_JD, flyby_ensemble
+        start = args.flyby_start if args.flyby_start is not None else APOPHIS_2029_START_JD
+        outcome = flyby_ensemble(flyby, models, result.best.epoch_jd, start)
+        text = _flyby_text(outcome, len(result.accepted))
+        files.append(('flyby.txt', (text + '\n').encode()))
+    return files
+
+
+def _flyby_text(outcome: Any, accepted: int) -> str:
+    """Return the periods and L before and after the flyby, one line a model."""
+    import math
+
+    from tumble_ros.core.model.units import HOURS_PER_YEAR as H
+    lines = ['flyby: model, P_phi, P_psi [h] before -> after, L (lambda, beta) [deg] after']
+    for k, (before, after) in enumerate(zip(outcome.before, outcome.after)):
+        label = 'nominal' if k == 0 else (f'accepted {k + 1}' if k < accepted
+                                          else f'posterior {k - accepted + 1}')
+        lines.append(f'  {label:<13} {before.precession_period * H:.5f} '
+                     f'{before.rotation_period * H:.4f} -> {after.precession_period * H:.5f} '
+                     f'{after.rotation_period * H:.4f}  '
+                     f'({math.degrees(after.pole_longitude or 0.0) % 360:.2f}, '
+                     f'{math.degrees(after.pole_latitude or 0.0):.2f})')
+    return '\n'.join(lines)
+
+
+def _print_and_write(args: argparse.Namespace, campaign: Any, result: Any,
+                     extras: list[tuple[str, bytes]]) -> None:
     """Print the report; write the files of ``--out``."""
     from tumble_ros.inversion.report import format_result, result_json
     from tumble_ros.inversion.scenario_out import scenario_yaml
     text, document = format_result(result), result_json(result)
     print(document if args.json else text)
+    for name, content in extras:
+        if name == 'flyby.txt':
+            print(content.decode().rstrip(), file=sys.stderr if args.json else sys.stdout)
     if args.out is None:
         return
     span_hours = campaign.span_days * 24.0
@@ -127,6 +200,7 @@ def _print_and_write(args: argparse.Namespace, campaign: Any, result: Any) -> No
     files += [(f'fit_{k}.yaml', scenario_yaml(fit, span_hours, f'Accepted solution {k} of '
                                               f'{len(result.accepted)}').encode())
               for k, fit in enumerate(result.accepted[1:], start=2)]
+    files += extras
     if not args.no_figures:
         from tumble_ros.inversion.figures import figure_files
         files += figure_files(campaign, result)

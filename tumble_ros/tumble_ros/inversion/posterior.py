@@ -5,7 +5,7 @@ log p(x) = -chi^2(x) / 2 with flat priors inside the parameters' bounds (``model
 offsets solved at every sample as in the fit (the profiled likelihood); a parameter set with no
 possible spin state (a P_psi no body of the ratios has, moments that break the triangle
 inequality) has p = 0. The walkers start in a Gaussian ball of the fit's covariance (a tenth of
-its 1 sigma); the first ``burn`` steps are dropped. What comes out is a sample of the free
+its 1 sigma), each where the model can be evaluated; the first ``burn`` steps are dropped. What comes out is a sample of the free
 parameters (units of :data:`~.model.PARAMETER_UNITS`) to draw the states the photometry allows
 (an ensemble through a flyby, the spread of a prediction). Cost: walkers x steps model
 evaluations (~0.1 s each at 2,000 points).
@@ -72,8 +72,15 @@ def sample_posterior(campaign: Campaign, fit: InversionFit, *, walkers: int | No
 
     rng = np.random.default_rng(seed)
     spread = np.where(np.isfinite(fit.sigma) & (fit.sigma > 0), fit.sigma, 1e-6) * 0.1
-    start = fit.values + spread * rng.standard_normal((walkers, len(names)))
-    start = np.clip(start, lower + 1e-12, upper - 1e-12)
+    start = np.empty((walkers, len(names)))
+    for w in range(walkers):            # each walker where the model can be evaluated
+        for _ in range(100):
+            start[w] = np.clip(fit.values + spread * rng.standard_normal(len(names)),
+                               lower + 1e-12, upper - 1e-12)
+            if np.isfinite(log_probability(start[w])):
+                break
+        else:
+            start[w] = fit.values
     sampler = emcee.EnsembleSampler(walkers, len(names), log_probability)
     # (emcee draws from a numpy RandomState: seeded from ours, the chain is reproducible)
     state = emcee.State(start, random_state=np.random.RandomState(
@@ -81,4 +88,6 @@ def sample_posterior(campaign: Campaign, fit: InversionFit, *, walkers: int | No
     sampler.run_mcmc(state, steps)
     chain = sampler.get_chain(discard=burn, flat=True)
     logp = sampler.get_log_prob(discard=burn, flat=True)
-    return Posterior(names, chain, logp, float(np.mean(sampler.acceptance_fraction)))
+    possible = np.isfinite(logp)        # (a walker never leaves a possible state once in one)
+    return Posterior(names, chain[possible], logp[possible],
+                     float(np.mean(sampler.acceptance_fraction)))
