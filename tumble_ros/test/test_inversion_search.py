@@ -152,8 +152,8 @@ def test_the_period_search_gets_hours_and_block_means_removed(noisy, monkeypatch
     assert 'period search: a warning' in warnings and any('alias' in w for w in warnings)
 
 
-def test_the_invert_command_samples_the_posterior_and_runs_the_flyby(noisy, tmp_path,
-                                                                      monkeypatch, capsys):
+def test_the_invert_command_samples_the_posterior_and_runs_the_flyby(
+        noisy, tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(invert_cli, 'load_campaign', lambda files, fmt, eph: noisy)
     out = tmp_path / 'out'
     code = invert_cli.main(['obs.txt', '--periods', '27.38,263', '--modes', 'SAM',

@@ -60,7 +60,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--candidates', type=int, default=6, help='most period pairs (6)')
     p.add_argument('--epoch', type=float, help='t = 0 [JD TDB] (default: the first point)')
     p.add_argument('--posterior', type=int, metavar='STEPS',
-                   help='sample the best fit\'s posterior with emcee, STEPS per walker (a '
+                   help="sample the best fit's posterior with emcee, STEPS per walker (a "
                    'quarter burnt): posterior.npz in --out')
     p.add_argument('--flyby', metavar='SCENARIO',
                    help='run the accepted solutions (and --flyby-samples posterior samples) '
@@ -68,7 +68,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--flyby-samples', type=int, default=20, metavar='N',
                    help='posterior samples run through --flyby (20; one run each)')
     p.add_argument('--flyby-start', type=float, metavar='JD',
-                   help='t = 0 of --flyby [JD TDB] (default: apophis_2029\'s, 2029-04-10 21:46)')
+                   help="t = 0 of --flyby [JD TDB] (default: apophis_2029's, 2029-04-10 21:46)")
     p.add_argument('--json', action='store_true', help='print the report as JSON')
     p.add_argument('--out', type=Path, help='folder for the report, fit.yaml and figures')
     p.add_argument('--no-figures', action='store_true', help='no PNG figures in --out')

@@ -5,10 +5,11 @@ log p(x) = -chi^2(x) / 2 with flat priors inside the parameters' bounds (``model
 offsets solved at every sample as in the fit (the profiled likelihood); a parameter set with no
 possible spin state (a P_psi no body of the ratios has, moments that break the triangle
 inequality) has p = 0. The walkers start in a Gaussian ball of the fit's covariance (a tenth of
-its 1 sigma), each where the model can be evaluated; the first ``burn`` steps are dropped. What comes out is a sample of the free
-parameters (units of :data:`~.model.PARAMETER_UNITS`) to draw the states the photometry allows
-(an ensemble through a flyby, the spread of a prediction). Cost: walkers x steps model
-evaluations (~0.1 s each at 2,000 points).
+its 1 sigma), each where the model can be evaluated; the first ``burn`` steps are dropped.
+What comes out is a sample of the free parameters (units of :data:`~.model.PARAMETER_UNITS`),
+the states the photometry allows (an ensemble through a flyby, the spread of a prediction), the
+samples with p = 0 left out. Cost: walkers x steps model evaluations (~0.1 s each at 2,000
+points).
 """
 from __future__ import annotations
 
