@@ -39,7 +39,7 @@ setup(
         'console_scripts': [
             f'{name} = tumble_ros.__main__:entry'
             for name in ('sim', 'comparator', 'recorder', 'bringup', 'analyze', 'ensemble',
-                         'encounter')
+                         'encounter', 'invert')
         ],
     },
 )

@@ -5,8 +5,8 @@
     python -m tumble_ros <executable> [args ...]   run an executable, as `ros2 run tumble_ros` does
     python -m tumble_ros --help                    the usage (USAGE); <executable> --help: its own
 
-Executables: sim, comparator, recorder, bringup, analyze, ensemble, encounter. SCENARIO is a
-params file or the name of a shipped one (``fig10``: config/fig10.yaml).
+Executables: sim, comparator, recorder, bringup, analyze, ensemble, encounter, invert. SCENARIO
+is a params file or the name of a shipped one (``fig10``: config/fig10.yaml).
 
 The main job simulates the scenario, compares it with the paper's analytic solution and records
 everything to ``recordings/<scenario>_<UTC time>.mcap`` (``bringup --offline``: the recording is
@@ -24,7 +24,7 @@ or SIGHUP while it is still importing ends it quietly (nothing is compiled at im
 compiles a loop on its first use), with the exit code it gives when stopped later (0 for a
 node, 128 + the signal otherwise). A closed stdout or stderr (``bringup | head -1``) ends it
 quietly too, as Unix tools do: exit 141 (128 + SIGPIPE), the recording finalised. The offline
-commands (analyze, ensemble, encounter) serve a stop where they are
+commands (analyze, ensemble, encounter, invert) serve a stop where they are
 (:func:`tumble_ros.exits.interrupts`, taking over one the early handler recorded) and, stopped,
 end without the interpreter's teardown (:func:`~tumble_ros.exits.end_if_stopped`).
 
@@ -60,6 +60,7 @@ EXECUTABLES = {
     'analyze': 'tumble_ros.analysis.cli:main',
     'ensemble': 'tumble_ros.cli.ensemble:main',
     'encounter': 'tumble_ros.cli.encounter:main',
+    'invert': 'tumble_ros.cli.invert:main',
 }
 #: What each executable does, in one line of ``--help``.
 SUMMARIES = {
@@ -70,6 +71,7 @@ SUMMARIES = {
     'analyze': "a recording's summary and figures, offline",
     'ensemble': 'N bodies (impacts, spread spin states), on Dask, into a Zarr store',
     'encounter': 'an ensemble through a flyby: the spin state before and after',
+    'invert': "a tumbler's spin state and shape fitted to photometry (docs/inversion.md)",
 }
 #: ``python -m tumble_ros --help``: the usage, not the module's notes (and kept under -OO).
 USAGE = """usage: python -m tumble_ros [SCENARIO] [--live]
@@ -92,7 +94,7 @@ Examples:
   python -m tumble_ros analyze recordings/run.mcap --figures figs/
 Docs: README.md; the nodes, topics and parameters: docs/ros.md."""
 #: The executables whose ``main`` takes the arguments without the program name.
-BARE_ARGV = frozenset({'ensemble', 'encounter'})
+BARE_ARGV = frozenset({'ensemble', 'encounter', 'invert'})
 #: The nodes: they exit 0 when a signal stops them.
 NODES = frozenset({'sim', 'comparator', 'recorder'})
 #: The executables that import no numba (a recording needs none): their start imports none.

@@ -57,11 +57,17 @@ def kaasalainen(mu0: FloatArray, mu: FloatArray) -> FloatArray:
 
 @dataclass(frozen=True)
 class ScatteringLaw:
-    """A named law S(mu0, mu) on arrays of one shape (both >= 0, S = 0 if either is 0)."""
+    """
+    A named law S(mu0, mu) on arrays of one shape (both >= 0, S = 0 if either is 0).
+
+    ``weights`` (w_LS, w_L): the law is w_LS mu0 mu / (mu0 + mu) + w_L mu0 mu (the compiled
+    brightness sums the two in one pass, ``kernel``); None for a law of another form.
+    """
 
     name: str
     function: Callable[[FloatArray, FloatArray], FloatArray]
     note: str
+    weights: tuple[float, float] | None = None
 
     def __call__(self, mu0: FloatArray, mu: FloatArray) -> FloatArray:
         """Return S(mu0, mu) elementwise."""
@@ -71,11 +77,12 @@ class ScatteringLaw:
 #: The scattering laws by name.
 LAWS: dict[str, ScatteringLaw] = {
     item.name: item for item in (
-        ScatteringLaw('lambert', lambert, 'S = mu0 mu: a diffusing surface'),
+        ScatteringLaw('lambert', lambert, 'S = mu0 mu: a diffusing surface', (0.0, 1.0)),
         ScatteringLaw('lommel_seeliger', lommel_seeliger,
-                      'S = mu0 mu / (mu0 + mu): single scattering, dark regolith'),
+                      'S = mu0 mu / (mu0 + mu): single scattering, dark regolith', (1.0, 0.0)),
         ScatteringLaw('kaasalainen', kaasalainen,
-                      'S = mu0 mu / (mu0 + mu) + 0.1 mu0 mu: Kaasalainen et al. 2001'),
+                      'S = mu0 mu / (mu0 + mu) + 0.1 mu0 mu: Kaasalainen et al. 2001',
+                      (1.0, KAASALAINEN_LAMBERT_WEIGHT)),
     )
 }
 

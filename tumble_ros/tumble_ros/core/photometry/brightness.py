@@ -33,10 +33,12 @@ import numpy as np
 from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.compiling.jit import python_source
 from tumble_ros.core.model.scattering import law as find_law, ScatteringLaw
+from tumble_ros.core.photometry import kernel
 from tumble_ros.core.photometry.shape import Mesh
 from tumble_ros.core.torques.frames import orbital_to_body
 
-__all__ = ['brightness', 'brightness_in_body', 'to_body', 'phase_angle', 'aspect_angles',
+__all__ = ['brightness', 'brightness_in_body', 'scattering_sums', 'to_body', 'phase_angle',
+           'aspect_angles',
            'latitude_longitude', 'reference_brightness', 'magnitude', 'CHUNK_ELEMENTS']
 
 #: The samples x facets blocks of :func:`brightness` hold at most this many numbers (8 MB per
@@ -94,9 +96,24 @@ def brightness(quaternion: ArrayLike, sun: ArrayLike, observer: ArrayLike, mesh:
 
 def brightness_in_body(sun: FloatArray, observer: FloatArray, mesh: Mesh,
                        law: str | ScatteringLaw = 'lambert') -> FloatArray:
-    """Return :func:`brightness` of unit directions (n, 3) already in body axes."""
+    """
+    Return :func:`brightness` of unit directions (n, 3) already in body axes.
+
+    A law of the registry (a weighted sum of Lommel-Seeliger and Lambert) is summed by the
+    compiled :func:`scattering_sums`; another law, or no numba, by numpy in blocks.
+    """
     scatter = find_law(law)
-    s_body, o_body = sun, observer
+    if kernel.COMPILED and scatter.weights is not None:
+        w_ls, w_l = scatter.weights
+        sums = scattering_sums(sun, observer, mesh)
+        out_sum: FloatArray = w_ls * sums[:, 0] + w_l * sums[:, 1]
+        return out_sum
+    return _numpy_brightness(sun, observer, mesh, scatter)
+
+
+def _numpy_brightness(s_body: FloatArray, o_body: FloatArray, mesh: Mesh,
+                      scatter: ScatteringLaw) -> FloatArray:
+    """Return the brightness (n,) by numpy, in blocks of :data:`CHUNK_ELEMENTS`."""
     n = s_body.shape[0]
     out = np.empty(n)
     block = max(1, CHUNK_ELEMENTS // mesh.areas.size)
@@ -106,6 +123,27 @@ def brightness_in_body(sun: FloatArray, observer: FloatArray, mesh: Mesh,
         mu0 = np.maximum(_cosines(s_body[start:start + block], columns), 0.0)
         mu = np.maximum(_cosines(o_body[start:start + block], columns), 0.0)
         out[start:start + block] = np.sum(scatter(mu0, mu) * mesh.areas, axis=1)
+    return out
+
+
+def scattering_sums(sun: FloatArray, observer: FloatArray, mesh: Mesh) -> FloatArray:
+    """
+    Return the Lommel-Seeliger and the Lambert facet sums (n, 2) [mesh area units].
+
+    ``sun``, ``observer`` (n, 3) unit directions in body axes; column 0 sums area mu0 mu /
+    (mu0 + mu), column 1 area mu0 mu, over the facets both lit and seen (``kernel``): the
+    brightness of the law w_LS S_LS + w_L S_L is w_LS col0 + w_L col1.
+    """
+    s = np.ascontiguousarray(sun, dtype=float)
+    o = np.ascontiguousarray(observer, dtype=float)
+    if s.ndim != 2 or s.shape[1] != 3 or o.shape != s.shape:
+        raise ValueError(f'sun, observer: need two (n, 3) arrays, got {s.shape}, {o.shape}')
+    out = np.empty((s.shape[0], 2))
+    if kernel.COMPILED:
+        kernel.scattering_sums(s, o, np.ascontiguousarray(mesh.normals), mesh.areas, out)
+        return out
+    for column, name in enumerate(('lommel_seeliger', 'lambert')):
+        out[:, column] = _numpy_brightness(s, o, mesh, find_law(name))
     return out
 
 
