@@ -30,7 +30,8 @@ model, so nothing here imports ``tumble_ros.core`` or ``tumble_ros.inversion`` e
   -2.5 log10(B / B_ref) + 5 log10(r Delta) + slope * alpha[deg] (a linear phase function);
 * **the geometry**: the asteroid and the Earth on two-body Kepler ellipses about the Sun
   (ecliptic J2000 elements; the Earth's of Standish's mean elements at J2000), the observer at
-  the geocentre, light time by iteration (emission time t_e: |r_obs(t) - r_ast(t_e)| = c (t - t_e));
+  the geocentre, light time by iteration (the emission time t_e of a reception at t:
+  |r_obs(t) - r_ast(t_e)| = c (t - t_e));
 * **the sampling**: nights inside apparition windows where the solar elongation allows, a
   deterministic lunar gap (nights within 3.5 d of a full moon are dropped), weather (a random
   choice of the nights left), runs of a few hours, 1-sigma errors 0.01-0.03 mag per night,
@@ -160,7 +161,7 @@ def rotation_period(i: np.ndarray, d: float, momentum: float, mode: str) -> floa
 
 def _polhode(i: np.ndarray, d: float, momentum: float, mode: str,
              samples: int) -> np.ndarray:
-    """w (samples, 3) [rad/d] at equal time steps over one polhode period (Jacobi functions)."""
+    """Return w (samples, 3) [rad/d] at equal time steps over one polhode period (Jacobi)."""
     i1, i2, i3 = i
     l2 = momentum * momentum
     e2 = l2 / d
@@ -253,7 +254,7 @@ def _euler_rhs(moments: np.ndarray) -> Callable[[float, np.ndarray], np.ndarray]
 
 def integrate_attitude(spin: TrueSpin, jd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
-    w (n, 3) [rad/d] body axes and C (n, 3, 3) body -> ecliptic at the times ``jd`` [JD TDB].
+    Return w (n, 3) [rad/d] body axes, C (n, 3, 3) body -> ecliptic at ``jd`` [JD TDB].
 
     Euler's equations and dC/dt = C [w]x by DOP853 (rtol 1e-12, atol 1e-14 of the scale), from
     the epoch forwards to the later times and backwards to the earlier ones.
@@ -290,8 +291,8 @@ def ellipsoid_of_inertia(inertia_ratios: Sequence[float]) -> np.ndarray:
     return axes / axes[0]
 
 
-def _surface_grid(semi_axes: Sequence[float], nu: int, nv: int) -> tuple[np.ndarray,
-                                                                          np.ndarray]:
+def _surface_grid(semi_axes: Sequence[float], nu: int,
+                  nv: int) -> tuple[np.ndarray, np.ndarray]:
     """Outward unit normals (m, 3) and area weights (m,) of the (u, v) midpoint grid."""
     a, b, c = semi_axes
     u = (np.arange(nu) + 0.5) * 2.0 * math.pi / nu
@@ -318,7 +319,7 @@ def ellipsoid_brightness(sun_body: np.ndarray, observer_body: np.ndarray,
                          semi_axes: Sequence[float], nu: int = 256, nv: int = 128,
                          lambert: float = LAMBERT_WEIGHT) -> np.ndarray:
     """
-    Disk-integrated brightness B (n,) of the ellipsoid: the surface integral of S(mu0, mu).
+    Return the brightness B (n,) of the ellipsoid: the surface integral of S(mu0, mu).
 
     ``sun_body``, ``observer_body`` (n, 3) unit directions in body axes; semi-axes along x, y, z.
     """
@@ -335,7 +336,7 @@ def ellipsoid_brightness(sun_body: np.ndarray, observer_body: np.ndarray,
 def sphere_brightness(phase: np.ndarray, radius: float = 1.0,
                       lambert: float = LAMBERT_WEIGHT) -> np.ndarray:
     """
-    The closed form of :func:`ellipsoid_brightness` for a sphere at phase angles ``phase`` [rad].
+    Return :func:`ellipsoid_brightness` of a sphere at phase angles ``phase`` [rad], exactly.
 
     Lommel-Seeliger: (pi R^2 / 2) (1 - sin(a/2) tan(a/2) ln cot(a/4)); Lambert:
     (2 R^2 / 3) (sin a + (pi - a) cos a).
@@ -352,7 +353,7 @@ def sphere_brightness(phase: np.ndarray, radius: float = 1.0,
 
 @dataclass(frozen=True)
 class KeplerElements:
-    """Heliocentric ecliptic J2000 elements: a [au], e, i, node, peri, mean anomaly [deg] at epoch."""
+    """Heliocentric ecliptic J2000 elements: a [au], e, i, node, peri, M [deg] at the epoch."""
 
     a: float
     e: float
@@ -407,7 +408,7 @@ def _emission_geometry(asteroid: KeplerElements, jd_received: np.ndarray
 
 
 def solar_elongation(asteroid: KeplerElements, jd: np.ndarray) -> np.ndarray:
-    """The Sun-Earth-asteroid angle [deg] at ``jd``."""
+    """Return the Sun-Earth-asteroid angle [deg] at ``jd``."""
     earth = kepler_position(EARTH, jd)
     ast = kepler_position(asteroid, jd)
     to_sun, to_ast = -earth, ast - earth
@@ -435,7 +436,7 @@ class Apparition:
 
 def observing_nights(apparition: Apparition, asteroid: KeplerElements,
                      rng: np.random.Generator) -> list[np.ndarray]:
-    """The reception times [JD] of each night: moon and elongation gaps, weather, runs."""
+    """Return the reception times [JD] of each night: moon and elongation gaps, weather, runs."""
     candidates = np.arange(math.ceil(apparition.start_jd), math.floor(apparition.end_jd)) + 0.8
     lunar_age = (candidates - FULL_MOON_JD) % SYNODIC_MONTH
     dark = np.minimum(lunar_age, SYNODIC_MONTH - lunar_age) > 3.5
@@ -483,7 +484,7 @@ def magnitudes(attitude: np.ndarray, sun: np.ndarray, observer: np.ndarray,
                semi_axes: Sequence[float], phase_slope: float, nu: int = 256,
                nv: int = 128) -> np.ndarray:
     """
-    m = -2.5 log10(B / B_ref) + 5 log10(r Delta) + slope * alpha [deg].
+    Return m = -2.5 log10(B / B_ref) + 5 log10(r Delta) + slope * alpha [deg].
 
     B_ref: the zero-phase brightness of the sphere of the ellipsoid's volume (closed form).
     """
@@ -503,7 +504,7 @@ def make_campaign(truth: TrueSpin, apparitions: Sequence[Apparition], seed: int 
                   phase_slope: float = 0.03, sigma: tuple[float, float] = (0.01, 0.03),
                   nu: int = 256, nv: int = 128) -> SyntheticCampaign:
     """
-    The noiseless campaign of ``truth`` over ``apparitions`` (the sampling drawn from ``seed``).
+    Make the noiseless campaign of ``truth`` over ``apparitions`` (sampling from ``seed``).
 
     ``semi_axes`` default: the uniform ellipsoid of the inertia ratios; ``sigma`` the range of
     each night's 1-sigma error [mag].
@@ -531,7 +532,7 @@ def make_campaign(truth: TrueSpin, apparitions: Sequence[Apparition], seed: int 
 def draw(synthetic: SyntheticCampaign, rng: np.random.Generator, offset_sigma: float = 0.3,
          free_offsets: bool = True) -> Campaign:
     """
-    One noise draw: Gaussian noise of each point's sigma and a random offset per night [mag].
+    Return one noise draw: Gaussian noise of each point's sigma, an offset per night [mag].
 
     ``free_offsets`` False: no offsets, the blocks calibrated (absolute magnitudes).
     """

@@ -1,5 +1,5 @@
 """
-The synthetic-campaign generator (synthetic_campaigns.py) proven on its own, before it proves the fit.
+The synthetic-campaign generator (synthetic_campaigns.py) proven alone, before it proves the fit.
 
 Each check can fail: the rigid body conserves E and L to 1e-10 over weeks; the requested P_psi
 and P_phi are what the integrated motion does (zero crossings of w in body axes; the reference
@@ -60,7 +60,7 @@ def test_pole_and_phases_are_the_requested(motion):
 
 
 def _crossing_times(t, x):
-    """Times where x crosses 0 upwards, linearly interpolated."""
+    """Return the times where x crosses 0 upwards, linearly interpolated."""
     k = np.nonzero((x[:-1] < 0.0) & (x[1:] >= 0.0))[0]
     return t[k] - x[k] * (t[k + 1] - t[k]) / (x[k + 1] - x[k])
 

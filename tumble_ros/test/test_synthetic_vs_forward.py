@@ -38,7 +38,7 @@ STATES = [sc.TrueSpin('SAM', 11.0, 47.0, (0.55, 0.83), (123.0, -35.0), (0.7, 2.2
 
 
 def project_state(spin: sc.TrueSpin) -> SpinObservables:
-    """The same state in the project's type (periods in years, angles in radians)."""
+    """Return the same state in the project's type (periods in years, angles in radians)."""
     return SpinObservables(spin.mode, spin.precession_period_h / HOURS_PER_YEAR,
                            spin.rotation_period_h / HOURS_PER_YEAR, spin.inertia_ratios,
                            tuple(math.radians(v) for v in spin.pole_deg), spin.phases,
