@@ -12,7 +12,7 @@ Each campaign comes from tumble_ros/test/synthetic_campaigns.py (an integration 
 brightness independent of the fit's); each draw is new noise and new night offsets, the fit
 (``inversion.fit.fit_local``) starts at the truth. Printed per quantity: the truth, the mean
 fit, the median 1 sigma, the fractions of draws within 1/2/3 sigma and the mean z^2.
-``make bench`` runs it with ``--full`` only (``--quick``, the default run: one draw of ``lam``).
+``make bench`` runs one draw of ``lam``, every case with ``--full``, nothing with ``--quick``.
 """
 from __future__ import annotations
 
@@ -84,13 +84,16 @@ def run_case(case: str, draws: int, out=print) -> None:
 
 @section('Inversion: injection and recovery (benchmarks/inversion_recovery.py)', order=60)
 def recovery_section(ctx):
-    """``make bench``: one draw of the LAM (quick or default); every case with --full."""
-    if ctx.full:
+    """``make bench``: one draw of the LAM; every case, 16 draws, with --full; none if --quick."""
+    if ctx.quick:
+        ctx.print('  not run with --quick (a fit takes tens of seconds): '
+                  'scripts/env.sh python benchmarks/inversion_recovery.py')
+    elif ctx.full:
         for case in CASES:
             run_case(case, 16, ctx.print)
     else:
         run_case('lam', 1, ctx.print)
-        ctx.print('  (one draw: the coverage table needs benchmarks/inversion_recovery.py)')
+        ctx.print('  (one draw: the coverage table is benchmarks/inversion_recovery.py)')
 
 
 def main(argv=None) -> int:

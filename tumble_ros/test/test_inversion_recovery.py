@@ -49,15 +49,22 @@ def lam_fits():
     return synthetic, ir.recover(synthetic, COVERAGE_DRAWS, seed=1000)
 
 
+def covered(z: np.ndarray) -> bool:
+    """Whether z-scores (draws, quantities) pass the coverage criteria (module docstring)."""
+    within_1, within_3 = np.mean(np.abs(z) < 1.0), np.mean(np.abs(z) < 3.0)
+    return bool(0.45 <= np.mean(z ** 2) <= 2.0 and 0.5 <= within_1 <= 0.86
+                and within_3 >= 0.95)
+
+
 def test_the_reported_sigma_covers_the_truth(lam_fits):
     synthetic, fits = lam_fits
     truth = ir.truth_parameters(synthetic)
     print(ir.table('LAM 9 h / 20 h, 25 nights', fits, truth))
     assert all(f.success for f in fits)
-    cov = ir.coverage(fits, truth)
-    within = cov.pooled_within
-    assert 0.45 <= cov.pooled_mean_z2 <= 2.0, ir.table('coverage', fits, truth)
-    assert 0.5 <= within[0] <= 0.86 and within[2] >= 0.95, ir.table('coverage', fits, truth)
+    z = ir.coverage(fits, truth).z
+    assert covered(z), ir.table('coverage', fits, truth)
+    # the draws are enough to see a 1 sigma wrong by 2x, either way
+    assert not covered(2.0 * z) and not covered(0.5 * z)
 
 
 def test_a_sam_is_recovered():
