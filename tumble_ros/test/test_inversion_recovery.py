@@ -12,7 +12,8 @@ quadrature of the ellipsoid's brightness, Kepler geometry, nights with lunar and
   twice: both fail) and the fraction within 1 sigma in [0.5, 0.86] (0.68 if right; 0.38 and
   0.95 for 1 sigma wrong by 2x), within 3 sigma >= 0.95.
 * **A SAM** (P_phi 6.2 h, P_psi 28 h) on 30 nights of one apparition: the truth within 3 sigma.
-* **A principal-axis rotator** (5.3 h): the period search says one period, no pair to fit.
+* **A principal-axis rotator** (5.3 h) on 12 nights: the period search should say one period,
+  no pair to fit. It does not (xfail, strict: the test's docstring says why).
 * **Long** (TUMBLE_ROS_LONG_INVERSION=1, minutes each): the SAM over two apparitions;
   Apophis (Pravec et al. 2014's state) sampled like 2020-21 (1,280 points on 67 nights), its
   periods to the published precision at 1 sigma (P_phi 0.07 h / 3, P_psi 6 h / 3: Pravec et
@@ -41,6 +42,7 @@ SAM = sc.TrueSpin('SAM', 6.2, 28.0, (0.55, 0.83), (123.0, -35.0), (0.7, 2.2), Fa
 SAM_SEASONS = (sc.Apparition(2459170.5, 2459240.5, 30, 600),
                sc.Apparition(2459530.5, 2459600.5, 30, 600))
 PA = sc.TrueSpin('PA', 5.3, 5.3, (0.5, 0.8), (60.0, 20.0), (1.0, 0.0), epoch_jd=2459169.5)
+PA_SEASON = sc.Apparition(2459170.5, 2459190.5, 12, 200)
 
 
 @pytest.fixture(scope='module')
@@ -75,15 +77,27 @@ def test_a_sam_is_recovered():
     assert fit.success and np.all(np.abs(z) < 3.0)
 
 
+@pytest.mark.xfail(strict=True, reason='issue 49: the period search reports two close periods '
+                   'for a principal-axis rotator whose viewing geometry changes (2.631 and '
+                   '2.650 h over 20 d), and the inversion has no principal-axis model to say '
+                   'one period')
 def test_a_principal_axis_rotator_has_one_period():
-    synthetic = sc.make_campaign(PA, [LAM_SEASON], seed=13, nu=128, nv=64)
+    """
+    One period (half the 5.3-h turn: the ellipsoid's lightcurve repeats every half turn).
+
+    The search is given its range (its default here starts at 7.5 h, its grid's size, above the
+    lightcurve's 2.65 h). It fails today: the Fourier series of one fixed period cannot follow
+    the changing geometry (the synodic drift of the phase, the amplitude with the aspect), the
+    BIC takes a second period 1/span away for it (bic 2 periods -1443.6 < 1 period -1416.3),
+    and every candidate is then a tumbler (LAM 1.32 / 2.65 h...).
+    """
+    synthetic = sc.make_campaign(PA, [PA_SEASON], seed=13, nu=128, nv=64)
     campaign = sc.draw(synthetic, np.random.default_rng(3000))
-    candidates, solution = period_candidates(campaign, SearchSettings())
-    assert solution is not None and not solution.two_periods
+    candidates, solution = period_candidates(campaign, SearchSettings(period_range=(2.0, 12.0)))
+    assert solution is not None and not solution.two_periods, (solution.p1, solution.p2)
     assert candidates == []
-    # the ellipsoid's lightcurve repeats every half turn: the search finds P/2 (or P)
     found = min((abs(solution.p1 - p) / solution.p1_sigma, p) for p in (5.3 / 2, 5.3))
-    assert found[0] < 3.0
+    assert found[0] < 3.0, (solution.p1, solution.p1_sigma)
 
 
 @long_only
