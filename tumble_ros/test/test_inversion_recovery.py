@@ -10,12 +10,13 @@ quadrature of the ellipsoid's brightness, Kepler geometry, nights with lunar and
   TUMBLE_ROS_LONG_INVERSION=1). Pooled over P_phi, P_psi, lambda, beta, I1/I3, I2/I3: the mean
   z^2 must lie in [0.45, 2.0] (1 if right; 4 if the 1 sigma were half the scatter, 0.25 if
   twice: both fail) and the fraction within 1 sigma in [0.5, 0.86] (0.68 if right; 0.38 and
-  0.95 for 1 sigma wrong by 2x), within 3 sigma >= 0.95.
+  0.95 for 1 sigma wrong by 2x), within 3 sigma >= 0.95; the same z-scores scaled by 2 and by
+  1/2 must fail the criteria (the draws are enough to see it).
 * **A SAM** (P_phi 6.2 h, P_psi 28 h) on 30 nights of one apparition: the truth within 3 sigma.
 * **A principal-axis rotator** (5.3 h) on 12 nights: the period search should say one period,
   no pair to fit. It does not (xfail, strict: the test's docstring says why).
-* **Long** (TUMBLE_ROS_LONG_INVERSION=1, minutes each): the SAM over two apparitions;
-  Apophis (Pravec et al. 2014's state) sampled like 2020-21 (1,280 points on 67 nights), its
+* **Long** (TUMBLE_ROS_LONG_INVERSION=1, minutes each): the SAM's coverage; the SAM over two
+  apparitions; Apophis (Pravec et al. 2014's state) sampled like 2020-21 (1,280 points on 67 nights), its
   periods to the published precision at 1 sigma (P_phi 0.07 h / 3, P_psi 6 h / 3: Pravec et
   al.'s 3-sigma); over 2012-13 and 2020-21, to ~0.001 h and ~0.1 h (Durech et al. 2026,
   arXiv:2604.24566: 27.374 +- 0.001 h, 262.2 +- 0.1 h) with the cycle-count aliases across the
@@ -98,6 +99,15 @@ def test_a_principal_axis_rotator_has_one_period():
     assert candidates == []
     found = min((abs(solution.p1 - p) / solution.p1_sigma, p) for p in (5.3 / 2, 5.3))
     assert found[0] < 3.0, (solution.p1, solution.p1_sigma)
+
+
+@long_only
+def test_the_reported_sigma_covers_the_truth_of_a_sam():
+    synthetic = sc.make_campaign(SAM, SAM_SEASONS[:1], seed=12)
+    truth = ir.truth_parameters(synthetic)
+    fits = ir.recover(synthetic, COVERAGE_DRAWS, seed=6000)
+    print(ir.table('SAM 6.2 h / 28 h, 30 nights', fits, truth))
+    assert covered(ir.coverage(fits, truth).z), ir.table('coverage', fits, truth)
 
 
 @long_only
