@@ -14,8 +14,8 @@ from matplotlib.figure import Figure
 import numpy as np
 
 from tumble_ros.core import load_scenario, simulate
-from tumble_ros.core.model.units import HOURS_PER_YEAR
 from tumble_ros.core.photometry import synthetic_lightcurve
+from tumble_ros.core.units import HOURS_PER_YEAR
 
 CONFIG = Path(__file__).resolve().parents[1] / 'tumble_ros' / 'config' / 'apophis_2029.yaml'
 

@@ -35,8 +35,8 @@ from tumble_ros.analysis.depth import (after_state, coupling_size, DEGREE3,
 from tumble_ros.analysis.encounter import encounter_ensemble, format_encounter
 from tumble_ros.core import load_scenario, simulate_ensemble
 from tumble_ros.core.model.body import BodySpec
-from tumble_ros.core.model.units import HOURS_PER_YEAR
 from tumble_ros.core.torques.perturbers import Perturber
+from tumble_ros.core.units import HOURS_PER_YEAR
 from tumble_ros.topics import SIM_NODE_PARAMETERS
 
 ROOT = Path(__file__).resolve().parents[1]

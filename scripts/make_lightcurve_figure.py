@@ -26,8 +26,8 @@ from tumble_ros.analysis.periods import campaign_times, format_periods, search_p
 from tumble_ros.core import load_scenario, simulate   # noqa: E402
 from tumble_ros.core.model.rotation import quaternion_to_euler   # noqa: E402
 from tumble_ros.core.model.spinstate import spin_state   # noqa: E402
-from tumble_ros.core.model.units import HOURS_PER_YEAR as H   # noqa: E402
 from tumble_ros.core.photometry import LightcurveSettings, synthetic_lightcurve   # noqa: E402
+from tumble_ros.core.units import HOURS_PER_YEAR as H   # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / 'tumble_ros' / 'config' / 'apophis_2029.yaml'

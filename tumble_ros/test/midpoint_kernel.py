@@ -6,7 +6,7 @@ body's state ``st``): test_core_kernel_registry registers it with the one regist
 runs it through simulate() and the ensemble loop. Fixed step, n = ceil(span / step) equal
 steps (``rk4.step_count``); dense output linear between the step's ends (order 2 as well).
 """
-from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.compiling.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import CF, FAIL, N, ST
 from tumble_ros.core.kernels.physics import rhs
 from tumble_ros.core.kernels.rk4 import step_count

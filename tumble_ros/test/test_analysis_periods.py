@@ -19,8 +19,8 @@ from tumble_ros.analysis.periods import (_degenerate, _grid_rss, campaign_times,
 from tumble_ros.core import load_scenario, simulate
 from tumble_ros.core.model.rotation import quaternion_to_euler
 from tumble_ros.core.model.spinstate import spin_state
-from tumble_ros.core.model.units import HOURS_PER_YEAR
 from tumble_ros.core.photometry import LightcurveSettings, synthetic_lightcurve
+from tumble_ros.core.units import HOURS_PER_YEAR
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config' / 'apophis_2029.yaml'
 H = HOURS_PER_YEAR

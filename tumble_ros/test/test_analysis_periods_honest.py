@@ -111,7 +111,7 @@ def test_a_geometry_dominated_curve_is_warned_about():
 def recording_of(tmp_path, t, brightness, magnitude, phase):
     """Return a Recording of a lightcurve topic only (t [h], its first three columns)."""
     from tumble_ros.analysis.recording import Recording
-    from tumble_ros.core.model.units import HOURS_PER_YEAR
+    from tumble_ros.core.units import HOURS_PER_YEAR
     columns = np.zeros((t.size, 8))
     columns[:, 0], columns[:, 1], columns[:, 2] = brightness, magnitude, phase
     empty = np.empty(0)

@@ -331,7 +331,7 @@ def runs(tmp_path_factory):
 
 def _dominant(out: str) -> float:
     """Return the first peak of the text summary [rad/yr] (printed in rad/<display unit>)."""
-    from tumble_ros.core.model.units import TIME_UNITS
+    from tumble_ros.core.units import TIME_UNITS
 
     line = next(x for x in out.splitlines() if x.strip().startswith('1. '))
     value, unit = line.split()[1:3]

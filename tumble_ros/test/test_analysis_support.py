@@ -208,7 +208,7 @@ def test_write_recording_round_trips_through_the_io_reader(tmp_path):
     (9 / 8766, 'min'), (0.5 / 8766, 'min'), (10 / (8766 * 3600), 's'), (0.0, 's')])
 def test_a_short_run_is_shown_in_hours_or_days(span, unit):
     from tumble_ros.analysis.timeaxis import display_unit
-    from tumble_ros.core.model.units import TIME_UNITS
+    from tumble_ros.core.units import TIME_UNITS
 
     name, years = display_unit(span)
     assert (name, years) == (unit, TIME_UNITS[unit])

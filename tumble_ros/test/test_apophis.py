@@ -21,8 +21,8 @@ from tumble_ros.cli.encounter import main as encounter_main
 from tumble_ros.core import IntegratorSettings, load_scenario, simulate
 from tumble_ros.core.model.rotation import euler_to_quaternion, quaternion_to_matrix
 from tumble_ros.core.model.spinstate import omega_for_periods, spin_state
-from tumble_ros.core.model.units import GM_EARTH, HOURS_PER_YEAR
 from tumble_ros.core.torques.orbits import KeplerOrbit, orientation_from_elements
+from tumble_ros.core.units import GM_EARTH, HOURS_PER_YEAR
 from tumble_ros.io import read_messages
 from tumble_ros.nodes.bringup import run_bringup
 

@@ -22,8 +22,8 @@ from tumble_ros.core import Scenario, ScenarioError
 from tumble_ros.core.model.body import BodySpec
 from tumble_ros.core.model.gravity_field import GravityField, principal_frame
 from tumble_ros.core.model.mass_models import Ellipsoid
-from tumble_ros.core.model.units import GM_EARTH, HOURS_PER_YEAR
 from tumble_ros.core.torques.orbits import KeplerOrbit
+from tumble_ros.core.units import GM_EARTH, HOURS_PER_YEAR
 
 H = HOURS_PER_YEAR
 AXES = (0.217, 0.154, 0.147)        # km: an ellipsoid of moments ~0.64 : 0.97 : 1

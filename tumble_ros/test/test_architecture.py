@@ -1,7 +1,9 @@
 """
 The import map: no circle, and every arrow points down the layers.
 
-Layers, bottom up: ``errors`` and ``topics`` (facts, no imports), ``core`` (numerics), ``io``
+Layers, bottom up: ``errors``, ``topics`` and ``file_kinds`` (facts, no imports; file_kinds:
+what a path that is not a regular file is, the one table of every reader), ``core`` (numerics,
+in rooms of its own: :data:`CORE_ROOMS`), ``io``
 (recordings, ensemble stores), ``runs`` (what a run does, without ROS: the ensembles' engines
 and runs into io's stores), ``ensembles`` (the run layer's ensemble names, re-exported),
 ``analysis`` (offline tools over core and io), ``inversion`` (photometry back to a spin
@@ -20,14 +22,17 @@ ALLOWED = {
     'errors': set(),
     'topics': set(),
     'exits': set(),
-    'core': {'errors'},
-    'io': {'errors', 'topics'},
-    'runs': {'errors', 'topics', 'core', 'io'},
-    'ensembles': {'errors', 'core', 'io', 'runs'},
-    'analysis': {'errors', 'topics', 'core', 'io', 'exits'},
-    'inversion': {'errors', 'topics', 'core', 'io', 'runs', 'ensembles', 'analysis', 'exits'},
-    'cli': {'errors', 'topics', 'core', 'runs', 'ensembles', 'analysis', 'inversion', 'exits'},
-    'nodes': {'errors', 'topics', 'core', 'io', 'runs'},
+    'file_kinds': set(),
+    'core': {'errors', 'file_kinds'},
+    'io': {'errors', 'topics', 'file_kinds'},
+    'runs': {'errors', 'topics', 'file_kinds', 'core', 'io'},
+    'ensembles': {'errors', 'file_kinds', 'core', 'io', 'runs'},
+    'analysis': {'errors', 'topics', 'file_kinds', 'core', 'io', 'exits'},
+    'inversion': {'errors', 'topics', 'file_kinds', 'core', 'io', 'runs', 'ensembles',
+                  'analysis', 'exits'},
+    'cli': {'errors', 'topics', 'file_kinds', 'core', 'runs', 'ensembles', 'analysis',
+            'inversion', 'exits'},
+    'nodes': {'errors', 'topics', 'file_kinds', 'core', 'io', 'runs'},
     '__main__': {'nodes', 'analysis', 'inversion', 'cli', 'runs', 'io', 'exits'},
     '__init__': set(),
 }
@@ -169,8 +174,8 @@ THIRD_PARTY_PRIVATE = {
     ('tumble_ros.core.integrators.adaptive', 'solver._y'),
     ('tumble_ros.core.integrators.adaptive', 'ode._integrator'),
     ('tumble_ros.core.integrators.adaptive', 'ode._y'),
-    ('tumble_ros.core.jit', '_IMPL._locator_classes'),
-    ('tumble_ros.core.jit', 'cache_file._load_index'),   # numba's: is a loop in its cache
+    ('tumble_ros.core.compiling.jit', '_IMPL._locator_classes'),
+    ('tumble_ros.core.compiling.jit', 'cache_file._load_index'),  # numba's: a loop cached?
     ('tumble_ros.core.torques.component', 'f._sig'),
     ('tumble_ros.nodes.parameters', 'node._parameters'),
     ('tumble_ros.nodes.parameters', 'node._parameter_overrides'),
@@ -211,37 +216,95 @@ def test_no_module_imports_a_private_name_of_another():
     assert imported <= PRIVATE_IMPORTS_LEFT, sorted(imported - PRIVATE_IMPORTS_LEFT)
 
 
-#: Inside core, bottom up: the compiled physics may import only the numba switch, the units
-#: (constants), the plain-arithmetic sin/cos/atan2 (``core.trig``), the torques, the
-#: limits/kernels below it; never the integrators, the propagator or the scenario.
-CORE_BOTTOM = {
-    'tumble_ros.core.jit': {'tumble_ros.core.numba_inlining', 'tumble_ros.core.numba_blas_check',
-                            'tumble_ros.core.user_cache'},
-    'tumble_ros.core.user_cache': set(),
-    'tumble_ros.core.model.units': set(),
-    'tumble_ros.core.trig': {'tumble_ros.core.jit'},
-    'tumble_ros.core.torques': {'tumble_ros.core.jit', 'tumble_ros.core.model.units',
-                                'tumble_ros.core.trig'},
-    'tumble_ros.core.kernels': {'tumble_ros.core.jit', 'tumble_ros.core.torques',
-                                'tumble_ros.core.trig'},
-    'tumble_ros.core.model.limits': {'tumble_ros.core.kernels', 'tumble_ros.core.jit',
-                                     'tumble_ros.core.torques', 'tumble_ros.core.trig'},
+#: Core's rooms, bottom up, and the rooms each may import (besides itself): no arrow back up.
+#: A room is a subpackage of core or a loose module. ``compiling``: the compile machinery (the
+#: numba switch, its adjustments, the cache), apart from the numerics; ``array_types`` and
+#: ``units``: facts; ``trig``: plain-arithmetic sin/cos/atan2 the kernels inline; ``torques``;
+#: ``kernels``: the physics every path runs and the compiled loops; ``integrators``; ``model``:
+#: the body and the validated scenario, whose inputs name the torques and the integrators'
+#: settings; ``photometry`` and ``propagation``: what a telescope sees of a scenario's body and
+#: its motion in time; ``analytic``: the paper's solution of a scenario; ``__init__``: core's
+#: public names.
+CORE_ROOMS = {
+    'compiling': set(),
+    'array_types': set(),
+    'units': set(),
+    'trig': {'compiling'},
+    'torques': {'compiling', 'units', 'trig'},
+    'kernels': {'compiling', 'trig', 'torques'},
+    'integrators': {'compiling', 'kernels', 'torques'},
+    'model': {'compiling', 'array_types', 'units', 'trig', 'torques', 'kernels', 'integrators'},
+    'photometry': {'compiling', 'array_types', 'units', 'trig', 'torques', 'model'},
+    'propagation': {'compiling', 'array_types', 'units', 'trig', 'torques', 'kernels',
+                    'integrators', 'model'},
+    'analytic': {'array_types', 'units', 'torques', 'model'},
+    '__init__': {'compiling', 'array_types', 'units', 'trig', 'torques', 'kernels',
+                 'integrators', 'model', 'photometry', 'propagation', 'analytic'},
 }
+#: Modules left at an old path when theirs moved (documented import paths keep working): each
+#: re-exports the room it moved to, and imports nothing else of core. Those inside a room
+#: (``model.units``, ``propagation.timebase``, ``photometry.scattering``...) point down anyway.
+CORE_REEXPORTS = {'jit': 'compiling', 'numba_inlining': 'compiling',
+                  'numba_blas_check': 'compiling', 'user_cache': 'compiling',
+                  'user_files': 'model'}
 
 
-def test_the_compiled_physics_is_the_bottom_of_core():
-    edges = graph()
+def core_room(module: str) -> str:
+    """Return the room of core that ``module`` (``tumble_ros.core...``) is in."""
+    parts = module.split('.')
+    return parts[2] if len(parts) > 2 else '__init__'
+
+
+def core_arrows_back_up(edges: dict[str, set[str]]) -> list[str]:
+    """Return every import between core's rooms that :data:`CORE_ROOMS` does not allow."""
     wrong = []
     for module, targets in edges.items():
-        for prefix, allowed in CORE_BOTTOM.items():
-            if module == prefix or module.startswith(prefix + '.'):
-                for target in targets:
-                    inside = target == prefix or target.startswith(prefix + '.')
-                    below = any(target == a or target.startswith(a + '.') for a in allowed)
-                    if target.startswith('tumble_ros.core') and not (inside or below):
-                        wrong.append(f'{module} -> {target}')
-    assert not wrong
-    assert 'tumble_ros.core.kernels.physics' in edges  # (the check sees the new modules)
+        if layer(module) != 'core':
+            continue
+        room = core_room(module)
+        allowed = ({CORE_REEXPORTS[room]} if room in CORE_REEXPORTS else CORE_ROOMS[room])
+        wrong += [f'{module} -> {target}' for target in sorted(targets)
+                  if layer(target) == 'core' and core_room(target) != room
+                  and core_room(target) not in allowed]
+    return sorted(wrong)
+
+
+def test_the_rooms_of_core_are_in_order():
+    """Each room may import only rooms listed before it (so the table itself has no circle)."""
+    order = list(CORE_ROOMS)
+    assert [room for k, room in enumerate(order) if not CORE_ROOMS[room] <= set(order[:k])] == []
+    assert set(CORE_REEXPORTS.values()) <= set(order) and not set(CORE_REEXPORTS) & set(order)
+
+
+def test_every_module_of_core_is_in_a_room():
+    rooms = {core_room(m) for m in graph() if layer(m) == 'core'}
+    assert rooms - set(CORE_ROOMS) - set(CORE_REEXPORTS) == set()
+    assert 'compiling' in rooms and 'tumble_ros.core.compiling.jit' in graph()  # (reach)
+
+
+def test_no_arrow_points_back_up_between_the_rooms_of_core():
+    assert core_arrows_back_up(graph()) == []
+
+
+def test_the_check_of_core_sees_an_arrow_back_up():
+    """A made-up import from the torques into the model, and from the machinery into numerics."""
+    edges = {'tumble_ros.core.torques.orbits': {'tumble_ros.core.model.limits'},
+             'tumble_ros.core.compiling.jit': {'tumble_ros.core.kernels.layout'},
+             'tumble_ros.core.jit': {'tumble_ros.core.kernels'},
+             'tumble_ros.core.model.scenario': {'tumble_ros.core.torques.orbits'}}
+    assert core_arrows_back_up(edges) == [
+        'tumble_ros.core.compiling.jit -> tumble_ros.core.kernels.layout',
+        'tumble_ros.core.jit -> tumble_ros.core.kernels',
+        'tumble_ros.core.torques.orbits -> tumble_ros.core.model.limits']
+
+
+def test_one_table_says_what_a_path_that_is_no_regular_file_is():
+    """Only ``file_kinds`` tests a mode for a FIFO, a device or a socket: the readers ask it."""
+    kinds = {'S_ISFIFO', 'S_ISCHR', 'S_ISBLK', 'S_ISSOCK'}
+    testing = sorted(name for name, path in modules().items()
+                     for node in ast.walk(ast.parse(path.read_text()))
+                     if isinstance(node, ast.Attribute) and node.attr in kinds)
+    assert testing and set(testing) == {'tumble_ros.file_kinds'}, testing
 
 
 def private_imports(path: Path) -> list[str]:

@@ -15,13 +15,13 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from tumble_ros.core import load_scenario, simulate
-from tumble_ros.core.jit import python_source
+from tumble_ros.core.compiling.jit import python_source
 from tumble_ros.core.model.gravity_field import GravityField, principal_frame
-from tumble_ros.core.model.units import SECONDS_PER_YEAR
 from tumble_ros.core.propagation.coupled import CoupledBody, field_potential, propagate_coupled
 from tumble_ros.core.torques.multipole import field_acceleration
 from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
+from tumble_ros.core.units import SECONDS_PER_YEAR
 
 APOPHIS = load_scenario(Path(__file__).resolve().parents[1] / 'config' / 'apophis_2029.yaml')
 G = 6.6743e-20                                     # km^3 / (kg s^2), CODATA 2018

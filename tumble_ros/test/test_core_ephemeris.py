@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from tumble_ros.core import load_scenario, parse_scenario, ScenarioError, simulate
-from tumble_ros.core.model.units import HOURS_PER_YEAR, KM_PER_AU
 from tumble_ros.core.torques.ephemeris import Ephemeris, read_ephemeris
 from tumble_ros.core.torques.perturbers import Perturber
+from tumble_ros.core.units import HOURS_PER_YEAR, KM_PER_AU
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 APOPHIS = load_scenario(CONFIG / 'apophis_2029.yaml')

@@ -1,4 +1,4 @@
-"""The block loops' 512-bit vectors where the CPU has AVX-512 (core.jit ``wide=True``)."""
+"""The block loops' 512-bit vectors on AVX-512 (core.compiling.jit ``wide=True``)."""
 from __future__ import annotations
 
 import re
@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from tumble_ros.core import kernels
-from tumble_ros.core.jit import _wide_ir, COMPILED, jit, PREFER_512_BIT, WIDE_VECTOR_LOOPS
+from tumble_ros.core.compiling.jit import (_wide_ir, COMPILED, jit, PREFER_512_BIT,
+                                           WIDE_VECTOR_LOOPS)
 
 needs_numba = pytest.mark.skipif(not COMPILED, reason='numba not available')
 

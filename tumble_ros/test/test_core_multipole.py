@@ -21,11 +21,11 @@ from tumble_ros.core.model.dynamics import angular_momentum_orbital
 from tumble_ros.core.model.gravity_field import (GravityField, principal_frame,
                                                  regular_solid_harmonics)
 from tumble_ros.core.model.rotation import quaternion_to_matrix
-from tumble_ros.core.model.units import SECONDS_PER_YEAR
 from tumble_ros.core.torques import tidal_torque
 from tumble_ros.core.torques.multipole import field_acceleration, field_torque
 from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
+from tumble_ros.core.units import SECONDS_PER_YEAR
 
 #: The seed of this file's random inputs: each test draws from a generator of its own, so its
 #: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).

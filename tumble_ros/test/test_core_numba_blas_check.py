@@ -1,4 +1,4 @@
-"""numba's BLAS check without importing scipy.linalg (core.numba_blas_check): same answer."""
+"""numba's BLAS check without scipy.linalg (core.compiling.numba_blas_check): same answer."""
 from __future__ import annotations
 
 import inspect
@@ -8,8 +8,8 @@ import sys
 
 import pytest
 
-from tumble_ros.core.jit import COMPILED
-from tumble_ros.core.numba_blas_check import scipy_linalg_installed
+from tumble_ros.core.compiling.jit import COMPILED
+from tumble_ros.core.compiling.numba_blas_check import scipy_linalg_installed
 
 needs_numba = pytest.mark.skipif(not COMPILED, reason='numba not available')
 

@@ -1,4 +1,4 @@
-"""numba's IR inlining with one copy of the callee (core.numba_inlining): less work, same code."""
+"""numba's inlining with one copy of the callee (core.compiling.numba_inlining): less work."""
 from __future__ import annotations
 
 import contextlib
@@ -10,8 +10,9 @@ from typing import Any, Callable, Iterator
 
 import pytest
 
-from tumble_ros.core.jit import COMPILED, jit, jit_inline
-from tumble_ros.core.numba_inlining import copy_callee_once, one_copy_source, PER_BLOCK_COPY
+from tumble_ros.core.compiling.jit import COMPILED, jit, jit_inline
+from tumble_ros.core.compiling.numba_inlining import (copy_callee_once, one_copy_source,
+                                                      PER_BLOCK_COPY)
 
 needs_numba = pytest.mark.skipif(not COMPILED, reason='numba not available')
 

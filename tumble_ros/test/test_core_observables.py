@@ -19,7 +19,7 @@ from tumble_ros.core import (IntegratorSettings, load_scenario, parse_scenario, 
 from tumble_ros.core.model.observables import observe, SpinObservables
 from tumble_ros.core.model.rotation import euler_to_matrix, euler_to_quaternion
 from tumble_ros.core.model.spinstate import omega_for_periods, spin_state
-from tumble_ros.core.model.units import TIME_UNITS
+from tumble_ros.core.units import TIME_UNITS
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 HOUR = TIME_UNITS['h']

@@ -16,10 +16,10 @@ from test_core_torque import point_cloud
 from tumble_ros.core import IntegratorSettings, Scenario, simulate
 from tumble_ros.core.model.dynamics import angular_momentum_orbital
 from tumble_ros.core.model.rotation import quaternion_to_matrix
-from tumble_ros.core.model.units import SECONDS_PER_YEAR
 from tumble_ros.core.torques.orbits import (eccentric_anomaly, hyperbolic_anomaly, KeplerOrbit,
                                             orbit_state)
 from tumble_ros.core.torques.perturbers import Perturber
+from tumble_ros.core.units import SECONDS_PER_YEAR
 
 #: The seed of this file's random inputs: each test draws from a generator of its own, so its
 #: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).
@@ -84,7 +84,7 @@ def test_the_hyperbolic_solver_converges_in_a_few_iterations_near_a_parabola(mon
     pericentre; and from the logarithmic starter Newton crawled on the nearly cubic equation.
     A runaway flyby test spent ~90 % of its 12 s there.
     """
-    from tumble_ros.core.jit import python_source
+    from tumble_ros.core.compiling.jit import python_source
     from tumble_ros.core.torques import orbits
 
     counting = _CountingMath('sinh')
@@ -101,7 +101,7 @@ def test_the_hyperbolic_solver_converges_in_a_few_iterations_near_a_parabola(mon
 @pytest.mark.parametrize('e', [0.0, 0.3, 0.9, 0.99])
 def test_the_elliptic_solver_converges_in_a_few_iterations(monkeypatch, e):
     """At most 6 Halley iterations for every mean anomaly (its Python source, sin counted)."""
-    from tumble_ros.core.jit import python_source
+    from tumble_ros.core.compiling.jit import python_source
     from tumble_ros.core.torques import orbits
 
     counting = _CountingMath('sin')
@@ -350,7 +350,7 @@ def test_the_tilted_orbit_plane_is_the_rotation_of_the_flat_one():
 
 def test_a_flyby_has_its_perigee_speed_and_the_two_body_integrals():
     """Perigee, v_inf, energy and angular momentum from finite differences of the positions."""
-    from tumble_ros.core.model.units import GM_EARTH
+    from tumble_ros.core.units import GM_EARTH
 
     rp, v_inf = 38000.0, 5.8                                       # km, km/s
     orbit = KeplerOrbit.flyby(GM_EARTH, rp, v_inf=v_inf, t_p=0.01, inclination=0.3, node=1.0)
@@ -406,7 +406,7 @@ def test_a_flyby_from_parameters_is_the_flyby_orbit():
 
 def test_the_perturber_position_of_the_circular_orbit_is_the_sun_by_keplers_third_law():
     from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital
-    from tumble_ros.core.model.units import GM_SUN, KM_PER_AU
+    from tumble_ros.core.units import GM_SUN, KM_PER_AU
 
     sc = Scenario(orbit_rate=2.0 * math.pi)                        # one turn a year: 1 au
     t = np.array([0.0, 0.1, 0.37])
@@ -528,7 +528,7 @@ def test_the_encounter_window_is_where_the_torque_exceeds_its_fraction():
 @pytest.mark.parametrize('e', [0.0, 0.5, 0.99])
 def test_an_ellipse_returns_after_its_period_with_its_energy_and_momentum(e):
     """Period 2 pi / n, v^2/2 - GM/r = -GM/2a, |r x v| = sqrt(GM a (1 - e^2))."""
-    from tumble_ros.core.model.units import GM_SUN, KM_PER_AU
+    from tumble_ros.core.units import GM_SUN, KM_PER_AU
 
     orbit = KeplerOrbit(gm=GM_SUN, a=KM_PER_AU, e=e, t_p=0.1, lambda_p=0.3, inclination=0.2,
                         node=1.1)

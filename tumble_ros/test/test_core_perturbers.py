@@ -17,9 +17,9 @@ from test_core_torque import point_cloud
 from tumble_ros.core import (dump_scenario, IntegratorSettings, parse_scenario, Scenario,
                              ScenarioError, simulate)
 from tumble_ros.core.model.rotation import quaternion_to_matrix
-from tumble_ros.core.model.units import GM_EARTH, SECONDS_PER_YEAR
 from tumble_ros.core.torques.orbits import KeplerOrbit
 from tumble_ros.core.torques.perturbers import Perturber
+from tumble_ros.core.units import GM_EARTH, SECONDS_PER_YEAR
 
 #: The seed of this file's random inputs: each test draws from a generator of its own, so its
 #: inputs do not depend on which tests ran before it (pytest-xdist balances them over workers).
@@ -123,7 +123,7 @@ def test_the_j2_torque_is_the_sum_of_the_j2_forces_on_the_bodys_point_masses(tri
     body = Perturber('earth', orbit, j2=j2, pole=tuple(pole))
     point = Perturber('earth', orbit)
     law, law_point = body.law(inertia), point.law(inertia)
-    from tumble_ros.core.jit import python_source
+    from tumble_ros.core.compiling.jit import python_source
     from tumble_ros.core.torques.perturbers import perturber_torque
     torque_of = python_source(perturber_torque)
     q = rng.normal(size=4)
@@ -245,7 +245,7 @@ def test_with_the_bodys_field_the_torque_is_its_degree_n_torque():
     of the perturber's pull on every point; the monopole, left out, would cost 5e-3 of the
     torque at 1e6 km from a 0.3-km body (``perturbers`` docstring).
     """
-    from tumble_ros.core.jit import python_source
+    from tumble_ros.core.compiling.jit import python_source
     from tumble_ros.core.model.gravity_field import GravityField, principal_frame
     from tumble_ros.core.torques.perturbers import perturber_torque
 

@@ -15,12 +15,12 @@ import pytest
 from tumble_ros.core import Scenario, simulate
 from tumble_ros.core.model.rotation import (matrix_to_quaternion, quaternion_multiply,
                                             quaternion_to_matrix)
-from tumble_ros.core.model.units import KM_PER_AU, SECONDS_PER_YEAR
 from tumble_ros.core.photometry import (aspect_angles, body_mesh, brightness, convex_mesh,
                                         ellipsoid_mesh, icosphere, LAWS, LightcurveSettings,
                                         magnitude, observer_geometry, phase_angle,
                                         reference_brightness, synthetic_lightcurve)
 from tumble_ros.core.torques.orbits import KeplerOrbit
+from tumble_ros.core.units import KM_PER_AU, SECONDS_PER_YEAR
 
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 

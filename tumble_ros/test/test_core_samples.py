@@ -109,7 +109,7 @@ def test_continuity_and_jacobi_by_an_independent_computation():
 @pytest.mark.parametrize('compiled', [False, True])
 def test_the_matrix_is_rotations_bit_for_bit(compiled):
     """quaternion_matrix (one sample, compiled or its source) = quaternions_to_matrices, bits."""
-    from tumble_ros.core.jit import python_source
+    from tumble_ros.core.compiling.jit import python_source
 
     rng = np.random.default_rng(11)
     q = rng.normal(size=(500, 4)) * rng.uniform(0.5, 2.0, size=(500, 1))

@@ -1,4 +1,4 @@
-"""numba's cache of the compiled sources, shared by the clones of the same sources (core.jit)."""
+"""numba's cache of the compiled sources, shared by the clones of them (core.compiling.jit)."""
 from __future__ import annotations
 
 import json
@@ -11,11 +11,12 @@ import time
 
 import pytest
 
-from tumble_ros.core import jit, kernels
-from tumble_ros.core.user_cache import user_cache_dir
+from tumble_ros.core import kernels
+from tumble_ros.core.compiling import jit
+from tumble_ros.core.compiling.user_cache import user_cache_dir
 
 needs_numba = pytest.mark.skipif(not jit.COMPILED, reason='numba not available')
-PACKAGE = Path(jit.__file__).resolve().parents[1]
+PACKAGE = Path(jit.__file__).resolve().parents[2]
 
 #: In a fresh process: numba's cache counters of a small compiled function of kernels/.
 _CALL = """

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from tumble_ros.core.propagation.timebase import MAX_STAMP_NS, TimeBase
+from tumble_ros.core.model.timebase import MAX_STAMP_NS, TimeBase
 
 
 @pytest.mark.parametrize('spy', [1.0, 0.001, 3600.0, 31557600.0 / 1e4])

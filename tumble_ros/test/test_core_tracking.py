@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from tumble_ros.core import kernels
-from tumble_ros.core.jit import called, python_source
+from tumble_ros.core.compiling.jit import called, python_source
 from tumble_ros.core.kernels import tracking
 from tumble_ros.core.kernels.layout import BK, BT, ST
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from tumble_ros.core import kernels, trig
-from tumble_ros.core.jit import called, python_source
+from tumble_ros.core.compiling.jit import called, python_source
 from tumble_ros.core.kernels.layout import BT
 
 needs_numba = pytest.mark.skipif(not kernels.COMPILED,
@@ -98,7 +98,7 @@ def test_the_vectorised_block_pass_gives_the_scalar_bits(rows):
 @needs_numba
 def test_the_suns_direction_of_many_times_at_once_gives_the_scalar_bits():
     """The dop853 lanes' pass: every lane's Sun direction is the single body's, bit for bit."""
-    from tumble_ros.core.jit import jit
+    from tumble_ros.core.compiling.jit import jit
     from tumble_ros.core.torques.gravity_gradient import (sun_in_orbit_plane,
                                                           sun_in_orbit_plane_rows)
 

@@ -1,4 +1,4 @@
-"""Scenario units at the boundary (core/model/units.py): hours, days, ... made years once."""
+"""Scenario units at the boundary (core/units.py): hours, days, ... made years once."""
 import math
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 
 from tumble_ros.core import parse_scenario, Scenario, ScenarioError, simulate
 from tumble_ros.core.model.scenario import PARAMETER_DOCS
-from tumble_ros.core.model.units import HOURS_PER_YEAR, TIME_POWERS, TIME_UNITS, to_years
+from tumble_ros.core.units import HOURS_PER_YEAR, TIME_POWERS, TIME_UNITS, to_years
 
 
 def test_every_time_like_parameter_is_converted_with_its_power_of_time():

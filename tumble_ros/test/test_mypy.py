@@ -5,10 +5,11 @@ mypy.ini is strict on the numerical core (``tumble_ros.core``), the typed IO
 (``tumble_ros.io``) and the run layer (``tumble_ros.runs``), ordinary elsewhere. The package is
 checked in one run: a module's errors depend on the types of what it imports.
 
-mypy's cache is the user's (``core.user_cache``), shared by the clones of the repository: mypy
-takes a module's cached result only where the source's hash is the one it checked (a clone has
-other paths and times, so it hashes each file), and checks again what changed and what depends
-on it. A fresh clone's check then takes ~1 s instead of ~18 s (benchmarks/HISTORY.md).
+mypy's cache is the user's (``core.compiling.user_cache``), shared by the clones of the
+repository: mypy takes a module's cached result only where the source's hash is the one it
+checked (a clone has other paths and times, so it hashes each file), and checks again what
+changed and what depends on it. A fresh clone's check then takes ~1 s instead of ~18 s
+(benchmarks/HISTORY.md).
 """
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ import subprocess
 import sys
 import tempfile
 
-from tumble_ros.core.user_cache import user_cache_dir
+from tumble_ros.core.compiling.user_cache import user_cache_dir
 
 ROOT = Path(__file__).resolve().parents[2]
 #: mypy's incremental cache, shared by the clones (its own Python-version folders inside).

@@ -79,7 +79,7 @@ def test_published_state_equals_simulate_at_the_stamped_times(ros):
     assert len(omega) == len(attitude) == len(clock) == 101  # 0, 0.002, ..., 0.2 yr: none lost
     t = times(omega, spy=3.0)
     np.testing.assert_allclose(t, np.arange(101) * 0.002, rtol=0, atol=1e-15)
-    # the stamps are the one output grid (core.propagation.timebase.SampleGrid) at 3 s per year
+    # the stamps are the one output grid (core.model.timebase.SampleGrid) at 3 s per year
     assert t.tolist() == TimeBase(3.0).grid(0.002, 0.2).times().tolist()
     ref = simulate(Scenario(duration=0.2, output_interval=0.002), t_eval=t)
     np.testing.assert_array_equal(omega_array(omega), ref.omega)  # same times, same numbers

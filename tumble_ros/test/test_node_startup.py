@@ -71,7 +71,7 @@ def test_the_core_compiles_no_perturber_torque_until_one_is_used():
 
 
 def test_a_perturbers_compiled_torque_is_its_law():
-    from tumble_ros.core.jit import COMPILED
+    from tumble_ros.core.compiling.jit import COMPILED
     from tumble_ros.core.torques.component import SIGNATURE
     from tumble_ros.core.torques.orbits import KeplerOrbit
     from tumble_ros.core.torques.perturbers import (kepler_perturber_torque, Perturber,

@@ -13,7 +13,7 @@ from rclpy.parameter import Parameter
 
 from tumble_ros.analysis.recording import load_recording
 from tumble_ros.core import load_scenario, parse_scenario, Scenario, simulate
-from tumble_ros.core.model.units import TIME_UNITS
+from tumble_ros.core.units import TIME_UNITS
 from tumble_ros.runs.offline import record_offline
 
 #: (duration, output_interval) in the scenario's unit, as a person writes them.

@@ -21,7 +21,7 @@ import pytest
 from tumble_ros.analysis.ensemble import main as analyse_main
 from tumble_ros.cli.ensemble import main as ensemble_main
 from tumble_ros.core import check_params_file, IntegratorSettings, load_scenario, ScenarioError
-from tumble_ros.core.jit import COMPILE_NOTICE_VARIABLE
+from tumble_ros.core.compiling.jit import COMPILE_NOTICE_VARIABLE
 from tumble_ros.ensembles import EnsembleStoreError, open_ensemble, run_ensemble_to_store
 from tumble_ros.io.ensemble_store import EnsembleStoreLocked, lock_path, store_lock
 

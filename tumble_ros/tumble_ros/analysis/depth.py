@@ -38,9 +38,9 @@ from tumble_ros.core import IntegratorSettings, Scenario, simulate_ensemble
 from tumble_ros.core.model.gravity_field import GravityField
 from tumble_ros.core.model.rotation import euler_to_quaternion
 from tumble_ros.core.model.spinstate import spin_state
-from tumble_ros.core.model.units import GM_MOON, GM_SUN, HOURS_PER_YEAR, KM_PER_AU
 from tumble_ros.core.torques.ephemeris import Ephemeris
 from tumble_ros.core.torques.perturbers import Perturber
+from tumble_ros.core.units import GM_MOON, GM_SUN, HOURS_PER_YEAR, KM_PER_AU
 
 from .encounter import EncounterResult, tumbler_states
 

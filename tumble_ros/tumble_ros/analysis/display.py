@@ -1,7 +1,7 @@
 """
 The units and the frame the analysis shows a recording in: chosen once, used by text and figures.
 
-Inside, the analysis computes in years [yr], rad/yr and radians (``core.model.units``). What it
+Inside, the analysis computes in years [yr], rad/yr and radians (``core.units``). What it
 prints and draws is in the units of the field, chosen here from the run's span and its scenario:
 
 * times, periods and rates in one time unit: the scenario's ``time_unit`` when it states one
@@ -32,7 +32,7 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
-from tumble_ros.core.model.units import HOURS_PER_YEAR, TIME_UNITS
+from tumble_ros.core.units import HOURS_PER_YEAR, TIME_UNITS
 
 from .timeaxis import display_unit
 

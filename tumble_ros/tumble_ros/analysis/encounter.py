@@ -37,7 +37,7 @@ from tumble_ros.core.model.mass_models import Ellipsoid
 from tumble_ros.core.model.rotation import (euler_to_quaternion, matrix_to_euler,
                                             quaternion_to_matrix)
 from tumble_ros.core.model.spinstate import omega_for_periods, spin_state
-from tumble_ros.core.model.units import HOURS_PER_YEAR
+from tumble_ros.core.units import HOURS_PER_YEAR
 
 from .display import longitude_degrees
 

@@ -26,7 +26,7 @@ from matplotlib.figure import Figure
 import numpy as np
 from tumble_ros.core import parse_scenario
 from tumble_ros.core.model.spinstate import spin_state
-from tumble_ros.core.model.units import HOURS_PER_YEAR
+from tumble_ros.core.units import HOURS_PER_YEAR
 from tumble_ros.errors import AnalysisError, TumbleRosError
 from tumble_ros.io import open_ensemble
 from tumble_ros.io.ensemble_store import SCENARIO_ATTR

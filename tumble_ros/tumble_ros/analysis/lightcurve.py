@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tumble_ros.core.model.units import HOURS_PER_YEAR
+from tumble_ros.core.units import HOURS_PER_YEAR
 from tumble_ros.errors import AnalysisError
 from tumble_ros.topics import LIGHTCURVE
 

@@ -30,8 +30,8 @@ import stat
 
 import numpy as np
 
-from tumble_ros.core.user_files import file_kind
 from tumble_ros.errors import AnalysisError
+from tumble_ros.file_kinds import file_kind
 
 from .periods import MAX_MAGNITUDE, MAX_SIGMA, MIN_SIGMA
 

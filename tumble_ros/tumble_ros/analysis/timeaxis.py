@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tumble_ros.core.model.units import TIME_UNITS
+from tumble_ros.core.units import TIME_UNITS
 
 __all__ = ['Sampling', 'UNIFORM_TOL', 'GAP_FACTOR', 'same_stamps', 'sampling', 'runs',
            'display_unit', 'DISPLAY_MIN_UNITS']

@@ -31,8 +31,8 @@ from tumble_ros.cli.engine import add_engine_arguments, engine
 from tumble_ros.cli.progress import ProgressBar
 from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
                              Scenario, ScenarioError)
-from tumble_ros.core.jit import compile_notices
-from tumble_ros.core.model.units import from_years, TIME_UNITS
+from tumble_ros.core.compiling.jit import compile_notices
+from tumble_ros.core.units import from_years, TIME_UNITS
 from tumble_ros.ensembles import (EnsembleStoreError, open_ensemble, run_ensemble,
                                   run_ensemble_to_store)
 from tumble_ros.errors import TumbleRosError

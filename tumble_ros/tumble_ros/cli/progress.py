@@ -5,7 +5,7 @@ import math
 import sys
 import time
 
-from tumble_ros.core.model.units import from_years
+from tumble_ros.core.units import from_years
 
 __all__ = ['ProgressBar']
 

@@ -4,12 +4,12 @@ Compile the integration loops ahead (build tooling): ``python -m tumble_ros.cli.
 numba compiles the single-body and the ensemble loops (per body, and in lockstep or as lanes for
 the methods that have one) of each compiled method
 (``core.kernels.KERNELS``) on their first use (then cached in the user's cache): a run compiles
-only the loops it uses (``core.jit.first_use`` says so on stderr). This optional step
+only the loops it uses (``core.compiling.jit.first_use`` says so on stderr). This optional step
 (``make warmup``; ``make test`` runs it first) compiles them all ahead (into the user's cache,
-shared by the clones of the same sources: ``core.jit.shared_cache_folder``). It also compiles the
-loops' variant for extra torques (``core.torques.TorqueComponent``: every scenario with 1 to
-8 of them shares it, whatever their functions; ``core.torques.component.EXTRA_SLOTS``) and
-the reference path's calls. The loops compile in parallel, on up to as many processes as there
+shared by the clones of the same sources: ``core.compiling.jit.shared_cache_folder``). It also
+compiles the loops' variant for extra torques (``core.torques.TorqueComponent``: every scenario
+with 1 to 8 of them shares it, whatever their functions; ``core.torques.component.EXTRA_SLOTS``)
+and the reference path's calls. The loops compile in parallel, on up to as many processes as there
 are cores (each method's loops are its own copies, so the compilations share nothing): one
 task per method and variant, without and with extra torques, and the reference path's in
 two more (:func:`_tasks`); each method says when its parts are ready.
@@ -32,9 +32,10 @@ import sys
 import time
 from typing import Any
 
-from tumble_ros.core import (Impact, IntegratorSettings, jit, kernels, load_scenario, Scenario,
+from tumble_ros.core import (Impact, IntegratorSettings, kernels, load_scenario, Scenario,
                              shipped_scenario, simulate, simulate_ensemble, torque_function,
                              TorqueComponent)
+from tumble_ros.core.compiling import jit
 from tumble_ros.core.integrators import INTEGRATORS
 
 __all__ = ['warm_up', 'warm_up_scenario', 'main']

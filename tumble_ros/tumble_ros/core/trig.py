@@ -49,7 +49,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit_inline
+from tumble_ros.core.compiling.jit import jit_inline
 
 __all__ = ['sin_cos', 'sin_cos_reduced', 'scaled_sin_cos_rows', 'sin_cos_rows', 'REDUCED_LIMIT',
            'SMALL', 'atan2']

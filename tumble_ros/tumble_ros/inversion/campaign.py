@@ -40,8 +40,9 @@ def _vectors(name: str, value: np.ndarray, n: int) -> np.ndarray:
                             'vectors are not finite')
     distance = np.linalg.norm(array, axis=1)
     if np.any(distance < MIN_DISTANCE_AU):
-        raise CampaignError(f'{name}: {int(np.sum(distance < MIN_DISTANCE_AU))} vectors shorter '
-                            f'than {MIN_DISTANCE_AU} au (the vector from the asteroid is missing?)')
+        raise CampaignError(f'{name}: {int(np.sum(distance < MIN_DISTANCE_AU))} vectors '
+                            f'shorter than {MIN_DISTANCE_AU} au (the vector from the asteroid '
+                            'is missing?)')
     return array
 
 
@@ -114,7 +115,7 @@ class Campaign:
         return float(self.jd_tdb[-1] - self.jd_tdb[0])
 
     def phase_angle(self) -> np.ndarray:
-        """The Sun-asteroid-observer angle of each point [rad]."""
+        """Return the Sun-asteroid-observer angle of each point [rad]."""
         s = self.sun / np.linalg.norm(self.sun, axis=1)[:, None]
         o = self.observer / np.linalg.norm(self.observer, axis=1)[:, None]
         return np.arccos(np.clip(np.sum(s * o, axis=1), -1.0, 1.0))
@@ -126,9 +127,10 @@ class Campaign:
         return self.magnitude - 5.0 * np.log10(r * delta)
 
     def merged(self, other: 'Campaign') -> 'Campaign':
-        """This campaign and ``other`` as one, in time order, their blocks kept apart."""
+        """Return this campaign and ``other`` as one, in time order, their blocks kept apart."""
         if self.light_time_corrected != other.light_time_corrected:
-            raise CampaignError('cannot merge a light-time corrected campaign with one that is not')
+            raise CampaignError('cannot merge a light-time corrected campaign with one that '
+                                'is not')
         order = np.argsort(np.concatenate([self.jd_tdb, other.jd_tdb]), kind='stable')
         both = lambda a, b: np.concatenate([a, b])[order]  # noqa: E731
         return Campaign(both(self.jd_tdb, other.jd_tdb), both(self.magnitude, other.magnitude),

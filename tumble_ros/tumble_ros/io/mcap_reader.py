@@ -63,6 +63,7 @@ from mcap.stream_reader import breakup_chunk, MAGIC_SIZE, StreamReader
 from mcap_ros2.decoder import DecoderFactory
 
 from tumble_ros.errors import IoError
+from tumble_ros.file_kinds import file_kind
 
 from .msgdefs import SEPARATOR
 
@@ -161,14 +162,8 @@ def _describe(err: BaseException) -> str:
 
 # -- opening --------------------------------------------------------------------------------------
 
-_FILE_KINDS = ((stat.S_ISDIR, 'is a directory'), (stat.S_ISFIFO, 'is a FIFO (named pipe)'),
-               (stat.S_ISCHR, 'is a character device'), (stat.S_ISBLK, 'is a block device'),
-               (stat.S_ISSOCK, 'is a socket'))
-
-
 def _not_regular(path: Path, mode: int) -> McapError:
-    kind = next((text for test, text in _FILE_KINDS if test(mode)), 'is not a regular file')
-    return McapError(f'{path}: {kind}, not an MCAP file (only regular files are read)')
+    return McapError(f'{path}: {file_kind(mode)}, not an MCAP file (only regular files are read)')
 
 
 def _open_regular(path: Path) -> io.BufferedReader:

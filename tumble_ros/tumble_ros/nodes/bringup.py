@@ -48,7 +48,7 @@ from rclpy.parameter import Parameter
 
 from tumble_ros import topics
 from tumble_ros.core import Scenario, ScenarioError
-from tumble_ros.core.model.units import from_years
+from tumble_ros.core.units import from_years
 from tumble_ros.errors import NodeError
 from tumble_ros.io import WrittenMessages
 from tumble_ros.nodes.comparator import ComparatorNode

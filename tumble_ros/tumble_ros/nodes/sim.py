@@ -21,7 +21,7 @@ and publishes every ``output_interval`` of simulated time:
 
 Every stamp is ROS time carrying simulated time, ``status`` included (the time of the last
 published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year)
-(``core.propagation.timebase``). The node is the clock source: it paces on the steady clock
+(``core.model.timebase``). The node is the clock source: it paces on the steady clock
 whatever ``use_sim_time`` says. Services:
 ``apply_impact`` (tumble_ros_interfaces/ApplyImpact, every request answered), ``pause``,
 ``resume``, ``step`` (std_srvs/Trigger). Impacts are queued by the service and applied at the
@@ -44,8 +44,8 @@ from std_srvs.srv import Trigger
 
 from tumble_ros import topics
 from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeBase
-from tumble_ros.core.model.units import from_years
-from tumble_ros.core.propagation.timebase import SampleGrid
+from tumble_ros.core.model.timebase import SampleGrid
+from tumble_ros.core.units import from_years
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import (declare_node_parameters, declare_scenario_parameters,

@@ -31,7 +31,7 @@ import numpy as np
 from tumble_ros.core import (AnalyticModel, DEPARTURE, departure_text, make_model, parse_scenario,
                              Scenario, ScenarioError, TimeBase)
 from tumble_ros.core.analytic import omega_many
-from tumble_ros.core.propagation.timebase import SampleGrid
+from tumble_ros.core.model.timebase import SampleGrid
 
 from .records import (ComparedSample, ComparisonBlock, ComparisonStatus, Floats, OK,
                       SampleBlock, SegmentStart, WARN)

@@ -46,8 +46,8 @@ import numpy as np
 
 from tumble_ros import topics
 from tumble_ros.core import Scenario, TimeBase
+from tumble_ros.core.model.timebase import SampleGrid
 from tumble_ros.core.propagation.propagator import FAST_WORK_BUDGET
-from tumble_ros.core.propagation.timebase import SampleGrid
 from tumble_ros.io import McapWriter, offered_qos_yaml, WrittenMessages
 from tumble_ros.runs.messages.builders import new_run_id, SampleEncoder
 from tumble_ros.runs.messages.markers import marker_every, marker_samples, MarkerScene

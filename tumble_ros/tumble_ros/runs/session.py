@@ -2,7 +2,7 @@
 The simulation session: what the simulator does each batch, without ROS, in one place.
 
 A :class:`SimulationSession` integrates a :class:`~tumble_ros.core.Scenario` on its output grid
-(:class:`~tumble_ros.core.propagation.timebase.SampleGrid`) with
+(:class:`~tumble_ros.core.model.timebase.SampleGrid`) with
 :class:`~tumble_ros.core.Propagator`: ``advance(k_last)`` samples the grid up to index
 ``k_last`` and returns the batch's records
 (:mod:`.records`), in the order they go out: the impacts that ended and the segments that
@@ -21,8 +21,8 @@ import numpy as np
 
 from tumble_ros import topics
 from tumble_ros.core import dump_scenario, Impact, Propagator, Scenario, TimeBase
+from tumble_ros.core.model.timebase import SampleGrid
 from tumble_ros.core.photometry import LightcurveSampler
-from tumble_ros.core.propagation.timebase import SampleGrid
 
 from .records import (DIVERGED, FINISHED, Floats, ImpactEnded, PAUSED, RUNNING, SampleBlock,
                       SegmentStart, SessionRecord, StatusChange)

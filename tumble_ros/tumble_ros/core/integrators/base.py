@@ -47,14 +47,26 @@ from typing import Callable, ClassVar, Protocol, TYPE_CHECKING
 import numpy as np
 
 from tumble_ros.core.kernels.checks import collapsed, finite_norm
-from tumble_ros.core.model.limits import budget_message
 
 if TYPE_CHECKING:
     from tumble_ros.core.torques import TorqueComponent
 
-__all__ = ['Stepper', 'SegmentProblem', 'RUNNING', 'FINISHED', 'FAILED']
+__all__ = ['Stepper', 'SegmentProblem', 'RUNNING', 'FINISHED', 'FAILED', 'budget_message']
 
 RUNNING, FINISHED, FAILED = 'running', 'finished', 'failed'
+
+
+def budget_message(steps: float, span: float, t: float) -> str:
+    """
+    Why a run stopped at its work budget: ``steps`` within ``span`` [yr] before ``t`` [yr].
+
+    The budget is the scenario's (``model.limits.step_budget``); the message is the stepper's.
+    """
+    return (f'work budget exceeded at t = {t:.10g} yr: {steps:.0f} steps within {span:.3g} yr, '
+            "less than one output_interval: the motion has become far faster than the scenario's "
+            'own rates (a runaway spin-up, e.g. a pericentre very close to a point-mass '
+            'perturber, or a diverging solution); if it is real, a shorter output_interval '
+            'resolves it (docs/physics.md, "Work budget")')
 
 
 def step_nan_message(method_name: str, t: float) -> str:

@@ -18,10 +18,9 @@ import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core import kernels as K
-from tumble_ros.core.integrators.base import (FAILED, FINISHED, RUNNING, SegmentProblem,
-                                              step_nan_message, Stepper)
-from tumble_ros.core.jit import first_use, needs_compiling
-from tumble_ros.core.model.limits import budget_message
+from tumble_ros.core.compiling.jit import first_use, needs_compiling
+from tumble_ros.core.integrators.base import (budget_message, FAILED, FINISHED, RUNNING,
+                                              SegmentProblem, step_nan_message, Stepper)
 from tumble_ros.core.torques import extra_torque_arrays
 
 __all__ = ['CompiledStepper', 'fast_path_available', 'why_no_fast_path', 'failure_message']

@@ -17,8 +17,8 @@ from typing import Any, Callable
 import numpy as np
 import numpy.typing as npt
 
+from tumble_ros.core.compiling.jit import python_source
 from tumble_ros.core.integrators.base import SegmentProblem, Stepper, StepSettings
-from tumble_ros.core.jit import python_source
 from tumble_ros.core.kernels import rk4 as _rk4
 
 # the kernel's functions run on numpy arrays (their Python source: the compiled ones take floats)

@@ -2,7 +2,7 @@
 Compiled integration loops: the hot path without interpreter overhead.
 
 Everything here is plain Python written in the subset numba compiles (floats, 1-D/2-D float64
-arrays, loops); :mod:`tumble_ros.core.jit` compiles it, or leaves it as plain Python
+arrays, loops); :mod:`tumble_ros.core.compiling.jit` compiles it, or leaves it as plain Python
 (:data:`COMPILED` False: the callers, :class:`~..integrators.compiled.CompiledStepper` and
 :mod:`..ensemble`, then take the reference path, which gives the same trajectory).
 
@@ -30,7 +30,7 @@ One module per concern, every arrow downward:
 
 Quaternion attitude only. ``python -m tumble_ros.core.kernels`` prints the array layouts.
 """
-from tumble_ros.core.jit import COMPILED, NUMBA_VERSION
+from tumble_ros.core.compiling.jit import COMPILED, NUMBA_VERSION
 from tumble_ros.core.kernels.arrays import (config_array, free_flow_split, new_state,
                                             problem_array, problem_arrays, set_pulses)
 from tumble_ros.core.kernels.checks import collapsed, finite_norm, MIN_STEP_ULPS

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from tumble_ros.core.jit import jit
+from tumble_ros.core.compiling.jit import jit
 from tumble_ros.core.kernels.layout import Array
 
 __all__ = ['finite_norm', 'collapsed', 'MIN_STEP_ULPS']

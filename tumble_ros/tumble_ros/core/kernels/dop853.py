@@ -15,7 +15,7 @@ import types
 
 import numpy as np
 
-from tumble_ros.core.jit import jit, jit_inline, jit_wide
+from tumble_ros.core.compiling.jit import jit, jit_inline, jit_wide
 from tumble_ros.core.kernels.lanes import lanes_rhs
 from tumble_ros.core.kernels.layout import (Array, CF, Extra, FAIL, LANE_STAGES, LN, N, ST,
                                             STATUS)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit
+from tumble_ros.core.compiling.jit import jit
 from tumble_ros.core.kernels.layout import Array, Extra, ST, STATUS
 from tumble_ros.core.kernels.stepping import advance, emit, seg_init
 

@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit, jit_inline, jit_wide
+from tumble_ros.core.compiling.jit import jit, jit_inline, jit_wide
 from tumble_ros.core.kernels.checks import collapsed
 from tumble_ros.core.kernels.layout import (Array, BB, BK, BT, CF, Extra, FAIL, LI, N, ST,
                                             STATUS)

@@ -25,7 +25,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any, Callable, NamedTuple
 
-from tumble_ros.core.jit import COMPILED_SOURCES, specialise
+from tumble_ros.core.compiling.jit import COMPILED_SOURCES, specialise
 from tumble_ros.core.kernels import dop853, ensemble, lanes, lockstep, rk4, splitting, stepping
 from tumble_ros.core.kernels.layout import Array, CF, Extra
 
@@ -86,7 +86,7 @@ def cached(module: ModuleType) -> bool:
     """
     Return whether the loops of ``module``'s method are kept in numba's cache.
 
-    Only for a module among :data:`~tumble_ros.core.jit.COMPILED_SOURCES` (its edits
+    Only for a module among :data:`~tumble_ros.core.compiling.jit.COMPILED_SOURCES` (its edits
     invalidate the cache); any other (a test's) is compiled in every process.
     """
     try:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from tumble_ros.core.jit import called, jit, jit_inline
+from tumble_ros.core.compiling.jit import called, jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, Extra, PR
 from tumble_ros.core.torques.frames import orbital_to_body
 from tumble_ros.core.torques.gravity_gradient import sun_in_orbit_plane, tidal_torque

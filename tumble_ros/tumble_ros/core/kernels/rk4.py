@@ -18,7 +18,7 @@ from typing import TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit, jit_inline, jit_wide
+from tumble_ros.core.compiling.jit import jit, jit_inline, jit_wide
 from tumble_ros.core.kernels.layout import Array, BB, BK, BT, CF, Extra, FAIL, N, PR, ST
 from tumble_ros.core.kernels.physics import (derivatives, plain_torque_given_sun, rhs, rhs_called,
                                              torque_given_sun)

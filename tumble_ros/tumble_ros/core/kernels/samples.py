@@ -15,7 +15,7 @@ compiled loop one sample at a time (an ensemble). :func:`quaternion_matrix` repe
 ``rotation.quaternions_to_matrices``' arithmetic for one sample (``core.model.rotation`` does
 not import the kernels: an import-cycle risk), tied to it bit for bit by a test. Both give
 the same bits: the same operations in the same order and no fused multiply-add (numba does not
-contract without ``fastmath``: :data:`~tumble_ros.core.jit.JIT_OPTIONS`); sin and cos of the
+contract without ``fastmath``: :data:`~.compiling.jit.JIT_OPTIONS`); sin and cos of the
 Sun's phase come from numpy, once per time, in both. The continuity is
 ``rotation.continuous_quaternions``'s rule written as a loop (its cumulative product of signs
 as a running sign). test_core_samples.py compares them bit for bit.
@@ -32,7 +32,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.compiling.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array
 
 __all__ = ['quaternion_matrix', 'jacobi_sample', 'ensemble_samples']

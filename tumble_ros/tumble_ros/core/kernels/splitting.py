@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from tumble_ros.core.jit import called, jit, jit_inline, jit_wide
+from tumble_ros.core.compiling.jit import called, jit, jit_inline, jit_wide
 from tumble_ros.core.kernels.layout import Array, BK, BT, CF, Extra, FAIL, N, PR, ST
 from tumble_ros.core.kernels.physics import (axis_turn, body_torque, flow_pieces, free_flow,
                                              pi_turn, plain_torque_given_sun,

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.compiling.jit import jit, jit_inline
 from tumble_ros.core.kernels.checks import collapsed, finite_norm, MIN_STEP_ULPS
 from tumble_ros.core.kernels.layout import Array, CF, Extra, FAIL, N, ST, STATUS
 from tumble_ros.core.kernels.tracking import (refresh_track, set_track, track_pieces, track_rate,

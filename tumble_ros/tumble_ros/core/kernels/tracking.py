@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 
-from tumble_ros.core.jit import jit, jit_inline
+from tumble_ros.core.compiling.jit import jit, jit_inline
 from tumble_ros.core.kernels.layout import Array, ST
 from tumble_ros.core.trig import atan2
 

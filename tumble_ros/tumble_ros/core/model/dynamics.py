@@ -34,7 +34,7 @@ import numpy as np
 
 from tumble_ros.core import kernels
 from tumble_ros.core.array_types import ArrayLike, FloatArray, Vector3
-from tumble_ros.core.jit import python_source
+from tumble_ros.core.compiling.jit import python_source
 from tumble_ros.core.kernels import samples
 from tumble_ros.core.model.rotation import (euler_to_matrix, euler_to_quaternion, matrix_to_euler,
                                             quaternion_to_matrix)

@@ -20,7 +20,7 @@ from tumble_ros.errors import CoreError
 __all__ = ['ScenarioError', 'MIN_RTOL', 'MAX_RTOL', 'MIN_ORBIT_RATE', 'MAX_ORBIT_RATE',
            'MAX_OMEGA', 'MAX_ATOL', 'MAX_DURATION', 'MAX_STEPS', 'MAX_SAMPLES', 'MAX_ROTATION',
            'RESOLUTION_ULPS', 'MAX_PARAMS_FILE_BYTES', 'MAX_IMPACTS', 'MIN_WINDOW_STEPS',
-           'STEPS_PER_RADIAN', 'step_budget', 'budget_message', 'MAX_SHAPE_FILE_BYTES',
+           'STEPS_PER_RADIAN', 'step_budget', 'MAX_SHAPE_FILE_BYTES',
            'MAX_FACETS', 'MIN_BODY_SIZE', 'MAX_BODY_SIZE', 'MAX_DEGREE', 'MAX_EPHEMERIS_BYTES',
            'MAX_INTERPOLATION_ERROR', 'MAX_KNOTS', 'MIN_KNOTS', 'MAX_ECCENTRICITY', 'MAX_GM',
            'MAX_PERICENTRE_SPEED', 'MAX_SEMI_MAJOR_AXIS']
@@ -134,12 +134,3 @@ def step_budget(output_interval: float, rate: float, max_step: float) -> tuple[f
     if max_step > 0.0:
         steps = max(steps, 4.0 * output_interval / max_step)
     return float(output_interval), float(math.ceil(steps))
-
-
-def budget_message(steps: float, span: float, t: float) -> str:
-    """Why a run stopped at its work budget: ``steps`` within ``span`` [yr] before ``t`` [yr]."""
-    return (f'work budget exceeded at t = {t:.10g} yr: {steps:.0f} steps within {span:.3g} yr, '
-            "less than one output_interval: the motion has become far faster than the scenario's "
-            'own rates (a runaway spin-up, e.g. a pericentre very close to a point-mass '
-            'perturber, or a diverging solution); if it is real, a shorter output_interval '
-            'resolves it (docs/physics.md, "Work budget")')

@@ -16,7 +16,7 @@ it): the same refusals, in one line naming the file, whoever reads it::
 
 A FIFO, a device or a socket is refused before any read, a file larger than
 :data:`MAX_PARAMS_FILE_BYTES` before it is read (a 60-MB ``omega0`` list held 1.2 GB while
-YAML parsed it), UTF-16 or binary data by name: :mod:`tumble_ros.core.user_files`, the
+YAML parsed it), UTF-16 or binary data by name: :mod:`.user_files`, the
 check of every file a user names.
 """
 from __future__ import annotations
@@ -29,7 +29,7 @@ import re
 from typing import Any, TYPE_CHECKING
 
 from tumble_ros.core.model.limits import MAX_PARAMS_FILE_BYTES, ScenarioError
-from tumble_ros.core.user_files import decode_user_text, read_user_bytes
+from tumble_ros.core.model.user_files import decode_user_text, read_user_bytes
 
 if TYPE_CHECKING:
     import yaml

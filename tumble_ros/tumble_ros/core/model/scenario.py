@@ -26,11 +26,12 @@ from typing import Any, Iterable, Mapping, Sequence
 import numpy as np
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.compiling.jit import python_source
 from tumble_ros.core.integrators import INTEGRATORS
-from tumble_ros.core.jit import python_source
 from tumble_ros.core.model.body import BODY_PARAMETER_DOCS, BodySpec
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.model.gravity_field import GravityField, MAX_DEGREE
+from tumble_ros.core.model.lightcurve_settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
 from tumble_ros.core.model.limits import (MAX_ATOL, MAX_DURATION, MAX_IMPACTS, MAX_OMEGA,
                                           MAX_ORBIT_RATE, MAX_ROTATION, MAX_RTOL, MAX_SAMPLES,
                                           MAX_STEPS, MIN_ORBIT_RATE, MIN_RTOL, RESOLUTION_ULPS,
@@ -40,13 +41,12 @@ from tumble_ros.core.model.observables import (SPIN_DEFAULTS, spin_from_paramete
                                                SPIN_PARAMETER_DOCS, SpinObservables)
 from tumble_ros.core.model.params_file import check_params_file, parse_params_text
 from tumble_ros.core.model.shipped import config_dir
-from tumble_ros.core.model.units import seconds_per_year_of, TIME_UNITS, to_years
-from tumble_ros.core.photometry.settings import LIGHTCURVE_PARAMETER_DOCS, LightcurveSettings
-from tumble_ros.core.propagation.timebase import MAX_STAMP_NS, SampleGrid, TimeBase
+from tumble_ros.core.model.timebase import MAX_STAMP_NS, SampleGrid, TimeBase
 from tumble_ros.core.torques import orbital_to_body, TorqueComponent
 from tumble_ros.core.torques.ephemeris import Ephemeris, read_ephemeris
 from tumble_ros.core.torques.orbits import KeplerOrbit, perturber_position
 from tumble_ros.core.torques.perturbers import check_name, Perturber
+from tumble_ros.core.units import seconds_per_year_of, TIME_UNITS, to_years
 
 __all__ = [
     'ScenarioError',
@@ -901,7 +901,7 @@ def _orbit_from_parameters(params: Mapping[str, Any], prefix: str = 'orbit',
 PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'time_unit': ('', "the scenario's time unit: yr (default), d, h, min or s; the unit of every "
                   'time, rate and torque below (converted to years once, when the scenario is '
-                  'read: core/model/units.py), of the output grid (one ROS second per unit) and '
+                  'read: core/units.py), of the output grid (one ROS second per unit) and '
                   'of every printed time, rate and period'),
     'values_in_years': ('', 'true: the times, rates and torques below are in years whatever '
                         'time_unit says (a written scenario: to_parameters, the scenario '

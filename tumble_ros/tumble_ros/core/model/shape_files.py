@@ -40,7 +40,7 @@ from tumble_ros.core.array_types import ArrayLike, FloatArray
 from tumble_ros.core.model.limits import MAX_FACETS, MAX_SHAPE_FILE_BYTES, ScenarioError
 from tumble_ros.core.model.mass_models import MassModelError, Polyhedron
 from tumble_ros.core.model.shipped import package_dir
-from tumble_ros.core.user_files import read_user_text
+from tumble_ros.core.model.user_files import read_user_text
 
 __all__ = ['ShapeFileError', 'Mesh', 'read_mesh', 'load_shape', 'write_obj', 'write_counts',
            'resolve_shape_path', 'SHAPES_DIR', 'box_mesh', 'ellipsoid_mesh']
@@ -170,7 +170,7 @@ def read_mesh(path: str | Path) -> Mesh:
 
     Raises :class:`ShapeFileError` naming the file, the line and the problem; a path that is
     no regular file (a FIFO, a device, a directory), a file above
-    :data:`~.limits.MAX_SHAPE_FILE_BYTES` or not UTF-8 text (:mod:`tumble_ros.core.user_files`),
+    :data:`~.limits.MAX_SHAPE_FILE_BYTES` or not UTF-8 text (:mod:`.user_files`),
     and more than :data:`~.limits.MAX_FACETS` facets or vertices are refused before the work.
     """
     path = Path(path)

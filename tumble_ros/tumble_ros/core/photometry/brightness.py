@@ -31,8 +31,8 @@ from typing import Any, Callable
 import numpy as np
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
-from tumble_ros.core.jit import python_source
-from tumble_ros.core.photometry.scattering import law as find_law, ScatteringLaw
+from tumble_ros.core.compiling.jit import python_source
+from tumble_ros.core.model.scattering import law as find_law, ScatteringLaw
 from tumble_ros.core.photometry.shape import Mesh
 from tumble_ros.core.torques.frames import orbital_to_body
 

@@ -33,16 +33,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.model.lightcurve_settings import LightcurveSettings
 from tumble_ros.core.model.mass_models import Ellipsoid, Polyhedron
 from tumble_ros.core.model.shape import body_shape
-from tumble_ros.core.model.units import KM_PER_AU, SECONDS_PER_YEAR
 from tumble_ros.core.photometry.brightness import (brightness_in_body, latitude_longitude,
                                                    magnitude, phase_angle,
                                                    reference_brightness, to_body)
-from tumble_ros.core.photometry.settings import LightcurveSettings
 from tumble_ros.core.photometry.shape import body_mesh, convex_mesh, ellipsoid_mesh, Mesh
 from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital
 from tumble_ros.core.torques.orbits import perturber_radius, SPEED_OF_LIGHT
+from tumble_ros.core.units import KM_PER_AU, SECONDS_PER_YEAR
 
 if TYPE_CHECKING:
     from tumble_ros.core.model.scenario import Scenario

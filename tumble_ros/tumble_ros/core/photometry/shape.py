@@ -26,10 +26,10 @@ import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core.array_types import ArrayLike, FloatArray
+from tumble_ros.core.model.lightcurve_settings import DEFAULT_SUBDIVISIONS, MAX_SUBDIVISIONS
 from tumble_ros.core.model.mesh_checks import convexity_defect, CONVEXITY_TOLERANCE, \
     DEGENERATE_AREA
 from tumble_ros.core.model.shape import body_shape
-from tumble_ros.core.photometry.settings import DEFAULT_SUBDIVISIONS, MAX_SUBDIVISIONS
 
 __all__ = ['Mesh', 'convex_mesh', 'icosphere', 'ellipsoid_mesh', 'body_mesh',
            'DEFAULT_SUBDIVISIONS', 'MAX_SUBDIVISIONS', 'CONVEXITY_TOLERANCE']

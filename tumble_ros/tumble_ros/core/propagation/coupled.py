@@ -41,13 +41,13 @@ from typing import Callable, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import python_source
+from tumble_ros.core.compiling.jit import python_source
 from tumble_ros.core.model.gravity_field import G_KM3, GravityField
 from tumble_ros.core.model.rotation import euler_to_quaternion, quaternion_to_matrix
 from tumble_ros.core.model.scenario import Scenario
-from tumble_ros.core.model.units import SECONDS_PER_YEAR
 from tumble_ros.core.torques.multipole import field_acceleration, field_torque
 from tumble_ros.core.torques.orbits import KeplerOrbit
+from tumble_ros.core.units import SECONDS_PER_YEAR
 
 __all__ = ['CoupledBody', 'CoupledResult', 'propagate_coupled', 'field_potential']
 

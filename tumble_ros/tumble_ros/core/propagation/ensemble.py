@@ -45,10 +45,10 @@ import numpy as np
 import numpy.typing as npt
 
 from tumble_ros.core import kernels as K
+from tumble_ros.core.compiling.jit import first_use, load_for
 from tumble_ros.core.integrators import INTEGRATORS
 from tumble_ros.core.integrators.base import Stepper
 from tumble_ros.core.integrators.compiled import failure_message, why_no_fast_path
-from tumble_ros.core.jit import first_use, load_for
 from tumble_ros.core.kernels import samples
 from tumble_ros.core.model.dynamics import ATTITUDE_MODELS
 from tumble_ros.core.model.limits import MAX_OMEGA, MAX_ROTATION, step_budget

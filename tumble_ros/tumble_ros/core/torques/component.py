@@ -36,7 +36,7 @@ import warnings
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import COMPILED
+from tumble_ros.core.compiling.jit import COMPILED
 
 __all__ = ['TorqueComponent', 'torque_function', 'extra_torque_arrays', 'NO_EXTRA',
            'EXTRA_SLOTS']

@@ -48,8 +48,8 @@ from typing import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit_inline, python_source
-from tumble_ros.core.model.units import KM_PER_AU, SECONDS_PER_YEAR, TIME_UNITS
+from tumble_ros.core.compiling.jit import jit_inline, python_source
+from tumble_ros.core.units import KM_PER_AU, SECONDS_PER_YEAR, TIME_UNITS
 
 __all__ = ['Ephemeris', 'read_ephemeris', 'ephemeris_position', 'interpolation_error',
            'DEGREE', 'MIN_KNOTS', 'MAX_KNOTS', 'MAX_EPHEMERIS_BYTES', 'MAX_INTERPOLATION_ERROR',

@@ -7,7 +7,7 @@ by rounding still gives a rotation.
 """
 from __future__ import annotations
 
-from tumble_ros.core.jit import jit_inline
+from tumble_ros.core.compiling.jit import jit_inline
 
 __all__ = ['orbital_to_body']
 

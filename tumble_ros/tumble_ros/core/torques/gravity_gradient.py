@@ -19,7 +19,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import called, jit_inline, python_source
+from tumble_ros.core.compiling.jit import called, jit_inline, python_source
 from tumble_ros.core.torques.frames import orbital_to_body
 from tumble_ros.core.trig import scaled_sin_cos_rows, sin_cos
 

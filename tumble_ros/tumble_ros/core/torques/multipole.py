@@ -58,7 +58,7 @@ import math
 
 import numpy as np
 
-from tumble_ros.core.jit import jit_inline
+from tumble_ros.core.compiling.jit import jit_inline
 
 __all__ = ['field_acceleration', 'field_torque', 'packed_size']
 

@@ -31,7 +31,7 @@ differentiated by complex steps) over the point masses of a body.
 """
 from __future__ import annotations
 
-from tumble_ros.core.jit import jit_inline
+from tumble_ros.core.compiling.jit import jit_inline
 
 __all__ = ['oblateness_hessian', 'tensor_torque', 'oblateness_torque']
 

@@ -27,7 +27,7 @@ with the mean anomaly M = n (t - t_p), n = sqrt(GM / |a|^3). Both are solved by 
 from a starter that converges for every e in range (Danby 1987 for the ellipse, M = 0.85 e
 offset; for the hyperbola the smaller of the logarithmic starter and the root of the
 equation's cubic approximation, close to the solution near a parabola's pericentre) to a few
-ulp, or until the residual is rounding noise; the solvers are compiled (``core.jit``) and
+ulp, or until the residual is rounding noise; the solvers are compiled (``core.compiling.jit``) and
 called by the torque function inside the integrators' loops
 (:func:`.perturbers.kepler_perturber_torque`: a Kepler orbit is a perturber's source).
 """
@@ -40,9 +40,9 @@ from typing import Any, Callable
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit, jit_inline, python_source
-from tumble_ros.core.model.units import GM_SUN, PERTURBER_RADII, SECONDS_PER_YEAR
+from tumble_ros.core.compiling.jit import jit, jit_inline, python_source
 from tumble_ros.core.torques.gravity_gradient import sun_direction_orbital
+from tumble_ros.core.units import GM_SUN, PERTURBER_RADII, SECONDS_PER_YEAR
 
 __all__ = ['KeplerOrbit', 'eccentric_anomaly', 'hyperbolic_anomaly', 'orbit_state',
            'plane_to_orbital', 'perturber_position', 'orientation_from_elements',

@@ -36,8 +36,7 @@ from typing import Any, Callable, Protocol, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from tumble_ros.core.jit import jit_inline
-from tumble_ros.core.model.units import PERTURBER_RADII, SECONDS_PER_YEAR
+from tumble_ros.core.compiling.jit import jit_inline
 from tumble_ros.core.torques.component import torque_function, TorqueComponent
 from tumble_ros.core.torques.ephemeris import Ephemeris, ephemeris_position
 from tumble_ros.core.torques.frames import orbital_to_body
@@ -46,6 +45,7 @@ from tumble_ros.core.torques.multipole import field_torque
 from tumble_ros.core.torques.oblateness import oblateness_torque
 from tumble_ros.core.torques.orbits import (KeplerOrbit, MAX_GM, orbit_state, perturber_radius,
                                             plane_to_orbital)
+from tumble_ros.core.units import PERTURBER_RADII, SECONDS_PER_YEAR
 
 __all__ = ['Perturber', 'Source', 'check_name', 'SourceKind', 'SOURCE_KINDS',
            'perturber_torque', 'kepler_perturber_torque', 'ephemeris_perturber_torque', 'MAX_J2',

@@ -8,7 +8,7 @@ integrator steps over an edge). Units: inertia-units * rad/yr^2; the result in b
 """
 from __future__ import annotations
 
-from tumble_ros.core.jit import jit_inline
+from tumble_ros.core.compiling.jit import jit_inline
 from tumble_ros.core.torques.frames import orbital_to_body
 
 __all__ = ['pulse_torque']

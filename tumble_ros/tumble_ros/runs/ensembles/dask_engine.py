@@ -39,7 +39,7 @@ import uuid
 import numpy as np
 
 from tumble_ros.core import ScenarioError
-from tumble_ros.core.user_cache import user_cache_dir
+from tumble_ros.core.compiling.user_cache import user_cache_dir
 from tumble_ros.errors import CoreError
 
 __all__ = ['EnsembleRunError', 'dask_client', 'map_as_completed', 'LOOPBACK']
@@ -189,7 +189,7 @@ def _sigint_ignoring_python() -> Path:
     the interpreter's exit, printed "/bin/sh: 0: cannot open .../python" (and the resource
     tracker it failed to start warned it died). Its text depends only on ``sys.executable``, so
     one file per interpreter serves every run: in the user's cache folder
-    (``core.user_cache.user_cache_dir``: ``~/.cache/tumble_ros``, made private), written
+    (``core.compiling.user_cache.user_cache_dir``: ``~/.cache/tumble_ros``, made private), written
     whole then renamed into place (concurrent runs never see half a file); where that folder
     cannot be written, in a private temporary folder.
     """

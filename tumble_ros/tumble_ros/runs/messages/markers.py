@@ -46,7 +46,7 @@ from tumble_ros.core.model.rotation import quaternions_to_matrices
 from tumble_ros.core.model.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, MOMENTUM_LENGTH,
                                          PERTURBER_LENGTH, POLYHEDRON, polyhedron_triangles,
                                          torquing_body_direction, torquing_body_directions)
-from tumble_ros.core.propagation.timebase import SampleGrid
+from tumble_ros.core.model.timebase import SampleGrid
 from tumble_ros.io import message_definition, MessageTemplate
 from visualization_msgs.msg import Marker, MarkerArray
 
