@@ -26,8 +26,8 @@ import synthetic_campaigns as sc
 from tumble_ros.core import IntegratorSettings, Scenario, simulate
 from tumble_ros.core.model.observables import SpinObservables
 from tumble_ros.core.model.rotation import euler_to_matrix, quaternion_to_matrix
-from tumble_ros.core.model.units import HOURS_PER_YEAR
 from tumble_ros.core.photometry import brightness, ellipsoid_mesh
+from tumble_ros.core.units import HOURS_PER_YEAR
 
 DAYS_PER_YEAR = 365.25
 STATES = [sc.TrueSpin('SAM', 11.0, 47.0, (0.55, 0.83), (123.0, -35.0), (0.7, 2.2),
