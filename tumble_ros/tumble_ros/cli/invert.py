@@ -83,7 +83,7 @@ def load_campaign(files: Sequence[str], file_format: str | None,
     """Return the Campaign of ``files`` read by the inversion's readers."""
     from tumble_ros.inversion import readers
     return readers.read_campaign(list(files), file_format,
-                                 ephemeris=None if ephemeris is None else tuple(ephemeris))
+                                 ephemeris=None if ephemeris is None else (ephemeris[0], ephemeris[1]))
 
 
 def _outputs(args: argparse.Namespace, accepted: int) -> list[str]:
