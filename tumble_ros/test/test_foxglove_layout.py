@@ -17,7 +17,7 @@ import re
 
 import pytest
 from tumble_ros import topics
-from tumble_ros.analysis.viewer_layouts import LAYOUTS as VIEWER_LAYOUTS, layout_for, layout_line
+from tumble_ros.analysis.viewer_layouts import layout_for, layout_line, LAYOUTS as VIEWER_LAYOUTS
 from tumble_ros.core.model.scenario import load_scenario
 from tumble_ros.core.model.units import HOURS_PER_YEAR, seconds_per_year_of
 from tumble_ros.io.msgdefs import message_spec
@@ -332,10 +332,12 @@ def _feeds(path) -> dict[str, str]:
 @pytest.mark.parametrize('path', LAYOUTS, ids=lambda p: p.name)
 def test_the_series_with_gaps_are_dots_not_lines_across_them(path):
     """
+    Draw the series that have gaps as dots: a line would join across the gap.
+
     The comparator publishes nothing where its model does not apply (a flyby's encounter
-    window: 1,370 of 2,881 samples compared) and the impacts are single points: a line would
-    join across the gap. Lichtblick 1.10.8 joins every point of a series (Plot ``showLine``,
-    PlotCoordinator.ts: default true); ``showLine: false`` draws the points alone.
+    window: 1,370 of 2,881 samples compared) and the impacts are single points. Lichtblick
+    1.10.8 joins every point of a series (Plot ``showLine``, PlotCoordinator.ts: default true);
+    ``showLine: false`` draws the points alone.
     """
     feeds = _feeds(path)
     gappy = ('/comparison/', '/' + topics.IMPACT_EVENTS)

@@ -3,10 +3,10 @@ The shipped Foxglove/Lichtblick layouts, and which one fits a recording.
 
 A recording's timeline counts ROS seconds, and one ROS second is one ``time_unit`` of the run
 (``seconds_per_year`` 0, the default: 1 s per yr for a run in years, 365.25 * 24 = 8766 s per
-yr for a run in hours). A viewer plots a value against that timeline as it is published: w in rad/yr
-(``tumble_ros.topics``). So each layout is made for one timeline unit and shows rates in rad
-per that unit (the flyby's layout converts them with user scripts, ``/studio_script/...``),
-stating the units in every panel title:
+yr for a run in hours). A viewer plots a value against that timeline as it is published: w
+in rad/yr (``tumble_ros.topics``). So each layout is made for one timeline unit and shows
+rates in rad per that unit (the flyby's layout converts them with user scripts,
+``/studio_script/...``), stating the units in every panel title:
 
     layout = layout_for(rec.seconds_per_year)   # ViewerLayout or None (no layout in that unit)
     layout_line(rec.seconds_per_year)           # what the main job prints: the file and why
@@ -82,7 +82,7 @@ def layout_for(seconds_per_year: float) -> ViewerLayout | None:
 
 
 def layout_line(seconds_per_year: float) -> str:
-    """Return one line telling which layout to open a recording with, and why (or that none fits)."""
+    """Return one line naming the layout to open a recording with, and why (or that none fits)."""
     layout = layout_for(seconds_per_year)
     if layout is not None:
         return (f'viewer: open the recording in Foxglove or Lichtblick with the layout '
