@@ -393,3 +393,51 @@ def test_the_3d_panel_follows_the_frame_of_the_markers(path):
     assert set(panel['cameraState']) <= CAMERA_KEYS
     # per-frame settings: only frames the recording has
     assert set(panel['transforms']) <= {topics.FRAME_ORBITAL}
+
+
+# -- room at 1280x800: Lichtblick 1.10.8's chrome, measured in headless Chromium (the panels'
+# rectangles in the page at 1280x800, the layouts imported: app bar 0-44 px, the layout's
+# tiles 44-724 px, toolbars and tab rows 30 px; the left sidebar, open at the start, 320 px) --
+#: The area the layout tree splits: the window less the app bar, the playback bar and the left
+#: sidebar (the worst case: open) [px].
+SCREEN = (1280, 800)
+APP_BAR = 44
+PLAYBACK_BAR = 76
+SIDEBAR = 320
+#: A panel's toolbar (its title) and a Tab panel's row of tabs [px].
+TOOLBAR = 30
+TAB_BAR = 30
+#: The least a panel's content needs [px]: a plot, 3 y ticks and its x axis; the 3D scene; a
+#: few lines of a message. StateTransitions: 64 px a path and a 30-px x axis (its index.tsx).
+MIN_CONTENT = {'Plot': 110, '3D': 250, 'RawMessages': 90}
+MIN_WIDTH = 250
+
+
+def _rectangles(node, config, x, y, w, h) -> dict[str, tuple[float, float, float, float]]:
+    """Return {panel: (x, y, width, height) of its content} for a layout tree in that area."""
+    if isinstance(node, str):
+        found = {}
+        if node.startswith('Tab!'):
+            for tab in config[node]['tabs']:
+                found.update(_rectangles(tab['layout'], config, x, y + TAB_BAR, w, h - TAB_BAR))
+            return found
+        return {node: (x, y + TOOLBAR, w, h - TOOLBAR)}
+    share = node.get('splitPercentage', 50.0) / 100.0
+    if node['direction'] == 'row':
+        return {**_rectangles(node['first'], config, x, y, w * share, h),
+                **_rectangles(node['second'], config, x + w * share, y, w * (1 - share), h)}
+    return {**_rectangles(node['first'], config, x, y, w, h * share),
+            **_rectangles(node['second'], config, x, y + h * share, w, h * (1 - share))}
+
+
+@pytest.mark.parametrize('path', LAYOUTS, ids=lambda p: p.name)
+def test_every_panel_has_room_at_1280x800(path):
+    """No 30-pixel strips: each panel's content has the room its kind needs (events included)."""
+    layout = _layout(path)
+    config = layout['configById']
+    width, height = SCREEN[0] - SIDEBAR, SCREEN[1] - APP_BAR - PLAYBACK_BAR
+    for name, (_, _, w, h) in _rectangles(layout['layout'], config, 0, 0, width, height).items():
+        kind = name.split('!')[0]
+        need = (64 * len(config[name]['paths']) + 30 if kind == 'StateTransitions'
+                else MIN_CONTENT[kind])
+        assert h >= need and w >= MIN_WIDTH, (name, round(w), round(h), need)
