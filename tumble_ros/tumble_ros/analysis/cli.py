@@ -44,6 +44,7 @@ from .figure_pool import FigurePool, PendingFigures
 from .recording import load_recording, normalize_namespace, stderr_progress
 from .report import format_summary, summary_to_dict
 from .summary import analyze, SummaryParts
+from .viewer_layouts import layout_line
 
 __all__ = ['command', 'main', 'EXIT_TRUNCATED']
 
@@ -267,6 +268,7 @@ def _command(argv: Iterable[str] | None, written: WrittenMessages | None,
             print(format_periods(periods[0]))
             for path in periods[1:]:
                 print(f'lightcurve: {path}')
+        print(layout_line(rec.seconds_per_year))    # the viewer layout made for its timeline
     if periods is not None:
         _period_warnings(periods[0])
     return _partial(summary)
