@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Write the Moon's and the Sun's ephemerides relative to Apophis for its 2029 flyby (a model).
 
-    scripts/env.sh python scripts/make_flyby_ephemerides.py [--out-dir tumble_ros/config/ephemerides]
+    scripts/env.sh python scripts/make_flyby_ephemerides.py [--out-dir DIR]
 
-writes ``apophis_2029_moon.txt`` and ``apophis_2029_sun.txt``: the Moon and the Sun seen from
+writes ``apophis_2029_moon.txt`` and ``apophis_2029_sun.txt`` (to ``tumble_ros/config/ephemerides``
+by default): the Moon and the Sun seen from
 (99942) Apophis, ecliptic J2000 [km, km/s], every 15 minutes from 1 h before the run of
 ``config/apophis_2029.yaml`` starts (2029-04-10 21:46 TDB, JD 2462237.406944444) to 1 h after it
 ends (144 h later), in the JPL Horizons vector-table format that ``core/torques/ephemeris.py``
@@ -95,7 +96,7 @@ def table_text(body: str) -> str:
     distance = np.linalg.norm(position, axis=1)
     lines = [
         '*' * 79,
-        f'A MODEL in the JPL Horizons vector-table format, NOT JPL\'s ephemeris: {BODIES[body]}',
+        f"A MODEL in the JPL Horizons vector-table format, NOT JPL's ephemeris: {BODIES[body]}",
         'relative to (99942) Apophis, written by scripts/make_flyby_ephemerides.py (its docstring',
         "states the model and its accuracy): the body from the Earth by astropy's 'builtin'",
         'ephemeris (ERFA epv00 / moon98), plus the Earth from Apophis on the hyperbola of',
@@ -112,7 +113,7 @@ def table_text(body: str) -> str:
         jd = EPOCH_JD + h / 24.0
         x, y, z = position[k]
         vx, vy, vz = velocity[k]
-        lines.append(f'{jd:.9f} = TDB (t = {h:+.2f} h from the run\'s start)')
+        lines.append(f"{jd:.9f} = TDB (t = {h:+.2f} h from the run's start)")
         lines.append(f' X ={x: .15E} Y ={y: .15E} Z ={z: .15E}')
         lines.append(f' VX={vx: .15E} VY={vy: .15E} VZ={vz: .15E}')
     lines.append('$$EOE')

@@ -394,7 +394,7 @@ def test_the_shipped_shape_at_degree4_is_the_flyby_with_a_mass_model(apophis):
 
 
 def _flyby_tables():
-    """The script that writes the Moon's and the Sun's tables (scripts/), as a module."""
+    """Return the script that writes the Moon's and the Sun's tables (scripts/), a module."""
     import importlib.util
 
     path = Path(__file__).resolve().parents[2] / 'scripts' / 'make_flyby_ephemerides.py'
