@@ -5,7 +5,7 @@ Inside, everything is in years (times), rad/yr (rates) and I rad/yr^2 (torques).
 file or parameter set with ``time_unit: h`` states every time-like value in hours instead:
 ``duration``, ``output_interval``, ``integrator.step``, ``integrator.max_step``,
 ``impacts.start``, ``impacts.duration``, ``orbit.t_p``, ``spin.precession_period``,
-``spin.rotation_period`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
+``spin.rotation_period``, ``lightcurve.night_length``, ``night_every``, ``night_start`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
 ``impacts.torque`` [I rad/h^2]. :func:`to_years` converts them once, when the scenario is read;
 the scenario, the recordings and the analysis then compute in years. The scenario remembers its
 unit (``Scenario.time_unit``): its output grid is one ROS second per unit, and what a person
@@ -63,6 +63,7 @@ TIME_POWERS = {
     'duration': 1, 'output_interval': 1, 'integrator.step': 1, 'integrator.max_step': 1,
     'impacts.start': 1, 'impacts.duration': 1, 'orbit.t_p': 1,
     'spin.precession_period': 1, 'spin.rotation_period': 1,
+    'lightcurve.night_length': 1, 'lightcurve.night_every': 1, 'lightcurve.night_start': 1,
     'omega0': -1, 'orbit_rate': -1,
     'impacts.torque': -2,
 }
