@@ -23,7 +23,7 @@ import argparse
 import os
 from pathlib import Path
 import sys
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -155,7 +155,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         sc = (load_scenario(args.config, ignore=frozenset(SIM_NODE_PARAMETERS)) if args.config
               else Scenario())
         unit = sc.time_unit
-        changes = {k: parse_time(v, unit, f'--{k.replace("_", "-")}')
+        changes: dict[str, Any] = {k: parse_time(v, unit, f'--{k.replace("_", "-")}')
                    for k, v in (('duration', args.duration),
                                 ('output_interval', args.output_interval)) if v is not None}
         if 'duration' in changes and 'output_interval' not in changes:

@@ -5,7 +5,8 @@ Inside, everything is in years (times), rad/yr (rates) and I rad/yr^2 (torques).
 file or parameter set with ``time_unit: h`` states every time-like value in hours instead:
 ``duration``, ``output_interval``, ``integrator.step``, ``integrator.max_step``,
 ``impacts.start``, ``impacts.duration``, ``orbit.t_p``, ``spin.precession_period``,
-``spin.rotation_period``, ``lightcurve.night_length``, ``night_every``, ``night_start`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
+``spin.rotation_period``, ``lightcurve.night_length``, ``lightcurve.night_every``,
+``lightcurve.night_start`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
 ``impacts.torque`` [I rad/h^2]. :func:`to_years` converts them once, when the scenario is read;
 the scenario, the recordings and the analysis then compute in years. The scenario remembers its
 unit (``Scenario.time_unit``): its output grid is one ROS second per unit, and what a person
