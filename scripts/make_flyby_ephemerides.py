@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Write the Moon's and the Sun's ephemerides relative to Apophis for its 2029 flyby (a model).
+"""
+Write the Moon's and the Sun's ephemerides relative to Apophis for its 2029 flyby (a model).
 
     scripts/env.sh python scripts/make_flyby_ephemerides.py [--out-dir DIR]
 
@@ -122,7 +123,7 @@ def table_text(body: str) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Write the tables to ``--out-dir``."""
-    parser = argparse.ArgumentParser(description=__doc__.split('\n', 1)[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().split('\n', 1)[0])
     parser.add_argument('--out-dir', type=Path,
                         default=ROOT / 'tumble_ros' / 'config' / 'ephemerides')
     args = parser.parse_args(argv)

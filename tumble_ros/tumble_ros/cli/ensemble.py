@@ -155,9 +155,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         sc = (load_scenario(args.config, ignore=frozenset(SIM_NODE_PARAMETERS)) if args.config
               else Scenario())
         unit = sc.time_unit
+        given = (('duration', args.duration), ('output_interval', args.output_interval))
         changes: dict[str, Any] = {k: parse_time(v, unit, f'--{k.replace("_", "-")}')
-                   for k, v in (('duration', args.duration),
-                                ('output_interval', args.output_interval)) if v is not None}
+                                   for k, v in given if v is not None}
         if 'duration' in changes and 'output_interval' not in changes:
             changes['output_interval'] = min(sc.output_interval, changes['duration'])
         step = None if args.step is None else parse_time(args.step, unit, '--step')
