@@ -22,6 +22,10 @@ setup(
         (os.path.join('share', package_name, 'config', 'shapes'),
          glob(os.path.join('config', 'shapes', '*.obj'))
          + glob(os.path.join('config', 'shapes', '*.tab'))),
+        # Ephemeris tables of perturbers (docs/physics.md, "Ephemerides"), beside the scenario
+        # files that name them (perturbers.<name>.ephemeris_file: ephemerides/...).
+        (os.path.join('share', package_name, 'config', 'ephemerides'),
+         glob(os.path.join('config', 'ephemerides', '*.txt'))),
         # Launch files, found by `ros2 launch tumble_ros <file>` under share/tumble_ros/launch.
         (os.path.join('share', package_name, 'launch'),
          glob(os.path.join('launch', '*.launch.py'))),

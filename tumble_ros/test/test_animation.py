@@ -116,9 +116,12 @@ def test_one_frame_of_the_animation_as_a_png(tmp_path, capsys):
     (['--animate', 'x.gif', '--fps', 'nan'], '--fps must be in [0.1, 100], got nan'),
     (['--animate', 'x.gif', '--frames', '1000000000'],
      '--frames must be an integer in [1, 10,000] (MAX_FRAMES), got 1000000000'),
-    (['--animate', 'x.png', '--at', 'nan'], '--at must be a finite time [yr], got nan'),
-    (['--animate', 'x.png', '--at', 'inf'], '--at must be a finite time [yr], got inf'),
-    (['--still', 'x.png', '--at=-inf'], '--at must be a finite time [yr], got -inf'),
+    (['--animate', 'x.png', '--at', 'nan'], "--at: 'nan' is not a time: a number in the run's "
+     'time_unit or a number and its unit, one of yr, d, h, min, s: 12h, 3d, 30min, 90s, 2yr'),
+    (['--animate', 'x.png', '--at', 'inf'], "--at: 'inf' is not a time"),
+    (['--still', 'x.png', '--at=-inf'], "--at: '-inf' is not a time"),
+    (['--still', 'x.png', '--at', '1e999h'], "--at: must be a finite time, got '1e999h'"),
+    (['--still', 'x.png', '--at', '3 days'], "--at: '3 days' is not a time"),
     (['--animate', 'x.png', '--at', '99'], '--at 99 yr: outside the attitude samples, [0, '),
     (['--still', 'x.png', '--at=-5'], '--at -5 yr: outside the run, [0, '),
 ])

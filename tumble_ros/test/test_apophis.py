@@ -391,3 +391,83 @@ def test_the_shipped_shape_at_degree4_is_the_flyby_with_a_mass_model(apophis):
     change = np.linalg.norm(before[-1] - before[0]) / np.linalg.norm(before[0])
     assert change > 0.1
     assert np.linalg.norm(after[-1] - before[-1]) / np.linalg.norm(before[-1]) < 1e-8
+
+
+def _flyby_tables():
+    """Return the script that writes the Moon's and the Sun's tables (scripts/), a module."""
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[2] / 'scripts' / 'make_flyby_ephemerides.py'
+    spec = importlib.util.spec_from_file_location('make_flyby_ephemerides', path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_shipped_moon_and_sun_tables_are_the_scripts_model(tmp_path):
+    """
+    config/ephemerides/*: written again by scripts/make_flyby_ephemerides.py, byte for byte.
+
+    A table edited by hand, or a script changed without writing them again, fails here.
+    """
+    script = _flyby_tables()
+    assert script.main(['--out-dir', str(tmp_path)]) == 0
+    shipped = CONFIG.parent / 'ephemerides'
+    for body in ('moon', 'sun'):
+        name = f'apophis_2029_{body}.txt'
+        assert (tmp_path / name).read_text() == (shipped / name).read_text(), name
+        assert 'NOT JPL' in (shipped / name).read_text()[:400]
+
+
+def test_the_shipped_moon_and_sun_are_where_the_sky_has_them(apophis):
+    """
+    apophis_2029_moon_sun.yaml: the flyby with the Moon and the Sun from their tables.
+
+    The tables less the Earth's hyperbola are the bodies seen from the Earth. Checked against
+    numbers this model does not compute: the Sun's direction at perigee is apophis_2029.yaml's
+    cited lightcurve.sun (geocentric ecliptic longitude 23.84 deg, J2000) at 1.003 au; the Moon
+    stays between its extreme perigee and apogee (356,400 to 406,700 km) at its orbital speed
+    (0.96 to 1.09 km/s), and it moves prograde (its angular momentum towards the ecliptic's
+    north pole, the lunar orbit 5.1 deg from the ecliptic).
+    """
+    both = load_scenario(CONFIG.with_name('apophis_2029_moon_sun.yaml'))
+    assert [p.name for p in both.all_perturbers] == ['kepler_orbit', 'moon', 'sun']
+    assert (both.omega0, both.euler0, both.orbit, both.duration, both.time_unit) == (
+        apophis.omega0, apophis.euler0, apophis.orbit, apophis.duration, apophis.time_unit)
+    moon, sun = both.perturbers
+    hours = np.linspace(0.0, 144.0, 145)
+    earth = apophis.orbit.position(hours / HOURS_PER_YEAR)
+    sun_geo = sun.position([72.0 / HOURS_PER_YEAR])[0] - apophis.orbit.position(
+        [72.0 / HOURS_PER_YEAR])[0]
+    np.testing.assert_allclose(sun_geo / np.linalg.norm(sun_geo), apophis.lightcurve.sun,
+                               atol=1e-4)
+    assert np.linalg.norm(sun_geo) / 1.495978707e8 == pytest.approx(1.003, abs=5e-4)
+    moon_geo = moon.position(hours / HOURS_PER_YEAR) - earth
+    distance = np.linalg.norm(moon_geo, axis=1)
+    assert np.all((356_400.0 < distance) & (distance < 406_700.0))
+    speed = np.linalg.norm(np.diff(moon_geo, axis=0), axis=1) / 3600.0          # km/s
+    assert np.all((0.96 < speed) & (speed < 1.09))
+    pole = np.cross(moon_geo[0], moon_geo[10])
+    assert pole[2] / np.linalg.norm(pole) > math.cos(math.radians(5.2))
+
+
+def test_the_shipped_moon_and_sun_move_the_spin_by_their_share(apophis):
+    """
+    Run apophis_2029_moon_sun.yaml whole: the Moon and the Sun move omega after the flyby.
+
+    Each torque ~ GM / R^3: the Moon's at its closest (95,000 km) is ~8e-4 of the Earth's at
+    perigee, the Sun's ~6e-6 of it over the whole run; the flyby changes omega by ~0.7 of
+    itself, so the two bodies move omega after it by 1e-5 to 1e-2 of it, and the Moon's
+    closest approach is where the model puts it (95,000 to 96,000 km, 16 to 18 h after
+    perigee). Without either (the same file, perturbers removed) the run is apophis_2029's.
+    """
+    both = load_scenario(CONFIG.with_name('apophis_2029_moon_sun.yaml'))
+    closest, when = both.perturbers[0].source.closest_approach()
+    assert 95_000.0 < closest < 96_000.0 and 88.0 < when * HOURS_PER_YEAR < 90.0
+    t = np.array([0.0, both.duration])
+    with_them, without = simulate(both, t_eval=t).omega, simulate(apophis, t_eval=t).omega
+    change = np.linalg.norm(without[-1] - without[0]) / np.linalg.norm(without[0])
+    moved = np.linalg.norm(with_them[-1] - without[-1]) / np.linalg.norm(without[-1])
+    assert change > 0.5 and 1e-5 < moved < 1e-2, (change, moved)
+    alone = simulate(both.replace(perturbers=()), t_eval=t).omega
+    np.testing.assert_array_equal(alone, without)

@@ -19,7 +19,7 @@ import pytest
 from tumble_ros import topics
 from tumble_ros.analysis.viewer_layouts import layout_for, layout_line, LAYOUTS as VIEWER_LAYOUTS
 from tumble_ros.core.model.scenario import load_scenario
-from tumble_ros.core.model.units import HOURS_PER_YEAR, seconds_per_year_of
+from tumble_ros.core.units import HOURS_PER_YEAR, seconds_per_year_of
 from tumble_ros.io.msgdefs import message_spec
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'

@@ -13,8 +13,8 @@ from tumble_ros.core.model.rotation import euler_to_quaternion
 from tumble_ros.core.model.scenario import load_scenario
 from tumble_ros.core.model.shipped import shipped_scenario
 from tumble_ros.core.model.spinstate import spin_state
-from tumble_ros.core.model.units import HOURS_PER_YEAR
 from tumble_ros.core.propagation.ensemble import simulate_ensemble
+from tumble_ros.core.units import HOURS_PER_YEAR
 from tumble_ros.inversion.flyby import flyby_ensemble, state_at
 from tumble_ros.inversion.model import ModelError, TumblerParameters
 

@@ -17,7 +17,7 @@ import signal
 import numpy as np
 import pytest
 
-from tumble_ros.core.model.units import KM_PER_AU
+from tumble_ros.core.units import KM_PER_AU
 from tumble_ros.inversion.campaign import CampaignError
 from tumble_ros.inversion.readers import common, read_campaign, to_tdb
 from tumble_ros.inversion.readers.common import LIGHT_DAYS_PER_AU

@@ -16,9 +16,9 @@ quadrature of the ellipsoid's brightness, Kepler geometry, nights with lunar and
 * **A principal-axis rotator** (5.3 h) on 12 nights: the period search should say one period,
   no pair to fit. It does not (xfail, strict: the test's docstring says why).
 * **Long** (TUMBLE_ROS_LONG_INVERSION=1, minutes each): the SAM's coverage; the SAM over two
-  apparitions; Apophis (Pravec et al. 2014's state) sampled like 2020-21 (1,280 points on 67 nights), its
-  periods to the published precision at 1 sigma (P_phi 0.07 h / 3, P_psi 6 h / 3: Pravec et
-  al.'s 3-sigma); over 2012-13 and 2020-21, to ~0.001 h and ~0.1 h (Durech et al. 2026,
+  apparitions; Apophis (Pravec et al. 2014's state) sampled like 2020-21 (1,280 points on 67
+  nights), its periods to the published precision at 1 sigma (P_phi 0.07 h / 3, P_psi 6 h / 3:
+  Pravec et al.'s 3-sigma); over 2012-13 and 2020-21, to ~0.001 h and ~0.1 h (Durech et al. 2026,
   arXiv:2604.24566: 27.374 +- 0.001 h, 262.2 +- 0.1 h) with the cycle-count aliases across the
   8-year gap fitted and listed.
 """

@@ -396,3 +396,70 @@ def test_nothing_is_published_before_the_command_line_is_accepted(ros):
     accepted = ros.start(SimNode, start_paused=True, duration=0.2, output_interval=0.002)
     assert ros.spin_until(lambda: len(descriptions) == 1 and status, 5.0)
     assert descriptions[0].run_id == accepted.run_id
+
+
+def test_a_node_in_hours_runs_the_defaults_it_was_not_given_in_years(ros):
+    """
+    time_unit h with no integrator.step, duration or max_step: the Scenario's own defaults.
+
+    The node declared every scenario parameter with its default in years and read them all
+    back as given, so with time_unit h it ran integrator.step 1e-4 h (not 1e-4 yr) and a
+    duration of 2 h. What it lists (``ros2 param get``) is now the default in its unit.
+    """
+    sim = ros.start(SimNode, time_unit='h', output_interval=1.0, real_time_factor=0.0,
+                    integrator__method='rk4')
+    default = Scenario()
+    assert sim.scenario.integrator.step == default.integrator.step            # 1e-4 yr
+    assert sim.scenario.duration == default.duration                          # 2 yr
+    assert sim.scenario.output_interval == pytest.approx(1.0 / 8766.0, rel=1e-15)
+    assert sim.get_parameter('integrator.step').value == pytest.approx(0.8766, rel=1e-12)
+    assert sim.get_parameter('duration').value == pytest.approx(2.0 * 8766.0, rel=1e-12)
+    assert list(sim.get_parameter('omega0').value) == pytest.approx(
+        [v / 8766.0 for v in default.omega0], rel=1e-12)                       # rad/h
+
+
+def test_a_node_in_hours_takes_a_spin_block_beside_its_listed_defaults(ros):
+    """The omega0 it lists (the default in rad/h) is no second spin state beside spin.*."""
+    from tumble_ros.core import load_scenario, shipped_scenario
+    expected = load_scenario(shipped_scenario('tumbling_from_observables'))
+    spin = {'spin__mode': 'SAM', 'spin__precession_period': 27.38,
+            'spin__rotation_period': 263.0, 'spin__inertia_ratios': [0.61, 0.965],
+            'spin__pole': [4.363323129985824, -1.3089969389957472], 'spin__phases': [0.0, 0.0]}
+    sim = ros.start(SimNode, time_unit='h', duration=1.0, output_interval=0.5,
+                    real_time_factor=0.0, **spin)
+    assert sim.scenario.omega0 == expected.omega0 and sim.scenario.inertia == expected.inertia
+
+
+def test_the_impact_service_takes_and_answers_the_scenarios_time_unit(ros):
+    """
+    time_unit h: start and duration [h], torque [I rad/h^2], the schedule answered in hours.
+
+    The service read them in years whatever the scenario said: start 12 was refused as past
+    the end of a 24-h run (12 yr).
+    """
+    events = ros.collect(ImpactEvent, topics.IMPACT_EVENTS)
+    sim = ros.start(SimNode, time_unit='h', duration=24.0, output_interval=0.5,
+                    real_time_factor=0.0, start_paused=True)
+    reply = ros.call(ApplyImpact, topics.APPLY_IMPACT, impact_request(
+        start=12.0, duration=0.01, torque=Vector3(x=0.0, y=0.0, z=3.0)))
+    assert reply.accepted, reply.message
+    assert (reply.scheduled_start, reply.scheduled_end) == pytest.approx(
+        (12.0, 12.01), rel=1e-12)
+    assert reply.message == 'impact 1 scheduled on [12, 12.01] h'
+    ros.call(Trigger, topics.RESUME, Trigger.Request())
+    assert ros.spin_until(lambda: events, 20.0)
+    # (the event is recorded in years: 3 I rad/h^2 for 0.01 h is 0.03 / Iz rad/h)
+    assert events[0].delta_omega.z == pytest.approx(3.0 * 0.01 / 1.5 * 8766.0, rel=1e-9)
+    assert events[0].start == pytest.approx(12.0 / 8766.0, rel=1e-12)
+    assert sim.scenario.time_unit == 'h'
+
+
+def test_real_time_factor_is_in_the_scenarios_time_unit(ros, monkeypatch):
+    """real_time_factor 1 with time_unit h: an hour a wall-clock second (it was a year)."""
+    import tumble_ros.nodes.sim as sim_module
+
+    sim = ros.start(SimNode, time_unit='h', duration=24.0, output_interval=0.5,
+                    real_time_factor=1.0, start_paused=True)
+    sim._pace_origin = (100.0, 0)          # (wall time, sample index) when pacing began
+    monkeypatch.setattr(sim_module.time, 'monotonic', lambda: 103.0)
+    assert sim._paced_index() == 6         # 3 s later: 3 h, the sample at 3 h (every 0.5 h)

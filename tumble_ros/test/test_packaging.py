@@ -170,7 +170,7 @@ def test_the_built_package_holds_every_module_and_the_shipped_files(built):
             for p in (lib / 'tumble_ros').rglob('*.py')} == modules
     shipped = {p.relative_to(CONFIG).as_posix() for p in CONFIG.rglob('*') if p.is_file()}
     assert {'default.yaml', 'fig9.yaml', 'apophis_2029.yaml', 'foxglove_layout.json',
-            'shapes/apophis.obj'} <= shipped
+            'shapes/apophis.obj', 'ephemerides/apophis_2029_moon.txt'} <= shipped
     assert {p.relative_to(lib / 'tumble_ros' / 'config').as_posix()
             for p in (lib / 'tumble_ros' / 'config').rglob('*') if p.is_file()} == shipped
 

@@ -270,8 +270,9 @@ SIM_NODE_PARAMETERS = {
                          '0 = one ROS second per time_unit (1 for yr, 8766 for h): the grid of '
                          'simulate(scenario); another value samples its own grid',
                          (0.0, 1e6), True),
-    'real_time_factor': (0.1, 'yr/s', 'simulated years per wall-clock second; 0 = as fast as the '
-                         'subscribers take it', (0.0, 1e6), False),
+    'real_time_factor': (0.1, 'time_unit/s', 'simulated time per wall-clock second, in the '
+                         "scenario's time_unit (yr by default; 1 with time_unit h: an hour a "
+                         'second); 0 = as fast as the subscribers take it', (0.0, 1e6), False),
     'start_paused': (False, '', 'start paused (resume or step with the services)', None, True),
     'min_consumers': (0, '', 'wait until this many consumers report progress before publishing',
                       None, True),

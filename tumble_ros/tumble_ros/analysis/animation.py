@@ -47,12 +47,13 @@ from tumble_ros.core.model.rotation import quaternion_multiply, quaternions_to_m
 from tumble_ros.core.model.shape import (AXIS_LENGTH, body_shape, BOX, COLORS, ELLIPSOID,
                                          MOMENTUM_LENGTH, PERTURBER_LENGTH,
                                          torquing_body_direction)
+from tumble_ros.core.units import from_years
 from tumble_ros.errors import AnalysisError
 from tumble_ros.io import read_messages
 from tumble_ros.topics import (BODY_MARKERS, FRAME_BODY, MARKER_AXES, MARKER_MOMENTUM,
                                MARKER_PERTURBER, MARKER_SUN, MARKERS)
 
-from .display import recording_units
+from .display import recording_units, run_time_unit
 from .figures import envelope, numeric_limits, time_axis
 from .recording import Recording
 
@@ -376,14 +377,22 @@ def check_frames_fps(frames: int, fps: float) -> None:
         raise AnalysisError(f'--fps must be in [{MIN_FPS:g}, {MAX_FPS:g}], got {fps!r}')
 
 
-def check_time(at: float | None, t: np.ndarray, what: str = 'the attitude samples') -> None:
-    """Refuse a time ``at`` [yr] that is not finite or outside [t[0], t[-1]] (None passes)."""
+def check_time(at: float | None, t: np.ndarray, what: str = 'the attitude samples',
+               unit: str = 'yr') -> None:
+    """
+    Refuse a time ``at`` [yr] that is not finite or outside [t[0], t[-1]] (None passes).
+
+    The refusal states the times in ``unit`` (the run's time_unit, the unit --at is read in).
+    """
     if at is None:
         return
     if not np.isfinite(at):
-        raise AnalysisError(f'--at must be a finite time [yr], got {at!r}')
+        raise AnalysisError(f'--at must be a finite time, got {at!r}')
     if not t[0] <= at <= t[-1]:
-        raise AnalysisError(f'--at {at:g} yr: outside {what}, [{t[0]:g}, {t[-1]:g}] yr')
+        def text(years: float) -> str:
+            return f'{from_years(float(years), unit):g}'
+        raise AnalysisError(f'--at {text(at)} {unit}: outside {what}, [{text(t[0])}, '
+                            f'{text(t[-1])}] {unit}')
 
 
 class _GifStream:
@@ -456,7 +465,7 @@ def write_animation(rec: Recording, path: str | os.PathLike[str], *, frames: int
     single = path.suffix.lower() == '.png'
     writer = None if single else _writer(path, fps)
     t, quaternion, omega = _attitude_samples(rec)
-    check_time(at, t)
+    check_time(at, t, unit=run_time_unit(rec))
     if single:
         target = (t[0] + t[-1]) / 2 if at is None else at
         chosen = np.array([int(np.argmin(np.abs(t - target)))])
@@ -511,7 +520,7 @@ def write_still(rec: Recording, path: str | os.PathLike[str], *, at: float | Non
     Returns (path, the scene's time [yr]). AnalysisError when the recording has no scene.
     """
     path = _target(path, overwrite)
-    check_time(at, rec.t if rec.n else np.zeros(1), 'the run')
+    check_time(at, rec.t if rec.n else np.zeros(1), 'the run', run_time_unit(rec))
     topic = rec.topic(MARKERS)
     if topic not in rec.topics or rec.topics[topic][1] == 0:
         raise AnalysisError(f'{rec.path}: no {topic} scenes (recorded before the 3D scene '

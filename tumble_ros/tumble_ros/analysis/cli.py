@@ -33,12 +33,13 @@ from pathlib import Path
 import sys
 from typing import NoReturn
 
+from tumble_ros.core.units import parse_time, TIME_INPUT_HELP, time_parts
 from tumble_ros.errors import AnalysisError
 from tumble_ros.exits import Interrupted, interrupts
 from tumble_ros.io import McapError, WrittenMessages
 from tumble_ros.topics import MARKERS
 
-from .display import recording_units
+from .display import recording_units, run_time_unit
 from .figure_files import FigureExistsError
 from .figure_pool import FigurePool, PendingFigures
 from .recording import load_recording, normalize_namespace, stderr_progress
@@ -117,10 +118,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--still', metavar='FILE.png', default=None,
                         help='also draw one recorded 3D scene (the markers topic: what RViz and '
                              'Foxglove show) with matplotlib')
-    parser.add_argument('--at', type=float, default=None, metavar='T',
-                        help='with --still: the first scene at or after T [yr] (default: the '
-                             'first scene); with --animate FILE.png: the sample nearest T '
-                             '(default: the middle of the run)')
+    parser.add_argument('--at', default=None, metavar='T',
+                        help='with --still: the first scene at or after T (default: the first '
+                             'scene); with --animate FILE.png: the sample nearest T (default: '
+                             f'the middle of the run). T: {TIME_INPUT_HELP}')
     parser.add_argument('--quiet', action='store_true',
                         help='no progress messages on stderr')
     return parser
@@ -172,8 +173,11 @@ def _check_options(args) -> str | None:
         return '--frames and --fps need --animate FILE'
     if args.at is not None and args.still is None and not str(args.animate).endswith('.png'):
         return '--at needs --still FILE.png or --animate FILE.png'
-    if args.at is not None and not math.isfinite(args.at):
-        return f'--at must be a finite time [yr], got {args.at}'
+    if args.at is not None:
+        try:
+            time_parts(args.at, '--at')
+        except ValueError as err:
+            return str(err)
     if args.animate is not None:
         from . import animation   # matplotlib only when asked for
         try:
@@ -364,22 +368,33 @@ def _partial(summary) -> int:
     return EXIT_TRUNCATED
 
 
+def _at(rec, text: str | None) -> float | None:
+    """Return --at in years: a bare number in the recording's time_unit, else its own unit."""
+    if text is None:
+        return None
+    try:
+        return parse_time(text, run_time_unit(rec), '--at')
+    except ValueError as err:
+        raise AnalysisError(str(err)) from None
+
+
 def _pictures(rec, args) -> dict[str, tuple]:
     """Write the animation and the still asked for: {'animation'|'still': (path, what)}."""
     if args.animate is None and args.still is None:
         return {}
     from . import animation   # matplotlib only when asked for
     out = {}
+    at = _at(rec, args.at)
     if args.animate is not None:
         frames = args.frames or animation.FRAMES
         fps = args.fps or animation.FPS
         bar = None if args.quiet else animation.stderr_bar(f'animating {args.animate}')
         path, count = animation.write_animation(rec, args.animate, frames=frames, fps=fps,
-                                                at=args.at, overwrite=args.overwrite,
+                                                at=at, overwrite=args.overwrite,
                                                 progress=bar)
         out['animation'] = (path, f'{count} frames at {fps:g} fps' if count > 1 else 'one frame')
     if args.still is not None:
-        path, t = animation.write_still(rec, args.still, at=args.at, overwrite=args.overwrite)
+        path, t = animation.write_still(rec, args.still, at=at, overwrite=args.overwrite)
         out['still'] = (path, f'the {rec.topic(MARKERS)} scene at t = '
                               f'{recording_units(rec).time_text(t)}')
     return out

@@ -41,7 +41,8 @@ if TYPE_CHECKING:
 
     from .recording import Recording
 
-__all__ = ['DisplayUnits', 'display_units', 'recording_units', 'frame_name', 'is_flyby',
+__all__ = ['DisplayUnits', 'display_units', 'recording_units', 'run_time_unit', 'frame_name',
+           'is_flyby',
            'longitude_degrees', 'ORBITAL_FRAME', 'ELEMENTS_FRAME']
 
 #: The frame of a circular-orbit run (the paper's X'Y'Z': Z' the orbit normal).
@@ -150,6 +151,11 @@ def display_units(span: float, scenario: Scenario | None = None) -> DisplayUnits
     unit = getattr(scenario, 'time_unit', 'yr')
     name, years = (unit, TIME_UNITS[unit]) if unit != 'yr' else display_unit(span)
     return DisplayUnits(name, years, frame_name(scenario))
+
+
+def run_time_unit(rec: Recording) -> str:
+    """Return the recording's scenario ``time_unit`` (yr without a scenario): its inputs' unit."""
+    return getattr(rec.scenario, 'time_unit', None) or 'yr'
 
 
 def recording_units(rec: Recording) -> DisplayUnits:

@@ -21,7 +21,7 @@ import math
 from pathlib import Path
 
 from tumble_ros.core.model.shipped import config_dir
-from tumble_ros.core.model.units import TIME_UNITS
+from tumble_ros.core.units import TIME_UNITS
 
 __all__ = ['ViewerLayout', 'LAYOUTS', 'timeline_unit', 'layout_for', 'layout_line']
 

@@ -23,7 +23,7 @@ import argparse
 import os
 from pathlib import Path
 import sys
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -32,7 +32,7 @@ from tumble_ros.cli.progress import ProgressBar
 from tumble_ros.core import (GaussianSpread, IntegratorSettings, load_scenario, RandomImpacts,
                              Scenario, ScenarioError)
 from tumble_ros.core.compiling.jit import compile_notices
-from tumble_ros.core.units import from_years, TIME_UNITS
+from tumble_ros.core.units import from_years, parse_time, TIME_INPUT_HELP, TIME_UNITS
 from tumble_ros.ensembles import (EnsembleStoreError, open_ensemble, run_ensemble,
                                   run_ensemble_to_store)
 from tumble_ros.errors import TumbleRosError
@@ -52,22 +52,26 @@ def _parser() -> argparse.ArgumentParser:
                    help='scenario file (ROS 2 params YAML); default: the default scenario')
     p.add_argument('--bodies', '-n', type=int, default=100,
                    help='number of bodies N (default 100)')
-    p.add_argument('--duration', type=float, help="override the scenario's duration [yr]")
-    p.add_argument('--output-interval', type=float, help='override the output interval [yr]')
+    p.add_argument('--duration', metavar='T',
+                   help=f"override the scenario's duration: {TIME_INPUT_HELP}")
+    p.add_argument('--output-interval', metavar='T',
+                   help=f'override the output interval: {TIME_INPUT_HELP}')
     p.add_argument('--method', help='override integrator.method (e.g. splitting6, dop853, rk4)')
-    p.add_argument('--step', type=float, help='override integrator.step [yr]')
+    p.add_argument('--step', metavar='T', help=f'override integrator.step: {TIME_INPUT_HELP}')
     p.add_argument('--rtol', type=float, help='override integrator.rtol')
     p.add_argument('--atol', type=float, help='override integrator.atol')
     p.add_argument('--impact-rate', type=float, default=0.0,
-                   help='random impacts per year per body (default 0)')
-    p.add_argument('--impact-torque', type=float, default=1e6,
-                   help='impact torque magnitude [I rad/yr^2]')
-    p.add_argument('--impact-duration', type=float, default=3e-7,
-                   help='pulse length [yr] (default 3e-7)')
+                   help="random impacts per body per unit of the scenario's time_unit "
+                        '(per year by default; default 0)')
+    p.add_argument('--impact-torque', type=float, default=None,
+                   help="impact torque magnitude [I rad/unit^2], unit the scenario's time_unit "
+                        '(default 1e6 I rad/yr^2)')
+    p.add_argument('--impact-duration', metavar='T', default=None,
+                   help=f'pulse length: {TIME_INPUT_HELP} (default 3e-7 yr, 9.5 s)')
     p.add_argument('--impact-frame', choices=('body', 'orbital'), default='body')
     p.add_argument('--omega-spread', type=float, default=0.0,
-                   help='standard deviation [rad/yr] of a Gaussian perturbation of omega0 '
-                        'per body')
+                   help="standard deviation [rad/unit, unit the scenario's time_unit] of a "
+                        'Gaussian perturbation of omega0 per body')
     p.add_argument('--seed', type=int, default=0, help='random seed (default 0)')
     p.add_argument('--reference', action='store_true',
                    help='run the reference path (one simulate() per body)')
@@ -150,12 +154,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         sc = (load_scenario(args.config, ignore=frozenset(SIM_NODE_PARAMETERS)) if args.config
               else Scenario())
-        changes = {k: v for k, v in (('duration', args.duration),
-                                     ('output_interval', args.output_interval))
-                   if v is not None}
+        unit = sc.time_unit
+        given = (('duration', args.duration), ('output_interval', args.output_interval))
+        changes: dict[str, Any] = {k: parse_time(v, unit, f'--{k.replace("_", "-")}')
+                                   for k, v in given if v is not None}
         if 'duration' in changes and 'output_interval' not in changes:
             changes['output_interval'] = min(sc.output_interval, changes['duration'])
-        integ = {k: v for k, v in (('method', args.method), ('step', args.step),
+        step = None if args.step is None else parse_time(args.step, unit, '--step')
+        integ = {k: v for k, v in (('method', args.method), ('step', step),
                                    ('rtol', args.rtol), ('atol', args.atol)) if v is not None}
         if integ:
             fields = {f: getattr(sc.integrator, f)
@@ -167,11 +173,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ScenarioError(f'--bodies: must be >= 1, got {args.bodies}')
         impacts = omega0 = None
         if args.impact_rate > 0:
-            impacts = RandomImpacts(rate=args.impact_rate, torque=args.impact_torque,
-                                    pulse=args.impact_duration, frame=args.impact_frame,
-                                    seed=args.seed)
+            per_year = 1.0 / TIME_UNITS[unit]      # (a rate per unit, per year)
+            torque = (1e6 if args.impact_torque is None
+                      else args.impact_torque * per_year * per_year)
+            pulse = (3e-7 if args.impact_duration is None
+                     else parse_time(args.impact_duration, unit, '--impact-duration'))
+            impacts = RandomImpacts(rate=args.impact_rate * per_year, torque=torque,
+                                    pulse=pulse, frame=args.impact_frame, seed=args.seed)
         if args.omega_spread > 0:
-            omega0 = GaussianSpread(sc.omega0, args.omega_spread, seed=args.seed)
+            omega0 = GaussianSpread(sc.omega0, args.omega_spread / TIME_UNITS[unit],
+                                    seed=args.seed)
         inputs = {'impacts': impacts, 'omega0': omega0}
         to_store = bool(args.out) and args.out.rstrip('/').endswith('.zarr')
         with interrupts(), compile_notices(not args.quiet), engine(args) as client:
@@ -193,7 +204,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f'\nensemble: stopped by {stop.name}{kept}', file=sys.stderr)
         return stop.exit_code
     n_impacts = (len(sc.impacts) * args.bodies if impacts is None else
-                 f'random, {args.impact_rate:g}/yr per body, seed {args.seed}')
+                 f'random, {args.impact_rate:g}/{sc.time_unit} per body, seed {args.seed}')
     ok = int(result.success.sum())
     w_end = result.omega[:, -1]
     print(f'bodies: {result.n_bodies} ({ok} succeeded), impacts: {n_impacts}, '

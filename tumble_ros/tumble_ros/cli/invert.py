@@ -169,7 +169,7 @@ def _flyby_text(outcome: Any, accepted: int) -> str:
     """Return the periods and L before and after the flyby, one line a model."""
     import math
 
-    from tumble_ros.core.model.units import HOURS_PER_YEAR as H
+    from tumble_ros.core.units import HOURS_PER_YEAR as H
     lines = ['flyby: model, P_phi, P_psi [h] before -> after, L (lambda, beta) [deg] after']
     for k, (before, after) in enumerate(zip(outcome.before, outcome.after)):
         label = 'nominal' if k == 0 else (f'accepted {k + 1}' if k < accepted

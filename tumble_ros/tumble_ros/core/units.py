@@ -5,7 +5,8 @@ Inside, everything is in years (times), rad/yr (rates) and I rad/yr^2 (torques).
 file or parameter set with ``time_unit: h`` states every time-like value in hours instead:
 ``duration``, ``output_interval``, ``integrator.step``, ``integrator.max_step``,
 ``impacts.start``, ``impacts.duration``, ``orbit.t_p``, ``spin.precession_period``,
-``spin.rotation_period`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
+``spin.rotation_period``, ``lightcurve.night_length``, ``lightcurve.night_every``,
+``lightcurve.night_start`` [h]; ``omega0``, ``orbit_rate`` [rad/h];
 ``impacts.torque`` [I rad/h^2]. :func:`to_years` converts them once, when the scenario is read;
 the scenario, the recordings and the analysis then compute in years. The scenario remembers its
 unit (``Scenario.time_unit``): its output grid is one ROS second per unit, and what a person
@@ -19,10 +20,13 @@ standard values, :data:`PERTURBER_RADII` the radii a Kepler orbit's perturber ta
 """
 from __future__ import annotations
 
+import math
+import re
 from typing import Any, Mapping
 
 __all__ = ['TIME_UNITS', 'HOURS_PER_YEAR', 'SECONDS_PER_YEAR', 'to_years', 'TIME_POWERS',
-           'seconds_per_year_of', 'from_years',
+           'seconds_per_year_of', 'from_years', 'in_unit', 'parse_time', 'time_parts',
+           'TIME_INPUT_HELP',
            'GM_SUN', 'GM_EARTH', 'GM_MOON', 'KM_PER_AU', 'PERTURBER_RADII']
 
 HOURS_PER_YEAR = 365.25 * 24.0
@@ -60,6 +64,7 @@ TIME_POWERS = {
     'duration': 1, 'output_interval': 1, 'integrator.step': 1, 'integrator.max_step': 1,
     'impacts.start': 1, 'impacts.duration': 1, 'orbit.t_p': 1,
     'spin.precession_period': 1, 'spin.rotation_period': 1,
+    'lightcurve.night_length': 1, 'lightcurve.night_every': 1, 'lightcurve.night_start': 1,
     'omega0': -1, 'orbit_rate': -1,
     'impacts.torque': -2,
 }
@@ -89,11 +94,66 @@ def seconds_per_year_of(unit: str) -> float:
 
 def to_years(params: Mapping[str, Any], unit: str) -> dict[str, Any]:
     """Return ``params`` with every time-like value converted from ``unit`` to years."""
-    years_per_unit = TIME_UNITS[unit]
+    return _converted(params, TIME_UNITS[unit])
+
+
+def in_unit(params: Mapping[str, Any], unit: str) -> dict[str, Any]:
+    """
+    Return ``params`` [yr] with every time-like value stated in ``unit``.
+
+    :func:`to_years`' inverse, to an ulp: the defaults a node declares for a scenario in
+    ``unit`` (``nodes.parameters``), so that what it lists is what it runs.
+    """
+    return _converted(params, 1.0 / TIME_UNITS[unit])
+
+
+def _converted(params: Mapping[str, Any], factor: float) -> dict[str, Any]:
+    """Return ``params`` with each time-like value times ``factor`` to its power of time."""
     out = dict(params)
-    if unit == 'yr':
+    if factor == 1.0:
         return out
     for name, power in TIME_POWERS.items():
         if name in out:
-            out[name] = _scaled(out[name], years_per_unit ** power)
+            out[name] = _scaled(out[name], factor ** power)
     return out
+
+
+#: How a time is typed at a command line or a service (:func:`parse_time`), for help texts.
+TIME_INPUT_HELP = ("a number in the scenario's time_unit, or with a unit: 12h, 3d, 30min, 90s, "
+                   '2yr')
+_TIME_INPUT = re.compile(r'\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*('
+                         + '|'.join(sorted(TIME_UNITS, key=len, reverse=True)) + r')?\s*')
+
+
+def parse_time(text: str | float, unit: str, name: str = 'time') -> float:
+    """
+    Return the time ``text`` in years: a number in ``unit``, or a number and its own unit.
+
+    ``unit`` is the scenario's ``time_unit`` (a key of :data:`TIME_UNITS`), the unit of a bare
+    number; ``12h``, ``3d``, ``30min``, ``90s`` or ``2yr`` state theirs. ValueError naming
+    ``name`` (an option, a field) for anything else, a value that is not finite included.
+    """
+    number, stated = time_parts(text, name, unit)
+    return number * TIME_UNITS[stated or unit]
+
+
+def time_parts(text: str | float, name: str = 'time', unit: str = '') -> tuple[float, str]:
+    """
+    Return (the number, its unit or '') of a time as :func:`parse_time` reads it.
+
+    For a check before the scenario's unit is known (``unit`` '': the message says "the
+    run's time_unit"); ValueError as :func:`parse_time`.
+    """
+    if isinstance(text, (int, float)) and not isinstance(text, bool):
+        number, stated = float(text), ''
+    else:
+        match = _TIME_INPUT.fullmatch(str(text))
+        if match is None:
+            where = f"{unit} (the scenario's time_unit)" if unit else "the run's time_unit"
+            raise ValueError(f'{name}: {text!r} is not a time: a number in {where} or a number '
+                             f"and its unit, one of {', '.join(TIME_UNITS)}: 12h, 3d, 30min, "
+                             '90s, 2yr')
+        number, stated = float(match.group(1)), match.group(2) or ''
+    if not math.isfinite(number):
+        raise ValueError(f'{name}: must be a finite time, got {text!r}')
+    return number, stated

@@ -33,7 +33,7 @@ import numpy as np
 from tumble_ros.core.model.limits import ScenarioError
 from tumble_ros.core.model.observables import SpinObservables
 from tumble_ros.core.model.scenario import IntegratorSettings, Scenario
-from tumble_ros.core.model.units import HOURS_PER_YEAR, KM_PER_AU
+from tumble_ros.core.units import HOURS_PER_YEAR, KM_PER_AU
 from tumble_ros.core.photometry.brightness import (magnitude, reference_brightness,
                                                    scattering_sums, to_body)
 from tumble_ros.core.photometry.shape import ellipsoid_mesh, Mesh

@@ -57,28 +57,53 @@ def declare_scenario_parameters(node: Node) -> None:
     element type (:data:`EMPTY_ARRAY_TYPES`).
     """
     from tumble_ros.core import PARAMETER_DOCS, Scenario
-    for name, default in Scenario().to_parameters().items():
-        unit, description = PARAMETER_DOCS[name]
-        descriptor = ParameterDescriptor(
-            description=describe(description, unit),
-            additional_constraints='validated by tumble_ros.core.Scenario (docs/physics.md)',
-            read_only=True,
-            dynamic_typing=True,
-        )
-        if name not in EMPTY_ARRAY_TYPES:
-            node.declare_parameter(name, default, descriptor)
-            continue
-        override = node._parameter_overrides.get(name)   # (no public getter)
-        unset = override is not None and override.type_ == Parameter.Type.NOT_SET
-        writable = ParameterDescriptor()
-        writable.dynamic_typing = True
-        node.declare_parameter(name, default, writable, ignore_override=unset)
-        value = node.get_parameter(name).value
-        if not len(value):
-            # Typed empty: through set_parameters, the one way rclpy keeps a given type for [].
-            node.set_parameters([Parameter(name, EMPTY_ARRAY_TYPES[name], [])])
-        node.set_descriptor(name, descriptor)
+    defaults = Scenario().to_parameters()     # in years, values_in_years False
+    for name in ('time_unit', 'values_in_years'):
+        _declare_scenario_parameter(node, name, defaults.pop(name), PARAMETER_DOCS[name])
+    for name, default in _defaults_in_unit(node, defaults).items():
+        _declare_scenario_parameter(node, name, default, PARAMETER_DOCS[name])
     _declare_perturbers(node)
+
+
+def _defaults_in_unit(node: Node, defaults: dict[str, Any]) -> dict[str, Any]:
+    """
+    Return the defaults [yr] in the unit of the node's values (``time_unit``, or years).
+
+    A node given ``time_unit: h`` lists (``ros2 param get``) the defaults it runs: the default
+    step 1e-4 yr as 0.8766 h, not 1e-4 (which it would have read as 1e-4 h). An unknown unit
+    leaves them in years (the Scenario refuses it, naming time_unit).
+    """
+    from tumble_ros.core.units import in_unit, TIME_UNITS
+    unit = node.get_parameter('time_unit').value
+    in_years = node.get_parameter('values_in_years').value
+    if in_years is not False or unit not in TIME_UNITS:
+        return defaults
+    return in_unit(defaults, unit)
+
+
+def _declare_scenario_parameter(node: Node, name: str, default: Any,
+                                doc: tuple[str, str]) -> None:
+    """Declare one scenario parameter (:func:`declare_scenario_parameters`)."""
+    unit, description = doc
+    descriptor = ParameterDescriptor(
+        description=describe(description, unit),
+        additional_constraints='validated by tumble_ros.core.Scenario (docs/physics.md)',
+        read_only=True,
+        dynamic_typing=True,
+    )
+    if name not in EMPTY_ARRAY_TYPES:
+        node.declare_parameter(name, default, descriptor)
+        return
+    override = node._parameter_overrides.get(name)   # (no public getter)
+    unset = override is not None and override.type_ == Parameter.Type.NOT_SET
+    writable = ParameterDescriptor()
+    writable.dynamic_typing = True
+    node.declare_parameter(name, default, writable, ignore_override=unset)
+    value = node.get_parameter(name).value
+    if not len(value):
+        # Typed empty: through set_parameters, the one way rclpy keeps a given type for [].
+        node.set_parameters([Parameter(name, EMPTY_ARRAY_TYPES[name], [])])
+    node.set_descriptor(name, descriptor)
 
 
 def _declare_perturbers(node: Node) -> None:
@@ -146,15 +171,23 @@ def read_parameters(node: Node, names: Iterable[str]) -> dict[str, Any]:
 
 
 def read_scenario_parameters(node: Node) -> dict[str, Any]:
-    """Return the scenario parameters' values (see :func:`declare_scenario_parameters`)."""
+    """
+    Return the scenario parameters the node was given (see :func:`declare_scenario_parameters`).
+
+    Only those given (a params file, ``-p``, a launch file's overrides): the Scenario takes its
+    own defaults for the others, in years whatever ``time_unit`` says. Every parameter declared
+    is read back, a default included, and a default was once read in the scenario's unit: a
+    node given ``time_unit: h`` ran the default step 1e-4 yr as 1e-4 h.
+    """
     from tumble_ros.core import PARAMETER_DOCS, ScenarioError
     from tumble_ros.core.model.scenario import perturber_parameter_names
-    values = read_parameters(node, PARAMETER_DOCS)
+    given = node._parameter_overrides                # (no public getter)
+    values = read_parameters(node, [n for n in PARAMETER_DOCS if n in given])
     try:
         perturbers = perturber_parameter_names(values)
     except ScenarioError:
         return values   # (refused, naming perturbers.names, by Scenario.from_parameters)
-    return {**values, **read_parameters(node, perturbers)}
+    return {**values, **read_parameters(node, [n for n in perturbers if n in given])}
 
 
 def section_applies(key: str, node_fqn: str) -> bool:

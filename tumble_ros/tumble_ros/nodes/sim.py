@@ -28,7 +28,8 @@ Every stamp is ROS time carrying simulated time, ``status`` included (the time o
 published sample): t [yr] = stamp_ns / (1e9 * seconds_per_year)
 (``core.model.timebase``). The node is the clock source: it paces on the steady clock
 whatever ``use_sim_time`` says. Services:
-``apply_impact`` (tumble_ros_interfaces/ApplyImpact, every request answered), ``pause``,
+``apply_impact`` (tumble_ros_interfaces/ApplyImpact, every request answered; its times and
+torque in the scenario's ``time_unit``, as ``real_time_factor``), ``pause``,
 ``resume``, ``step`` (std_srvs/Trigger). Impacts are queued by the service and applied at the
 next step boundary, never inside the callback. The node holds no physics and no run logic:
 what a batch does is :class:`~tumble_ros.runs.session.SimulationSession`'s (the offline recording's
@@ -51,7 +52,7 @@ from tf2_msgs.msg import TFMessage  # type: ignore[attr-defined]  # rosidl-gener
 from tumble_ros import topics
 from tumble_ros.core import Impact, ImpactLimits, Scenario, ScenarioError, TimeBase
 from tumble_ros.core.model.timebase import SampleGrid
-from tumble_ros.core.units import from_years
+from tumble_ros.core.units import from_years, TIME_UNITS
 from tumble_ros.nodes.clocks import steady_timer
 from tumble_ros.nodes.guarded import GuardedNode
 from tumble_ros.nodes.parameters import (declare_node_parameters, declare_scenario_parameters,
@@ -107,6 +108,9 @@ class SimNode(GuardedNode):
         # the output grid (the one of Scenario.output_times, at this node's seconds_per_year)
         self._grid = output_grid(self.scenario, self.timebase)
         self._limits = ImpactLimits(params['max_impact_duration'], params['max_impact_impulse'])
+        #: years per unit of the scenario's time_unit: real_time_factor and the impact service
+        #: are in that unit, the session in years
+        self._years_per_unit = TIME_UNITS[self.scenario.time_unit]
         self._rtf = params['real_time_factor']
         #: This run's id, in every ``scenario`` description (a restart draws a new one).
         self.run_id: str = new_run_id()
@@ -276,7 +280,7 @@ class SimNode(GuardedNode):
         if self._pace_origin is None:
             self._pace_origin = (now, self._session.samples)
         wall0, k0 = self._pace_origin
-        t_target = self._grid.time(k0) + self._rtf * (now - wall0)
+        t_target = self._grid.time(k0) + self._rtf * self._years_per_unit * (now - wall0)
         return int(self.timebase.to_ns(t_target) // self._grid.interval_ns)
 
     def _publish_up_to(self, k_last: int) -> None:
@@ -389,10 +393,12 @@ class SimNode(GuardedNode):
             response.message = (f'too many impacts in progress ({MAX_PENDING_IMPACTS} accepted '
                                 'and not yet ended): retry after some have ended')
             return response
-        start = self.t if request.start_now else request.start
-        torque = (request.torque.x, request.torque.y, request.torque.z)
+        per = self._years_per_unit               # the request is in the scenario's time_unit
+        start = self.t if request.start_now else request.start * per
+        per2 = per * per
+        torque = (request.torque.x / per2, request.torque.y / per2, request.torque.z / per2)
         try:
-            impact = Impact(start, request.duration, torque, frame)
+            impact = Impact(start, request.duration * per, torque, frame)
             self._limits.check(impact, now=self.t, end=self.scenario.duration)
         except ScenarioError as err:
             response.message = str(err)
@@ -400,9 +406,11 @@ class SimNode(GuardedNode):
         impact_id, self._next_id = self._next_id, self._next_id + 1
         self._session.request_impact(impact, impact_id)
         response.accepted, response.id = True, impact_id
-        response.scheduled_start, response.scheduled_end = impact.start, impact.end
-        response.message = (
-            f'impact {impact_id} scheduled on [{impact.start:.9g}, {impact.end:.9g}] yr')
+        unit = self.scenario.time_unit
+        response.scheduled_start = from_years(impact.start, unit)
+        response.scheduled_end = from_years(impact.end, unit)
+        response.message = (f'impact {impact_id} scheduled on [{response.scheduled_start:.9g}, '
+                            f'{response.scheduled_end:.9g}] {unit}')
         self.get_logger().info(response.message)
         return response
 

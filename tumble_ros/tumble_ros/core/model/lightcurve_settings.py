@@ -8,9 +8,11 @@ and what is allowed), read from and written to the flat parameters like the rest
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 from typing import Any, Mapping
 
 import numpy as np
+import numpy.typing as npt
 
 from tumble_ros.core.model.limits import ScenarioError
 from tumble_ros.core.model.scattering import LAWS
@@ -62,6 +64,12 @@ class LightcurveSettings:
         Label samples with their reception times t + delta / c (default False).
     subdivisions : int
         Icosphere subdivisions of the body's mesh, 0 to :data:`MAX_SUBDIVISIONS`.
+    night_length, night_every, night_start : float
+        A ground campaign's nights [yr]: the body is observed on [night_start + k night_every,
+        night_start + k night_every + night_length) for every integer k, and a sample outside
+        them carries NaN brightness and magnitude (not observed; :meth:`observed`).
+        ``night_length`` 0 (default): observed at every sample; ``night_every`` default one
+        day (1 / 365.25 yr), ``night_start`` default 0.
 
     """
 
@@ -71,6 +79,9 @@ class LightcurveSettings:
     sun: tuple[float, float, float] = (0.0, 1.0, 0.0)
     light_time: bool = False
     subdivisions: int = DEFAULT_SUBDIVISIONS
+    night_length: float = 0.0
+    night_every: float = 1.0 / 365.25
+    night_start: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ('enabled', 'light_time'):
@@ -89,13 +100,39 @@ class LightcurveSettings:
             raise ScenarioError(f'lightcurve.subdivisions: must be an integer in [0, '
                                 f'{MAX_SUBDIVISIONS}], got {k!r}')
         object.__setattr__(self, 'subdivisions', int(k))
+        self._check_nights()
+
+    def _check_nights(self) -> None:
+        """Refuse nights that are not finite, a length < 0 or longer than their spacing."""
+        for name in ('night_length', 'night_every', 'night_start'):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
+                    or not math.isfinite(value):
+                raise ScenarioError(f'lightcurve.{name}: must be a finite time, got {value!r}')
+            object.__setattr__(self, name, float(value))
+        if not 0.0 < self.night_every:
+            raise ScenarioError(f'lightcurve.night_every: must be > 0 (the spacing of the '
+                                f'nights), got {self.night_every!r}')
+        if not 0.0 <= self.night_length <= self.night_every:
+            raise ScenarioError(f'lightcurve.night_length: must be in [0, night_every] (0: '
+                                f'observed at every sample), got {self.night_length!r}')
+
+    def observed(self, t: npt.ArrayLike) -> npt.NDArray[np.bool_]:
+        """Return whether each time ``t`` [yr] falls in a night (every one without nights)."""
+        times = np.atleast_1d(np.asarray(t, dtype=float))
+        if self.night_length == 0.0:
+            return np.ones(times.shape, dtype=bool)
+        return np.mod(times - self.night_start, self.night_every) < self.night_length
 
     def to_parameters(self) -> dict[str, Any]:
         """Return the flat ``lightcurve.*`` parameters."""
         return {'lightcurve.enabled': self.enabled, 'lightcurve.law': self.law,
                 'lightcurve.observer': list(self.observer), 'lightcurve.sun': list(self.sun),
                 'lightcurve.light_time': self.light_time,
-                'lightcurve.subdivisions': self.subdivisions}
+                'lightcurve.subdivisions': self.subdivisions,
+                'lightcurve.night_length': self.night_length,
+                'lightcurve.night_every': self.night_every,
+                'lightcurve.night_start': self.night_start}
 
     @classmethod
     def from_parameters(cls, params: Mapping[str, Any]) -> 'LightcurveSettings':
@@ -124,4 +161,9 @@ LIGHTCURVE_PARAMETER_DOCS: dict[str, tuple[str, str]] = {
     'lightcurve.light_time': ('', 'stamp samples at their reception time t + delta / c'),
     'lightcurve.subdivisions': ('', f'icosphere subdivisions of the body mesh, 0 to '
                                 f'{MAX_SUBDIVISIONS} (20 4^k facets)'),
+    'lightcurve.night_length': ('yr', "a ground campaign's nights: observed for night_length "
+                                'every night_every from night_start, NaN brightness and '
+                                'magnitude between them; 0 = observed at every sample'),
+    'lightcurve.night_every': ('yr', 'spacing of the nights (default one day, 1/365.25 yr)'),
+    'lightcurve.night_start': ('yr', 'start of the first night (default 0)'),
 }

@@ -167,6 +167,9 @@ def synthetic_lightcurve(scenario: Scenario, t: ArrayLike, quaternion: ArrayLike
     b = brightness_in_body(sun, observer, mesh, settings.law)
     m = magnitude(b, reference_brightness(mesh, settings.law), geometry.sun_distance,
                   geometry.observer_distance)
+    unobserved = ~settings.observed(t)          # between a campaign's nights: not seen
+    b[unobserved] = np.nan
+    m[unobserved] = np.nan
     delay = geometry.observer_distance * KM_PER_AU / SPEED_OF_LIGHT
     stamped = t + delay / SECONDS_PER_YEAR if settings.light_time else t.copy()
     return LightcurveRecord(stamped, delay, b, m, phase_angle(geometry.sun, geometry.observer),
