@@ -82,8 +82,8 @@ def load_campaign(files: Sequence[str], file_format: str | None,
                   ephemeris: Sequence[str] | None) -> Any:
     """Return the Campaign of ``files`` read by the inversion's readers."""
     from tumble_ros.inversion import readers
-    return readers.read_campaign(list(files), file_format,
-                                 ephemeris=None if ephemeris is None else (ephemeris[0], ephemeris[1]))
+    tables = None if ephemeris is None else (ephemeris[0], ephemeris[1])
+    return readers.read_campaign(list(files), file_format, ephemeris=tables)
 
 
 def _outputs(args: argparse.Namespace, accepted: int) -> list[str]:

@@ -33,12 +33,12 @@ import numpy as np
 from tumble_ros.core.model.limits import ScenarioError
 from tumble_ros.core.model.observables import SpinObservables
 from tumble_ros.core.model.scenario import IntegratorSettings, Scenario
-from tumble_ros.core.units import HOURS_PER_YEAR, KM_PER_AU
 from tumble_ros.core.photometry.brightness import (magnitude, reference_brightness,
                                                    scattering_sums, to_body)
 from tumble_ros.core.photometry.shape import ellipsoid_mesh, Mesh
 from tumble_ros.core.propagation.simulate import simulate
 from tumble_ros.core.torques.orbits import SPEED_OF_LIGHT
+from tumble_ros.core.units import HOURS_PER_YEAR, KM_PER_AU
 from tumble_ros.inversion.campaign import Campaign, CampaignError
 
 __all__ = ['ModelOptions', 'TumblerParameters', 'ForwardModel', 'PARAMETER_UNITS',
