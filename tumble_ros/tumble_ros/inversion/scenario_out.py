@@ -15,8 +15,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from tumble_ros.core.units import HOURS_PER_YEAR
 from tumble_ros.core.model.scattering import KAASALAINEN_LAMBERT_WEIGHT
+from tumble_ros.core.units import HOURS_PER_YEAR
 from tumble_ros.inversion.fit import InversionFit
 
 __all__ = ['scenario_parameters', 'scenario_yaml']
