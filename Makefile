@@ -113,7 +113,7 @@ venv-pip:
 # (a third of the sources; nothing imports them). Needed: Python may be told not to write it at
 # import (PYTHONDONTWRITEBYTECODE: a run's imports then took 2.8 s instead of 1.0 s).
 $(BYTECODE_STAMP): $(VENV_STAMP)
-	@echo '== compiling the bytecode of $(VENV) (beside the colcon build)'
+	@echo '== compiling the bytecode of $(VENV)'
 	$(VENV)/bin/python -m compileall -q -j 0 -x '/tests?/' $(VENV)/lib
 	touch $@
 
