@@ -14,6 +14,7 @@ RUNS = {
     'integrators_on_fig9.py': (None, []),           # prints only; takes no folder
     'ensemble_to_csv.py': (['20'], ['final_omega.csv', 'spread.nc']),
     'apophis_lightcurve.py': ([], ['apophis_lightcurve.png']),
+    'coupled_orbit.py': ([], ['coupled_orbit.png']),
 }
 
 
