@@ -6,9 +6,10 @@ The orbit and the spin integrated together: Apophis' 2029 flyby with the orbit c
 A shipped scenario's flyby (tumble_ros/config/apophis_2029.yaml) propagated twice by
 ``core.propagation.coupled.propagate_coupled``: with the orbit pulled by the body's quadrupole
 (a homogeneous ellipsoid of Apophis' semi-axes and GM), and on the fixed hyperbola the nodes
-use. Writes ``coupled_orbit.png`` (the orbit's deviation from the hyperbola [km], and the
-change of the total energy against the energy the spin exchanged: the conservation check) and prints both. The coupled orbit is a
-Python API, not a scenario option: the nodes integrate the attitude alone (docs/python.md).
+use. Writes ``coupled_orbit.png`` (the orbit's deviation from the hyperbola [m], and the change
+of the total energy against the energy the spin exchanged: the conservation check) and prints
+both. The coupled orbit is a Python API, not a scenario option: the nodes integrate the attitude
+alone (docs/python.md).
 """
 from pathlib import Path
 import sys
