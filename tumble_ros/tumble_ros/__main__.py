@@ -81,7 +81,7 @@ Without an executable, the main job: simulate SCENARIO, compare it with the pape
 solution, record everything to recordings/<scenario>_<UTC time>.mcap and analyse it (a summary
 on stdout, the figures in recordings/<scenario>_<UTC time>_figures/). SCENARIO is a params file
 or a shipped scenario's name (default, fig3 ... fig10, apophis_2029, apophis_2029_shape_degree4,
-tumbling_from_observables); without one: default.
+apophis_2029_moon_sun, photometric_campaign, tumbling_from_observables); without one: default.
 Times, rates and periods are printed in the scenario's time_unit (periods also in hours).
 
   --live      run the three nodes over the ROS graph (default: the recording written offline)
