@@ -27,8 +27,8 @@ from tumble_ros.inversion.search import (_readings, fibonacci_sphere, invert, pe
 def noisy():
     points = geometry(nights=7, per_night=25)
     clean = ForwardModel(points).magnitudes(TRUTH)
-    rng = np.random.default_rng(1)
-    return observed(points, clean + rng.normal(0.0, 0.01, clean.size))
+    noise = np.random.default_rng(1).normal(0.0, 0.01, clean.size)     # data, drawn once
+    return observed(points, clean + noise)
 
 
 @pytest.fixture(scope='module')

@@ -117,7 +117,10 @@ def test_the_main_job_ends_with_everything_written(tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     (recording,) = Path(tmp_path, 'recordings').glob('short_*.mcap')
     figures = recording.with_name(recording.stem + '_figures')
-    assert done.stdout.rstrip().endswith(str(Path('recordings') / figures.name /
-                                             'spectrum_wx.png'))
+    # the figures' list, then the viewer's layout line (analysis/viewer_layouts.py)
+    *_, last_figure, layout_line = done.stdout.rstrip().splitlines()
+    assert last_figure.strip().endswith(str(Path('recordings') / figures.name /
+                                            'spectrum_wx.png')), last_figure
+    assert layout_line.startswith('viewer: ') and 'foxglove_layout.json' in layout_line
     assert all((figures / name).stat().st_size > 1000
                for name in ('omega.png', 'error.png', 'spectrum_wx.png'))

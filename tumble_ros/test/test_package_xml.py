@@ -41,6 +41,7 @@ ROSDEP_KEYS = {
     'visualization_msgs': 'visualization_msgs',
     # Python libraries (rosdep/python.yaml of ros/rosdistro)
     'catkin_pkg': 'python3-catkin-pkg-modules',
+    'astropy': 'python3-astropy',
     'dask': 'python3-dask',
     'distributed': 'python3-distributed',
     'matplotlib': 'python3-matplotlib',
@@ -65,6 +66,7 @@ PIP_ONLY = {
     'lz4': 'pip "lz4", a dependency of mcap',
     'zstandard': 'pip "zstandard", a dependency of mcap',
     'mpl_toolkits': 'part of matplotlib (python3-matplotlib): its 3D axes',
+    'emcee': 'no rosdep key: the optional posterior of `invert --posterior` (pip extra posterior)',
 }
 
 #: Where the imports are read, and which dependency kinds satisfy them.

@@ -33,7 +33,7 @@ CONFIG = REPO / 'tumble_ros' / 'config'
 ROS_ONLY = {'ament_index_python', 'launch', 'launch_ros'}
 #: Top-level module -> the distribution that provides it, for the ROS-free packages' imports.
 DISTRIBUTIONS = {
-    'numpy': 'numpy', 'scipy': 'scipy', 'numba': 'numba', 'yaml': 'pyyaml',
+    'emcee': 'emcee', 'numpy': 'numpy', 'scipy': 'scipy', 'numba': 'numba', 'yaml': 'pyyaml',
     'matplotlib': 'matplotlib', 'mpl_toolkits': 'matplotlib', 'PIL': 'pillow', 'mcap': 'mcap',
     'mcap_ros2': 'mcap-ros2-support', 'zstandard': 'zstandard', 'lz4': 'lz4',
     'dask': 'dask', 'distributed': 'dask', 'xarray': 'xarray', 'zarr': 'zarr',
@@ -99,7 +99,9 @@ def test_pyproject_lists_every_package_of_the_source_tree():
 def test_every_import_but_ros_is_a_declared_dependency():
     project = _pyproject()['project']
     required = {_requirement_name(r) for r in project['dependencies']}
-    extra = {_requirement_name(r) for r in project['optional-dependencies']['ensembles']}
+    extras = project['optional-dependencies']
+    extra = {_requirement_name(r) for r in extras['ensembles']}
+    posterior = {_requirement_name(r) for r in extras['posterior']}
     imported = {}
     for path in SOURCE.rglob('*.py'):
         for top in imported_modules(path) - set(sys.stdlib_module_names) - {'__future__'}:
@@ -109,16 +111,18 @@ def test_every_import_but_ros_is_a_declared_dependency():
     unknown = set(imported) - set(DISTRIBUTIONS)
     assert not unknown, f'map these imports to their distribution in DISTRIBUTIONS: {unknown}'
     missing = {m: sorted(files) for m, files in imported.items()
-               if DISTRIBUTIONS[m] not in required | extra}
+               if DISTRIBUTIONS[m] not in required | extra | posterior}
     assert not missing, f'imported, not declared in pyproject.toml: {missing}'
     # the heavy ensemble stack is the extra, the rest is always installed
     assert {'dask', 'xarray', 'zarr'} == extra and not extra & required
+    assert posterior == {'emcee'} and not posterior & required      # invert --posterior
     assert {'numpy', 'scipy', 'numba', 'pyyaml', 'matplotlib', 'mcap'} <= required
 
 
 def test_every_dependency_has_a_lower_bound_and_no_pin():
     project = _pyproject()['project']
-    for requirement in project['dependencies'] + project['optional-dependencies']['ensembles']:
+    extras = project['optional-dependencies']
+    for requirement in project['dependencies'] + extras['ensembles'] + extras['posterior']:
         assert '>=' in requirement and '==' not in requirement and '<' not in requirement, (
             requirement)
 

@@ -100,7 +100,7 @@ def test_analyze_at_is_in_the_recordings_unit(tmp_path, capsys):
     for at in ('12', '12h', '0.5d'):
         out = tmp_path / f'still_{at}.png'
         assert command([str(result.output), '--still', str(out), '--at', at, '--quiet']) == 0
-        said.append(capsys.readouterr().out.split(f'still: {out} ')[1].strip())
+        said.append(capsys.readouterr().out.split(f'still: {out} ')[1].splitlines()[0].strip())
     assert said == ['(the /markers scene at t = 12 h)'] * 3, said
     assert command([str(result.output), '--still', str(tmp_path / 'x.png'), '--at', '30',
                     '--quiet']) == 1
