@@ -16,6 +16,7 @@ anything imports rclpy (the RMW reads these variables when a context is initiali
   multicast traffic to the network and see no other host's nodes.
 """
 import os
+import signal
 import time
 
 import pytest
@@ -115,6 +116,18 @@ LONGEST_FIRST = (
     'test_process_sim.py', 'test_node_startup.py', 'test_animation.py',
     'test_trust_nodes.py', 'test_main_job.py',
 )
+
+
+@pytest.fixture
+def alarm():
+    """Fail instead of hanging: SIGALRM after 20 s raises in a blocked call."""
+    def expire(signum, frame):
+        raise TimeoutError('the reader blocked')
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.alarm(20)
+    yield
+    signal.alarm(0)
+    signal.signal(signal.SIGALRM, previous)
 
 
 def pytest_collection_modifyitems(config, items):

@@ -8,7 +8,6 @@ error of 1e-300, a line with more or fewer fields than the header, bytes that ar
 name their line. Through ``analyze --photometry``: one ``ERROR:`` line, status 1.
 """
 import os
-import signal
 
 import numpy as np
 import pytest
@@ -23,18 +22,6 @@ def rows(count, start=1):
     """Return ``count`` data lines 'jd,mag,err' half an hour apart."""
     return ''.join(f'{2460000.5 + k / 48:.6f},{15 + 0.1 * np.sin(k):.4f},0.01\n'
                    for k in range(start, start + count))
-
-
-@pytest.fixture
-def alarm():
-    """Fail instead of hanging: SIGALRM after 20 s raises in a blocked call."""
-    def expire(signum, frame):
-        raise TimeoutError('the reader blocked')
-    previous = signal.signal(signal.SIGALRM, expire)
-    signal.alarm(20)
-    yield
-    signal.alarm(0)
-    signal.signal(signal.SIGALRM, previous)
 
 
 def test_a_fifo_without_a_writer_is_refused_by_its_kind_at_once(tmp_path, alarm):

@@ -12,7 +12,6 @@ the file and the line.
 """
 import math
 import os
-import signal
 
 import numpy as np
 import pytest
@@ -70,18 +69,6 @@ def light_time(t_received):
     b = 2.0 * d0 @ V
     c = d0 @ d0
     return (-b - math.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)
-
-
-@pytest.fixture
-def alarm():
-    """Fail instead of hanging: SIGALRM after 20 s raises in a blocked call."""
-    def expire(signum, frame):
-        raise TimeoutError('the reader blocked')
-    previous = signal.signal(signal.SIGALRM, expire)
-    signal.alarm(20)
-    yield
-    signal.alarm(0)
-    signal.signal(signal.SIGALRM, previous)
 
 
 # --- time scales and light time ------------------------------------------------------------

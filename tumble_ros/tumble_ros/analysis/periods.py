@@ -638,9 +638,10 @@ Progress = Callable[[str, float], None]
 
 
 def stderr_search_progress(after: float = 2.0, every: float = 5.0,
-                           stream: TextIO | None = None) -> Progress:
+                           stream: TextIO | None = None, label: str = 'period search',
+                           ) -> Progress:
     """
-    Return a :data:`Progress` that prints ``period search: STAGE, 40%`` to ``stream`` (stderr).
+    Return a :data:`Progress` that prints ``LABEL: STAGE, 40% (12 s)`` to ``stream`` (stderr).
 
     Silent for the first ``after`` seconds [s] (a short search prints nothing), then at each
     new stage and at most once every ``every`` seconds within one.
@@ -654,7 +655,7 @@ def stderr_search_progress(after: float = 2.0, every: float = 5.0,
         if now - start < after or (stage == current and now - last < every):
             return
         last, current = now, stage
-        print(f'period search: {stage}, {min(max(fraction, 0.0), 1.0):.0%} '
+        print(f'{label}: {stage}, {min(max(fraction, 0.0), 1.0):.0%} '
               f'({now - start:.0f} s)', file=stream or sys.stderr, flush=True)
     return report
 

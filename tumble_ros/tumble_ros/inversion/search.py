@@ -23,13 +23,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import math
-import sys
 import time
-from typing import Callable, Sequence, TextIO
+from typing import Sequence, TextIO
 
 import numpy as np
 
-from tumble_ros.analysis.periods import DAYS_IN_HOURS, PeriodSolution, search_periods
+from tumble_ros.analysis.periods import (DAYS_IN_HOURS, PeriodSolution, Progress, search_periods,
+                                         stderr_search_progress)
 from tumble_ros.core.model.limits import ScenarioError
 from tumble_ros.inversion.campaign import Campaign
 from tumble_ros.inversion.fit import CHI2_FAR, fit_local, InversionFit
@@ -42,7 +42,6 @@ __all__ = ['SearchSettings', 'Candidate', 'CandidateResult', 'InversionResult', 
 #: Inertia ratios (I1/I3, I2/I3) tried, in order, for a candidate the start's ratios do not
 #: allow (the SAMs need P_psi / P_phi above a bound that the ratios set, the LAMs too).
 INERTIA_STARTS = ((0.6, 0.9), (0.5, 0.8), (0.75, 0.95), (0.45, 0.6), (0.85, 0.97))
-Progress = Callable[[str, float], None]
 
 
 @dataclass(frozen=True)
@@ -134,18 +133,7 @@ class InversionResult:
 def stderr_progress(after: float = 2.0, every: float = 5.0,
                     stream: TextIO | None = None) -> Progress:
     """Return a progress callback printing ``invert: STAGE, 40% (12 s)`` to stderr."""
-    start = time.monotonic()
-    last, current = -math.inf, ''
-
-    def report(stage: str, fraction: float) -> None:
-        nonlocal last, current
-        now = time.monotonic()
-        if now - start < after or (stage == current and now - last < every):
-            return
-        last, current = now, stage
-        print(f'invert: {stage}, {min(max(fraction, 0.0), 1.0):.0%} ({now - start:.0f} s)',
-              file=stream or sys.stderr, flush=True)
-    return report
+    return stderr_search_progress(after, every, stream, label='invert')
 
 
 # -- candidates ----------------------------------------------------------------------------
